@@ -1,0 +1,23 @@
+"""scoutsim: simulation, analysis and validation of Scout II bounding.
+
+Poulakakis, Smith & Buehler, "Experimentally Validated Bounding Models for the Scout II
+Quadrupedal Robot", ICRA 2004. See README.md and docs/.
+"""
+
+__version__ = "0.1.0"
+
+from .parameters import (  # noqa: E402
+    ControllerParameters, ParameterError, RobotParameters, load_controller, load_parameters,
+    load_robot,
+)
+from .result import SimulationResult  # noqa: E402
+from .simulation import (  # noqa: E402
+    InitialState, IntegratorSettings, Sensors, default_initial_state, simulate,
+)
+from .control.bounding import BoundingController  # noqa: E402
+
+__all__ = [
+    "simulate", "SimulationResult", "InitialState", "IntegratorSettings", "Sensors",
+    "default_initial_state", "RobotParameters", "ControllerParameters", "ParameterError",
+    "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
+]

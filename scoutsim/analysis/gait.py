@@ -1,0 +1,578 @@
+"""Strides and gait metrics of a bounding run (SPEC.md section 8; paper Sec. IV).
+
+A **stride** runs from one back-leg lift-off to the next (SPEC.md 8; paper Sec. IV.C:
+"steady state strides defined by the back leg lift-off event"). For every stride this module
+computes the quantities the paper compares between simulation and experiment (Fig. 12):
+stride frequency, duty factor of each virtual leg, maximum and minimum torso pitch and COM
+height, and the mean forward speed. Steady-state averages are taken over the strides that
+begin after an initial transient.
+
+All times are the plant's continuous-time event times (``result.events``), not controller
+samples: a stance starts at a ``"touchdown"`` event of a leg and ends at the next
+``"liftoff"`` event of the same leg. Other plant events (``"slide_start"``, ``"stick"``,
+strut events, ...) and the controller's own detections (``"controller_touchdown"``, ...) do
+not start or end a stance.
+
+Units: seconds, metres, m/s, Hz, degrees for angles in the metrics (the time series are in
+radians), amperes for currents.
+
+Public API
+----------
+gait_metrics(result, transient_s=2.0) -> GaitMetrics
+stance_intervals(result, leg) -> (k, 2) array of [touchdown, lift-off] times [s]
+stride_table(result, transient_s=2.0) -> dict of column arrays (one row per stride)
+Stride, GaitMetrics, SUMMARY_KEYS, STRIDE_METRICS
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from ..model import layout as L
+
+__all__ = ["gait_metrics", "stance_intervals", "stride_table", "Stride", "GaitMetrics",
+           "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "STRIDE_METRICS"]
+
+#: Keys that :meth:`GaitMetrics.summary` returns first, in this order.
+SUMMARY_KEYS = ("outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
+                "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
+                "height_min_m", "max_friction_ratio", "n_steady_strides")
+#: Keys that follow :data:`SUMMARY_KEYS` in :meth:`GaitMetrics.summary`, in this order.
+SUMMARY_EXTRA_KEYS = ("t_end_s", "n_strides", "stride_period_cv", "steady_bounding",
+                      "motor_saturation_retraction_back", "motor_saturation_retraction_front",
+                      "max_belt_deflection_deg", "max_impact_impulse_ratio",
+                      "end_of_stance_slides", "model")
+#: Per-stride numeric metrics that are averaged over the steady strides.
+STRIDE_METRICS = ("period_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
+                  "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m",
+                  "mean_speed_m_s")
+
+#: Current mismatch [A] above which the amplifier/motor limit counts as active.
+SATURATION_TOLERANCE_A = 1e-6
+
+_LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
+
+
+def _leg(leg) -> int:
+    try:
+        return _LEGS[leg]
+    except (KeyError, TypeError):
+        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
+
+
+def _json_float(v):
+    """float(v), or None if v is None, NaN or infinite (JSON has no NaN/inf)."""
+    if v is None:
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _json_number(v):
+    """Like :func:`_json_float`, but integral values become int (counts in ``stats``)."""
+    v = _json_float(v)
+    if v is not None and v.is_integer():
+        return int(v)
+    return v
+
+
+def _events(result) -> np.ndarray:
+    ev = np.asarray(result.events, dtype=float)
+    if ev.size == 0:
+        return np.zeros((0, L.NEVREC))
+    return ev.reshape(-1, ev.shape[-1])
+
+
+# -----------------------------------------------------------------------------------------
+# interpolation
+# -----------------------------------------------------------------------------------------
+def _hermite(t, y, dy, te):
+    """Cubic Hermite interpolation of samples ``y`` with derivatives ``dy`` at times ``te``.
+
+    Parameters
+    ----------
+    t : (n,) array
+        Sample times [s], non-decreasing.
+    y, dy : (n,) arrays
+        Values and their time derivatives at the samples.
+    te : float or array
+        Query times [s]; clamped to [t[0], t[-1]].
+
+    Returns
+    -------
+    ndarray
+        Interpolated values, same shape as ``te``. For a smooth signal sampled at 1 kHz the
+        error is O(h^4) (about 1e-12 m for the torso position of a bounding run).
+    """
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    dy = np.asarray(dy, dtype=float)
+    te = np.asarray(te, dtype=float)
+    n = t.shape[0]
+    if n == 0:
+        return np.full(te.shape, np.nan)
+    if n == 1:
+        return np.full(te.shape, y[0])
+    tc = np.clip(te, t[0], t[-1])
+    i = np.clip(np.searchsorted(t, tc, side="right") - 1, 0, n - 2)
+    h = t[i + 1] - t[i]
+    ok = h > 0.0
+    hs = np.where(ok, h, 1.0)
+    s = np.where(ok, (tc - t[i]) / hs, 0.0)
+    s2 = s * s
+    s3 = s2 * s
+    h00 = 2 * s3 - 3 * s2 + 1
+    h10 = s3 - 2 * s2 + s
+    h01 = -2 * s3 + 3 * s2
+    h11 = s3 - s2
+    out = h00 * y[i] + h10 * hs * dy[i] + h01 * y[i + 1] + h11 * hs * dy[i + 1]
+    # a zero-length interval (duplicate sample time): take the later sample
+    return np.where(ok, out, y[np.minimum(i + 1, n - 1)])
+
+
+def _velocity(result, index):
+    return np.asarray(result.state, dtype=float)[:, L.NQ + index]
+
+
+# -----------------------------------------------------------------------------------------
+# stances
+# -----------------------------------------------------------------------------------------
+def stance_intervals(result, leg) -> np.ndarray:
+    """Stance intervals of one virtual leg from the plant's contact events.
+
+    A stance starts at a ``"touchdown"`` event and ends at the next ``"liftoff"`` event of
+    the same leg (continuous-time event times; SPEC.md 8). A ``"slide_start"`` or any other
+    event does not end a stance. A stance still open at the end of the data ends at
+    ``result.t_end``. If the first contact event of the leg is a lift-off, the leg started
+    the run on the ground and that stance starts at the first sample time ``result.t[0]``.
+
+    Parameters
+    ----------
+    result : SimulationResult
+    leg : {"back", "front", 0, 1}
+
+    Returns
+    -------
+    (k, 2) ndarray
+        Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
+    """
+    li = _leg(leg)
+    ev = _events(result)
+    m = (ev[:, 2] == li) & np.isin(ev[:, 1], (L.EK_TOUCHDOWN, L.EK_LIFTOFF))
+    sel = ev[m]
+    sel = sel[np.argsort(sel[:, 0], kind="stable")]
+    t0 = float(result.t[0]) if len(result.t) else 0.0
+    out = []
+    start = None
+    for i, row in enumerate(sel):
+        kind = int(row[1])
+        if kind == L.EK_TOUCHDOWN:
+            if start is None:
+                start = float(row[0])
+        else:  # lift-off
+            if start is not None:
+                out.append((start, float(row[0])))
+                start = None
+            elif i == 0:
+                out.append((t0, float(row[0])))
+    if start is not None:
+        out.append((start, max(float(result.t_end), start)))
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+def _overlap(intervals: np.ndarray, a: float, b: float) -> float:
+    """Total length [s] of the intersection of ``intervals`` with [a, b]."""
+    if intervals.shape[0] == 0 or b <= a:
+        return 0.0
+    lo = np.maximum(intervals[:, 0], a)
+    hi = np.minimum(intervals[:, 1], b)
+    return float(np.sum(np.clip(hi - lo, 0.0, None)))
+
+
+# -----------------------------------------------------------------------------------------
+# strides
+# -----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Stride:
+    """Metrics of one stride, back-leg lift-off to the next (SPEC.md 8; paper Sec. IV).
+
+    Supports attribute access (``s.period_s``) and mapping access (``s["period_s"]``,
+    ``dict(s)``).
+
+    Attributes
+    ----------
+    index : int
+        Stride number, 0 for the stride starting at the first back-leg lift-off.
+    t_start, t_end : float
+        Back-leg lift-off times bounding the stride [s].
+    period_s : float
+        t_end - t_start [s].
+    stride_frequency_hz : float
+        1 / period_s [Hz] (paper's omega_s).
+    duty_factor_back, duty_factor_front : float
+        Stance time of that virtual leg inside [t_start, t_end] divided by the period [-]
+        (paper's beta), from the continuous-time touchdown / lift-off events.
+    pitch_max_deg, pitch_min_deg : float
+        Extremes of the torso pitch over the samples inside the stride and the two
+        endpoints (interpolated) [deg], nose up positive.
+    height_max_m, height_min_m : float
+        Extremes of the torso COM height, likewise [m].
+    mean_speed_m_s : float
+        (x(t_end) - x(t_start)) / period [m/s], x at the event times by cubic Hermite
+        interpolation of the sampled position and forward speed.
+    steady : bool
+        The stride starts at or after the transient and ends before the data end.
+    """
+
+    index: int
+    t_start: float
+    t_end: float
+    period_s: float
+    stride_frequency_hz: float
+    duty_factor_back: float
+    duty_factor_front: float
+    pitch_max_deg: float
+    pitch_min_deg: float
+    height_max_m: float
+    height_min_m: float
+    mean_speed_m_s: float
+    steady: bool
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict (plain int / float / bool; NaN or inf become None)."""
+        d = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "index":
+                d[f.name] = int(v)
+            elif f.name == "steady":
+                d[f.name] = bool(v)
+            else:
+                d[f.name] = _json_float(v)
+        return d
+
+    # mapping protocol, so that a stride also behaves like the dict it describes
+    def keys(self):
+        return [f.name for f in fields(self)]
+
+    def __getitem__(self, key):
+        if key not in self.keys():
+            raise KeyError(key)
+        return getattr(self, key)
+
+
+def _extrema(t, y, dy, a, b):
+    """(max, min) of samples of y strictly inside (a, b) plus y(a), y(b) interpolated."""
+    ends = _hermite(t, y, dy, np.array([a, b]))
+    i0 = np.searchsorted(t, a, side="right")
+    i1 = np.searchsorted(t, b, side="left")
+    vals = np.concatenate([ends, y[i0:i1]])
+    return float(np.max(vals)), float(np.min(vals))
+
+
+def _strides(result, transient_s, stances):
+    t = np.asarray(result.t, dtype=float)
+    lo = np.sort(result.event_times("liftoff", "back").astype(float))
+    if len(lo) < 2 or len(t) == 0:
+        return []
+    x = np.asarray(result.x, dtype=float)
+    dx = _velocity(result, L.IX)
+    th = np.asarray(result.pitch, dtype=float)
+    dth = _velocity(result, L.ITH)
+    hy = np.asarray(result.height, dtype=float)
+    dhy = _velocity(result, L.IY)
+    t_end_run = float(result.t_end)
+    xs = _hermite(t, x, dx, lo)
+    out = []
+    for k in range(len(lo) - 1):
+        a, b = float(lo[k]), float(lo[k + 1])
+        period = b - a
+        if not period > 0.0:
+            continue  # duplicate event time: not a stride
+        pmax, pmin = _extrema(t, th, dth, a, b)
+        hmax, hmin = _extrema(t, hy, dhy, a, b)
+        out.append(Stride(
+            index=len(out), t_start=a, t_end=b, period_s=period,
+            stride_frequency_hz=1.0 / period,
+            duty_factor_back=_overlap(stances[0], a, b) / period,
+            duty_factor_front=_overlap(stances[1], a, b) / period,
+            pitch_max_deg=math.degrees(pmax), pitch_min_deg=math.degrees(pmin),
+            height_max_m=hmax, height_min_m=hmin,
+            mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
+            steady=bool(a >= transient_s and b <= t_end_run)))
+    return out
+
+
+# -----------------------------------------------------------------------------------------
+# the metrics object
+# -----------------------------------------------------------------------------------------
+@dataclass
+class GaitMetrics:
+    """Strides and steady-state gait metrics of one run (SPEC.md 8; paper Sec. IV, Fig. 12).
+
+    Build with :func:`gait_metrics`. The mean attributes (``mean_speed_m_s``,
+    ``stride_frequency_hz``, ``duty_factor_back``, ...; see :data:`STRIDE_METRICS`) are the
+    means over the steady strides of the per-stride values; pitch and height means are
+    means of the per-stride extrema, as the paper reports. They are None when there is no
+    steady stride.
+
+    Attributes
+    ----------
+    strides : list of Stride
+        All complete strides (back-leg lift-off to the next), in time order.
+    transient_s : float
+        Strides starting before this time [s] are not steady.
+    outcome : str
+        The run's outcome ("completed", "fell", ...).
+    t_end : float
+        Time the run reached [s].
+    stance : dict
+        ``{"back": (k, 2) array, "front": ...}`` stance intervals [s]
+        (:func:`stance_intervals`).
+    means : dict
+        Metric name -> mean over the steady strides (None if there are none).
+    """
+
+    strides: list
+    transient_s: float
+    outcome: str
+    t_end: float
+    stance: dict
+    means: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        steady = self.steady_strides
+        self.means = {k: (float(np.mean([s[k] for s in steady])) if steady else None)
+                      for k in STRIDE_METRICS}
+
+    # -- counts and steady strides --------------------------------------------------------
+    @property
+    def steady_strides(self) -> list:
+        """Strides with ``steady`` True."""
+        return [s for s in self.strides if s.steady]
+
+    @property
+    def n_strides(self) -> int:
+        return len(self.strides)
+
+    @property
+    def n_steady_strides(self) -> int:
+        return len(self.steady_strides)
+
+    # -- steady-state means (None without steady strides) --------------------------------
+    @property
+    def period_s(self):
+        """Mean stride period over the steady strides [s]."""
+        return self.means["period_s"]
+
+    @property
+    def stride_frequency_hz(self):
+        """Mean of the per-stride frequencies 1/period over the steady strides [Hz]."""
+        return self.means["stride_frequency_hz"]
+
+    @property
+    def duty_factor_back(self):
+        """Mean back-leg duty factor over the steady strides [-]."""
+        return self.means["duty_factor_back"]
+
+    @property
+    def duty_factor_front(self):
+        """Mean front-leg duty factor over the steady strides [-]."""
+        return self.means["duty_factor_front"]
+
+    @property
+    def pitch_max_deg(self):
+        """Mean of the per-stride maximum pitch over the steady strides [deg]."""
+        return self.means["pitch_max_deg"]
+
+    @property
+    def pitch_min_deg(self):
+        """Mean of the per-stride minimum pitch over the steady strides [deg]."""
+        return self.means["pitch_min_deg"]
+
+    @property
+    def height_max_m(self):
+        """Mean of the per-stride maximum COM height over the steady strides [m]."""
+        return self.means["height_max_m"]
+
+    @property
+    def height_min_m(self):
+        """Mean of the per-stride minimum COM height over the steady strides [m]."""
+        return self.means["height_min_m"]
+
+    @property
+    def mean_speed_m_s(self):
+        """Mean of the per-stride mean forward speeds over the steady strides [m/s]."""
+        return self.means["mean_speed_m_s"]
+
+    @property
+    def stride_period_cv(self):
+        """Coefficient of variation std/mean of the steady stride periods [-].
+
+        Population standard deviation (ddof = 0); None without steady strides."""
+        steady = self.steady_strides
+        if not steady:
+            return None
+        p = np.array([s.period_s for s in steady])
+        return float(np.std(p) / np.mean(p))
+
+    def is_steady_bounding(self, min_strides: int = 7, max_period_cv: float = 0.05) -> bool:
+        """Whether the run is steady bounding.
+
+        True iff the outcome is "completed", there are at least ``min_strides`` steady
+        strides (the paper used >= 7 per run, Sec. IV.C) and the stride-period coefficient
+        of variation is at most ``max_period_cv``.
+        """
+        if self.outcome != "completed" or self.n_steady_strides < min_strides:
+            return False
+        cv = self.stride_period_cv
+        return cv is not None and cv <= max_period_cv
+
+    # -- actuator diagnostics -------------------------------------------------------------
+    @staticmethod
+    def motor_saturation_fraction(result, leg):
+        """Fraction of stance-retraction samples at which the motor limit was active.
+
+        The commanded current is i_cmd = tau_cmd / (N eta K_T) (SPEC.md 4; N and eta from
+        ``result.provenance["robot"]``). A sample with controller leg state
+        stance-retraction (``leg_state == 1``) counts as saturated when the delivered
+        motor current differs from i_cmd by more than 1e-6 A (the amplifier current limit
+        or the torque-speed line was active).
+
+        Parameters
+        ----------
+        result : SimulationResult
+        leg : {"back", "front", 0, 1}
+
+        Returns
+        -------
+        float or None
+            In [0, 1]; None if the leg never was in stance-retraction or the robot
+            parameters are not in the provenance.
+        """
+        li = _leg(leg)
+        robot = (result.provenance or {}).get("robot")
+        if not robot:
+            return None
+        k = (robot["planetary_ratio"] * robot["sprocket_ratio"]
+             * robot["gearbox_efficiency"] * robot["sprocket_efficiency"]
+             * robot["torque_constant"])
+        m = result.leg_state(li) == L.LS_RETRACTION
+        n = int(np.count_nonzero(m))
+        if n == 0 or not k > 0:
+            return None
+        i_cmd = np.asarray(result.hip_torque_commanded(li))[m] / k
+        i = np.asarray(result.motor_current(li))[m]
+        return float(np.count_nonzero(np.abs(i - i_cmd) > SATURATION_TOLERANCE_A) / n)
+
+    @staticmethod
+    def max_belt_deflection_deg(result):
+        """Largest |belt deflection alpha - phi| of both legs over the run [deg] (Model II;
+        0 for the other variants); None if there are no samples."""
+        if len(result.t) == 0:
+            return None
+        b = np.concatenate([np.asarray(result.belt_deflection(0)),
+                            np.asarray(result.belt_deflection(1))])
+        return _json_float(math.degrees(float(np.max(np.abs(b)))))
+
+    # -- export ---------------------------------------------------------------------------
+    def summary(self, result) -> dict:
+        """JSON-safe run summary (SPEC.md 8; paper Fig. 12 quantities).
+
+        Keys, in order: :data:`SUMMARY_KEYS` (outcome, steady-state means, the maximum
+        ratio |tangential|/normal ground force ``max_friction_ratio`` from
+        ``result.stats``, the number of steady strides), then :data:`SUMMARY_EXTRA_KEYS`.
+        Missing or non-finite values are None (JSON null), never NaN.
+
+        Parameters
+        ----------
+        result : SimulationResult
+            The run these metrics were computed from.
+        """
+        stats = result.stats or {}
+        prov = result.provenance or {}
+        out = {"outcome": self.outcome}
+        for k in SUMMARY_KEYS[1:9]:
+            out[k] = _json_float(self.means[k])
+        out["max_friction_ratio"] = _json_float(stats.get("max_friction_ratio"))
+        out["n_steady_strides"] = self.n_steady_strides
+        out["t_end_s"] = _json_float(self.t_end)
+        out["n_strides"] = self.n_strides
+        out["stride_period_cv"] = _json_float(self.stride_period_cv)
+        out["steady_bounding"] = bool(self.is_steady_bounding())
+        out["motor_saturation_retraction_back"] = _json_float(
+            self.motor_saturation_fraction(result, 0))
+        out["motor_saturation_retraction_front"] = _json_float(
+            self.motor_saturation_fraction(result, 1))
+        out["max_belt_deflection_deg"] = self.max_belt_deflection_deg(result)
+        out["max_impact_impulse_ratio"] = _json_float(stats.get("max_impact_impulse_ratio"))
+        out["end_of_stance_slides"] = _json_number(stats.get("end_of_stance_slides"))
+        out["model"] = prov.get("model")
+        return out
+
+    def to_dict(self) -> dict:
+        """JSON-safe dict: transient, outcome, counts, means, period CV and all strides."""
+        return {"transient_s": float(self.transient_s), "outcome": self.outcome,
+                "t_end_s": _json_float(self.t_end), "n_strides": self.n_strides,
+                "n_steady_strides": self.n_steady_strides,
+                "means": {k: _json_float(v) for k, v in self.means.items()},
+                "stride_period_cv": _json_float(self.stride_period_cv),
+                "strides": [s.to_dict() for s in self.strides]}
+
+
+def gait_metrics(result, transient_s: float = 2.0) -> GaitMetrics:
+    """Split a run into strides and compute the gait metrics (SPEC.md 8; paper Sec. IV).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run (``t``, ``state``, ``events``, ``outcome``, ``t_end``, ``stats``,
+        ``provenance``).
+    transient_s : float
+        Strides that start before this time [s] are part of the transient and excluded
+        from the steady-state means (default 2 s).
+
+    Returns
+    -------
+    GaitMetrics
+        All strides (back-leg lift-off to the next back-leg lift-off), their metrics and
+        the means over the steady strides.
+    """
+    if not (isinstance(transient_s, (int, float)) and math.isfinite(transient_s)
+            and transient_s >= 0):
+        raise ValueError(f"transient_s = {transient_s!r} is not allowed: must be a finite "
+                         "number >= 0")
+    stances = (stance_intervals(result, 0), stance_intervals(result, 1))
+    strides = _strides(result, float(transient_s), stances)
+    return GaitMetrics(strides=strides, transient_s=float(transient_s),
+                       outcome=str(result.outcome), t_end=float(result.t_end),
+                       stance={"back": stances[0], "front": stances[1]})
+
+
+def stride_table(result, transient_s: float = 2.0) -> dict:
+    """Per-stride metrics as columns, one row per stride (for CSV export / DataFrames).
+
+    Parameters
+    ----------
+    result : SimulationResult
+    transient_s : float
+        As in :func:`gait_metrics` [s].
+
+    Returns
+    -------
+    dict of str -> ndarray
+        Columns ``index`` (int), ``t_start``, ``t_end`` [s], the metrics of
+        :data:`STRIDE_METRICS` (units in their names) and ``steady`` (bool); each of
+        length ``n_strides``.
+    """
+    strides = gait_metrics(result, transient_s).strides
+    cols = {"index": np.array([s.index for s in strides], dtype=int),
+            "t_start": np.array([s.t_start for s in strides], dtype=float),
+            "t_end": np.array([s.t_end for s in strides], dtype=float)}
+    for k in STRIDE_METRICS:
+        cols[k] = np.array([s[k] for s in strides], dtype=float)
+    cols["steady"] = np.array([s.steady for s in strides], dtype=bool)
+    return cols

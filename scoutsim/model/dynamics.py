@@ -1,0 +1,716 @@
+"""Equations of motion of the planar Scout II model (compiled with Numba).
+
+Implements SPEC.md sections 1-5; docs/model.md derives every term. Summary:
+
+* Generalized coordinates q = [x, y, theta, phi_b, phi_f, alpha_b, alpha_f] (paper eq. 1 with
+  the leg lengths l_b, l_f carried separately because the toe is massless, and the Model II
+  driven-gear angles alpha). Only the *active* coordinates enter the dynamics: 7 in
+  Model II, the first 5 otherwise (alpha is then a copy of phi).
+* Mass matrix from body Jacobians, M = sum_b m_b J_b^T J_b + I_b J_w^T J_w (torso, two leg
+  bodies, Model II gear pairs with reflected inertia J_2 + N^2 J_1), Coriolis/centripetal
+  vector h = sum m_b J_b^T (dJ_b/dt dq).
+* Contact and stiction are holonomic constraints on q, solved together with the dynamics in
+  one KKT system ``[M R^T; R 0] [ddq; -lambda] = [Q - h; r]``. Coordinates fixed by a
+  constraint that can be solved explicitly (stance leg angle from the toe anchor, massless
+  flight legs, stuck motor joint) are *projected* before every evaluation, so the constraints
+  hold exactly and do not drift; the multipliers lambda are the ground and holding forces.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .layout import (
+    A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
+    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
+    MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_I, MODEL_II, MODEL_IDEAL,
+    MODEL_PASSIVE, NAUX, NAUX_LEG, NQ, NS, P_B_J, P_C, P_CB, P_D, P_ETA, P_G, P_IL, P_IMAX,
+    P_IT, P_J1, P_J2, P_K, P_KB, P_KT, P_KW, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT,
+    P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, SLIDE,
+    STICK, STRUT, STUCK,
+)
+
+MAX_ROWS = 6          # at most 2 rows per leg (strut) + 1 per motor joint
+MAX_KKT = NQ + MAX_ROWS
+
+
+@njit(cache=True)
+def solve_dense(A, b, n):
+    """Solve A[:n,:n] x = b[:n] in place by Gaussian elimination with partial pivoting.
+
+    Deterministic and allocation-free (the systems are at most 13 x 13). Returns False if a
+    pivot is numerically zero (the constrained dynamics are singular)."""
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            a = abs(A[i, j])
+            if a > scale:
+                scale = a
+    tiny = 1e-13 * scale if scale > 0.0 else 1e-300
+    for k in range(n):
+        p = k
+        best = abs(A[k, k])
+        for i in range(k + 1, n):
+            a = abs(A[i, k])
+            if a > best:
+                best = a
+                p = i
+        if best <= tiny:
+            return False
+        if p != k:
+            for j in range(n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            f = A[i, k] * inv
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+                b[i] -= f * b[k]
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= A[i, j] * b[j]
+        b[i] = acc / A[i, i]
+    return True
+
+
+@njit(cache=True)
+def hip_position(q, P, leg):
+    """Hip position (hx, hy) [m] of virtual leg ``leg`` (0 back, 1 front), SPEC.md 1."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    return q[0] + sL * math.cos(q[2]), q[1] + sL * math.sin(q[2])
+
+
+@njit(cache=True)
+def hip_velocity(q, dq, P, leg):
+    """Hip velocity [m/s]."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    return dq[0] - sL * math.sin(q[2]) * dq[2], dq[1] + sL * math.cos(q[2]) * dq[2]
+
+
+@njit(cache=True)
+def project(q, dq, l, P, mi, mf):
+    """Make the dependent coordinates consistent with the active constraints (in place).
+
+    * stance (stick/strut) leg: phi and dphi from the toe anchor and the hip, l = |toe - hip|;
+    * sliding leg: l from the toe height being zero;
+    * massless leg in flight: phi prescribed (touchdown angle, torso- or world-referenced),
+      l = l0;
+    * massive leg in flight: l limited to the stop l0 (and = l0 for an undamped leg);
+    * ideal / Model I / passive: alpha := phi; Model II stuck motor joint: dalpha = 0.
+    """
+    model = int(P[P_MODEL])
+    l0 = P[P_L0]
+    massless = P[P_MASSLESS] > 0.5
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        hx, hy = hip_position(q, P, leg)
+        hvx, hvy = hip_velocity(q, dq, P, leg)
+        if mode == STICK or mode == STRUT:
+            px = mf[MF_ANCHOR_B + leg]
+            ddx = px - hx
+            ddy = -hy
+            ll = math.sqrt(ddx * ddx + ddy * ddy)
+            g = math.atan2(ddx, -ddy)
+            sg = math.sin(g)
+            cg = math.cos(g)
+            q[3 + leg] = g - q[2]
+            dg = -(hvx * cg + hvy * sg) / ll
+            dq[3 + leg] = dg - dq[2]
+            l[leg] = ll
+        elif mode == SLIDE:
+            g = q[2] + q[3 + leg]
+            l[leg] = hy / math.cos(g)
+        else:
+            if massless:
+                td = P[P_TD_B + leg]
+                if P[P_TD_WORLD] > 0.5:
+                    q[3 + leg] = td - q[2]
+                    dq[3 + leg] = -dq[2]
+                else:
+                    q[3 + leg] = td
+                    dq[3 + leg] = 0.0
+                l[leg] = l0
+            else:
+                if P[P_C] <= 0.0 or l[leg] > l0:
+                    l[leg] = l0
+        if model != MODEL_II:
+            q[5 + leg] = q[3 + leg]
+            dq[5 + leg] = dq[3 + leg]
+        elif mi[MI_MOTOR_B + leg] == STUCK:
+            dq[5 + leg] = 0.0
+
+
+@njit(cache=True)
+def mass_matrix(q, P, M):
+    """Fill M (7 x 7) with the generalized mass matrix at q (SPEC.md 2, 5)."""
+    for i in range(NQ):
+        for j in range(NQ):
+            M[i, j] = 0.0
+    npl = P[P_NP]
+    ml = npl * P[P_ML]
+    il = npl * P[P_IL]
+    d = P[P_D]
+    th = q[2]
+    M[0, 0] += P[P_MT]
+    M[1, 1] += P[P_MT]
+    M[2, 2] += P[P_IT]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        g = th + q[3 + leg]
+        jth_x = -sL * math.sin(th) + d * math.cos(g)
+        jth_y = sL * math.cos(th) + d * math.sin(g)
+        jph_x = d * math.cos(g)
+        jph_y = d * math.sin(g)
+        k = 3 + leg
+        # translational part m J^T J over coordinates (x, y, theta, phi_leg)
+        M[0, 0] += ml
+        M[1, 1] += ml
+        M[0, 2] += ml * jth_x
+        M[1, 2] += ml * jth_y
+        M[0, k] += ml * jph_x
+        M[1, k] += ml * jph_y
+        M[2, 2] += ml * (jth_x * jth_x + jth_y * jth_y)
+        M[2, k] += ml * (jth_x * jph_x + jth_y * jph_y)
+        M[k, k] += ml * (jph_x * jph_x + jph_y * jph_y)
+        # rotational part (leg angular velocity dtheta + dphi)
+        M[2, 2] += il
+        M[2, k] += il
+        M[k, k] += il
+    if int(P[P_MODEL]) == MODEL_II:
+        j1 = npl * P[P_J1]
+        j2 = npl * P[P_J2]
+        N = P[P_N]
+        for leg in range(2):
+            a = 5 + leg
+            M[2, 2] += j1 + j2
+            M[2, a] += j2 + N * j1
+            M[a, a] += j2 + N * N * j1
+    for i in range(NQ):
+        for j in range(i):
+            M[i, j] = M[j, i]
+
+
+@njit(cache=True)
+def coriolis(q, dq, P, h):
+    """Fill h (7) with the velocity-product terms, M ddq + h = Q (leg bodies only)."""
+    for i in range(NQ):
+        h[i] = 0.0
+    ml = P[P_NP] * P[P_ML]
+    d = P[P_D]
+    th = q[2]
+    dth = dq[2]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        g = th + q[3 + leg]
+        dg = dth + dq[3 + leg]
+        ax = -sL * math.cos(th) * dth * dth - d * math.sin(g) * dg * dg
+        ay = -sL * math.sin(th) * dth * dth + d * math.cos(g) * dg * dg
+        jth_x = -sL * math.sin(th) + d * math.cos(g)
+        jth_y = sL * math.cos(th) + d * math.sin(g)
+        h[0] += ml * ax
+        h[1] += ml * ay
+        h[2] += ml * (jth_x * ax + jth_y * ay)
+        h[3 + leg] += ml * d * (math.cos(g) * ax + math.sin(g) * ay)
+
+
+@njit(cache=True)
+def kinetic_energy(q, dq, P):
+    """Kinetic energy 1/2 dq^T M dq [J]."""
+    M = np.empty((NQ, NQ))
+    mass_matrix(q, P, M)
+    e = 0.0
+    for i in range(NQ):
+        for j in range(NQ):
+            e += dq[i] * M[i, j] * dq[j]
+    return 0.5 * e
+
+
+@njit(cache=True)
+def potential_energy(q, l, P):
+    """Gravity + leg springs + Model II belt springs [J]."""
+    g = P[P_G]
+    npl = P[P_NP]
+    e = P[P_MT] * g * q[1]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        gam = q[2] + q[3 + leg]
+        yc = q[1] + sL * math.sin(q[2]) - P[P_D] * math.cos(gam)
+        e += npl * P[P_ML] * g * yc
+        dl = P[P_L0] - l[leg]
+        e += 0.5 * npl * P[P_K] * dl * dl
+        if int(P[P_MODEL]) == MODEL_II:
+            b = q[5 + leg] - q[3 + leg]
+            e += 0.5 * npl * P[P_KB] * b * b
+    return e
+
+
+@njit(cache=True)
+def motor_current(cmd_torque, omega_m, vb, P):
+    """Motor current [A] delivered for a commanded leg torque (per physical leg) [N m].
+
+    SPEC.md 4: i_cmd = tau / (N eta K_T), limited by |i| <= i_max and, except in the ideal
+    variant, by the torque-speed line (-V_b - K_w w)/R_A <= i <= (V_b - K_w w)/R_A."""
+    model = int(P[P_MODEL])
+    if model == MODEL_PASSIVE:
+        return 0.0
+    imax = P[P_IMAX]
+    ic = cmd_torque / (P[P_N] * P[P_ETA] * P[P_KT])
+    lo = -imax
+    hi = imax
+    if model != MODEL_IDEAL:
+        r = P[P_RA]
+        v_lo = (-vb - P[P_KW] * omega_m) / r
+        v_hi = (vb - P[P_KW] * omega_m) / r
+        if v_lo > lo:
+            lo = v_lo
+        if v_hi < hi:
+            hi = v_hi
+    if ic < lo:
+        ic = lo
+    if ic > hi:
+        ic = hi
+    return ic
+
+
+@njit(cache=True)
+def battery_voltage(dq, cmd, P):
+    """Battery terminal voltage V_b [V] (SPEC.md 4).
+
+    Ideal source (R_b = 0): V_b = V_oc. Otherwise the amplifiers are taken as lossless
+    converters, so the battery supplies P = sum_motors V_term i and
+    V_b = (V_oc + sqrt(V_oc^2 - 4 R_b P)) / 2; the coupling through the voltage limits is
+    resolved by fixed-point iteration."""
+    voc = P[P_VB]
+    rb = P[P_RB]
+    if rb <= 0.0 or int(P[P_MODEL]) == MODEL_IDEAL or int(P[P_MODEL]) == MODEL_PASSIVE:
+        return voc
+    vb = voc
+    for _ in range(4):
+        pw = 0.0
+        for leg in range(2):
+            om = P[P_N] * (dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg])
+            i = motor_current(cmd[leg], om, vb, P)
+            pw += P[P_NP] * i * (P[P_RA] * i + P[P_KW] * om)
+        disc = voc * voc - 4.0 * rb * pw
+        if disc < 0.0:
+            disc = 0.0
+        vb = 0.5 * (voc + math.sqrt(disc))
+    return vb
+
+
+@njit(cache=True)
+def evaluate(s, P, mi, mf, cmd, ds, aux):
+    """Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
+
+    Parameters
+    ----------
+    s : (16,) state [q, dq, l_b, l_f] (SI).
+    P : parameter array (layout.P_*).
+    mi, mf : integer / float mode arrays (contact modes, motor-joint modes, toe anchors).
+    cmd : (2,) commanded hip torque per physical leg, leg side [N m] (sample-and-hold).
+    ds : (16,) output derivative.
+    aux : (NAUX,) output ground forces, torques, currents, energy, ... (layout.A_*).
+
+    Returns
+    -------
+    bool : False if the constrained dynamics are singular.
+    """
+    model = int(P[P_MODEL])
+    nact = 7 if model == MODEL_II else 5
+    q = s[0:NQ].copy()
+    dq = s[NQ:2 * NQ].copy()
+    l = s[IL_B:IL_B + 2].copy()
+    project(q, dq, l, P, mi, mf)
+
+    M = np.empty((NQ, NQ))
+    h = np.empty(NQ)
+    mass_matrix(q, P, M)
+    coriolis(q, dq, P, h)
+
+    npl = P[P_NP]
+    grav = P[P_G]
+    l0 = P[P_L0]
+    k = P[P_K]
+    c = P[P_C]
+    d = P[P_D]
+    N = P[P_N]
+    th = q[2]
+    dth = dq[2]
+    massless = P[P_MASSLESS] > 0.5
+
+    Q = np.zeros(NQ)
+    # gravity
+    Q[1] -= P[P_MT] * grav
+    mlg = npl * P[P_ML] * grav
+    for leg in range(2):
+        g = th + q[3 + leg]
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        Q[1] -= mlg
+        Q[2] -= mlg * (sL * math.cos(th) + d * math.sin(g))
+        Q[3 + leg] -= mlg * d * math.sin(g)
+
+    # actuators
+    vb = battery_voltage(dq, cmd, P)
+    cur = np.zeros(2)
+    om = np.zeros(2)
+    tau_app = np.zeros(2)
+    tau_belt = np.zeros(2)
+    tau_fric = np.zeros(2)
+    for leg in range(2):
+        if model == MODEL_II:
+            om[leg] = N * dq[5 + leg]
+        else:
+            om[leg] = N * dq[3 + leg]
+        cur[leg] = motor_current(cmd[leg], om[leg], vb, P)
+        tau_app[leg] = N * P[P_ETA] * P[P_KT] * cur[leg]
+        if model == MODEL_II:
+            Q[5 + leg] += npl * tau_app[leg]
+            mm = mi[MI_MOTOR_B + leg]
+            tf = P[P_B_J] * om[leg]
+            if mm != STUCK:
+                tf += P[P_TAU_S] * mm
+            tau_fric[leg] = tf
+            Q[5 + leg] -= npl * N * tf
+            tb = P[P_KB] * (q[5 + leg] - q[3 + leg]) + P[P_CB] * (dq[5 + leg] - dq[3 + leg])
+            tau_belt[leg] = tb
+            Q[3 + leg] += npl * tb
+            Q[5 + leg] -= npl * tb
+        elif model != MODEL_PASSIVE:
+            Q[3 + leg] += npl * tau_app[leg]
+
+    # contact forces and constraint rows
+    R = np.zeros((MAX_ROWS, NQ))
+    r = np.zeros(MAX_ROWS)
+    row_kind = np.zeros(MAX_ROWS, dtype=np.int64)   # 1 perp, 2 axial, 3 motor, 4 prescribed
+    row_leg = np.zeros(MAX_ROWS, dtype=np.int64)
+    nr = 0
+    Fax = np.zeros(2)
+    ldot = np.zeros(2)
+    Gt = np.zeros(2)
+    Gn = np.zeros(2)
+    toe_x = np.zeros(2)
+    toe_y = np.zeros(2)
+    toe_vx = np.zeros(2)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        g = th + q[3 + leg]
+        dg = dth + dq[3 + leg]
+        sg = math.sin(g)
+        cg = math.cos(g)
+        hx, hy = hip_position(q, P, leg)
+        hvx, hvy = hip_velocity(q, dq, P, leg)
+        ll = l[leg]
+        # toe Jacobian (material point at distance ll on the leg axis), columns x, y, th, phi
+        jt_th_x = -sL * math.sin(th) + ll * cg
+        jt_th_y = sL * math.cos(th) + ll * sg
+        jt_ph_x = ll * cg
+        jt_ph_y = ll * sg
+        # hip acceleration bias dJ_hip/dt dq
+        bx = -sL * math.cos(th) * dth * dth
+        by = -sL * math.sin(th) * dth * dth
+        kk = 3 + leg
+        if mode == STICK or mode == STRUT:
+            ld = -(hvx * sg - hvy * cg)           # dl/dt = -dhip . u
+            ldot[leg] = ld
+            F = npl * (k * (l0 - ll) - c * ld)
+            if mode == STRUT:
+                F = npl * k * (l0 - ll)
+            Fax[leg] = F
+            # Q += J_toe^T (-F u), u = (sg, -cg)
+            fx = -F * sg
+            fy = F * cg
+            Q[0] += fx
+            Q[1] += fy
+            Q[2] += jt_th_x * fx + jt_th_y * fy
+            Q[kk] += jt_ph_x * fx + jt_ph_y * fy
+            # perpendicular pin: n^T J_toe ddq = -[(b . n) + 2 ldot dg]
+            R[nr, 0] = cg
+            R[nr, 1] = sg
+            R[nr, 2] = sL * math.sin(q[3 + leg]) + ll
+            R[nr, kk] = ll
+            r[nr] = -(bx * cg + by * sg + 2.0 * ld * dg)
+            row_kind[nr] = 1
+            row_leg[nr] = leg
+            nr += 1
+            if mode == STRUT:
+                w = P[P_STRUT_OMEGA]
+                R[nr, 0] = sg
+                R[nr, 1] = -cg
+                R[nr, 2] = -sL * math.cos(q[3 + leg])
+                r[nr] = -(bx * sg - by * cg) + ll * dg * dg + 2.0 * w * ld + w * w * (ll - l0)
+                row_kind[nr] = 2
+                row_leg[nr] = leg
+                nr += 1
+            toe_x[leg] = mf[MF_ANCHOR_B + leg]
+            toe_y[leg] = 0.0
+            toe_vx[leg] = 0.0
+        elif mode == SLIDE:
+            # toe on the ground (height 0), l = hy / cos(g)
+            ld = hvy / cg + hy * sg * dg / (cg * cg)
+            ldot[leg] = ld
+            F = npl * (k * (l0 - ll) - c * ld)
+            Fax[leg] = F
+            mu = P[P_MU]
+            sig = 0.0
+            if mu < 1e300:
+                sig = mu * mi[MI_SLIDE_DIR_B + leg]
+            gn = F / (cg + sig * sg)
+            gt = -sig * gn
+            Gn[leg] = gn
+            Gt[leg] = gt
+            Q[0] += gt
+            Q[1] += gn
+            Q[2] += jt_th_x * gt + jt_th_y * gn
+            Q[kk] += jt_ph_x * gt + jt_ph_y * gn
+            toe_x[leg] = hx + ll * sg
+            toe_y[leg] = 0.0
+            toe_vx[leg] = hvx + ld * sg + ll * cg * dg
+        else:
+            if massless:
+                R[nr, kk] = 1.0
+                if P[P_TD_WORLD] > 0.5:
+                    R[nr, 2] = 1.0
+                r[nr] = 0.0
+                row_kind[nr] = 4
+                row_leg[nr] = leg
+                nr += 1
+                ld = 0.0
+            elif c > 0.0 and ll < l0:
+                ld = (k / c) * (l0 - ll)
+            else:
+                ld = 0.0
+            ldot[leg] = ld
+            toe_x[leg] = hx + ll * sg
+            toe_y[leg] = hy - ll * cg
+            toe_vx[leg] = hvx + ld * sg + ll * cg * dg
+        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            R[nr, 5 + leg] = 1.0
+            r[nr] = 0.0
+            row_kind[nr] = 3
+            row_leg[nr] = leg
+            nr += 1
+
+    # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
+    n = nact + nr
+    A = np.zeros((n, n))
+    b = np.zeros(n)
+    for i in range(nact):
+        for j in range(nact):
+            A[i, j] = M[i, j]
+        b[i] = Q[i] - h[i]
+    for rr in range(nr):
+        for j in range(nact):
+            A[nact + rr, j] = R[rr, j]
+            A[j, nact + rr] = R[rr, j]
+        b[nact + rr] = r[rr]
+    ok = solve_dense(A, b, n)
+
+    for i in range(NQ):
+        ds[i] = dq[i]
+        ds[NQ + i] = 0.0
+    if ok:
+        for i in range(nact):
+            ds[NQ + i] = b[i]
+    if model != MODEL_II:
+        ds[NQ + 5] = ds[NQ + 3]
+        ds[NQ + 6] = ds[NQ + 4]
+    ds[IL_B] = ldot[0]
+    ds[IL_B + 1] = ldot[1]
+
+    hold = np.zeros(2)
+    strut = np.zeros(2)
+    for rr in range(nr):
+        lam = -b[nact + rr] if ok else 0.0
+        leg = row_leg[rr]
+        g = th + q[3 + leg]
+        if row_kind[rr] == 1:      # perpendicular ground force lam * n
+            Gt[leg] += lam * math.cos(g)
+            Gn[leg] += lam * math.sin(g)
+        elif row_kind[rr] == 2:    # strut force lam * u (tension positive)
+            strut[leg] = lam
+            Gt[leg] += lam * math.sin(g)
+            Gn[leg] -= lam * math.cos(g)
+        elif row_kind[rr] == 3:    # holding torque at one motor
+            hold[leg] = lam / (npl * N)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            g = th + q[3 + leg]
+            # axial part of the ground force: -F u
+            Gt[leg] += -Fax[leg] * math.sin(g)
+            Gn[leg] += Fax[leg] * math.cos(g)
+        o = leg * NAUX_LEG
+        aux[o + A_GT] = Gt[leg]
+        aux[o + A_GN] = Gn[leg]
+        aux[o + A_FAX] = Fax[leg] if mode != STRUT else -strut[leg]
+        aux[o + A_TAU_CMD] = cmd[leg]
+        aux[o + A_TAU_APP] = tau_app[leg]
+        aux[o + A_CURRENT] = cur[leg]
+        aux[o + A_OMEGA_M] = om[leg]
+        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
+        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            aux[o + A_HOLD] = hold[leg]
+        else:
+            aux[o + A_HOLD] = tau_fric[leg]
+        aux[o + A_TOE_X] = toe_x[leg]
+        aux[o + A_TOE_Y] = toe_y[leg]
+        aux[o + A_SLIP_V] = toe_vx[leg]
+        aux[o + A_STRUT] = strut[leg]
+        aux[o + A_TAU_BELT] = tau_belt[leg]
+    aux[A_VBATT] = vb
+    ekin = 0.0
+    for i in range(NQ):
+        for j in range(NQ):
+            ekin += dq[i] * M[i, j] * dq[j]
+    aux[A_ENERGY] = 0.5 * ekin + potential_energy(q, l, P)
+    aux[A_KKT_OK] = 1.0 if ok else 0.0
+    return ok
+
+
+@njit(cache=True)
+def project_state(s, P, mi, mf):
+    """Project the dependent coordinates of a full state vector in place."""
+    q = s[0:NQ].copy()
+    dq = s[NQ:2 * NQ].copy()
+    l = s[IL_B:IL_B + 2].copy()
+    project(q, dq, l, P, mi, mf)
+    s[0:NQ] = q
+    s[NQ:2 * NQ] = dq
+    s[IL_B:IL_B + 2] = l
+
+
+@njit(cache=True)
+def impact(s, P, mi, mf, out):
+    """Rigid-body impact onto the constraints of the current modes (SPEC.md 3), in place.
+
+    Solves ``[M R^T; R 0] [dq+; Lambda] = [M dq-; r]`` where R holds the velocity
+    constraints that act impulsively: every pinned toe (perpendicular and, for a strut,
+    axial), massless flight legs, and in Model II a rigid belt for each leg (the belt damper
+    is far stiffer than the gear-train inertia over an impact: alpha' - phi' keeps its
+    value). Stiction cannot carry an impulse, so stuck motor joints do not constrain it.
+
+    out[leg*3 + 0..2]: normal impulse, tangential impulse [N s] of each pinned toe;
+    out[6]: kinetic energy lost [J]. Returns False if singular.
+    """
+    model = int(P[P_MODEL])
+    nact = 7 if model == MODEL_II else 5
+    q = s[0:NQ].copy()
+    dq = s[NQ:2 * NQ].copy()
+    l = s[IL_B:IL_B + 2].copy()
+    # stiction does not act impulsively: treat motor joints as free while projecting
+    mi2 = mi.copy()
+    mi2[MI_MOTOR_B] = 1
+    mi2[MI_MOTOR_B + 1] = 1
+    project(q, dq, l, P, mi2, mf)
+    M = np.empty((NQ, NQ))
+    mass_matrix(q, P, M)
+    ke0 = 0.0
+    dq0 = s[NQ:2 * NQ].copy()
+    if model != MODEL_II:
+        dq0[5] = dq0[3]
+        dq0[6] = dq0[4]
+    for i in range(NQ):
+        for j in range(NQ):
+            ke0 += dq0[i] * M[i, j] * dq0[j]
+    R = np.zeros((MAX_ROWS, NQ))
+    r = np.zeros(MAX_ROWS)
+    rleg = np.zeros(MAX_ROWS, dtype=np.int64)
+    rkind = np.zeros(MAX_ROWS, dtype=np.int64)
+    nr = 0
+    th = q[2]
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        g = th + q[3 + leg]
+        sg = math.sin(g)
+        cg = math.cos(g)
+        kk = 3 + leg
+        if mode == STICK or mode == STRUT:
+            R[nr, 0] = cg
+            R[nr, 1] = sg
+            R[nr, 2] = sL * math.sin(q[3 + leg]) + l[leg]
+            R[nr, kk] = l[leg]
+            rleg[nr] = leg
+            rkind[nr] = 1
+            nr += 1
+            if mode == STRUT:
+                R[nr, 0] = sg
+                R[nr, 1] = -cg
+                R[nr, 2] = -sL * math.cos(q[3 + leg])
+                rleg[nr] = leg
+                rkind[nr] = 2
+                nr += 1
+        elif mode == FLIGHT and P[P_MASSLESS] > 0.5:
+            R[nr, kk] = 1.0
+            if P[P_TD_WORLD] > 0.5:
+                R[nr, 2] = 1.0
+            rleg[nr] = leg
+            rkind[nr] = 4
+            nr += 1
+        if model == MODEL_II:
+            R[nr, 5 + leg] = 1.0
+            R[nr, 3 + leg] = -1.0
+            r[nr] = dq0[5 + leg] - dq0[3 + leg]
+            rleg[nr] = leg
+            rkind[nr] = 3
+            nr += 1
+    n = nact + nr
+    A = np.zeros((n, n))
+    b = np.zeros(n)
+    for i in range(nact):
+        acc = 0.0
+        for j in range(nact):
+            A[i, j] = M[i, j]
+            acc += M[i, j] * dq0[j]
+        b[i] = acc
+    for rr in range(nr):
+        for j in range(nact):
+            A[nact + rr, j] = R[rr, j]
+            A[j, nact + rr] = R[rr, j]
+        b[nact + rr] = r[rr]
+    ok = solve_dense(A, b, n)
+    for i in range(7):
+        out[i] = 0.0
+    if not ok:
+        return False
+    for i in range(nact):
+        dq[i] = b[i]
+    if model != MODEL_II:
+        dq[5] = dq[3]
+        dq[6] = dq[4]
+    for rr in range(nr):
+        lam = -b[nact + rr]
+        leg = rleg[rr]
+        g = th + q[3 + leg]
+        if rkind[rr] == 1:
+            out[3 * leg] += lam * math.sin(g)
+            out[3 * leg + 1] += lam * math.cos(g)
+        elif rkind[rr] == 2:
+            out[3 * leg] -= lam * math.cos(g)
+            out[3 * leg + 1] += lam * math.sin(g)
+    ke1 = 0.0
+    for i in range(NQ):
+        for j in range(NQ):
+            ke1 += dq[i] * M[i, j] * dq[j]
+    out[6] = 0.5 * (ke0 - ke1)
+    s[0:NQ] = q
+    s[NQ:2 * NQ] = dq
+    s[IL_B:IL_B + 2] = l
+    if model == MODEL_II:
+        # a stuck joint was carried along by the impulse: it now slips with the gear train
+        for leg in range(2):
+            if mi[MI_MOTOR_B + leg] == STUCK:
+                mi[MI_MOTOR_B + leg] = 1 if dq[5 + leg] >= 0.0 else -1
+    project_state(s, P, mi, mf)
+    return True

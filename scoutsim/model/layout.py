@@ -1,0 +1,139 @@
+"""Index layout of the compiled model's flat arrays.
+
+The compiled core (Numba) works on flat float64/int64 arrays; this module is the one place
+that names their slots. Leg index 0 is the back virtual leg, 1 the front (SPEC.md 1:
+back hip at -L, front hip at +L along the torso axis).
+"""
+
+# --- legs -------------------------------------------------------------------------------
+BACK = 0
+FRONT = 1
+LEG_NAMES = ("back", "front")
+HIP_SIGN = (-1.0, 1.0)  # hip position along the torso axis, in units of L
+
+# --- state vector s = [q(7), dq(7), l_back, l_front] ----------------------------------------
+# q = [x, y, theta, phi_b, phi_f, alpha_b, alpha_f]; alpha (Model II driven-gear angle
+# relative to the torso) equals phi in the ideal / Model I / passive variants.
+NQ = 7
+IX, IY, ITH, IPHB, IPHF, IALB, IALF = range(7)
+IL_B = 14
+IL_F = 15
+NS = 16
+STATE_NAMES = (
+    "x", "y", "theta", "phi_back", "phi_front", "alpha_back", "alpha_front",
+    "dx", "dy", "dtheta", "dphi_back", "dphi_front", "dalpha_back", "dalpha_front",
+    "leg_length_back", "leg_length_front",
+)
+
+# --- model variants -------------------------------------------------------------------
+MODEL_IDEAL = 0
+MODEL_I = 1
+MODEL_II = 2
+MODEL_PASSIVE = 3
+MODEL_NAMES = {"ideal": MODEL_IDEAL, "I": MODEL_I, "II": MODEL_II, "passive": MODEL_PASSIVE}
+
+# --- contact modes (per leg) ------------------------------------------------------------
+FLIGHT = 0
+STICK = 1   # toe pinned at its anchor, spring/damper along the leg axis
+SLIDE = 2   # toe on the ground sliding (frictionless or Coulomb)
+STRUT = 3   # leg at its stop l0 with the toe pinned: rigid strut
+CONTACT_NAMES = ("flight", "stick", "slide", "strut")
+
+# --- motor-joint friction modes (Model II, per leg) -------------------------------------
+SLIP_NEG = -1
+STUCK = 0
+SLIP_POS = 1
+
+# --- integer mode array mi ------------------------------------------------------------
+MI_CONTACT_B = 0
+MI_CONTACT_F = 1
+MI_MOTOR_B = 2
+MI_MOTOR_F = 3
+MI_SLIDE_DIR_B = 4
+MI_SLIDE_DIR_F = 5
+NMI = 6
+
+# --- float mode array mf --------------------------------------------------------------
+MF_ANCHOR_B = 0   # toe anchor x [m] while pinned
+MF_ANCHOR_F = 1
+NMF = 2
+
+# --- parameter array P ----------------------------------------------------------------
+(P_MT, P_IT, P_ML, P_IL, P_K, P_C, P_L, P_L0, P_D, P_NP, P_G, P_TORSO_LEN, P_TORSO_H,
+ P_N, P_ETA, P_J1, P_J2, P_TAU_S, P_B_J, P_KB, P_CB, P_KT, P_KW, P_RA, P_IMAX, P_VB, P_RB,
+ P_MODEL, P_MU, P_MASSLESS, P_TD_WORLD, P_TD_B, P_TD_F, P_THETA_LIM, P_STRUT_OMEGA,
+ P_SENSE_ALPHA) = range(36)
+NP_ = 36
+
+# --- auxiliary outputs (per evaluation) ---------------------------------------------------
+# per leg (offset leg * NAUX_LEG)
+A_GT = 0         # ground tangential force on the toe [N] (virtual leg)
+A_GN = 1         # ground normal force [N]
+A_FAX = 2        # axial leg force, compression positive [N] (virtual leg)
+A_TAU_CMD = 3    # commanded hip torque, per physical leg, leg side [N m]
+A_TAU_APP = 4    # applied actuator torque, per physical leg, leg/driven-gear side [N m]
+A_CURRENT = 5    # motor current, per motor [A]
+A_OMEGA_M = 6    # motor speed relative to the torso [rad/s]
+A_BELT = 7       # belt deflection alpha - phi [rad]
+A_HOLD = 8       # stiction holding torque at the motor while stuck, per motor [N m]
+A_TOE_X = 9
+A_TOE_Y = 10
+A_SLIP_V = 11    # toe horizontal velocity [m/s]
+A_STRUT = 12     # strut axial multiplier (tension positive) [N]
+A_TAU_BELT = 13  # belt torque on the leg, per physical leg [N m]
+NAUX_LEG = 14
+A_VBATT = 2 * NAUX_LEG      # battery voltage [V]
+A_ENERGY = A_VBATT + 1      # total mechanical energy [J]
+A_KKT_OK = A_ENERGY + 1     # 1 if the constrained dynamics solved, 0 if singular
+NAUX = A_KKT_OK + 1
+AUX_LEG_NAMES = ("ground_force_tangential", "ground_force_normal", "leg_axial_force",
+                 "hip_torque_commanded", "hip_torque_applied", "motor_current",
+                 "motor_speed", "belt_deflection", "stiction_holding_torque", "toe_x",
+                 "toe_y", "toe_velocity_x", "strut_force", "belt_torque")
+
+# --- events ---------------------------------------------------------------------------
+# slots: per leg 3 contact slots, per leg 1 motor slot, 2 fall slots
+NEV_CONTACT = 3
+EV_MOTOR_B = 6
+EV_MOTOR_F = 7
+EV_FALL_HEIGHT = 8
+EV_FALL_PITCH = 9
+NEV = 10
+
+# event kinds written to the event log
+EK_TOUCHDOWN = 1
+EK_LIFTOFF = 2
+EK_SLIDE_START = 3     # toe starts to slide (end-of-stance consistency or Coulomb)
+EK_STICK = 4           # sliding toe sticks again
+EK_STRUT_START = 5
+EK_STRUT_END = 6
+EK_MOTOR_STICK = 7
+EK_MOTOR_SLIP = 8
+EK_FALL = 9
+EK_CTRL_TOUCHDOWN = 10   # controller detects touchdown
+EK_CTRL_LIFTOFF = 11     # controller detects lift-off
+EK_CTRL_SWEEP = 12       # controller passes the sweep limit
+EVENT_KIND_NAMES = {
+    EK_TOUCHDOWN: "touchdown", EK_LIFTOFF: "liftoff", EK_SLIDE_START: "slide_start",
+    EK_STICK: "stick", EK_STRUT_START: "strut_start", EK_STRUT_END: "strut_end",
+    EK_MOTOR_STICK: "motor_stick", EK_MOTOR_SLIP: "motor_slip", EK_FALL: "fall",
+    EK_CTRL_TOUCHDOWN: "controller_touchdown", EK_CTRL_LIFTOFF: "controller_liftoff",
+    EK_CTRL_SWEEP: "controller_sweep_limit",
+}
+# event record: [t, kind, leg, v1, v2, v3]
+# touchdown: v1 = normal impulse [N s], v2 = tangential impulse, v3 = kinetic energy lost [J]
+NEVREC = 6
+
+# --- controller leg states ------------------------------------------------------------
+LS_FLIGHT = 0
+LS_RETRACTION = 1
+LS_BRAKE = 2
+LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+
+# --- run status -----------------------------------------------------------------------
+ST_RUNNING = 0
+ST_COMPLETED = 1
+ST_FELL = 2
+ST_NUMERICAL_FAILURE = 3
+STATUS_NAMES = {ST_RUNNING: "running", ST_COMPLETED: "completed", ST_FELL: "fell",
+                ST_NUMERICAL_FAILURE: "numerical_failure"}

@@ -1,0 +1,532 @@
+"""Hybrid integration: adaptive steps, located events, mode transitions, control samples.
+
+Everything here is compiled with Numba. The run is a sequence of control periods; inside
+each the commanded torques are held (sample-and-hold) and the plant is integrated with the
+Dormand-Prince 5(4) pair under error control, forced to land on the next sample time.
+Plant events (touchdown, lift-off, slide start/stop, strut, stiction stick/slip, fall) are
+sign changes of event functions; each is located on the step's continuous extension by the
+Illinois method to 1e-13 s and the step is then redone exactly to the event time, so
+events are located in continuous time, not snapped to a step or to the control grid. The
+controller sees the consequences at its next sample.
+
+An event function is armed only after it has been seen positive, so a function that is
+zero or negative right after a transition (a toe placed below ground by a massless leg, a
+motor that has just broken away) does not re-trigger at once.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..control.bounding import bounding_step
+from ..model.dynamics import evaluate, impact, project_state
+from ..model.layout import (
+    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, A_TOE_Y,
+    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
+    EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START, EK_TOUCHDOWN,
+    EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NAUX_LEG, NEV, NEV_CONTACT, NEVREC, NQ, NS,
+    P_G, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM,
+    P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_COMPLETED, ST_FELL,
+    ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK,
+)
+from .dopri5 import dense, step
+
+# integrator statistics slots
+S_NFEV = 0
+S_NSTEP = 1
+S_NREJECT = 2
+S_NEVENT = 3
+S_NEND_SLIDE = 4      # end-of-stance slides (SPEC.md 3 consistency case)
+S_NSTRUT = 5
+S_MAX_FRICTION = 6    # largest |Ft|/Fn in stance with Fn above 5 % body weight
+S_MAX_IMPULSE_RATIO = 7
+S_HMIN = 8
+S_HMAX = 9
+NSTAT = 10
+
+EVENT_TIME_TOL = 1e-13
+
+
+@njit(cache=True)
+def body_weight(P):
+    return (P[P_MT] + 2.0 * P[P_NP] * P[P_ML]) * P[P_G]
+
+
+@njit(cache=True)
+def event_values(s, aux, P, mi, out):
+    """Event functions of the current modes; an event happens when one goes below zero."""
+    W = body_weight(P)
+    l0 = P[P_L0]
+    massless = P[P_MASSLESS] > 0.5
+    coulomb = P[P_MU] < 1e300
+    for i in range(NEV):
+        out[i] = 1.0
+    for leg in range(2):
+        o = leg * NAUX_LEG
+        e = leg * NEV_CONTACT
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == FLIGHT:
+            out[e] = aux[o + A_TOE_Y] / l0
+        elif mode == STICK:
+            out[e] = aux[o + A_GN] / W
+            if not massless:
+                out[e + 1] = (l0 - s[IL_B + leg]) / l0
+            if coulomb:
+                out[e + 2] = (P[P_MU] * aux[o + A_GN] - abs(aux[o + A_GT])) / W
+        elif mode == SLIDE:
+            out[e] = aux[o + A_GN] / W
+            if coulomb:
+                out[e + 1] = aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg]
+        elif mode == STRUT:
+            out[e] = aux[o + A_GN] / W
+            out[e + 1] = aux[o + A_STRUT] / W
+        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0:
+            mm = mi[MI_MOTOR_B + leg]
+            if mm == STUCK:
+                out[EV_MOTOR_B + leg] = (P[P_TAU_S] - abs(aux[o + A_HOLD])) / P[P_TAU_S]
+            else:
+                out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N]
+    th = s[2]
+    a = 0.5 * P[P_TORSO_LEN]
+    b = 0.5 * P[P_TORSO_H]
+    out[EV_FALL_HEIGHT] = s[1] - a * abs(math.sin(th)) - b * abs(math.cos(th))
+    out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
+
+
+@njit(cache=True)
+def log_event(ev, nev, t, kind, leg, v1, v2, v3):
+    if nev < ev.shape[0]:
+        ev[nev, 0] = t
+        ev[nev, 1] = kind
+        ev[nev, 2] = leg
+        ev[nev, 3] = v1
+        ev[nev, 4] = v2
+        ev[nev, 5] = v3
+    return nev + 1
+
+
+@njit(cache=True)
+def leave_contact(s, mi, leg):
+    """Switch a leg to flight (its current leg length is kept as the toe's state)."""
+    mi[MI_CONTACT_B + leg] = FLIGHT
+
+
+@njit(cache=True)
+def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
+    """Make the modes consistent with the forces at the current state (after a reset or a
+    change of command): a pinned toe the ground would have to pull is released (to flight,
+    or to a slide if the leg still pushes, SPEC.md 3), a strut in compression becomes a
+    spring leg, a stuck motor joint loaded beyond breakaway slips, a slipping joint at rest
+    sticks if stiction can hold it. Returns the updated event count."""
+    W = body_weight(P)
+    coulomb = P[P_MU] < 1e300
+    model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
+    for _ in range(12):
+        project_state(s, P, mi, mf)
+        evaluate(s, P, mi, mf, cmd, ds, aux)
+        changed = False
+        for leg in range(2):
+            o = leg * NAUX_LEG
+            mode = mi[MI_CONTACT_B + leg]
+            gn = aux[o + A_GN]
+            if mode == STICK:
+                if gn < 0.0:
+                    if aux[o + A_FAX] > 1e-9 * W and P[P_MASSLESS] < 0.5:
+                        mi[MI_CONTACT_B + leg] = SLIDE
+                        gt = aux[o + A_GT]
+                        mi[MI_SLIDE_DIR_B + leg] = -1 if gt > 0.0 else 1
+                        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX], 0.0)
+                        stats[S_NEND_SLIDE] += 1
+                    else:
+                        leave_contact(s, mi, leg)
+                        nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
+                    mi[MI_CONTACT_B + leg] = SLIDE
+                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX], 1.0)
+                    changed = True
+            elif mode == STRUT:
+                if gn < 0.0:
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif aux[o + A_STRUT] < 0.0:
+                    mi[MI_CONTACT_B + leg] = STICK
+                    nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
+                    changed = True
+            elif mode == SLIDE:
+                if gn < 0.0 or aux[o + A_FAX] <= 0.0:
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -1e-9:
+                    # sliding against its friction direction: try sticking at the toe
+                    mi[MI_CONTACT_B + leg] = STICK
+                    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+                    project_state(s, P, mi, mf)
+                    evaluate(s, P, mi, mf, cmd, ds, aux)
+                    if abs(aux[o + A_GT]) > P[P_MU] * aux[o + A_GN] * (1.0 + 1e-9) + 1e-9 * W:
+                        mi[MI_CONTACT_B + leg] = SLIDE
+                        mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                    else:
+                        nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+                    changed = True
+            if model2:
+                mm = mi[MI_MOTOR_B + leg]
+                if mm == STUCK:
+                    hold = aux[o + A_HOLD]
+                    if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
+                        mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
+                        nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
+                        changed = True
+                elif aux[o + A_OMEGA_M] * mm < -1e-9:
+                    # moving against its friction direction: re-examine as stuck
+                    mi[MI_MOTOR_B + leg] = STUCK
+                    project_state(s, P, mi, mf)
+                    evaluate(s, P, mi, mf, cmd, ds, aux)
+                    hold = aux[o + A_HOLD]
+                    if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
+                        mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
+                    else:
+                        nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, hold, 0.0, 0.0)
+                    changed = True
+        if not changed:
+            break
+    project_state(s, P, mi, mf)
+    evaluate(s, P, mi, mf, cmd, ds, aux)
+    return nev
+
+
+@njit(cache=True)
+def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
+    """Pin the toe where it touched the ground and apply the impact (SPEC.md 3)."""
+    o = leg * NAUX_LEG
+    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+    mi[MI_CONTACT_B + leg] = STICK
+    ok = impact(s, P, mi, mf, imp)
+    pn = imp[3 * leg]
+    pt = imp[3 * leg + 1]
+    if pn > 0.0:
+        r = abs(pt) / pn
+        if r > stats[S_MAX_IMPULSE_RATIO]:
+            stats[S_MAX_IMPULSE_RATIO] = r
+    # stiction carries no impulse: impact() released stuck joints; settle() re-examines
+    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[6])
+    return nev, ok
+
+
+@njit(cache=True)
+def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
+    """Mode transition for event slot k at time t (state s already at the event)."""
+    ok = True
+    if k < 2 * NEV_CONTACT:
+        leg = k // NEV_CONTACT
+        slot = k % NEV_CONTACT
+        mode = mi[MI_CONTACT_B + leg]
+        o = leg * NAUX_LEG
+        if mode == FLIGHT:
+            nev, ok = touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp)
+        elif mode == STICK:
+            if slot == 0:
+                # normal force reached zero: lift-off, or a slide if the leg still pushes
+                if aux[o + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
+                    mi[MI_CONTACT_B + leg] = SLIDE
+                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                    stats[S_NEND_SLIDE] += 1
+                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
+                                    aux[o + A_FAX], 0.0)
+                else:
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            elif slot == 1:
+                mi[MI_CONTACT_B + leg] = STRUT
+                stats[S_NSTRUT] += 1
+                nev = log_event(ev, nev, t, EK_STRUT_START, leg, aux[o + A_GN], 0.0, 0.0)
+            else:
+                mi[MI_CONTACT_B + leg] = SLIDE
+                mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
+                                aux[o + A_FAX], 1.0)
+        elif mode == SLIDE:
+            if slot == 0:
+                leave_contact(s, mi, leg)
+                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            else:
+                # slide velocity reached zero: stick here; settle() slides on (possibly
+                # reversed) if the friction cone cannot hold the toe
+                mi[MI_CONTACT_B + leg] = STICK
+                mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+                nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+        elif mode == STRUT:
+            if slot == 0:
+                leave_contact(s, mi, leg)
+                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            else:
+                mi[MI_CONTACT_B + leg] = STICK
+                nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
+    elif k < EV_FALL_HEIGHT:
+        leg = k - EV_MOTOR_B
+        o = leg * NAUX_LEG
+        if mi[MI_MOTOR_B + leg] == STUCK:
+            hold = aux[o + A_HOLD]
+            mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
+            nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
+        else:
+            # a slipping joint comes to rest: stuck; settle() lets it slip on if the
+            # holding torque needed exceeds the breakaway level
+            mi[MI_MOTOR_B + leg] = STUCK
+            nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, aux[o + A_HOLD], 0.0, 0.0)
+    else:
+        nev = log_event(ev, nev, t, EK_FALL, -1, s[1], s[2], 0.0)
+    return nev, ok
+
+
+@njit(cache=True)
+def record_friction(aux, P, mi, stats):
+    """Track the largest friction ratio |Ft|/Fn needed by a pinned toe (Fn > 5 % weight)."""
+    W = body_weight(P)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            o = leg * NAUX_LEG
+            gn = aux[o + A_GN]
+            if gn > 0.05 * W:
+                r = abs(aux[o + A_GT]) / gn
+                if r > stats[S_MAX_FRICTION]:
+                    stats[S_MAX_FRICTION] = r
+
+
+@njit(cache=True)
+def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
+            ev, nev, stats, armed, e_old, e_new, ybuf, imp):
+    """Integrate from t to t_end (one control period) with events.
+
+    hwork[0] carries the step-size guess between calls. Returns (t, nev, status)."""
+    K0 = K[0]
+    nfail = 0
+    e_end = np.empty(NEV)
+    e_tmp = np.empty(NEV)
+    aux_tmp = np.empty(NAUX)
+    project_state(s, P, mi, mf)
+    evaluate(s, P, mi, mf, cmd, K0, aux)
+    stats[S_NFEV] += 1
+    event_values(s, aux, P, mi, e_old)
+    for i in range(NEV):
+        if e_old[i] > 0.0:
+            armed[i] = True
+    h = hwork[0]
+    while t < t_end:
+        remaining = t_end - t
+        last = False
+        if h >= remaining * (1.0 - 1e-12):
+            h = remaining
+            last = True
+        err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol)
+        stats[S_NFEV] += 6
+        if not ok or not (err == err):
+            h *= 0.25
+            nfail += 1
+            if h < 1e-14 or nfail > 60:
+                return t, nev, ST_NUMERICAL_FAILURE
+            continue
+        if err > 1.0:
+            stats[S_NREJECT] += 1
+            fac = 0.9 * err ** -0.2
+            if fac < 0.2:
+                fac = 0.2
+            h *= fac
+            if h < 1e-14:
+                return t, nev, ST_NUMERICAL_FAILURE
+            continue
+        nfail = 0
+        project_state(y_new, P, mi, mf)
+        event_values(y_new, aux_new, P, mi, e_new)
+        # earliest triggered event
+        kmin = -1
+        thmin = 2.0
+        for i in range(NEV):
+            e_end[i] = e_new[i]
+        for k in range(NEV):
+            if armed[k] and e_end[k] < 0.0:
+                # Illinois on the continuous extension, bracket [0, 1]
+                a = 0.0
+                fa = e_old[k]
+                b = 1.0
+                fb = e_end[k]
+                if fa <= 0.0:
+                    th = 0.0
+                else:
+                    side = 0
+                    th = 1.0
+                    for _ in range(100):
+                        th = (a * fb - b * fa) / (fb - fa)
+                        dense(s, h, K, th, ybuf)
+                        evaluate(ybuf, P, mi, mf, cmd, tmp, aux_tmp)
+                        stats[S_NFEV] += 1
+                        project_state(ybuf, P, mi, mf)
+                        event_values(ybuf, aux_tmp, P, mi, e_tmp)
+                        fc = e_tmp[k]
+                        if fc > 0.0:
+                            a = th
+                            fa = fc
+                            if side == -1:
+                                fb *= 0.5
+                            side = -1
+                        else:
+                            b = th
+                            fb = fc
+                            if side == 1:
+                                fa *= 0.5
+                            side = 1
+                        if (b - a) * h < EVENT_TIME_TOL or fc == 0.0:
+                            break
+                    th = b
+                if th < thmin:
+                    thmin = th
+                    kmin = k
+        if kmin >= 0:
+            # redo the step exactly to the event time
+            he = thmin * h
+            if he > 0.0:
+                err, ok = step(s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol)
+                stats[S_NFEV] += 6
+                for i in range(NS):
+                    s[i] = y_new[i]
+                t = t + he
+            stats[S_NSTEP] += 1
+            project_state(s, P, mi, mf)
+            evaluate(s, P, mi, mf, cmd, K0, aux)
+            stats[S_NEVENT] += 1
+            nev, ok = apply_event(kmin, t, s, P, mi, mf, aux, ev, nev, stats, imp)
+            if kmin == EV_FALL_HEIGHT or kmin == EV_FALL_PITCH:
+                return t, nev, ST_FELL
+            if not ok:
+                return t, nev, ST_NUMERICAL_FAILURE
+            nev = settle(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats)
+            stats[S_NFEV] += 1
+            if aux[A_KKT_OK] < 0.5:
+                return t, nev, ST_NUMERICAL_FAILURE
+            event_values(s, aux, P, mi, e_old)
+            for i in range(NEV):
+                armed[i] = e_old[i] > 0.0
+            if he > 0.0 and he < h:
+                h = max(he, 1e-6)
+            if t_end - t < 1e-12:
+                t = t_end
+            continue
+        # accept
+        stats[S_NSTEP] += 1
+        if h < stats[S_HMIN]:
+            stats[S_HMIN] = h
+        if h > stats[S_HMAX]:
+            stats[S_HMAX] = h
+        for i in range(NS):
+            s[i] = y_new[i]
+            K0[i] = K[6, i]
+        for i in range(NAUX):
+            aux[i] = aux_new[i]
+        for i in range(NEV):
+            e_old[i] = e_new[i]
+            if e_new[i] > 0.0:
+                armed[i] = True
+        record_friction(aux, P, mi, stats)
+        if last:
+            t = t_end
+        else:
+            t = t + h
+        fac = 5.0 if err == 0.0 else 0.9 * err ** -0.2
+        if fac > 5.0:
+            fac = 5.0
+        if fac < 0.2:
+            fac = 0.2
+        hnext = h * fac
+        if last:
+            # keep the unclipped guess for the next control period
+            hnext = max(hnext, hwork[0] if hwork[0] < 10 * h else h)
+        h = hnext
+        hwork[0] = h
+    hwork[0] = h if h > 1e-7 else 1e-7
+    return t, nev, ST_RUNNING
+
+
+@njit(cache=True)
+def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
+        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed):
+    """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
+
+    At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
+    is the caller's) updates the held commands, the modes are settled, the sample is
+    recorded, then the plant is integrated to the next sample. Returns
+    (k, n_out, nev, status, t)."""
+    K = np.zeros((7, NS))
+    y_new = np.zeros(NS)
+    tmp = np.zeros(NS)
+    aux = np.zeros(NAUX)
+    aux_new = np.zeros(NAUX)
+    e_old = np.zeros(NEV)
+    e_new = np.zeros(NEV)
+    ybuf = np.zeros(NS)
+    imp = np.zeros(7)
+    ds = np.zeros(NS)
+    tr = np.zeros(2, dtype=np.int64)
+    t = k_start * dt
+    k = k_start
+    while k < k_stop:
+        t = k * dt
+        if builtin:
+            bounding_step(s, P, C, ls, cmd, tr)
+            for leg in range(2):
+                if tr[leg] & 1:
+                    nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
+                if tr[leg] & 2:
+                    nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
+                if tr[leg] & 4:
+                    nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
+        nev = settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats)
+        # record the sample
+        out_t[n_out] = t
+        for i in range(NS):
+            out_s[n_out, i] = s[i]
+        for i in range(NAUX):
+            out_aux[n_out, i] = aux[i]
+        out_ls[n_out, 0] = ls[0]
+        out_ls[n_out, 1] = ls[1]
+        out_ls[n_out, 2] = mi[MI_CONTACT_B]
+        out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
+        out_ls[n_out, 4] = mi[MI_MOTOR_B]
+        out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
+        n_out += 1
+        if aux[A_KKT_OK] < 0.5:
+            return k, n_out, nev, ST_NUMERICAL_FAILURE, t
+        if k >= k_last:
+            k += 1
+            break
+        t_next = (k + 1) * dt
+        t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
+                                 tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
+                                 ybuf, imp)
+        if status != ST_RUNNING:
+            # record the final state (fall or failure) off the grid
+            evaluate(s, P, mi, mf, cmd, ds, aux)
+            out_t[n_out] = t
+            for i in range(NS):
+                out_s[n_out, i] = s[i]
+            for i in range(NAUX):
+                out_aux[n_out, i] = aux[i]
+            out_ls[n_out, 0] = ls[0]
+            out_ls[n_out, 1] = ls[1]
+            out_ls[n_out, 2] = mi[MI_CONTACT_B]
+            out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
+            out_ls[n_out, 4] = mi[MI_MOTOR_B]
+            out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
+            n_out += 1
+            return k + 1, n_out, nev, status, t
+        k += 1
+        if nev > ev.shape[0] - 64:
+            break
+    return k, n_out, nev, ST_RUNNING, t

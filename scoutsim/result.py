@@ -1,0 +1,236 @@
+"""The result of a simulation: time series, events, outcome, statistics and provenance.
+
+Arrays are sampled at the controller's sample times (1 kHz by default; a run that falls
+or fails ends with one extra off-grid sample at that moment). Events are located in
+continuous time. Saved losslessly as a single ``.npz`` file (arrays bit-exact, metadata as
+JSON).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .model import layout as L
+
+_LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
+
+
+def _leg(leg) -> int:
+    try:
+        return _LEGS[leg]
+    except KeyError:
+        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
+
+
+@dataclass
+class SimulationResult:
+    """Everything one run produced.
+
+    Attributes
+    ----------
+    t : (n,) sample times [s].
+    state : (n, 16) states [x, y, theta, phi_b, phi_f, alpha_b, alpha_f, their rates,
+        l_b, l_f] (SI; see ``scoutsim.model.layout.STATE_NAMES``).
+    aux : (n, NAUX) outputs: ground forces, torques, currents, motor speeds, belt
+        deflection, battery voltage, energy (``layout.A_*``).
+    modes : (n, 6) int8: controller leg states (back, front), plant contact modes (back,
+        front), motor-joint stiction modes (back, front).
+    events : (m, 6) [t, kind, leg, v1, v2, v3] (``layout.EK_*``).
+    outcome : "completed", "fell", "numerical_failure" or "interrupted".
+    t_end : time the run reached [s].
+    stats : integrator statistics and contact diagnostics.
+    provenance : parameters, model variant, tolerances, initial state, package version.
+    """
+
+    t: np.ndarray
+    state: np.ndarray
+    aux: np.ndarray
+    modes: np.ndarray
+    events: np.ndarray
+    outcome: str
+    t_end: float
+    stats: dict
+    provenance: dict
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    # -- torso -----------------------------------------------------------------------
+    @property
+    def x(self):
+        """Torso COM forward position [m]."""
+        return self.state[:, L.IX]
+
+    @property
+    def height(self):
+        """Torso COM height y [m]."""
+        return self.state[:, L.IY]
+
+    @property
+    def pitch(self):
+        """Torso pitch theta [rad], nose up positive."""
+        return self.state[:, L.ITH]
+
+    @property
+    def forward_speed(self):
+        """Torso COM forward velocity [m/s]."""
+        return self.state[:, L.NQ + L.IX]
+
+    @property
+    def pitch_rate(self):
+        """[rad/s]"""
+        return self.state[:, L.NQ + L.ITH]
+
+    @property
+    def energy(self):
+        """Total mechanical energy (kinetic + gravity + leg and belt springs) [J]."""
+        return self.aux[:, L.A_ENERGY]
+
+    @property
+    def battery_voltage(self):
+        """[V]"""
+        return self.aux[:, L.A_VBATT]
+
+    # -- legs ------------------------------------------------------------------------
+    def leg_angle(self, leg):
+        """Leg angle phi relative to the torso [rad] (toe ahead of hip positive)."""
+        return self.state[:, L.IPHB + _leg(leg)]
+
+    def leg_rate(self, leg):
+        """[rad/s]"""
+        return self.state[:, L.NQ + L.IPHB + _leg(leg)]
+
+    def motor_angle(self, leg):
+        """Driven-gear angle alpha relative to the torso [rad] (= phi outside Model II)."""
+        return self.state[:, L.IALB + _leg(leg)]
+
+    def leg_length(self, leg):
+        """[m]"""
+        return self.state[:, L.IL_B + _leg(leg)]
+
+    def _aux(self, leg, slot):
+        return self.aux[:, _leg(leg) * L.NAUX_LEG + slot]
+
+    def ground_force(self, leg):
+        """(tangential, normal) ground force on the virtual leg's toe [N]."""
+        return self._aux(leg, L.A_GT), self._aux(leg, L.A_GN)
+
+    def hip_torque_commanded(self, leg):
+        """Commanded hip torque per physical leg [N m]."""
+        return self._aux(leg, L.A_TAU_CMD)
+
+    def hip_torque_applied(self, leg):
+        """Actuator torque delivered per physical leg, N eta K_T i [N m]."""
+        return self._aux(leg, L.A_TAU_APP)
+
+    def motor_current(self, leg):
+        """[A] per motor"""
+        return self._aux(leg, L.A_CURRENT)
+
+    def motor_speed(self, leg):
+        """Motor shaft speed relative to the torso [rad/s]."""
+        return self._aux(leg, L.A_OMEGA_M)
+
+    def belt_deflection(self, leg):
+        """alpha - phi [rad] (Model II; zero otherwise)."""
+        return self._aux(leg, L.A_BELT)
+
+    def leg_axial_force(self, leg):
+        """Leg spring/damper force, compression positive [N] (virtual leg)."""
+        return self._aux(leg, L.A_FAX)
+
+    def leg_state(self, leg):
+        """Controller leg state per sample: 0 flight, 1 stance-retraction, 2 stance-brake."""
+        return self.modes[:, _leg(leg)].astype(int)
+
+    def contact_mode(self, leg):
+        """Plant contact mode per sample: 0 flight, 1 stick, 2 slide, 3 strut."""
+        return self.modes[:, 2 + _leg(leg)].astype(int)
+
+    # -- events ----------------------------------------------------------------------
+    def event_times(self, kind: str, leg=None) -> np.ndarray:
+        """Times [s] of events of a kind ("touchdown", "liftoff", ...), optionally of one leg."""
+        codes = {v: k for k, v in L.EVENT_KIND_NAMES.items()}
+        if kind not in codes:
+            raise ValueError(f"kind = {kind!r} is not allowed: must be one of {sorted(codes)}")
+        m = self.events[:, 1] == codes[kind]
+        if leg is not None:
+            m &= self.events[:, 2] == _leg(leg)
+        return self.events[m, 0]
+
+    def event_table(self) -> list[dict]:
+        """Events as a list of dicts (time, kind, leg, values)."""
+        out = []
+        for row in self.events:
+            leg = int(row[2])
+            out.append({"t": float(row[0]), "kind": L.EVENT_KIND_NAMES.get(int(row[1]), "?"),
+                        "leg": L.LEG_NAMES[leg] if leg >= 0 else None,
+                        "values": [float(v) for v in row[3:]]})
+        return out
+
+    def impacts(self):
+        """Touchdown impacts: (t, leg, normal impulse [N s], tangential impulse [N s],
+        kinetic energy lost [J]) as an array."""
+        m = self.events[:, 1] == L.EK_TOUCHDOWN
+        return self.events[m][:, [0, 2, 3, 4, 5]]
+
+    # -- analysis (computed on demand) -----------------------------------------------------
+    def gait(self, **kwargs):
+        """Strides and gait metrics (:func:`scoutsim.analysis.gait.gait_metrics`)."""
+        from .analysis.gait import gait_metrics
+        key = ("gait", tuple(sorted(kwargs.items())))
+        if key not in self._cache:
+            self._cache[key] = gait_metrics(self, **kwargs)
+        return self._cache[key]
+
+    @property
+    def strides(self):
+        """Per-stride metrics (list of dicts) of all strides."""
+        return self.gait().strides
+
+    def summary(self) -> dict:
+        """The run summary (outcome and steady-state gait metrics), JSON-safe."""
+        return self.gait().summary(self)
+
+    @property
+    def fell(self) -> bool:
+        return self.outcome == "fell"
+
+    # -- persistence -----------------------------------------------------------------
+    def save(self, path) -> Path:
+        """Save losslessly to ``path`` (.npz)."""
+        path = Path(path)
+        meta = {"outcome": self.outcome, "t_end": self.t_end, "stats": self.stats,
+                "provenance": self.provenance, "format": "scoutsim.result/1"}
+        np.savez_compressed(path, t=self.t, state=self.state, aux=self.aux, modes=self.modes,
+                            events=self.events, meta=np.array(json.dumps(meta, allow_nan=True)))
+        return path if path.suffix == ".npz" else path.with_suffix(path.suffix + ".npz")
+
+    @classmethod
+    def load(cls, path) -> "SimulationResult":
+        """Load a result written by :meth:`save`."""
+        with np.load(path, allow_pickle=False) as z:
+            meta = json.loads(str(z["meta"]))
+            if meta.get("format") != "scoutsim.result/1":
+                raise ValueError(f"{path}: not a scoutsim result file")
+            return cls(t=z["t"], state=z["state"], aux=z["aux"], modes=z["modes"],
+                       events=z["events"], outcome=meta["outcome"], t_end=meta["t_end"],
+                       stats=meta["stats"], provenance=meta["provenance"])
+
+    def columns(self) -> dict:
+        """All time series as named 1-D arrays (for CSV export / DataFrames)."""
+        cols = {"t": self.t}
+        for i, n in enumerate(L.STATE_NAMES):
+            cols[n] = self.state[:, i]
+        for leg in range(2):
+            for j, n in enumerate(L.AUX_LEG_NAMES):
+                cols[f"{n}_{L.LEG_NAMES[leg]}"] = self.aux[:, leg * L.NAUX_LEG + j]
+        cols["battery_voltage"] = self.aux[:, L.A_VBATT]
+        cols["energy"] = self.aux[:, L.A_ENERGY]
+        for leg in range(2):
+            cols[f"leg_state_{L.LEG_NAMES[leg]}"] = self.modes[:, leg].astype(float)
+            cols[f"contact_mode_{L.LEG_NAMES[leg]}"] = self.modes[:, 2 + leg].astype(float)
+            cols[f"motor_joint_mode_{L.LEG_NAMES[leg]}"] = self.modes[:, 4 + leg].astype(float)
+        return cols

@@ -1,0 +1,316 @@
+"""The entry point: :func:`simulate` runs the hybrid model under a controller.
+
+    result = scoutsim.simulate(robot, controller, initial_state, duration, model="II")
+
+Parts are swappable: robot parameters (:class:`~scoutsim.parameters.RobotParameters`), the
+transmission variant (``model``: "ideal", "I", "II", "passive"), the controller (the
+compiled Table I law, or any object with ``command(t, sensors)``), the initial state and
+the integrator settings (:class:`IntegratorSettings`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import namedtuple
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from . import __version__
+from .control.bounding import BoundingController, controller_array
+from .model import layout as L
+from .model.packing import robot_array
+from .numerics.hybrid import NSTAT, S_HMIN, run
+from .parameters import ControllerParameters, RobotParameters, validate_robot
+from .result import SimulationResult
+
+Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
+
+
+@dataclass(frozen=True)
+class IntegratorSettings:
+    """Error control of the reference integrator (Dormand-Prince 5(4) with located events).
+
+    rtol, atol : relative / absolute local error tolerance (SI units of each state
+        component). The paper's Working Model runs used an adaptive Kutta-Merson
+        integrator at 1e-10; scoutsim's default 1e-8 / 1e-9 reproduces its gait metrics to
+        better than 1e-4 (see tests/numerics).
+    initial_step : first step guess [s].
+    """
+
+    rtol: float = 1e-8
+    atol: float = 1e-9
+    initial_step: float = 1e-4
+
+    def __post_init__(self):
+        for name in ("rtol", "atol", "initial_step"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"integrator.{name} = {v!r} is not allowed: must be a "
+                                 "finite number > 0")
+        if self.rtol < 1e-14:
+            raise ValueError(f"integrator.rtol = {self.rtol} is not allowed: must be >= 1e-14")
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Initial state of the robot (SI units, angles in rad; SPEC.md 1 conventions).
+
+    The default is how such a robot is set going (SPEC.md 3): dropped with both legs in
+    flight at their touchdown angles, torso pitched nose-up by 4 deg, from a torso-COM height
+    of 0.33 m (toes about 2 cm above the ground), moving forward at 1.2 m/s
+    (see docs/model.md, "Default start"). Leg lengths default to l0.
+    """
+
+    x: float = 0.0
+    y: float = 0.33
+    theta: float = math.radians(4.0)
+    dx: float = 1.2
+    dy: float = 0.0
+    dtheta: float = 0.0
+    phi_back: float | None = None
+    phi_front: float | None = None
+    dphi_back: float = 0.0
+    dphi_front: float = 0.0
+    leg_length_back: float | None = None
+    leg_length_front: float | None = None
+
+    def replace(self, **changes) -> "InitialState":
+        import dataclasses
+        return dataclasses.replace(self, **changes)
+
+
+def _state_vector(init: InitialState, robot: RobotParameters,
+                  ctrl: ControllerParameters | None, passive_angles, passive_world) -> np.ndarray:
+    s = np.zeros(L.NS)
+    vals = asdict(init)
+    for name, v in vals.items():
+        if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise ValueError(f"initial_state.{name} = {v!r} is not allowed: must be finite")
+    if not (-math.pi / 2 < init.theta < math.pi / 2):
+        raise ValueError(f"initial_state.theta = {math.degrees(init.theta):.1f} deg is not "
+                         "allowed: must be in (-90, 90) deg")
+    if ctrl is not None:
+        td = (ctrl.touchdown_angle_back, ctrl.touchdown_angle_front)
+    elif passive_world:
+        td = (passive_angles[0] - init.theta, passive_angles[1] - init.theta)
+    else:
+        td = tuple(passive_angles)
+    phib = td[0] if init.phi_back is None else init.phi_back
+    phif = td[1] if init.phi_front is None else init.phi_front
+    l0 = robot.leg_rest_length
+    lb = l0 if init.leg_length_back is None else init.leg_length_back
+    lf = l0 if init.leg_length_front is None else init.leg_length_front
+    for name, v in (("leg_length_back", lb), ("leg_length_front", lf)):
+        if not (0.0 < v <= l0):
+            raise ValueError(f"initial_state.{name} = {v} m is not allowed: must be in "
+                             f"(0, {l0}] m")
+    s[:7] = [init.x, init.y, init.theta, phib, phif, phib, phif]
+    s[7:14] = [init.dx, init.dy, init.dtheta, init.dphi_back, init.dphi_front,
+               init.dphi_back, init.dphi_front]
+    s[L.IL_B] = lb
+    s[L.IL_F] = lf
+    # both toes must start above ground (the run starts in double flight)
+    for leg, name in ((0, "back"), (1, "front")):
+        sL = (2 * leg - 1) * robot.half_hip_spacing
+        g = init.theta + s[3 + leg]
+        toe_y = init.y + sL * math.sin(init.theta) - s[L.IL_B + leg] * math.cos(g)
+        if toe_y < 0.0:
+            raise ValueError(f"initial_state.y = {init.y} m is not allowed: the {name} toe "
+                             f"starts {-toe_y * 1000:.1f} mm below the ground; the run "
+                             "starts in flight, raise y or change the leg angles")
+    return s
+
+
+def default_initial_state() -> InitialState:
+    """The documented default start (see :class:`InitialState`)."""
+    return InitialState()
+
+
+def simulate(robot: RobotParameters | None = None, controller=None,
+             initial_state: InitialState | None = None, duration: float = 10.0, *,
+             model: str = "II", integrator: IntegratorSettings | None = None,
+             friction_coefficient: float = math.inf, pitch_limit_deg: float = 60.0,
+             passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
+             progress: bool = False, chunk_seconds: float = 1.0) -> SimulationResult:
+    """Simulate the planar Scout II model.
+
+    Parameters
+    ----------
+    robot : RobotParameters, optional
+        Physical parameters (default: Scout II, ``scoutsim/data/scout2.toml``).
+    controller : ControllerParameters, BoundingController, user object or None
+        ControllerParameters or a plain BoundingController run the compiled Table I
+        bounding law; any other object with ``command(t, sensors)`` runs through Python
+        (see :class:`~scoutsim.control.bounding.BoundingController` for the interface).
+        ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
+    initial_state : InitialState, optional
+        Start state (default: :func:`default_initial_state`).
+    duration : float
+        Simulated time [s].
+    model : {"II", "I", "ideal", "passive"}
+        Actuation / transmission variant (SPEC.md 4-5).
+    integrator : IntegratorSettings, optional
+        Tolerances of the reference integrator.
+    friction_coefficient : float
+        Coulomb coefficient of the toe; ``inf`` (default) = no slip.
+    pitch_limit_deg : float
+        |pitch| [deg] that counts as a fall (SPEC.md 3).
+    passive_touchdown_angles : (back, front) [rad]
+        Massless-leg configuration only: where the legs are placed in flight.
+    passive_touchdown_world : bool
+        Massless-leg configuration only: angles from the world vertical (True) or relative
+        to the torso (False).
+    progress : bool
+        Show a progress bar (tqdm) on stderr.
+
+    Returns
+    -------
+    SimulationResult
+        Time series at the control samples, events, outcome and provenance. A run that
+        falls or fails numerically returns normally with ``outcome`` saying so and the data
+        up to that point; a KeyboardInterrupt also returns the data computed so far
+        (``outcome = "interrupted"``).
+    """
+    robot = validate_robot(robot if robot is not None else RobotParameters())
+    integ = integrator or IntegratorSettings()
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
+    if not (0.0 < pitch_limit_deg < 90.0):
+        raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+
+    user_ctrl = None
+    if model == "passive":
+        cparams = None
+        if controller is not None and not isinstance(controller, ControllerParameters):
+            user_ctrl = controller
+    elif controller is None:
+        cparams = ControllerParameters()
+    elif isinstance(controller, ControllerParameters):
+        cparams = controller
+    elif type(controller) is BoundingController:
+        cparams = controller.params
+    elif hasattr(controller, "command"):
+        cparams = getattr(controller, "params", None)
+        if not isinstance(cparams, ControllerParameters):
+            cparams = ControllerParameters()
+        user_ctrl = controller
+    else:
+        raise TypeError("controller must be ControllerParameters, a BoundingController or "
+                        "an object with a command(t, sensors) method")
+    if isinstance(controller, ControllerParameters) or cparams is not None:
+        from .parameters import validate_parameters
+        if user_ctrl is None and cparams is not None:
+            validate_parameters(robot, cparams)
+
+    P = robot_array(robot, model, friction_coefficient=friction_coefficient,
+                    passive_touchdown_angles=passive_touchdown_angles,
+                    passive_touchdown_world=passive_touchdown_world,
+                    pitch_limit=math.radians(pitch_limit_deg))
+    C = controller_array(cparams if (model != "passive" and user_ctrl is None) else None)
+    if model != "passive" and user_ctrl is None:
+        C = controller_array(cparams)
+    dt = cparams.control_period if cparams is not None else 1e-3
+    init = initial_state or default_initial_state()
+    s = _state_vector(init, robot, cparams if model != "passive" else None,
+                      passive_touchdown_angles, passive_touchdown_world)
+
+    n_total = int(round(duration / dt)) + 1
+    k_last = n_total - 1
+    mi = np.zeros(L.NMI, dtype=np.int64)
+    mf = np.zeros(L.NMF)
+    for leg in range(2):
+        w = s[L.NQ + 5 + leg]
+        mi[L.MI_MOTOR_B + leg] = L.STUCK if w == 0.0 else (L.SLIP_POS if w > 0 else L.SLIP_NEG)
+        mi[L.MI_SLIDE_DIR_B + leg] = 1
+    ls = np.zeros(2, dtype=np.int64)
+    cmd = np.zeros(2)
+    hwork = np.array([integ.initial_step])
+    out_t = np.zeros(n_total + 1)
+    out_s = np.zeros((n_total + 1, L.NS))
+    out_aux = np.zeros((n_total + 1, L.NAUX))
+    out_ls = np.zeros((n_total + 1, 6), dtype=np.int8)
+    ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
+    stats = np.zeros(NSTAT)
+    stats[S_HMIN] = np.inf
+    armed = np.zeros(L.NEV, dtype=np.bool_)
+    n_out = 0
+    nev = 0
+    status = L.ST_RUNNING
+    k = 0
+    t_now = 0.0
+    wall0 = time.perf_counter()
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=round(duration, 3), unit="s", unit_scale=False, desc=f"Model {model}",
+                   leave=False, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
+    chunk = max(1, int(round(chunk_seconds / dt))) if user_ctrl is None else 1
+    if user_ctrl is not None and hasattr(user_ctrl, "reset"):
+        user_ctrl.reset(robot, _sensors(s, cparams, model))
+    interrupted = False
+    try:
+        while k <= k_last and status == L.ST_RUNNING:
+            if user_ctrl is not None:
+                sens = _sensors(s, cparams, model)
+                cmd[:] = user_ctrl.command(k * dt, sens)
+                if not np.all(np.isfinite(cmd)):
+                    raise ValueError(f"controller returned non-finite torques {cmd} at t = {k * dt} s")
+                states = getattr(user_ctrl, "leg_states", None)
+                if states is not None:
+                    ls[:] = states
+            k_stop = min(k + chunk, k_last + 1)
+            k_prev = k
+            k, n_out, nev, status, t_now = run(
+                s, P, mi, mf, C, ls, cmd, k, k_stop, k_last, dt, integ.rtol, integ.atol,
+                user_ctrl is None, hwork, out_t, out_s, out_aux, out_ls, n_out, ev, nev,
+                stats, armed)
+            if nev > ev.shape[0] - 64:
+                ev = np.concatenate([ev, np.zeros_like(ev)])
+            if bar is not None:
+                bar.update(round((k - k_prev) * dt, 6))
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        if bar is not None:
+            bar.close()
+    wall = time.perf_counter() - wall0
+    if interrupted:
+        outcome = "interrupted"
+    elif status == L.ST_RUNNING:
+        outcome = "completed"
+    else:
+        outcome = L.STATUS_NAMES[status]
+    provenance = {
+        "scoutsim_version": __version__,
+        "model": model,
+        "robot": asdict(robot),
+        "controller": (asdict(cparams) if cparams is not None else None),
+        "controller_kind": ("builtin" if user_ctrl is None and model != "passive" else
+                            (type(user_ctrl).__name__ if user_ctrl is not None else "none")),
+        "initial_state": asdict(init),
+        "integrator": asdict(integ),
+        "duration_s": duration,
+        "friction_coefficient": (None if math.isinf(friction_coefficient) else friction_coefficient),
+        "pitch_limit_deg": pitch_limit_deg,
+        "passive_touchdown_angles_rad": list(passive_touchdown_angles),
+        "passive_touchdown_world": passive_touchdown_world,
+        "control_period_s": dt,
+    }
+    return SimulationResult(
+        t=out_t[:n_out].copy(), state=out_s[:n_out].copy(), aux=out_aux[:n_out].copy(),
+        modes=out_ls[:n_out].copy(), events=ev[:min(nev, ev.shape[0])].copy(),
+        outcome=outcome, t_end=float(t_now if status != L.ST_RUNNING else out_t[n_out - 1]),
+        stats={name: float(stats[i]) for i, name in enumerate(
+            ["rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
+             "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio",
+             "min_step_s", "max_step_s"])} | {"wall_time_s": wall},
+        provenance=provenance)
+
+
+def _sensors(s, cparams, model):
+    use_alpha = cparams is not None and cparams.sense_motor_angle and model == "II"
+    i0 = L.IALB if use_alpha else L.IPHB
+    return Sensors(hip_angle=s[i0:i0 + 2].copy(), hip_rate=s[L.NQ + i0:L.NQ + i0 + 2].copy(),
+                   leg_length=s[L.IL_B:L.IL_B + 2].copy())
