@@ -28,7 +28,7 @@ from ..model.layout import (
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
     EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START, EK_TOUCHDOWN,
     EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NAUX_LEG, NEV, NEV_CONTACT, NEVREC, NQ, NS,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NEVREC, NQ, NS,
     P_G, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM,
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_COMPLETED, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK,
@@ -310,6 +310,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     K0 = K[0]
     nfail = 0
     e_end = np.empty(NEV)
+    pending = np.zeros(NEV, dtype=np.bool_)
+    mi_before = np.zeros(NMI, dtype=np.int64)
     e_tmp = np.empty(NEV)
     aux_tmp = np.empty(NAUX)
     project_state(s, P, mi, mf)
@@ -401,17 +403,43 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
             evaluate(s, P, mi, mf, cmd, K0, aux)
-            stats[S_NEVENT] += 1
-            nev, ok = apply_event(kmin, t, s, P, mi, mf, aux, ev, nev, stats, imp)
-            if kmin == EV_FALL_HEIGHT or kmin == EV_FALL_PITCH:
-                return t, nev, ST_FELL
-            if not ok:
-                return t, nev, ST_NUMERICAL_FAILURE
-            nev = settle(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats)
-            stats[S_NFEV] += 1
-            if aux[A_KKT_OK] < 0.5:
-                return t, nev, ST_NUMERICAL_FAILURE
-            event_values(s, aux, P, mi, e_old)
+            # apply the event, then any other armed event that has also been reached at
+            # this instant (simultaneous touchdowns of a pitch-free landing, ...)
+            for i in range(NEV):
+                pending[i] = armed[i]
+            kcur = kmin
+            for _ in range(NEV):
+                stats[S_NEVENT] += 1
+                pending[kcur] = False
+                for i in range(NMI):
+                    mi_before[i] = mi[i]
+                nev, ok = apply_event(kcur, t, s, P, mi, mf, aux, ev, nev, stats, imp)
+                if kcur == EV_FALL_HEIGHT or kcur == EV_FALL_PITCH:
+                    return t, nev, ST_FELL
+                if not ok:
+                    return t, nev, ST_NUMERICAL_FAILURE
+                nev = settle(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats)
+                stats[S_NFEV] += 1
+                if aux[A_KKT_OK] < 0.5:
+                    return t, nev, ST_NUMERICAL_FAILURE
+                event_values(s, aux, P, mi, e_old)
+                kcur = -1
+                for i in range(NEV):
+                    if pending[i] and e_old[i] <= 1e-12:
+                        # only if the slot still means the same thing (its leg's modes
+                        # unchanged)
+                        same = True
+                        if i < 2 * NEV_CONTACT:
+                            lg = i // NEV_CONTACT
+                            same = mi[MI_CONTACT_B + lg] == mi_before[MI_CONTACT_B + lg]
+                        elif i < EV_FALL_HEIGHT:
+                            lg = i - EV_MOTOR_B
+                            same = mi[MI_MOTOR_B + lg] == mi_before[MI_MOTOR_B + lg]
+                        if same:
+                            kcur = i
+                            break
+                if kcur < 0:
+                    break
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
             if he > 0.0 and he < h:

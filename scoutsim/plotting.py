@@ -1,0 +1,308 @@
+"""Figures of a bounding run (presentation layer; the only place besides the CLI output
+that shows angles in degrees).
+
+    fig = plot_run(result, "run.png")            # pitch, height, leg angles, hip torques
+    fig = plot_torque_speed(result, "both", "ts.png")   # paper Fig. 11, with motor limits
+
+The functions build :class:`matplotlib.figure.Figure` objects directly, without
+``matplotlib.pyplot``: nothing is registered with a GUI backend, no global figure state is
+kept (no figure leak in long sweeps), ``plt.show`` is never called, and saving renders with
+the Agg (PNG) / PDF / SVG canvas chosen from the file suffix, so everything works headless.
+In Jupyter, ``display(fig)`` (or a figure as the last expression of a cell) shows it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+__all__ = ["plot_run", "plot_torque_speed", "LEG_STATE_COLORS", "motor_limits"]
+
+_LEG_NAMES = ("back", "front")
+_LEG_INDEX = {"back": 0, "front": 1, 0: 0, 1: 1}
+_LEG_COLORS = ("tab:blue", "tab:red")
+
+#: Background colour of each controller leg state (paper Sec. II: flight,
+#: stance-retraction, stance-brake), indexed by the state code of ``result.leg_state``.
+LEG_STATE_COLORS = ("#d6e9ff", "#ffd9a8", "#c9efc4")
+_LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+
+_MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
+                 "passive": "passive (no controller)"}
+
+
+def _leg(leg) -> int:
+    try:
+        return _LEG_INDEX[leg]
+    except (KeyError, TypeError):
+        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
+
+
+def _save(fig: Figure, path) -> None:
+    if path is None:
+        return
+    path = Path(path)
+    if path.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise ValueError(f"path = '{path}' is not allowed: the suffix must be .png, .pdf or .svg")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=150 if path.suffix.lower() == ".png" else None)
+
+
+def _model_label(result) -> str:
+    model = (result.provenance or {}).get("model")
+    return _MODEL_LABELS.get(model, f"model {model}")
+
+
+def _title(result) -> str:
+    outcome = result.outcome
+    if outcome != "completed":
+        outcome = f"{outcome} at t = {result.t_end:.2f} s"
+    return f"Scout II bounding, {_model_label(result)}: {outcome}"
+
+
+def _runs(values: np.ndarray):
+    """(start index, stop index, value) of the runs of equal consecutive values."""
+    if values.size == 0:
+        return []
+    edges = np.flatnonzero(np.diff(values)) + 1
+    starts = np.concatenate([[0], edges])
+    stops = np.concatenate([edges, [values.size]])
+    return [(int(a), int(b), int(values[a])) for a, b in zip(starts, stops)]
+
+
+def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) -> None:
+    """Shade the controller leg state over time in the axes-fraction strip [y0, y1].
+
+    A sample's state holds from its time until the next sample (zero-order hold, as the
+    1 kHz controller does)."""
+    verts = {k: [] for k in range(len(LEG_STATE_COLORS))}
+    for a, b, k in _runs(states):
+        ta = t[a]
+        tb = t[b] if b < t.size else t[-1]
+        if k in verts and tb > ta:
+            verts[k].append([(ta, y0), (tb, y0), (tb, y1), (ta, y1)])
+    for k, v in verts.items():
+        if v:
+            ax.add_collection(PolyCollection(v, facecolors=LEG_STATE_COLORS[k], edgecolors="none",
+                                             transform=ax.get_xaxis_transform(), zorder=0))
+
+
+def plot_run(result, path=None, t_range=None) -> Figure:
+    """Time histories of a run: pitch, COM height, leg angles with leg states, hip torques.
+
+    Four stacked panels share the time axis [s]:
+
+    1. torso pitch theta [deg] (nose up positive);
+    2. torso COM height y [m];
+    3. leg angles phi (relative to the torso, toe ahead of the hip positive) of the back
+       and front virtual legs [deg]; the background shows each leg's controller state
+       (paper Sec. II, Table I: flight / stance-retraction / stance-brake), the back leg
+       in the lower half of the panel, the front leg in the upper half;
+    4. hip torque per physical leg [N m]: commanded (dashed) and delivered by the actuator,
+       N eta K_T i (solid).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run.
+    path : str or path-like, optional
+        Save the figure there; the format follows the suffix (.png, .pdf, .svg).
+    t_range : (t0, t1), optional
+        Time window to show [s] (default: the whole run).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    t = np.asarray(result.t, dtype=float)
+    if t_range is not None:
+        try:
+            t0, t1 = (float(v) for v in t_range)
+        except (TypeError, ValueError):
+            raise ValueError(f"t_range = {t_range!r} is not allowed: must be (t0, t1) in s") from None
+        if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
+            raise ValueError(f"t_range = {t_range!r} is not allowed: must be finite with t1 > t0")
+        sel = np.flatnonzero((t >= t0) & (t <= t1))
+        if sel.size:  # keep one sample either side so lines and bands reach the edges
+            sel = np.arange(max(sel[0] - 1, 0), min(sel[-1] + 2, t.size))
+    else:
+        sel = np.arange(t.size)
+        t0, t1 = (float(t[0]), float(t[-1])) if t.size else (0.0, 1.0)
+    ts = t[sel]
+
+    fig = Figure(figsize=(10, 9.5), layout="constrained")
+    ax_pitch, ax_height, ax_leg, ax_tau = fig.subplots(4, 1, sharex=True)
+
+    ax_pitch.plot(ts, np.degrees(np.asarray(result.pitch)[sel]), color="k", lw=1.2,
+                  label="pitch theta")
+    ax_pitch.axhline(0.0, color="0.6", lw=0.6)
+    ax_pitch.set_ylabel("pitch [deg]")
+
+    ax_height.plot(ts, np.asarray(result.height)[sel], color="k", lw=1.2,
+                   label="torso COM height y")
+    ax_height.set_ylabel("COM height [m]")
+
+    has_controller = (result.provenance or {}).get("controller") is not None
+    for li, name in enumerate(_LEG_NAMES):
+        ax_leg.plot(ts, np.degrees(np.asarray(result.leg_angle(li))[sel]), color=_LEG_COLORS[li],
+                    lw=1.2, label=f"phi {name}")
+        if has_controller:
+            _state_bands(ax_leg, ts, np.asarray(result.leg_state(li))[sel],
+                         0.5 * li, 0.5 * (li + 1))
+    ax_leg.set_ylabel("leg angle phi [deg]")
+    handles, labels = ax_leg.get_legend_handles_labels()
+    if has_controller:
+        for k, name in enumerate(_LEG_STATE_NAMES):
+            handles.append(Patch(facecolor=LEG_STATE_COLORS[k], edgecolor="0.5", lw=0.5))
+            labels.append(name)
+        for li, name in enumerate(_LEG_NAMES):
+            ax_leg.text(1.005, 0.25 + 0.5 * li, f"{name}\nstate", transform=ax_leg.transAxes,
+                        fontsize=7, va="center", ha="left", color=_LEG_COLORS[li])
+    ax_leg.legend(handles, labels, loc="upper left", fontsize=8, ncol=5, framealpha=0.85,
+                  bbox_to_anchor=(0.0, 1.0))
+
+    for li, name in enumerate(_LEG_NAMES):
+        ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=_LEG_COLORS[li],
+                    lw=1.0, ls="--", label=f"{name} commanded")
+        ax_tau.plot(ts, np.asarray(result.hip_torque_applied(li))[sel], color=_LEG_COLORS[li],
+                    lw=1.2, label=f"{name} applied")
+    ax_tau.axhline(0.0, color="0.6", lw=0.6)
+    ax_tau.set_ylabel("hip torque per leg [N m]")
+    ax_tau.set_xlabel("time [s]")
+    ax_tau.legend(loc="upper left", fontsize=8, ncol=4, framealpha=0.85)
+
+    if result.outcome == "fell" and t0 <= result.t_end <= t1:
+        for ax in (ax_pitch, ax_height, ax_leg, ax_tau):
+            ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
+        ax_pitch.plot([], [], color="crimson", lw=1.0, ls=":", label="fall")
+    ax_pitch.legend(loc="upper left", fontsize=8)
+    ax_height.legend(loc="upper left", fontsize=8)
+
+    for ax in (ax_pitch, ax_height, ax_leg, ax_tau):
+        ax.grid(True, lw=0.4, alpha=0.5)
+    ax_tau.set_xlim(t0, t1)
+    fig.suptitle(_title(result))
+    _save(fig, path)
+    return fig
+
+
+def motor_limits(robot: dict) -> dict:
+    """Actuator limits at one physical leg (SPEC.md 4; paper Sec. II, eq. (3)).
+
+    Parameters
+    ----------
+    robot : dict
+        Robot parameters as in ``result.provenance["robot"]`` (SI units).
+
+    Returns
+    -------
+    dict
+        ``N`` gear ratio [-], ``eta`` efficiency [-], ``tau_current`` = N eta K_T i_max
+        [N m] (current limit), ``tau_stall`` = N eta K_T V / R_A [N m] (torque-speed line at
+        zero speed), ``w_no_load`` = V / (K_w N) [rad/s] (leg speed where the line crosses
+        zero torque) and ``slope`` = N eta K_T K_w N / R_A [N m s/rad] (torque lost per unit
+        leg speed).
+    """
+    N = robot["planetary_ratio"] * robot["sprocket_ratio"]
+    eta = robot["gearbox_efficiency"] * robot["sprocket_efficiency"]
+    kt, kw, ra = robot["torque_constant"], robot["speed_constant"], robot["armature_resistance"]
+    v = robot["battery_voltage"]
+    return {"N": N, "eta": eta, "tau_current": N * eta * kt * robot["current_limit"],
+            "tau_stall": N * eta * kt * v / ra, "w_no_load": v / (kw * N),
+            "slope": N * eta * kt * kw * N / ra}
+
+
+def _torque_speed_axes(ax, result, li: int) -> None:
+    robot = (result.provenance or {}).get("robot")
+    model = (result.provenance or {}).get("model")
+    tau = np.asarray(result.hip_torque_applied(li), dtype=float)
+    lim = motor_limits(robot) if robot else None
+    # leg-side speed of the actuator: w_m / N = dphi (ideal, Model I) or dalpha (Model II)
+    if lim is not None:
+        w = np.asarray(result.motor_speed(li), dtype=float) / lim["N"]
+    else:
+        w = np.asarray(result.leg_rate(li), dtype=float)
+    states = np.asarray(result.leg_state(li))
+    has_controller = (result.provenance or {}).get("controller") is not None
+    if has_controller:
+        for k, name in enumerate(_LEG_STATE_NAMES):
+            m = states == k
+            if np.any(m):
+                ax.plot(tau[m], w[m], ls="none", marker=".", ms=2.0, alpha=0.6,
+                        color=("tab:blue", "tab:orange", "tab:green")[k], label=name)
+    else:
+        ax.plot(tau, w, ls="none", marker=".", ms=2.0, alpha=0.6, color="tab:gray",
+                label="samples")
+
+    tmax = float(np.max(np.abs(tau))) if tau.size else 0.0
+    wmax = float(np.max(np.abs(w))) if w.size else 0.0
+    if lim is not None:
+        tmax = max(tmax, lim["tau_current"])
+        wmax = max(wmax, lim["w_no_load"])
+    xl, yl = 1.15 * max(tmax, 1e-3), 1.15 * max(wmax, 1e-3)
+    if lim is not None:
+        note = "" if model != "ideal" else " (not applied in the ideal model)"
+        ic = lim["tau_current"]
+        ax.axvline(ic, color="k", lw=1.0, ls="--", label=f"current limit +-{ic:.1f} N m")
+        ax.axvline(-ic, color="k", lw=1.0, ls="--")
+        ww = np.array([-yl, yl])
+        for sign in (1.0, -1.0):
+            # tau = N eta K_T (+-V - K_w N w) / R_A
+            tt = sign * lim["tau_stall"] - lim["slope"] * ww
+            ax.plot(tt, ww, color="0.35", lw=1.0, ls="-.",
+                    label=(f"torque-speed lines +-V{note}" if sign > 0 else None))
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.axvline(0.0, color="0.6", lw=0.5)
+    ax.set_xlim(-xl, xl)
+    ax.set_ylim(-yl, yl)
+    ax.set_xlabel("applied hip torque per leg [N m]")
+    ax.set_ylabel("leg angular speed [rad/s]")
+    ax.set_title(f"{_LEG_NAMES[li]} leg")
+    ax.grid(True, lw=0.4, alpha=0.5)
+    ax.legend(loc="upper right", fontsize=7, markerscale=4, framealpha=0.85)
+
+
+def plot_torque_speed(result, leg="both", path=None) -> Figure:
+    """Leg angular speed against applied hip torque, with the motor limits (paper Fig. 11).
+
+    Every sample of the run is a dot, coloured by the controller leg state. The speed is
+    the actuator's leg-side speed w = w_m / N (the leg rate dphi/dt for the ideal actuator
+    and Model I, the driven-gear rate dalpha/dt for Model II) [rad/s]; the torque is what
+    the actuator delivers per physical leg, N eta K_T i [N m]. Lines show the actuator's
+    limits (SPEC.md 4): the current limit tau = +-N eta K_T i_max (dashed) and the
+    torque-speed lines tau = N eta K_T (+-V - K_w N w) / R_A at the battery voltage V
+    (dash-dotted), with the parameters from ``result.provenance["robot"]``.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The run.
+    leg : {"back", "front", 0, 1, "both"} or a sequence of legs
+        One panel per leg (default both, side by side).
+    path : str or path-like, optional
+        Save the figure there (.png, .pdf, .svg).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if isinstance(leg, str) and leg == "both":
+        legs = [0, 1]
+    elif isinstance(leg, (list, tuple)):
+        legs = [_leg(x) for x in leg]
+        if not legs:
+            raise ValueError("leg = [] is not allowed: give at least one leg")
+    else:
+        legs = [_leg(leg)]
+    fig = Figure(figsize=(5.5 * len(legs), 5.0), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(legs), sharey=True, squeeze=False)[0])
+    for ax, li in zip(axes, legs):
+        _torque_speed_axes(ax, result, li)
+    fig.suptitle(f"Torque-speed, {_model_label(result)} ({result.outcome})")
+    _save(fig, path)
+    return fig
