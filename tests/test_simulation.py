@@ -1,0 +1,141 @@
+"""Tests of the simulate() entry point: equivalences, limits, stiction, outcomes, persistence."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim import (BoundingController, ControllerParameters, InitialState,
+                      IntegratorSettings, RobotParameters, SimulationResult)
+
+TIGHT = IntegratorSettings(rtol=1e-10, atol=1e-10)
+
+
+def lumped(robot: RobotParameters) -> RobotParameters:
+    """One 'physical' leg per virtual leg carrying the doubled per-leg values; two motors
+    in parallel = one motor with half the resistance and twice the current limit."""
+    n = robot.legs_per_virtual_leg
+    return dataclasses.replace(
+        robot, legs_per_virtual_leg=1, leg_mass=n * robot.leg_mass,
+        leg_inertia=n * robot.leg_inertia, leg_stiffness=n * robot.leg_stiffness,
+        leg_damping=n * robot.leg_damping, drive_gear_inertia=n * robot.drive_gear_inertia,
+        driven_gear_inertia=n * robot.driven_gear_inertia,
+        joint_stiction=n * robot.joint_stiction, joint_damping=n * robot.joint_damping,
+        belt_stiffness=n * robot.belt_stiffness, belt_damping=n * robot.belt_damping,
+        armature_resistance=robot.armature_resistance / n,
+        current_limit=n * robot.current_limit)
+
+
+def lumped_controller(c: ControllerParameters, n: int) -> ControllerParameters:
+    g = {f: n * getattr(c, f) for f in ("flight_kp_front", "flight_kd_front", "flight_kp_back",
+                                         "flight_kd_back", "brake_kp_front", "brake_kd_front",
+                                         "brake_kp_back", "brake_kd_back")}
+    return dataclasses.replace(c, **g)
+
+
+@pytest.mark.parametrize("model", ["I", "II"])
+def test_virtual_leg_of_two_equals_one_with_lumped_parameters(model):
+    robot = RobotParameters()
+    ctrl = ControllerParameters()
+    a = scoutsim.simulate(robot, ctrl, None, 0.6, model=model, integrator=TIGHT)
+    b = scoutsim.simulate(lumped(robot), lumped_controller(ctrl, 2), None, 0.6, model=model,
+                          integrator=TIGHT)
+    assert a.outcome == b.outcome
+    assert len(a.event_times("touchdown")) >= 2
+    assert np.allclose(a.state, b.state, rtol=0, atol=1e-7)
+    # per-physical-leg torque is half the lumped one
+    assert np.allclose(a.hip_torque_applied("back") * 2, b.hip_torque_applied("back"), atol=1e-5)
+
+
+def test_model_II_approaches_model_I_in_the_rigid_limit():
+    """Belt stiffer and gear inertia smaller -> Model II -> Model I (no joint friction)."""
+    base = RobotParameters(joint_stiction=0.0, joint_damping=0.0)
+    ctrl = ControllerParameters(sense_motor_angle=False)
+    ref = scoutsim.simulate(base, ctrl, None, 0.25, model="I", integrator=TIGHT)
+    errs = []
+    for f in (1.0, 10.0, 100.0):
+        rob = dataclasses.replace(base, belt_stiffness=base.belt_stiffness * f,
+                                  driven_gear_inertia=base.driven_gear_inertia / f,
+                                  drive_gear_inertia=base.drive_gear_inertia / f)
+        r = scoutsim.simulate(rob, ctrl, None, 0.25, model="II")
+        n = min(len(r.t), len(ref.t))
+        errs.append(np.max(np.abs(r.state[:n, :3] - ref.state[:n, :3])))
+    assert errs[2] < errs[1] < errs[0]
+    assert errs[2] < 0.1 * errs[0]
+
+
+class ConstantTorque:
+    """User controller: constant hip torque on both legs (per physical leg, N m)."""
+
+    def __init__(self, tau):
+        self.tau = tau
+
+    def command(self, t, sensors):
+        return (self.tau, self.tau)
+
+
+@pytest.mark.parametrize("tau_leg, moves", [(0.4, False), (0.8, True)])
+def test_stiction_holds_below_breakaway_and_releases_above(tau_leg, moves):
+    """Model II in free fall (no gravity torques between bodies): a motor torque below the
+    motor-joint stiction (N * 5.5e-3 = 0.56 N m at the leg) leaves the leg still, above it
+    the gear train breaks away."""
+    robot = RobotParameters()
+    breakaway_leg = robot.gear_ratio * robot.joint_stiction
+    assert (tau_leg < breakaway_leg) != moves
+    init = InitialState(y=5.0, theta=0.0, dx=0.0, dtheta=0.0)
+    r = scoutsim.simulate(robot, ConstantTorque(tau_leg), init, 0.2, model="II",
+                          integrator=TIGHT)
+    travel = np.max(np.abs(r.motor_angle("back") - r.motor_angle("back")[0]))
+    if moves:
+        assert travel > 1e-3
+    else:
+        assert travel < 1e-12
+        assert np.all(r.modes[:, 4] == 0)   # stuck all along
+
+
+def test_python_controller_path_matches_compiled():
+    class Same(BoundingController):
+        pass
+
+    a = scoutsim.simulate(None, ControllerParameters(), None, 0.4, model="II")
+    b = scoutsim.simulate(None, Same(), None, 0.4, model="II")
+    assert np.array_equal(a.state, b.state)
+    assert np.array_equal(a.leg_state("back"), b.leg_state("back"))
+
+
+def test_fall_returns_data_up_to_the_fall():
+    r = scoutsim.simulate(None, None, InitialState(dx=0.0, dtheta=math.radians(-200)), 5.0,
+                          model="ideal", pitch_limit_deg=10.0)
+    assert r.outcome == "fell"
+    assert r.t_end < 5.0
+    assert r.t[-1] == pytest.approx(r.t_end)
+    assert len(r.event_times("fall")) == 1
+    assert abs(math.degrees(r.pitch[-1])) == pytest.approx(10.0, abs=1e-6)
+
+
+def test_save_load_lossless(tmp_path):
+    r = scoutsim.simulate(duration=0.3, model="II")
+    p = r.save(tmp_path / "run.npz")
+    q = SimulationResult.load(p)
+    for name in ("t", "state", "aux", "modes", "events"):
+        assert np.array_equal(getattr(r, name), getattr(q, name))
+    assert q.provenance == r.provenance and q.outcome == r.outcome
+
+
+@pytest.mark.parametrize("kw, field", [
+    ({"duration": -1.0}, "duration"),
+    ({"model": "III"}, "model"),
+    ({"initial_state": InitialState(y=0.2)}, "initial_state.y"),
+    ({"initial_state": InitialState(theta=math.nan)}, "initial_state.theta"),
+    ({"integrator": None, "friction_coefficient": -0.5}, "friction_coefficient"),
+])
+def test_bad_simulation_input_names_the_field(kw, field):
+    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+        scoutsim.simulate(**kw)
+
+
+def test_bad_integrator_settings():
+    with pytest.raises(ValueError, match="rtol"):
+        IntegratorSettings(rtol=0.0)
