@@ -187,8 +187,8 @@ class ControllerParameters:
     brake_kp_back: float = 300.0
     brake_kd_back: float = 5.0
     control_period: float = 1.0e-3
-    touchdown_compression: float = 4.0e-3
-    liftoff_compression: float = 3.0e-3
+    touchdown_compression: float = 8.0e-3
+    liftoff_compression: float = 6.0e-3
     sense_motor_angle: bool = True
 
     def replace(self, **changes) -> "ControllerParameters":

@@ -241,18 +241,22 @@ def test_fallen_run_is_not_steady_bounding():
 
 
 def test_motor_saturation_fraction_and_belt_deflection():
+    """Saturated = operating point on the current limit or on the torque-speed line."""
     r = make_result()
     rp = scoutsim.RobotParameters()
-    k = rp.gear_ratio * rp.efficiency * rp.torque_constant
     o = L.BACK * L.NAUX_LEG
-    tau = -3.0
     r.modes[1000:2000, L.BACK] = L.LS_RETRACTION
     r.modes[2000:2500, L.BACK] = L.LS_BRAKE
-    r.aux[:, o + L.A_TAU_CMD] = tau
-    r.aux[:, o + L.A_CURRENT] = tau / k
-    r.aux[1000:1250, o + L.A_CURRENT] = tau / k + 1e-3     # limited: 250 of 1000 samples
-    r.aux[1250:1260, o + L.A_CURRENT] = tau / k + 1e-9     # within the 1e-6 A tolerance
-    r.aux[2000:2500, o + L.A_CURRENT] = 0.0                # brake: does not count
+    r.aux[:, L.A_VBATT] = rp.battery_voltage
+    r.aux[:, o + L.A_CURRENT] = -3.0                      # inside the limits
+    r.aux[:, o + L.A_OMEGA_M] = -100.0
+    r.aux[1000:1200, o + L.A_CURRENT] = -rp.current_limit  # on the current limit: 200
+    # on the torque-speed line: R i + K_w w = -V_b  -> 50 samples
+    w = -300.0
+    r.aux[1200:1250, o + L.A_OMEGA_M] = w
+    r.aux[1200:1250, o + L.A_CURRENT] = (-rp.battery_voltage - rp.speed_constant * w) / rp.armature_resistance
+    r.aux[1250:1260, o + L.A_CURRENT] = -0.9 * rp.current_limit   # near, but not on, a limit
+    r.aux[2000:2500, o + L.A_CURRENT] = -rp.current_limit          # brake: does not count
     g = gait_metrics(r)
     assert g.motor_saturation_fraction(r, "back") == pytest.approx(0.25)
     assert g.motor_saturation_fraction(r, "front") is None  # never in retraction
