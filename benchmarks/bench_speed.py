@@ -1,0 +1,80 @@
+"""Speed benchmark (issue: 10 s of Model II bounding; real-time factor; SciPy baseline).
+
+    python benchmarks/bench_speed.py [--baseline-seconds 0.3]
+
+Measures in one run, on one core:
+* first-call compile time (fresh Numba cache in a new process);
+* cached start-up: wall time of ``scoutsim run --duration 1`` in a new process;
+* wall time of 10 s of Model II at the default tolerance (best of 3) -> real-time factor;
+* the same model in plain Python integrated by SciPy solve_ivp (benchmarks/scipy_baseline.py,
+  NUMBA_DISABLE_JIT=1), over the first ``--baseline-seconds`` of the same run, and scoutsim
+  over the same span -> speed ratio per simulated second.
+Targets of issue 2 are printed next to the measurements; nothing here asserts.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def sub(cmd, env=None):
+    t0 = time.perf_counter()
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
+    return time.perf_counter() - t0, out.stdout
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--baseline-seconds", type=float, default=0.3)
+    args = ap.parse_args()
+    import scoutsim
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        t_compile, _ = sub([sys.executable, "-c",
+                            "import scoutsim; scoutsim.simulate(duration=0.01, model='II')"], env)
+    scoutsim.simulate(duration=0.01, model="II")  # warm the normal cache
+    with tempfile.TemporaryDirectory() as out:
+        t_start, _ = sub([sys.executable, "-m", "scoutsim", "run", "--duration", "1",
+                          "--out", out, "--no-progress"])
+    walls = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        r = scoutsim.simulate(duration=10.0, model="II")
+        walls.append(time.perf_counter() - t0)
+    w10 = min(walls)
+    # scoutsim over the baseline span
+    span = args.baseline_seconds
+    ws = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        scoutsim.simulate(duration=span, model="II")
+        ws.append(time.perf_counter() - t0)
+    w_span = min(ws)
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    _, out = sub([sys.executable, str(HERE / "scipy_baseline.py"), str(span), "II"], env)
+    base = json.loads(out.strip().splitlines()[-1])
+    rows = [
+        ("first-call compile (new process, empty cache)", f"{t_compile:.1f} s", "reported"),
+        ("cached start-up: scoutsim run --duration 1", f"{t_start:.2f} s", "< 3 s"),
+        ("10 s Model II, default tolerance, best of 3", f"{w10 * 1000:.0f} ms", "<= 50 ms"),
+        ("real-time factor", f"{10.0 / w10:.1f}", ">= 200"),
+        (f"SciPy solve_ivp baseline, {span} s simulated", f"{base['wall_s']:.2f} s", ""),
+        (f"scoutsim, same {span} s", f"{w_span * 1000:.1f} ms", ""),
+        ("speed-up over SciPy baseline", f"{base['wall_s'] / w_span:.1f}x", ">= 20x"),
+    ]
+    print(f"scoutsim {scoutsim.__version__}  outcome of the 10 s run: {r.outcome} "
+          f"(t_end {r.t_end:.2f} s, {int(r.stats['rhs_evaluations'])} RHS evaluations)")
+    for name, val, target in rows:
+        print(f"{name:<52} {val:>12}   target {target}")
+
+
+if __name__ == "__main__":
+    main()
