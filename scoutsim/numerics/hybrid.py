@@ -208,9 +208,25 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     o = leg * NAUX_LEG
     mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
     mi[MI_CONTACT_B + leg] = STICK
+    s_pre = s.copy()
+    mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
     pn = imp[3 * leg]
     pt = imp[3 * leg + 1]
+    if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
+        # Coulomb floor: the pinning impulse lies outside the friction cone (for a
+        # massless toe on a compliant leg the only cone-consistent impulse is zero):
+        # no impulse, the toe lands sliding
+        for i in range(s.shape[0]):
+            s[i] = s_pre[i]
+        for i in range(mi.shape[0]):
+            mi[i] = mi_pre[i]
+        mi[MI_CONTACT_B + leg] = SLIDE
+        mi[MI_SLIDE_DIR_B + leg] = 1 if aux[o + A_SLIP_V] >= 0.0 else -1
+        project_state(s, P, mi, mf)
+        nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
+        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, 0.0, 0.0, 2.0)
+        return nev, True
     if pn > 0.0:
         r = abs(pt) / pn
         if r > stats[S_MAX_IMPULSE_RATIO]:
