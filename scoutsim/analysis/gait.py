@@ -26,6 +26,7 @@ Stride, GaitMetrics, SUMMARY_KEYS, STRIDE_METRICS
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field, fields
 
@@ -527,7 +528,25 @@ class GaitMetrics:
                 "strides": [s.to_dict() for s in self.strides]}
 
 
-def gait_metrics(result, transient_s: float = 2.0) -> GaitMetrics:
+def _converged_tail(strides, tol):
+    """Keep ``steady`` only for the contiguous final run of candidate strides whose period
+    lies within ``tol`` (relative) of the median period of the last seven candidates: the
+    gait has converged there. Earlier strides are transient however late they start."""
+    cand = [i for i, st in enumerate(strides) if st.steady]
+    if not cand:
+        return strides
+    ref = float(np.median([strides[i].period_s for i in cand[-7:]]))
+    first = len(strides)
+    for i in reversed(cand):
+        if abs(strides[i].period_s - ref) <= tol * ref and (first == len(strides) or i == first - 1):
+            first = i
+        else:
+            break
+    return [dataclasses.replace(st, steady=(i >= first and st.steady))
+            for i, st in enumerate(strides)]
+
+
+def gait_metrics(result, transient_s: float = 2.0, period_tolerance: float = 0.05) -> GaitMetrics:
     """Split a run into strides and compute the gait metrics (SPEC.md 8; paper Sec. IV).
 
     Parameters
@@ -538,6 +557,10 @@ def gait_metrics(result, transient_s: float = 2.0) -> GaitMetrics:
     transient_s : float
         Strides that start before this time [s] are part of the transient and excluded
         from the steady-state means (default 2 s).
+    period_tolerance : float
+        Steady strides are the final contiguous strides (after ``transient_s``) whose
+        period is within this fraction of the median of the last seven (default 5 %):
+        a slow transient is not averaged into the steady state.
 
     Returns
     -------
@@ -549,8 +572,11 @@ def gait_metrics(result, transient_s: float = 2.0) -> GaitMetrics:
             and transient_s >= 0):
         raise ValueError(f"transient_s = {transient_s!r} is not allowed: must be a finite "
                          "number >= 0")
+    if not (isinstance(period_tolerance, (int, float)) and 0 < period_tolerance < 1):
+        raise ValueError(f"period_tolerance = {period_tolerance!r} is not allowed: must be "
+                         "in (0, 1)")
     stances = (stance_intervals(result, 0), stance_intervals(result, 1))
-    strides = _strides(result, float(transient_s), stances)
+    strides = _converged_tail(_strides(result, float(transient_s), stances), period_tolerance)
     return GaitMetrics(strides=strides, transient_s=float(transient_s),
                        outcome=str(result.outcome), t_end=float(result.t_end),
                        stance={"back": stances[0], "front": stances[1]})

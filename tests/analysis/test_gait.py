@@ -311,3 +311,17 @@ def test_real_simulation_model_I():
             near |= (np.abs(r.t - a) <= 1.5e-3) | (np.abs(r.t - b) <= 1.5e-3)
         assert np.all(cm[inside & ~near] != L.FLIGHT)
         assert np.all(cm[~inside & ~near] == L.FLIGHT)
+
+
+def test_slow_transient_after_transient_time_is_not_steady():
+    """Strides still converging after transient_s are excluded: steady = converged tail."""
+    lo = [0.3003]
+    periods = [0.40, 0.40, 0.40, 0.40, 0.40, 0.40, 0.37, 0.33] + [0.30] * 12
+    for p in periods:
+        lo.append(lo[-1] + p)
+    r = make_result(duration=lo[-1] + 0.2, lo=np.array(lo))
+    g = gait_metrics(r, transient_s=1.0)
+    assert g.n_steady_strides == 12
+    assert g.stride_period_cv == pytest.approx(0.0, abs=1e-12)
+    assert g.period_s == pytest.approx(0.30)
+    assert g.is_steady_bounding()
