@@ -309,8 +309,11 @@ def battery_voltage(dq, cmd, P):
 
 
 @njit(cache=True)
-def evaluate(s, P, mi, mf, cmd, ds, aux):
-    """Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
+def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
+    """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
+    for cross-checks of the optimized :func:`evaluate_ws`.
+
+    Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
 
     Parameters
     ----------
@@ -576,6 +579,498 @@ def evaluate(s, P, mi, mf, cmd, ds, aux):
     aux[A_ENERGY] = 0.5 * ekin + potential_energy(q, l, P)
     aux[A_KKT_OK] = 1.0 if ok else 0.0
     return ok
+
+
+# --- allocation-free evaluation ----------------------------------------------------------
+# Workspace layout (float64 vector ``wk`` of size WK_SIZE; 2-D workspace ``wA`` of shape
+# (WA_ROWS, MAX_KKT); integer pivots ``piv`` of size MAX_KKT).
+WK_Q = 0
+WK_DQ = WK_Q + NQ
+WK_L = WK_DQ + NQ
+WK_Q_ = WK_L + 2           # generalized forces Q
+WK_H = WK_Q_ + NQ          # Coriolis vector
+WK_R = WK_H + NQ           # constraint right-hand sides r
+WK_B = WK_R + MAX_ROWS     # KKT right-hand side / solution
+WK_B2 = WK_B + MAX_KKT     # second right-hand side (stiff directions)
+WK_RKIND = WK_B2 + MAX_KKT
+WK_RLEG = WK_RKIND + MAX_ROWS
+WK_LEG = WK_RLEG + MAX_ROWS  # per-leg scalars, 16 slots x 2 legs
+WK_SIZE = WK_LEG + 32
+WA_R = MAX_KKT             # rows of wA holding the constraint rows R
+WA_M = WA_R + MAX_ROWS     # rows of wA holding the mass matrix M
+WA_ROWS = WA_M + NQ
+# per-leg scalar slots (offset WK_LEG + 2 * slot + leg)
+LG_FAX, LG_LDOT, LG_GT, LG_GN, LG_TOEX, LG_TOEY, LG_TOEVX, LG_CUR, LG_OM, LG_TAPP, \
+    LG_TBELT, LG_TFRIC, LG_HOLD, LG_STRUT = range(14)
+
+
+@njit(cache=True)
+def new_eval_workspace():
+    """Scratch arrays for :func:`evaluate_ws` (wk, wA, piv)."""
+    return (np.zeros(WK_SIZE), np.zeros((WA_ROWS, MAX_KKT)),
+            np.zeros(MAX_KKT, dtype=np.int64))
+
+
+@njit(cache=True)
+def lu_factor(A, piv, n):
+    """LU factorization with partial pivoting of A[:n,:n] in place (multipliers below the
+    diagonal, row interchanges in piv). The same operations as :func:`solve_dense`, so
+    ``lu_solve`` reproduces its results bit for bit. Returns False if singular."""
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            a = abs(A[i, j])
+            if a > scale:
+                scale = a
+    tiny = 1e-13 * scale if scale > 0.0 else 1e-300
+    for k in range(n):
+        p = k
+        best = abs(A[k, k])
+        for i in range(k + 1, n):
+            a = abs(A[i, k])
+            if a > best:
+                best = a
+                p = i
+        piv[k] = p
+        if best <= tiny:
+            return False
+        if p != k:
+            # columns < k hold the multipliers of earlier steps, which stay with the row
+            # position they were computed for (as the right-hand side is swapped in order)
+            for j in range(k, n):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            f = A[i, k] * inv
+            A[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@njit(cache=True)
+def lu_solve(A, piv, b, o, n):
+    """Solve with the factors of :func:`lu_factor`; right-hand side b[o:o+n], in place."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            tmp = b[o + k]
+            b[o + k] = b[o + p]
+            b[o + p] = tmp
+        bk = b[o + k]
+        for i in range(k + 1, n):
+            f = A[i, k]
+            if f != 0.0:
+                b[o + i] -= f * bk
+    for i in range(n - 1, -1, -1):
+        acc = b[o + i]
+        for j in range(i + 1, n):
+            acc -= A[i, j] * b[o + j]
+        b[o + i] = acc / A[i, i]
+
+
+@njit(cache=True)
+def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
+    """:func:`evaluate` without allocations, on the scratch arrays of
+    :func:`new_eval_workspace`.
+
+    If ``want_stiff``, also fills ``stiff`` (16 x 4) with a rank-2 factorization
+    J_s = U V^T (U = stiff[:, 0:2], V = stiff[:, 2:4]) of the Jacobian of ds with respect
+    to s restricted to the Model II belt dampers (the stiff part, eigenvalues ~ -1e4 /s):
+    ds_ddq ~ -npl c_b G w (w^T Pi dq) per leg, G the constrained inverse mass matrix,
+    w = e_alpha - e_phi, Pi the velocity projection. Zero in the other models."""
+    model = int(P[P_MODEL])
+    nact = 7 if model == MODEL_II else 5
+    q = wk[WK_Q:WK_Q + NQ]
+    dq = wk[WK_DQ:WK_DQ + NQ]
+    l = wk[WK_L:WK_L + 2]
+    for i in range(NQ):
+        q[i] = s[i]
+        dq[i] = s[NQ + i]
+    l[0] = s[IL_B]
+    l[1] = s[IL_B + 1]
+    project(q, dq, l, P, mi, mf)
+
+    Q = wk[WK_Q_:WK_Q_ + NQ]
+    h = wk[WK_H:WK_H + NQ]
+    r = wk[WK_R:WK_R + MAX_ROWS]
+    LG = wk[WK_LEG:WK_LEG + 32]
+    for i in range(NQ):
+        Q[i] = 0.0
+        h[i] = 0.0
+    for i in range(28):
+        LG[i] = 0.0
+    A = wA[0:MAX_KKT]
+    R = wA[WA_R:WA_R + MAX_ROWS]
+    M = wA[WA_M:WA_M + NQ]
+
+    npl = P[P_NP]
+    grav = P[P_G]
+    l0 = P[P_L0]
+    k = P[P_K]
+    c = P[P_C]
+    d = P[P_D]
+    N = P[P_N]
+    Lh = P[P_L]
+    ml = npl * P[P_ML]
+    il = npl * P[P_IL]
+    th = q[2]
+    dth = dq[2]
+    sth = math.sin(th)
+    cth = math.cos(th)
+    massless = P[P_MASSLESS] > 0.5
+
+    # mass matrix, Coriolis vector, gravity (SPEC.md 2); as mass_matrix() / coriolis()
+    for i in range(NQ):
+        for j in range(NQ):
+            M[i, j] = 0.0
+    M[0, 0] = P[P_MT]
+    M[1, 1] = P[P_MT]
+    M[2, 2] = P[P_IT]
+    Q[1] -= P[P_MT] * grav
+    mlg = ml * grav
+    epot = P[P_MT] * grav * q[1]
+    sgl0 = 0.0
+    cgl0 = 0.0
+    sgl1 = 0.0
+    cgl1 = 0.0
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * Lh
+        kk = 3 + leg
+        g = th + q[kk]
+        dg = dth + dq[kk]
+        sg = math.sin(g)
+        cg = math.cos(g)
+        if leg == 0:
+            sgl0 = sg
+            cgl0 = cg
+        else:
+            sgl1 = sg
+            cgl1 = cg
+        jth_x = -sL * sth + d * cg
+        jth_y = sL * cth + d * sg
+        jph_x = d * cg
+        jph_y = d * sg
+        M[0, 0] += ml
+        M[1, 1] += ml
+        M[0, 2] += ml * jth_x
+        M[1, 2] += ml * jth_y
+        M[0, kk] += ml * jph_x
+        M[1, kk] += ml * jph_y
+        M[2, 2] += ml * (jth_x * jth_x + jth_y * jth_y)
+        M[2, kk] += ml * (jth_x * jph_x + jth_y * jph_y)
+        M[kk, kk] += ml * (jph_x * jph_x + jph_y * jph_y)
+        M[2, 2] += il
+        M[2, kk] += il
+        M[kk, kk] += il
+        ax = -sL * cth * dth * dth - d * sg * dg * dg
+        ay = -sL * sth * dth * dth + d * cg * dg * dg
+        h[0] += ml * ax
+        h[1] += ml * ay
+        h[2] += ml * (jth_x * ax + jth_y * ay)
+        h[kk] += ml * d * (cg * ax + sg * ay)
+        Q[1] -= mlg
+        Q[2] -= mlg * (sL * cth + d * sg)
+        Q[kk] -= mlg * d * sg
+        # potential energy (as potential_energy())
+        yc = q[1] + sL * sth - d * cg
+        epot += ml * grav * yc
+        dl = l0 - l[leg]
+        epot += 0.5 * npl * k * dl * dl
+        if model == MODEL_II:
+            bd = q[5 + leg] - q[kk]
+            epot += 0.5 * npl * P[P_KB] * bd * bd
+    if model == MODEL_II:
+        j1 = npl * P[P_J1]
+        j2 = npl * P[P_J2]
+        for leg in range(2):
+            a = 5 + leg
+            M[2, 2] += j1 + j2
+            M[2, a] += j2 + N * j1
+            M[a, a] += j2 + N * N * j1
+    for i in range(NQ):
+        for j in range(i):
+            M[i, j] = M[j, i]
+
+    # actuators
+    vb = battery_voltage(dq, cmd, P)
+    for leg in range(2):
+        if model == MODEL_II:
+            om = N * dq[5 + leg]
+        else:
+            om = N * dq[3 + leg]
+        cur = motor_current(cmd[leg], om, vb, P)
+        tapp = N * P[P_ETA] * P[P_KT] * cur
+        LG[2 * LG_OM + leg] = om
+        LG[2 * LG_CUR + leg] = cur
+        LG[2 * LG_TAPP + leg] = tapp
+        if model == MODEL_II:
+            Q[5 + leg] += npl * tapp
+            mm = mi[MI_MOTOR_B + leg]
+            tf = P[P_B_J] * om
+            if mm != STUCK:
+                tf += P[P_TAU_S] * mm
+            LG[2 * LG_TFRIC + leg] = tf
+            Q[5 + leg] -= npl * N * tf
+            tb = P[P_KB] * (q[5 + leg] - q[3 + leg]) + P[P_CB] * (dq[5 + leg] - dq[3 + leg])
+            LG[2 * LG_TBELT + leg] = tb
+            Q[3 + leg] += npl * tb
+            Q[5 + leg] -= npl * tb
+        elif model != MODEL_PASSIVE:
+            Q[3 + leg] += npl * tapp
+
+    # contact forces and constraint rows
+    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    for i in range(MAX_ROWS):
+        for j in range(NQ):
+            R[i, j] = 0.0
+        r[i] = 0.0
+    nr = 0
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        sL = (2.0 * leg - 1.0) * Lh
+        sg = sgl0 if leg == 0 else sgl1
+        cg = cgl0 if leg == 0 else cgl1
+        dg = dth + dq[3 + leg]
+        hx = q[0] + sL * cth
+        hy = q[1] + sL * sth
+        hvx = dq[0] - sL * sth * dth
+        hvy = dq[1] + sL * cth * dth
+        ll = l[leg]
+        jt_th_x = -sL * sth + ll * cg
+        jt_th_y = sL * cth + ll * sg
+        jt_ph_x = ll * cg
+        jt_ph_y = ll * sg
+        bx = -sL * cth * dth * dth
+        by = -sL * sth * dth * dth
+        kk = 3 + leg
+        # sin(phi), cos(phi) of the leg angle relative to the torso
+        sph = sg * cth - cg * sth
+        cph = cg * cth + sg * sth
+        if mode == STICK or mode == STRUT:
+            ld = -(hvx * sg - hvy * cg)
+            LG[2 * LG_LDOT + leg] = ld
+            F = npl * (k * (l0 - ll) - c * ld)
+            if mode == STRUT:
+                F = npl * k * (l0 - ll)
+            LG[2 * LG_FAX + leg] = F
+            fx = -F * sg
+            fy = F * cg
+            Q[0] += fx
+            Q[1] += fy
+            Q[2] += jt_th_x * fx + jt_th_y * fy
+            Q[kk] += jt_ph_x * fx + jt_ph_y * fy
+            R[nr, 0] = cg
+            R[nr, 1] = sg
+            R[nr, 2] = sL * sph + ll
+            R[nr, kk] = ll
+            r[nr] = -(bx * cg + by * sg + 2.0 * ld * dg)
+            rkind[nr] = 1.0
+            rleg[nr] = leg
+            nr += 1
+            if mode == STRUT:
+                w = P[P_STRUT_OMEGA]
+                R[nr, 0] = sg
+                R[nr, 1] = -cg
+                R[nr, 2] = -sL * cph
+                r[nr] = -(bx * sg - by * cg) + ll * dg * dg + 2.0 * w * ld + w * w * (ll - l0)
+                rkind[nr] = 2.0
+                rleg[nr] = leg
+                nr += 1
+            LG[2 * LG_TOEX + leg] = mf[MF_ANCHOR_B + leg]
+        elif mode == SLIDE:
+            ld = hvy / cg + hy * sg * dg / (cg * cg)
+            LG[2 * LG_LDOT + leg] = ld
+            F = npl * (k * (l0 - ll) - c * ld)
+            LG[2 * LG_FAX + leg] = F
+            mu = P[P_MU]
+            sig = 0.0
+            if mu < 1e300:
+                sig = mu * mi[MI_SLIDE_DIR_B + leg]
+            gn = F / (cg + sig * sg)
+            gt = -sig * gn
+            LG[2 * LG_GN + leg] = gn
+            LG[2 * LG_GT + leg] = gt
+            Q[0] += gt
+            Q[1] += gn
+            Q[2] += jt_th_x * gt + jt_th_y * gn
+            Q[kk] += jt_ph_x * gt + jt_ph_y * gn
+            LG[2 * LG_TOEX + leg] = hx + ll * sg
+            LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
+        else:
+            if massless:
+                R[nr, kk] = 1.0
+                if P[P_TD_WORLD] > 0.5:
+                    R[nr, 2] = 1.0
+                r[nr] = 0.0
+                rkind[nr] = 4.0
+                rleg[nr] = leg
+                nr += 1
+                ld = 0.0
+            elif c > 0.0 and ll < l0:
+                ld = (k / c) * (l0 - ll)
+            else:
+                ld = 0.0
+            LG[2 * LG_LDOT + leg] = ld
+            LG[2 * LG_TOEX + leg] = hx + ll * sg
+            LG[2 * LG_TOEY + leg] = hy - ll * cg
+            LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
+        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            R[nr, 5 + leg] = 1.0
+            r[nr] = 0.0
+            rkind[nr] = 3.0
+            rleg[nr] = leg
+            nr += 1
+
+    # kinetic energy before the factorization
+    ekin = 0.0
+    for i in range(NQ):
+        acc = 0.0
+        for j in range(NQ):
+            acc += M[i, j] * dq[j]
+        ekin += dq[i] * acc
+
+    # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
+    n = nact + nr
+    b = wk[WK_B:WK_B + MAX_KKT]
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = 0.0
+    for i in range(nact):
+        for j in range(nact):
+            A[i, j] = M[i, j]
+        b[i] = Q[i] - h[i]
+    for rr in range(nr):
+        for j in range(nact):
+            A[nact + rr, j] = R[rr, j]
+            A[j, nact + rr] = R[rr, j]
+        b[nact + rr] = r[rr]
+    ok = lu_factor(A, piv, n)
+    if ok:
+        lu_solve(A, piv, wk, WK_B, n)
+
+    for i in range(NQ):
+        ds[i] = dq[i]
+        ds[NQ + i] = 0.0
+    if ok:
+        for i in range(nact):
+            ds[NQ + i] = b[i]
+    if model != MODEL_II:
+        ds[NQ + 5] = ds[NQ + 3]
+        ds[NQ + 6] = ds[NQ + 4]
+    ds[IL_B] = LG[2 * LG_LDOT]
+    ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
+
+    if want_stiff:
+        for i in range(NS):
+            for j in range(4):
+                stiff[i, j] = 0.0
+        if model == MODEL_II and ok:
+            b2 = wk[WK_B2:WK_B2 + MAX_KKT]
+            cb = npl * P[P_CB]
+            for leg in range(2):
+                for i in range(n):
+                    b2[i] = 0.0
+                b2[5 + leg] = 1.0
+                b2[3 + leg] = -1.0
+                lu_solve(A, piv, wk, WK_B2, n)
+                for i in range(nact):
+                    stiff[NQ + i, leg] = -cb * b2[i]
+                # V: d(dalpha - dphi)/d(s_dq) through the velocity projection
+                vcol = 2 + leg
+                if mi[MI_MOTOR_B + leg] != STUCK:
+                    stiff[NQ + 5 + leg, vcol] = 1.0
+                mode = mi[MI_CONTACT_B + leg]
+                if mode == STICK or mode == STRUT:
+                    sg = sgl0 if leg == 0 else sgl1
+                    cg = cgl0 if leg == 0 else cgl1
+                    sL = (2.0 * leg - 1.0) * Lh
+                    ll = l[leg]
+                    sph = sg * cth - cg * sth
+                    stiff[NQ + 0, vcol] = cg / ll
+                    stiff[NQ + 1, vcol] = sg / ll
+                    stiff[NQ + 2, vcol] = (sL * sph + ll) / ll
+                elif mode == FLIGHT and massless:
+                    if P[P_TD_WORLD] > 0.5:
+                        stiff[NQ + 2, vcol] = 1.0
+                else:
+                    stiff[NQ + 3 + leg, vcol] = -1.0
+
+    for rr in range(nr):
+        lam = -b[nact + rr] if ok else 0.0
+        leg = int(rleg[rr])
+        sg = sgl0 if leg == 0 else sgl1
+        cg = cgl0 if leg == 0 else cgl1
+        kind = int(rkind[rr])
+        if kind == 1:
+            LG[2 * LG_GT + leg] += lam * cg
+            LG[2 * LG_GN + leg] += lam * sg
+        elif kind == 2:
+            LG[2 * LG_STRUT + leg] = lam
+            LG[2 * LG_GT + leg] += lam * sg
+            LG[2 * LG_GN + leg] -= lam * cg
+        elif kind == 3:
+            LG[2 * LG_HOLD + leg] = lam / (npl * N)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            sg = sgl0 if leg == 0 else sgl1
+            cg = cgl0 if leg == 0 else cgl1
+            LG[2 * LG_GT + leg] += -LG[2 * LG_FAX + leg] * sg
+            LG[2 * LG_GN + leg] += LG[2 * LG_FAX + leg] * cg
+        o = leg * NAUX_LEG
+        aux[o + A_GT] = LG[2 * LG_GT + leg]
+        aux[o + A_GN] = LG[2 * LG_GN + leg]
+        aux[o + A_FAX] = LG[2 * LG_FAX + leg] if mode != STRUT else -LG[2 * LG_STRUT + leg]
+        aux[o + A_TAU_CMD] = cmd[leg]
+        aux[o + A_TAU_APP] = LG[2 * LG_TAPP + leg]
+        aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
+        aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
+        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
+        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
+        else:
+            aux[o + A_HOLD] = LG[2 * LG_TFRIC + leg]
+        aux[o + A_TOE_X] = LG[2 * LG_TOEX + leg]
+        aux[o + A_TOE_Y] = LG[2 * LG_TOEY + leg]
+        aux[o + A_SLIP_V] = LG[2 * LG_TOEVX + leg]
+        aux[o + A_STRUT] = LG[2 * LG_STRUT + leg]
+        aux[o + A_TAU_BELT] = LG[2 * LG_TBELT + leg]
+    aux[A_VBATT] = vb
+    aux[A_ENERGY] = 0.5 * ekin + epot
+    aux[A_KKT_OK] = 1.0 if ok else 0.0
+    return ok
+
+
+@njit(cache=True)
+def evaluate(s, P, mi, mf, cmd, ds, aux):
+    """Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
+
+    Parameters
+    ----------
+    s : (16,) state [q, dq, l_b, l_f] (SI).
+    P : parameter array (layout.P_*).
+    mi, mf : integer / float mode arrays (contact modes, motor-joint modes, toe anchors).
+    cmd : (2,) commanded hip torque per physical leg, leg side [N m] (sample-and-hold).
+    ds : (16,) output derivative.
+    aux : (NAUX,) output ground forces, torques, currents, energy, ... (layout.A_*).
+
+    Returns
+    -------
+    bool : False if the constrained dynamics are singular.
+
+    Allocates its scratch space; the integrators call :func:`evaluate_ws` with a
+    preallocated workspace instead.
+    """
+    wk = np.empty(WK_SIZE)
+    wA = np.empty((WA_ROWS, MAX_KKT))
+    piv = np.empty(MAX_KKT, dtype=np.int64)
+    stiff = np.empty((1, 1))
+    return evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, False, stiff)
 
 
 @njit(cache=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..model.dynamics import evaluate
+from ..model.dynamics import evaluate_ws, new_eval_workspace
 from ..model.layout import NAUX, NS
 
 C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
@@ -43,10 +43,11 @@ PD = np.array([
 
 
 @njit(cache=True)
-def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol):
+def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
     """One Dormand-Prince step of size h from y, with K[0] = f(y) already filled.
 
     Fills K[1..6], y_new and aux_new (outputs at y_new; K[6] = f(y_new) is FSAL).
+    ``ew`` is the evaluation workspace (:func:`new_eval_workspace`).
     Returns (error_norm, ok); ok is False if the dynamics were singular at a stage."""
     ok = True
     for st in range(1, 7):
@@ -60,7 +61,8 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol):
         if st == 6:
             for i in range(NS):
                 y_new[i] = tmp[i]
-        if not evaluate(tmp, P, mi, mf, cmd, K[st], aux_new):
+        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
+                           ew[3]):
             ok = False
     err = 0.0
     for i in range(NS):
@@ -92,3 +94,10 @@ def dense(y, h, K, theta, out):
 def new_workspace():
     """Scratch arrays for the compiled integrator."""
     return (np.zeros((7, NS)), np.zeros(NS), np.zeros(NS), np.zeros(NAUX))
+
+
+@njit(cache=True)
+def eval_workspace():
+    """Evaluation workspace tuple (wk, wA, piv, stiff) for :func:`evaluate_ws`."""
+    wk, wA, piv = new_eval_workspace()
+    return (wk, wA, piv, np.zeros((NS, 4)))

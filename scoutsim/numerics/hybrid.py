@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..control.bounding import bounding_step
-from ..model.dynamics import evaluate, impact, project_state
+from ..model.dynamics import evaluate_ws, impact, project_state
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, A_TOE_Y,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
@@ -33,7 +33,7 @@ from ..model.layout import (
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_COMPLETED, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK,
 )
-from .dopri5 import dense, step
+from .dopri5 import dense, eval_workspace, step
 
 # integrator statistics slots
 S_NFEV = 0
@@ -117,6 +117,12 @@ def leave_contact(s, mi, leg):
 
 @njit(cache=True)
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
+    """:func:`settle_ws` with its own evaluation workspace."""
+    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace())
+
+
+@njit(cache=True)
+def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
     or to a slide if the leg still pushes, SPEC.md 3), a strut in compression becomes a
@@ -127,7 +133,7 @@ def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
     for _ in range(12):
         project_state(s, P, mi, mf)
-        evaluate(s, P, mi, mf, cmd, ds, aux)
+        evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
         changed = False
         for leg in range(2):
             o = leg * NAUX_LEG
@@ -169,7 +175,7 @@ def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
                     mi[MI_CONTACT_B + leg] = STICK
                     mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
                     project_state(s, P, mi, mf)
-                    evaluate(s, P, mi, mf, cmd, ds, aux)
+                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
                     if abs(aux[o + A_GT]) > P[P_MU] * aux[o + A_GN] * (1.0 + 1e-9) + 1e-9 * W:
                         mi[MI_CONTACT_B + leg] = SLIDE
                         mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
@@ -188,7 +194,7 @@ def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
                     # moving against its friction direction: re-examine as stuck
                     mi[MI_MOTOR_B + leg] = STUCK
                     project_state(s, P, mi, mf)
-                    evaluate(s, P, mi, mf, cmd, ds, aux)
+                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
                     hold = aux[o + A_HOLD]
                     if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
                         mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
@@ -198,7 +204,7 @@ def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
         if not changed:
             break
     project_state(s, P, mi, mf)
-    evaluate(s, P, mi, mf, cmd, ds, aux)
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
     return nev
 
 
@@ -319,7 +325,7 @@ def record_friction(aux, P, mi, stats):
 
 @njit(cache=True)
 def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
-            ev, nev, stats, armed, e_old, e_new, ybuf, imp):
+            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew):
     """Integrate from t to t_end (one control period) with events.
 
     hwork[0] carries the step-size guess between calls. Returns (t, nev, status)."""
@@ -331,7 +337,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     e_tmp = np.empty(NEV)
     aux_tmp = np.empty(NAUX)
     project_state(s, P, mi, mf)
-    evaluate(s, P, mi, mf, cmd, K0, aux)
+    evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3])
     stats[S_NFEV] += 1
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
@@ -344,7 +350,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         if h >= remaining * (1.0 - 1e-12):
             h = remaining
             last = True
-        err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol)
+        err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
         stats[S_NFEV] += 6
         if not ok or not (err == err):
             h *= 0.25
@@ -384,7 +390,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     for _ in range(100):
                         th = (a * fb - b * fa) / (fb - fa)
                         dense(s, h, K, th, ybuf)
-                        evaluate(ybuf, P, mi, mf, cmd, tmp, aux_tmp)
+                        evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False,
+                                    ew[3])
                         stats[S_NFEV] += 1
                         project_state(ybuf, P, mi, mf)
                         event_values(ybuf, aux_tmp, P, mi, e_tmp)
@@ -411,14 +418,14 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             # redo the step exactly to the event time
             he = thmin * h
             if he > 0.0:
-                err, ok = step(s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol)
+                err, ok = step(s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
                 stats[S_NFEV] += 6
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
-            evaluate(s, P, mi, mf, cmd, K0, aux)
+            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3])
             # apply the event, then any other armed event that has also been reached at
             # this instant (simultaneous touchdowns of a pitch-free landing, ...)
             for i in range(NEV):
@@ -434,7 +441,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     return t, nev, ST_FELL
                 if not ok:
                     return t, nev, ST_NUMERICAL_FAILURE
-                nev = settle(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats)
+                nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew)
                 stats[S_NFEV] += 1
                 if aux[A_KKT_OK] < 0.5:
                     return t, nev, ST_NUMERICAL_FAILURE
@@ -518,6 +525,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     imp = np.zeros(7)
     ds = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
+    ew = eval_workspace()
     t = k_start * dt
     k = k_start
     while k < k_stop:
@@ -531,7 +539,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
-        nev = settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats)
+        nev = settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew)
         # record the sample
         out_t[n_out] = t
         for i in range(NS):
@@ -553,10 +561,10 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         t_next = (k + 1) * dt
         t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
                                  tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp)
+                                 ybuf, imp, ew)
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
-            evaluate(s, P, mi, mf, cmd, ds, aux)
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
             out_t[n_out] = t
             for i in range(NS):
                 out_s[n_out, i] = s[i]

@@ -1,0 +1,100 @@
+"""The allocation-free evaluation (dynamics.evaluate_ws) reproduces the reference
+implementation (dynamics.evaluate_reference), and its stiff-Jacobian factors capture the
+belt-damper eigenvalues of Model II."""
+
+import math
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim import InitialState, RobotParameters
+from scoutsim.model import dynamics as D
+from scoutsim.model import layout as L
+from scoutsim.model.packing import robot_array
+
+MASSLESS = RobotParameters(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
+
+
+def _cases(robot, model, mu, **kw):
+    r = scoutsim.simulate(robot, duration=0.4, model=model, friction_coefficient=mu, **kw)
+    P = robot_array(robot, model, friction_coefficient=mu,
+                    passive_touchdown_angles=kw.get("passive_touchdown_angles", (0.0, 0.0)),
+                    passive_touchdown_world=True, pitch_limit=1.0)
+    out = []
+    for n in range(0, len(r.t), 5):
+        s = r.state[n].copy()
+        mi = np.zeros(L.NMI, dtype=np.int64)
+        mf = np.zeros(L.NMF)
+        mi[0:2] = r.modes[n, 2:4]
+        mi[2:4] = r.modes[n, 4:6]
+        mi[4:6] = 1 if n % 2 else -1
+        for leg in range(2):
+            mf[leg] = r.aux[n, leg * L.NAUX_LEG + L.A_TOE_X]
+        cmd = np.array([r.aux[n, L.A_TAU_CMD], r.aux[n, L.NAUX_LEG + L.A_TAU_CMD]])
+        out.append((s, mi, mf, cmd))
+    return P, out
+
+
+CONFIGS = [
+    (RobotParameters(), "II", 0.8, {}),
+    (RobotParameters(), "I", 0.8, {}),
+    (RobotParameters(), "ideal", math.inf, {}),
+    (MASSLESS, "passive", math.inf,
+     dict(initial_state=InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.3),
+          passive_touchdown_angles=(0.05, 0.05))),
+]
+
+
+@pytest.mark.parametrize("robot,model,mu,kw", CONFIGS)
+def test_evaluate_ws_matches_reference(robot, model, mu, kw):
+    P, cases = _cases(robot, model, mu, **kw)
+    wk, wA, piv = D.new_eval_workspace()
+    st = np.zeros((L.NS, 4))
+    worst = 0.0
+    for s, mi, mf, cmd in cases:
+        for motor in ([0, 0], [1, -1], [0, 1]):
+            for contact in (None, [L.STRUT, L.STICK], [L.SLIDE, L.FLIGHT]):
+                mi2 = mi.copy()
+                mi2[2:4] = motor
+                if contact is not None:
+                    mi2[0:2] = contact
+                d1 = np.zeros(L.NS)
+                a1 = np.zeros(L.NAUX)
+                d2 = np.zeros(L.NS)
+                a2 = np.zeros(L.NAUX)
+                ok1 = D.evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
+                ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st)
+                assert ok1 == ok2
+                for x, y in ((d1, d2), (a1, a2)):
+                    fl = 1e-9 * max(np.max(np.abs(x)), 1.0)
+                    worst = max(worst, np.max(np.abs(x - y) / (np.abs(x) + fl)))
+    assert worst < 1e-10
+
+
+def test_stiff_factors_capture_belt_eigenvalues():
+    """The rank-2 U V^T has (nearly) the two fastest eigenvalues of the full Jacobian."""
+    P, cases = _cases(RobotParameters(), "II", 0.8)
+    wk, wA, piv = D.new_eval_workspace()
+    st = np.zeros((L.NS, 4))
+    aux = np.zeros(L.NAUX)
+    for s, mi, mf, cmd in cases[::6]:
+        f0 = np.zeros(L.NS)
+        D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, wk, wA, piv, True, st)
+        J = np.zeros((L.NS, L.NS))
+        for j in range(L.NS):
+            e = 1e-7 * max(1.0, abs(s[j]))
+            sp = s.copy()
+            sp[j] += e
+            sm = s.copy()
+            sm[j] -= e
+            dp = np.zeros(L.NS)
+            dm = np.zeros(L.NS)
+            D.evaluate(sp, P, mi, mf, cmd, dp, aux)
+            D.evaluate(sm, P, mi, mf, cmd, dm, aux)
+            J[:, j] = (dp - dm) / (2 * e)
+        lam_full = np.sort(np.linalg.eigvals(J).real)[:2]
+        Js = st[:, 0:2] @ st[:, 2:4].T
+        lam_s = np.sort(np.linalg.eigvals(Js).real)[:2]
+        assert np.all(lam_full < -3000.0)
+        assert np.allclose(lam_s, lam_full, rtol=0.05)
