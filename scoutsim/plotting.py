@@ -248,14 +248,14 @@ def _torque_speed_axes(ax, result, li: int) -> None:
     if lim is not None:
         note = "" if model != "ideal" else " (not applied in the ideal model)"
         ic = lim["tau_current"]
-        ax.axvline(ic, color="k", lw=1.0, ls="--", label=f"current limit +-{ic:.1f} N m")
+        ax.axvline(ic, color="k", lw=1.0, ls="--", label=f"current limit ±{ic:.1f} N m")
         ax.axvline(-ic, color="k", lw=1.0, ls="--")
         ww = np.array([-yl, yl])
         for sign in (1.0, -1.0):
             # tau = N eta K_T (+-V - K_w N w) / R_A
             tt = sign * lim["tau_stall"] - lim["slope"] * ww
             ax.plot(tt, ww, color="0.35", lw=1.0, ls="-.",
-                    label=(f"torque-speed lines +-V{note}" if sign > 0 else None))
+                    label=(f"torque-speed lines ±V{note}" if sign > 0 else None))
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.axvline(0.0, color="0.6", lw=0.5)
     ax.set_xlim(-xl, xl)

@@ -123,8 +123,14 @@ def _state_vector(init: InitialState, robot: RobotParameters,
     return s
 
 
-def default_initial_state() -> InitialState:
-    """The documented default start (see :class:`InitialState`)."""
+def default_initial_state(model: str = "II") -> InitialState:
+    """The documented default start (see :class:`InitialState`).
+
+    For the passive model (legs placed at the passive touchdown angles, vertical by
+    default) the start is level at 0.36 m with 1 m/s forward: the controlled robot's
+    nose-up start would put a vertical back leg's toe below the ground."""
+    if model == "passive":
+        return InitialState(y=0.36, theta=0.0, dx=1.0)
     return InitialState()
 
 
@@ -212,7 +218,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     if model != "passive" and user_ctrl is None:
         C = controller_array(cparams)
     dt = cparams.control_period if cparams is not None else 1e-3
-    init = initial_state or default_initial_state()
+    init = initial_state or default_initial_state(model)
     s = _state_vector(init, robot, cparams if model != "passive" else None,
                       passive_touchdown_angles, passive_touchdown_world)
 

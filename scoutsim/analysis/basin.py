@@ -14,7 +14,7 @@ import csv
 import itertools
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor
+import sys
 from dataclasses import dataclass, field
 
 DEFAULT_SPEEDS = (0.8, 1.1, 1.4, 1.7)            # m/s
@@ -22,21 +22,92 @@ DEFAULT_PITCH_RATES = (-100.0, -50.0, 0.0, 50.0)  # deg/s (edge unit: converted 
 DEFAULT_HEIGHTS = (0.36, 0.40)                   # m
 
 
-def _one(task):
-    from ..simulation import InitialState, simulate
-    model, speed, pitch_rate_deg_s, height, duration, robot, controller, mu = task
-    row = {"model": model, "speed_m_s": speed, "pitch_rate_deg_s": pitch_rate_deg_s,
-           "height_m": height}
+BASIN_COLUMNS = ("model", "speed", "pitch_rate_deg_s", "height", "outcome", "steady_bounding",
+                 "mean_speed_m_s", "n_steady_strides")
+
+
+def basin_task(task: dict) -> dict:
+    """Run one start of the basin grid (top level so that worker processes can import it)."""
+    from .. import simulation
+    InitialState, simulate = simulation.InitialState, simulation.simulate
+    row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
     try:
-        init = InitialState(y=height, dx=speed, dtheta=math.radians(pitch_rate_deg_s))
-        r = simulate(robot, controller, init, duration, model=model, friction_coefficient=mu)
-    except ValueError as e:
-        return row | {"outcome": "invalid_start", "steady_bounding": False,
-                      "mean_speed_m_s": None, "n_steady_strides": 0, "error": str(e)}
-    g = r.gait()
-    return row | {"outcome": r.outcome, "steady_bounding": bool(g.is_steady_bounding()),
-                  "mean_speed_m_s": g.mean_speed_m_s, "n_steady_strides": g.n_steady_strides,
-                  "error": ""}
+        init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),
+                            y=task["height"])
+        result = simulate(task["robot"], task["controller"], init, task["duration"],
+                          model=task["model"], integrator=task["integrator"],
+                          friction_coefficient=task["friction"])
+    except ValueError as exc:
+        row.update(outcome="invalid_start", steady_bounding=False, mean_speed_m_s=None,
+                   n_steady_strides=0, error=str(exc))
+        return row
+    except Exception as exc:  # noqa: BLE001 - reported per start, exit code 1
+        row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
+                   n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
+        return row
+    g = result.gait()
+    speed = g.mean_speed_m_s
+    row.update(outcome=result.outcome, steady_bounding=bool(g.is_steady_bounding()),
+               mean_speed_m_s=(float(speed) if speed is not None and math.isfinite(speed)
+                               else None),
+               n_steady_strides=int(g.n_steady_strides))
+    return row
+
+
+def run_basin_tasks(tasks: list[dict], workers: int, progress: bool) -> list[dict]:
+    from tqdm import tqdm
+    rows: list = [None] * len(tasks)
+    bar = tqdm(total=len(tasks), unit="run", desc="basin", file=sys.stderr, disable=not progress,
+               leave=False)
+    try:
+        if workers == 1 or len(tasks) <= 1:
+            for i, task in enumerate(tasks):
+                rows[i] = basin_task(task)
+                bar.update(1)
+        else:
+            import concurrent.futures as cf
+            import multiprocessing
+            # spawn: no fork of a process that may run threads (tqdm monitor, numba)
+            ctx = multiprocessing.get_context("spawn")
+            with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
+                                        mp_context=ctx) as pool:
+                futures = {pool.submit(basin_task, task): i for i, task in enumerate(tasks)}
+                try:
+                    for fut in cf.as_completed(futures):
+                        i = futures[fut]
+                        try:
+                            rows[i] = fut.result()
+                        except Exception as exc:  # noqa: BLE001 - e.g. a worker died
+                            rows[i] = {k: tasks[i][k] for k in
+                                       ("model", "speed", "pitch_rate_deg_s", "height")}
+                            rows[i].update(outcome="error", steady_bounding=False,
+                                           mean_speed_m_s=None, n_steady_strides=0,
+                                           error=f"{type(exc).__name__}: {exc}")
+                        bar.update(1)
+                except BaseException:
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    raise
+    finally:
+        bar.close()
+    return rows
+
+
+def basin_stats(rows: list[dict], models: list[str]) -> dict:
+    per = {}
+    for m in models:
+        mine = [r for r in rows if r["model"] == m]
+        invalid = sum(r["outcome"] == "invalid_start" for r in mine)
+        valid = len(mine) - invalid
+        steady = sum(bool(r["steady_bounding"]) for r in mine if r["outcome"] != "invalid_start")
+        outcomes = {}
+        for r in mine:
+            outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
+        per[m] = {"n_starts": len(mine), "n_invalid_start": invalid, "n_valid": valid,
+                  "n_steady_bounding": steady,
+                  "fraction_steady_bounding": (steady / valid) if valid else None,
+                  "outcomes": outcomes}
+    return per
+
 
 
 @dataclass
@@ -57,30 +128,22 @@ class BasinResult:
         return list(dict.fromkeys(r["model"] for r in self.rows))
 
     def summary(self) -> dict:
-        out = {}
-        for m in self.models():
-            rows = [r for r in self.rows if r["model"] == m]
-            out[m] = {"fraction_steady": self.fraction(m),
-                      "n_starts": len(rows),
-                      "n_invalid_starts": sum(r["outcome"] == "invalid_start" for r in rows),
-                      "n_steady": sum(r["steady_bounding"] for r in rows)}
-        return out
+        """Per model: starts, invalid starts, steady starts, fraction, outcomes."""
+        return basin_stats(self.rows, self.models())
 
     def to_csv(self, path):
-        keys = ["model", "speed_m_s", "pitch_rate_deg_s", "height_m", "outcome",
-                "steady_bounding", "mean_speed_m_s", "n_steady_strides"]
         with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=keys, extrasaction="ignore")
+            w = csv.DictWriter(f, fieldnames=BASIN_COLUMNS, extrasaction="ignore")
             w.writeheader()
             for r in self.rows:
-                w.writerow(r)
+                w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
 
 
 def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
                         pitch_rates_deg_s=DEFAULT_PITCH_RATES, heights=DEFAULT_HEIGHTS,
                         duration: float = 10.0, robot=None, controller=None,
                         friction_coefficient: float = math.inf, workers: int | None = None,
-                        progress: bool = False) -> BasinResult:
+                        progress: bool = False, integrator=None) -> BasinResult:
     """Run the grid of starts and classify each (see module docstring).
 
     Parameters
@@ -93,15 +156,12 @@ def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
     friction_coefficient : toe Coulomb coefficient (inf = no slip).
     workers : processes (default: all cores; 1 = in this process).
     """
-    tasks = [(m, float(v), float(w), float(y), duration, robot, controller,
-              friction_coefficient)
+    tasks = [{"model": m, "speed": float(v), "pitch_rate_deg_s": float(w), "height": float(y),
+              "robot": robot, "controller": controller, "duration": duration,
+              "integrator": integrator, "friction": friction_coefficient}
              for m, v, w, y in itertools.product(models, speeds, pitch_rates_deg_s, heights)]
     workers = workers or os.cpu_count() or 1
-    if workers == 1:
-        rows = [_one(t) for t in tasks]
-    else:
-        with ProcessPoolExecutor(workers) as ex:
-            rows = list(ex.map(_one, tasks))
+    rows = run_basin_tasks(tasks, workers, progress)
     return BasinResult(rows=rows, settings={
         "models": list(models), "speeds_m_s": list(speeds),
         "pitch_rates_deg_s": list(pitch_rates_deg_s), "heights_m": list(heights),

@@ -1,0 +1,505 @@
+"""Command-line interface: ``scoutsim run`` and ``scoutsim basin``.
+
+    scoutsim run [--model {ideal,I,II,passive}] [--duration S] [--robot FILE] [--out DIR]
+                 [--rtol X] [--atol X] [--friction MU] [--speed V] [--height Y]
+                 [--pitch-rate W] [--no-plots] [--no-progress] [--json]
+    scoutsim basin [--model LIST] [--speeds LIST] [--pitch-rates LIST] [--heights LIST]
+                   [--duration S] [--robot FILE] [--out DIR] [--workers N] [--no-progress]
+
+Presentation layer: all computation is SI (angles in rad); degrees appear only in what is
+printed and plotted, converted here with :func:`math.degrees` / :func:`math.radians`.
+
+Exit codes: 0 success (also when the robot fell: the summary says so), 1 numerical failure
+(``run``) or a crashed start (``basin``), 2 bad usage, parameter file or initial state,
+130 interrupted (Ctrl-C; the data computed so far is still written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+from .analysis.basin import BASIN_COLUMNS, basin_stats, run_basin_tasks
+
+__all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_timeseries_csv",
+           "format_summary", "format_basin"]
+
+MODELS = ("ideal", "I", "II", "passive")
+_LIST_OPTIONS = ("--speeds", "--pitch-rates", "--heights", "--model")
+
+#: Unit of each ``result.columns()`` name, by prefix (first match wins); written into the
+#: header of ``timeseries.csv`` as ``name [unit]``. Mode columns are codes without a unit.
+TIMESERIES_UNITS = (
+    ("t", "s", True), ("x", "m", True), ("y", "m", True), ("theta", "rad", True),
+    ("phi_", "rad", False), ("alpha_", "rad", False), ("dx", "m/s", True),
+    ("dy", "m/s", True), ("dtheta", "rad/s", True), ("dphi_", "rad/s", False),
+    ("dalpha_", "rad/s", False), ("leg_length_", "m", False), ("ground_force_", "N", False),
+    ("leg_axial_force_", "N", False), ("hip_torque_", "N m", False),
+    ("motor_current_", "A", False), ("motor_speed_", "rad/s", False),
+    ("belt_deflection_", "rad", False), ("stiction_holding_torque_", "N m", False),
+    ("toe_x_", "m", False), ("toe_y_", "m", False), ("toe_velocity_x_", "m/s", False),
+    ("strut_force_", "N", False), ("belt_torque_", "N m", False),
+    ("battery_voltage", "V", True), ("energy", "J", True),
+)
+
+
+class _UsageError(Exception):
+    """A problem with the user's input: message on stderr, exit code 2."""
+
+
+# -----------------------------------------------------------------------------------------
+# argument types
+# -----------------------------------------------------------------------------------------
+#: Toe friction of the CLI's Scout II jobs: Coulomb mu on carpet [assumed]. The Table I
+#: controller does not bound on a no-slip floor (docs/model.md, "Toe friction").
+SCOUT_FLOOR_FRICTION = 0.8
+
+
+def _positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be a finite number > 0")
+    return v
+
+
+def _finite_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be finite")
+    return v
+
+
+def _friction(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v >= 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be >= 0 "
+                                         "('inf' = no slip)")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be >= 1")
+    return v
+
+
+def _float_list(positive: bool = False):
+    def parse(text: str) -> list[float]:
+        items = [s.strip() for s in text.split(",")]
+        if not items or any(s == "" for s in items):
+            raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of numbers")
+        return [(_positive_float if positive else _finite_float)(s) for s in items]
+    return parse
+
+
+def _model_list(text: str) -> list[str]:
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    if not items:
+        raise argparse.ArgumentTypeError("give at least one model")
+    bad = [m for m in items if m not in MODELS]
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown model(s) {bad}; choose from {', '.join(MODELS)}")
+    return list(dict.fromkeys(items))
+
+
+def _join_list_values(argv: list[str]) -> list[str]:
+    """Let ``--pitch-rates -100,-50`` work: argparse would take "-100,-50" for an option."""
+    out, i = [], 0
+    while i < len(argv):
+        tok = argv[i]
+        if (tok in _LIST_OPTIONS and i + 1 < len(argv) and len(argv[i + 1]) > 1
+                and argv[i + 1][0] == "-" and (argv[i + 1][1].isdigit() or argv[i + 1][1] == ".")):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+# -----------------------------------------------------------------------------------------
+# parser
+# -----------------------------------------------------------------------------------------
+def build_parser() -> argparse.ArgumentParser:
+    """The ``scoutsim`` argument parser (subcommands ``run`` and ``basin``)."""
+    from . import __version__
+    parser = argparse.ArgumentParser(
+        prog="scoutsim",
+        description="Simulate planar Scout II bounding (Poulakakis, Smith & Buehler, ICRA 2004).",
+        epilog="examples:\n"
+               "  scoutsim run                       # Model II, 10 s, results in scoutsim_out/\n"
+               "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
+               "  scoutsim run --json --no-plots     # summary as JSON on stdout\n"
+               "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="{run,basin}")
+
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--duration", type=_positive_float, default=10.0, metavar="S",
+                        help="simulated time per run [s] (default: 10)")
+    common.add_argument("--robot", metavar="FILE",
+                        help="TOML robot/controller file with the layout of "
+                             "scoutsim/data/scout2.toml; unset entries keep the Scout II "
+                             "defaults")
+    common.add_argument("--out", default="scoutsim_out", metavar="DIR",
+                        help="output directory, created if needed (default: scoutsim_out)")
+    common.add_argument("--rtol", type=_positive_float, default=None, metavar="X",
+                        help="integrator relative tolerance (default: 1e-8)")
+    common.add_argument("--atol", type=_positive_float, default=None, metavar="X",
+                        help="integrator absolute tolerance (default: 1e-9)")
+    common.add_argument("--friction", type=_friction, default=SCOUT_FLOOR_FRICTION, metavar="MU",
+                        help="Coulomb friction coefficient of the toes (default: "
+                             f"{SCOUT_FLOOR_FRICTION}, the carpet the paper's experiments ran "
+                             "on; 'inf' = no slip, the default of simulate(); see "
+                             "docs/model.md)")
+    common.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (it is also off when stderr is not a terminal)")
+
+    run = sub.add_parser(
+        "run", parents=[common], help="simulate one run, print a summary, write data and plots",
+        description="Simulate one bounding run and write to DIR: timeseries.csv, result.npz, "
+                    "summary.json, run.png and torque_speed.png.")
+    run.add_argument("--model", choices=MODELS, default="II",
+                     help="actuator/transmission model (default: II)")
+    run.add_argument("--speed", type=_finite_float, default=None, metavar="V",
+                     help="initial forward speed [m/s] (default: 1.2)")
+    run.add_argument("--height", type=_positive_float, default=None, metavar="Y",
+                     help="initial torso COM height [m] (default: 0.33)")
+    run.add_argument("--pitch-rate", type=_finite_float, default=None, metavar="W",
+                     help="initial pitch rate [deg/s] (default: 0)")
+    run.add_argument("--no-plots", action="store_true", help="do not write run.png and "
+                     "torque_speed.png")
+    run.add_argument("--json", action="store_true",
+                     help="print the summary as JSON on stdout instead of the table")
+    run.set_defaults(func=_cmd_run)
+
+    basin = sub.add_parser(
+        "basin", parents=[common],
+        help="fraction of a grid of initial states that reaches steady bounding, per model",
+        description="Run a grid of initial states (forward speed x pitch rate x height) for "
+                    "each model in parallel and report the fraction that reaches steady "
+                    "bounding (GaitMetrics.is_steady_bounding: completed, >= 7 steady strides "
+                    "after the 2 s transient, stride-period CV <= 5 %%). Starts with a toe "
+                    "below the ground are recorded as invalid_start and left out of the "
+                    "fraction. Writes basin.csv and basin.json to DIR.")
+    basin.add_argument("--model", type=_model_list, default=["ideal", "I", "II"], metavar="LIST",
+                       help="comma-separated models (default: ideal,I,II)")
+    basin.add_argument("--speeds", type=_float_list(), default=[0.8, 1.1, 1.4, 1.7],
+                       metavar="LIST", help="initial forward speeds [m/s] "
+                       "(default: 0.8,1.1,1.4,1.7)")
+    basin.add_argument("--pitch-rates", type=_float_list(), default=[-100.0, -50.0, 0.0, 50.0],
+                       metavar="LIST", help="initial pitch rates [deg/s] "
+                       "(default: -100,-50,0,50)")
+    basin.add_argument("--heights", type=_float_list(positive=True), default=[0.36, 0.40],
+                       metavar="LIST", help="initial torso COM heights [m] (default: 0.36,0.40)")
+    basin.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                       help="parallel processes (default: os.cpu_count(); 1 runs in this "
+                            "process)")
+    basin.set_defaults(func=_cmd_basin)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``scoutsim`` console script; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    try:
+        args = parser.parse_args(_join_list_values(argv))
+    except SystemExit as exc:  # --help, --version or a usage error (argparse printed it)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    try:
+        return args.func(args)
+    except _UsageError as exc:
+        print(f"scoutsim {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"scoutsim {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `scoutsim run --json | head`
+        try:  # keep Python from complaining again when it flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+        return 1
+
+
+# -----------------------------------------------------------------------------------------
+# helpers
+# -----------------------------------------------------------------------------------------
+def _load_parameters(path):
+    """(robot, controller) from the user's TOML file (or the defaults); _UsageError if bad."""
+    from .parameters import load_parameters
+    if path is not None:
+        p = Path(path)
+        if not p.exists():
+            raise _UsageError(f"robot file '{path}' not found")
+        if not p.is_file():
+            raise _UsageError(f"robot file '{path}' is not a file")
+    try:
+        return load_parameters(path)
+    except OSError as exc:
+        raise _UsageError(f"cannot read robot file '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise _UsageError(f"robot file '{path}' is not UTF-8 text: {exc}") from None
+    except ValueError as exc:  # ParameterError (names the field) and other bad values
+        raise _UsageError(str(exc)) from None
+
+
+def _integrator(args):
+    from .simulation import IntegratorSettings
+    kw = {}
+    if args.rtol is not None:
+        kw["rtol"] = args.rtol
+    if args.atol is not None:
+        kw["atol"] = args.atol
+    try:
+        return IntegratorSettings(**kw)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+
+
+def _out_dir(path) -> Path:
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise _UsageError(f"cannot create output directory '{out}': {exc.strerror or exc}") from None
+    return out
+
+
+def _json_safe(v):
+    """Replace non-finite floats by None (strict JSON has no NaN / Infinity)."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: _json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_safe(x) for x in v]
+    return v
+
+
+def _dumps(obj) -> str:
+    return json.dumps(_json_safe(obj), indent=2, allow_nan=False)
+
+
+def column_unit(name: str) -> str | None:
+    """Unit of a ``result.columns()`` name (None for codes and unknown names)."""
+    for prefix, unit, exact in TIMESERIES_UNITS:
+        if (name == prefix) if exact else name.startswith(prefix):
+            return unit
+    return None
+
+
+def write_timeseries_csv(result, path) -> Path:
+    """Write ``result.columns()`` as CSV, one row per sample, header ``name [unit]``."""
+    import numpy as np
+    cols = result.columns()
+    names = list(cols)
+    header = ",".join(f"{n} [{u}]" if (u := column_unit(n)) else n for n in names)
+    data = np.column_stack([np.asarray(cols[n], dtype=float) for n in names]) if names else \
+        np.zeros((0, 0))
+    path = Path(path)
+    np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.12g")
+    return path
+
+
+def _fmt(v, spec: str, unit: str = "") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "n/a"
+    return f"{v:{spec}}{(' ' + unit) if unit else ''}"
+
+
+def _pair(a, b, spec: str, unit: str) -> str:
+    if a is None and b is None:
+        return "n/a"
+    return f"{_fmt(a, spec)} / {_fmt(b, spec)}{(' ' + unit) if unit else ''}"
+
+
+def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float) -> str:
+    """The human-readable summary table of a run."""
+    outcome = summary.get("outcome")
+    if outcome != "completed" and t_end is not None:
+        outcome = f"{outcome} at t = {t_end:.3f} s"
+    rtf = (t_end / wall_s) if wall_s > 0 and t_end else None
+    rows = [
+        ("outcome", outcome),
+        ("mean forward speed", _fmt(summary.get("mean_speed_m_s"), ".3f", "m/s")),
+        ("stride frequency", _fmt(summary.get("stride_frequency_hz"), ".3f", "Hz")),
+        ("duty factor back / front", _pair(summary.get("duty_factor_back"),
+                                           summary.get("duty_factor_front"), ".3f", "")),
+        ("pitch max / min", _pair(summary.get("pitch_max_deg"), summary.get("pitch_min_deg"),
+                                  ".2f", "deg")),
+        ("COM height max / min", _pair(summary.get("height_max_m"), summary.get("height_min_m"),
+                                       ".4f", "m")),
+        ("largest friction ratio |F_t|/F_n", _fmt(summary.get("max_friction_ratio"), ".3f")),
+        ("steady strides", _fmt(summary.get("n_steady_strides"), "d")
+         + (f" (of {summary['n_strides']})" if summary.get("n_strides") is not None else "")),
+        ("steady bounding", {True: "yes", False: "no"}.get(summary.get("steady_bounding"), "n/a")),
+        ("wall time", _fmt(wall_s, ".2f", "s")),
+        ("real-time factor", (f"{rtf:.2f}x (simulated / wall time)" if rtf else "n/a")),
+    ]
+    width = max(len(k) for k, _ in rows)
+    model = summary.get("model")
+    lines = [f"scoutsim run: model {model}, {duration:g} s requested"]
+    lines += [f"  {k:<{width}}  {v}" for k, v in rows]
+    if summary.get("n_steady_strides") == 0 and summary.get("outcome") == "completed":
+        lines.append("  (no steady strides: the gait means need strides after the 2 s "
+                     "transient; run longer)")
+    return "\n".join(lines)
+
+
+# -----------------------------------------------------------------------------------------
+# scoutsim run
+# -----------------------------------------------------------------------------------------
+def _cmd_run(args) -> int:
+    from .simulation import InitialState, simulate
+    robot, controller = _load_parameters(args.robot)
+    integ = _integrator(args)
+    changes = {}
+    if args.speed is not None:
+        changes["dx"] = args.speed
+    if args.height is not None:
+        changes["y"] = args.height
+    if args.pitch_rate is not None:
+        changes["dtheta"] = math.radians(args.pitch_rate)
+    init = InitialState(**changes)
+    out = _out_dir(args.out)
+    progress = (not args.no_progress) and sys.stderr.isatty()
+
+    wall0 = time.perf_counter()
+    try:
+        result = simulate(robot, controller, init, args.duration, model=args.model,
+                          integrator=integ, friction_coefficient=args.friction,
+                          progress=progress)
+    except ValueError as exc:  # invalid initial state or option
+        raise _UsageError(str(exc)) from None
+    wall = time.perf_counter() - wall0
+
+    summary = result.summary()
+    files = [out / "timeseries.csv", out / "result.npz", out / "summary.json"]
+    write_timeseries_csv(result, files[0])
+    result.save(files[1])
+    files[2].write_text(_dumps(summary) + "\n")
+    if not args.no_plots:
+        from .plotting import plot_run, plot_torque_speed
+        plot_run(result, out / "run.png")
+        plot_torque_speed(result, "both", out / "torque_speed.png")
+        files += [out / "run.png", out / "torque_speed.png"]
+
+    if args.json:
+        print(_dumps(summary))
+    else:
+        print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end))
+        print(f"wrote {', '.join(f.name for f in files)} to {out}/")
+    if result.outcome == "numerical_failure":
+        print("scoutsim run: the integration failed numerically (see summary.json and "
+              "result.npz); try a smaller --rtol", file=sys.stderr)
+        return 1
+    if result.outcome == "interrupted":
+        return 130
+    return 0
+
+
+# -----------------------------------------------------------------------------------------
+# scoutsim basin
+# -----------------------------------------------------------------------------------------
+def format_basin(per: dict, n_grid: int, duration: float) -> str:
+    """The human-readable basin table."""
+    head = ("model", "starts", "invalid", "valid", "steady", "fraction", "fell", "other")
+    lines = [f"scoutsim basin: {n_grid} starts per model, {duration:g} s each; fraction = "
+             "steady bounding / valid starts",
+             "  " + "  ".join(f"{h:>8}" for h in head)]
+    for m, s in per.items():
+        frac = s["fraction_steady_bounding"]
+        fell = s["outcomes"].get("fell", 0)
+        other = s["n_valid"] - s["outcomes"].get("completed", 0) - fell
+        vals = (m, s["n_starts"], s["n_invalid_start"], s["n_valid"], s["n_steady_bounding"],
+                "n/a" if frac is None else f"{frac:.3f}", fell, other)
+        lines.append("  " + "  ".join(f"{v!s:>8}" for v in vals))
+    return "\n".join(lines)
+
+
+def _cmd_basin(args) -> int:
+    robot, controller = _load_parameters(args.robot)
+    integ = _integrator(args)
+    out = _out_dir(args.out)
+    models = args.model
+    workers = args.workers or os.cpu_count() or 1
+    progress = (not args.no_progress) and sys.stderr.isatty()
+    grid = [(v, w, h) for v in args.speeds for w in args.pitch_rates for h in args.heights]
+    tasks = [{"model": m, "speed": v, "pitch_rate_deg_s": w, "height": h, "robot": robot,
+              "controller": controller, "duration": args.duration, "integrator": integ,
+              "friction": args.friction} for m in models for (v, w, h) in grid]
+    if args.duration < 5.0:
+        print(f"scoutsim basin: note: --duration {args.duration:g} s is short; steady bounding "
+              "needs >= 7 strides after the 2 s transient, so (almost) no start can qualify",
+              file=sys.stderr)
+
+    wall0 = time.perf_counter()
+    rows = run_basin_tasks(tasks, workers, progress)
+    wall = time.perf_counter() - wall0
+
+    csv_path = out / "basin.csv"
+    with open(csv_path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=BASIN_COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
+    per = basin_stats(rows, models)
+    summary = {
+        "fraction_steady_bounding": {m: s["fraction_steady_bounding"] for m, s in per.items()},
+        "models": per,
+        "grid": {"speeds_m_s": args.speeds, "pitch_rates_deg_s": args.pitch_rates,
+                 "heights_m": args.heights, "duration_s": args.duration,
+                 "n_starts_per_model": len(grid)},
+        "criterion": "GaitMetrics.is_steady_bounding(): outcome completed, >= 7 steady "
+                     "strides after the 2 s transient, stride-period CV <= 0.05; "
+                     "invalid_start excluded from the denominator",
+        "wall_time_s": wall,
+        "workers": workers,
+    }
+    (out / "basin.json").write_text(_dumps(summary) + "\n")
+
+    print(format_basin(per, len(grid), args.duration))
+    n_invalid = sum(s["n_invalid_start"] for s in per.values())
+    if n_invalid:
+        example = next(r for r in rows if r["outcome"] == "invalid_start")
+        print(f"{n_invalid} invalid start(s) (toe below the ground), e.g. speed "
+              f"{example['speed']:g} m/s, pitch rate {example['pitch_rate_deg_s']:g} deg/s, "
+              f"height {example['height']:g} m: {example.get('error', '')}")
+    print(f"wall time {wall:.1f} s with {min(workers, len(tasks))} worker(s); "
+          f"wrote basin.csv, basin.json to {out}/")
+    errors = [r for r in rows if r["outcome"] == "error"]
+    for r in errors[:5]:
+        print(f"scoutsim basin: start model {r['model']}, speed {r['speed']:g}, pitch rate "
+              f"{r['pitch_rate_deg_s']:g}, height {r['height']:g} crashed: {r['error']}",
+              file=sys.stderr)
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

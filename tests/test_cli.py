@@ -1,0 +1,238 @@
+"""Tests of the command-line interface (scoutsim.cli): exit codes, written files, error
+messages, and the basin sweep."""
+
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim import SimulationResult
+from scoutsim.cli import main
+
+FIRST_KEYS = ["outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
+              "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
+              "height_min_m", "max_friction_ratio", "n_steady_strides"]
+RUN_FILES = ["timeseries.csv", "result.npz", "summary.json", "run.png", "torque_speed.png"]
+
+
+@pytest.fixture(scope="module")
+def run_out(tmp_path_factory):
+    """One `scoutsim run` shared by the tests that only read its output."""
+    out = tmp_path_factory.mktemp("run")
+    capture = pytest.MonkeyPatch()
+    import io
+    buf_out, buf_err = io.StringIO(), io.StringIO()
+    capture.setattr(sys, "stdout", buf_out)
+    capture.setattr(sys, "stderr", buf_err)
+    try:
+        code = main(["run", "--duration", "0.5", "--model", "II", "--out", str(out),
+                     "--no-progress", "--friction", "0.8"])
+    finally:
+        capture.undo()
+    return code, out, buf_out.getvalue(), buf_err.getvalue()
+
+
+def test_run_exits_0_and_writes_all_files(run_out):
+    code, out, stdout, _ = run_out
+    assert code == 0
+    for name in RUN_FILES:
+        assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+    assert (out / "run.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_run_prints_a_summary_table(run_out):
+    _, _, stdout, _ = run_out
+    for text in ("outcome", "mean forward speed", "stride frequency", "duty factor",
+                 "pitch max / min", "height max / min", "friction ratio", "steady strides",
+                 "wall time", "real-time factor"):
+        assert text in stdout, text
+
+
+def test_summary_json_has_the_required_first_keys(run_out):
+    _, out, _, _ = run_out
+    summary = json.loads((out / "summary.json").read_text())
+    assert list(summary)[:len(FIRST_KEYS)] == FIRST_KEYS
+    assert summary["outcome"] == "completed"
+    assert summary["model"] == "II"
+
+
+def test_csv_matches_the_saved_result(run_out):
+    _, out, _, _ = run_out
+    result = SimulationResult.load(out / "result.npz")
+    data = np.loadtxt(out / "timeseries.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert data.shape == (len(result.t), len(result.columns())) == (501, data.shape[1])
+    header = (out / "timeseries.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t [s]", "x [m]", "y [m]", "theta [rad]"]
+    assert "hip_torque_applied_back [N m]" in header and "motor_current_front [A]" in header
+    assert "leg_state_back" in header
+    np.testing.assert_allclose(data[:, 0], result.t, rtol=1e-11, atol=1e-15)
+    np.testing.assert_allclose(data[:, header.index("theta [rad]")], result.pitch,
+                               rtol=1e-10, atol=1e-14)
+    # options reach the simulation
+    assert result.provenance["friction_coefficient"] == 0.8
+    assert result.provenance["model"] == "II"
+
+
+def test_run_json_prints_the_summary_on_stdout(tmp_path, capsys):
+    assert main(["run", "--duration", "0.3", "--model", "I", "--out", str(tmp_path),
+                 "--no-progress", "--json", "--no-plots", "--rtol", "1e-7"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed == json.loads((tmp_path / "summary.json").read_text())
+    assert list(printed)[:len(FIRST_KEYS)] == FIRST_KEYS
+    assert not (tmp_path / "run.png").exists()
+    prov = SimulationResult.load(tmp_path / "result.npz").provenance
+    assert prov["integrator"]["rtol"] == 1e-7 and prov["model"] == "I"
+
+
+@pytest.mark.parametrize("body, field", [
+    ("[robot]\ntorso_mass = -1.0\n", "torso_mass"),
+    ("[robot]\ntorso_mas = 20.0\n", "torso_mas"),
+    ("[controller]\ntouchdown_angle_front = { value = 21, unit = \"kg\" }\n",
+     "touchdown_angle_front"),
+])
+def test_bad_robot_file_exits_2_naming_the_field(tmp_path, capsys, body, field):
+    robot = tmp_path / "robot.toml"
+    robot.write_text(body)
+    code = main(["run", "--robot", str(robot), "--duration", "0.1", "--out",
+                 str(tmp_path / "out"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert field in err and "Traceback" not in err
+    assert not (tmp_path / "out" / "summary.json").exists()
+
+
+def test_missing_or_malformed_robot_file_exits_2(tmp_path, capsys):
+    assert main(["run", "--robot", str(tmp_path / "nope.toml"), "--no-progress"]) == 2
+    assert "not found" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[robot\n")
+    assert main(["run", "--robot", str(bad), "--no-progress"]) == 2
+    assert "malformed TOML" in capsys.readouterr().err
+
+
+def test_valid_robot_file_is_used(tmp_path):
+    robot = tmp_path / "robot.toml"
+    robot.write_text("[robot]\ntorso_mass = 21.5\n[motor]\ncurrent_limit = 10.0\n")
+    out = tmp_path / "out"
+    assert main(["run", "--robot", str(robot), "--duration", "0.2", "--out", str(out),
+                 "--no-progress", "--no-plots"]) == 0
+    prov = SimulationResult.load(out / "result.npz").provenance
+    assert prov["robot"]["torso_mass"] == 21.5 and prov["robot"]["current_limit"] == 10.0
+
+
+def test_usage_errors_exit_2(tmp_path, capsys):
+    assert main(["run", "--duration", "-1"]) == 2
+    assert main(["run", "--model", "III"]) == 2
+    assert main(["basin", "--model", "I,X"]) == 2
+    # an initial state with a toe below the ground
+    assert main(["run", "--height", "0.2", "--duration", "0.1", "--out", str(tmp_path),
+                 "--no-progress"]) == 2
+    assert "below the ground" in capsys.readouterr().err
+
+
+def test_no_subcommand_prints_help(capsys):
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert "usage: scoutsim" in out and "run" in out and "basin" in out
+
+
+def test_numerical_failure_exits_1_and_still_writes(tmp_path, monkeypatch):
+    real = scoutsim.simulation.simulate
+
+    def failing(*args, **kwargs):
+        r = real(*args, **kwargs)
+        r.outcome = "numerical_failure"
+        return r
+
+    monkeypatch.setattr(scoutsim.simulation, "simulate", failing)
+    assert main(["run", "--duration", "0.1", "--model", "I", "--out", str(tmp_path),
+                 "--no-progress", "--no-plots"]) == 1
+    assert json.loads((tmp_path / "summary.json").read_text())["outcome"] == "numerical_failure"
+
+
+def test_fall_exits_0_and_summary_says_so(tmp_path, monkeypatch, capsys):
+    real = scoutsim.simulation.simulate
+
+    def falling(*args, **kwargs):
+        r = real(*args, **kwargs)
+        r.outcome = "fell"
+        return r
+
+    monkeypatch.setattr(scoutsim.simulation, "simulate", falling)
+    assert main(["run", "--duration", "0.1", "--model", "I", "--out", str(tmp_path),
+                 "--no-progress", "--no-plots"]) == 0
+    assert "fell at t =" in capsys.readouterr().out
+
+
+def test_python_dash_m_scoutsim_works():
+    proc = subprocess.run([sys.executable, "-m", "scoutsim", "run", "--help"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0
+    assert "--duration" in proc.stdout and "--robot" in proc.stdout
+
+
+def _read_basin(out):
+    with open(out / "basin.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return rows, json.loads((out / "basin.json").read_text())
+
+
+def test_basin_writes_one_row_per_start_and_excludes_invalid_starts(tmp_path, capsys):
+    out = tmp_path / "basin"
+    code = main(["basin", "--model", "I,II", "--speeds", "1.1", "--pitch-rates", "-50,0",
+                 "--heights", "0.30,0.36", "--duration", "0.3", "--out", str(out),
+                 "--workers", "1", "--no-progress"])
+    assert code == 0
+    rows, summary = _read_basin(out)
+    assert len(rows) == 2 * 1 * 2 * 2
+    assert list(rows[0]) == ["model", "speed", "pitch_rate_deg_s", "height", "outcome",
+                             "steady_bounding", "mean_speed_m_s", "n_steady_strides"]
+    assert sorted({float(r["pitch_rate_deg_s"]) for r in rows}) == [-50.0, 0.0]
+    # at 0.30 m a toe starts below the ground (legs at their touchdown angles)
+    for r in rows:
+        if float(r["height"]) == 0.30:
+            assert r["outcome"] == "invalid_start"
+        else:
+            assert r["outcome"] in ("completed", "fell")
+            assert r["steady_bounding"] == "False"   # 0.3 s is far too short
+    for m in ("I", "II"):
+        s = summary["models"][m]
+        assert s["n_starts"] == 4 and s["n_invalid_start"] == 2 and s["n_valid"] == 2
+        assert summary["fraction_steady_bounding"][m] == 0.0
+    printed = capsys.readouterr().out
+    assert "invalid start" in printed and "fraction" in printed
+
+
+def test_basin_with_a_process_pool_matches_serial(tmp_path):
+    args = ["basin", "--model", "I", "--speeds", "1.0,1.3", "--pitch-rates", "0",
+            "--heights", "0.36", "--duration", "0.3", "--no-progress"]
+    assert main(args + ["--out", str(tmp_path / "a"), "--workers", "2"]) == 0
+    assert main(args + ["--out", str(tmp_path / "b"), "--workers", "1"]) == 0
+    rows_a, _ = _read_basin(tmp_path / "a")
+    rows_b, _ = _read_basin(tmp_path / "b")
+    assert len(rows_a) == 2
+    assert rows_a == rows_b, "order and values do not depend on the worker count"
+
+
+def test_basin_rejects_bad_lists():
+    assert main(["basin", "--speeds", "1,,2"]) == 2
+    assert main(["basin", "--heights", "0.36,-0.1"]) == 2
+    assert main(["basin", "--workers", "0"]) == 2
+
+
+def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch, capsys):
+    def broken(*args, **kwargs):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(scoutsim.simulation, "simulate", broken)
+    code = main(["basin", "--model", "I", "--speeds", "1.1", "--pitch-rates", "0",
+                 "--heights", "0.36", "--duration", "0.3", "--out", str(tmp_path),
+                 "--workers", "1", "--no-progress"])
+    assert code == 1
+    rows, summary = _read_basin(tmp_path)
+    assert [r["outcome"] for r in rows] == ["error"]
+    assert "RuntimeError: boom" in capsys.readouterr().err

@@ -1,0 +1,156 @@
+"""Tests of scoutsim.plotting: figures render headless, carry units, and draw the motor
+limits of SPEC.md 4 where they belong."""
+
+import sys
+
+import numpy as np
+import pytest
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+
+import scoutsim
+from scoutsim.plotting import LEG_STATE_COLORS, motor_limits, plot_run, plot_torque_speed
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def result_II():
+    return scoutsim.simulate(duration=1.0, model="II")
+
+
+@pytest.fixture(scope="module")
+def result_I():
+    return scoutsim.simulate(duration=1.0, model="I")
+
+
+def _pyplot_fignums():
+    plt = sys.modules.get("matplotlib.pyplot")
+    return None if plt is None else list(plt.get_fignums())
+
+
+def test_plot_run_has_four_labelled_panels_with_units(result_II):
+    fig = plot_run(result_II)
+    assert isinstance(fig, Figure)
+    axes = fig.get_axes()
+    assert len(axes) == 4
+    ylabels = [ax.get_ylabel() for ax in axes]
+    assert "[deg]" in ylabels[0] and "pitch" in ylabels[0]
+    assert "[m]" in ylabels[1] and "height" in ylabels[1]
+    assert "[deg]" in ylabels[2] and "phi" in ylabels[2]
+    assert "[N m]" in ylabels[3] and "torque" in ylabels[3]
+    assert axes[3].get_xlabel() == "time [s]"
+    for ax in axes:
+        assert ax.get_lines(), "every panel has data"
+        assert ax.get_legend() is not None
+    # panels share the time axis
+    assert axes[0].get_shared_x_axes().joined(axes[0], axes[3])
+    title = fig._suptitle.get_text()
+    assert "Model II" in title and result_II.outcome in title
+
+
+def test_plot_run_values_are_in_degrees(result_II):
+    fig = plot_run(result_II)
+    pitch_line = fig.get_axes()[0].get_lines()[0]
+    np.testing.assert_allclose(pitch_line.get_ydata(), np.degrees(result_II.pitch))
+    leg_lines = [ln for ln in fig.get_axes()[2].get_lines() if ln.get_label().startswith("phi")]
+    np.testing.assert_allclose(leg_lines[0].get_ydata(), np.degrees(result_II.leg_angle("back")))
+    np.testing.assert_allclose(leg_lines[1].get_ydata(), np.degrees(result_II.leg_angle("front")))
+
+
+def test_plot_run_shows_torques_commanded_dashed_and_applied_solid(result_II):
+    ax = plot_run(result_II).get_axes()[3]
+    by_label = {ln.get_label(): ln for ln in ax.get_lines()}
+    for leg in ("back", "front"):
+        cmd, app = by_label[f"{leg} commanded"], by_label[f"{leg} applied"]
+        assert cmd.get_linestyle() == "--" and app.get_linestyle() == "-"
+        np.testing.assert_allclose(cmd.get_ydata(), result_II.hip_torque_commanded(leg))
+        np.testing.assert_allclose(app.get_ydata(), result_II.hip_torque_applied(leg))
+
+
+def test_plot_run_leg_state_bands_cover_the_states_the_controller_visited(result_II):
+    ax = plot_run(result_II).get_axes()[2]
+    bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
+    colors = {tuple(np.round(c.get_facecolor()[0][:3], 3)) for c in bands}
+    from matplotlib.colors import to_rgb
+    visited = set(np.unique(result_II.leg_state(0))) | set(np.unique(result_II.leg_state(1)))
+    assert visited == {0, 1, 2}, "a 1 s run passes through all three leg states"
+    expected = {tuple(np.round(to_rgb(LEG_STATE_COLORS[k]), 3)) for k in visited}
+    assert colors == expected
+    # the bands of one leg tile its time span without gaps (zero-order hold)
+    back = [c for c in bands if c.get_paths()[0].vertices[0, 1] == 0.0]
+    total = sum(float(np.ptp(p.vertices[:, 0])) for c in back for p in c.get_paths())
+    assert total == pytest.approx(result_II.t[-1] - result_II.t[0], rel=1e-9)
+    legend_texts = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert {"flight", "stance-retraction", "stance-brake"} <= legend_texts
+
+
+def test_plot_run_saves_png_pdf_svg_headless(result_II, tmp_path):
+    before = _pyplot_fignums()
+    for suffix, magic in ((".png", PNG_MAGIC), (".pdf", b"%PDF"), (".svg", b"<?xml")):
+        path = tmp_path / "sub" / f"run{suffix}"
+        plot_run(result_II, path)
+        data = path.read_bytes()
+        assert len(data) > 1000 and data.startswith(magic)
+    assert _pyplot_fignums() == before, "no figures registered with pyplot"
+
+
+def test_plot_run_rejects_unknown_suffix_and_bad_time_range(result_II, tmp_path):
+    with pytest.raises(ValueError, match="suffix"):
+        plot_run(result_II, tmp_path / "run.jpeg")
+    with pytest.raises(ValueError, match="t_range"):
+        plot_run(result_II, t_range=(0.5, 0.2))
+
+
+def test_plot_run_time_range_limits_axis_and_data(result_II):
+    fig = plot_run(result_II, t_range=(0.2, 0.6))
+    ax = fig.get_axes()[0]
+    assert ax.get_xlim() == pytest.approx((0.2, 0.6))
+    x = ax.get_lines()[0].get_xdata()
+    assert x[0] >= 0.2 - 1.5e-3 and x[-1] <= 0.6 + 1.5e-3
+
+
+def test_motor_limits_match_spec_numbers():
+    lim = motor_limits(scoutsim.simulate(duration=0.01, model="I").provenance["robot"])
+    assert lim["N"] == pytest.approx(102.19, abs=0.01)          # 72.38 x 48/34
+    assert lim["eta"] == pytest.approx(0.6528)
+    assert lim["tau_current"] == pytest.approx(lim["N"] * 0.6528 * 0.0389 * 12.0)
+    assert lim["w_no_load"] == pytest.approx(36.0 / (0.0389 * lim["N"]))
+
+
+def test_torque_speed_draws_current_limit_and_torque_speed_lines(result_I, tmp_path):
+    path = tmp_path / "ts.png"
+    fig = plot_torque_speed(result_I, "both", path)
+    assert path.read_bytes().startswith(PNG_MAGIC)
+    axes = fig.get_axes()
+    assert len(axes) == 2
+    lim = motor_limits(result_I.provenance["robot"])
+    for ax, leg in zip(axes, ("back", "front")):
+        assert "[N m]" in ax.get_xlabel() and "[rad/s]" in ax.get_ylabel()
+        assert leg in ax.get_title()
+        lines = ax.get_lines()
+        verticals = sorted(float(ln.get_xdata()[0]) for ln in lines
+                           if ln.get_linestyle() == "--" and len(set(ln.get_xdata())) == 1)
+        assert verticals == pytest.approx([-lim["tau_current"], lim["tau_current"]])
+        ts_lines = [ln for ln in lines if ln.get_linestyle() == "-."]
+        assert len(ts_lines) == 2
+        for ln, sign in zip(ts_lines, (1.0, -1.0)):
+            tau, w = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+            # tau = N eta K_T (+-V - K_w N w) / R_A
+            expect = lim["N"] * lim["eta"] * 0.0389 * (sign * 36.0 - 0.0389 * lim["N"] * w) / 1.2
+            np.testing.assert_allclose(tau, expect, rtol=1e-12)
+        # the samples lie inside the limits (Model I enforces them)
+        pts = [ln for ln in lines if ln.get_linestyle() in ("None", "none", "")]
+        tau = np.concatenate([ln.get_xdata() for ln in pts])
+        w = np.concatenate([ln.get_ydata() for ln in pts])
+        assert tau.size == result_I.t.size
+        assert np.all(np.abs(tau) <= lim["tau_current"] * (1 + 1e-9))
+        assert np.all(tau <= lim["tau_stall"] - lim["slope"] * w + 1e-6)
+        assert np.all(tau >= -lim["tau_stall"] - lim["slope"] * w - 1e-6)
+
+
+def test_torque_speed_single_leg_and_bad_leg(result_II):
+    fig = plot_torque_speed(result_II, "front")
+    assert len(fig.get_axes()) == 1 and "front" in fig.get_axes()[0].get_title()
+    with pytest.raises(ValueError, match="leg"):
+        plot_torque_speed(result_II, "middle")
