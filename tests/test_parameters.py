@@ -145,10 +145,10 @@ def test_bad_robot_values_refused(overrides, pieces):
      ["controller.touchdown_angle_back", "-90.0 deg", "(-90, 90) deg"]),
     ({"flight_kp_front": -1.0}, ["controller.flight_kp_front", "-1.0", ">= 0"]),
     ({"control_period": 0.5}, ["controller.control_period", "500.0 ms", "(0, 100] ms"]),
-    ({"liftoff_compression": 4e-3}, ["controller.liftoff_compression", "4.0 mm",
-                                     "< touchdown_compression = 4 mm"]),
-    ({"liftoff_compression": 5e-3}, ["controller.liftoff_compression", "5.0 mm",
-                                     "< touchdown_compression"]),
+    ({"liftoff_compression": 8e-3, "touchdown_compression": 8e-3},
+     ["controller.liftoff_compression", "8.0 mm", "< touchdown_compression = 8 mm"]),
+    ({"liftoff_compression": 9e-3, "touchdown_compression": 8e-3},
+     ["controller.liftoff_compression", "9.0 mm", "< touchdown_compression"]),
 ])
 def test_bad_controller_values_refused(overrides, pieces):
     with pytest.raises(ParameterError) as err:
@@ -244,7 +244,8 @@ def test_validate_instances_directly():
     with pytest.raises(ParameterError, match="wrong type"):
         validate_robot(RobotParameters(legs_per_virtual_leg=2.0))
     with pytest.raises(ParameterError, match=r"liftoff_compression = 3\.0 mm"):
-        validate_controller(ControllerParameters(touchdown_compression=2e-3))
+        validate_controller(ControllerParameters(touchdown_compression=2e-3,
+                                                 liftoff_compression=3e-3))
 
 
 # -- provenance round trip ------------------------------------------------------------------
