@@ -35,6 +35,7 @@ from .layout import (
 
 MAX_ROWS = 6          # at most 2 rows per leg (strut) + 1 per motor joint
 MAX_KKT = NQ + MAX_ROWS
+NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
 
 
 @njit(cache=True)
@@ -677,11 +678,15 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
     """:func:`evaluate` without allocations, on the scratch arrays of
     :func:`new_eval_workspace`.
 
-    If ``want_stiff``, also fills ``stiff`` (16 x 4) with a rank-2 factorization
-    J_s = U V^T (U = stiff[:, 0:2], V = stiff[:, 2:4]) of the Jacobian of ds with respect
-    to s restricted to the Model II belt dampers (the stiff part, eigenvalues ~ -1e4 /s):
-    ds_ddq ~ -npl c_b G w (w^T Pi dq) per leg, G the constrained inverse mass matrix,
-    w = e_alpha - e_phi, Pi the velocity projection. Zero in the other models."""
+    If ``want_stiff``, also fills ``stiff`` (16 x 2 NSTIFF) with a rank-4 factorization
+    J_s = U V^T (U = stiff[:, :NSTIFF], V = stiff[:, NSTIFF:]) of the Jacobian of ds with respect
+    to s restricted to the Model II belt spring-dampers (the stiff part: eigenvalues
+    ~ -1e4 /s from c_b against the gear-train inertia): per leg
+    d(ddq)/ds ~ -npl G w (c_b w^T Pi_v + k_b w^T Pi_q), G the constrained inverse mass
+    matrix (from the same factorization), w = e_alpha - e_phi, Pi_v / Pi_q the
+    derivatives of the velocity / position projections; plus the motor-side damping on
+    alpha (joint friction b_J, back-EMF while on the torque-speed line),
+    -npl G e_alpha d_m e_alpha^T. Zero in the other models."""
     model = int(P[P_MODEL])
     nact = 7 if model == MODEL_II else 5
     q = wk[WK_Q:WK_Q + NQ]
@@ -967,23 +972,27 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
 
     if want_stiff:
         for i in range(NS):
-            for j in range(4):
+            for j in range(2 * NSTIFF):
                 stiff[i, j] = 0.0
         if model == MODEL_II and ok:
             b2 = wk[WK_B2:WK_B2 + MAX_KKT]
-            cb = npl * P[P_CB]
+            cb = P[P_CB]
+            kb = P[P_KB]
             for leg in range(2):
                 for i in range(n):
                     b2[i] = 0.0
                 b2[5 + leg] = 1.0
                 b2[3 + leg] = -1.0
                 lu_solve(A, piv, wk, WK_B2, n)
+                # U: response of ddq to a unit belt torque pair, -npl G w
                 for i in range(nact):
-                    stiff[NQ + i, leg] = -cb * b2[i]
-                # V: d(dalpha - dphi)/d(s_dq) through the velocity projection
-                vcol = 2 + leg
+                    stiff[NQ + i, leg] = -npl * b2[i]
+                # V: belt torque c_b (dalpha - dphi) + k_b (alpha - phi) differentiated
+                # with respect to s through the projection of the dependent coordinates
+                vcol = NSTIFF + leg
+                stiff[5 + leg, vcol] = kb
                 if mi[MI_MOTOR_B + leg] != STUCK:
-                    stiff[NQ + 5 + leg, vcol] = 1.0
+                    stiff[NQ + 5 + leg, vcol] = cb
                 mode = mi[MI_CONTACT_B + leg]
                 if mode == STICK or mode == STRUT:
                     sg = sgl0 if leg == 0 else sgl1
@@ -991,14 +1000,62 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
                     sL = (2.0 * leg - 1.0) * Lh
                     ll = l[leg]
                     sph = sg * cth - cg * sth
-                    stiff[NQ + 0, vcol] = cg / ll
-                    stiff[NQ + 1, vcol] = sg / ll
-                    stiff[NQ + 2, vcol] = (sL * sph + ll) / ll
+                    # phi = atan2(anchor - hip_x, hip_y) - theta; dphi from R dq = 0
+                    d0 = cg / ll
+                    d1 = sg / ll
+                    d2 = (sL * sph + ll) / ll
+                    # the damper also depends on q through the projected dphi:
+                    # dphi = dg - dtheta, dg = -(hvx b + hvy a) / ll^2 with
+                    # a = anchor - hip_x = ll sin g, b = hip_y = ll cos g
+                    hvx = dq[0] - sL * sth * dth
+                    hvy = dq[1] + sL * cth * dth
+                    aa = ll * sg
+                    bb = ll * cg
+                    D2 = ll * ll
+                    dgv = -(hvx * bb + hvy * aa) / D2
+                    dga = -hvy / D2 - 2.0 * aa * dgv / D2
+                    dgb = -hvx / D2 - 2.0 * bb * dgv / D2
+                    e0 = -dga
+                    e1 = dgb
+                    e2 = (dga * sL * sth + dgb * sL * cth
+                          + (bb * sL * cth + aa * sL * sth) * dth / D2)
+                    stiff[0, vcol] = kb * d0 - cb * e0
+                    stiff[1, vcol] = kb * d1 - cb * e1
+                    stiff[2, vcol] = kb * d2 - cb * e2
+                    stiff[NQ + 0, vcol] = cb * d0
+                    stiff[NQ + 1, vcol] = cb * d1
+                    stiff[NQ + 2, vcol] = cb * d2
                 elif mode == FLIGHT and massless:
                     if P[P_TD_WORLD] > 0.5:
-                        stiff[NQ + 2, vcol] = 1.0
+                        stiff[2, vcol] = kb
+                        stiff[NQ + 2, vcol] = cb
                 else:
-                    stiff[NQ + 3 + leg, vcol] = -1.0
+                    stiff[3 + leg, vcol] = -kb
+                    stiff[NQ + 3 + leg, vcol] = -cb
+
+            # motor-side damping on alpha: joint viscous friction and, while the current is
+            # limited by the torque-speed line, the back-EMF
+            r_a = P[P_RA]
+            for leg in range(2):
+                if mi[MI_MOTOR_B + leg] == STUCK:
+                    continue
+                dm = P[P_B_J]
+                om = LG[2 * LG_OM + leg]
+                imax = P[P_IMAX]
+                ic = cmd[leg] / (N * P[P_ETA] * P[P_KT])
+                v_lo = (-vb - P[P_KW] * om) / r_a
+                v_hi = (vb - P[P_KW] * om) / r_a
+                if model != MODEL_IDEAL and ((v_hi < imax and ic > v_hi) or
+                                             (v_lo > -imax and ic < v_lo)):
+                    dm += P[P_ETA] * P[P_KT] * P[P_KW] / r_a
+                dm *= N * N
+                for i in range(n):
+                    b2[i] = 0.0
+                b2[5 + leg] = 1.0
+                lu_solve(A, piv, wk, WK_B2, n)
+                for i in range(nact):
+                    stiff[NQ + i, 2 + leg] = -npl * b2[i]
+                stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
 
     for rr in range(nr):
         lam = -b[nact + rr] if ok else 0.0

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..model.dynamics import evaluate_ws, new_eval_workspace
+from ..model.dynamics import NSTIFF, evaluate_ws, new_eval_workspace
 from ..model.layout import NAUX, NS
 
 C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
@@ -100,4 +100,4 @@ def new_workspace():
 def eval_workspace():
     """Evaluation workspace tuple (wk, wA, piv, stiff) for :func:`evaluate_ws`."""
     wk, wA, piv = new_eval_workspace()
-    return (wk, wA, piv, np.zeros((NS, 4)))
+    return (wk, wA, piv, np.zeros((NS, 2 * NSTIFF)))

@@ -33,7 +33,17 @@ from ..model.layout import (
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_COMPLETED, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK,
 )
+from . import ark
 from .dopri5 import dense, eval_workspace, step
+
+# integration methods (``run(..., method)``)
+METHOD_AUTO = -1      # currently DOPRI5 for every model (see below)
+METHOD_DOPRI5 = 0     # explicit Dormand-Prince 5(4): the reference
+METHOD_ARK4 = 1       # experimental: additive RK 4(3), belt spring-dampers implicit (ark.py)
+# ARK4 is accurate (10 s Model II gait metrics within 3e-6 of the rtol 1e-10 reference) but
+# at the default tolerances not yet faster than DOPRI5: its step is limited by the
+# accuracy of the stiff components where the analytic stiff factors miss couplings (slide
+# mode friction torque), so AUTO keeps DOPRI5 until it is.
 
 # integrator statistics slots
 S_NFEV = 0
@@ -324,12 +334,33 @@ def record_friction(aux, P, mi, stats):
 
 
 @njit(cache=True)
+def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
+            Z, eval_end):
+    """One step of the selected method; returns (error_norm, ok, evaluations)."""
+    if method == METHOD_ARK4:
+        return ark.step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                        SF1, Z, eval_end)
+    err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
+    return err, ok, 6
+
+
+@njit(cache=True)
+def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
+    """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
+    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
+                       method == METHOD_ARK4, SF0)
+
+
+@njit(cache=True)
 def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
-            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew):
+            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z):
     """Integrate from t to t_end (one control period) with events.
 
-    hwork[0] carries the step-size guess between calls. Returns (t, nev, status)."""
+    hwork[0] carries the step-size guess between calls. ``method``: METHOD_DOPRI5 or
+    METHOD_ARK4 (SF0, SF1, Z: its stiff-factor and stage scratch). Returns
+    (t, nev, status)."""
     K0 = K[0]
+    expo = -0.25 if method == METHOD_ARK4 else -0.2
     nfail = 0
     e_end = np.empty(NEV)
     pending = np.zeros(NEV, dtype=np.bool_)
@@ -337,7 +368,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     e_tmp = np.empty(NEV)
     aux_tmp = np.empty(NAUX)
     project_state(s, P, mi, mf)
-    evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3])
+    eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
     stats[S_NFEV] += 1
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
@@ -350,8 +381,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         if h >= remaining * (1.0 - 1e-12):
             h = remaining
             last = True
-        err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
-        stats[S_NFEV] += 6
+        err, ok, nf = do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
+                              ew, SF0, SF1, Z, False)
+        stats[S_NFEV] += nf
         if not ok or not (err == err):
             h *= 0.25
             nfail += 1
@@ -360,7 +392,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             continue
         if err > 1.0:
             stats[S_NREJECT] += 1
-            fac = 0.9 * err ** -0.2
+            fac = 0.9 * err ** expo
             if fac < 0.2:
                 fac = 0.2
             h *= fac
@@ -389,7 +421,10 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     th = 1.0
                     for _ in range(100):
                         th = (a * fb - b * fa) / (fb - fa)
-                        dense(s, h, K, th, ybuf)
+                        if method == METHOD_ARK4:
+                            ark.dense(s, y_new, h, K, th, ybuf)
+                        else:
+                            dense(s, h, K, th, ybuf)
                         evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False,
                                     ew[3])
                         stats[S_NFEV] += 1
@@ -418,8 +453,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             # redo the step exactly to the event time
             he = thmin * h
             if he > 0.0:
-                err, ok = step(s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
-                stats[S_NFEV] += 6
+                err, ok, nf = do_step(method, s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp,
+                                      rtol, atol, ew, SF0, SF1, Z, True)
+                stats[S_NFEV] += nf
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -465,6 +501,10 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     break
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
+            if method == METHOD_ARK4:
+                # stiff factors at the post-event state (settle() filled K0 and aux)
+                eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
+                stats[S_NFEV] += 1
             if he > 0.0 and he < h:
                 h = max(he, 1e-6)
             if t_end - t < 1e-12:
@@ -479,6 +519,10 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]
+        if method == METHOD_ARK4:
+            for i in range(NS):
+                for j in range(2 * ark.NSTIFF):
+                    SF0[i, j] = SF1[i, j]
         for i in range(NAUX):
             aux[i] = aux_new[i]
         for i in range(NEV):
@@ -490,7 +534,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             t = t_end
         else:
             t = t + h
-        fac = 5.0 if err == 0.0 else 0.9 * err ** -0.2
+        fac = 5.0 if err == 0.0 else 0.9 * err ** expo
         if fac > 5.0:
             fac = 5.0
         if fac < 0.2:
@@ -507,12 +551,13 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
 
 @njit(cache=True)
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed):
+        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, method=METHOD_AUTO):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
     is the caller's) updates the held commands, the modes are settled, the sample is
-    recorded, then the plant is integrated to the next sample. Returns
+    recorded, then the plant is integrated to the next sample. ``method``: METHOD_AUTO
+    (default), METHOD_DOPRI5 or METHOD_ARK4 (Model II only). Returns
     (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
@@ -526,6 +571,12 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ds = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
     ew = eval_workspace()
+    SF0 = np.zeros((NS, 2 * ark.NSTIFF))
+    SF1 = np.zeros((NS, 2 * ark.NSTIFF))
+    Z = np.zeros((ark.Z_ROWS, ark.NSTIFF))
+    meth = method
+    if meth == METHOD_AUTO or (meth == METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
+        meth = METHOD_DOPRI5
     t = k_start * dt
     k = k_start
     while k < k_stop:
@@ -561,7 +612,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         t_next = (k + 1) * dt
         t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
                                  tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp, ew)
+                                 ybuf, imp, ew, meth, SF0, SF1, Z)
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])

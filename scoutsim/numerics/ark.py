@@ -1,0 +1,223 @@
+"""Linearly implicit additive Runge-Kutta step for the stiff Model II belt dampers (compiled).
+
+Model II is stiff: each belt damper (c_b per physical leg) acts against the gear train's
+reflected inertia and gives a relative gear/leg mode with eigenvalue ~ -6e3 ... -1.4e4 /s,
+which holds an explicit method to ~0.1 ms steps. Everything else is slow (|lambda| < 200 /s).
+
+Splitting. At the start of each step the model supplies a rank-2 factorization
+L = U V^T of the belt-damper part of the Jacobian (``dynamics.evaluate_ws`` with
+``want_stiff``); the right-hand side is split *exactly* as
+
+    f(y) = [f(y) - L y] + L y,
+
+the first part treated explicitly, the linear second part implicitly, with the additive
+Runge-Kutta pair ARK4(3)6L[2]SA of Kennedy & Carpenter (Appl. Numer. Math. 44, 2003):
+ERK + L-stable, stiffly accurate ESDIRK (gamma = 1/4), order 4 with an embedded order-3
+solution. Because L is constant within a step the splitting is exact and the pair keeps its
+order whatever L is; L only has to capture the stiff modes for stability. Each implicit
+stage solves (I - h gamma U V^T) Y = rhs by the Sherman-Morrison-Woodbury formula (a 2 x 2
+system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the physics is
+f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
+atol + rtol max(|y|, |y_new|)). Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..model.dynamics import NSTIFF, evaluate_ws
+from ..model.layout import NS
+
+NSTAGE = 6
+Z_ROWS = NSTAGE + 2 * NSTIFF + 3   # rows of the scratch array Z (NSTIFF columns)
+GAMMA = 0.25
+C = np.array([0.0, 1.0 / 2.0, 83.0 / 250.0, 31.0 / 50.0, 17.0 / 20.0, 1.0])
+AE = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [1.0 / 2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [13861.0 / 62500.0, 6889.0 / 62500.0, 0.0, 0.0, 0.0, 0.0],
+    [-116923316275.0 / 2393684061468.0, -2731218467317.0 / 15368042101831.0,
+     9408046702089.0 / 11113171139209.0, 0.0, 0.0, 0.0],
+    [-451086348788.0 / 2902428689909.0, -2682348792572.0 / 7519795681897.0,
+     12662868775082.0 / 11960479115383.0, 3355817975965.0 / 11060851509271.0, 0.0, 0.0],
+    [647845179188.0 / 3216320057751.0, 73281519250.0 / 8382639484533.0,
+     552539513391.0 / 3454668386233.0, 3354512671639.0 / 8306763924573.0,
+     4040.0 / 17871.0, 0.0],
+])
+AI = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [1.0 / 4.0, 1.0 / 4.0, 0.0, 0.0, 0.0, 0.0],
+    [8611.0 / 62500.0, -1743.0 / 31250.0, 1.0 / 4.0, 0.0, 0.0, 0.0],
+    [5012029.0 / 34652500.0, -654441.0 / 2922500.0, 174375.0 / 388108.0, 1.0 / 4.0, 0.0, 0.0],
+    [15267082809.0 / 155376265600.0, -71443401.0 / 120774400.0,
+     730878875.0 / 902184768.0, 2285395.0 / 8070912.0, 1.0 / 4.0, 0.0],
+    [82889.0 / 524892.0, 0.0, 15625.0 / 83664.0, 69875.0 / 102672.0, -2260.0 / 8211.0,
+     1.0 / 4.0],
+])
+B = np.array([82889.0 / 524892.0, 0.0, 15625.0 / 83664.0, 69875.0 / 102672.0,
+              -2260.0 / 8211.0, 1.0 / 4.0])
+BHAT = np.array([4586570599.0 / 29645900160.0, 0.0, 178811875.0 / 945068544.0,
+                 814220225.0 / 1159782912.0, -3700637.0 / 11593932.0, 61727.0 / 225920.0])
+# error weights b - bhat
+EW = B - BHAT
+# coefficients of U z_j in stage i: (AI - AE)[i, j]
+AD = AI - AE
+
+
+@njit(cache=True)
+def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
+         eval_end):
+    """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
+    (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:]) already filled.
+
+    Fills K[1..5] (stage derivatives), y_new and, if the step is accepted (error <= 1) or
+    ``eval_end``, K[6] = f(y_new), aux_new and SF1 (stiff factors at y_new, FSAL).
+    Z (NSTAGE + 2*NSTIFF, NSTIFF) is scratch. Returns (error_norm, ok, evaluations)."""
+    ok = True
+    nfev = 0
+    R = NSTIFF
+    hg = h * GAMMA
+    VU = Z[NSTAGE:NSTAGE + R]            # V^T U
+    Si = Z[NSTAGE + R:NSTAGE + 2 * R]    # (I - h gamma V^T U)^-1
+    for a in range(R):
+        for b in range(R):
+            acc = 0.0
+            for i in range(NS):
+                acc += SF0[i, R + a] * SF0[i, b]
+            VU[a, b] = acc
+        acc = 0.0
+        for i in range(NS):
+            acc += SF0[i, R + a] * y[i]
+        Z[0, a] = acc
+    if not invert_small(VU, hg, Si, R):
+        return np.inf, False, nfev
+    w = Z[NSTAGE + 2 * R]
+    m = Z[NSTAGE + 2 * R + 1]
+    pp = Z[NSTAGE + 2 * R + 2]
+    for st in range(1, NSTAGE):
+        # rhs = y + h sum_j [AE_ij f_j + (AI_ij - AE_ij) U z_j]
+        for a in range(R):
+            acc = 0.0
+            for j in range(st):
+                acc += AD[st, j] * Z[j, a]
+            w[a] = h * acc
+            m[a] = 0.0
+        for i in range(NS):
+            acc = 0.0
+            for j in range(st):
+                c = AE[st, j]
+                if c != 0.0:
+                    acc += c * K[j, i]
+            r = y[i] + h * acc
+            for a in range(R):
+                r += SF0[i, a] * w[a]
+            tmp[i] = r
+            for a in range(R):
+                m[a] += SF0[i, R + a] * r
+        # Y = W^-1 rhs = rhs + h gamma U S^-1 V^T rhs
+        for a in range(R):
+            acc = 0.0
+            for b in range(R):
+                acc += Si[a, b] * m[b]
+            pp[a] = hg * acc
+        for i in range(NS):
+            acc = tmp[i]
+            for a in range(R):
+                acc += SF0[i, a] * pp[a]
+            tmp[i] = acc
+        # z = V^T Y = m + (V^T U) p
+        for a in range(R):
+            acc = m[a]
+            for b in range(R):
+                acc += VU[a, b] * pp[b]
+            Z[st, a] = acc
+        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
+                           ew[3]):
+            ok = False
+        nfev += 1
+    # error estimate, filtered through W^-1 (Hairer & Wanner IV.8: the raw difference
+    # over-estimates the error in the damped stiff components)
+    for a in range(R):
+        m[a] = 0.0
+    for i in range(NS):
+        acc = 0.0
+        e = 0.0
+        for j in range(NSTAGE):
+            acc += B[j] * K[j, i]
+            e += EW[j] * K[j, i]
+        y_new[i] = y[i] + h * acc
+        e *= h
+        tmp[i] = e
+        for a in range(R):
+            m[a] += SF0[i, R + a] * e
+    for a in range(R):
+        acc = 0.0
+        for b in range(R):
+            acc += Si[a, b] * m[b]
+        pp[a] = hg * acc
+    err = 0.0
+    for i in range(NS):
+        e = tmp[i]
+        for a in range(R):
+            e += SF0[i, a] * pp[a]
+        tmp[i] = e
+        sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+        err += (e / sc) ** 2
+    err = np.sqrt(err / NS)
+    if ok and (eval_end or err <= 1.0):
+        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew[0], ew[1], ew[2], True,
+                           SF1):
+            ok = False
+        nfev += 1
+    return err, ok, nfev
+
+
+@njit(cache=True)
+def invert_small(VU, hg, Si, R):
+    """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4)."""
+    M = np.empty((4, 8))
+    for a in range(R):
+        for b in range(R):
+            M[a, b] = (1.0 if a == b else 0.0) - hg * VU[a, b]
+            M[a, R + b] = 1.0 if a == b else 0.0
+    for k in range(R):
+        p = k
+        best = abs(M[k, k])
+        for i in range(k + 1, R):
+            if abs(M[i, k]) > best:
+                best = abs(M[i, k])
+                p = i
+        if best == 0.0 or not (best == best):
+            return False
+        if p != k:
+            for j in range(2 * R):
+                t = M[k, j]
+                M[k, j] = M[p, j]
+                M[p, j] = t
+        inv = 1.0 / M[k, k]
+        for j in range(2 * R):
+            M[k, j] *= inv
+        for i in range(R):
+            if i != k:
+                f = M[i, k]
+                if f != 0.0:
+                    for j in range(2 * R):
+                        M[i, j] -= f * M[k, j]
+    for a in range(R):
+        for b in range(R):
+            Si[a, b] = M[a, R + b]
+    return True
+
+
+@njit(cache=True)
+def dense(y, y1, h, K, theta, out):
+    """Cubic Hermite continuous extension on (y, K[0]) -> (y1, K[6]) at t + theta*h."""
+    t2 = theta * theta
+    t3 = t2 * theta
+    h00 = 2.0 * t3 - 3.0 * t2 + 1.0
+    h10 = t3 - 2.0 * t2 + theta
+    h01 = -2.0 * t3 + 3.0 * t2
+    h11 = t3 - t2
+    for i in range(NS):
+        out[i] = h00 * y[i] + h01 * y1[i] + h * (h10 * K[0, i] + h11 * K[6, i])
