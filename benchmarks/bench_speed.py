@@ -5,7 +5,8 @@
 Measures in one run, on one core:
 * first-call compile time (fresh Numba cache in a new process);
 * cached start-up: wall time of ``scoutsim run --duration 1`` in a new process;
-* wall time of 10 s of Model II at the default tolerance (best of 3) -> real-time factor;
+* wall time of 10 s of Model II bounding (default start, Coulomb floor mu = 0.8) at the
+  default tolerance (best of 3) -> real-time factor;
 * the same model in plain Python integrated by SciPy solve_ivp (benchmarks/scipy_baseline.py,
   NUMBA_DISABLE_JIT=1), over the first ``--baseline-seconds`` of the same run, and scoutsim
   over the same span -> speed ratio per simulated second.
@@ -22,6 +23,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+MU = 0.8   # the floor on which the Table I controller bounds (README, docs/model.md)
 
 
 def sub(cmd, env=None):
@@ -47,7 +49,7 @@ def main():
     walls = []
     for _ in range(3):
         t0 = time.perf_counter()
-        r = scoutsim.simulate(duration=10.0, model="II")
+        r = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=MU)
         walls.append(time.perf_counter() - t0)
     w10 = min(walls)
     # scoutsim over the baseline span
@@ -55,11 +57,11 @@ def main():
     ws = []
     for _ in range(5):
         t0 = time.perf_counter()
-        scoutsim.simulate(duration=span, model="II")
+        scoutsim.simulate(duration=span, model="II", friction_coefficient=MU)
         ws.append(time.perf_counter() - t0)
     w_span = min(ws)
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-    _, out = sub([sys.executable, str(HERE / "scipy_baseline.py"), str(span), "II"], env)
+    _, out = sub([sys.executable, str(HERE / "scipy_baseline.py"), str(span), "II", str(MU)], env)
     base = json.loads(out.strip().splitlines()[-1])
     rows = [
         ("first-call compile (new process, empty cache)", f"{t_compile:.1f} s", "reported"),

@@ -6,7 +6,7 @@ would get by writing the model for solve_ivp. solve_ivp integrates each 1 ms con
 with the current modes' event functions; at a plant event the mode transition is applied
 and integration restarts, exactly as in scoutsim's compiled loop.
 
-Usage: NUMBA_DISABLE_JIT=1 python benchmarks/scipy_baseline.py DURATION_S [MODEL]
+Usage: NUMBA_DISABLE_JIT=1 python benchmarks/scipy_baseline.py DURATION_S [MODEL] [MU]
 Prints one JSON line: simulated seconds, wall seconds, event count, final state.
 """
 
@@ -27,9 +27,9 @@ from scoutsim.numerics.hybrid import NSTAT, apply_event, event_values, settle
 from scoutsim.simulation import _state_vector
 
 
-def run(duration, model="II", rtol=1e-8, atol=1e-9):
+def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):
     robot, ctrl = RobotParameters(), ControllerParameters()
-    P = robot_array(robot, model)
+    P = robot_array(robot, model, friction_coefficient=friction_coefficient)
     C = controller_array(ctrl)
     s = _state_vector(default_initial_state(), robot, ctrl, (0, 0), True)
     mi = np.zeros(L.NMI, dtype=np.int64)
@@ -97,8 +97,9 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9):
 if __name__ == "__main__":
     dur = float(sys.argv[1])
     model = sys.argv[2] if len(sys.argv) > 2 else "II"
+    mu = float(sys.argv[3]) if len(sys.argv) > 3 else math.inf
     t0 = time.perf_counter()
-    t, nev, s = run(dur, model)
+    t, nev, s = run(dur, model, friction_coefficient=mu)
     wall = time.perf_counter() - t0
     print(json.dumps({"simulated_s": t, "wall_s": wall, "events": nev,
                       "x": float(s[0]), "y": float(s[1]), "theta": float(s[2])}))
