@@ -21,11 +21,12 @@ from . import __version__
 from .control.bounding import BoundingController, controller_array
 from .model import layout as L
 from .model.packing import robot_array
-from .numerics.hybrid import NSTAT, S_HMIN, run
+from .numerics.hybrid import METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
 from .parameters import ControllerParameters, RobotParameters, validate_robot
 from .result import SimulationResult
 
 Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
+_METHODS = {"dopri5": METHOD_DOPRI5, "ark4": METHOD_ARK4}
 
 
 @dataclass(frozen=True)
@@ -37,13 +38,20 @@ class IntegratorSettings:
         integrator at 1e-10; scoutsim's default 1e-8 / 1e-9 reproduces its gait metrics to
         better than 1e-4 (see tests/numerics).
     initial_step : first step guess [s].
+    method : "dopri5" (the reference: explicit Dormand-Prince 5(4)) or "ark4"
+        (experimental: additive Runge-Kutta 4(3) with the belt spring-dampers and motor
+        damping implicit, scoutsim/numerics/ark.py; not yet faster, see README).
     """
 
     rtol: float = 1e-8
     atol: float = 1e-9
     initial_step: float = 1e-4
+    method: str = "dopri5"
 
     def __post_init__(self):
+        if self.method not in _METHODS:
+            raise ValueError(f"integrator.method = {self.method!r} is not allowed: must be one "
+                             f"of {sorted(_METHODS)}")
         for name in ("rtol", "atol", "initial_step"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -271,7 +279,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             k, n_out, nev, status, t_now = run(
                 s, P, mi, mf, C, ls, cmd, k, k_stop, k_last, dt, integ.rtol, integ.atol,
                 user_ctrl is None, hwork, out_t, out_s, out_aux, out_ls, n_out, ev, nev,
-                stats, armed)
+                stats, armed, _METHODS[integ.method])
             if nev > ev.shape[0] - 64:
                 ev = np.concatenate([ev, np.zeros_like(ev)])
             if bar is not None:

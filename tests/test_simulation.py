@@ -139,3 +139,14 @@ def test_bad_simulation_input_names_the_field(kw, field):
 def test_bad_integrator_settings():
     with pytest.raises(ValueError, match="rtol"):
         IntegratorSettings(rtol=0.0)
+
+
+def test_experimental_ark4_method_agrees_with_reference():
+    ref = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
+                            integrator=IntegratorSettings(rtol=1e-10, atol=1e-10))
+    ark = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
+                            integrator=IntegratorSettings(method="ark4"))
+    assert len(ref.event_times("touchdown")) >= 4
+    assert np.max(np.abs(ark.state[:, :3] - ref.state[:, :3])) < 1e-5
+    with pytest.raises(ValueError, match="integrator.method"):
+        IntegratorSettings(method="euler")
