@@ -142,9 +142,9 @@ def test_bad_integrator_settings():
 
 
 def test_experimental_ark4_method_agrees_with_reference():
-    ref = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
+    ref = scoutsim.simulate(duration=2.0, model="II", friction_coefficient=0.8,
                             integrator=IntegratorSettings(rtol=1e-10, atol=1e-10))
-    ark = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
+    ark = scoutsim.simulate(duration=2.0, model="II", friction_coefficient=0.8,
                             integrator=IntegratorSettings(method="ark4"))
     assert len(ref.event_times("touchdown")) >= 4
     assert np.max(np.abs(ark.state[:, :3] - ref.state[:, :3])) < 1e-5
