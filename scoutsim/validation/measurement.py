@@ -1,0 +1,229 @@
+"""The experiment's measurement chain, simulated (SPEC.md 8; paper Sec. IV.B).
+
+On Scout II, torso pitch and COM height were measured with two laser range finders at the
+front and back ends of the torso, and the laser data were low-pass filtered at 15 Hz after
+the fact via FFT; hip torques were estimated from the motor currents as ``N eta K_T i``.
+This module reproduces that chain so that a simulation can be turned into exactly what the
+robot would have logged (:func:`to_log`), and compared with a log like with like.
+
+    log = to_log(result)                       # noise-free
+    log = to_log(result, noise=SensorNoise(), seed=1)
+
+Laser geometry: see :mod:`scoutsim.validation.logs` ("Laser geometry").
+
+Low-pass (:func:`fft_lowpass`): zero-phase, applied in the frequency domain with
+``numpy.fft``. Gain 1 below ``cutoff - transition/2``, 0 above ``cutoff + transition/2``,
+a raised cosine in between (gain 1/2 at the cut-off); ``transition_hz = 0`` is a
+brick-wall. Default 15 Hz with a 5 Hz transition (pass band to 12.5 Hz, stop band from
+17.5 Hz): a smooth cut keeps the filter's impulse response short, so edge effects die out
+within about 0.3 s of the ends of a record. Before the FFT the record is extended at each
+end by up to ``pad_s`` (1 s) of its odd reflection about the end value (continuous value
+and slope, as ``scipy.signal.filtfilt``'s padding), which avoids the wrap-around jump of a
+plain FFT; the extension is dropped afterwards. Within ``EDGE_S`` of either end the result
+is affected by the unknown signal outside the record; stride analysis ignores strides there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..model import layout as L
+from .logs import ExperimentLog
+
+__all__ = ["LaserGeometry", "SensorNoise", "laser_ranges", "pitch_height_from_lasers",
+           "fft_lowpass", "lowpass_gain", "torque_from_current", "torque_per_amp", "to_log",
+           "EDGE_S"]
+
+#: Time [s] at each end of a record within which the low-pass has edge effects.
+EDGE_S = 0.3
+
+
+@dataclass(frozen=True)
+class LaserGeometry:
+    """Where the two laser range finders are (see :mod:`scoutsim.validation.logs`).
+
+    half_spacing_m : distance of each laser from the torso COM along the torso axis [m]
+        (default 0.35 = torso_length / 2, the torso ends).
+    mount_offset_m : offset of the laser aperture below the torso axis, along the torso's
+        downward normal [m] (default 0).
+    """
+
+    half_spacing_m: float = 0.35
+    mount_offset_m: float = 0.0
+
+    def __post_init__(self):
+        if not (math.isfinite(self.half_spacing_m) and self.half_spacing_m > 0):
+            raise ValueError(f"half_spacing_m = {self.half_spacing_m!r} is not allowed: must "
+                             "be a finite number > 0")
+        if not math.isfinite(self.mount_offset_m):
+            raise ValueError(f"mount_offset_m = {self.mount_offset_m!r} is not allowed: must "
+                             "be finite")
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """Standard deviations of white Gaussian sensor noise added by :func:`to_log`
+    (defaults: a plausible small-robot sensor suite [assumed]).
+
+    laser_m : laser range noise [m]; angle_rad, rate_rad_s : encoder angle / rate noise;
+    current_a : current-sense noise [A].
+    """
+
+    laser_m: float = 1.0e-3
+    angle_rad: float = 2.0e-3
+    rate_rad_s: float = 0.05
+    current_a: float = 0.1
+
+
+def laser_ranges(height, pitch, geometry: LaserGeometry | None = None):
+    """(front, back) ranges [m] of the two lasers for COM height ``height`` [m] and pitch
+    ``pitch`` [rad] over flat ground ``y = 0``."""
+    g = geometry or LaserGeometry()
+    y = np.asarray(height, dtype=float)
+    th = np.asarray(pitch, dtype=float)
+    c = np.cos(th)
+    s = np.sin(th)
+    d = g.half_spacing_m
+    return (y + d * s) / c - g.mount_offset_m, (y - d * s) / c - g.mount_offset_m
+
+
+def pitch_height_from_lasers(front, back, geometry: LaserGeometry | None = None):
+    """(pitch [rad], COM height [m]) from the two laser ranges (exact inverse of
+    :func:`laser_ranges`)."""
+    g = geometry or LaserGeometry()
+    rf = np.asarray(front, dtype=float) + g.mount_offset_m
+    rb = np.asarray(back, dtype=float) + g.mount_offset_m
+    th = np.arctan((rf - rb) / (2.0 * g.half_spacing_m))
+    return th, 0.5 * (rf + rb) * np.cos(th)
+
+
+def lowpass_gain(f, cutoff_hz: float = 15.0, transition_hz: float = 5.0):
+    """Gain of :func:`fft_lowpass` at frequencies ``f`` [Hz]."""
+    f = np.abs(np.asarray(f, dtype=float))
+    if transition_hz <= 0:
+        return (f <= cutoff_hz).astype(float)
+    lo = cutoff_hz - 0.5 * transition_hz
+    g = np.where(f <= lo, 1.0, 0.0)
+    m = (f > lo) & (f < lo + transition_hz)
+    g[m] = 0.5 * (1.0 + np.cos(math.pi * (f[m] - lo) / transition_hz))
+    return g
+
+
+def fft_lowpass(x, fs: float, cutoff_hz: float = 15.0, transition_hz: float = 5.0,
+                pad_s: float = 1.0) -> np.ndarray:
+    """Zero-phase FFT low-pass of a uniformly sampled record (see the module docstring).
+
+    Parameters
+    ----------
+    x : (n,) array
+    fs : sample rate [Hz]
+    cutoff_hz : half-gain frequency [Hz] (default 15, as in the paper)
+    transition_hz : width of the raised-cosine roll-off [Hz]; 0 = brick-wall
+    pad_s : length of the odd-reflection extension at each end [s]
+    """
+    if not (cutoff_hz > 0 and transition_hz >= 0 and transition_hz < 2 * cutoff_hz):
+        raise ValueError(f"cutoff_hz = {cutoff_hz}, transition_hz = {transition_hz} are not "
+                         "allowed: need cutoff > 0 and 0 <= transition < 2 cutoff")
+    x = np.asarray(x, dtype=float)
+    n = x.shape[0]
+    if n < 3:
+        return x.copy()
+    p = min(n - 1, int(round(pad_s * fs)))
+    ext = np.concatenate([2 * x[0] - x[p:0:-1], x, 2 * x[-1] - x[-2:-p - 2:-1]])
+    spec = np.fft.rfft(ext)
+    f = np.fft.rfftfreq(ext.shape[0], 1.0 / fs)
+    return np.fft.irfft(spec * lowpass_gain(f, cutoff_hz, transition_hz), ext.shape[0])[p:p + n]
+
+
+def torque_per_amp(robot) -> float:
+    """N eta K_T [N m/A] of a RobotParameters or its dict (``provenance["robot"]``)."""
+    if isinstance(robot, dict):
+        n = robot["planetary_ratio"] * robot["sprocket_ratio"]
+        eta = robot["gearbox_efficiency"] * robot["sprocket_efficiency"]
+        return float(n * eta * robot["torque_constant"])
+    return float(robot.gear_ratio * robot.efficiency * robot.torque_constant)
+
+
+def torque_from_current(current, robot) -> np.ndarray:
+    """Hip torque per physical leg estimated from motor current, ``N eta K_T i`` [N m]."""
+    return torque_per_amp(robot) * np.asarray(current, dtype=float)
+
+
+def _on_grid(result):
+    """Indices of the samples on the controller grid (drops a final off-grid sample of a run
+    that fell or failed)."""
+    t = np.asarray(result.t, dtype=float)
+    dt = float((result.provenance or {}).get("control_period_s") or 1e-3)
+    k = t / dt
+    return np.flatnonzero(np.abs(k - np.round(k)) < 1e-6)
+
+
+def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
+           geometry: LaserGeometry | None = None, lowpass_hz: float | None = 15.0,
+           lowpass_transition_hz: float = 5.0, source: str | None = None, notes: str = "",
+           synthetic: bool = True) -> ExperimentLog:
+    """What the robot would have logged during the simulated run ``result``.
+
+    Columns: laser ranges (from the simulated pitch and height, :func:`laser_ranges`), leg
+    angles and rates as the hip encoders see them (motor-side angle alpha for Model II when
+    the controller senses the motor angle, as the robot's encoders sit on the motors; phi
+    otherwise), motor currents, controller leg states, leg lengths. Optional white Gaussian
+    noise (``noise``: :class:`SensorNoise` or a dict of its fields; ``seed`` for numpy's
+    default_rng) is added to the sensors, never to the leg states. The log's metadata holds
+    the geometry, the low-pass setting (applied by :attr:`ExperimentLog.pitch`), N eta K_T,
+    ``synthetic = True`` and the simulation's provenance.
+    """
+    geometry = geometry or LaserGeometry()
+    k = _on_grid(result)
+    prov = result.provenance or {}
+    state = np.asarray(result.state, dtype=float)[k]
+    t = np.asarray(result.t, dtype=float)[k]
+    robot = prov.get("robot")
+    ctrl = prov.get("controller") or {}
+    encoder_on_motor = prov.get("model") == "II" and bool(ctrl.get("sense_motor_angle", True))
+    rf, rb = laser_ranges(state[:, L.IY], state[:, L.ITH], geometry)
+    cols = {"t": t, "laser_front_m": rf, "laser_back_m": rb}
+    for leg, name in enumerate(("back", "front")):
+        iang = (L.IALB if encoder_on_motor else L.IPHB) + leg
+        cols[f"phi_{name}_rad"] = state[:, iang]
+        cols[f"dphi_{name}_rad_s"] = state[:, L.NQ + iang]
+    for leg, name in enumerate(("back", "front")):
+        cols[f"current_{name}_a"] = np.asarray(result.motor_current(leg), dtype=float)[k]
+    for leg, name in enumerate(("back", "front")):
+        cols[f"leg_state_{name}"] = np.asarray(result.leg_state(leg), dtype=float)[k]
+    for leg, name in enumerate(("back", "front")):
+        cols[f"leg_length_{name}_m"] = state[:, L.IL_B + leg]
+    if noise is not None:
+        nz = noise if isinstance(noise, SensorNoise) else SensorNoise(**dict(noise))
+        rng = np.random.default_rng(seed)
+        n = t.shape[0]
+        for c in cols:
+            sd = (nz.laser_m if c.startswith("laser_") else
+                  nz.angle_rad if c.startswith("phi_") else
+                  nz.rate_rad_s if c.startswith("dphi_") else
+                  nz.current_a if c.startswith("current_") else 0.0)
+            if sd > 0:
+                cols[c] = cols[c] + rng.normal(0.0, sd, n)
+    meta = {
+        "source": source or f"scoutsim {prov.get('scoutsim_version', '')} simulation, "
+                            f"model {prov.get('model')}",
+        "synthetic": bool(synthetic),
+        "notes": notes,
+        "laser_half_spacing_m": geometry.half_spacing_m,
+        "laser_mount_offset_m": geometry.mount_offset_m,
+        "lowpass_hz": lowpass_hz,
+        "lowpass_transition_hz": lowpass_transition_hz,
+        "torque_per_amp_nm_a": torque_per_amp(robot) if robot else None,
+        "encoder": "motor-side angle alpha" if encoder_on_motor else "leg angle phi",
+        "sensor_noise": None if noise is None else asdict(
+            noise if isinstance(noise, SensorNoise) else SensorNoise(**dict(noise))),
+        "noise_seed": seed if (seed is None or isinstance(seed, int)) else str(seed),
+        "simulation": {"model": prov.get("model"), "outcome": result.outcome,
+                       "t_end_s": float(result.t_end),
+                       "friction_coefficient": prov.get("friction_coefficient"),
+                       "initial_state": prov.get("initial_state"), "robot": robot},
+    }
+    return ExperimentLog(columns=cols, meta=meta, path=None)

@@ -1,0 +1,137 @@
+"""Strides and per-stride gait metrics of a log (SPEC.md 8; paper Sec. IV.C).
+
+The same definitions as :mod:`scoutsim.analysis.gait`, applied to what a robot logs
+instead of the simulator's continuous-time events:
+
+- **Lift-off / touchdown** of a leg is the first sample at which its logged controller
+  state changes from stance (1 or 2) to flight (0) / from flight to stance (so event times
+  are quantized to the 1 ms control period, as on the robot).
+- A **stride** runs from one back-leg lift-off to the next.
+- Per stride: ``period_s``, ``stride_frequency_hz`` (1/period), ``duty_factor_back`` and
+  ``duty_factor_front`` (stance time inside the stride / period), ``pitch_max_deg``,
+  ``pitch_min_deg``, ``height_max_m``, ``height_min_m`` (extremes of the *measured* pitch
+  and height, :attr:`ExperimentLog.pitch`, over the samples from lift-off to lift-off
+  inclusive). ``mean_speed_m_s`` is NaN: the robot did not log its forward position.
+- **Steady strides**: start at or after ``transient_s``, lie entirely at least
+  :data:`~scoutsim.validation.measurement.EDGE_S` inside the record (no filter edge
+  effects), and belong to the final contiguous block whose periods are within
+  ``period_tolerance`` of the median period of the last seven candidates (as in
+  :func:`scoutsim.analysis.gait.gait_metrics`).
+
+The results are :class:`scoutsim.analysis.gait.Stride` objects, so the metric names match.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis.gait import STRIDE_METRICS, Stride
+from .measurement import EDGE_S
+
+__all__ = ["log_strides", "LogGait", "stance_intervals_log", "STRIDE_METRICS"]
+
+
+def stance_intervals_log(log, leg) -> np.ndarray:
+    """(k, 2) [touchdown, lift-off] times [s] of one leg from its logged states; a stance
+    open at the start begins at t[0], one open at the end ends at t[-1]."""
+    s = log.leg_state(leg)
+    t = log.t
+    stance = s != 0
+    edges = np.diff(stance.astype(int))
+    starts = list(np.flatnonzero(edges == 1) + 1)
+    ends = list(np.flatnonzero(edges == -1) + 1)
+    if stance[0]:
+        starts.insert(0, 0)
+    if stance[-1]:
+        ends.append(len(t) - 1)
+    return np.array([[t[a], t[b]] for a, b in zip(starts, ends)], dtype=float).reshape(-1, 2)
+
+
+def _overlap(iv, a, b):
+    if iv.shape[0] == 0 or b <= a:
+        return 0.0
+    lo = np.maximum(iv[:, 0], a)
+    hi = np.minimum(iv[:, 1], b)
+    return float(np.sum(np.clip(hi - lo, 0.0, None)))
+
+
+def _converged_tail(strides, tol):
+    cand = [i for i, st in enumerate(strides) if st.steady]
+    if not cand:
+        return strides
+    ref = float(np.median([strides[i].period_s for i in cand[-7:]]))
+    first = len(strides)
+    for i in reversed(cand):
+        if abs(strides[i].period_s - ref) <= tol * ref and (first == len(strides)
+                                                            or i == first - 1):
+            first = i
+        else:
+            break
+    return [dataclasses.replace(st, steady=(i >= first and st.steady))
+            for i, st in enumerate(strides)]
+
+
+@dataclass
+class LogGait:
+    """Strides of one log and the means over its steady strides (None without any)."""
+
+    strides: list
+    transient_s: float
+    source: str = ""
+    means: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        steady = self.steady_strides
+        self.means = {k: (float(np.mean([s[k] for s in steady])) if steady else None)
+                      for k in STRIDE_METRICS}
+
+    @property
+    def steady_strides(self) -> list:
+        return [s for s in self.strides if s.steady]
+
+    @property
+    def n_strides(self) -> int:
+        return len(self.strides)
+
+    @property
+    def n_steady_strides(self) -> int:
+        return len(self.steady_strides)
+
+    def __getattr__(self, name):
+        if name in STRIDE_METRICS:
+            return self.means[name]
+        raise AttributeError(name)
+
+
+def log_strides(log, transient_s: float = 2.0, period_tolerance: float = 0.05) -> LogGait:
+    """Split a log into strides and compute the per-stride metrics (module docstring)."""
+    if not (math.isfinite(transient_s) and transient_s >= 0):
+        raise ValueError(f"transient_s = {transient_s!r} is not allowed: must be >= 0")
+    t = log.t
+    lo = log.liftoff_times("back")
+    stances = (stance_intervals_log(log, "back"), stance_intervals_log(log, "front"))
+    th = np.asarray(log.pitch)
+    y = np.asarray(log.height)
+    t0, t1 = float(t[0]), float(t[-1])
+    out = []
+    for k in range(len(lo) - 1):
+        a, b = float(lo[k]), float(lo[k + 1])
+        period = b - a
+        i0 = int(np.searchsorted(t, a, side="left"))
+        i1 = int(np.searchsorted(t, b, side="right"))
+        out.append(Stride(
+            index=len(out), t_start=a, t_end=b, period_s=period,
+            stride_frequency_hz=1.0 / period,
+            duty_factor_back=_overlap(stances[0], a, b) / period,
+            duty_factor_front=_overlap(stances[1], a, b) / period,
+            pitch_max_deg=math.degrees(float(np.max(th[i0:i1]))),
+            pitch_min_deg=math.degrees(float(np.min(th[i0:i1]))),
+            height_max_m=float(np.max(y[i0:i1])), height_min_m=float(np.min(y[i0:i1])),
+            mean_speed_m_s=math.nan,
+            steady=bool(a - t0 >= max(transient_s, EDGE_S) and b <= t1 - EDGE_S)))
+    out = _converged_tail(out, period_tolerance)
+    return LogGait(strides=out, transient_s=float(transient_s), source=log.name)
