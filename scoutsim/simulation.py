@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections import namedtuple
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -22,7 +22,8 @@ from .control.bounding import BoundingController, controller_array
 from .model import layout as L
 from .model.packing import robot_array
 from .numerics.hybrid import METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
-from .parameters import ControllerParameters, RobotParameters, validate_robot
+from .parameters import (ControllerParameters, RobotParameters, validate_parameters,
+                         validate_robot)
 from .result import SimulationResult
 
 Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
@@ -213,18 +214,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     else:
         raise TypeError("controller must be ControllerParameters, a BoundingController or "
                         "an object with a command(t, sensors) method")
-    if isinstance(controller, ControllerParameters) or cparams is not None:
-        from .parameters import validate_parameters
-        if user_ctrl is None and cparams is not None:
-            validate_parameters(robot, cparams)
+    if user_ctrl is None and cparams is not None:
+        validate_parameters(robot, cparams)
 
     P = robot_array(robot, model, friction_coefficient=friction_coefficient,
                     passive_touchdown_angles=passive_touchdown_angles,
                     passive_touchdown_world=passive_touchdown_world,
                     pitch_limit=math.radians(pitch_limit_deg))
-    C = controller_array(cparams if (model != "passive" and user_ctrl is None) else None)
-    if model != "passive" and user_ctrl is None:
-        C = controller_array(cparams)
+    # the compiled controller runs unless the model is passive or the user brings their own
+    C = controller_array(cparams if user_ctrl is None else None)
     dt = cparams.control_period if cparams is not None else 1e-3
     init = initial_state or default_initial_state(model)
     s = _state_vector(init, robot, cparams if model != "passive" else None,

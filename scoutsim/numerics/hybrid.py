@@ -550,6 +550,23 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
 
 
 @njit(cache=True)
+def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
+    """Append one row (time, state, outputs, leg states and modes) to the time series."""
+    out_t[n_out] = t
+    for i in range(NS):
+        out_s[n_out, i] = s[i]
+    for i in range(NAUX):
+        out_aux[n_out, i] = aux[i]
+    out_ls[n_out, 0] = ls[0]
+    out_ls[n_out, 1] = ls[1]
+    out_ls[n_out, 2] = mi[MI_CONTACT_B]
+    out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
+    out_ls[n_out, 4] = mi[MI_MOTOR_B]
+    out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
+    return n_out + 1
+
+
+@njit(cache=True)
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, method=METHOD_AUTO):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
@@ -592,18 +609,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
         nev = settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew)
         # record the sample
-        out_t[n_out] = t
-        for i in range(NS):
-            out_s[n_out, i] = s[i]
-        for i in range(NAUX):
-            out_aux[n_out, i] = aux[i]
-        out_ls[n_out, 0] = ls[0]
-        out_ls[n_out, 1] = ls[1]
-        out_ls[n_out, 2] = mi[MI_CONTACT_B]
-        out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
-        out_ls[n_out, 4] = mi[MI_MOTOR_B]
-        out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
-        n_out += 1
+        n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
         if aux[A_KKT_OK] < 0.5:
             return k, n_out, nev, ST_NUMERICAL_FAILURE, t
         if k >= k_last:
@@ -616,18 +622,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
-            out_t[n_out] = t
-            for i in range(NS):
-                out_s[n_out, i] = s[i]
-            for i in range(NAUX):
-                out_aux[n_out, i] = aux[i]
-            out_ls[n_out, 0] = ls[0]
-            out_ls[n_out, 1] = ls[1]
-            out_ls[n_out, 2] = mi[MI_CONTACT_B]
-            out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
-            out_ls[n_out, 4] = mi[MI_MOTOR_B]
-            out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
-            n_out += 1
+            n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
             return k + 1, n_out, nev, status, t
         k += 1
         if nev > ev.shape[0] - 64:

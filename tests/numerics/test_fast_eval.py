@@ -104,17 +104,11 @@ def test_stiff_factors_capture_belt_eigenvalues():
 
 def test_ark_method_matches_reference_model_ii():
     """The experimental linearly implicit ARK4(3) path reproduces DOPRI5 (Model II)."""
-    import scoutsim.simulation as S
-    from scoutsim.numerics import hybrid as H
-    orig = S.run
     out = {}
-    try:
-        for m in (H.METHOD_DOPRI5, H.METHOD_ARK4):
-            S.run = lambda *a, m=m: H.run(*a, m)
-            out[m] = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8)
-    finally:
-        S.run = orig
-    a, b = out[H.METHOD_DOPRI5], out[H.METHOD_ARK4]
+    for m in ("dopri5", "ark4"):
+        out[m] = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
+                                   integrator=scoutsim.IntegratorSettings(method=m))
+    a, b = out["dopri5"], out["ark4"]
     assert a.outcome == b.outcome == "completed"
     assert len(a.events) == len(b.events)
     assert np.max(np.abs(a.events[:, 0] - b.events[:, 0])) < 1e-6
