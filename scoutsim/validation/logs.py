@@ -400,8 +400,9 @@ def _check_columns(path, names):
     if missing:
         import difflib
         hints = []
+        unknown = [n for n in names if n not in COLUMN_UNITS]
         for c in missing:
-            close = difflib.get_close_matches(c, names, n=1)
+            close = difflib.get_close_matches(c, unknown, n=1)
             if close:
                 hints.append(f"'{c}' (found '{close[0]}': wrong name or unit?)")
             else:

@@ -348,3 +348,12 @@ def test_cli_compare_example(tmp_path, capsys):
     assert float(ii["stride_frequency_hz"]["mean_percent_error"]) > 1.0
     assert all(r["mean_percent_error"] == "" and r["n_strides"] == "0"
                for r in rows if r["model"] == "I")
+
+
+def test_missing_column_hints_at_a_misnamed_one(tmp_path):
+    lg = _small_log()
+    cols = dict(lg.columns)
+    cols["phi_back_deg"] = cols.pop("phi_back_rad")
+    p = save_log(ExperimentLog(cols, {}), tmp_path / "hint.csv")
+    with pytest.raises(LogError, match=r"'phi_back_rad' \(found 'phi_back_deg'"):
+        load_log(p)
