@@ -380,7 +380,8 @@ def _pair(a, b, spec: str, unit: str) -> str:
     return f"{_fmt(a, spec)} / {_fmt(b, spec)}{(' ' + unit) if unit else ''}"
 
 
-def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float) -> str:
+def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float,
+                   friction: float | None = None) -> str:
     """The human-readable summary table of a run."""
     outcome = summary.get("outcome")
     if outcome != "completed" and t_end is not None:
@@ -405,7 +406,9 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
     ]
     width = max(len(k) for k, _ in rows)
     model = summary.get("model")
-    lines = [f"scoutsim run: model {model}, {duration:g} s requested"]
+    floor = ("" if friction is None else
+             ", floor: no slip" if math.isinf(friction) else f", floor: Coulomb mu = {friction:g}")
+    lines = [f"scoutsim run: model {model}, {duration:g} s requested{floor}"]
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]
     if summary.get("n_steady_strides") == 0 and summary.get("outcome") == "completed":
         lines.append("  (no steady strides: the gait means need strides after the 2 s "
@@ -454,7 +457,8 @@ def _cmd_run(args) -> int:
     if args.json:
         print(_dumps(summary))
     else:
-        print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end))
+        print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end,
+                             friction=args.friction))
         print(f"wrote {', '.join(f.name for f in files)} to {out}/")
     if result.outcome == "numerical_failure":
         print("scoutsim run: the integration failed numerically (see summary.json and "
