@@ -184,7 +184,7 @@ def stance_intervals(result, leg) -> np.ndarray:
     return np.array(out, dtype=float).reshape(-1, 2)
 
 
-def _overlap(intervals: np.ndarray, a: float, b: float) -> float:
+def stance_overlap(intervals: np.ndarray, a: float, b: float) -> float:
     """Total length [s] of the intersection of ``intervals`` with [a, b]."""
     if intervals.shape[0] == 0 or b <= a:
         return 0.0
@@ -298,8 +298,8 @@ def _strides(result, transient_s, stances):
         out.append(Stride(
             index=len(out), t_start=a, t_end=b, period_s=period,
             stride_frequency_hz=1.0 / period,
-            duty_factor_back=_overlap(stances[0], a, b) / period,
-            duty_factor_front=_overlap(stances[1], a, b) / period,
+            duty_factor_back=stance_overlap(stances[0], a, b) / period,
+            duty_factor_front=stance_overlap(stances[1], a, b) / period,
             pitch_max_deg=math.degrees(pmax), pitch_min_deg=math.degrees(pmin),
             height_max_m=hmax, height_min_m=hmin,
             mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
@@ -528,7 +528,7 @@ class GaitMetrics:
                 "strides": [s.to_dict() for s in self.strides]}
 
 
-def _converged_tail(strides, tol):
+def converged_tail(strides, tol):
     """Keep ``steady`` only for the contiguous final run of candidate strides whose period
     lies within ``tol`` (relative) of the median period of the last seven candidates: the
     gait has converged there. Earlier strides are transient however late they start."""
@@ -576,7 +576,7 @@ def gait_metrics(result, transient_s: float = 2.0, period_tolerance: float = 0.0
         raise ValueError(f"period_tolerance = {period_tolerance!r} is not allowed: must be "
                          "in (0, 1)")
     stances = (stance_intervals(result, 0), stance_intervals(result, 1))
-    strides = _converged_tail(_strides(result, float(transient_s), stances), period_tolerance)
+    strides = converged_tail(_strides(result, float(transient_s), stances), period_tolerance)
     return GaitMetrics(strides=strides, transient_s=float(transient_s),
                        outcome=str(result.outcome), t_end=float(result.t_end),
                        stance={"back": stances[0], "front": stances[1]})

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.gait import STRIDE_METRICS, Stride
+from ..analysis.gait import STRIDE_METRICS, Stride, converged_tail, stance_overlap
 from .measurement import EDGE_S
 
 __all__ = ["log_strides", "LogGait", "stance_intervals_log", "STRIDE_METRICS"]
@@ -49,30 +49,6 @@ def stance_intervals_log(log, leg) -> np.ndarray:
     if stance[-1]:
         ends.append(len(t) - 1)
     return np.array([[t[a], t[b]] for a, b in zip(starts, ends)], dtype=float).reshape(-1, 2)
-
-
-def _overlap(iv, a, b):
-    if iv.shape[0] == 0 or b <= a:
-        return 0.0
-    lo = np.maximum(iv[:, 0], a)
-    hi = np.minimum(iv[:, 1], b)
-    return float(np.sum(np.clip(hi - lo, 0.0, None)))
-
-
-def _converged_tail(strides, tol):
-    cand = [i for i, st in enumerate(strides) if st.steady]
-    if not cand:
-        return strides
-    ref = float(np.median([strides[i].period_s for i in cand[-7:]]))
-    first = len(strides)
-    for i in reversed(cand):
-        if abs(strides[i].period_s - ref) <= tol * ref and (first == len(strides)
-                                                            or i == first - 1):
-            first = i
-        else:
-            break
-    return [dataclasses.replace(st, steady=(i >= first and st.steady))
-            for i, st in enumerate(strides)]
 
 
 @dataclass
@@ -126,12 +102,12 @@ def log_strides(log, transient_s: float = 2.0, period_tolerance: float = 0.05) -
         out.append(Stride(
             index=len(out), t_start=a, t_end=b, period_s=period,
             stride_frequency_hz=1.0 / period,
-            duty_factor_back=_overlap(stances[0], a, b) / period,
-            duty_factor_front=_overlap(stances[1], a, b) / period,
+            duty_factor_back=stance_overlap(stances[0], a, b) / period,
+            duty_factor_front=stance_overlap(stances[1], a, b) / period,
             pitch_max_deg=math.degrees(float(np.max(th[i0:i1]))),
             pitch_min_deg=math.degrees(float(np.min(th[i0:i1]))),
             height_max_m=float(np.max(y[i0:i1])), height_min_m=float(np.min(y[i0:i1])),
             mean_speed_m_s=math.nan,
             steady=bool(a - t0 >= max(transient_s, EDGE_S) and b <= t1 - EDGE_S)))
-    out = _converged_tail(out, period_tolerance)
+    out = converged_tail(out, period_tolerance)
     return LogGait(strides=out, transient_s=float(transient_s), source=log.name)
