@@ -17,6 +17,8 @@ import os
 import sys
 from dataclasses import dataclass, field
 
+from .parallel import map_tasks
+
 DEFAULT_SPEEDS = (0.8, 1.1, 1.4, 1.7)            # m/s
 DEFAULT_PITCH_RATES = (-100.0, -50.0, 0.0, 50.0)  # deg/s (edge unit: converted once below)
 DEFAULT_HEIGHTS = (0.36, 0.40)                   # m
@@ -54,42 +56,17 @@ def basin_task(task: dict) -> dict:
     return row
 
 
-def run_basin_tasks(tasks: list[dict], workers: int, progress: bool) -> list[dict]:
-    from tqdm import tqdm
-    rows: list = [None] * len(tasks)
-    bar = tqdm(total=len(tasks), unit="run", desc="basin", file=sys.stderr, disable=not progress,
-               leave=False)
-    try:
-        if workers == 1 or len(tasks) <= 1:
-            for i, task in enumerate(tasks):
-                rows[i] = basin_task(task)
-                bar.update(1)
-        else:
-            import concurrent.futures as cf
-            import multiprocessing
-            # spawn: no fork of a process that may run threads (tqdm monitor, numba)
-            ctx = multiprocessing.get_context("spawn")
-            with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
-                                        mp_context=ctx) as pool:
-                futures = {pool.submit(basin_task, task): i for i, task in enumerate(tasks)}
-                try:
-                    for fut in cf.as_completed(futures):
-                        i = futures[fut]
-                        try:
-                            rows[i] = fut.result()
-                        except Exception as exc:  # noqa: BLE001 - e.g. a worker died
-                            rows[i] = {k: tasks[i][k] for k in
-                                       ("model", "speed", "pitch_rate_deg_s", "height")}
-                            rows[i].update(outcome="error", steady_bounding=False,
-                                           mean_speed_m_s=None, n_steady_strides=0,
-                                           error=f"{type(exc).__name__}: {exc}")
-                        bar.update(1)
-                except BaseException:
-                    pool.shutdown(wait=False, cancel_futures=True)
-                    raise
-    finally:
-        bar.close()
-    return rows
+def _basin_error_row(task: dict, exc: Exception) -> dict:
+    row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
+    row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
+               n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
+    return row
+
+
+def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=None) -> list[dict]:
+    """Run the starts (locally in parallel, or on a Dask cluster); rows in task order."""
+    return map_tasks(basin_task, tasks, workers=workers, scheduler=scheduler,
+                     progress=progress, desc="basin", error_row=_basin_error_row)
 
 
 def basin_stats(rows: list[dict], models: list[str]) -> dict:

@@ -1,0 +1,257 @@
+"""Parameter sweeps: many runs over a grid or a random sample of robot/controller values.
+
+Each point sets some fields of :class:`~scoutsim.parameters.RobotParameters` and/or
+:class:`~scoutsim.parameters.ControllerParameters` (names ``robot.<field>`` and
+``controller.<field>``, SI units as in those classes), runs :func:`scoutsim.simulate`, and
+records the outcome, the steady-state gait metrics and the cycle's regularity (steady
+bounding, stride-period coefficient of variation). Points run in parallel on all local
+cores by default or on a Dask cluster (``scheduler``); each finished point is appended at
+once to a checkpoint file in the output directory, so an interrupted sweep resumes
+without recomputing what it finished, and a failing point is recorded with its error
+without stopping the sweep. The table is written as Parquet (``pyarrow``) and CSV.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..parameters import ControllerParameters, RobotParameters
+from .parallel import map_tasks
+
+SUMMARY_COLUMNS = ("outcome", "t_end_s", "mean_speed_m_s", "stride_frequency_hz",
+                   "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
+                   "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
+                   "steady_bounding", "max_friction_ratio", "error")
+_SECTIONS = {"robot": RobotParameters, "controller": ControllerParameters}
+
+
+def parameter_names() -> list[str]:
+    """All names a sweep can vary."""
+    return [f"{sec}.{f.name}" for sec, cls in _SECTIONS.items()
+            for f in dataclasses.fields(cls)]
+
+
+def _check_name(name: str):
+    sec, _, fld = name.partition(".")
+    cls = _SECTIONS.get(sec)
+    if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
+        import difflib
+        near = difflib.get_close_matches(name, parameter_names(), n=1)
+        hint = f"; did you mean {near[0]!r}?" if near else ""
+        raise ValueError(f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
+                         f"controller.<field> of RobotParameters / ControllerParameters{hint}")
+
+
+def grid_points(grid: dict) -> list[dict]:
+    """Cartesian product of ``{name: values}`` as a list of points (last name fastest)."""
+    for name in grid:
+        _check_name(name)
+    names = list(grid)
+    return [dict(zip(names, map(float, vals)))
+            for vals in itertools.product(*(list(grid[n]) for n in names))]
+
+
+def random_points(bounds: dict, n: int, seed: int = 0) -> list[dict]:
+    """``n`` points drawn uniformly within ``{name: (low, high)}`` (seeded, reproducible)."""
+    for name in bounds:
+        _check_name(name)
+    rng = np.random.default_rng(seed)
+    names = list(bounds)
+    lo = np.array([bounds[k][0] for k in names], dtype=float)
+    hi = np.array([bounds[k][1] for k in names], dtype=float)
+    u = rng.random((n, len(names)))
+    return [dict(zip(names, map(float, lo + (hi - lo) * row))) for row in u]
+
+
+def point_key(point: dict, settings: dict) -> str:
+    """Stable identity of a point within a sweep (for resuming)."""
+    blob = json.dumps({"point": point, "settings": settings}, sort_keys=True, default=repr)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def sweep_task(task: dict) -> dict:
+    """Run one point (top level: picklable for worker processes and Dask)."""
+    from .. import simulation
+    point = task["point"]
+    row = dict(point)
+    try:
+        rob_changes = {k.split(".", 1)[1]: v for k, v in point.items() if k.startswith("robot.")}
+        ctl_changes = {k.split(".", 1)[1]: v for k, v in point.items()
+                       if k.startswith("controller.")}
+        if "legs_per_virtual_leg" in rob_changes:
+            rob_changes["legs_per_virtual_leg"] = int(rob_changes["legs_per_virtual_leg"])
+        robot = dataclasses.replace(task["robot"], **rob_changes)
+        ctrl = dataclasses.replace(task["controller"], **ctl_changes)
+        r = simulation.simulate(robot, ctrl, task["initial_state"], task["duration"],
+                                model=task["model"],
+                                friction_coefficient=task["friction_coefficient"])
+        s = r.summary()
+        row.update({k: s.get(k) for k in SUMMARY_COLUMNS if k in s})
+        row["steady_bounding"] = bool(s.get("steady_bounding"))
+        row["error"] = ""
+    except Exception as exc:  # noqa: BLE001 - recorded per point, the sweep goes on
+        row.update({k: None for k in SUMMARY_COLUMNS})
+        row.update(outcome="error", steady_bounding=False,
+                   error=f"{type(exc).__name__}: {exc}")
+    return row
+
+
+@dataclass
+class SweepResult:
+    """The sweep table: one row per point, in point order."""
+
+    rows: list
+    parameters: list
+    settings: dict = field(default_factory=dict)
+
+    def column(self, name) -> np.ndarray:
+        return np.array([np.nan if r.get(name) is None else r.get(name) for r in self.rows],
+                        dtype=float if name not in ("outcome", "error") else object)
+
+    def columns(self) -> dict:
+        names = list(self.parameters) + [c for c in SUMMARY_COLUMNS]
+        return {n: [r.get(n) for r in self.rows] for n in names}
+
+    def to_csv(self, path):
+        import csv
+        cols = self.columns()
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(list(cols))
+            for i in range(len(self.rows)):
+                w.writerow(["" if cols[c][i] is None else cols[c][i] for c in cols])
+
+    def to_parquet(self, path):
+        try:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+        except ImportError as exc:
+            raise RuntimeError("writing Parquet needs pyarrow: pip install pyarrow "
+                               "(or pip install 'scoutsim[sweep]')") from exc
+        pq.write_table(pa.table(self.columns()), path)
+
+    def plot_map(self, x: str, y: str, value: str = "mean_speed_m_s", path=None):
+        """Map of ``value`` over two swept parameters (grid sweeps); non-steady points
+        hatched. Angles (names ending in 'angle' / 'limit') are shown in degrees."""
+        from matplotlib.figure import Figure
+        xs = self.column(x)
+        ys = self.column(y)
+        vs = self.column(value)
+        ux, uy = np.unique(xs), np.unique(ys)
+        Z = np.full((len(uy), len(ux)), np.nan)
+        steady = np.zeros_like(Z, dtype=bool)
+        for xi, yi, v, r in zip(xs, ys, vs, self.rows):
+            j, i = np.searchsorted(ux, xi), np.searchsorted(uy, yi)
+            Z[i, j] = v
+            steady[i, j] = bool(r.get("steady_bounding"))
+
+        def edge(name, vals):
+            deg = name.endswith(("angle_front", "angle_back", "limit_front", "limit_back"))
+            return (np.degrees(vals), f"{name} [deg]") if deg else (vals, name + " [SI]")
+        gx, lx = edge(x, ux)
+        gy, ly = edge(y, uy)
+        fig = Figure(figsize=(6.5, 5))
+        ax = fig.add_subplot()
+        m = ax.pcolormesh(gx, gy, Z, shading="nearest", cmap="viridis")
+        fig.colorbar(m, ax=ax, label=value)
+        for i in range(len(uy)):
+            for j in range(len(ux)):
+                if not steady[i, j]:
+                    ax.plot(gx[j], gy[i], "x", color="w", ms=5)
+        ax.set_xlabel(lx)
+        ax.set_ylabel(ly)
+        ax.set_title(f"{value} (x: not steady bounding)")
+        if path is not None:
+            fig.savefig(path, dpi=120, bbox_inches="tight")
+        return fig
+
+
+def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,
+          controller=None, initial_state=None, friction_coefficient: float = 0.8,
+          out=None, workers: int | None = None, scheduler=None, progress: bool = False,
+          resume: bool = True) -> SweepResult:
+    """Run every point (see module docstring).
+
+    Parameters
+    ----------
+    points : list of {name: value} (see :func:`grid_points`, :func:`random_points`).
+    model, duration, robot, controller, initial_state, friction_coefficient :
+        the base configuration every point modifies (``simulate`` arguments; the sweep's
+        floor defaults to the Coulomb mu = 0.8 on which the Table I controller bounds).
+    out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv``.
+    workers : local processes (default all cores). scheduler : Dask address or Client.
+    resume : skip points already in ``out/points.jsonl`` with the same settings.
+    """
+    if not points:
+        raise ValueError("points is empty: nothing to sweep")
+    names = list(dict.fromkeys(k for p in points for k in p))
+    for n in names:
+        _check_name(n)
+    robot = robot or RobotParameters()
+    controller = controller or ControllerParameters()
+    settings = {"model": model, "duration_s": duration,
+                "friction_coefficient": None if math.isinf(friction_coefficient)
+                else friction_coefficient,
+                "robot": dataclasses.asdict(robot), "controller": dataclasses.asdict(controller),
+                "initial_state": None if initial_state is None
+                else dataclasses.asdict(initial_state)}
+    keys = [point_key(p, settings) for p in points]
+    done: dict = {}
+    ck = None
+    if out is not None:
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        ck = out / "points.jsonl"
+        if resume and ck.exists():
+            for line in ck.read_text().splitlines():
+                try:
+                    rec = json.loads(line)
+                except json.JSONDecodeError:
+                    continue       # a line cut by an interruption
+                done[rec["key"]] = rec["row"]
+        elif ck.exists():
+            ck.unlink()
+    todo = [i for i, k in enumerate(keys) if k not in done]
+    tasks = [{"point": points[i], "model": model, "duration": duration, "robot": robot,
+              "controller": controller, "initial_state": initial_state,
+              "friction_coefficient": friction_coefficient} for i in todo]
+    fh = open(ck, "a") if ck is not None else None
+
+    def on_result(j, row):
+        if fh is not None:
+            fh.write(json.dumps({"key": keys[todo[j]], "row": row}, default=_json) + "\n")
+            fh.flush()
+
+    try:
+        new_rows = map_tasks(sweep_task, tasks, workers=workers, scheduler=scheduler,
+                             progress=progress, desc="sweep", on_result=on_result)
+    finally:
+        if fh is not None:
+            fh.close()
+    for j, row in zip(todo, new_rows):
+        done[keys[j]] = row
+    rows = [done[k] for k in keys]
+    res = SweepResult(rows=rows, parameters=names,
+                      settings=settings | {"n_points": len(points), "n_resumed":
+                                           len(points) - len(todo)})
+    if out is not None:
+        res.to_csv(out / "sweep.csv")
+        try:
+            res.to_parquet(out / "sweep.parquet")
+        except RuntimeError:
+            pass
+    return res
+
+
+def _json(v):
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    return repr(v)

@@ -1,0 +1,82 @@
+"""Parameter sweeps: grid/random points, failing points, resume, Parquet, Dask = local."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from scoutsim.analysis.sweep import (SUMMARY_COLUMNS, grid_points, parameter_names,
+                                     random_points, sweep)
+
+GRID = {"controller.touchdown_angle_front": [math.radians(19), math.radians(21)],
+        "controller.touchdown_angle_back": [math.radians(17), math.radians(19)]}
+
+
+def test_grid_and_random_points():
+    pts = grid_points(GRID)
+    assert len(pts) == 4 and pts[1]["controller.touchdown_angle_back"] == pytest.approx(
+        math.radians(19))
+    r1 = random_points({"robot.leg_damping": (40, 70)}, 5, seed=3)
+    r2 = random_points({"robot.leg_damping": (40, 70)}, 5, seed=3)
+    assert r1 == r2 and all(40 <= p["robot.leg_damping"] <= 70 for p in r1)
+    assert "robot.leg_stiffness" in parameter_names()
+
+
+def test_unknown_parameter_is_named_with_suggestion():
+    with pytest.raises(ValueError, match=r"controller.touchdown_angel_front.*did you mean"):
+        grid_points({"controller.touchdown_angel_front": [0.3]})
+
+
+def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
+    pts = [{"robot.torso_mass": 20.865}, {"robot.torso_mass": -1.0}]
+    res = sweep(pts, model="I", duration=0.4, workers=1, out=tmp_path)
+    assert res.rows[0]["outcome"] in ("completed", "fell") and res.rows[0]["error"] == ""
+    assert res.rows[1]["outcome"] == "error" and "torso_mass" in res.rows[1]["error"]
+    assert (tmp_path / "sweep.csv").exists()
+
+
+def test_resume_does_not_recompute(tmp_path):
+    pts = grid_points(GRID)
+    a = sweep(pts[:2], model="II", duration=0.5, workers=1, out=tmp_path)
+    lines = (tmp_path / "points.jsonl").read_text().splitlines()
+    assert len(lines) == 2
+    b = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path)
+    assert b.settings["n_resumed"] == 2
+    assert b.rows[:2] == a.rows
+    assert len((tmp_path / "points.jsonl").read_text().splitlines()) == 4
+    # an interrupted line at the end of the checkpoint is ignored
+    with open(tmp_path / "points.jsonl", "a") as f:
+        f.write('{"key": "abc", "row": {')
+    c = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path)
+    assert c.settings["n_resumed"] == 4 and c.rows == b.rows
+
+
+def test_parquet_round_trip(tmp_path):
+    pq = pytest.importorskip("pyarrow.parquet")
+    res = sweep(grid_points(GRID)[:2], model="I", duration=0.3, workers=1, out=tmp_path)
+    t = pq.read_table(tmp_path / "sweep.parquet").to_pydict()
+    for name in list(GRID) + list(SUMMARY_COLUMNS):
+        assert name in t
+    assert t["controller.touchdown_angle_front"] == [r["controller.touchdown_angle_front"]
+                                                     for r in res.rows]
+
+
+def test_dask_cluster_gives_the_same_table_as_local(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    pts = grid_points(GRID)
+    local = sweep(pts, model="II", duration=0.5, workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = sweep(pts, model="II", duration=0.5, scheduler=client)
+    assert json.dumps(local.rows, sort_keys=True) == json.dumps(remote.rows, sort_keys=True)
+
+
+def test_map_plot(tmp_path):
+    res = sweep(grid_points(GRID), model="I", duration=0.3, workers=1)
+    fig = res.plot_map("controller.touchdown_angle_front", "controller.touchdown_angle_back",
+                       "t_end_s", path=tmp_path / "map.png")
+    ax = fig.axes[0]
+    assert "[deg]" in ax.get_xlabel() and "[deg]" in ax.get_ylabel()
+    assert (tmp_path / "map.png").stat().st_size > 1000
