@@ -14,7 +14,6 @@ import csv
 import itertools
 import math
 import os
-import sys
 from dataclasses import dataclass, field
 
 from .parallel import map_tasks

@@ -1,0 +1,57 @@
+"""Sweep benchmark (issue 4): a 400-point touchdown-angle sweep of Model II, 2 s each.
+
+    python benchmarks/bench_sweep.py [--points-per-axis 20] [--duration 2]
+
+Runs the same sweep with one worker, with all local cores, and on a local Dask cluster
+(one worker process per core), in this one run; prints wall times, the parallel speed-up
+over one worker, and whether the three tables are identical.
+"""
+
+import argparse
+import json
+import math
+import os
+import time
+
+import numpy as np
+
+from scoutsim.analysis.sweep import grid_points, sweep
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--points-per-axis", type=int, default=20)
+    ap.add_argument("--duration", type=float, default=2.0)
+    args = ap.parse_args()
+    n = args.points_per_axis
+    grid = {"controller.touchdown_angle_front": np.radians(np.linspace(15, 27, n)),
+            "controller.touchdown_angle_back": np.radians(np.linspace(13, 25, n))}
+    pts = grid_points(grid)
+    sweep(pts[:2], duration=0.05, workers=1)          # compile / load the cache first
+    cores = os.cpu_count() or 1
+    t0 = time.perf_counter()
+    one = sweep(pts, duration=args.duration, workers=1)
+    w1 = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    many = sweep(pts, duration=args.duration, workers=cores)
+    wn = time.perf_counter() - t0
+    import distributed
+    with distributed.LocalCluster(n_workers=cores, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        client.run(lambda: __import__("scoutsim").simulate(duration=0.05))   # warm workers
+        t0 = time.perf_counter()
+        dk = sweep(pts, duration=args.duration, scheduler=client)
+        wd = time.perf_counter() - t0
+    same = (json.dumps(one.rows, sort_keys=True) == json.dumps(many.rows, sort_keys=True)
+            == json.dumps(dk.rows, sort_keys=True))
+    steady = sum(r["steady_bounding"] for r in one.rows)
+    print(f"{len(pts)} points x {args.duration:g} s of Model II ({steady} steady bounding)")
+    print(f"one worker                {w1:7.1f} s")
+    print(f"{cores} local workers           {wn:7.1f} s   speed-up {w1 / wn:.2f}x   target >= 1.7x")
+    print(f"local Dask cluster ({cores} workers) {wd:7.1f} s   speed-up {w1 / wd:.2f}x")
+    print(f"tables identical (1 worker / {cores} workers / Dask): {same}")
+
+
+if __name__ == "__main__":
+    main()
