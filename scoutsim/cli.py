@@ -6,7 +6,9 @@
     scoutsim basin [--model LIST] [--speeds LIST] [--pitch-rates LIST] [--heights LIST]
                    [--duration S] [--robot FILE] [--out DIR] [--workers N] [--no-progress]
     scoutsim compare (LOG... | --example) [--models LIST] [--duration S] [--robot FILE]
-                     [--out DIR] [--friction MU] [--transient S] [--no-progress]
+                     [--out DIR] [--friction MU] [--transient S] [--no-progress] [--no-plots]
+    scoutsim plot RESULT.npz|LOG [--out FILE] [--t0 S] [--t1 S]
+    scoutsim animate RESULT.npz --out FILE.gif|.mp4 [--fps N] [--t0 S] [--t1 S] [--dpi N]
 
 Presentation layer: all computation is SI (angles in rad); degrees appear only in what is
 printed and plotted, converted here with :func:`math.degrees` / :func:`math.radians`.
@@ -154,10 +156,12 @@ def build_parser() -> argparse.ArgumentParser:
                "  scoutsim run --json --no-plots     # summary as JSON on stdout\n"
                "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
                "  scoutsim compare run1.csv run2.csv --models I,II --out cmp\n"
-               "  scoutsim compare --example             # on the shipped SYNTHETIC data set",
+               "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
+               "  scoutsim plot scoutsim_out/result.npz --out run.pdf --t0 3 --t1 4\n"
+               "  scoutsim animate scoutsim_out/result.npz --out run.gif --t0 3 --t1 4",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare}")
+    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare,plot,animate,orbit}")
 
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--duration", type=_positive_float, default=10.0, metavar="S",
@@ -256,7 +260,71 @@ def build_parser() -> argparse.ArgumentParser:
                               "are transient [s] (default: 2)")
     compare.add_argument("--no-progress", action="store_true",
                          help="no progress bar (it is also off when stderr is not a terminal)")
+    compare.add_argument("--no-plots", action="store_true",
+                         help="do not write the figures (fig5, fig8-fig12, phase .png) and "
+                              "phase_rms.csv")
     compare.set_defaults(func=_cmd_compare)
+
+    plot = sub.add_parser(
+        "plot", help="figure of one saved run (result.npz) or one experiment log",
+        description="Plot one run: a result.npz written by `scoutsim run` (pitch, height, "
+                    "leg angles with leg states, hip torques) or an experiment log (.csv, "
+                    ".csv.gz, .parquet: measured pitch and height, leg angles, leg states, "
+                    "torques from current).")
+    plot.add_argument("input", metavar="RESULT.npz|LOG", help="saved result or experiment log")
+    plot.add_argument("--out", metavar="FILE", default=None,
+                      help="output figure, .png, .pdf or .svg (default: INPUT's name with "
+                           ".png, in the current directory)")
+    plot.add_argument("--t0", type=_finite_float, default=None, metavar="S",
+                      help="start of the time window [s]")
+    plot.add_argument("--t1", type=_finite_float, default=None, metavar="S",
+                      help="end of the time window [s]")
+    plot.set_defaults(func=_cmd_plot)
+
+    anim = sub.add_parser(
+        "animate", help="stick-figure animation of a saved run (GIF or MP4)",
+        description="Animate a result.npz written by `scoutsim run`: torso box, legs "
+                    "coloured by controller leg state, ground-force arrows, ground line, "
+                    "time stamp. Frames at t0 + k/fps, k = 0 .. floor((t1 - t0) fps). GIF "
+                    "via Pillow; MP4 needs ffmpeg on the PATH.")
+    anim.add_argument("input", metavar="RESULT.npz", help="saved result (scoutsim run --out)")
+    anim.add_argument("--out", metavar="FILE", required=True, help="output .gif or .mp4")
+    anim.add_argument("--fps", type=_positive_float, default=25.0, metavar="N",
+                      help="frames per simulated second, played back in real time "
+                           "(default: 25)")
+    anim.add_argument("--t0", type=_finite_float, default=None, metavar="S",
+                      help="start of the animated window [s] (default: start of the run)")
+    anim.add_argument("--t1", type=_finite_float, default=None, metavar="S",
+                      help="end of the animated window [s] (default: end of the run)")
+    anim.add_argument("--dpi", type=_positive_int, default=80, metavar="N",
+                      help="resolution; frames are 8 x 4 inches (default: 80 -> 640 x 320)")
+    anim.set_defaults(func=_cmd_animate)
+
+    orbit = sub.add_parser(
+        "orbit", help="periodic bounding orbit and its Floquet multipliers (docs/orbits.md)",
+        description="--passive: the conservative massless-leg model's periodic bound through "
+                    "a level-torso apex of the given speed, height and pitch rate; solves for "
+                    "the touchdown angles (from the world vertical) and prints them, the "
+                    "period, the multipliers of the apex return map and the map residual. "
+                    "Without --passive: the controlled robot's converged cycle at back-leg "
+                    "lift-off and multipliers estimated from its transient.")
+    orbit.add_argument("--passive", action="store_true",
+                       help="the passive conservative model (massless legs, SPEC.md 2)")
+    orbit.add_argument("--speed", type=_positive_float, default=1.3, metavar="V",
+                       help="--passive: forward speed at the apex [m/s] (default: 1.3)")
+    orbit.add_argument("--apex-height", type=_positive_float, default=0.35, metavar="H",
+                       help="--passive: torso COM height at the apex [m] (default: 0.35)")
+    orbit.add_argument("--pitch-rate", type=_finite_float, default=0.0, metavar="W",
+                       help="--passive: pitch rate at the apex [deg/s] (default: 0)")
+    orbit.add_argument("--model", choices=("ideal", "I", "II"), default="II",
+                       help="controlled model (default: II)")
+    orbit.add_argument("--friction", type=_friction, default=SCOUT_FLOOR_FRICTION,
+                       metavar="MU", help=f"controlled: toe friction (default: "
+                       f"{SCOUT_FLOOR_FRICTION})")
+    orbit.add_argument("--duration", type=_positive_float, default=12.0, metavar="S",
+                       help="controlled: simulated time to converge [s] (default: 12)")
+    orbit.add_argument("--json", action="store_true", help="print one JSON object")
+    orbit.set_defaults(func=_cmd_orbit)
     return parser
 
 
@@ -584,9 +652,155 @@ def _cmd_compare(args) -> int:
     table.to_detail_csv(out / "errors_detail.csv")
     (out / "errors.md").write_text(table.to_markdown())
     print(table.format())
-    print(f"wall time {wall:.1f} s; wrote errors.csv, errors_detail.csv, errors.md to {out}/")
+    written = ["errors.csv", "errors_detail.csv", "errors.md"]
+    if not args.no_plots:
+        from .validation.figures import write_figures
+        from .validation.phase import phase_compare
+        figs = write_figures(logs, table, out, transient_s=args.transient)
+        written += [p.name for p in figs.values()]
+        print()
+        print(phase_compare(logs, table, transient_s=args.transient).format())
+    print(f"wall time {wall:.1f} s; wrote {', '.join(written)} to {out}/")
     failed = [m for m, r in table.models.items() if r.outcome == "numerical_failure"]
     return 1 if failed else 0
+
+
+# -----------------------------------------------------------------------------------------
+# scoutsim plot / scoutsim animate
+# -----------------------------------------------------------------------------------------
+def _input_file(path: str) -> Path:
+    p = Path(path)
+    if not p.exists():
+        raise _UsageError(f"input '{path}' not found")
+    if not p.is_file():
+        raise _UsageError(f"input '{path}' is not a file")
+    return p
+
+
+def _load_result(p: Path):
+    from .result import SimulationResult
+    if p.suffix.lower() != ".npz":
+        raise _UsageError(f"input '{p}' is not a saved result: expected a .npz written by "
+                          "`scoutsim run` (result.npz)")
+    try:
+        return SimulationResult.load(p)
+    except (OSError, ValueError, KeyError) as exc:
+        raise _UsageError(f"cannot read result '{p}': {exc}") from None
+
+
+def _window(args):
+    if args.t0 is not None and args.t1 is not None and not args.t1 > args.t0:
+        raise _UsageError(f"--t0 {args.t0:g} --t1 {args.t1:g} is not allowed: need t1 > t0")
+
+
+def _cmd_plot(args) -> int:
+    from .validation.logs import LOG_SUFFIXES, LogError, load_log
+    p = _input_file(args.input)
+    _window(args)
+    name = p.name.lower()
+    is_log = any(name.endswith(s) for s in LOG_SUFFIXES)
+    if not is_log and p.suffix.lower() != ".npz":
+        raise _UsageError(f"input '{p}' is neither a saved result (.npz) nor an experiment log "
+                          f"({', '.join(LOG_SUFFIXES)})")
+    if args.out is None:
+        stem = p.name
+        for s in (".npz",) + LOG_SUFFIXES:
+            if stem.lower().endswith(s):
+                stem = stem[:-len(s)]
+                break
+        out = Path(f"{stem}.png")
+    else:
+        out = Path(args.out)
+    if out.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise _UsageError(f"--out '{out}' is not allowed: the suffix must be .png, .pdf or "
+                          ".svg")
+    if is_log:
+        try:
+            obj = load_log(p)
+        except LogError as exc:
+            raise _UsageError(str(exc)) from None
+        t = obj.t
+    else:
+        obj = _load_result(p)
+        t = obj.t
+    t0 = float(t[0]) if args.t0 is None else args.t0
+    t1 = float(t[-1]) if args.t1 is None else args.t1
+    t_range = None if (args.t0 is None and args.t1 is None) else (t0, t1)
+    try:
+        if is_log:
+            from .validation.figures import plot_log
+            plot_log(obj, out, t_range=t_range)
+        else:
+            from .plotting import plot_run
+            plot_run(obj, out, t_range=t_range)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    print(f"wrote {out}")
+    return 0
+
+
+def _cmd_animate(args) -> int:
+    from .animation import ANIMATION_SUFFIXES, save_animation
+    p = _input_file(args.input)
+    _window(args)
+    out = Path(args.out)
+    if out.suffix.lower() not in ANIMATION_SUFFIXES:
+        raise _UsageError(f"--out '{out}' is not allowed: the suffix must be .gif or .mp4")
+    result = _load_result(p)
+    try:
+        save_animation(result, out, fps=args.fps, t0=args.t0, t1=args.t1, dpi=args.dpi)
+    except (ValueError, RuntimeError) as exc:
+        raise _UsageError(str(exc)) from None
+    print(f"wrote {out}")
+    return 0
+
+
+# -----------------------------------------------------------------------------------------
+# scoutsim orbit
+# -----------------------------------------------------------------------------------------
+def _cmd_orbit(args) -> int:
+    from .analysis.orbits import MapError, controlled_cycle, passive_bounding_orbit
+    if args.passive:
+        try:
+            orb = passive_bounding_orbit(args.speed, args.apex_height,
+                                         math.radians(args.pitch_rate))
+        except MapError as exc:
+            print(f"scoutsim orbit: {exc}", file=sys.stderr)
+            return 1
+        d = orb.to_dict()
+        if args.json:
+            print(_dumps(d))
+            return 0
+        print(f"scoutsim orbit: passive model, apex speed {args.speed:g} m/s, height "
+              f"{args.apex_height:g} m, pitch rate {args.pitch_rate:g} deg/s, torso level")
+        print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.6f} / "
+              f"{d['touchdown_angle_front_deg']:.6f} deg (from the world vertical)")
+        print(f"  period                        {d['period_s']:.6f} s")
+        print("  eigenvalues                   " + ", ".join(
+            f"{m.real:.6f}{m.imag:+.6f}j" for m in orb.multipliers)
+              + f"  (|.| = {', '.join(f'{abs(m):.4f}' for m in orb.multipliers)})")
+        print(f"  residual max|P(z)-z|          {d['residual']:.2e}")
+        return 0
+    try:
+        cyc = controlled_cycle(model=args.model, friction_coefficient=args.friction,
+                               duration=args.duration)
+    except MapError as exc:
+        print(f"scoutsim orbit: {exc}", file=sys.stderr)
+        return 1
+    d = cyc.to_dict()
+    if args.json:
+        print(_dumps(d))
+        return 0
+    print(f"scoutsim orbit: model {args.model}, Table I controller, mu = {args.friction:g}, "
+          f"{args.duration:g} s; section: back-leg lift-off")
+    for name, v, sp in zip(d["state_names"], d["state"], d["stride_to_stride_spread"]):
+        print(f"  {name:<7} {v: .6f}  (stride-to-stride spread {sp:.1e})")
+    print(f"  period  {d['period_s']:.6f} s over the last {d['n_tail']} of {d['n_strides']} "
+          "strides")
+    print("  multipliers (estimated) " + ", ".join(
+        f"{m.real:.3f}{m.imag:+.3f}j" for m in cyc.multipliers))
+    print(f"  note: {d['method']}")
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

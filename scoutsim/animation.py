@@ -1,0 +1,200 @@
+"""Stick-figure animation of a bounding run.
+
+    from scoutsim.animation import animate, save_animation
+    save_animation(result, "run.gif", fps=25, t0=3.0, t1=4.0)     # GIF via Pillow
+    save_animation(result, "run.mp4", fps=30)                      # needs ffmpeg
+    anim = animate(result, fps=25)      # matplotlib.animation.FuncAnimation (Jupyter: HTML)
+
+Each frame shows the torso as a box (length ``torso_length``, height ``torso_height``,
+rotated by the pitch), the two virtual legs from hip to toe coloured by their controller
+leg state (:data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake
+green; the same colours as the dots of :func:`scoutsim.plotting.plot_torque_speed`), the
+ground reaction force on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the
+ground line with tick marks every 0.25 m (so the forward motion shows while the view
+follows the torso) and the time stamp.
+
+Frames are taken at ``t0 + k / fps`` for ``k = 0 .. floor((t1 - t0) * fps)``, so a window
+gives ``floor((t1 - t0) * fps) + 1`` frames (both ends included when ``(t1 - t0) * fps`` is
+an integer) and plays back in real time. Each frame shows the sample at or just before its
+time (zero-order hold of the 1 kHz record).
+
+The figure is built without ``matplotlib.pyplot`` (headless; no GUI). GIFs are written
+with :class:`matplotlib.animation.PillowWriter` (Pillow ships with matplotlib); MP4 needs
+the ``ffmpeg`` program on the PATH and raises :class:`RuntimeError` saying so otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon
+
+__all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS",
+           "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
+
+#: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
+LEG_STATE_COLORS = ("tab:blue", "tab:orange", "tab:green")
+_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+#: Length of a ground-force arrow per newton [m/N] (the robot's weight, about 203 N, is
+#: drawn 0.2 m long).
+FORCE_SCALE_M_PER_N = 1.0e-3
+ANIMATION_SUFFIXES = (".gif", ".mp4")
+_VIEW_HALF_WIDTH_M = 0.75
+_TICK_SPACING_M = 0.25
+
+
+def frame_times(result, fps: float = 25.0, t0: float | None = None,
+                t1: float | None = None) -> np.ndarray:
+    """Times [s] of the frames: ``t0 + k / fps``, ``k = 0 .. floor((t1 - t0) * fps)``.
+
+    ``t0``/``t1`` default to the start and end of the run; they must lie within it and
+    t1 > t0. ValueError otherwise."""
+    t = np.asarray(result.t, dtype=float)
+    if t.size < 1:
+        raise ValueError("the result holds no samples")
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps = {fps!r} is not allowed: must be a finite number > 0")
+    a = float(t[0]) if t0 is None else float(t0)
+    b = float(t[-1]) if t1 is None else float(t1)
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise ValueError(f"t0 = {t0!r}, t1 = {t1!r} are not allowed: must be finite")
+    eps = 1e-9
+    if a < t[0] - eps or b > t[-1] + eps:
+        raise ValueError(f"t0 = {a:g} s, t1 = {b:g} s are not allowed: the run covers "
+                         f"{t[0]:g}-{t[-1]:g} s")
+    if not b > a:
+        raise ValueError(f"t0 = {a:g} s, t1 = {b:g} s are not allowed: need t1 > t0")
+    n = int(math.floor((b - a) * fps + 1e-9)) + 1
+    return a + np.arange(n) / float(fps)
+
+
+def _geometry(result) -> tuple[float, float, float]:
+    robot = (result.provenance or {}).get("robot") or {}
+    if not robot:
+        from .parameters import RobotParameters
+        import dataclasses
+        robot = dataclasses.asdict(RobotParameters())
+    return (0.5 * float(robot["hip_spacing"]), float(robot["torso_length"]),
+            float(robot["torso_height"]))
+
+
+def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None = None,
+            figsize=(8.0, 4.0), dpi: int = 80) -> FuncAnimation:
+    """A :class:`~matplotlib.animation.FuncAnimation` of ``result`` (module docstring).
+
+    Parameters
+    ----------
+    result : SimulationResult
+    fps : frames per second of simulated time (playback in real time)
+    t0, t1 : time window [s] (default: the whole run)
+    figsize, dpi : size of the frames (default 640 x 320 pixels)
+    """
+    from .model import layout as L
+    times = frame_times(result, fps, t0, t1)
+    t = np.asarray(result.t, dtype=float)
+    idx = np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, t.size - 1)
+    state = np.asarray(result.state, dtype=float)
+    aux = np.asarray(result.aux, dtype=float)
+    has_ctrl = (result.provenance or {}).get("controller") is not None
+    states = [np.asarray(result.leg_state(leg)) if has_ctrl else np.zeros(t.size, int)
+              for leg in (0, 1)]
+    contact = [np.asarray(result.contact_mode(leg)) for leg in (0, 1)]
+    half_hip, length, height = _geometry(result)
+
+    fig = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.1, 0.14, 0.87, 0.78))
+    ax.set_aspect("equal")
+    ax.set_xlabel("forward position x [m]")
+    ax.set_ylabel("height y [m]")
+    ytop = max(0.65, float(np.max(state[:, L.IY])) + 0.25)
+    ax.set_ylim(-0.08, ytop)
+    ground, = ax.plot([], [], color="0.3", lw=1.5)
+    ticks, = ax.plot([], [], color="0.3", lw=1.0)
+    torso = Polygon(np.zeros((4, 2)), closed=True, facecolor="0.75", edgecolor="k", lw=1.2,
+                    zorder=3)
+    ax.add_patch(torso)
+    legs = [ax.plot([], [], lw=3.0, solid_capstyle="round", zorder=4)[0] for _ in range(2)]
+    toes = [ax.plot([], [], marker="o", ms=5, color="k", zorder=5)[0] for _ in range(2)]
+    forces = [ax.annotate("", xy=(0, 0), xytext=(0, 0), zorder=6,
+                          arrowprops=dict(arrowstyle="-|>", color="crimson", lw=1.5))
+              for _ in range(2)]
+    stamp = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=10,
+                    family="monospace")
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color=c, lw=3) for c in LEG_STATE_COLORS]
+    handles.append(Line2D([], [], color="crimson", lw=1.5))
+    names = list(_STATE_NAMES) + [f"ground force ({FORCE_SCALE_M_PER_N * 1e3:g} m/kN)"]
+    if not has_ctrl:
+        handles, names = handles[:1] + handles[3:], ["leg (no controller)", names[-1]]
+    ax.legend(handles, names, loc="upper right", fontsize=7, ncol=2, framealpha=0.85)
+    model = (result.provenance or {}).get("model")
+    ax.set_title(f"Scout II, model {model}", fontsize=10)
+
+    def draw(i):
+        k = int(idx[i])
+        x, y, th = state[k, L.IX], state[k, L.IY], state[k, L.ITH]
+        c, s = math.cos(th), math.sin(th)
+        u, n = np.array([c, s]), np.array([-s, c])  # torso axis, its upward normal
+        com = np.array([x, y])
+        hl, hh = 0.5 * length, 0.5 * height
+        torso.set_xy(np.array([com + hl * u + hh * n, com - hl * u + hh * n,
+                               com - hl * u - hh * n, com + hl * u - hh * n]))
+        x0, x1 = x - _VIEW_HALF_WIDTH_M, x + _VIEW_HALF_WIDTH_M
+        ax.set_xlim(x0, x1)
+        ground.set_data([x0, x1], [0.0, 0.0])
+        tk = np.arange(math.floor(x0 / _TICK_SPACING_M), math.ceil(x1 / _TICK_SPACING_M) + 1)
+        tx = np.repeat(tk * _TICK_SPACING_M, 3)
+        ty = np.tile([0.0, -0.03, np.nan], tk.size)
+        ticks.set_data(tx, ty)
+        for leg in (0, 1):
+            hip = com + (2 * leg - 1) * half_hip * u
+            o = leg * L.NAUX_LEG
+            toe = np.array([aux[k, o + L.A_TOE_X], aux[k, o + L.A_TOE_Y]])
+            if not np.all(np.isfinite(toe)):  # fall back to the leg geometry
+                phi = state[k, L.IPHB + leg]
+                ll = state[k, L.IL_B + leg]
+                toe = hip + ll * np.array([math.sin(th + phi), -math.cos(th + phi)])
+            legs[leg].set_data([hip[0], toe[0]], [hip[1], toe[1]])
+            legs[leg].set_color(LEG_STATE_COLORS[int(states[leg][k]) % 3])
+            toes[leg].set_data([toe[0]], [toe[1]])
+            f = np.array([aux[k, o + L.A_GT], aux[k, o + L.A_GN]])
+            on = contact[leg][k] != 0 and np.all(np.isfinite(f)) and np.hypot(*f) > 1.0
+            tip = toe + FORCE_SCALE_M_PER_N * f if on else toe
+            forces[leg].xy = (tip[0], tip[1])
+            forces[leg].set_position((toe[0], toe[1]))
+            forces[leg].set_visible(bool(on))
+        stamp.set_text(f"t = {times[i]:7.3f} s")
+        return [torso, ground, ticks, stamp, *legs, *toes, *forces]
+
+    anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
+                         repeat=False)
+    anim.frame_times = times
+    return anim
+
+
+def save_animation(result, path, fps: float = 25.0, t0: float | None = None,
+                   t1: float | None = None, dpi: int = 80, progress=None) -> Path:
+    """Write the animation of ``result`` to ``path``: ``.gif`` (Pillow) or ``.mp4``
+    (ffmpeg; RuntimeError if it is not installed). Returns the path. ``progress``: optional
+    callback ``(frame, n_frames)``."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in ANIMATION_SUFFIXES:
+        raise ValueError(f"path = '{path}' is not allowed: the suffix must be .gif or .mp4")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise RuntimeError("writing .mp4 needs the ffmpeg program, which is not on the PATH; "
+                           "install ffmpeg (e.g. `apt-get install ffmpeg` or `conda install "
+                           "ffmpeg`) or write a .gif instead")
+    anim = animate(result, fps=fps, t0=t0, t1=t1, dpi=dpi)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = PillowWriter(fps=fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
+    cb = None if progress is None else (lambda i, n: progress(i, n))
+    anim.save(str(path), writer=writer, dpi=dpi, progress_callback=cb)
+    return path
