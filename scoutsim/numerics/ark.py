@@ -65,9 +65,56 @@ EW = B - BHAT
 AD = AI - AE
 
 
+# ARK3(2)4L[2]SA (Kennedy & Carpenter 2003): 4 stages, order 3, embedded order 2, same
+# structure (ERK + L-stable stiffly accurate ESDIRK sharing b).
+GAMMA3 = 1767732205903.0 / 4055673282236.0
+AE3 = np.zeros((NSTAGE, NSTAGE))
+AE3[1, 0] = 1767732205903.0 / 2027836641118.0
+AE3[2, 0] = 5535828885825.0 / 10492691773637.0
+AE3[2, 1] = 788022342437.0 / 10882634858940.0
+AE3[3, 0] = 6485989280629.0 / 16251701735622.0
+AE3[3, 1] = -4246266847089.0 / 9704473918619.0
+AE3[3, 2] = 10755448449292.0 / 10357097424841.0
+B3 = np.zeros(NSTAGE)
+B3[0] = 1471266399579.0 / 7840856788654.0
+B3[1] = -4482444167858.0 / 7529755066697.0
+B3[2] = 11266239266428.0 / 11593286722821.0
+B3[3] = GAMMA3
+BHAT3 = np.zeros(NSTAGE)
+BHAT3[0] = 2756255671327.0 / 12835298489170.0
+BHAT3[1] = -10771552573575.0 / 22201958757719.0
+BHAT3[2] = 9247589265047.0 / 10645013368117.0
+BHAT3[3] = 2193209047091.0 / 5459859503100.0
+AI3 = np.zeros((NSTAGE, NSTAGE))
+AI3[1, 0] = GAMMA3
+AI3[1, 1] = GAMMA3
+AI3[2, 0] = 2746238789719.0 / 10658868560708.0
+AI3[2, 1] = -640167445237.0 / 6845629431997.0
+AI3[2, 2] = GAMMA3
+AI3[3, :4] = B3[:4]
+EW3 = B3 - BHAT3
+AD3 = AI3 - AE3
+
+
 @njit(cache=True)
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
          eval_end):
+    """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
+    return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
+                    Z, eval_end, AE, AD, B, EW, GAMMA, NSTAGE)
+
+
+@njit(cache=True)
+def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
+          eval_end):
+    """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
+    return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
+                    Z, eval_end, AE3, AD3, B3, EW3, GAMMA3, 4)
+
+
+@njit(cache=True)
+def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
+             eval_end, AE, AD, B, EW, GAMMA, ns):
     """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
     (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:]) already filled.
 
@@ -95,7 +142,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
     w = Z[NSTAGE + 2 * R]
     m = Z[NSTAGE + 2 * R + 1]
     pp = Z[NSTAGE + 2 * R + 2]
-    for st in range(1, NSTAGE):
+    for st in range(1, ns):
         # rhs = y + h sum_j [AE_ij f_j + (AI_ij - AE_ij) U z_j]
         for a in range(R):
             acc = 0.0
@@ -143,7 +190,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
     for i in range(NS):
         acc = 0.0
         e = 0.0
-        for j in range(NSTAGE):
+        for j in range(ns):
             acc += B[j] * K[j, i]
             e += EW[j] * K[j, i]
         y_new[i] = y[i] + h * acc

@@ -40,6 +40,7 @@ from .dopri5 import dense, eval_workspace, step
 METHOD_AUTO = -1      # currently DOPRI5 for every model (see below)
 METHOD_DOPRI5 = 0     # explicit Dormand-Prince 5(4): the reference
 METHOD_ARK4 = 1       # experimental: additive RK 4(3), belt spring-dampers implicit (ark.py)
+METHOD_ARK3 = 2       # additive RK 3(2) (ark.py, ARK3(2)4L[2]SA), same splitting
 # ARK4 is accurate (10 s Model II gait metrics within 3e-6 of the rtol 1e-10 reference) but
 # at the default tolerances not yet faster than DOPRI5: its step is limited by the
 # accuracy of the stiff components where the analytic stiff factors miss couplings (slide
@@ -212,7 +213,8 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
                         nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, hold, 0.0, 0.0)
                     changed = True
         if not changed:
-            break
+            # ds and aux are those of the (projected) state as it stands
+            return nev
     project_state(s, P, mi, mf)
     evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
     return nev
@@ -340,6 +342,9 @@ def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew
     if method == METHOD_ARK4:
         return ark.step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
                         SF1, Z, eval_end)
+    if method == METHOD_ARK3:
+        return ark.step3(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                         SF1, Z, eval_end)
     err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
     return err, ok, 6
 
@@ -348,28 +353,34 @@ def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
-                       method == METHOD_ARK4, SF0)
+                       method >= METHOD_ARK4, SF0)
 
 
 @njit(cache=True)
 def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
-            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z):
+            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z,
+            fresh=False):
     """Integrate from t to t_end (one control period) with events.
 
     hwork[0] carries the step-size guess between calls. ``method``: METHOD_DOPRI5 or
-    METHOD_ARK4 (SF0, SF1, Z: its stiff-factor and stage scratch). Returns
+    METHOD_ARK4 (SF0, SF1, Z: its stiff-factor and stage scratch). ``fresh``: K[0] and aux
+    already hold f(s) and its outputs (and SF0 usable stiff factors). Returns
     (t, nev, status)."""
     K0 = K[0]
-    expo = -0.25 if method == METHOD_ARK4 else -0.2
+    expo = -0.25 if method == METHOD_ARK4 else (-1.0 / 3.0 if method == METHOD_ARK3 else -0.2)
     nfail = 0
     e_end = np.empty(NEV)
     pending = np.zeros(NEV, dtype=np.bool_)
     mi_before = np.zeros(NMI, dtype=np.int64)
     e_tmp = np.empty(NEV)
     aux_tmp = np.empty(NAUX)
-    project_state(s, P, mi, mf)
-    eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
-    stats[S_NFEV] += 1
+    if not fresh:
+        # (if fresh, K0 and aux were just computed at s by settle(); the ARK stiff factors
+        # SF0 are kept from the end of the previous step: any splitting matrix keeps the
+        # method's order)
+        project_state(s, P, mi, mf)
+        eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
+        stats[S_NFEV] += 1
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
         if e_old[i] > 0.0:
@@ -421,7 +432,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     th = 1.0
                     for _ in range(100):
                         th = (a * fb - b * fa) / (fb - fa)
-                        if method == METHOD_ARK4:
+                        if method >= METHOD_ARK4:
                             ark.dense(s, y_new, h, K, th, ybuf)
                         else:
                             dense(s, h, K, th, ybuf)
@@ -501,7 +512,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     break
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
-            if method == METHOD_ARK4:
+            if method >= METHOD_ARK4:
                 # stiff factors at the post-event state (settle() filled K0 and aux)
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
                 stats[S_NFEV] += 1
@@ -519,7 +530,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]
-        if method == METHOD_ARK4:
+        if method >= METHOD_ARK4:
             for i in range(NS):
                 for j in range(2 * ark.NSTIFF):
                     SF0[i, j] = SF1[i, j]
@@ -591,8 +602,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     SF0 = np.zeros((NS, 2 * ark.NSTIFF))
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.NSTIFF))
+    sf_ok = False         # SF0 holds stiff factors from an earlier step
     meth = method
-    if meth == METHOD_AUTO or (meth == METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
+    if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
         meth = METHOD_DOPRI5
     t = k_start * dt
     k = k_start
@@ -607,7 +619,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
-        nev = settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew)
+        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew)
+        stats[S_NFEV] += 1
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
         if aux[A_KKT_OK] < 0.5:
@@ -618,7 +631,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         t_next = (k + 1) * dt
         t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
                                  tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp, ew, meth, SF0, SF1, Z)
+                                 ybuf, imp, ew, meth, SF0, SF1, Z,
+                                 sf_ok or meth == METHOD_DOPRI5)
+        sf_ok = True
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
