@@ -1,0 +1,85 @@
+"""Periodic orbits of the passive model and the controlled cycle (scoutsim.analysis.orbits)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim.analysis import orbits as O
+from scoutsim.cli import main
+from scoutsim.simulation import InitialState, IntegratorSettings
+
+
+@pytest.fixture(scope="module")
+def orbit50():
+    return O.passive_bounding_orbit(1.3, 0.35, math.radians(50.0))
+
+
+def test_passive_fixed_point_residual_below_1e9(orbit50):
+    assert orbit50.residual < 1e-9
+    m = O.passive_apex_map(orbit50.z, orbit50.touchdown_angles)
+    assert np.max(np.abs(m.z - orbit50.z)) < 1e-9
+    assert m.period == pytest.approx(orbit50.period, abs=1e-12)
+
+
+def test_energy_conservation_gives_multiplier_one(orbit50):
+    assert orbit50.unit_multiplier_error < 1e-6
+
+
+def test_zero_pitch_rate_gives_equal_touchdown_angles():
+    o = O.passive_bounding_orbit(1.3, 0.35, 0.0)
+    assert o.residual < 1e-9
+    assert abs(o.touchdown_angles[0] - o.touchdown_angles[1]) < 1e-8
+    assert o.unit_multiplier_error < 1e-6
+
+
+def test_orbit_converges_under_tighter_tolerance(orbit50):
+    loose = O.passive_bounding_orbit(1.3, 0.35, math.radians(50.0), rtol=1e-10,
+                                     guess=orbit50.touchdown_angles)
+    assert np.max(np.abs(np.subtract(loose.touchdown_angles, orbit50.touchdown_angles))) < 1e-7
+    assert abs(loose.period - orbit50.period) < 1e-8
+
+
+def test_apex_map_agrees_with_simulate(orbit50):
+    """The orbit module's passive integration is the simulator's passive model: the apex
+    state after one stride agrees with a simulate() run (ballistic apex from a 1 kHz sample)."""
+    z = orbit50.z
+    r = scoutsim.simulate(O.passive_robot(), None,
+                          InitialState(y=z[0], theta=0.0, dx=z[2], dy=0.0, dtheta=z[3]),
+                          0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
+                          passive_touchdown_angles=orbit50.touchdown_angles)
+    assert not O._glitched(r.events)
+    t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
+    k = int(np.searchsorted(r.t, t_lo, side="right"))
+    s = r.state[k]
+    g = O.passive_robot().gravity
+    dy = s[8]
+    sim = np.array([s[1] + dy * dy / (2 * g), s[2] + s[9] * dy / g, s[7], s[9]])
+    assert np.max(np.abs(sim - z)) < 1e-8
+
+
+def test_continuation_follows_the_family():
+    fam = O.continue_passive_family(1.3, 0.35, np.radians([0.0, 25.0, 50.0]), linearise=False)
+    assert all(o.residual < 1e-9 for o in fam)
+    # the back leg touches down further forward as the pitch rate grows
+    assert fam[0].touchdown_angles[0] < fam[1].touchdown_angles[0] < fam[2].touchdown_angles[0]
+
+
+def test_cli_orbit_passive_json_has_exactly_the_keys(capsys):
+    code = main(["orbit", "--passive", "--speed", "1.3", "--apex-height", "0.35",
+                 "--pitch-rate", "50", "--json"])
+    assert code == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d) == {"touchdown_angle_back_deg", "touchdown_angle_front_deg", "period_s",
+                      "eigenvalues", "residual"}
+    assert d["residual"] < 1e-9
+    assert len(d["eigenvalues"]) == 4 and all(len(e) == 2 for e in d["eigenvalues"])
+
+
+def test_controlled_cycle_converges():
+    c = O.controlled_cycle()
+    assert c.outcome == "completed"
+    assert 0.15 < c.period < 0.4
+    assert np.all(c.spread < 0.05)
