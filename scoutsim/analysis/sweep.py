@@ -3,8 +3,8 @@
 Each point sets some fields of :class:`~scoutsim.parameters.RobotParameters` and/or
 :class:`~scoutsim.parameters.ControllerParameters` (names ``robot.<field>`` and
 ``controller.<field>``, SI units as in those classes), runs :func:`scoutsim.simulate`, and
-records the outcome, the steady-state gait metrics and the cycle's regularity (steady
-bounding, stride-period coefficient of variation). Points run in parallel on all local
+records the outcome, the whole-run average speed, the steady-state gait metrics and the
+cycle's regularity (steady bounding, stride-period coefficient of variation). Points run in parallel on all local
 cores by default or on a Dask cluster (``scheduler``); each finished point is appended at
 once to a checkpoint file in the output directory, so an interrupted sweep resumes
 without recomputing what it finished, and a failing point is recorded with its error
@@ -26,7 +26,7 @@ import numpy as np
 from ..parameters import ControllerParameters, RobotParameters
 from .parallel import map_tasks
 
-SUMMARY_COLUMNS = ("outcome", "t_end_s", "mean_speed_m_s", "stride_frequency_hz",
+SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
                    "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
                    "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
                    "steady_bounding", "max_friction_ratio", "error")
@@ -95,6 +95,8 @@ def sweep_task(task: dict) -> dict:
                                 friction_coefficient=task["friction_coefficient"])
         s = r.summary()
         row.update({k: s.get(k) for k in SUMMARY_COLUMNS if k in s})
+        # whole-run average speed: defined even for runs too short for steady strides
+        row["average_speed_m_s"] = float((r.x[-1] - r.x[0]) / r.t[-1]) if r.t[-1] > 0 else None
         row["steady_bounding"] = bool(s.get("steady_bounding"))
         row["error"] = ""
     except Exception as exc:  # noqa: BLE001 - recorded per point, the sweep goes on
