@@ -596,7 +596,8 @@ WK_B2 = WK_B + MAX_KKT     # second right-hand side (stiff directions)
 WK_RKIND = WK_B2 + MAX_KKT
 WK_RLEG = WK_RKIND + MAX_ROWS
 WK_LEG = WK_RLEG + MAX_ROWS  # per-leg scalars, 16 slots x 2 legs
-WK_SIZE = WK_LEG + 32
+WK_Y = WK_LEG + 32         # reduced KKT right-hand side / solution
+WK_SIZE = WK_Y + MAX_KKT
 WA_R = MAX_KKT             # rows of wA holding the constraint rows R
 WA_M = WA_R + MAX_ROWS     # rows of wA holding the mass matrix M
 WA_ROWS = WA_M + NQ
@@ -671,6 +672,79 @@ def lu_solve(A, piv, b, o, n):
         for j in range(i + 1, n):
             acc -= A[i, j] * b[o + j]
         b[o + i] = acc / A[i, i]
+
+
+@njit(cache=True)
+def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
+    """Assemble and factor the KKT matrix with the Model II gear coordinates eliminated.
+
+    The driven-gear angles alpha (coordinates 5, 6) couple to the rest of the mass matrix
+    only through M[2, alpha]; no contact row involves them. A free gear's row is solved
+    for its acceleration and folded into the theta row (Schur complement
+    M22 - M2a^2 / Maa); a stuck gear has ddalpha = its row's right-hand side and its
+    multiplier follows from its row. What is left is [M5 R_c^T; R_c 0] with the contact rows
+    only (at most 5 + 4 unknowns instead of 7 + 6). Returns (ok, size)."""
+    m = 5
+    for i in range(m):
+        for j in range(m):
+            A[i, j] = M[i, j]
+    if nact == 7:
+        if free0:
+            A[2, 2] -= M[2, 5] * M[2, 5] / M[5, 5]
+        if free1:
+            A[2, 2] -= M[2, 6] * M[2, 6] / M[6, 6]
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == 3.0:
+            continue
+        for j in range(m):
+            A[m + nc, j] = R[rr, j]
+            A[j, m + nc] = R[rr, j]
+        nc += 1
+    n = m + nc
+    for i in range(m, n):
+        for j in range(m, n):
+            A[i, j] = 0.0
+    return lu_factor(A, piv, n), n
+
+
+@njit(cache=True)
+def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo):
+    """Solve the full KKT system [M R^T; R 0] x = b[o:o+nact+nr] (in place, original
+    ordering) with the factors of :func:`kkt_reduced_factor`; y[yo:] is scratch."""
+    m = 5
+    for i in range(m):
+        y[yo + i] = b[o + i]
+    if nact == 7:
+        if free0:
+            y[yo + 2] -= M[2, 5] / M[5, 5] * b[o + 5]
+        if free1:
+            y[yo + 2] -= M[2, 6] / M[6, 6] * b[o + 6]
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == 3.0:
+            continue
+        y[yo + m + nc] = b[o + nact + rr]
+        nc += 1
+    lu_solve(A, piv, y, yo, m + nc)
+    ddth = y[yo + 2]
+    if nact == 7:
+        if free0:
+            b[o + 5] = (b[o + 5] - M[2, 5] * ddth) / M[5, 5]
+        if free1:
+            b[o + 6] = (b[o + 6] - M[2, 6] * ddth) / M[6, 6]
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == 3.0:
+            a = 5 + int(rleg[rr])
+            dda = b[o + nact + rr]
+            b[o + nact + rr] = b[o + a] - M[2, a] * ddth - M[a, a] * dda
+            b[o + a] = dda
+        else:
+            b[o + nact + rr] = y[yo + m + nc]
+            nc += 1
+    for i in range(m):
+        b[o + i] = y[yo + i]
 
 
 @njit(cache=True)
@@ -942,21 +1016,15 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
     # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
     n = nact + nr
     b = wk[WK_B:WK_B + MAX_KKT]
-    for i in range(n):
-        for j in range(n):
-            A[i, j] = 0.0
     for i in range(nact):
-        for j in range(nact):
-            A[i, j] = M[i, j]
         b[i] = Q[i] - h[i]
     for rr in range(nr):
-        for j in range(nact):
-            A[nact + rr, j] = R[rr, j]
-            A[j, nact + rr] = R[rr, j]
         b[nact + rr] = r[rr]
-    ok = lu_factor(A, piv, n)
+    free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
+    free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
+    ok, nred = kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1)
     if ok:
-        lu_solve(A, piv, wk, WK_B, n)
+        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y)
 
     for i in range(NQ):
         ds[i] = dq[i]
@@ -983,7 +1051,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
                     b2[i] = 0.0
                 b2[5 + leg] = 1.0
                 b2[3 + leg] = -1.0
-                lu_solve(A, piv, wk, WK_B2, n)
+                kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
+                                  WK_Y)
                 # U: response of ddq to a unit belt torque pair, -npl G w
                 for i in range(nact):
                     stiff[NQ + i, leg] = -npl * b2[i]
@@ -1052,7 +1121,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
                 for i in range(n):
                     b2[i] = 0.0
                 b2[5 + leg] = 1.0
-                lu_solve(A, piv, wk, WK_B2, n)
+                kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
+                                  WK_Y)
                 for i in range(nact):
                     stiff[NQ + i, 2 + leg] = -npl * b2[i]
                 stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
