@@ -232,7 +232,7 @@ def fig8(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
         lg, st, steady = rep
         k = _sel(lg, st.t_start, st.t_end)
         tt = lg.t[k] - st.t_start
-        lab = f"{_tag(src, steady)}, {st.period_s:.3f} s"
+        lab = f"{_tag(src, steady)}, period {st.period_s:.3f} s"
         th = np.asarray(lg.pitch)[k] * _DEG
         y = np.asarray(lg.height)[k]
         ax_p.plot(tt, th, label=lab, **_line_kw(src, i, steady))
