@@ -150,3 +150,17 @@ def test_experimental_ark4_method_agrees_with_reference():
     assert np.max(np.abs(ark.state[:, :3] - ref.state[:, :3])) < 1e-5
     with pytest.raises(ValueError, match="integrator.method"):
         IntegratorSettings(method="euler")
+
+
+def test_experimental_ark3_gait_metrics_agree_with_reference():
+    """ARK3 at its working tolerance: steady gait metrics within 1e-4 of the reference."""
+    keys = ("mean_speed_m_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
+            "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m")
+    ref = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=0.8,
+                            integrator=IntegratorSettings(rtol=1e-10, atol=1e-10)).summary()
+    ark = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=0.8,
+                            integrator=IntegratorSettings(method="ark3", rtol=1e-5,
+                                                          atol=1e-6)).summary()
+    assert ref["n_steady_strides"] >= 7 and ark["n_steady_strides"] >= 7
+    for k in keys:
+        assert ark[k] == pytest.approx(ref[k], rel=1e-4), k

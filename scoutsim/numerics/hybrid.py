@@ -140,6 +140,10 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     spring leg, a stuck motor joint loaded beyond breakaway slips, a slipping joint at rest
     sticks if stiction can hold it. Returns the updated event count."""
     W = body_weight(P)
+    # a contact force counts as pulling only beyond rounding: a massless undamped leg
+    # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
+    # release it at once (the toe would then be disarmed at height <= 0 and fall through)
+    gn_tol = -1e-9 * W
     coulomb = P[P_MU] < 1e300
     model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
     for _ in range(12):
@@ -151,7 +155,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
             mode = mi[MI_CONTACT_B + leg]
             gn = aux[o + A_GN]
             if mode == STICK:
-                if gn < 0.0:
+                if gn < gn_tol:
                     if aux[o + A_FAX] > 1e-9 * W and P[P_MASSLESS] < 0.5:
                         mi[MI_CONTACT_B + leg] = SLIDE
                         gt = aux[o + A_GT]
@@ -168,7 +172,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
                     nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX], 1.0)
                     changed = True
             elif mode == STRUT:
-                if gn < 0.0:
+                if gn < gn_tol:
                     leave_contact(s, mi, leg)
                     nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
                     changed = True
@@ -177,7 +181,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
                     nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
                     changed = True
             elif mode == SLIDE:
-                if gn < 0.0 or aux[o + A_FAX] <= 0.0:
+                if gn < gn_tol or aux[o + A_FAX] <= 0.0:
                     leave_contact(s, mi, leg)
                     nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
                     changed = True
@@ -495,7 +499,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 event_values(s, aux, P, mi, e_old)
                 kcur = -1
                 for i in range(NEV):
-                    if pending[i] and e_old[i] <= 1e-12:
+                    if pending[i] and e_old[i] <= 0.0:
                         # only if the slot still means the same thing (its leg's modes
                         # unchanged)
                         same = True
