@@ -161,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
                "  scoutsim animate scoutsim_out/result.npz --out run.gif --t0 3 --t1 4",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare,plot,animate,orbit}")
+    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare,plot,animate,orbit,sweep}")
 
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--duration", type=_positive_float, default=10.0, metavar="S",
@@ -325,7 +325,103 @@ def build_parser() -> argparse.ArgumentParser:
                        help="controlled: simulated time to converge [s] (default: 12)")
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     orbit.set_defaults(func=_cmd_orbit)
+
+    sw = sub.add_parser(
+        "sweep", parents=[common],
+        help="parameter sweep (grid or random sample) in parallel or on a Dask cluster",
+        description="Run a grid or random sample of robot/controller parameters, named "
+                    "robot.<field> or controller.<field> (SI units as in RobotParameters / "
+                    "ControllerParameters; a _deg suffix on an angle field takes degrees), "
+                    "and write sweep.parquet, sweep.csv, the checkpoint points.jsonl (an "
+                    "interrupted sweep resumes) and, for a two-parameter grid, map.png. "
+                    "Example: scoutsim sweep --grid controller.touchdown_angle_front_deg="
+                    "15:27:20 --grid controller.touchdown_angle_back_deg=13:25:20 "
+                    "--duration 2")
+    sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:NUM",
+                    help="grid axis (repeatable): NUM values from START to STOP")
+    sw.add_argument("--random", action="append", default=[], metavar="NAME=LOW:HIGH",
+                    help="uniformly sampled parameter (repeatable), with --samples")
+    sw.add_argument("--samples", type=_positive_int, default=100, metavar="N",
+                    help="number of random points (default: 100)")
+    sw.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    sw.add_argument("--model", choices=("ideal", "I", "II"), default="II",
+                    help="model (default: II)")
+    sw.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                    help="local processes (default: all cores)")
+    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask distributed scheduler address (e.g. tcp://host:8786)")
+    sw.add_argument("--no-resume", action="store_true",
+                    help="recompute every point even if DIR/points.jsonl has it")
+    sw.set_defaults(func=_cmd_sweep)
     return parser
+
+
+def _sweep_axis(text: str, n_parts: int):
+    """'name=a:b[:n]' -> (SI name, floats); a _deg suffix converts degrees once, here."""
+    name, sep, rng = text.partition("=")
+    parts = rng.split(":")
+    if not sep or len(parts) != n_parts:
+        form = "NAME=START:STOP:NUM" if n_parts == 3 else "NAME=LOW:HIGH"
+        raise _UsageError(f"{text!r} is not allowed: must be {form}")
+    try:
+        vals = [float(v) for v in parts]
+    except ValueError:
+        raise _UsageError(f"{text!r}: the range must be numbers") from None
+    if name.endswith("_deg"):
+        name = name[:-4]
+        vals = [math.radians(v) for v in vals[:2]] + vals[2:]
+    return name, vals
+
+
+def _cmd_sweep(args) -> int:
+    import numpy as np
+    from .analysis.sweep import grid_points, random_points, sweep
+    if bool(args.grid) == bool(args.random):
+        raise _UsageError("give either --grid axes or --random parameters")
+    try:
+        if args.grid:
+            axes = {}
+            for g in args.grid:
+                name, (a, b, n) = _sweep_axis(g, 3)
+                if n < 1 or n != int(n):
+                    raise _UsageError(f"{g!r}: NUM must be a whole number >= 1")
+                axes[name] = np.linspace(a, b, int(n))
+            points = grid_points(axes)
+        else:
+            bounds = {}
+            for g in args.random:
+                name, (a, b) = _sweep_axis(g, 2)
+                bounds[name] = (a, b)
+            points = random_points(bounds, args.samples, args.seed)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    robot, controller = _load_parameters(args.robot)
+    out = _out_dir(args.out)
+    progress = (not args.no_progress) and sys.stderr.isatty()
+    wall0 = time.perf_counter()
+    res = sweep(points, model=args.model, duration=args.duration, robot=robot,
+                controller=controller, friction_coefficient=args.friction, out=out,
+                workers=args.workers, scheduler=args.scheduler, progress=progress,
+                resume=not args.no_resume)
+    wall = time.perf_counter() - wall0
+    outcomes = {}
+    for r in res.rows:
+        outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
+    steady = sum(bool(r.get("steady_bounding")) for r in res.rows)
+    print(f"scoutsim sweep: {len(points)} points of model {args.model}, {args.duration:g} s "
+          f"each ({res.settings['n_resumed']} resumed from {out}/points.jsonl)")
+    print(f"  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
+    print(f"  steady bounding: {steady}")
+    print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
+    if args.grid and len(res.parameters) == 2:
+        res.plot_map(res.parameters[0], res.parameters[1], "average_speed_m_s",
+                     path=out / "map.png")
+        print(f"  map of the average speed: {out}/map.png")
+    errors = [r for r in res.rows if r["outcome"] == "error"]
+    for r in errors[:3]:
+        print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} failed: "
+              f"{r['error']}", file=sys.stderr)
+    return 0
 
 
 def main(argv=None) -> int:

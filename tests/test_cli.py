@@ -4,6 +4,7 @@ messages, and the basin sweep."""
 import csv
 import json
 import subprocess
+import math
 import sys
 
 import numpy as np
@@ -236,3 +237,26 @@ def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch,
     rows, summary = _read_basin(tmp_path)
     assert [r["outcome"] for r in rows] == ["error"]
     assert "RuntimeError: boom" in capsys.readouterr().err
+
+
+def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys):
+    out = tmp_path / "sw"
+    code = main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
+                 "--grid", "controller.touchdown_angle_back_deg=17:19:2", "--model", "I",
+                 "--duration", "0.3", "--workers", "1", "--out", str(out), "--no-progress"])
+    assert code == 0
+    lines = (out / "sweep.csv").read_text().splitlines()
+    assert len(lines) == 1 + 4
+    header = lines[0].split(",")
+    assert header[0] == "controller.touchdown_angle_front"
+    first = dict(zip(header, lines[1].split(",")))
+    assert float(first["controller.touchdown_angle_front"]) == pytest.approx(math.radians(19))
+    assert (out / "map.png").stat().st_size > 1000
+    assert "4 points" in capsys.readouterr().out
+
+
+def test_sweep_cli_bad_axis_is_a_usage_error(tmp_path, capsys):
+    assert main(["sweep", "--grid", "controller.touchdown_angle_front=1:2",
+                 "--out", str(tmp_path)]) == 2
+    assert main(["sweep", "--grid", "robot.torso_mas=1:2:2", "--out", str(tmp_path)]) == 2
+    assert "did you mean" in capsys.readouterr().err
