@@ -60,6 +60,8 @@ S_HMAX = 9
 NSTAT = 10
 
 EVENT_TIME_TOL = 1e-13
+MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
+MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
 
 
 @njit(cache=True)
@@ -373,6 +375,10 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     K0 = K[0]
     expo = -0.25 if method == METHOD_ARK4 else (-1.0 / 3.0 if method == METHOD_ARK3 else -0.2)
     nfail = 0
+    # stall guards (a run must end with an outcome, never loop without end): events and
+    # steps within one control period
+    n_events_here = 0
+    n_steps_here = 0
     e_end = np.empty(NEV)
     pending = np.zeros(NEV, dtype=np.bool_)
     mi_before = np.zeros(NMI, dtype=np.int64)
@@ -477,6 +483,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
             evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3])
+            n_events_here += 1
+            if n_events_here > MAX_EVENTS_PER_PERIOD:
+                return t, nev, ST_NUMERICAL_FAILURE
             # apply the event, then any other armed event that has also been reached at
             # this instant (simultaneous touchdowns of a pitch-free landing, ...)
             for i in range(NEV):
@@ -527,6 +536,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             continue
         # accept
         stats[S_NSTEP] += 1
+        n_steps_here += 1
+        if n_steps_here > MAX_STEPS_PER_PERIOD:
+            return t, nev, ST_NUMERICAL_FAILURE
         if h < stats[S_HMIN]:
             stats[S_HMIN] = h
         if h > stats[S_HMAX]:
