@@ -9,7 +9,6 @@ over one worker, and whether the three tables are identical.
 
 import argparse
 import json
-import math
 import os
 import time
 

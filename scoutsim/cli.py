@@ -410,7 +410,7 @@ def _cmd_sweep(args) -> int:
     steady = sum(bool(r.get("steady_bounding")) for r in res.rows)
     print(f"scoutsim sweep: {len(points)} points of model {args.model}, {args.duration:g} s "
           f"each ({res.settings['n_resumed']} resumed from {out}/points.jsonl)")
-    print(f"  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
+    print("  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
     print(f"  steady bounding: {steady}")
     print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
     if args.grid and len(res.parameters) == 2:

@@ -23,7 +23,6 @@ The results are :class:`scoutsim.analysis.gait.Stride` objects, so the metric na
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 
