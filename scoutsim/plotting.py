@@ -249,24 +249,29 @@ def _torque_speed_axes(ax, result, li: int) -> None:
         tmax = max(tmax, lim["tau_current"])
         wmax = max(wmax, lim["w_no_load"])
     xl, yl = 1.15 * max(tmax, 1e-3), 1.15 * max(wmax, 1e-3)
+    note = "" if model != "ideal" else " (not applied in the ideal model)"
+    draw_motor_limits(ax, lim, xl, yl, note=note)
+    ax.set_xlabel("applied hip torque per leg [N m]")
+    ax.set_ylabel("leg angular speed [rad/s]")
+    ax.set_title(f"{_LEG_NAMES[li]} leg")
+
+
+def draw_motor_limits(ax, lim, xl, yl, *, note="", current_ls="--", line_ls="-."):
+    """Draw the current limit (+-N eta K_T i_max) and the torque-speed lines
+    tau = N eta K_T (+-V - K_w N w) / R_A on a torque [N m] / leg-speed [rad/s] axes, set
+    the limits to +-xl, +-yl, and add the zero lines, grid and legend (paper Fig. 11)."""
     if lim is not None:
-        note = "" if model != "ideal" else " (not applied in the ideal model)"
         ic = lim["tau_current"]
-        ax.axvline(ic, color="k", lw=1.0, ls="--", label=f"current limit ±{ic:.1f} N m")
-        ax.axvline(-ic, color="k", lw=1.0, ls="--")
+        ax.axvline(ic, color="k", lw=1.0, ls=current_ls, label=f"current limit ±{ic:.1f} N m")
+        ax.axvline(-ic, color="k", lw=1.0, ls=current_ls)
         ww = np.array([-yl, yl])
         for sign in (1.0, -1.0):
-            # tau = N eta K_T (+-V - K_w N w) / R_A
-            tt = sign * lim["tau_stall"] - lim["slope"] * ww
-            ax.plot(tt, ww, color="0.35", lw=1.0, ls="-.",
-                    label=(f"torque-speed lines ±V{note}" if sign > 0 else None))
+            ax.plot(sign * lim["tau_stall"] - lim["slope"] * ww, ww, color="0.35", lw=1.0,
+                    ls=line_ls, label=(f"torque-speed lines ±V{note}" if sign > 0 else None))
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.axvline(0.0, color="0.6", lw=0.5)
     ax.set_xlim(-xl, xl)
     ax.set_ylim(-yl, yl)
-    ax.set_xlabel("applied hip torque per leg [N m]")
-    ax.set_ylabel("leg angular speed [rad/s]")
-    ax.set_title(f"{_LEG_NAMES[li]} leg")
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.legend(loc="upper right", fontsize=7, markerscale=4, framealpha=0.85)
 

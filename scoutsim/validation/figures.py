@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..plotting import _save, motor_limits
+from ..plotting import _save, draw_motor_limits, motor_limits
 from .phase import Source, _label, _style, as_source, as_sources, phase_compare, plot_phase
 
 __all__ = ["fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "fig_phase", "plot_log",
@@ -372,22 +372,10 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
             y = np.asarray(lg.leg_rate(leg))[k]
             ax.plot(x, y, label=f"{_tag(src, steady)}, one step", **_line_kw(src, i, steady))
         xl, yl = 1.15 * tmax, 1.15 * wmax
-        ic = lim["tau_current"]
-        ax.axvline(ic, color="k", lw=1.0, ls=(0, (5, 2)), label=f"current limit ±{ic:.1f} N m")
-        ax.axvline(-ic, color="k", lw=1.0, ls=(0, (5, 2)))
-        ww = np.array([-yl, yl])
-        for sign in (1.0, -1.0):
-            ax.plot(sign * lim["tau_stall"] - lim["slope"] * ww, ww, color="0.35", lw=1.0,
-                    ls=(0, (6, 2, 1, 2)), label="torque-speed lines ±V" if sign > 0 else None)
-        ax.axhline(0.0, color="0.6", lw=0.5)
-        ax.axvline(0.0, color="0.6", lw=0.5)
-        ax.set_xlim(-xl, xl)
-        ax.set_ylim(-yl, yl)
+        draw_motor_limits(ax, lim, xl, yl, current_ls=(0, (5, 2)), line_ls=(0, (6, 2, 1, 2)))
         ax.set_xlabel("hip torque per leg [N m]")
         ax.set_ylabel("leg angular speed (encoder) [rad/s]")
         ax.set_title(f"{leg} leg")
-        ax.grid(True, lw=0.4, alpha=0.5)
-        ax.legend(loc="upper right", fontsize=7, markerscale=4, framealpha=0.85)
     return _finish(fig, "Motor saturation: leg speed against hip torque (Fig. 11)",
                    _notes(exp, mods, missing), path)
 
