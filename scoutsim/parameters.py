@@ -59,6 +59,14 @@ class RobotParameters:
         Gear ratios [-]; N = planetary_ratio * sprocket_ratio (Table III).
     gearbox_efficiency, sprocket_efficiency : float
         Efficiencies in (0, 1]; eta = product (Table III).
+    gearbox_idle_loss_torque : float
+        tau_idle, torque-independent transmission loss at the leg side, per physical leg
+        [N m] (assumed, default 0). Together with ``gearbox_load_loss_coefficient`` it makes
+        the efficiency fall at low torque (paper Sec. IV.B; docs/model.md "Transmission
+        losses"). Zero (with a zero coefficient) recovers the constant efficiency exactly.
+    gearbox_load_loss_coefficient : float
+        c_load, load-proportional loss tau_loss = tau_idle + c_load |tau_out| [-], in [0, 1)
+        (assumed, default 0).
     drive_gear_inertia : float
         J_1, drive (motor-side) gear inertia [kg m^2] (Table II).
     driven_gear_inertia : float
@@ -102,6 +110,8 @@ class RobotParameters:
     sprocket_ratio: float = 48.0 / 34.0
     gearbox_efficiency: float = 0.68
     sprocket_efficiency: float = 0.96
+    gearbox_idle_loss_torque: float = 0.0
+    gearbox_load_loss_coefficient: float = 0.0
     drive_gear_inertia: float = 3.5e-6
     driven_gear_inertia: float = 1.0e-3
     joint_stiction: float = 5.5e-3
@@ -300,6 +310,8 @@ _RULES: dict[str, _Range] = {
     "torso_length": _POSITIVE, "torso_height": _POSITIVE,
     "planetary_ratio": _POSITIVE, "sprocket_ratio": _POSITIVE,
     "gearbox_efficiency": _EFFICIENCY, "sprocket_efficiency": _EFFICIENCY,
+    "gearbox_idle_loss_torque": _NON_NEGATIVE,
+    "gearbox_load_loss_coefficient": _Range(0.0, True, 1.0, False),
     "drive_gear_inertia": _NON_NEGATIVE, "driven_gear_inertia": _NON_NEGATIVE,
     "joint_stiction": _NON_NEGATIVE, "joint_damping": _NON_NEGATIVE,
     "belt_stiffness": _POSITIVE, "belt_damping": _NON_NEGATIVE,

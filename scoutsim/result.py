@@ -122,7 +122,8 @@ class SimulationResult:
         return self._aux(leg, L.A_TAU_CMD)
 
     def hip_torque_applied(self, leg):
-        """Actuator torque delivered per physical leg, N eta K_T i [N m]."""
+        """Actuator torque delivered per physical leg, N eta K_T i less any transmission
+        losses (docs/model.md) [N m]."""
         return self._aux(leg, L.A_TAU_APP)
 
     def motor_current(self, leg):

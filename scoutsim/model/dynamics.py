@@ -29,7 +29,7 @@ from .layout import (
     MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_I, MODEL_II, MODEL_IDEAL,
     MODEL_PASSIVE, NAUX, NAUX_LEG, NQ, NS, P_B_J, P_C, P_CB, P_D, P_ETA, P_G, P_IL, P_IMAX,
     P_IT, P_J1, P_J2, P_K, P_KB, P_KT, P_KW, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT,
-    P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, SLIDE,
+    P_C_LOAD, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, SLIDE,
     STICK, STRUT, STUCK,
 )
 
@@ -283,6 +283,48 @@ def motor_current(cmd_torque, omega_m, vb, P):
     return ic
 
 
+#: Motor speed [rad/s] over which the direction of the transmission losses is blended
+#: linearly (regularized Coulomb friction; docs/model.md "Transmission losses").
+LOSS_SPEED_REG = 1.0
+
+
+@njit(cache=True)
+def _loss_branch(tau0, d, idle, cl):
+    """Delivered torque for output motion in direction d = +-1 (see delivered_torque)."""
+    if tau0 * d > 0.0:                      # motoring: forward power flow
+        mag = (abs(tau0) - idle) / (1.0 + cl)
+        if mag < 0.0:
+            mag = 0.0
+        return mag if tau0 > 0.0 else -mag
+    return -d * (abs(tau0) + idle) / (1.0 - cl)   # back-driven: reverse power flow
+
+
+@njit(cache=True)
+def delivered_torque(cur, omega_m, P):
+    """Torque delivered to the leg / driven gear, per physical leg [N m], for motor current
+    ``cur`` [A] at motor speed ``omega_m`` relative to the torso [rad/s] (docs/model.md,
+    "Transmission losses").
+
+    The constant-efficiency torque tau_0 = N eta K_T i is corrected by a loss torque
+    tau_loss = tau_idle + c_load |tau_out| opposing the output motion (i.e. the power flow):
+    motoring (tau_0 w_m > 0): |tau_out| = max(|tau_0| - tau_idle, 0) / (1 + c_load), sign of
+    tau_0; back-driven (tau_0 w_m <= 0): tau_out = -sign(w_m) (|tau_0| + tau_idle) / (1 - c_load).
+    For |w_m| < LOSS_SPEED_REG the two directions are blended linearly. With
+    tau_idle = c_load = 0 this returns tau_0 exactly."""
+    tau0 = P[P_N] * P[P_ETA] * P[P_KT] * cur
+    idle = P[P_TAU_IDLE]
+    cl = P[P_C_LOAD]
+    if idle == 0.0 and cl == 0.0:
+        return tau0
+    w = omega_m / LOSS_SPEED_REG
+    if w >= 1.0:
+        return _loss_branch(tau0, 1.0, idle, cl)
+    if w <= -1.0:
+        return _loss_branch(tau0, -1.0, idle, cl)
+    return (0.5 * (1.0 + w) * _loss_branch(tau0, 1.0, idle, cl)
+            + 0.5 * (1.0 - w) * _loss_branch(tau0, -1.0, idle, cl))
+
+
 @njit(cache=True)
 def battery_voltage(dq, cmd, P):
     """Battery terminal voltage V_b [V] (SPEC.md 4).
@@ -376,7 +418,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         else:
             om[leg] = N * dq[3 + leg]
         cur[leg] = motor_current(cmd[leg], om[leg], vb, P)
-        tau_app[leg] = N * P[P_ETA] * P[P_KT] * cur[leg]
+        tau_app[leg] = delivered_torque(cur[leg], om[leg], P)
         if model == MODEL_II:
             Q[5 + leg] += npl * tau_app[leg]
             mm = mi[MI_MOTOR_B + leg]
@@ -882,7 +924,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
         else:
             om = N * dq[3 + leg]
         cur = motor_current(cmd[leg], om, vb, P)
-        tapp = N * P[P_ETA] * P[P_KT] * cur
+        tapp = delivered_torque(cur, om, P)
         LG[2 * LG_OM + leg] = om
         LG[2 * LG_CUR + leg] = cur
         LG[2 * LG_TAPP + leg] = tapp

@@ -62,8 +62,8 @@ NMF = 2
 (P_MT, P_IT, P_ML, P_IL, P_K, P_C, P_L, P_L0, P_D, P_NP, P_G, P_TORSO_LEN, P_TORSO_H,
  P_N, P_ETA, P_J1, P_J2, P_TAU_S, P_B_J, P_KB, P_CB, P_KT, P_KW, P_RA, P_IMAX, P_VB, P_RB,
  P_MODEL, P_MU, P_MASSLESS, P_TD_WORLD, P_TD_B, P_TD_F, P_THETA_LIM, P_STRUT_OMEGA,
- P_SENSE_ALPHA) = range(36)
-NP_ = 36
+ P_SENSE_ALPHA, P_TAU_IDLE, P_C_LOAD) = range(38)
+NP_ = 38
 
 # --- auxiliary outputs (per evaluation) ---------------------------------------------------
 # per leg (offset leg * NAUX_LEG)

@@ -55,6 +55,8 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_TORSO_H] = robot.torso_height
     P[L.P_N] = robot.gear_ratio
     P[L.P_ETA] = robot.efficiency
+    P[L.P_TAU_IDLE] = robot.gearbox_idle_loss_torque
+    P[L.P_C_LOAD] = robot.gearbox_load_loss_coefficient
     P[L.P_J1] = robot.drive_gear_inertia
     P[L.P_J2] = robot.driven_gear_inertia
     P[L.P_TAU_S] = robot.joint_stiction
