@@ -18,7 +18,7 @@ import math
 import numbers
 import tomllib
 import typing
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from os import PathLike

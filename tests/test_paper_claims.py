@@ -4,7 +4,6 @@ Floor: Coulomb friction mu = 0.8 (carpet; see docs/model.md for why no-slip is t
 assumption that fails). Default start: scoutsim.default_initial_state().
 """
 
-import math
 
 import numpy as np
 import pytest

@@ -3,7 +3,6 @@
 import json
 import math
 
-import numpy as np
 import pytest
 
 from scoutsim.analysis.sweep import (SUMMARY_COLUMNS, grid_points, parameter_names,

@@ -13,7 +13,7 @@ from scoutsim.validation import (ExperimentLog, LaserGeometry, LogError, SensorN
                                  fft_lowpass, load_dataset, load_log, log_strides, save_log,
                                  to_log)
 from scoutsim.validation.errors import (CSV_COLUMNS, ERROR_METRICS, ModelRun, assess_errors,
-                                        compare, percent_errors)
+                                        percent_errors)
 from scoutsim.validation.measurement import laser_ranges, pitch_height_from_lasers
 
 DURATION = 10.0
