@@ -40,47 +40,13 @@ NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
 
 @njit(cache=True)
 def solve_dense(A, b, n):
-    """Solve A[:n,:n] x = b[:n] in place by Gaussian elimination with partial pivoting.
-
-    Deterministic and allocation-free (the systems are at most 13 x 13). Returns False if a
-    pivot is numerically zero (the constrained dynamics are singular)."""
-    scale = 0.0
-    for i in range(n):
-        for j in range(n):
-            a = abs(A[i, j])
-            if a > scale:
-                scale = a
-    tiny = 1e-13 * scale if scale > 0.0 else 1e-300
-    for k in range(n):
-        p = k
-        best = abs(A[k, k])
-        for i in range(k + 1, n):
-            a = abs(A[i, k])
-            if a > best:
-                best = a
-                p = i
-        if best <= tiny:
-            return False
-        if p != k:
-            for j in range(n):
-                tmp = A[k, j]
-                A[k, j] = A[p, j]
-                A[p, j] = tmp
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            f = A[i, k] * inv
-            if f != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= f * A[k, j]
-                b[i] -= f * b[k]
-    for i in range(n - 1, -1, -1):
-        acc = b[i]
-        for j in range(i + 1, n):
-            acc -= A[i, j] * b[j]
-        b[i] = acc / A[i, i]
+    """Solve A[:n,:n] x = b[:n] in place by Gaussian elimination with partial pivoting
+    (:func:`lu_factor` then :func:`lu_solve`; deterministic, systems of at most 13 x 13).
+    Returns False if a pivot is numerically zero (the constrained dynamics are singular)."""
+    piv = np.empty(n, dtype=np.int64)
+    if not lu_factor(A, piv, n):
+        return False
+    lu_solve(A, piv, b, 0, n)
     return True
 
 
