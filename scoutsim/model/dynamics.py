@@ -1211,13 +1211,8 @@ def evaluate(s, P, mi, mf, cmd, ds, aux):
 @njit(cache=True)
 def project_state(s, P, mi, mf):
     """Project the dependent coordinates of a full state vector in place."""
-    q = s[0:NQ].copy()
-    dq = s[NQ:2 * NQ].copy()
-    l = s[IL_B:IL_B + 2].copy()
-    project(q, dq, l, P, mi, mf)
-    s[0:NQ] = q
-    s[NQ:2 * NQ] = dq
-    s[IL_B:IL_B + 2] = l
+    # views: project() writes the dependent coordinates straight into s
+    project(s[0:NQ], s[NQ:2 * NQ], s[IL_B:IL_B + 2], P, mi, mf)
 
 
 @njit(cache=True)

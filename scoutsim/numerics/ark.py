@@ -30,7 +30,8 @@ from ..model.dynamics import NSTIFF, evaluate_ws
 from ..model.layout import NS
 
 NSTAGE = 6
-Z_ROWS = NSTAGE + 2 * NSTIFF + 3   # rows of the scratch array Z (NSTIFF columns)
+Z_ROWS = NSTAGE + 2 * NSTIFF + 3 + 4   # rows of the scratch array Z (2 NSTIFF columns)
+Z_COLS = 2 * NSTIFF
 GAMMA = 0.25
 C = np.array([0.0, 1.0 / 2.0, 83.0 / 250.0, 31.0 / 50.0, 17.0 / 20.0, 1.0])
 AE = np.array([
@@ -98,29 +99,30 @@ AD3 = AI3 - AE3
 
 @njit(cache=True)
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-         eval_end):
+         eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
     return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
-                    Z, eval_end, AE, AD, B, EW, GAMMA, NSTAGE)
+                    Z, eval_end, want_sf, AE, AD, B, EW, GAMMA, NSTAGE)
 
 
 @njit(cache=True)
 def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-          eval_end):
+          eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
     return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
-                    Z, eval_end, AE3, AD3, B3, EW3, GAMMA3, 4)
+                    Z, eval_end, want_sf, AE3, AD3, B3, EW3, GAMMA3, 4)
 
 
 @njit(cache=True)
 def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-             eval_end, AE, AD, B, EW, GAMMA, ns):
+             eval_end, want_sf, AE, AD, B, EW, GAMMA, ns):
     """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
     (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:]) already filled.
 
     Fills K[1..5] (stage derivatives), y_new and, if the step is accepted (error <= 1) or
-    ``eval_end``, K[6] = f(y_new), aux_new and SF1 (stiff factors at y_new, FSAL).
-    Z (NSTAGE + 2*NSTIFF, NSTIFF) is scratch. Returns (error_norm, ok, evaluations)."""
+    ``eval_end``, K[6] = f(y_new), aux_new and, if ``want_sf``, SF1 (stiff factors at
+    y_new, FSAL).
+    Z (Z_ROWS, Z_COLS) is scratch. Returns (error_norm, ok, evaluations)."""
     ok = True
     nfev = 0
     R = NSTIFF
@@ -137,7 +139,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         for i in range(NS):
             acc += SF0[i, R + a] * y[i]
         Z[0, a] = acc
-    if not invert_small(VU, hg, Si, R):
+    if not invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3:NSTAGE + 2 * R + 7]):
         return np.inf, False, nfev
     w = Z[NSTAGE + 2 * R]
     m = Z[NSTAGE + 2 * R + 1]
@@ -213,7 +215,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         err += (e / sc) ** 2
     err = np.sqrt(err / NS)
     if ok and (eval_end or err <= 1.0):
-        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew[0], ew[1], ew[2], True,
+        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew[0], ew[1], ew[2], want_sf,
                            SF1):
             ok = False
         nfev += 1
@@ -221,9 +223,9 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
 
 
 @njit(cache=True)
-def invert_small(VU, hg, Si, R):
-    """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4)."""
-    M = np.empty((4, 8))
+def invert_small(VU, hg, Si, R, M):
+    """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4); M (4, 8) is
+    scratch."""
     for a in range(R):
         for b in range(R):
             M[a, b] = (1.0 if a == b else 0.0) - hg * VU[a, b]
