@@ -15,16 +15,22 @@ Procedure (paper Sec. IV.C; SPEC.md 8):
    filtered, sampled data with filtered, sampled data keeps the chain's own effects (15 Hz
    smoothing of the pitch peaks, 1 ms quantization of lift-off, controller-detected
    contact) out of the error.
-3. **Pairing**: each experimental stride k is compared with the model's *mean steady
-   stride* m (the mean of each metric over the model's steady strides); phase differences
-   rule out stride-by-stride or time-domain pairing (paper). Per metric the percent error
-   is ``e_k = 100 |m - x_k| / |x_k|`` (relative to the experiment). The table reports the
-   mean and the max of e_k over all experimental strides of all runs, and ``n_strides``,
-   the number of strides compared. Because every stride is compared with one model value,
-   the mean error includes the experiment's own stride-to-stride scatter: a model equal to
-   the experiment's mean still shows that scatter. The error of the means,
-   ``100 |m - mean_k x_k| / |mean_k x_k|``, is reported separately
-   (:attr:`ErrorRow.percent_error_of_means`; zero for a perfect model).
+3. **Pairing by rank**: the model's steady strides are a sample of the same kind as the
+   experiment's, so per metric the experimental strides are paired with the model's by
+   rank: the k-th smallest experimental value x_(k) (plotting position
+   p_k = (k + 1/2)/n) with the model's empirical quantile at p_k, m(p_k) (linear
+   interpolation between the model's sorted values at their own plotting positions; with
+   equally many strides this is plain rank-to-rank pairing). Phase differences rule out
+   stride-by-stride or time-domain pairing (paper). Per metric the percent error is
+   ``e_k = 100 |m(p_k) - x_(k)| / |x_(k)|`` (relative to the experiment); the table
+   reports the mean and the max of e_k over all experimental strides of all runs, and
+   ``n_strides``, the number of strides compared. A model identical to the experiment
+   gives exactly 0 % in every metric (the same strides, sorted alike). For a model on a
+   steady limit cycle (all its strides alike) m(p_k) is its stride value, so this is the
+   paper's comparison of every experimental stride with the simulated stride, and the
+   errors include the experiment's stride-to-stride scatter the model does not
+   reproduce. The error of the means, ``100 |mean m - mean x| / |mean x|``, is reported
+   separately (:attr:`ErrorRow.percent_error_of_means`).
 4. A model that falls, or has no steady strides, has no errors: its rows carry NaN
    errors, ``n_strides = 0`` and a status saying why.
 
@@ -44,7 +50,7 @@ import numpy as np
 from .strides import LogGait, log_strides
 
 __all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
-           "percent_errors", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]
+           "percent_errors", "rank_paired_model_values", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]
 
 ERROR_METRICS = ("stride_frequency_hz", "duty_factor_back", "duty_factor_front",
                  "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m")
@@ -58,8 +64,33 @@ CSV_COLUMNS = ("model", "metric", "mean_percent_error", "max_percent_error", "n_
 MIN_MODEL_DURATION_S = 10.0
 
 
-def percent_errors(model_value: float, experiment_values) -> np.ndarray:
-    """``100 |model - x_k| / |x_k|`` for every experimental value x_k (NaN where x_k = 0)."""
+def rank_paired_model_values(model_values, experiment_values) -> np.ndarray:
+    """The model value paired with each experimental value by rank (module docstring, 3).
+
+    Returns an array aligned with ``experiment_values`` (not sorted): entry k is the model's
+    empirical quantile at the plotting position of x_k's rank among the experiment's values.
+    Ties keep their order of appearance (stable sort), so identical inputs pair exactly."""
+    x = np.asarray(experiment_values, dtype=float)
+    m = np.sort(np.asarray(model_values, dtype=float))
+    if m.size == 0:
+        raise ValueError("rank pairing needs at least one model value")
+    n = x.size
+    order = np.argsort(x, kind="stable")
+    out = np.empty(n)
+    if m.size == n:
+        out[order] = m
+    elif m.size == 1:
+        out[:] = m[0]
+    else:
+        p_exp = (np.arange(n) + 0.5) / n
+        p_mod = (np.arange(m.size) + 0.5) / m.size
+        out[order] = np.interp(p_exp, p_mod, m)
+    return out
+
+
+def percent_errors(model_value, experiment_values) -> np.ndarray:
+    """``100 |m_k - x_k| / |x_k|`` for every experimental value x_k (NaN where x_k = 0);
+    ``model_value`` is one value or one per x_k."""
     x = np.asarray(experiment_values, dtype=float)
     with np.errstate(divide="ignore", invalid="ignore"):
         e = 100.0 * np.abs(model_value - x) / np.abs(x)
@@ -211,7 +242,12 @@ def assess_errors(experiment_strides: list, model_runs: dict, n_runs: int = 1,
                                      "no experimental strides"))
                 continue
             m = float(run.gait.means[metric])
-            e = percent_errors(m, x)
+            model_strides = np.array([s[metric] for s in run.gait.steady_strides],
+                                     dtype=float)
+            model_strides = model_strides[np.isfinite(model_strides)]
+            paired = (rank_paired_model_values(model_strides, x) if model_strides.size
+                      else np.full(n, m))
+            e = percent_errors(paired, x)
             good = np.isfinite(e)
             rows.append(ErrorRow(
                 model, metric,

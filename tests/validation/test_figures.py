@@ -2,6 +2,7 @@
 figure writing of `scoutsim compare`: figures render headless, are non-empty, label every
 axis with a unit, and say so when a model has no steady strides."""
 
+import math
 import re
 import sys
 
@@ -83,13 +84,52 @@ def test_comparison_figures_render_with_units(name, exp_logs, sims, tmp_path):
 
 
 def test_fig5_highlights_one_stride(exp_logs, tmp_path):
-    fig = figures.fig5(exp_logs, tmp_path / "fig5.svg")
+    fig = figures.fig5(exp_logs, tmp_path / "fig5.svg", n_snapshots=5)
     _check_labels(fig)
     assert (tmp_path / "fig5.svg").read_text().lstrip().startswith("<?xml")
-    spans = [p for ax in fig.get_axes() for p in ax.patches]
-    assert len(spans) == 2  # the highlighted stride in both panels
-    legend = fig.get_axes()[0].get_legend().get_texts()[0].get_text()
+    ax_s, ax_p, ax_h, ax_pz, ax_hz = fig.get_axes()
+    spans = [p for ax in (ax_p, ax_h, ax_pz, ax_hz) for p in ax.patches]
+    assert len(spans) == 4  # the highlighted stride in the run and in the zoom
+    legend = ax_p.get_legend().get_texts()[0].get_text()
     assert "steady stride" in legend
+    # the snapshot strip: one torso per snapshot, marked in the zoomed time series
+    assert len(ax_s.patches) == 5
+    assert len([ln for ln in ax_pz.get_lines() if ln.get_linestyle() == ":"]) == 5
+    lo, hi = ax_pz.get_xlim()
+    assert hi - lo < 1.0 < ax_p.get_xlim()[1] - ax_p.get_xlim()[0]
+    with pytest.raises(ValueError, match="n_snapshots"):
+        figures.fig5(exp_logs, n_snapshots=0)
+
+
+@pytest.mark.parametrize("with_length", [True, False])
+def test_robot_pose_puts_stance_toes_on_the_ground(exp_logs, with_length):
+    from scoutsim.validation import ExperimentLog
+    lg = exp_logs[0]
+    if not with_length:
+        lg = ExperimentLog({k: v for k, v in lg.columns.items()
+                            if not k.startswith("leg_length")}, dict(lg.meta))
+    rob = RobotParameters()
+    checked = 0
+    for k in range(0, len(lg.t), 97):
+        pose = figures.robot_pose(lg, k)
+        for name, leg in pose["legs"].items():
+            (hx, hy), (tx, ty) = leg["hip"], leg["toe"]
+            length = math.hypot(tx - hx, ty - hy)
+            if with_length:
+                # a logged length is drawn as logged (filtered pitch and height need not
+                # put that toe exactly on the ground)
+                assert length == pytest.approx(lg.leg_length(name)[k], abs=1e-12)
+                checked += 1
+            else:
+                assert length <= rob.leg_rest_length + 1e-12
+                if leg["state"] != 0 and length < rob.leg_rest_length:
+                    # a stance leg's length derived from the hip height: toe on the ground
+                    assert ty == pytest.approx(0.0, abs=1e-12)
+                    checked += 1
+        # hips are the torso's hip spacing apart
+        hb, hf = pose["legs"]["back"]["hip"], pose["legs"]["front"]["hip"]
+        assert math.hypot(hf[0] - hb[0], hf[1] - hb[1]) == pytest.approx(rob.hip_spacing)
+    assert checked > 0
 
 
 def test_fig9_has_leg_state_square_wave(exp_logs, sims):
