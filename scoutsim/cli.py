@@ -306,8 +306,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "a level-torso apex of the given speed, height and pitch rate; solves for "
                     "the touchdown angles (from the world vertical) and prints them, the "
                     "period, the multipliers of the apex return map and the map residual. "
-                    "Without --passive: the controlled robot's converged cycle at back-leg "
-                    "lift-off and multipliers estimated from its transient.")
+                    "Without --passive: the controlled robot's periodic orbit (Newton on the "
+                    "stride map sampled where the controller detects back-leg lift-off, "
+                    "started from a converged run), its touchdown angles from the world "
+                    "vertical, period, Floquet multipliers and residual.")
     orbit.add_argument("--passive", action="store_true",
                        help="the passive conservative model (massless legs, SPEC.md 2)")
     orbit.add_argument("--speed", type=_positive_float, default=1.3, metavar="V",
@@ -322,7 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
                        metavar="MU", help=f"controlled: toe friction (default: "
                        f"{SCOUT_FLOOR_FRICTION})")
     orbit.add_argument("--duration", type=_positive_float, default=12.0, metavar="S",
-                       help="controlled: simulated time to converge [s] (default: 12)")
+                       help="controlled: simulated time to the Newton start [s] (default: 12)")
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     orbit.set_defaults(func=_cmd_orbit)
 
@@ -352,6 +354,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="Dask distributed scheduler address (e.g. tcp://host:8786)")
     sw.add_argument("--no-resume", action="store_true",
                     help="recompute every point even if DIR/points.jsonl has it")
+    sw.add_argument("--orbit", action="store_true",
+                    help="also find each bounding point's periodic orbit (Newton) and record "
+                         "its period and Floquet stability (a few s per point)")
     sw.set_defaults(func=_cmd_sweep)
     return parser
 
@@ -402,7 +407,7 @@ def _cmd_sweep(args) -> int:
     res = sweep(points, model=args.model, duration=args.duration, robot=robot,
                 controller=controller, friction_coefficient=args.friction, out=out,
                 workers=args.workers, scheduler=args.scheduler, progress=progress,
-                resume=not args.no_resume)
+                resume=not args.no_resume, orbit=args.orbit)
     wall = time.perf_counter() - wall0
     outcomes = {}
     for r in res.rows:
@@ -417,6 +422,13 @@ def _cmd_sweep(args) -> int:
         res.plot_map(res.parameters[0], res.parameters[1], "average_speed_m_s",
                      path=out / "map.png")
         print(f"  map of the average speed: {out}/map.png")
+        if args.orbit:
+            res.plot_map(res.parameters[0], res.parameters[1], "orbit_spectral_radius",
+                         path=out / "stability.png")
+            print(f"  map of the orbit's spectral radius (< 1: stable): {out}/stability.png")
+    if args.orbit:
+        stable = sum(bool(r.get("orbit_stable")) for r in res.rows)
+        print(f"  periodic orbits found and stable: {stable} of {steady} bounding points")
     errors = [r for r in res.rows if r["outcome"] == "error"]
     for r in errors[:3]:
         print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} failed: "
@@ -855,7 +867,7 @@ def _cmd_animate(args) -> int:
 # scoutsim orbit
 # -----------------------------------------------------------------------------------------
 def _cmd_orbit(args) -> int:
-    from .analysis.orbits import MapError, controlled_cycle, passive_bounding_orbit
+    from .analysis.orbits import MapError, controlled_fixed_point, passive_bounding_orbit
     if args.passive:
         try:
             orb = passive_bounding_orbit(args.speed, args.apex_height,
@@ -878,24 +890,33 @@ def _cmd_orbit(args) -> int:
         print(f"  residual max|P(z)-z|          {d['residual']:.2e}")
         return 0
     try:
-        cyc = controlled_cycle(model=args.model, friction_coefficient=args.friction,
-                               duration=args.duration)
+        orb = controlled_fixed_point(model=args.model, friction_coefficient=args.friction,
+                                     settle_duration=args.duration)
     except MapError as exc:
         print(f"scoutsim orbit: {exc}", file=sys.stderr)
         return 1
-    d = cyc.to_dict()
+    d = orb.to_dict()
     if args.json:
         print(_dumps(d))
         return 0
-    print(f"scoutsim orbit: model {args.model}, Table I controller, mu = {args.friction:g}, "
-          f"{args.duration:g} s; section: back-leg lift-off")
-    for name, v, sp in zip(d["state_names"], d["state"], d["stride_to_stride_spread"]):
-        print(f"  {name:<7} {v: .6f}  (stride-to-stride spread {sp:.1e})")
-    print(f"  period  {d['period_s']:.6f} s over the last {d['n_tail']} of {d['n_strides']} "
-          "strides")
-    print("  multipliers (estimated) " + ", ".join(
-        f"{m.real:.3f}{m.imag:+.3f}j" for m in cyc.multipliers))
-    print(f"  note: {d['method']}")
+    print(f"scoutsim orbit: model {args.model}, Table I controller at 1 kHz, mu = "
+          f"{args.friction:g}; section: the sample at which the controller detects back-leg "
+          "lift-off; Newton on the sampled stride map")
+    print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "
+          f"{d['touchdown_angle_front_deg']:.4f} deg (from the world vertical, on the orbit)")
+    print(f"  period                        {d['period_s']:.6f} s "
+          f"({round(d['period_s'] * 1000)} control periods), mean speed "
+          f"{d['mean_speed_m_s']:.4f} m/s")
+    for name, v in d["state"].items():
+        print(f"    {name:<18} {v: .9f}")
+    import numpy as np
+    mags = np.abs(orb.multipliers)
+    big = np.argsort(-mags)[:6]
+    print("  largest multipliers           " + ", ".join(
+        f"{orb.multipliers[i].real:.4f}{orb.multipliers[i].imag:+.4f}j" for i in big)
+          + f"  (spectral radius {mags.max():.4f}: {'stable' if orb.stable else 'unstable'})")
+    print(f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
+          "Newton iterations")
     return 0
 
 

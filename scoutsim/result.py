@@ -150,6 +150,25 @@ class SimulationResult:
         """Plant contact mode per sample: 0 flight, 1 stick, 2 slide, 3 strut."""
         return self.modes[:, 2 + _leg(leg)].astype(int)
 
+    def hybrid_state(self, k: int):
+        """The complete hybrid state at recorded sample ``k`` (continuous state, plant and
+        controller modes, toe anchors) as a :class:`~scoutsim.simulation.HybridState`:
+        ``simulate(..., initial_state=result.hybrid_state(k))`` continues this run from
+        t[k] (its time restarts at 0)."""
+        from .simulation import HybridState
+        n = len(self.t)
+        if not (isinstance(k, (int, np.integer)) and -n <= k < n):
+            raise ValueError(f"k = {k!r} is not allowed: must be an integer sample index in "
+                             f"[{-n}, {n - 1}]")
+        m = self.modes[k].astype(int)
+        aux = self.aux[k]
+        return HybridState(
+            state=self.state[k], leg_states=(m[0], m[1]), contact_modes=(m[2], m[3]),
+            motor_modes=(m[4], m[5]),
+            slide_directions=tuple(1 if aux[leg * L.NAUX_LEG + L.A_SLIP_V] >= 0.0 else -1
+                                   for leg in range(2)),
+            toe_anchors=tuple(float(aux[leg * L.NAUX_LEG + L.A_TOE_X]) for leg in range(2)))
+
     # -- events ----------------------------------------------------------------------
     def event_times(self, kind: str, leg=None) -> np.ndarray:
         """Times [s] of events of a kind ("touchdown", "liftoff", ...), optionally of one leg."""

@@ -92,6 +92,57 @@ class InitialState:
         return dataclasses.replace(self, **changes)
 
 
+@dataclass(frozen=True)
+class HybridState:
+    """The complete hybrid state at a control sample: where a run can be resumed exactly.
+
+    Unlike :class:`InitialState` (a physical start in double flight, the rest derived), it
+    holds everything the simulator carries from one sample to the next, so Model II gear
+    angles, legs in stance and the controller's leg states can be set (used by
+    :func:`scoutsim.analysis.orbits.controlled_fixed_point`). Take one from a run with
+    :meth:`SimulationResult.hybrid_state`; a run from it starts at t = 0.
+
+    state : (16,) [x, y, theta, phi_b, phi_f, alpha_b, alpha_f, their rates, l_b, l_f]
+        (SI; layout.py; dependent coordinates are projected at the start).
+    leg_states : controller leg states (back, front): 0 flight, 1 stance-retraction,
+        2 stance-brake.
+    contact_modes : plant toe modes (back, front): 0 flight, 1 stick, 2 slide, 3 strut.
+    motor_modes : Model II motor-joint modes (back, front): 0 stuck, +1 / -1 slipping in
+        that direction.
+    slide_directions : +1 / -1, direction of a sliding toe (back, front).
+    toe_anchors : world x [m] of pinned (stick / strut) toes (back, front).
+    """
+
+    state: tuple
+    leg_states: tuple = (0, 0)
+    contact_modes: tuple = (0, 0)
+    motor_modes: tuple = (0, 0)
+    slide_directions: tuple = (1, 1)
+    toe_anchors: tuple = (0.0, 0.0)
+
+    def __post_init__(self):
+        s = np.asarray(self.state, dtype=float)
+        if s.shape != (L.NS,) or not np.all(np.isfinite(s)):
+            raise ValueError(f"HybridState.state must be {L.NS} finite numbers, got shape "
+                             f"{s.shape}")
+        object.__setattr__(self, "state", tuple(float(v) for v in s))
+        allowed = {"leg_states": (L.LS_FLIGHT, L.LS_RETRACTION, L.LS_BRAKE),
+                   "contact_modes": (L.FLIGHT, L.STICK, L.SLIDE, L.STRUT),
+                   "motor_modes": (L.STUCK, L.SLIP_POS, L.SLIP_NEG),
+                   "slide_directions": (1, -1)}
+        for name, ok in allowed.items():
+            v = tuple(int(x) for x in getattr(self, name))
+            if len(v) != 2 or any(x not in ok for x in v):
+                raise ValueError(f"HybridState.{name} = {getattr(self, name)!r} is not "
+                                 f"allowed: two values from {sorted(ok)}")
+            object.__setattr__(self, name, v)
+        a = tuple(float(x) for x in self.toe_anchors)
+        if len(a) != 2 or not all(math.isfinite(x) for x in a):
+            raise ValueError(f"HybridState.toe_anchors = {self.toe_anchors!r} is not allowed: "
+                             "two finite positions [m]")
+        object.__setattr__(self, "toe_anchors", a)
+
+
 def _state_vector(init: InitialState, robot: RobotParameters,
                   ctrl: ControllerParameters | None, passive_angles, passive_world) -> np.ndarray:
     s = np.zeros(L.NS)
@@ -162,8 +213,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         bounding law; any other object with ``command(t, sensors)`` runs through Python
         (see :class:`~scoutsim.control.bounding.BoundingController` for the interface).
         ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
-    initial_state : InitialState, optional
-        Start state (default: :func:`default_initial_state`).
+    initial_state : InitialState or HybridState, optional
+        Start state (default: :func:`default_initial_state`); a :class:`HybridState`
+        (e.g. ``result.hybrid_state(k)``) resumes a run exactly at one of its samples.
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}
@@ -227,18 +279,33 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     C = controller_array(cparams if user_ctrl is None else None)
     dt = cparams.control_period if cparams is not None else 1e-3
     init = initial_state or default_initial_state(model)
-    s = _state_vector(init, robot, cparams if model != "passive" else None,
-                      passive_touchdown_angles, passive_touchdown_world)
+    resume = isinstance(init, HybridState)
+    if resume:
+        s = np.array(init.state)
+    elif isinstance(init, InitialState):
+        s = _state_vector(init, robot, cparams if model != "passive" else None,
+                          passive_touchdown_angles, passive_touchdown_world)
+    else:
+        raise TypeError("initial_state must be an InitialState or a HybridState, not "
+                        f"{type(init).__name__}")
 
     n_total = int(round(duration / dt)) + 1
     k_last = n_total - 1
     mi = np.zeros(L.NMI, dtype=np.int64)
     mf = np.zeros(L.NMF)
-    for leg in range(2):
-        w = s[L.NQ + 5 + leg]
-        mi[L.MI_MOTOR_B + leg] = L.STUCK if w == 0.0 else (L.SLIP_POS if w > 0 else L.SLIP_NEG)
-        mi[L.MI_SLIDE_DIR_B + leg] = 1
     ls = np.zeros(2, dtype=np.int64)
+    for leg in range(2):
+        if resume:
+            mi[L.MI_CONTACT_B + leg] = init.contact_modes[leg]
+            mi[L.MI_MOTOR_B + leg] = init.motor_modes[leg]
+            mi[L.MI_SLIDE_DIR_B + leg] = init.slide_directions[leg]
+            mf[L.MF_ANCHOR_B + leg] = init.toe_anchors[leg]
+            ls[leg] = init.leg_states[leg]
+        else:
+            w = s[L.NQ + 5 + leg]
+            mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 else
+                                      (L.SLIP_POS if w > 0 else L.SLIP_NEG))
+            mi[L.MI_SLIDE_DIR_B + leg] = 1
     cmd = np.zeros(2)
     hwork = np.array([integ.initial_step])
     out_t = np.zeros(n_total + 1)
@@ -303,7 +370,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "controller": (asdict(cparams) if cparams is not None else None),
         "controller_kind": ("builtin" if user_ctrl is None and model != "passive" else
                             (type(user_ctrl).__name__ if user_ctrl is not None else "none")),
-        "initial_state": asdict(init),
+        "initial_state": asdict(init) | ({"kind": "hybrid_state"} if resume else {}),
         "integrator": asdict(integ),
         "duration_s": duration,
         "friction_coefficient": (None if math.isinf(friction_coefficient) else friction_coefficient),

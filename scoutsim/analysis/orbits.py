@@ -24,13 +24,21 @@ prescribed touchdown angles from the world vertical, ``model="passive"``):
 * **Floquet multipliers**: eigenvalues of the central-difference Jacobian ``dP/dz`` at the
   fixed point. Energy conservation makes one of them exactly 1.
 
-Controlled robot (:func:`controlled_cycle`): the Table I law samples and holds at 1 kHz,
-so its return map at back-leg lift-off is piecewise smooth (the sample phase jumps) and the
-state at the section is not restartable through :class:`~scoutsim.simulation.InitialState`
-(the Model II gear angle and the controller state are not settable). The cycle is found by
-converging simulation and its multipliers are estimated from the converging strides by a
-least-squares fit of the linearised stride-to-stride map (finite differences along the
-transient), which is reported as such.
+Controlled robot (:func:`controlled_fixed_point`): the Table I law samples and holds at
+1 kHz, so the closed loop is a sampled-data system. **Section**: the control sample at which
+the controller detects back-leg lift-off; the section state is the complete hybrid state
+there (:class:`~scoutsim.simulation.HybridState`: continuous state without x, pinned toes'
+anchors relative to x, and the discrete plant/controller modes, which must recur). The
+stride map :func:`controlled_stride_map` is smooth as long as every controller transition
+stays on the same sample, so its fixed point is a periodic orbit lasting a whole number of
+control periods; Newton's method (forward-difference Jacobian, least-squares steps because
+pinned legs and stuck motor joints make some coordinates dependent) converges on it to a
+residual ~1e-12, and the eigenvalues of the Jacobian are its Floquet multipliers. On the
+Scout II defaults (Model II, mu 0.8) the orbit lasts 231 ms with spectral radius 0.888
+(a real multiplier -0.888: successive strides alternate about the orbit), and a long
+simulation from the default start settles onto it at that rate (tests/analysis).
+:func:`controlled_cycle` is the simulation-only estimate (mean of converged strides,
+multipliers fitted to the transient), kept as a cross-check.
 
 Units: SI, angles in rad (degrees only in the ``*_deg`` conveniences).
 """
@@ -44,9 +52,10 @@ import numpy as np
 
 from ..model import layout as L
 from ..parameters import RobotParameters
-from ..simulation import InitialState, IntegratorSettings, simulate
+from ..simulation import HybridState, InitialState, IntegratorSettings, simulate
 
-__all__ = ["MapError", "ApexMap", "PassiveOrbit", "ControlledCycle", "passive_robot",
+__all__ = ["MapError", "ApexMap", "PassiveOrbit", "ControlledCycle", "ControlledOrbit",
+           "controlled_fixed_point", "controlled_stride_map", "section_state", "CONTROLLED_Z_NAMES", "passive_robot",
            "passive_apex_map", "fd_jacobian", "passive_bounding_orbit",
            "continue_passive_family", "floquet_multipliers", "controlled_cycle",
            "APEX_STATE_NAMES", "LIFTOFF_STATE_NAMES"]
@@ -552,11 +561,8 @@ def controlled_cycle(*, model: str = "II", friction_coefficient: float = 0.8,
                      n_tail: int = 10) -> ControlledCycle:
     """Converged bounding cycle of the controlled robot (default Model II on mu = 0.8).
 
-    The Table I controller samples and holds at 1 kHz, so the stride map is piecewise
-    smooth in the state (the lift-off time's position in the sample grid enters) and the
-    Model II gear state and the controller's leg states cannot be set through
-    :class:`InitialState`: Newton refinement of a fixed point is not feasible. The cycle is
-    therefore found by converging simulation (mean of the last ``n_tail`` back-leg lift-off
+    Simulation-only estimate (no restarts; :func:`controlled_fixed_point` is the Newton
+    solution on the sampled stride map). The cycle is found by converging simulation (mean of the last ``n_tail`` back-leg lift-off
     states) and its multipliers are estimated by finite differences along the transient: a
     least-squares fit ``dz_{k+1} = A dz_k`` of the deviations from the converged state of
     the strides whose deviation is above 20x the converged jitter.
@@ -581,10 +587,201 @@ def controlled_cycle(*, model: str = "II", friction_coefficient: float = 0.8,
         A, *_ = np.linalg.lstsq(X, Y, rcond=None)
         mult = floquet_multipliers(A.T)
         method = (f"least-squares linear stride map fitted to {len(use)} transient strides "
-                  "(finite differences along the converging transient; the 1 kHz sampled "
-                  "controller makes the map piecewise smooth, so no Newton refinement)")
+                  "(finite differences along the converging transient; see "
+                  "controlled_fixed_point for the Newton solution)")
     else:
         mult = np.full(Z.shape[1], np.nan + 0j)
         method = "too few transient strides above the jitter to fit the stride map"
     return ControlledCycle(z=z, period=period, spread=spread, multipliers=mult,
                            n_strides=n, n_tail=n_tail, outcome=r.outcome, method=method)
+
+
+# -----------------------------------------------------------------------------------------
+# controlled robot: fixed point of the sampled stride map (Newton)
+# -----------------------------------------------------------------------------------------
+#: names of the section coordinates z of the controlled stride map (SI)
+CONTROLLED_Z_NAMES = (
+    "y", "theta", "phi_back", "phi_front", "alpha_back", "alpha_front",
+    "dx", "dy", "dtheta", "dphi_back", "dphi_front", "dalpha_back", "dalpha_front",
+    "leg_length_back", "leg_length_front", "anchor_back_rel", "anchor_front_rel")
+
+
+def _z_of(hs) -> np.ndarray:
+    """Section coordinates of a HybridState: the state without x, and the pinned toes'
+    anchors relative to x (0 for a leg not pinned)."""
+    s = np.asarray(hs.state)
+    rel = [(hs.toe_anchors[leg] - s[L.IX]) if hs.contact_modes[leg] in (L.STICK, L.STRUT)
+           else 0.0 for leg in range(2)]
+    return np.concatenate([s[1:], rel])
+
+
+def _hs_of(z, discrete):
+    s = np.concatenate([[0.0], z[:L.NS - 1]])
+    return HybridState(state=s, toe_anchors=(float(z[-2]), float(z[-1])), **discrete)
+
+
+def _discrete(hs) -> dict:
+    return dict(leg_states=hs.leg_states, contact_modes=hs.contact_modes,
+                motor_modes=hs.motor_modes, slide_directions=hs.slide_directions)
+
+
+def section_state(result):
+    """The HybridState at the second-to-last sample at which the controller of ``result``
+    (a :class:`~scoutsim.SimulationResult`) detected back-leg lift-off: a Newton start for
+    :func:`controlled_fixed_point`. MapError if the run has fewer than 3 such samples or
+    did not complete."""
+    dt = float(result.provenance["control_period_s"])
+    te = result.event_times("controller_liftoff", "back")
+    if result.outcome != "completed" or len(te) < 3:
+        raise MapError(f"no steady bounding to start from (outcome {result.outcome}, "
+                       f"{len(te)} back-leg lift-offs in {result.t[-1]:.3g} s)")
+    return result.hybrid_state(int(round(te[-2] / dt)))
+
+
+def controlled_stride_map(hs, *, model: str = "II", friction_coefficient: float = 0.8,
+                          robot=None, controller=None,
+                          integrator: IntegratorSettings | None = None,
+                          max_period: float = 0.6):
+    """One stride of the sampled closed loop from the HybridState ``hs`` taken at a control
+    sample: run until the controller next detects a back-leg lift-off (a sample, so the
+    stride lasts a whole number of control periods) and return
+    ``(z_start, z_end, hs_end, period_s)`` with z the section coordinates
+    (:data:`CONTROLLED_Z_NAMES`); z_start is ``hs`` after the projection of its dependent
+    coordinates. MapError if the robot falls or no lift-off is detected."""
+    r = simulate(robot, controller, hs, max_period, model=model, integrator=integrator,
+                 friction_coefficient=friction_coefficient)
+    dt = float(r.provenance["control_period_s"])
+    te = r.event_times("controller_liftoff", "back")
+    te = te[te > 0.5 * dt]
+    if len(te) == 0:
+        raise MapError(f"no back-leg lift-off detected within {max_period} s (outcome "
+                       f"{r.outcome} at t = {r.t_end:.3f} s)")
+    k1 = int(round(te[0] / dt))
+    if k1 >= len(r.t):
+        raise MapError(f"the run ended (outcome {r.outcome}) at the lift-off sample")
+    h1 = r.hybrid_state(k1)
+    return _z_of(r.hybrid_state(0)), _z_of(h1), h1, float(r.t[k1])
+
+
+@dataclass
+class ControlledOrbit:
+    """Fixed point of the controlled stride map (section: the control sample at which the
+    controller detects back-leg lift-off)."""
+
+    z: np.ndarray                 # section coordinates (CONTROLLED_Z_NAMES), SI
+    state: object                 # the HybridState at the section
+    period: float                 # [s], a whole number of control periods
+    residual: float               # max |P(z) - z| (SI units of each coordinate)
+    multipliers: np.ndarray       # eigenvalues of dP/dz (complex)
+    jacobian: np.ndarray = field(repr=False)
+    iterations: int = 0
+    history: list = field(default_factory=list)   # residual per Newton iteration
+    #: leg angle from the world vertical (theta + phi) at each leg's touchdown on the orbit
+    #: [rad] (back, front; linear interpolation between the 1 kHz samples)
+    touchdown_angles_world: tuple = (math.nan, math.nan)
+    mean_speed: float = math.nan    # forward travel over the period / period [m/s]
+
+    @property
+    def stable(self) -> bool:
+        return bool(np.max(np.abs(self.multipliers)) < 1.0)
+
+    def to_dict(self) -> dict:
+        return {
+            "section": "controller detects back-leg lift-off (control sample)",
+            "touchdown_angle_back_deg": math.degrees(self.touchdown_angles_world[0]),
+            "touchdown_angle_front_deg": math.degrees(self.touchdown_angles_world[1]),
+            "state": {n: float(v) for n, v in zip(CONTROLLED_Z_NAMES, self.z)},
+            "period_s": self.period,
+            "mean_speed_m_s": self.mean_speed,
+            "residual": self.residual,
+            "eigenvalues": [[float(m.real), float(m.imag)] for m in self.multipliers],
+            "spectral_radius": float(np.max(np.abs(self.multipliers))),
+            "stable": self.stable,
+            "iterations": self.iterations,
+            "residual_history": [float(v) for v in self.history],
+        }
+
+
+def controlled_fixed_point(start=None, *, model: str = "II",
+                           friction_coefficient: float = 0.8, robot=None, controller=None,
+                           integrator: IntegratorSettings | None = None,
+                           settle_duration: float = 12.0, tol: float = 1e-10,
+                           max_iter: int = 10, jacobian_step: float = 1e-6) -> ControlledOrbit:
+    """Periodic orbit of the controlled robot (Table I law at 1 kHz) by Newton's method on
+    the sampled stride map :func:`controlled_stride_map`, and its Floquet multipliers.
+
+    The closed loop is a sampled-data system: between samples the plant flows, at samples
+    the controller switches. On the section "the sample at which the controller detects
+    back-leg lift-off" the stride map is smooth as long as every controller transition
+    stays on the same sample, so a fixed point is a periodic orbit of a whole number of
+    control periods, and Newton converges on it quadratically (within a sample-phase
+    cell). ``start``: a HybridState at such a sample (default: the last one of a
+    ``settle_duration`` run from the default start). Jacobian: forward differences with
+    steps ``jacobian_step`` max(1, |z_j|); Newton steps by least squares (the dependent
+    coordinates of pinned legs and stuck motor joints make ``dP/dz - I`` rank deficient).
+    Default integrator: DOPRI5 at rtol 1e-11 / atol 1e-12, so the map is accurate well
+    below ``tol``. MapError if the discrete modes at the section change or no fixed point
+    is found within ``max_iter`` iterations."""
+    integ = integrator or IntegratorSettings(rtol=1e-11, atol=1e-12)
+    kw = dict(model=model, friction_coefficient=friction_coefficient, robot=robot,
+              controller=controller, integrator=integ)
+    if start is None:
+        start = simulate(robot, controller, None, settle_duration, model=model,
+                         friction_coefficient=friction_coefficient)
+    if not isinstance(start, HybridState):
+        start = section_state(start)
+    disc = _discrete(start)
+    z0, z1, h1, T = controlled_stride_map(start, **kw)
+    z = z0
+    hist = []
+    J = None
+    it = 0
+    for it in range(max_iter + 1):
+        F = z1 - z
+        res = float(np.max(np.abs(F)))
+        hist.append(res)
+        if _discrete(h1) != disc:
+            raise MapError(f"the discrete state at the section changed ({disc} -> "
+                           f"{_discrete(h1)}): not a period-1 orbit of this section")
+        if res < tol or it == max_iter:
+            break
+        J = np.empty((z.size, z.size))
+        for j in range(z.size):
+            e = jacobian_step * max(1.0, abs(z[j]))
+            zp = z.copy()
+            zp[j] += e
+            _, zj1, _, Tj = controlled_stride_map(_hs_of(zp, disc), **kw)
+            if Tj != T:
+                raise MapError(f"the stride length changed from {T} s to {Tj} s under a "
+                               f"perturbation of {CONTROLLED_Z_NAMES[j]}: the start lies on "
+                               "a sample-phase boundary")
+            J[:, j] = (zj1 - z1) / e
+        dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
+        z0, z1, h1, T = controlled_stride_map(_hs_of(z + dz, disc), **kw)
+        z = z0
+    if hist[-1] >= tol:
+        raise MapError(f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
+                       f"iterations (history {['%.1e' % v for v in hist]})")
+    if J is None or it > 0:
+        J = np.empty((z.size, z.size))
+        for j in range(z.size):
+            e = jacobian_step * max(1.0, abs(z[j]))
+            zp = z.copy()
+            zp[j] += e
+            J[:, j] = (controlled_stride_map(_hs_of(zp, disc), **kw)[1] - z1) / e
+    hs = _hs_of(z, disc)
+    r = simulate(robot, controller, hs, T, model=model, integrator=integ,
+                 friction_coefficient=friction_coefficient)
+    td = []
+    for leg in ("back", "front"):
+        te = r.event_times("touchdown", leg)
+        if len(te) == 0:
+            td.append(math.nan)
+            continue
+        g = r.pitch + r.leg_angle(leg)
+        td.append(float(np.interp(te[0], r.t, g)))
+    return ControlledOrbit(z=z, state=hs, period=T, residual=hist[-1],
+                           multipliers=floquet_multipliers(J), jacobian=J,
+                           iterations=len(hist) - 1, history=hist,
+                           touchdown_angles_world=tuple(td),
+                           mean_speed=float((r.x[-1] - r.x[0]) / (r.t[-1] - r.t[0])))

@@ -4,7 +4,9 @@ Each point sets some fields of :class:`~scoutsim.parameters.RobotParameters` and
 :class:`~scoutsim.parameters.ControllerParameters` (names ``robot.<field>`` and
 ``controller.<field>``, SI units as in those classes), runs :func:`scoutsim.simulate`, and
 records the outcome, the whole-run average speed, the steady-state gait metrics and the
-cycle's regularity (steady bounding, stride-period coefficient of variation). Points run in parallel on all local
+cycle's regularity (steady bounding, stride-period coefficient of variation) and, with
+``orbit=True``, the periodic orbit's period and Floquet stability (Newton on the sampled
+stride map from the run's last strides). Points run in parallel on all local
 cores by default or on a Dask cluster (``scheduler``); each finished point is appended at
 once to a checkpoint file in the output directory, so an interrupted sweep resumes
 without recomputing what it finished, and a failing point is recorded with its error
@@ -30,6 +32,7 @@ SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", 
                    "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
                    "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
                    "steady_bounding", "max_friction_ratio", "error")
+
 _SECTIONS = {"robot": RobotParameters, "controller": ControllerParameters}
 
 
@@ -77,6 +80,34 @@ def point_key(point: dict, settings: dict) -> str:
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
+#: columns added by ``orbit=True``: the controlled orbit at the point (Newton from the run's
+#: last strides, :func:`scoutsim.analysis.orbits.controlled_fixed_point`)
+ORBIT_COLUMNS = ("orbit_period_s", "orbit_spectral_radius", "orbit_stable", "orbit_residual",
+                 "orbit_status")
+#: integrator and tolerance of the per-point orbit (looser than the single-orbit default,
+#: rtol 1e-11 / 1e-10: a sweep wants stability, not the 12th digit)
+ORBIT_RTOL = 1e-9
+ORBIT_TOL = 1e-7
+
+
+def _orbit_columns(result, robot, ctrl, task) -> dict:
+    from ..simulation import IntegratorSettings
+    from .orbits import MapError, controlled_fixed_point
+    out = {k: None for k in ORBIT_COLUMNS}
+    try:
+        o = controlled_fixed_point(result, model=task["model"],
+                                   friction_coefficient=task["friction_coefficient"],
+                                   robot=robot, controller=ctrl, tol=ORBIT_TOL, max_iter=6,
+                                   integrator=IntegratorSettings(rtol=ORBIT_RTOL,
+                                                                 atol=ORBIT_RTOL / 10))
+        out.update(orbit_period_s=o.period, orbit_residual=o.residual,
+                   orbit_spectral_radius=float(np.max(np.abs(o.multipliers))),
+                   orbit_stable=o.stable, orbit_status="ok")
+    except MapError as exc:
+        out["orbit_status"] = f"no orbit: {exc}"
+    return out
+
+
 def sweep_task(task: dict) -> dict:
     """Run one point (top level: picklable for worker processes and Dask)."""
     from .. import simulation
@@ -98,6 +129,12 @@ def sweep_task(task: dict) -> dict:
         # whole-run average speed: defined even for runs too short for steady strides
         row["average_speed_m_s"] = float((r.x[-1] - r.x[0]) / r.t[-1]) if r.t[-1] > 0 else None
         row["steady_bounding"] = bool(s.get("steady_bounding"))
+        if task.get("orbit"):
+            if row["steady_bounding"]:
+                row.update(_orbit_columns(r, robot, ctrl, task))
+            else:
+                row.update({k: None for k in ORBIT_COLUMNS},
+                           orbit_status="no orbit: not steady bounding")
         row["error"] = ""
     except Exception as exc:  # noqa: BLE001 - recorded per point, the sweep goes on
         row.update({k: None for k in SUMMARY_COLUMNS})
@@ -120,6 +157,8 @@ class SweepResult:
 
     def columns(self) -> dict:
         names = list(self.parameters) + [c for c in SUMMARY_COLUMNS]
+        if self.settings.get("orbit"):
+            names += list(ORBIT_COLUMNS)
         return {n: [r.get(n) for r in self.rows] for n in names}
 
     def to_csv(self, path):
@@ -179,7 +218,7 @@ class SweepResult:
 def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,
           controller=None, initial_state=None, friction_coefficient: float = 0.8,
           out=None, workers: int | None = None, scheduler=None, progress: bool = False,
-          resume: bool = True) -> SweepResult:
+          resume: bool = True, orbit: bool = False) -> SweepResult:
     """Run every point (see module docstring).
 
     Parameters
@@ -191,6 +230,9 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
     out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv``.
     workers : local processes (default all cores). scheduler : Dask address or Client.
     resume : skip points already in ``out/points.jsonl`` with the same settings.
+    orbit : also find each steadily bounding point's periodic orbit by Newton from its run's
+        last strides and record its period, spectral radius, stability and residual
+        (:data:`ORBIT_COLUMNS`; a few seconds per point).
     """
     if not points:
         raise ValueError("points is empty: nothing to sweep")
@@ -204,7 +246,7 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
                 else friction_coefficient,
                 "robot": dataclasses.asdict(robot), "controller": dataclasses.asdict(controller),
                 "initial_state": None if initial_state is None
-                else dataclasses.asdict(initial_state)}
+                else dataclasses.asdict(initial_state), "orbit": bool(orbit)}
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
     ck = None
@@ -224,7 +266,7 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
     todo = [i for i, k in enumerate(keys) if k not in done]
     tasks = [{"point": points[i], "model": model, "duration": duration, "robot": robot,
               "controller": controller, "initial_state": initial_state,
-              "friction_coefficient": friction_coefficient} for i in todo]
+              "friction_coefficient": friction_coefficient, "orbit": orbit} for i in todo]
     fh = open(ck, "a") if ck is not None else None
 
     def on_result(j, row):

@@ -83,3 +83,83 @@ def test_controlled_cycle_converges():
     assert c.outcome == "completed"
     assert 0.15 < c.period < 0.4
     assert np.all(c.spread < 0.05)
+
+
+# -----------------------------------------------------------------------------------------
+# controlled robot: Newton on the sampled stride map
+# -----------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def controlled():
+    return O.controlled_fixed_point()
+
+
+@pytest.fixture(scope="module")
+def long_run():
+    return scoutsim.simulate(duration=20.0, model="II", friction_coefficient=0.8)
+
+
+def test_controlled_fixed_point_residual_below_1e9(controlled):
+    assert controlled.residual < 1e-9
+    # the map evaluated afresh at the reported orbit returns to it
+    z0, z1, h1, T = O.controlled_stride_map(controlled.state,
+                                            integrator=IntegratorSettings(rtol=1e-11,
+                                                                          atol=1e-12))
+    assert np.max(np.abs(z1 - z0)) < 1e-9
+    assert T == controlled.period
+    # a sampled-data orbit lasts a whole number of control periods
+    assert controlled.period * 1000 == pytest.approx(round(controlled.period * 1000), abs=1e-9)
+
+
+def test_controlled_orbit_is_where_the_simulation_converges(controlled, long_run):
+    """Independent of Newton: a long run from the default start settles onto the orbit
+    (stride length, section state), approaching it at the rate of the largest multiplier."""
+    r = long_run
+    dt = 1e-3
+    te = r.event_times("controller_liftoff", "back")
+    k = np.round(te / dt).astype(int)
+    assert np.all(np.round(np.diff(te[-20:]) / dt) * dt == pytest.approx(controlled.period))
+    dist = np.array([np.max(np.abs(O._z_of(r.hybrid_state(int(kk))) - controlled.z))
+                     for kk in k[-30:]])
+    assert dist[-1] < 1e-3
+    assert dist[-1] < 0.2 * dist[0]
+    # the plant's lift-off intervals approach the period alternately, with the ratio of the
+    # dominant multiplier
+    lam = controlled.multipliers[np.argmax(np.abs(controlled.multipliers))]
+    d = np.diff(r.event_times("liftoff", "back"))[-25:] - controlled.period
+    ratios = d[1:] / d[:-1]
+    assert abs(lam.imag) < 1e-9
+    assert np.median(ratios) == pytest.approx(lam.real, abs=0.05)
+
+
+def test_controlled_orbit_is_stable_and_converges_under_tighter_tolerance(controlled):
+    assert controlled.stable
+    tight = O.controlled_fixed_point(controlled.state,
+                                     integrator=IntegratorSettings(rtol=1e-12, atol=1e-13))
+    assert tight.period == controlled.period
+    assert np.max(np.abs(tight.z - controlled.z)) < 1e-8
+    assert np.max(np.abs(np.sort(np.abs(tight.multipliers)) -
+                         np.sort(np.abs(controlled.multipliers)))) < 1e-3
+
+
+def test_resumed_run_continues_the_original(long_run):
+    tight = IntegratorSettings(rtol=1e-10, atol=1e-11)
+    r = scoutsim.simulate(duration=2.5, model="II", friction_coefficient=0.8, integrator=tight)
+    k = 2000
+    r2 = scoutsim.simulate(initial_state=r.hybrid_state(k), duration=0.5, model="II",
+                           friction_coefficient=0.8, integrator=tight)
+    n = len(r2.t)
+    assert np.array_equal(r2.modes, r.modes[k:k + n])
+    assert np.max(np.abs(r2.state - r.state[k:k + n])) < 1e-8
+
+
+def test_cli_orbit_controlled_json(capsys):
+    assert main(["orbit", "--json", "--duration", "8"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    for key in ("touchdown_angle_back_deg", "touchdown_angle_front_deg", "period_s",
+                "eigenvalues", "residual"):
+        assert key in d
+    assert d["residual"] < 1e-9
+    # the touchdown angles from the world vertical are the commanded angles relative to
+    # the torso plus the pitch at touchdown: within the range of Table I +- the pitch range
+    assert 5.0 < d["touchdown_angle_back_deg"] < 35.0
+    assert 5.0 < d["touchdown_angle_front_deg"] < 35.0

@@ -79,3 +79,21 @@ def test_map_plot(tmp_path):
     ax = fig.axes[0]
     assert "[deg]" in ax.get_xlabel() and "[deg]" in ax.get_ylabel()
     assert (tmp_path / "map.png").stat().st_size > 1000
+
+
+def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
+    from scoutsim.analysis.sweep import ORBIT_COLUMNS
+    pts = [{"controller.touchdown_angle_front": math.radians(24.0),
+            "controller.touchdown_angle_back": math.radians(16.0)},
+           {"controller.touchdown_angle_front": math.radians(18.0),
+            "controller.touchdown_angle_back": math.radians(16.0)}]
+    res = sweep(pts, duration=6.0, workers=1, out=tmp_path, orbit=True)
+    bound, fell = res.rows
+    assert bound["steady_bounding"] and bound["orbit_status"] == "ok"
+    assert bound["orbit_residual"] < 1e-7
+    # the orbit's period is a whole number of control periods, near the run's strides
+    assert bound["orbit_period_s"] * 1000 == pytest.approx(round(bound["orbit_period_s"] * 1000))
+    assert bound["orbit_period_s"] == pytest.approx(1 / bound["stride_frequency_hz"], rel=0.02)
+    assert bound["orbit_stable"] == (bound["orbit_spectral_radius"] < 1)
+    assert not fell["steady_bounding"] and fell["orbit_status"].startswith("no orbit")
+    assert set(ORBIT_COLUMNS) <= set(res.columns())
