@@ -330,9 +330,12 @@ def _crossings(t, g):
     return np.array(td), np.array(lo), bool(inside[0])
 
 
-def stances_from_toe(t, g, t_end, merge_gap=0.003):
-    """Stance intervals from the toe's signed distance; contact bounces shorter than
-    ``merge_gap`` (soft-contact chatter at touchdown) are merged into the stance."""
+def stances_from_toe(t, g, t_end, merge_gap=0.010, min_stance=0.003):
+    """Stance intervals from the toe's signed distance. The MuJoCo toe (a small mass on the
+    leg spring) chatters on the ground at touchdown and in the end-of-stance slide, where
+    scoutsim's massless toe stays down: contact gaps shorter than ``merge_gap`` are merged
+    into the stance and isolated contacts shorter than ``min_stance`` dropped (a leg's flight
+    phase lasts about 90 ms, so neither can join or split real stances)."""
     td, lo, start_in = _crossings(t, g)
     ev = sorted([(x, 1) for x in td] + [(x, 0) for x in lo])
     out, start = [], (t[0] if start_in else None)
@@ -350,10 +353,11 @@ def stances_from_toe(t, g, t_end, merge_gap=0.003):
             merged[-1][1] = b
         else:
             merged.append([a, b])
+    merged = [m for m in merged if m[1] - m[0] >= min_stance or m[1] >= t_end]
     return np.array(merged, dtype=float).reshape(-1, 2)
 
 
-MERGE_GAP = 0.003
+MERGE_GAP = 0.010
 
 
 def mujoco_gait(run, transient_s=2.0, period_tolerance=0.05, merge_gap=None):
