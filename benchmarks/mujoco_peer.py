@@ -1,30 +1,20 @@
 """Peer comparison: the planar Scout II model built in MuJoCo, driven by the same Table I
 bounding controller at 1 kHz, against scoutsim in one run (issue 4, part 3).
 
-Usage:  python benchmarks/mujoco_peer.py [--model II|I] [--duration 10]
-                                          [--timesteps 1e-3,5e-4,2e-4,1e-4]
-                                          [--integrators implicitfast,RK4]
+Usage:  python benchmarks/mujoco_peer.py [--quick] [--duration 10] [--start cycle|default]
+            [--integrators RK4,implicitfast] [--timesteps 2e-4,1e-4,5e-5,2.5e-5]
+            [--legacy] [--stiction] [--noslip N] [--toe-mass KG] [--contact-timeconst S]
 
 MuJoCo is a benchmark-only tool, not a scoutsim dependency: ``pip install mujoco``.
 
-What is built (see benchmarks/README.md, "MuJoCo peer", for the departures):
-
-* torso: slide x, slide z, hinge pitch (axis -y, so nose-up is positive as in scoutsim);
-  mass 20.865 kg, pitch inertia 1.3 kg m^2; no collision geometry.
-* per virtual leg (back hip at -0.276 m, front at +0.276 m): leg body on a hip hinge
-  (2 x 0.97 kg, 2 x 0.01 kg m^2 about its COM 0.1615 m from the hip); a prismatic joint
-  along the leg carrying a 0.01 kg toe body (MuJoCo needs a mass there; scoutsim's toe is
-  massless) with spring 2 x 3520 N/m, damper 2 x 55 N s/m, rest length 0.323 m and a
-  joint limit at the rest length (the mechanical stop); a sphere toe on a plane,
-  Coulomb friction 0.8 (elliptic cone).
-* Model II: a driven-gear body on its own hip hinge (angle alpha relative to the torso),
-  body inertia 2 J_2, joint armature 2 N^2 J_1 (reflected drive-gear/motor inertia; total
-  2 x 0.0375 kg m^2), motor-joint viscous damping 2 N^2 b_j, and the belt as a fixed tendon
-  alpha - phi with stiffness 2 x 401.07 N m/rad and damping 2 x 229.18 N m s/rad. The
-  motor torque acts on alpha. Model I: the motor torque acts on phi directly.
-* actuator: the controller's torque per physical leg goes through scoutsim's actuator
-  limits (current limit 12 A and the torque-speed line of the 36 V supply, motor speed
-  N x hip rate), computed in Python at each 1 kHz control sample, times 2 legs.
+The MuJoCo model (``MjOptions``; departures and the lever study in benchmarks/README.md):
+torso slide x / slide z / hinge pitch; per virtual leg a hip hinge with the leg body, a
+prismatic joint carrying the leg spring/damper and a 0.01 kg toe (scoutsim: massless) with
+a joint limit at l0, a 0.1 mm sphere toe on a plane (near-hard contact: solimp 0.9999,
+solref 2 ms, elliptic cone, mu 0.8); Model II: a gear hinge alpha with scoutsim's exact
+gear-train mass-matrix block, the belt as a fixed tendon alpha - phi, and MuJoCo's
+``dcmotor`` reproducing scoutsim's current limit and torque-speed line at every step.
+Both simulators start from the same state (``CYCLE_START`` by default) and controller.
 """
 
 from __future__ import annotations
