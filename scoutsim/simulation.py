@@ -20,6 +20,7 @@ import numpy as np
 from . import __version__
 from .control.bounding import BoundingController, controller_array
 from .model import layout as L
+from .model.dynamics import NSTIFF
 from .model.packing import robot_array
 from .numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
 from .parameters import (ControllerParameters, RobotParameters, validate_parameters,
@@ -30,38 +31,65 @@ Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
 _METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
 
 
+#: default (rtol, atol) of each method when the settings leave them open
+DEFAULT_TOLERANCES = {"dopri5": (1e-8, 1e-9), "ark3": (1e-5, 1e-6), "ark4": (1e-6, 1e-7)}
+#: "auto" uses ARK3 for Model II only down to this rtol (a 3rd-order method is inefficient
+#: at tighter tolerances, where the 5th-order DOPRI5 takes over)
+AUTO_ARK_MIN_RTOL = 1e-7
+
+
 @dataclass(frozen=True)
 class IntegratorSettings:
-    """Error control of the reference integrator (Dormand-Prince 5(4) with located events).
+    """Integrator and error control (adaptive steps with located events in every method).
 
+    method : "auto" (default), "dopri5", "ark3" or "ark4".
+        "dopri5": explicit Dormand-Prince 5(4), the reference (default rtol 1e-8 /
+        atol 1e-9; the paper's Working Model runs used an adaptive Kutta-Merson integrator
+        at 1e-10, and 1e-8 reproduces their gait metrics to better than 1e-4, see
+        tests/numerics). "ark3" / "ark4": additive Runge-Kutta 3(2) / 4(3) with the
+        Model II belt spring-dampers and motor damping implicit (scoutsim/numerics/ark.py),
+        for the stiff Model II. "auto": Model II with ``rtol`` unset or >= 1e-7 -> "ark3"
+        (default rtol 1e-5 / atol 1e-6: about 5x faster than the reference, 10 s gait
+        metrics within 1e-5 of the rtol 1e-10 reference in speed, frequency and duty
+        factors, tests/test_simulation.py); every other case -> "dopri5".
     rtol, atol : relative / absolute local error tolerance (SI units of each state
-        component). The paper's Working Model runs used an adaptive Kutta-Merson
-        integrator at 1e-10; scoutsim's default 1e-8 / 1e-9 reproduces its gait metrics to
-        better than 1e-4 (see tests/numerics).
+        component); None = the method's default (:data:`DEFAULT_TOLERANCES`).
     initial_step : first step guess [s].
-    method : "dopri5" (the reference: explicit Dormand-Prince 5(4)), or the experimental
-        additive Runge-Kutta methods "ark3" (3(2), 4 stages) and "ark4" (4(3), 6 stages)
-        with the belt spring-dampers and motor damping implicit
-        (scoutsim/numerics/ark.py). For Model II, "ark3" at rtol 1e-5 / atol 1e-6 runs
-        about 5x faster than the reference with gait metrics within 1e-5 of it (README).
+
+    :meth:`resolve` gives the concrete settings a run uses (recorded in its provenance).
     """
 
-    rtol: float = 1e-8
-    atol: float = 1e-9
+    rtol: float | None = None
+    atol: float | None = None
     initial_step: float = 1e-4
-    method: str = "dopri5"
+    method: str = "auto"
 
     def __post_init__(self):
-        if self.method not in _METHODS:
+        if self.method not in _METHODS and self.method != "auto":
             raise ValueError(f"integrator.method = {self.method!r} is not allowed: must be one "
-                             f"of {sorted(_METHODS)}")
+                             f"of {sorted(_METHODS) + ['auto']}")
         for name in ("rtol", "atol", "initial_step"):
             v = getattr(self, name)
+            if v is None and name != "initial_step":
+                continue
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"integrator.{name} = {v!r} is not allowed: must be a "
                                  "finite number > 0")
-        if self.rtol < 1e-14:
+        if self.rtol is not None and self.rtol < 1e-14:
             raise ValueError(f"integrator.rtol = {self.rtol} is not allowed: must be >= 1e-14")
+
+    def resolve(self, model: str = "II") -> "IntegratorSettings":
+        """The concrete method and tolerances for ``model``."""
+        import dataclasses
+        m = self.method
+        if m == "auto":
+            m = ("ark3" if model == "II" and (self.rtol is None or
+                                              self.rtol >= AUTO_ARK_MIN_RTOL) else "dopri5")
+        elif m != "dopri5" and model != "II":
+            m = "dopri5"   # the ARK splitting exists for Model II's belts only
+        rt, at = DEFAULT_TOLERANCES[m]
+        return dataclasses.replace(self, method=m, rtol=rt if self.rtol is None else self.rtol,
+                                   atol=at if self.atol is None else self.atol)
 
 
 @dataclass(frozen=True)
@@ -243,7 +271,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         (``outcome = "interrupted"``).
     """
     robot = validate_robot(robot if robot is not None else RobotParameters())
-    integ = integrator or IntegratorSettings()
+    integ = (integrator or IntegratorSettings()).resolve(model)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
     if not (0.0 < pitch_limit_deg < 90.0):
@@ -307,7 +335,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                                       (L.SLIP_POS if w > 0 else L.SLIP_NEG))
             mi[L.MI_SLIDE_DIR_B + leg] = 1
     cmd = np.zeros(2)
-    hwork = np.array([integ.initial_step])
+    hwork = np.array([integ.initial_step, 0.0])
+    sfwork = np.zeros((L.NS, 2 * NSTIFF))
     out_t = np.zeros(n_total + 1)
     out_s = np.zeros((n_total + 1, L.NS))
     out_aux = np.zeros((n_total + 1, L.NAUX))
@@ -346,7 +375,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             k, n_out, nev, status, t_now = run(
                 s, P, mi, mf, C, ls, cmd, k, k_stop, k_last, dt, integ.rtol, integ.atol,
                 user_ctrl is None, hwork, out_t, out_s, out_aux, out_ls, n_out, ev, nev,
-                stats, armed, _METHODS[integ.method])
+                stats, armed, sfwork, _METHODS[integ.method])
             if nev > ev.shape[0] - 64:
                 ev = np.concatenate([ev, np.zeros_like(ev)])
             if bar is not None:

@@ -613,14 +613,17 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 
 @njit(cache=True)
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, method=METHOD_AUTO):
+        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork,
+        method=METHOD_AUTO):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
     is the caller's) updates the held commands, the modes are settled, the sample is
     recorded, then the plant is integrated to the next sample. ``method``: METHOD_AUTO
-    (default), METHOD_DOPRI5 or METHOD_ARK4 (Model II only). Returns
-    (k, n_out, nev, status, t)."""
+    (default), METHOD_DOPRI5 or METHOD_ARK3 / METHOD_ARK4 (Model II only). ``hwork``:
+    [step-size guess, 1 if ``sfwork`` (NS, 2 NSTIFF) holds the ARK stiff factors of the
+    last step], both carried between calls so that a run cut into calls (chunks, a Python
+    controller) integrates exactly as one call would. Returns (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
     tmp = np.zeros(NS)
@@ -633,13 +636,13 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ds = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
     ew = eval_workspace()
-    SF0 = np.zeros((NS, 2 * ark.NSTIFF))
+    SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[1] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
     sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
                         np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX),
                         np.zeros(1, dtype=np.int64))
-    sf_ok = False         # SF0 holds stiff factors from an earlier step
+    sf_ok = hwork[1] > 0.5   # SF0 holds stiff factors from an earlier step
     meth = method
     if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
         meth = METHOD_DOPRI5
@@ -671,6 +674,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                                  ybuf, imp, ew, meth, SF0, SF1, Z, sc,
                                  sf_ok or meth == METHOD_DOPRI5)
         sf_ok = True
+        hwork[1] = 1.0
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])

@@ -110,7 +110,8 @@ def test_ark_method_matches_reference_model_ii():
     out = {}
     for m in ("dopri5", "ark4"):
         out[m] = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
-                                   integrator=scoutsim.IntegratorSettings(method=m))
+                                   integrator=scoutsim.IntegratorSettings(method=m, rtol=1e-8,
+                                                                          atol=1e-9))
     a, b = out["dopri5"], out["ark4"]
     assert a.outcome == b.outcome == "completed"
     assert len(a.events) == len(b.events)
