@@ -30,11 +30,23 @@ values below 1e-10 of the largest get infinite variance). The confidence interva
 independent and the model is locally linear over the interval (tested by coverage over
 repeated noise draws, tests/identification).
 
+Before the intervals are trusted, every singular direction v_k of J is checked against
+the real cost: the linear model says a step t along v_k raises the cost by (S_k t)^2 / 2;
+the cost is evaluated at the interval's ends x +- t_q s / S_k v_k, and a direction along
+which it rises by less than ``flat_ratio`` (1/4) of that, or by more than 4 times, is
+*undetermined* (infinite variance): the quadratic model behind the interval does not hold
+there. This catches what finite differences alone cannot: a combination the model does
+not depend on at all (with the torso clamped only J_2 + N^2 J_1 enters, SPEC.md 5, a
+curved valley in ln J_1, ln J_2) still shows a small nonzero singular value from the
+stencil's curvature, which would give a false interval; along the straight singular
+direction the cost then rises thousands of times faster than predicted, because the
+valley curves away from it.
+
 Identifiability
 ---------------
-A parameter counts as *identifiable* by the given logs when its interval spans at most a
-factor ``max_interval_ratio`` (default 2, i.e. roughly +-35 %) and the fit did not end on
-the search box's edge. Otherwise it is reported as not identifiable, with the reason; the
+A parameter counts as *identifiable* by the given logs when no flat direction involves it,
+its interval spans at most a factor ``max_interval_ratio`` (default 2, i.e. roughly
++-35 %) and the fit did not end on the search box's edge. Otherwise it is reported as not identifiable, with the reason; the
 report also lists strongly correlated pairs (|rho| > 0.95) and the singular values and
 directions of the scaled Jacobian (the combination of log-parameters the data do not
 determine).
@@ -293,6 +305,9 @@ class IdentificationResult:
     n_residuals: int
     data: list = field(repr=False, default_factory=list)
     starts: list = field(default_factory=list)
+    curvature_ratios: list = field(default_factory=list)
+    flat: list = field(default_factory=list)
+    combinations: dict = field(default_factory=dict)
     nfev: int = 0
     message: str = ""
 
@@ -313,6 +328,9 @@ class IdentificationResult:
             "singular_values": [float(v) for v in self.singular_values],
             "singular_vectors": [[round(float(v), 6) for v in col]
                                  for col in self.singular_vectors.T],
+            "curvature_ratios": [float(v) for v in self.curvature_ratios],
+            "flat_directions": [bool(v) for v in self.flat],
+            "combinations": self.combinations,
             "cost": self.cost, "residual_scale": self.residual_scale,
             "channel_rms_over_sigma": self.channel_rms, "n_residuals": self.n_residuals,
             "function_evaluations": self.nfev, "optimizer_message": self.message,
@@ -345,12 +363,21 @@ class IdentificationResult:
             lines.append("strongly correlated (|rho| > 0.95): " + "; ".join(pairs))
         if len(self.singular_values):
             sv = self.singular_values
-            v = self.singular_vectors[:, -1]
-            k = np.argsort(-np.abs(v))[:3]
-            comb = " ".join(f"{v[i]:+.2f} ln {self.names[i]}" for i in k if abs(v[i]) > 0.05)
-            lines.append(f"singular values of the scaled Jacobian: "
-                         + ", ".join(f"{x:.3g}" for x in sv)
-                         + f"; least determined direction: {comb}")
+            lines.append("singular values of the scaled Jacobian: "
+                         + ", ".join(f"{x:.3g}" for x in sv) + "; cost rise over the "
+                         "interval / linear prediction: "
+                         + ", ".join(f"{x:.2f}" for x in self.curvature_ratios))
+            for k in np.flatnonzero(self.flat):
+                v = self.singular_vectors[:, k]
+                idx = np.argsort(-np.abs(v))[:3]
+                comb = " ".join(f"{v[i]:+.2f} ln {self.names[i]}" for i in idx
+                                if abs(v[i]) > 0.05)
+                lines.append(f"flat direction (not determined by these logs): {comb}")
+        for name, c in self.combinations.items():
+            lo, hi = c["interval"]
+            lines.append(f"determined combination {name} = {c['definition']}: "
+                         f"{c['value']:.5g} {c['unit']}, interval [{lo:.5g}, {hi:.5g}]"
+                         + (f" (true {c['true']:.5g})" if c.get("true") is not None else ""))
         return "\n".join(lines)
 
     def save(self, out_dir, figures: bool = True) -> Path:
@@ -415,7 +442,8 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
              confidence: float = 0.95, start: dict | None = None,
              integrator: IntegratorSettings | None = None, use_current: bool | None = None,
              max_interval_ratio: float = 2.0, max_nfev: int = 60,
-             diff_step: float = 1e-3, progress=None) -> IdentificationResult:
+             diff_step: float = 1e-3, jac_step: float = 1e-2, flat_ratio: float = 0.25,
+             progress=None) -> IdentificationResult:
     """Fit hip-unit parameters to one or more rig logs (see the module docstring).
 
     Parameters
@@ -437,6 +465,10 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     max_interval_ratio : an identifiable parameter's interval spans at most this factor.
     max_nfev, diff_step : passed to ``scipy.optimize.least_squares`` (per local fit; the
         finite-difference step is in ln p).
+    jac_step : central-difference step in ln p of the Jacobian at the optimum.
+    flat_ratio : a singular direction along which the cost rises by less than this
+        fraction, or more than its inverse, of the quadratic prediction over the interval
+        counts as undetermined.
     progress : optional callable(str) for progress messages.
     """
     base = validate_robot(robot if robot is not None else RobotParameters())
@@ -525,24 +557,60 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
         if best is None or sol.cost < best.cost:
             best = sol
     x = best.x
-    J = best.jac
-    r = best.fun
+    r = residuals(x)
     dof = max(nres - p, 1)
     s2 = float(r @ r) / dof
+    c_opt = 0.5 * float(r @ r)
+    zq = float(stats.t.ppf(0.5 + 0.5 * confidence, dof))
+    # Jacobian at the optimum by central differences (step jac_step in ln p, kept inside
+    # the box by shifting the stencil)
+    cols = []
+    for i in range(p):
+        h = jac_step
+        xp = x.copy()
+        xm = x.copy()
+        xp[i] = min(x[i] + h, xhi[i])
+        xm[i] = max(xp[i] - 2 * h, xlo[i])
+        cols.append((residuals(xp) - residuals(xm)) / (xp[i] - xm[i]))
+    J = np.column_stack(cols)
     U, S, Vt = np.linalg.svd(J, full_matrices=False)
     tol = 1e-10 * (S[0] if S.size else 0.0)
-    inv = np.array([1.0 / (v * v) if v > tol else np.inf for v in S])
+    # curvature check of every direction: the linear model says that moving t along the
+    # singular vector v_k raises the cost by (S_k t)^2 / 2; a direction along which the
+    # cost rises far less over the interval is flat (the data do not determine it, however
+    # large S_k looked) and gets infinite variance
+    flat = np.zeros(S.size, dtype=bool)
+    ratios = []
+    for k in range(S.size):
+        if S[k] <= tol:
+            flat[k] = True
+            ratios.append(0.0)
+            continue
+        w = zq * math.sqrt(s2) / S[k]
+        acts, preds = [], []
+        for sgn in (1.0, -1.0):
+            xt = np.clip(x + sgn * w * Vt[k], xlo, xhi)
+            t = float(np.dot(xt - x, Vt[k]))
+            if abs(t) < 1e-12:
+                continue
+            rt = residuals(xt)
+            acts.append(0.5 * float(rt @ rt) - c_opt)
+            preds.append(0.5 * (S[k] * t) ** 2)
+        rho = (sum(acts) / sum(preds)) if preds else 0.0
+        ratios.append(rho)
+        if rho < flat_ratio or rho > 1.0 / flat_ratio:
+            flat[k] = True
+    inv = np.where(flat, np.inf, 1.0 / np.where(flat, 1.0, S) ** 2)
     with np.errstate(invalid="ignore"):
-        cov = np.einsum("ik,k,jk->ij", Vt.T, inv, Vt.T) * s2
-        # directions with infinite variance make every parameter they touch undetermined
-        for k, v in enumerate(inv):
-            if not np.isfinite(v):
-                touched = np.abs(Vt[k]) > 1e-6
-                cov[np.ix_(touched, touched)] = np.inf
+        cov_det = np.einsum("ik,k,jk->ij", Vt.T, np.where(flat, 0.0, inv), Vt.T) * s2
+        cov = cov_det.copy()
+        # a flat direction makes every parameter it involves undetermined
+        for k in np.flatnonzero(flat):
+            touched = np.abs(Vt[k]) > 0.05
+            cov[np.ix_(touched, touched)] = np.inf
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
-    zq = float(stats.t.ppf(0.5 + 0.5 * confidence, dof))
     true = {}
     for d in data:
         tp = d.log.meta.get("true_parameters")
@@ -556,7 +624,7 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
         at_edge = (x[i] - xlo[i] < 1e-3) or (xhi[i] - x[i] < 1e-3)
         ratio = hi / lo if lo > 0 else math.inf
         if not math.isfinite(ratio):
-            ok, why = False, "the data do not constrain it (singular Jacobian)"
+            ok, why = False, "not determined: flat or curved cost valley"
         elif at_edge and ratio > 1.0:
             ok, why = False, "fit ran to the search box's edge"
         elif ratio > max_interval_ratio:
@@ -568,6 +636,29 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
             identifiable=ok, reason=why, log_sd=float(sd[i]),
             start=float(getattr(base, n)), bounds=(math.exp(xlo[i]), math.exp(xhi[i])),
             true=(float(true[n]) if n in true else None))
+    # the combination the clamped rigs determine when both gear inertias are fitted:
+    # the reflected gear-train inertia J_2 + N^2 J_1 (SPEC.md 5)
+    combos = {}
+    if "drive_gear_inertia" in names and "driven_gear_inertia" in names:
+        i1, i2 = names.index("drive_gear_inertia"), names.index("driven_gear_inertia")
+        n2 = base.gear_ratio ** 2
+        j1, j2 = math.exp(x[i1]), math.exp(x[i2])
+        jr = j2 + n2 * j1
+        g = np.zeros(p)
+        g[i1], g[i2] = n2 * j1 / jr, j2 / jr
+        var = float(g @ cov_det @ g)
+        if any(abs(float(g @ Vt[k])) > 0.2 * float(np.linalg.norm(g))
+               for k in np.flatnonzero(flat)):
+            var = math.inf
+        half = zq * math.sqrt(max(var, 0.0))
+        tr = None
+        if "drive_gear_inertia" in true and "driven_gear_inertia" in true:
+            tr = float(true["driven_gear_inertia"]) + n2 * float(true["drive_gear_inertia"])
+        combos["reflected_gear_inertia"] = {
+            "definition": "J_2 + N^2 J_1", "value": jr, "unit": "kg m^2",
+            "interval": [jr * math.exp(-half), jr * math.exp(half) if math.isfinite(half)
+                         else None],
+            "true": tr}
     # channel rms in units of the stated noise
     rms = {}
     o = 0
@@ -585,7 +676,8 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
         start_robot=base, correlation=corr, singular_values=S, singular_vectors=Vt.T,
         cost=float(best.cost), residual_scale=math.sqrt(s2), channel_rms=rms,
         n_residuals=nres, data=data, starts=starts_info, nfev=counter["nfev"],
-        message=str(best.message))
+        message=str(best.message), curvature_ratios=[float(v) for v in ratios],
+        flat=[bool(v) for v in flat], combinations=combos)
 
 
 # -----------------------------------------------------------------------------------------

@@ -256,6 +256,8 @@ def run_configuration(robot: RobotParameters, model: str, P: np.ndarray, C: np.n
     for leg in range(2):
         w = s[L.NQ + 5 + leg]
         mi[L.MI_MOTOR_B + leg] = L.STUCK if w == 0.0 else (L.SLIP_POS if w > 0 else L.SLIP_NEG)
+        if P[L.P_TAU_S] <= 0.0 and mi[L.MI_MOTOR_B + leg] == L.STUCK:
+            mi[L.MI_MOTOR_B + leg] = L.SLIP_POS   # no stiction: nothing can hold the gear
         mi[L.MI_SLIDE_DIR_B + leg] = 1
     ls = np.zeros(2, dtype=np.int64)
     cmd_arr = np.zeros(2) if cmd is None else np.array(cmd, dtype=float)
