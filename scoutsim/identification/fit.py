@@ -556,6 +556,14 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
             progress(f"refined {label}: cost {c0:.4g} -> {sol.cost:.4g} ({sol.nfev} evaluations)")
         if best is None or sol.cost < best.cost:
             best = sol
+    # polish: one more local fit from the best optimum with a fresh trust region (a
+    # stick/slip kink can stall trf's trust region before the minimum)
+    sol = optimize.least_squares(residuals, best.x, bounds=(xlo, xhi), method="trf",
+                                 x_scale=1.0, diff_step=diff_step, max_nfev=max_nfev)
+    if progress:
+        progress(f"polished: cost {best.cost:.4g} -> {sol.cost:.4g}")
+    if sol.cost < best.cost:
+        best = sol
     x = best.x
     r = residuals(x)
     dof = max(nres - p, 1)
@@ -604,9 +612,17 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     with np.errstate(invalid="ignore"):
         cov_det = np.einsum("ik,k,jk->ij", Vt.T, np.where(flat, 0.0, inv), Vt.T) * s2
         cov = cov_det.copy()
-        # a flat direction makes every parameter it involves undetermined
+        # a flat direction makes every parameter it involves undetermined: followed
+        # across the search box it moves parameter i by |v_ki| D_k; if that exceeds the
+        # parameter's own half-width, the interval would only hold conditionally
+        half_det = zq * np.sqrt(np.clip(np.diag(cov_det), 0.0, np.inf))
         for k in np.flatnonzero(flat):
-            touched = np.abs(Vt[k]) > 0.05
+            v = Vt[k]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                tmax = np.where(v > 0, (xhi - x) / v, np.where(v < 0, (xlo - x) / v, np.inf))
+                tmin = np.where(v > 0, (xlo - x) / v, np.where(v < 0, (xhi - x) / v, -np.inf))
+            D = float(np.min(tmax) - np.max(tmin))
+            touched = (np.abs(v) > 0.05) | (np.abs(v) * D > half_det)
             cov[np.ix_(touched, touched)] = np.inf
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
     with np.errstate(invalid="ignore", divide="ignore"):
