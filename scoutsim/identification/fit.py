@@ -375,9 +375,13 @@ class IdentificationResult:
                 lines.append(f"flat direction (not determined by these logs): {comb}")
         for name, c in self.combinations.items():
             lo, hi = c["interval"]
-            lines.append(f"determined combination {name} = {c['definition']}: "
-                         f"{c['value']:.5g} {c['unit']}, interval [{lo:.5g}, {hi:.5g}]"
-                         + (f" (true {c['true']:.5g})" if c.get("true") is not None else ""))
+            tr = f" (true {c['true']:.5g})" if c.get("true") is not None else ""
+            if hi is None:
+                lines.append(f"combination {name} = {c['definition']}: {c['value']:.5g} "
+                             f"{c['unit']}, not determined either{tr}")
+            else:
+                lines.append(f"determined combination {name} = {c['definition']}: "
+                             f"{c['value']:.5g} {c['unit']}, interval [{lo:.5g}, {hi:.5g}]{tr}")
         return "\n".join(lines)
 
     def save(self, out_dir, figures: bool = True) -> Path:
@@ -616,12 +620,14 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
         # across the search box it moves parameter i by |v_ki| D_k; if that exceeds the
         # parameter's own half-width, the interval would only hold conditionally
         half_det = zq * np.sqrt(np.clip(np.diag(cov_det), 0.0, np.inf))
+        spans = {}
         for k in np.flatnonzero(flat):
             v = Vt[k]
             with np.errstate(divide="ignore", invalid="ignore"):
                 tmax = np.where(v > 0, (xhi - x) / v, np.where(v < 0, (xlo - x) / v, np.inf))
                 tmin = np.where(v > 0, (xlo - x) / v, np.where(v < 0, (xhi - x) / v, -np.inf))
             D = float(np.min(tmax) - np.max(tmin))
+            spans[int(k)] = D
             touched = (np.abs(v) > 0.05) | (np.abs(v) * D > half_det)
             cov[np.ix_(touched, touched)] = np.inf
     sd = np.sqrt(np.clip(np.diag(cov), 0.0, np.inf))
@@ -663,10 +669,17 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
         g = np.zeros(p)
         g[i1], g[i2] = n2 * j1 / jr, j2 / jr
         var = float(g @ cov_det @ g)
-        if any(abs(float(g @ Vt[k])) > 0.2 * float(np.linalg.norm(g))
-               for k in np.flatnonzero(flat)):
-            var = math.inf
         half = zq * math.sqrt(max(var, 0.0))
+        # undetermined if a flat direction, followed across the box, moves it beyond its
+        # half-width (the same rule as for the parameters)
+        # half-width (the same rule as for the parameters) - except the gear direction
+        # itself, which the finite-difference stencil resolves only approximately
+        for k in np.flatnonzero(flat):
+            gv = abs(float(g @ Vt[k]))
+            gear_dir = Vt[k, i1] ** 2 + Vt[k, i2] ** 2 > 0.5
+            if gv > 0.2 * float(np.linalg.norm(g)) or (
+                    not gear_dir and gv * spans.get(int(k), 0.0) > half):
+                half = math.inf
         tr = None
         if "drive_gear_inertia" in true and "driven_gear_inertia" in true:
             tr = float(true["driven_gear_inertia"]) + n2 * float(true["drive_gear_inertia"])
