@@ -21,7 +21,6 @@ not identified: Maxon gives the efficiency drop only qualitatively.
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 
