@@ -161,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
                "  scoutsim animate scoutsim_out/result.npz --out run.gif --t0 3 --t1 4",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare,plot,animate,orbit,sweep}")
+    sub = parser.add_subparsers(dest="command", metavar="{run,basin,compare,plot,animate,orbit,sweep,identify,rig}")
 
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--duration", type=_positive_float, default=10.0, metavar="S",
@@ -358,6 +358,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="also find each bounding point's periodic orbit (Newton) and record "
                          "its period and Floquet stability (a few s per point)")
     sw.set_defaults(func=_cmd_sweep)
+    _add_identification_parsers(sub)
     return parser
 
 
@@ -922,3 +923,154 @@ def _cmd_orbit(args) -> int:
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(main())
+
+
+# -----------------------------------------------------------------------------------------
+# scoutsim identify / scoutsim rig (issue 5, docs/identification.md)
+# -----------------------------------------------------------------------------------------
+def _add_identification_parsers(sub):
+    from .identification.fit import DEFAULT_PARAMS
+    from .identification.rigs import HIP_PARAMETERS
+    idf = sub.add_parser(
+        "identify", help="fit Model II hip-unit parameters to bench-rig logs",
+        description="Fit hip-unit parameters (nonlinear least squares with a multi-start "
+                    "global search) to free-swing or flight-step rig logs; write DIR/"
+                    "identified.json (value, unit, interval, identifiable flag per parameter) "
+                    "and fit figures DIR/fit_<n>.png. --example makes virtual logs with known "
+                    "parameters and sensor noise, fits them and prints true against fitted "
+                    "values. See docs/identification.md.")
+    idf.add_argument("logs", nargs="*", metavar="LOG", help="rig log files (CSV/Parquet)")
+    idf.add_argument("--example", action="store_true",
+                     help="generate virtual logs with known parameters, fit, compare")
+    idf.add_argument("--rig", choices=("free-swing", "flight-steps"), default=None,
+                     help="the rig that made the logs (default: the logs' metadata 'rig'; "
+                          "with --example: both rigs, fitted together)")
+    idf.add_argument("--params", default=None, metavar="LIST",
+                     help="comma-separated parameters to fit, from: "
+                          + ", ".join(HIP_PARAMETERS) + " (default: "
+                          + ", ".join(DEFAULT_PARAMS["free-swing"]) + ")")
+    idf.add_argument("--robot", metavar="FILE",
+                     help="TOML robot file: the starting values and the fixed parameters")
+    idf.add_argument("--out", default="scoutsim_identify", metavar="DIR",
+                     help="output directory (default: scoutsim_identify)")
+    idf.add_argument("--starts", type=_positive_int, default=16, metavar="N",
+                     help="Sobol start points of the global search (default: 16)")
+    idf.add_argument("--local", type=_positive_int, default=2, metavar="N",
+                     help="best starts refined by least squares (default: 2)")
+    idf.add_argument("--seed", type=int, default=0, help="Sobol / noise seed (default: 0)")
+    idf.add_argument("--confidence", type=float, default=0.95, metavar="C",
+                     help="interval confidence level (default: 0.95)")
+    idf.add_argument("--no-plots", action="store_true", help="do not write fit figures")
+    idf.add_argument("--json", action="store_true", help="print identified.json to stdout")
+    idf.set_defaults(func=_cmd_identify)
+
+    rg = sub.add_parser(
+        "rig", help="run a virtual bench rig and write its log",
+        description="Run a virtual bench rig (the same simulator with the torso clamped) and "
+                    "write its log (DIR/<rig>.csv.gz) with sensor noise; the stall rig also "
+                    "prints the belt deflection at maximum hip torque (the paper's ~8 deg "
+                    "check).")
+    rg.add_argument("rig", choices=("free-swing", "flight-steps", "stall"))
+    rg.add_argument("--motor", choices=("open", "short"), default="open",
+                    help="free swing: motor leads open or shorted (default: open)")
+    rg.add_argument("--toe-mass", type=_positive_float, default=None, metavar="KG",
+                    help="free swing: mass at the toe [kg] (default: 1)")
+    rg.add_argument("--release", default=None, metavar="BACK,FRONT",
+                    help="free swing: release angles [deg] (default: 60,-40)")
+    rg.add_argument("--duration", type=_positive_float, default=None, metavar="S",
+                    help="recorded time [s] (default: the rig's)")
+    rg.add_argument("--robot", metavar="FILE", help="TOML robot file (default: Scout II)")
+    rg.add_argument("--out", default="scoutsim_rig", metavar="DIR",
+                    help="output directory (default: scoutsim_rig)")
+    rg.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
+    rg.add_argument("--no-noise", action="store_true", help="write the noise-free signals")
+    rg.set_defaults(func=_cmd_rig)
+
+
+def _cmd_identify(args) -> int:
+    from .identification.fit import EXAMPLE_FACTORS, example_logs, identify
+    from .validation.logs import LogError
+    if args.example and args.logs:
+        raise _UsageError("give log files or --example, not both")
+    if not args.example and not args.logs:
+        raise _UsageError("give at least one rig log (or --example)")
+    if not 0.0 < args.confidence < 1.0:
+        raise _UsageError(f"--confidence {args.confidence:g} is not allowed: must be in (0, 1)")
+    params = None
+    if args.params:
+        params = [p.strip() for p in args.params.split(",") if p.strip()]
+    robot = None
+    if args.robot:
+        robot, _ = _load_parameters(args.robot)
+    out = _out_dir(args.out)
+    wall0 = time.perf_counter()
+    try:
+        if args.example:
+            rigs = (args.rig,) if args.rig else ("free-swing", "flight-steps")
+            print("scoutsim identify --example: virtual logs of the " + " and ".join(rigs)
+                  + " rig(s), made with a hip unit = Table II x "
+                  + ", ".join(f"{k} {v:g}" for k, v in EXAMPLE_FACTORS.items())
+                  + "; the fit starts from Table II")
+            logs = example_logs(rigs, seed=args.seed, out_dir=out)
+            rig = None
+        else:
+            logs = args.logs
+            rig = args.rig
+        res = identify(logs, params, rig=rig, robot=robot, n_starts=args.starts,
+                       n_local=args.local, seed=args.seed, confidence=args.confidence)
+    except LogError as exc:
+        raise _UsageError(str(exc)) from None
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    wall = time.perf_counter() - wall0
+    path = res.save(out, figures=not args.no_plots)
+    if args.json:
+        print(path.read_text())
+    else:
+        print(res.report())
+        print(f"wall time {wall:.1f} s ({res.nfev} rig simulations); wrote {path}"
+              + ("" if args.no_plots else " and fit figures") + f" to {out}/")
+    return 0
+
+
+def _cmd_rig(args) -> int:
+    from .identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stall, rig_log,
+                                      run_rig, stall_deflection)
+    robot = None
+    if args.robot:
+        robot, _ = _load_parameters(args.robot)
+    out = _out_dir(args.out)
+    kw = {} if args.duration is None else {"duration": args.duration}
+    try:
+        if args.rig == "free-swing":
+            if args.toe_mass is not None:
+                kw["toe_mass"] = args.toe_mass
+            if args.release:
+                try:
+                    b, f = (math.radians(float(v)) for v in args.release.split(","))
+                except ValueError:
+                    raise _UsageError(f"--release {args.release!r} is not allowed: must be "
+                                      "BACK,FRONT in degrees") from None
+                kw |= {"release_angle_back": b, "release_angle_front": f}
+            rig = FreeSwing(motor=args.motor, **kw)
+        elif args.rig == "flight-steps":
+            rig = FlightSteps(**kw)
+        else:
+            rig = Stall(**kw)
+    except ValueError as exc:
+        raise _UsageError(str(exc)) from None
+    if args.rig == "stall":
+        d = stall_deflection(robot, rig)
+        res = d["result"]
+        lo, hi = d["static_band_deg"]
+        print(f"stall rig: hip torque {d['torque_nm']:.2f} N m per physical leg (N eta K_T "
+              f"i_max); belt deflection after {rig.duration:g} s: "
+              f"{d['deflection_final_deg']:.3f} deg (static band of the motor stiction "
+              f"{lo:.3f} .. {hi:.3f} deg; creep time constant c_b/k_b = "
+              f"{d['creep_time_constant_s']:.3f} s); the paper's bound: about 8 deg")
+    else:
+        res = run_rig(rig, robot)
+    log = rig_log(res, noise=None if args.no_noise else RigNoise(), seed=args.seed)
+    path = log.save(out / f"{args.rig}.csv.gz")
+    print(f"{args.rig} rig: {res.outcome}, {len(res.t)} samples; wrote {path}")
+    return 0

@@ -32,8 +32,9 @@ from .layout import (
     P_C_LOAD, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, SLIDE,
     STICK, STRUT, STUCK,
 )
+from .layout import CIRCUIT_OPEN, CIRCUIT_SHORT, P_CIRCUIT, P_CLAMP_LEGS, P_CLAMP_TORSO
 
-MAX_ROWS = 6          # at most 2 rows per leg (strut) + 1 per motor joint
+MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS
 NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
 
@@ -78,6 +79,14 @@ def project(q, dq, l, P, mi, mf):
     model = int(P[P_MODEL])
     l0 = P[P_L0]
     massless = P[P_MASSLESS] > 0.5
+    if P[P_CLAMP_TORSO] > 0.5:
+        # bench rig: the clamped torso is at rest (add_clamp_rows)
+        dq[0] = 0.0
+        dq[1] = 0.0
+        dq[2] = 0.0
+        if P[P_CLAMP_LEGS] > 0.5:
+            dq[3] = 0.0
+            dq[4] = 0.0
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         hx, hy = hip_position(q, P, leg)
@@ -230,6 +239,11 @@ def motor_current(cmd_torque, omega_m, vb, P):
     model = int(P[P_MODEL])
     if model == MODEL_PASSIVE:
         return 0.0
+    circuit = int(P[P_CIRCUIT])
+    if circuit == CIRCUIT_OPEN:
+        return 0.0      # bench rig, motor leads open
+    if circuit == CIRCUIT_SHORT:
+        return -P[P_KW] * omega_m / P[P_RA]   # bench rig, leads shorted: 0 = R_A i + K_w w_m
     imax = P[P_IMAX]
     ic = cmd_torque / (P[P_N] * P[P_ETA] * P[P_KT])
     lo = -imax
@@ -315,6 +329,29 @@ def battery_voltage(dq, cmd, P):
             disc = 0.0
         vb = 0.5 * (voc + math.sqrt(disc))
     return vb
+
+
+@njit(cache=True)
+def add_clamp_rows(P, R, r, rkind, rleg, nr):
+    """Bench-rig clamps as constraint rows (issue 5, docs/identification.md): with
+    P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (kind 5); with P_CLAMP_LEGS also ddphi = 0 for
+    both legs (kind 6). The multipliers are the clamp's force and torques. Returns the new
+    row count."""
+    if P[P_CLAMP_TORSO] > 0.5:
+        for j in range(3):
+            R[nr, j] = 1.0
+            r[nr] = 0.0
+            rkind[nr] = 5
+            rleg[nr] = 0
+            nr += 1
+        if P[P_CLAMP_LEGS] > 0.5:
+            for leg in range(2):
+                R[nr, 3 + leg] = 1.0
+                r[nr] = 0.0
+                rkind[nr] = 6
+                rleg[nr] = leg
+                nr += 1
+    return nr
 
 
 @njit(cache=True)
@@ -512,6 +549,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             row_kind[nr] = 3
             row_leg[nr] = leg
             nr += 1
+    nr = add_clamp_rows(P, R, r, row_kind, row_leg, nr)
 
     # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
     n = nact + nr
@@ -1012,6 +1050,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
             rkind[nr] = 3.0
             rleg[nr] = leg
             nr += 1
+    nr = add_clamp_rows(P, R, r, rkind, rleg, nr)
 
     # kinetic energy before the factorization
     ekin = 0.0

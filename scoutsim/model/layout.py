@@ -63,7 +63,18 @@ NMF = 2
  P_N, P_ETA, P_J1, P_J2, P_TAU_S, P_B_J, P_KB, P_CB, P_KT, P_KW, P_RA, P_IMAX, P_VB, P_RB,
  P_MODEL, P_MU, P_MASSLESS, P_TD_WORLD, P_TD_B, P_TD_F, P_THETA_LIM, P_STRUT_OMEGA,
  P_SENSE_ALPHA, P_TAU_IDLE, P_C_LOAD) = range(38)
-NP_ = 38
+# bench rigs (issue 5, scoutsim.identification.rigs): clamps are extra constraint rows of
+# the same KKT system; the motor circuit replaces the amplifier in an unpowered rig
+P_CLAMP_TORSO = 38   # 1: torso x, y, theta held fixed (free swing, flight steps, stall)
+P_CLAMP_LEGS = 39    # 1: leg angles phi held fixed relative to the torso (stall)
+P_CIRCUIT = 40       # CIRCUIT_*: what drives the motor current
+NP_ = 41
+
+# --- motor circuit (P_CIRCUIT) -----------------------------------------------------------
+CIRCUIT_AMPLIFIER = 0   # current amplifier with the limits of SPEC.md 4 (normal operation)
+CIRCUIT_OPEN = 1        # motor leads open: no current, the gear train is back-driven freely
+CIRCUIT_SHORT = 2       # motor leads shorted: i = -K_w w_m / R_A (back-EMF braking)
+CIRCUIT_NAMES = {"amplifier": CIRCUIT_AMPLIFIER, "open": CIRCUIT_OPEN, "short": CIRCUIT_SHORT}
 
 # --- auxiliary outputs (per evaluation) ---------------------------------------------------
 # per leg (offset leg * NAUX_LEG)

@@ -13,7 +13,9 @@ from . import layout as L
 
 def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: float = math.inf,
                 passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
-                pitch_limit: float = math.radians(60.0), strut_omega: float = 200.0) -> np.ndarray:
+                pitch_limit: float = math.radians(60.0), strut_omega: float = 200.0,
+                clamp_torso: bool = False, clamp_legs: bool = False,
+                motor_circuit: str = "amplifier") -> np.ndarray:
     """Parameter array P for the compiled model.
 
     Parameters
@@ -29,6 +31,12 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
         relative to the torso (False).
     pitch_limit : |theta| [rad] beyond which the run counts as a fall (default 60 deg).
     strut_omega : Baumgarte rate [rad/s] of the rigid-strut length constraint (SPEC.md 3).
+    clamp_torso : bench rigs only (issue 5): hold the torso's x, y, theta fixed by three
+        extra constraint rows of the KKT system (docs/identification.md).
+    clamp_legs : bench rigs only: also hold both leg angles phi fixed relative to the torso
+        (the stall rig); needs ``clamp_torso``.
+    motor_circuit : "amplifier" (normal operation, SPEC.md 4), "open" (motor leads open:
+        zero current) or "short" (leads shorted: i = -K_w w_m / R_A, back-EMF braking).
     """
     if model not in L.MODEL_NAMES:
         raise ValueError(f"model = {model!r} is not allowed: must be one of "
@@ -39,6 +47,12 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     if not (0.0 < pitch_limit < math.pi / 2):
         raise ValueError(f"pitch_limit = {math.degrees(pitch_limit)} deg is not allowed: "
                          "must be in (0, 90) deg")
+    if motor_circuit not in L.CIRCUIT_NAMES:
+        raise ValueError(f"motor_circuit = {motor_circuit!r} is not allowed: must be one of "
+                         f"{sorted(L.CIRCUIT_NAMES)}")
+    if clamp_legs and not clamp_torso:
+        raise ValueError("clamp_legs = True is not allowed without clamp_torso = True (the "
+                         "stall rig holds the torso and the legs)")
     P = np.zeros(L.NP_)
     P[L.P_MT] = robot.torso_mass
     P[L.P_IT] = robot.torso_inertia
@@ -78,6 +92,9 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_TD_F] = passive_touchdown_angles[1]
     P[L.P_THETA_LIM] = pitch_limit
     P[L.P_STRUT_OMEGA] = strut_omega
+    P[L.P_CLAMP_TORSO] = 1.0 if clamp_torso else 0.0
+    P[L.P_CLAMP_LEGS] = 1.0 if clamp_legs else 0.0
+    P[L.P_CIRCUIT] = float(L.CIRCUIT_NAMES[motor_circuit])
     if model == "II" and not (robot.driven_gear_inertia + robot.gear_ratio ** 2
                               * robot.drive_gear_inertia > 0.0):
         raise ValueError("robot.driven_gear_inertia / drive_gear_inertia = 0 is not allowed "

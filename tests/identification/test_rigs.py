@@ -1,0 +1,163 @@
+"""Virtual bench rigs (issue 5): each is the simulator with the torso clamped; the physics
+of each rig is checked against hand-derived laws (pendulum period, back-EMF torque
+balance, static belt balance), never against numbers taken from the code."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from scoutsim.control.bounding import controller_array
+from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stall, rig_log,
+                                          run_configuration, run_rig, stall_deflection)
+from scoutsim.model.packing import robot_array
+from scoutsim.parameters import ControllerParameters, RobotParameters
+from scoutsim.simulation import (IntegratorSettings, _state_vector, default_initial_state,
+                                 simulate)
+
+
+def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():
+    """The rig path (robot_array + run_configuration) without clamps is simulate()."""
+    robot = RobotParameters()
+    ctrl = ControllerParameters()
+    ref = simulate(robot, ctrl, duration=0.4, model="II")
+    P = robot_array(robot, "II")          # clamp_torso = clamp_legs = False
+    s0 = _state_vector(default_initial_state("II"), robot, ctrl, (0.0, 0.0), True)
+    res = run_configuration(robot, "II", P, controller_array(ctrl), s0, 0.4,
+                            ctrl.control_period, IntegratorSettings())
+    assert np.array_equal(res.t, ref.t)
+    assert np.array_equal(res.state, ref.state)
+    assert np.array_equal(res.aux, ref.aux)
+    assert np.array_equal(res.events, ref.events)
+
+
+def test_clamped_torso_does_not_move():
+    res = run_rig(FreeSwing(duration=0.5))
+    assert res.outcome == "completed"
+    assert np.all(res.state[:, 0] == 0.0) and np.all(res.state[:, 2] == 0.0)
+    assert np.all(res.state[:, 1] == 1.0)
+    assert np.all(res.state[:, 7:10] == 0.0)
+    assert np.ptp(res.leg_angle("back")) > 0.5          # while the leg swings
+
+
+def _pendulum(robot, toe_mass):
+    """Hand-derived small-angle pendulum of one physical leg with its toe mass and the
+    reflected gear train (belt rigid): I_hip = I_leg + m d^2 + m_t l0^2 + J_2 + N^2 J_1,
+    gravity stiffness (m d + m_t l0) g."""
+    N = robot.gear_ratio
+    I = (robot.leg_inertia + robot.leg_mass * robot.leg_com_distance ** 2
+         + toe_mass * robot.leg_rest_length ** 2 + robot.driven_gear_inertia
+         + N * N * robot.drive_gear_inertia)
+    kg = (robot.leg_mass * robot.leg_com_distance + toe_mass * robot.leg_rest_length) * robot.gravity
+    return I, kg
+
+
+def test_free_swing_small_oscillation_period_is_the_pendulum_with_reflected_gear_inertia():
+    robot = RobotParameters().replace(joint_stiction=0.0, joint_damping=0.0)
+    m_t = 1.0
+    res = run_rig(FreeSwing(release_angle_back=math.radians(3.0), release_angle_front=0.0,
+                            toe_mass=m_t, duration=3.0), robot)
+    I, kg = _pendulum(robot, m_t)
+    T = 2 * math.pi * math.sqrt(I / kg)
+    phi = res.leg_angle("back")
+    t = res.t
+    k = np.flatnonzero((phi[:-1] > 0) & (phi[1:] <= 0))         # downward zero crossings
+    tc = t[k] + phi[k] / (phi[k] - phi[k + 1]) * (t[k + 1] - t[k])
+    T_sim = float(np.mean(np.diff(tc)))
+    assert len(tc) >= 2
+    assert T_sim == pytest.approx(T, rel=0.01)
+    # the front leg hangs at rest
+    assert np.max(np.abs(res.leg_angle("front"))) < 1e-9
+
+
+def test_shorted_motor_creeps_at_the_back_emf_torque_balance():
+    """Leads shorted: i = -K_w w_m / R_A, so the leg creeps where gravity balances the
+    back-EMF torque N eta K_T i, the viscous joint damping N^2 b_J w and the stiction
+    N tau_s: (m d + m_t l0) g sin(phi) = (N^2 eta K_T K_w / R_A + N^2 b_J) |dphi| + N tau_s."""
+    robot = RobotParameters()
+    m_t = 1.0
+    res = run_rig(FreeSwing(release_angle_back=math.radians(60.0), release_angle_front=0.0,
+                            toe_mass=m_t, motor="short", duration=2.0), robot)
+    N = robot.gear_ratio
+    b = (N * N * robot.efficiency * robot.torque_constant * robot.speed_constant
+         / robot.armature_resistance + N * N * robot.joint_damping)
+    _, kg = _pendulum(robot, m_t)
+    k = (res.t > 0.5)                     # after the short transient (I / b ~ 20 ms)
+    phi = res.leg_angle("back")[k]
+    rate = res.state[k, 7 + 5]          # gear-train rate dalpha (the belt creeps too)
+    predicted = -(kg * np.sin(phi) - N * robot.joint_stiction) / b
+    np.testing.assert_allclose(rate, predicted, rtol=0.01)
+    # the logged current is the shorted-winding current
+    w_m = N * res.state[k, 7 + 5]
+    np.testing.assert_allclose(res.motor_current("back")[k],
+                               -robot.speed_constant * w_m / robot.armature_resistance,
+                               rtol=1e-12)
+
+
+def test_stall_belt_deflection_is_the_static_balance_and_below_the_paper_8_deg():
+    robot = RobotParameters()
+    d = stall_deflection(robot)
+    tau = (robot.gear_ratio * robot.efficiency * robot.torque_constant
+           * robot.current_limit)                    # amplifier limit at stall
+    assert d["torque_nm"] == pytest.approx(tau, rel=1e-12)
+    # at rest the motor-joint stiction holds the gear anywhere with
+    # |k_b (alpha - phi) - tau| <= N tau_s; the gear creeps in from zero deflection
+    lo = (tau - robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness
+    hi = (tau + robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness
+    assert lo * (1 - 1e-4) <= d["deflection_final_rad"] <= hi
+    assert math.degrees(d["deflection_final_rad"]) < 8.0       # paper Sec. III: ~8 deg
+    # the leg and torso did not move
+    res = d["result"]
+    assert np.all(res.state[:, 3:5] == 0.0)
+
+
+def test_flight_steps_servo_reaches_each_commanded_angle():
+    rig = FlightSteps()
+    res = run_rig(rig)
+    assert res.outcome == "completed"
+    td = rig.commands(res.t)
+    for j, leg in enumerate(("back", "front")):
+        enc = res.motor_angle(leg)
+        for t_end in list(rig.step_times[1:]) + [rig.duration]:
+            k = int(round(t_end / 1e-3)) - 1
+            # the PD holds the motor-side angle within the gravity-load error
+            # |tau_g| / kp <= m g d / kp
+            err = 0.97 * 9.81 * 0.1615 / 250.0
+            assert abs(enc[k] - td[k, j]) < err + 2e-3
+        assert np.all(res.leg_state(leg) == 0)          # never leaves flight
+
+
+def test_rig_log_has_the_log_format_and_quantised_encoder(tmp_path):
+    from scoutsim.validation.logs import load_log
+    res = run_rig(FreeSwing(duration=0.3))
+    noise = RigNoise(encoder_counts_per_rev=500, angle_rad=0.0, current_a=0.0)
+    log = rig_log(res, noise=noise, seed=3)
+    path = log.save(tmp_path / "fs.csv.gz")
+    back = load_log(path)
+    q = 2 * math.pi / (500 * RobotParameters().gear_ratio)
+    counts = back.leg_angle("back") / q
+    np.testing.assert_allclose(counts, np.round(counts), atol=5e-3)   # CSV: 7 digits
+    assert np.max(np.abs(back.leg_angle("back") - res.motor_angle("back"))) <= q / 2 + 1e-7
+    assert back.meta["rig"] == "free-swing"
+    assert back.meta["rig_config"]["toe_mass"] == 1.0
+
+
+@pytest.mark.parametrize("kw, field", [
+    ({"release_angle_back": math.radians(95)}, "free_swing.release_angle_back"),
+    ({"toe_mass": -1.0}, "free_swing.toe_mass"),
+    ({"motor": "battery"}, "free_swing.motor"),
+])
+def test_bad_rig_configuration_names_the_field(kw, field):
+    with pytest.raises(ValueError, match=field):
+        FreeSwing(**kw)
+
+
+def test_stall_needs_torso_clamp_and_flight_steps_need_ordered_times():
+    with pytest.raises(ValueError, match="clamp_legs"):
+        robot_array(RobotParameters(), "II", clamp_legs=True)
+    with pytest.raises(ValueError, match="step_times"):
+        FlightSteps(step_times=(0.0, 0.5, 0.4), angles_back=(0, 0, 0), angles_front=(0, 0, 0))
+    with pytest.raises(ValueError, match="stall.leg_angle"):
+        Stall(leg_angle=2.0)
