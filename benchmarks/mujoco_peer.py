@@ -487,7 +487,7 @@ def main(argv=None):
     print("-" * (len(hdr) + 44))
     print(fmt_row("scoutsim rtol 1e-10 (ref)", ref_sum,
                   f"{ref_sum['outcome']}, {ref_sum['n_steady_strides']} steady"))
-    print(fmt_row("scoutsim rtol 1e-8 (default)", def_sum,
+    print(fmt_row("scoutsim default (" + scoutsim.IntegratorSettings().resolve("II").method + ")", def_sum,
                   f"{def_sum['outcome']}, {def_sum['n_steady_strides']} steady, "
                   f"RTF {rtf_s:.1f}x ({wall:.3f} s wall)"))
     d_def, w_def = rel_dev(def_sum, ref_sum)

@@ -98,8 +98,10 @@ if __name__ == "__main__":
     dur = float(sys.argv[1])
     model = sys.argv[2] if len(sys.argv) > 2 else "II"
     mu = float(sys.argv[3]) if len(sys.argv) > 3 else math.inf
+    rtol = float(sys.argv[4]) if len(sys.argv) > 4 else 1e-8
+    atol = float(sys.argv[5]) if len(sys.argv) > 5 else 1e-9
     t0 = time.perf_counter()
-    t, nev, s = run(dur, model, friction_coefficient=mu)
+    t, nev, s = run(dur, model, rtol=rtol, atol=atol, friction_coefficient=mu)
     wall = time.perf_counter() - t0
     print(json.dumps({"simulated_s": t, "wall_s": wall, "events": nev,
                       "x": float(s[0]), "y": float(s[1]), "theta": float(s[2])}))
