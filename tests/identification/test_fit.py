@@ -131,3 +131,21 @@ def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     assert main(["identify", str(bad), "--rig", "free-swing", "--out",
                  str(tmp_path / "o2")]) == 2
     assert "missing column" in capsys.readouterr().err
+
+
+def test_gearbox_idle_loss_is_identified_by_the_same_machinery(true_robot):
+    """Issue 5 item 3: the torque-dependent efficiency's parameters are identifiable like
+    the others. A free swing back-drives the gear train, so an idle loss torque brakes it
+    like a Coulomb friction at the leg: fitted from zero, it is recovered within its
+    interval together with the joint damping."""
+    robot = true_robot.replace(gearbox_idle_loss_torque=0.3)
+    log = rig_log(run_rig(SHORT_SWING, robot), seed=3)
+    start = robot.replace(gearbox_idle_loss_torque=0.0,
+                          joint_damping=0.5 * robot.joint_damping)
+    res = identify([log], ["gearbox_idle_loss_torque", "joint_damping"], robot=start,
+                   n_starts=4, n_local=1, seed=1)
+    for name in ("gearbox_idle_loss_torque", "joint_damping"):
+        p = res.parameters[name]
+        assert p.identifiable, (name, p.reason)
+        assert p.interval[0] <= getattr(robot, name) <= p.interval[1], name
+        assert p.interval[1] / p.interval[0] < 1.1
