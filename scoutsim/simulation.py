@@ -330,9 +330,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             mf[L.MF_ANCHOR_B + leg] = init.toe_anchors[leg]
             ls[leg] = init.leg_states[leg]
         else:
+            # a joint at rest starts stuck if stiction can hold it; without stiction it
+            # is never stuck (no event could release it): "slipping" with zero Coulomb
+            # torque is the free, viscously damped joint
             w = s[L.NQ + 5 + leg]
-            mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 else
-                                      (L.SLIP_POS if w > 0 else L.SLIP_NEG))
+            mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 and robot.joint_stiction > 0.0 else
+                                      (L.SLIP_NEG if w < 0 else L.SLIP_POS))
             mi[L.MI_SLIDE_DIR_B + leg] = 1
     cmd = np.zeros(2)
     hwork = np.array([integ.initial_step, 0.0])

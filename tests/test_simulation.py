@@ -95,6 +95,17 @@ def test_stiction_holds_below_breakaway_and_releases_above(tau_leg, moves):
         assert np.all(r.modes[:, 4] == 0)   # stuck all along
 
 
+def test_without_stiction_any_torque_moves_the_joint():
+    """joint_stiction = 0: the motor joint is never stuck, so even a small torque turns it
+    (and the free fall gives the rigid-body angular acceleration of the gear train)."""
+    robot = RobotParameters().replace(joint_stiction=0.0)
+    init = InitialState(y=5.0, theta=0.0, dx=0.0, dtheta=0.0)
+    r = scoutsim.simulate(robot, ConstantTorque(0.05), init, 0.05, model="II",
+                          integrator=TIGHT)
+    assert np.all(r.modes[:, 4] != 0)
+    assert np.max(np.abs(r.motor_angle("back") - r.motor_angle("back")[0])) > 1e-6
+
+
 def test_python_controller_path_matches_compiled():
     class Same(BoundingController):
         pass
