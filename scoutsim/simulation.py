@@ -224,6 +224,90 @@ def default_initial_state(model: str = "II") -> InitialState:
     return InitialState()
 
 
+STAT_NAMES = ("rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
+              "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio", "min_step_s",
+              "max_step_s")
+
+
+def fresh_modes(s: np.ndarray, joint_stiction: float):
+    """Mode arrays (mi, mf) of a start from state ``s`` with both toes in flight: a motor
+    joint at rest starts stuck if stiction can hold it; without stiction it is never stuck
+    (no event could release it), so it starts "slipping" with zero Coulomb torque, the
+    free, viscously damped joint."""
+    mi = np.zeros(L.NMI, dtype=np.int64)
+    mf = np.zeros(L.NMF)
+    for leg in range(2):
+        w = s[L.NQ + 5 + leg]
+        mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 and joint_stiction > 0.0 else
+                                  (L.SLIP_NEG if w < 0 else L.SLIP_POS))
+        mi[L.MI_SLIDE_DIR_B + leg] = 1
+    return mi, mf
+
+
+class HybridEngine:
+    """One run of the compiled hybrid model (:func:`scoutsim.numerics.hybrid.run`): its
+    time-series buffers and everything carried from one call to the next (state, modes,
+    controller states, step-size guess, ARK splitting, armed events). :func:`simulate` and
+    the bench rigs (:mod:`scoutsim.identification.rigs`) drive it in chunks of control
+    samples; cutting a run into chunks does not change it."""
+
+    def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
+                 integrator: IntegratorSettings):
+        self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
+        self.dt = dt
+        self.integ = integrator
+        n_total = int(round(duration / dt)) + 1
+        self.k_last = n_total - 1
+        self.cmd = np.zeros(2)
+        self.hwork = np.array([integrator.initial_step, 0.0])
+        self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
+        self.out_t = np.zeros(n_total + 1)
+        self.out_s = np.zeros((n_total + 1, L.NS))
+        self.out_aux = np.zeros((n_total + 1, L.NAUX))
+        self.out_ls = np.zeros((n_total + 1, 6), dtype=np.int8)
+        self.ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
+        self.stats = np.zeros(NSTAT)
+        self.stats[S_HMIN] = np.inf
+        self.armed = np.zeros(L.NEV, dtype=np.bool_)
+        self.n_out = self.nev = self.k = 0
+        self.status = L.ST_RUNNING
+        self.t_now = 0.0
+
+    @property
+    def running(self) -> bool:
+        return self.k <= self.k_last and self.status == L.ST_RUNNING
+
+    def advance(self, k_stop: int, builtin: bool):
+        """Run control samples k .. k_stop - 1 (the compiled controller if ``builtin``,
+        else the held ``self.cmd``)."""
+        self.k, self.n_out, self.nev, self.status, self.t_now = run(
+            self.s, self.P, self.mi, self.mf, self.C, self.ls, self.cmd, self.k,
+            min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
+            self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
+            self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed, self.sfwork,
+            _METHODS[self.integ.method])
+        if self.nev > self.ev.shape[0] - 64:
+            self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
+
+    def outcome(self, interrupted: bool = False) -> str:
+        if interrupted:
+            return "interrupted"
+        return "completed" if self.status == L.ST_RUNNING else L.STATUS_NAMES[self.status]
+
+    def result(self, provenance: dict, interrupted: bool = False,
+               extra_stats: dict | None = None) -> SimulationResult:
+        n = self.n_out
+        return SimulationResult(
+            t=self.out_t[:n].copy(), state=self.out_s[:n].copy(),
+            aux=self.out_aux[:n].copy(), modes=self.out_ls[:n].copy(),
+            events=self.ev[:min(self.nev, self.ev.shape[0])].copy(),
+            outcome=self.outcome(interrupted),
+            t_end=float(self.t_now if self.status != L.ST_RUNNING else self.out_t[n - 1]),
+            stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
+            | (extra_stats or {}),
+            provenance=provenance)
+
+
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,
              model: str = "II", integrator: IntegratorSettings | None = None,
@@ -317,42 +401,19 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         raise TypeError("initial_state must be an InitialState or a HybridState, not "
                         f"{type(init).__name__}")
 
-    n_total = int(round(duration / dt)) + 1
-    k_last = n_total - 1
-    mi = np.zeros(L.NMI, dtype=np.int64)
-    mf = np.zeros(L.NMF)
     ls = np.zeros(2, dtype=np.int64)
-    for leg in range(2):
-        if resume:
+    if resume:
+        mi = np.zeros(L.NMI, dtype=np.int64)
+        mf = np.zeros(L.NMF)
+        for leg in range(2):
             mi[L.MI_CONTACT_B + leg] = init.contact_modes[leg]
             mi[L.MI_MOTOR_B + leg] = init.motor_modes[leg]
             mi[L.MI_SLIDE_DIR_B + leg] = init.slide_directions[leg]
             mf[L.MF_ANCHOR_B + leg] = init.toe_anchors[leg]
             ls[leg] = init.leg_states[leg]
-        else:
-            # a joint at rest starts stuck if stiction can hold it; without stiction it
-            # is never stuck (no event could release it): "slipping" with zero Coulomb
-            # torque is the free, viscously damped joint
-            w = s[L.NQ + 5 + leg]
-            mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 and robot.joint_stiction > 0.0 else
-                                      (L.SLIP_NEG if w < 0 else L.SLIP_POS))
-            mi[L.MI_SLIDE_DIR_B + leg] = 1
-    cmd = np.zeros(2)
-    hwork = np.array([integ.initial_step, 0.0])
-    sfwork = np.zeros((L.NS, 2 * NSTIFF))
-    out_t = np.zeros(n_total + 1)
-    out_s = np.zeros((n_total + 1, L.NS))
-    out_aux = np.zeros((n_total + 1, L.NAUX))
-    out_ls = np.zeros((n_total + 1, 6), dtype=np.int8)
-    ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
-    stats = np.zeros(NSTAT)
-    stats[S_HMIN] = np.inf
-    armed = np.zeros(L.NEV, dtype=np.bool_)
-    n_out = 0
-    nev = 0
-    status = L.ST_RUNNING
-    k = 0
-    t_now = 0.0
+    else:
+        mi, mf = fresh_modes(s, robot.joint_stiction)
+    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ)
     wall0 = time.perf_counter()
     bar = None
     if progress:
@@ -364,37 +425,26 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         user_ctrl.reset(robot, _sensors(s, cparams, model))
     interrupted = False
     try:
-        while k <= k_last and status == L.ST_RUNNING:
+        while eng.running:
             if user_ctrl is not None:
                 sens = _sensors(s, cparams, model)
-                cmd[:] = user_ctrl.command(k * dt, sens)
-                if not np.all(np.isfinite(cmd)):
-                    raise ValueError(f"controller returned non-finite torques {cmd} at t = {k * dt} s")
+                eng.cmd[:] = user_ctrl.command(eng.k * dt, sens)
+                if not np.all(np.isfinite(eng.cmd)):
+                    raise ValueError(f"controller returned non-finite torques {eng.cmd} at "
+                                     f"t = {eng.k * dt} s")
                 states = getattr(user_ctrl, "leg_states", None)
                 if states is not None:
                     ls[:] = states
-            k_stop = min(k + chunk, k_last + 1)
-            k_prev = k
-            k, n_out, nev, status, t_now = run(
-                s, P, mi, mf, C, ls, cmd, k, k_stop, k_last, dt, integ.rtol, integ.atol,
-                user_ctrl is None, hwork, out_t, out_s, out_aux, out_ls, n_out, ev, nev,
-                stats, armed, sfwork, _METHODS[integ.method])
-            if nev > ev.shape[0] - 64:
-                ev = np.concatenate([ev, np.zeros_like(ev)])
+            k_prev = eng.k
+            eng.advance(eng.k + chunk, user_ctrl is None)
             if bar is not None:
-                bar.update(round((k - k_prev) * dt, 6))
+                bar.update(round((eng.k - k_prev) * dt, 6))
     except KeyboardInterrupt:
         interrupted = True
     finally:
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - wall0
-    if interrupted:
-        outcome = "interrupted"
-    elif status == L.ST_RUNNING:
-        outcome = "completed"
-    else:
-        outcome = L.STATUS_NAMES[status]
     provenance = {
         "scoutsim_version": __version__,
         "model": model,
@@ -411,15 +461,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "passive_touchdown_world": passive_touchdown_world,
         "control_period_s": dt,
     }
-    return SimulationResult(
-        t=out_t[:n_out].copy(), state=out_s[:n_out].copy(), aux=out_aux[:n_out].copy(),
-        modes=out_ls[:n_out].copy(), events=ev[:min(nev, ev.shape[0])].copy(),
-        outcome=outcome, t_end=float(t_now if status != L.ST_RUNNING else out_t[n_out - 1]),
-        stats={name: float(stats[i]) for i, name in enumerate(
-            ["rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
-             "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio",
-             "min_step_s", "max_step_s"])} | {"wall_time_s": wall},
-        provenance=provenance)
+    return eng.result(provenance, interrupted, {"wall_time_s": wall})
 
 
 def _sensors(s, cparams, model):

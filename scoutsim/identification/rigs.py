@@ -39,12 +39,10 @@ import numpy as np
 from .. import __version__
 from ..control.bounding import C_TD_B, C_TD_F, controller_array
 from ..model import layout as L
-from ..model.dynamics import NSTIFF
 from ..model.packing import robot_array
-from ..numerics.hybrid import NSTAT, S_HMIN, run
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
-from ..simulation import _METHODS, IntegratorSettings
+from ..simulation import HybridEngine, IntegratorSettings, fresh_modes
 from ..validation.logs import ExperimentLog
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",
@@ -250,63 +248,27 @@ def run_configuration(robot: RobotParameters, model: str, P: np.ndarray, C: np.n
         k on, the controller's touchdown-angle commands [rad].
     """
     s = np.array(s0, dtype=float)
-    n_total = int(round(duration / dt)) + 1
-    k_last = n_total - 1
-    mi = np.zeros(L.NMI, dtype=np.int64)
-    mf = np.zeros(L.NMF)
-    for leg in range(2):
-        w = s[L.NQ + 5 + leg]
-        mi[L.MI_MOTOR_B + leg] = L.STUCK if w == 0.0 else (L.SLIP_POS if w > 0 else L.SLIP_NEG)
-        if P[L.P_TAU_S] <= 0.0 and mi[L.MI_MOTOR_B + leg] == L.STUCK:
-            mi[L.MI_MOTOR_B + leg] = L.SLIP_POS   # no stiction: nothing can hold the gear
-        mi[L.MI_SLIDE_DIR_B + leg] = 1
-    ls = np.zeros(2, dtype=np.int64)
-    cmd_arr = np.zeros(2) if cmd is None else np.array(cmd, dtype=float)
-    C = np.array(C, dtype=float)
+    mi, mf = fresh_modes(s, P[L.P_TAU_S])
     integrator = integrator.resolve(model)
-    hwork = np.array([integrator.initial_step, 0.0])
-    sfwork = np.zeros((L.NS, 2 * NSTIFF))
-    out_t = np.zeros(n_total + 1)
-    out_s = np.zeros((n_total + 1, L.NS))
-    out_aux = np.zeros((n_total + 1, L.NAUX))
-    out_ls = np.zeros((n_total + 1, 6), dtype=np.int8)
-    ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
-    stats = np.zeros(NSTAT)
-    stats[S_HMIN] = np.inf
-    armed = np.zeros(L.NEV, dtype=np.bool_)
-    n_out = nev = k = 0
-    status = L.ST_RUNNING
-    t_now = 0.0
+    eng = HybridEngine(P, np.array(C, dtype=float), s, mi, mf, np.zeros(2, dtype=np.int64),
+                       duration, dt, integrator)
+    if cmd is not None:
+        eng.cmd[:] = cmd
     chunk = max(1, int(round(1.0 / dt)))
     sched = sorted(schedule or [], key=lambda e: e[0])
     si = 0
-    while k <= k_last and status == L.ST_RUNNING:
-        while si < len(sched) and sched[si][0] <= k:
-            C[C_TD_B] = sched[si][1]
-            C[C_TD_F] = sched[si][2]
+    while eng.running:
+        while si < len(sched) and sched[si][0] <= eng.k:
+            eng.C[C_TD_B] = sched[si][1]
+            eng.C[C_TD_F] = sched[si][2]
             si += 1
-        k_stop = min(k + chunk, k_last + 1)
+        k_stop = eng.k + chunk
         if si < len(sched):
             k_stop = min(k_stop, int(sched[si][0]))
-        k, n_out, nev, status, t_now = run(
-            s, P, mi, mf, C, ls, cmd_arr, k, k_stop, k_last, dt, integrator.rtol,
-            integrator.atol, builtin, hwork, out_t, out_s, out_aux, out_ls, n_out, ev, nev,
-            stats, armed, sfwork, _METHODS[integrator.method])
-        if nev > ev.shape[0] - 64:
-            ev = np.concatenate([ev, np.zeros_like(ev)])
-    outcome = "completed" if status == L.ST_RUNNING else L.STATUS_NAMES[status]
-    return SimulationResult(
-        t=out_t[:n_out].copy(), state=out_s[:n_out].copy(), aux=out_aux[:n_out].copy(),
-        modes=out_ls[:n_out].copy(), events=ev[:min(nev, ev.shape[0])].copy(),
-        outcome=outcome,
-        t_end=float(t_now if status != L.ST_RUNNING else out_t[n_out - 1]),
-        stats={name: float(stats[i]) for i, name in enumerate(
-            ["rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
-             "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio",
-             "min_step_s", "max_step_s"])},
-        provenance=dict(provenance or {}, model=model, robot=asdict(robot),
-                        control_period_s=dt, integrator=asdict(integrator),
-                        scoutsim_version=__version__, duration_s=duration))
+        eng.advance(k_stop, builtin)
+    return eng.result(dict(provenance or {}, model=model, robot=asdict(robot),
+                           control_period_s=dt, integrator=asdict(integrator),
+                           scoutsim_version=__version__, duration_s=duration))
 
 
 def _clamped_state(clamp_height, phi_b, phi_f, robot):
