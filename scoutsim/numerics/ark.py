@@ -164,17 +164,8 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
             tmp[i] = r
             for a in range(R):
                 m[a] += SF0[i, R + a] * r
-        # Y = W^-1 rhs = rhs + h gamma U S^-1 V^T rhs
-        for a in range(R):
-            acc = 0.0
-            for b in range(R):
-                acc += Si[a, b] * m[b]
-            pp[a] = hg * acc
-        for i in range(NS):
-            acc = tmp[i]
-            for a in range(R):
-                acc += SF0[i, a] * pp[a]
-            tmp[i] = acc
+        # Y = W^-1 rhs
+        apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
         # z = V^T Y = m + (V^T U) p
         for a in range(R):
             acc = m[a]
@@ -200,17 +191,10 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         tmp[i] = e
         for a in range(R):
             m[a] += SF0[i, R + a] * e
-    for a in range(R):
-        acc = 0.0
-        for b in range(R):
-            acc += Si[a, b] * m[b]
-        pp[a] = hg * acc
+    apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
     err = 0.0
     for i in range(NS):
         e = tmp[i]
-        for a in range(R):
-            e += SF0[i, a] * pp[a]
-        tmp[i] = e
         sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
         err += (e / sc) ** 2
     err = np.sqrt(err / NS)
@@ -220,6 +204,22 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
             ok = False
         nfev += 1
     return err, ok, nfev
+
+
+@njit(cache=True)
+def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
+    """x := W^-1 x = x + h gamma U S^-1 V^T x (Sherman-Morrison-Woodbury), given
+    m = V^T x and Si = S^-1 = (I - h gamma V^T U)^-1; leaves p = h gamma S^-1 m in pp."""
+    for a in range(R):
+        acc = 0.0
+        for b in range(R):
+            acc += Si[a, b] * m[b]
+        pp[a] = hg * acc
+    for i in range(NS):
+        acc = x[i]
+        for a in range(R):
+            acc += SF0[i, a] * pp[a]
+        x[i] = acc
 
 
 @njit(cache=True)
