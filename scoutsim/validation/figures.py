@@ -76,6 +76,14 @@ def _sources(exp: Source, models: dict) -> list:
     return [exp] + list(models.values())
 
 
+def _shown(exp: Source, models: dict):
+    """(index, source, log, stride, steady) of every source that has a stride to show."""
+    for i, src in enumerate(_sources(exp, models)):
+        rep = src.representative()
+        if rep is not None:
+            yield (i, src) + tuple(rep)
+
+
 def _tag(src: Source, steady: bool) -> str:
     if steady:
         return src.label
@@ -328,11 +336,7 @@ def fig8(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     fig = Figure(figsize=(11, 4.5), layout="constrained")
     ax_p, ax_h = fig.subplots(1, 2)
     ext = _Extent()
-    for i, src in enumerate(_sources(exp, mods)):
-        rep = src.representative()
-        if rep is None:
-            continue
-        lg, st, steady = rep
+    for i, src, lg, st, steady in _shown(exp, mods):
         k = _sel(lg, st.t_start, st.t_end)
         tt = lg.t[k] - st.t_start
         lab = f"{_tag(src, steady)}, period {st.period_s:.3f} s"
@@ -366,11 +370,7 @@ def _step_figure(exp, mods, rows, title, path):
                         gridspec_kw={"height_ratios": [3] * len(rows) + [1.4]})
     missing = []
     ext = _Extent()
-    for i, src in enumerate(_sources(exp, mods)):
-        rep = src.representative()
-        if rep is None:
-            continue
-        lg, st, steady = rep
+    for i, src, lg, st, steady in _shown(exp, mods):
         kw = _line_kw(src, i, steady)
         for c, leg in enumerate(_LEGS):
             win = _leg_window(lg, st, leg)
@@ -461,11 +461,7 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
                                  for lg, s in pts])
             ax.plot(xs, ys, ls="none", marker=".", ms=1.5, color="0.65", alpha=0.5,
                     label=f"experiment, all {len(pts)} steady strides")
-        for i, src in enumerate(_sources(exp, mods)):
-            rep = src.representative()
-            if rep is None:
-                continue
-            lg, st, steady = rep
+        for i, src, lg, st, steady in _shown(exp, mods):
             win = _leg_window(lg, st, leg)
             if win is None:
                 missing.append(f"{src.label}: no complete {leg} step")
