@@ -65,7 +65,7 @@ def controller_array(c: ControllerParameters | None) -> np.ndarray:
     return a
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def retraction_torque(rate, P):
     """Stance-retraction command, eqs. (2)-(5) at the leg, per physical leg [N m].
 
@@ -84,7 +84,7 @@ def retraction_torque(rate, P):
     return tau
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sensed(s, C, leg):
     """Sensor readings (angle [rad], rate [rad/s], leg length [m]) of one leg."""
     if C[C_SENSE_ALPHA] > 0.5:
@@ -92,7 +92,7 @@ def sensed(s, C, leg):
     return s[IPHB + leg], s[NQ + IPHB + leg], s[IL_B + leg]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def bounding_step(s, P, C, ls, cmd, transitions):
     """One controller sample: update leg states ``ls`` and hold commands ``cmd``.
 

@@ -39,7 +39,7 @@ MAX_KKT = NQ + MAX_ROWS
 NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def solve_dense(A, b, n):
     """Solve A[:n,:n] x = b[:n] in place by Gaussian elimination with partial pivoting
     (:func:`lu_factor` then :func:`lu_solve`; deterministic, systems of at most 13 x 13).
@@ -51,21 +51,21 @@ def solve_dense(A, b, n):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def hip_position(q, P, leg):
     """Hip position (hx, hy) [m] of virtual leg ``leg`` (0 back, 1 front), SPEC.md 1."""
     sL = (2.0 * leg - 1.0) * P[P_L]
     return q[0] + sL * math.cos(q[2]), q[1] + sL * math.sin(q[2])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def hip_velocity(q, dq, P, leg):
     """Hip velocity [m/s]."""
     sL = (2.0 * leg - 1.0) * P[P_L]
     return dq[0] - sL * math.sin(q[2]) * dq[2], dq[1] + sL * math.cos(q[2]) * dq[2]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project(q, dq, l, P, mi, mf):
     """Make the dependent coordinates consistent with the active constraints (in place).
 
@@ -126,7 +126,7 @@ def project(q, dq, l, P, mi, mf):
             dq[5 + leg] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mass_matrix(q, P, M):
     """Fill M (7 x 7) with the generalized mass matrix at q (SPEC.md 2, 5)."""
     for i in range(NQ):
@@ -176,7 +176,7 @@ def mass_matrix(q, P, M):
             M[i, j] = M[j, i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def coriolis(q, dq, P, h):
     """Fill h (7) with the velocity-product terms, M ddq + h = Q (leg bodies only)."""
     for i in range(NQ):
@@ -199,7 +199,7 @@ def coriolis(q, dq, P, h):
         h[3 + leg] += ml * d * (math.cos(g) * ax + math.sin(g) * ay)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def kinetic_energy(q, dq, P):
     """Kinetic energy 1/2 dq^T M dq [J]."""
     M = np.empty((NQ, NQ))
@@ -211,7 +211,7 @@ def kinetic_energy(q, dq, P):
     return 0.5 * e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def potential_energy(q, l, P):
     """Gravity + leg springs + Model II belt springs [J]."""
     g = P[P_G]
@@ -230,7 +230,7 @@ def potential_energy(q, l, P):
     return e
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def motor_current(cmd_torque, omega_m, vb, P):
     """Motor current [A] delivered for a commanded leg torque (per physical leg) [N m].
 
@@ -268,7 +268,7 @@ def motor_current(cmd_torque, omega_m, vb, P):
 LOSS_SPEED_REG = 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _loss_branch(tau0, d, idle, cl):
     """Delivered torque for output motion in direction d = +-1 (see delivered_torque)."""
     if tau0 * d > 0.0:                      # motoring: forward power flow
@@ -279,7 +279,7 @@ def _loss_branch(tau0, d, idle, cl):
     return -d * (abs(tau0) + idle) / (1.0 - cl)   # back-driven: reverse power flow
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def delivered_torque(cur, omega_m, P):
     """Torque delivered to the leg / driven gear, per physical leg [N m], for motor current
     ``cur`` [A] at motor speed ``omega_m`` relative to the torso [rad/s] (docs/model.md,
@@ -305,7 +305,7 @@ def delivered_torque(cur, omega_m, P):
             + 0.5 * (1.0 - w) * _loss_branch(tau0, -1.0, idle, cl))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def battery_voltage(dq, cmd, P):
     """Battery terminal voltage V_b [V] (SPEC.md 4).
 
@@ -331,7 +331,7 @@ def battery_voltage(dq, cmd, P):
     return vb
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def add_clamp_rows(P, R, r, rkind, rleg, nr):
     """Bench-rig clamps as constraint rows (issue 5, docs/identification.md): with
     P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (kind 5); with P_CLAMP_LEGS also ddphi = 0 for
@@ -354,7 +354,7 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
     return nr
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
     for cross-checks of the optimized :func:`evaluate_ws`.
@@ -652,14 +652,14 @@ LG_FAX, LG_LDOT, LG_GT, LG_GN, LG_TOEX, LG_TOEY, LG_TOEVX, LG_CUR, LG_OM, LG_TAP
     LG_TBELT, LG_TFRIC, LG_HOLD, LG_STRUT = range(14)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def new_eval_workspace():
     """Scratch arrays for :func:`evaluate_ws` (wk, wA, piv)."""
     return (np.zeros(WK_SIZE), np.zeros((WA_ROWS, MAX_KKT)),
             np.zeros(MAX_KKT, dtype=np.int64))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def lu_factor(A, piv, n):
     """LU factorization with partial pivoting of A[:n,:n] in place (multipliers below the
     diagonal, row interchanges in piv). The same operations as :func:`solve_dense`, so
@@ -699,7 +699,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def lu_solve(A, piv, b, o, n):
     """Solve with the factors of :func:`lu_factor`; right-hand side b[o:o+n], in place."""
     for k in range(n):
@@ -720,7 +720,7 @@ def lu_solve(A, piv, b, o, n):
         b[o + i] = acc / A[i, i]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
     """Assemble and factor the KKT matrix with the Model II gear coordinates eliminated.
 
@@ -754,7 +754,7 @@ def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
     return lu_factor(A, piv, n), n
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo):
     """Solve the full KKT system [M R^T; R 0] x = b[o:o+nact+nr] (in place, original
     ordering) with the factors of :func:`kkt_reduced_factor`; y[yo:] is scratch."""
@@ -793,8 +793,8 @@ def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, y
         b[o + i] = y[yo + i]
 
 
-@njit(cache=True)
-def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
+@njit(cache=True, error_model="numpy")
+def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want_aux=True):
     """:func:`evaluate` without allocations, on the scratch arrays of
     :func:`new_eval_workspace`.
 
@@ -806,7 +806,10 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
     matrix (from the same factorization), w = e_alpha - e_phi, Pi_v / Pi_q the
     derivatives of the velocity / position projections; plus the motor-side damping on
     alpha (joint friction b_J, back-EMF while on the torque-speed line),
-    -npl G e_alpha d_m e_alpha^T. Zero in the other models."""
+    -npl G e_alpha d_m e_alpha^T. Zero in the other models.
+
+    ``want_aux=False`` (the integrators' inner stages, whose outputs nobody reads) skips the
+    outputs: aux is then left as it was, except ``aux[A_KKT_OK]``."""
     model = int(P[P_MODEL])
     nact = 7 if model == MODEL_II else 5
     q = wk[WK_Q:WK_Q + NQ]
@@ -1054,7 +1057,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
 
     # kinetic energy before the factorization
     ekin = 0.0
-    for i in range(NQ):
+    for i in range(NQ if want_aux else 0):
         acc = 0.0
         for j in range(NQ):
             acc += M[i, j] * dq[j]
@@ -1174,6 +1177,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
                     stiff[NQ + i, 2 + leg] = -npl * b2[i]
                 stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
 
+    if not want_aux:
+        aux[A_KKT_OK] = 1.0 if ok else 0.0
+        return ok
     for rr in range(nr):
         lam = -b[nact + rr] if ok else 0.0
         leg = int(rleg[rr])
@@ -1220,7 +1226,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff):
     return ok
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def evaluate(s, P, mi, mf, cmd, ds, aux):
     """Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
 
@@ -1247,14 +1253,14 @@ def evaluate(s, P, mi, mf, cmd, ds, aux):
     return evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, False, stiff)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def project_state(s, P, mi, mf):
     """Project the dependent coordinates of a full state vector in place."""
     # views: project() writes the dependent coordinates straight into s
     project(s[0:NQ], s[NQ:2 * NQ], s[IL_B:IL_B + 2], P, mi, mf)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def impact(s, P, mi, mf, out):
     """Rigid-body impact onto the constraints of the current modes (SPEC.md 3), in place.
 

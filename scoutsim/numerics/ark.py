@@ -27,7 +27,13 @@ import numpy as np
 from numba import njit
 
 from ..model.dynamics import NSTIFF, evaluate_ws
-from ..model.layout import NS
+from ..model.layout import NQ, NS
+
+# U (the first NSTIFF columns of the stiff factors) is zero outside the acceleration rows
+# NQ .. 2 NQ - 1 of the state (evaluate_ws: U = -npl G w, G the constrained inverse mass
+# matrix); the loops over U skip the zero rows.
+U0 = NQ
+U1 = 2 * NQ
 
 NSTAGE = 6
 Z_ROWS = NSTAGE + 2 * NSTIFF + 3 + 4   # rows of the scratch array Z (2 NSTIFF columns)
@@ -97,7 +103,7 @@ EW3 = B3 - BHAT3
 AD3 = AI3 - AE3
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
          eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
@@ -105,7 +111,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
                     Z, eval_end, want_sf, AE, AD, B, EW, GAMMA, NSTAGE)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
           eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
@@ -113,7 +119,7 @@ def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1
                     Z, eval_end, want_sf, AE3, AD3, B3, EW3, GAMMA3, 4)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
              eval_end, want_sf, AE, AD, B, EW, GAMMA, ns):
     """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
@@ -132,7 +138,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     for a in range(R):
         for b in range(R):
             acc = 0.0
-            for i in range(NS):
+            for i in range(U0, U1):
                 acc += SF0[i, R + a] * SF0[i, b]
             VU[a, b] = acc
         acc = 0.0
@@ -159,8 +165,9 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
                 if c != 0.0:
                     acc += c * K[j, i]
             r = y[i] + h * acc
-            for a in range(R):
-                r += SF0[i, a] * w[a]
+            if i >= U0 and i < U1:
+                for a in range(R):
+                    r += SF0[i, a] * w[a]
             tmp[i] = r
             for a in range(R):
                 m[a] += SF0[i, R + a] * r
@@ -173,7 +180,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
                 acc += VU[a, b] * pp[b]
             Z[st, a] = acc
         if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
-                           ew[3]):
+                           ew[3], False):
             ok = False
         nfev += 1
     # error estimate, filtered through W^-1 (Hairer & Wanner IV.8: the raw difference
@@ -206,7 +213,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     return err, ok, nfev
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
     """x := W^-1 x = x + h gamma U S^-1 V^T x (Sherman-Morrison-Woodbury), given
     m = V^T x and Si = S^-1 = (I - h gamma V^T U)^-1; leaves p = h gamma S^-1 m in pp."""
@@ -215,14 +222,14 @@ def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
         for b in range(R):
             acc += Si[a, b] * m[b]
         pp[a] = hg * acc
-    for i in range(NS):
+    for i in range(U0, U1):
         acc = x[i]
         for a in range(R):
             acc += SF0[i, a] * pp[a]
         x[i] = acc
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def invert_small(VU, hg, Si, R, M):
     """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4); M (4, 8) is
     scratch."""
@@ -259,7 +266,7 @@ def invert_small(VU, hg, Si, R, M):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dense(y, y1, h, K, theta, out):
     """Cubic Hermite continuous extension on (y, K[0]) -> (y1, K[6]) at t + theta*h."""
     t2 = theta * theta

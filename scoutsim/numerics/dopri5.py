@@ -42,7 +42,7 @@ PD = np.array([
 ])
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
     """One Dormand-Prince step of size h from y, with K[0] = f(y) already filled.
 
@@ -61,8 +61,9 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
         if st == 6:
             for i in range(NS):
                 y_new[i] = tmp[i]
+        # the outputs (aux_new) are needed at y_new only (the last stage)
         if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
-                           ew[3]):
+                           ew[3], st == 6):
             ok = False
     err = 0.0
     for i in range(NS):
@@ -75,7 +76,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
     return np.sqrt(err / NS), ok
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def dense(y, h, K, theta, out):
     """Continuous extension: state at t + theta*h (0 <= theta <= 1) after a step from y."""
     t1 = theta
@@ -96,7 +97,7 @@ def new_workspace():
     return (np.zeros((7, NS)), np.zeros(NS), np.zeros(NS), np.zeros(NAUX))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eval_workspace():
     """Evaluation workspace tuple (wk, wA, piv, stiff) for :func:`evaluate_ws`."""
     wk, wA, piv = new_eval_workspace()

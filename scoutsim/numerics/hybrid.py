@@ -63,14 +63,19 @@ NSTAT = 10
 EVENT_TIME_TOL = 1e-13
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
 MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
+# A control period starts with one step over the whole period when the carried step-size
+# guess is at least this fraction of it (the command has just changed, so the guess is
+# only a guess; measured on 10 s of Model II at the default tolerance: 8 % fewer
+# evaluations than starting from the guess, gait metrics within 2e-5 of the reference)
+WHOLE_PERIOD_FRACTION = 0.5
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def body_weight(P):
     return (P[P_MT] + 2.0 * P[P_NP] * P[P_ML]) * P[P_G]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
@@ -111,7 +116,7 @@ def event_values(s, aux, P, mi, out):
     out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def log_event(ev, nev, t, kind, leg, v1, v2, v3):
     if nev < ev.shape[0]:
         ev[nev, 0] = t
@@ -123,19 +128,19 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
     return nev + 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def leave_contact(s, mi, leg):
     """Switch a leg to flight (its current leg length is kept as the toe's state)."""
     mi[MI_CONTACT_B + leg] = FLIGHT
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
     return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace())
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
@@ -227,7 +232,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     return nev
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     """Pin the toe where it touched the ground and apply the impact (SPEC.md 3)."""
     o = leg * NAUX_LEG
@@ -261,7 +266,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     return nev, ok
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     """Mode transition for event slot k at time t (state s already at the event)."""
     ok = True
@@ -327,7 +332,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     return nev, ok
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def record_friction(aux, P, mi, stats):
     """Track the largest friction ratio |Ft|/Fn needed by a pinned toe (Fn > 5 % weight)."""
     W = body_weight(P)
@@ -342,7 +347,7 @@ def record_friction(aux, P, mi, stats):
                     stats[S_MAX_FRICTION] = r
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
             Z, eval_end, want_sf=True):
     """One step of the selected method; returns (error_norm, ok, evaluations).
@@ -357,7 +362,7 @@ def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew
     return err, ok, 6
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
@@ -367,7 +372,7 @@ def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
 AdvanceScratch = namedtuple("AdvanceScratch", "e_end pending mi_before e_tmp aux_tmp")
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
             ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z, sc,
             fresh=False):
@@ -401,6 +406,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         if e_old[i] > 0.0:
             armed[i] = True
     h = hwork[0]
+    if h >= WHOLE_PERIOD_FRACTION * (t_end - t):
+        h = t_end - t
     while t < t_end:
         remaining = t_end - t
         last = False
@@ -584,7 +591,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     return t, nev, ST_RUNNING
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
     """Append one row (time, state, outputs, leg states and modes) to the time series."""
     out_t[n_out] = t
@@ -601,7 +608,7 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
     return n_out + 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork,
         method=METHOD_AUTO):
