@@ -207,7 +207,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     err = np.sqrt(err / NS)
     if ok and (eval_end or err <= 1.0):
         if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew[0], ew[1], ew[2], want_sf,
-                           SF1):
+                           SF1, True):
             ok = False
         nfev += 1
     return err, ok, nfev

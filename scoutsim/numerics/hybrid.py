@@ -156,7 +156,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
     for _ in range(12):
         project_state(s, P, mi, mf)
-        evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
+        evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
         changed = False
         for leg in range(2):
             o = leg * NAUX_LEG
@@ -198,7 +198,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
                     mi[MI_CONTACT_B + leg] = STICK
                     mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
                     project_state(s, P, mi, mf)
-                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
+                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
                     if abs(aux[o + A_GT]) > P[P_MU] * aux[o + A_GN] * (1.0 + 1e-9) + 1e-9 * W:
                         mi[MI_CONTACT_B + leg] = SLIDE
                         mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
@@ -217,7 +217,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
                     # moving against its friction direction: re-examine as stuck
                     mi[MI_MOTOR_B + leg] = STUCK
                     project_state(s, P, mi, mf)
-                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
+                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
                     hold = aux[o + A_HOLD]
                     if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
                         mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
@@ -228,7 +228,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
             # ds and aux are those of the (projected) state as it stands
             return nev
     project_state(s, P, mi, mf)
-    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
     return nev
 
 
@@ -366,7 +366,7 @@ def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
-                       method >= METHOD_ARK4, SF0)
+                       method >= METHOD_ARK4, SF0, True)
 
 
 AdvanceScratch = namedtuple("AdvanceScratch", "e_end pending mi_before e_tmp aux_tmp")
@@ -462,7 +462,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                         else:
                             dense(s, h, K, th, ybuf)
                         evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False,
-                                    ew[3])
+                                    ew[3], True)
                         stats[S_NFEV] += 1
                         project_state(ybuf, P, mi, mf)
                         event_values(ybuf, aux_tmp, P, mi, e_tmp)
@@ -497,7 +497,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 t = t + he
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
-            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3])
+            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3], True)
             n_events_here += 1
             if n_events_here > MAX_EVENTS_PER_PERIOD:
                 return t, nev, ST_NUMERICAL_FAILURE
@@ -673,7 +673,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         hwork[1] = 1.0
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
-            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3])
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
             n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
             return k + 1, n_out, nev, status, t
         k += 1

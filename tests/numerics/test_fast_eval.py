@@ -64,7 +64,7 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
                 d2 = np.zeros(L.NS)
                 a2 = np.zeros(L.NAUX)
                 ok1 = D.evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
-                ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st)
+                ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st, True)
                 assert ok1 == ok2
                 for x, y in ((d1, d2), (a1, a2)):
                     # evaluate_ws eliminates the gear coordinates before the KKT solve
@@ -84,7 +84,7 @@ def test_stiff_factors_capture_belt_eigenvalues():
     aux = np.zeros(L.NAUX)
     for s, mi, mf, cmd in cases[::6]:
         f0 = np.zeros(L.NS)
-        D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, wk, wA, piv, True, st)
+        D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, wk, wA, piv, True, st, True)
         J = np.zeros((L.NS, L.NS))
         for j in range(L.NS):
             e = 1e-7 * max(1.0, abs(s[j]))
