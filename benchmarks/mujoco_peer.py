@@ -717,8 +717,7 @@ def main(argv=None):
         best = max(within, key=lambda r: r["rtf"])
         print(f"MATCHED: MuJoCo {best['integ']} dt={best['dt']:g} is within {100 * tol:g} % of "
               f"scoutsim's reference on every metric (max dev {100 * best['dev']:.2f} %, "
-              f"{SHORT[best['where']]}); RTF scoutsim {rtf_s:.1f}x / MuJoCo {best['rtf']:.2f}x "
-              f"= {rtf_s / best['rtf']:.1f}")
+              f"{SHORT[best['where']]}); {rtf_ratio(rtf_s, best['rtf'])}")
         same = [r for r in rows if r["integ"] == best["integ"] and math.isfinite(r["dev"])]
         fine = min(same, key=lambda r: r["dt"])
         if fine["dt"] < best["dt"]:
@@ -734,7 +733,7 @@ def main(argv=None):
             print(f"NOT MATCHED: no MuJoCo time step comes within {100 * tol:g} % of scoutsim's "
                   f"reference on every metric; closest MuJoCo {best['integ']} dt={best['dt']:g}, "
                   f"max dev {100 * best['dev']:.2f} % ({SHORT[best['where']]}); at that step "
-                  f"RTF scoutsim {rtf_s:.1f}x / MuJoCo {best['rtf']:.2f}x = {rtf_s / best['rtf']:.1f}")
+                  f"{rtf_ratio(rtf_s, best['rtf'])}")
         else:
             print("NOT MATCHED: no MuJoCo run reached a steady gait")
     # matched numerical accuracy: each simulator against its own converged solution
@@ -748,13 +747,18 @@ def main(argv=None):
             r = max(ok, key=lambda r: r["dt"])
             dv = rel_dev(r["vals"], fine["vals"])[0]
             print(f"self-convergence {integ}: dt={r['dt']:g} is within {100 * tol:g} % of MuJoCo's own "
-                  f"dt={fine['dt']:g} (max dev {100 * dv:.2f} %): RTF scoutsim {rtf_s:.1f}x / MuJoCo "
-                  f"{r['rtf']:.2f}x = {rtf_s / r['rtf']:.1f}")
+                  f"dt={fine['dt']:g} (max dev {100 * dv:.2f} %): {rtf_ratio(rtf_s, r['rtf'])}")
         else:
             print(f"self-convergence {integ}: no coarser step within {100 * tol:g} % of dt={fine['dt']:g}; "
-                  f"at dt={fine['dt']:g}: RTF scoutsim {rtf_s:.1f}x / MuJoCo {fine['rtf']:.2f}x = "
-                  f"{rtf_s / fine['rtf']:.1f}")
+                  f"at dt={fine['dt']:g}: {rtf_ratio(rtf_s, fine['rtf'])}")
     return 0
+
+
+
+def rtf_ratio(rtf_scoutsim: float, rtf_mujoco: float) -> str:
+    """'RTF scoutsim ..x / MuJoCo ..x = ratio', the benchmark's speed comparison."""
+    return (f"RTF scoutsim {rtf_scoutsim:.1f}x / MuJoCo {rtf_mujoco:.2f}x = "
+            f"{rtf_scoutsim / rtf_mujoco:.1f}")
 
 
 if __name__ == "__main__":

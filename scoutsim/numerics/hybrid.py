@@ -38,14 +38,12 @@ from . import ark
 from .dopri5 import dense, eval_workspace, step
 
 # integration methods (``run(..., method)``)
-METHOD_AUTO = -1      # currently DOPRI5 for every model (see below)
+# (the user-level choice, e.g. ARK3 for Model II at the default tolerance, is made by
+# ``simulation.IntegratorSettings.resolve``; run() itself maps AUTO to DOPRI5)
+METHOD_AUTO = -1      # DOPRI5
 METHOD_DOPRI5 = 0     # explicit Dormand-Prince 5(4): the reference
-METHOD_ARK4 = 1       # experimental: additive RK 4(3), belt spring-dampers implicit (ark.py)
+METHOD_ARK4 = 1       # additive RK 4(3), belt spring-dampers implicit (ark.py; Model II)
 METHOD_ARK3 = 2       # additive RK 3(2) (ark.py, ARK3(2)4L[2]SA), same splitting
-# ARK4 is accurate (10 s Model II gait metrics within 3e-6 of the rtol 1e-10 reference) but
-# at the default tolerances not yet faster than DOPRI5: its step is limited by the
-# accuracy of the stiff components where the analytic stiff factors miss couplings (slide
-# mode friction torque), so AUTO keeps DOPRI5 until it is.
 
 # integrator statistics slots
 S_NFEV = 0

@@ -75,6 +75,25 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
     assert worst < 1e-10
 
 
+def test_inner_stage_evaluation_skips_only_the_outputs():
+    """want_aux=False (the integrators' inner stages) gives the same derivative and stiff
+    factors bit for bit and leaves the outputs untouched (except the KKT flag)."""
+    P, cases = _cases(RobotParameters(), "II", 0.8)
+    wk, wA, piv = D.new_eval_workspace()
+    for s, mi, mf, cmd in cases:
+        st1 = np.zeros((L.NS, 2 * D.NSTIFF))
+        st2 = np.zeros((L.NS, 2 * D.NSTIFF))
+        d1, d2 = np.zeros(L.NS), np.zeros(L.NS)
+        a1 = np.zeros(L.NAUX)
+        a2 = np.full(L.NAUX, 7.0)
+        ok1 = D.evaluate_ws(s, P, mi, mf, cmd, d1, a1, wk, wA, piv, True, st1, True)
+        ok2 = D.evaluate_ws(s, P, mi, mf, cmd, d2, a2, wk, wA, piv, True, st2, False)
+        assert ok1 == ok2
+        assert np.array_equal(d1, d2) and np.array_equal(st1, st2)
+        assert a2[L.A_KKT_OK] == a1[L.A_KKT_OK]
+        assert np.all(np.delete(a2, L.A_KKT_OK) == 7.0)
+
+
 def test_stiff_factors_capture_belt_eigenvalues():
     """U V^T has (nearly) the two fastest eigenvalues of the full Jacobian, and what it
     leaves to the explicit part is not stiff."""
