@@ -265,20 +265,14 @@ def simulate_model(model: str, duration: float, robot=None, controller=None,
                    like=None, transient_s: float = 2.0, progress: bool = False) -> ModelRun:
     """Simulate one model and measure it like the log ``like`` (noise-free)."""
     from ..simulation import simulate
-    from .measurement import LaserGeometry, to_log
-    kw = {}
-    if like is not None:
-        kw = dict(geometry=LaserGeometry(float(like.meta["laser_half_spacing_m"]),
-                                         float(like.meta["laser_mount_offset_m"])),
-                  lowpass_hz=like.meta.get("lowpass_hz"),
-                  lowpass_transition_hz=float(like.meta.get("lowpass_transition_hz") or 0.0))
+    from .measurement import to_log_like
     res = simulate(robot, controller, initial_state, duration, model=model,
                    integrator=integrator, friction_coefficient=friction_coefficient,
                    progress=progress)
     if res.outcome == "numerical_failure":
         return ModelRun(model, res.outcome, float(res.t_end), None,
                         status=f"numerical failure at t = {res.t_end:.3f} s", result=res)
-    log = to_log(res, **kw)
+    log = to_log_like(res, like)
     gait = log_strides(log, transient_s=transient_s) if len(log.t) > 2 else None
     run = ModelRun(model, res.outcome, float(res.t_end), gait, result=res)
     if gait is None or gait.n_steady_strides == 0:

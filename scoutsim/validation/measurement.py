@@ -227,3 +227,16 @@ def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
                        "initial_state": prov.get("initial_state"), "robot": robot},
     }
     return ExperimentLog(columns=cols, meta=meta, path=None)
+
+
+def to_log_like(result, like: ExperimentLog | None = None) -> ExperimentLog:
+    """:func:`to_log` (noise-free) with the laser geometry and filter of the log ``like``
+    (its metadata), or the defaults without one: a simulation measured the way an
+    experiment was."""
+    kw = {}
+    if like is not None:
+        kw = dict(geometry=LaserGeometry(float(like.meta["laser_half_spacing_m"]),
+                                         float(like.meta["laser_mount_offset_m"])),
+                  lowpass_hz=like.meta.get("lowpass_hz"),
+                  lowpass_transition_hz=float(like.meta.get("lowpass_transition_hz") or 0.0))
+    return to_log(result, **kw)

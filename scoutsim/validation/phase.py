@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .logs import ExperimentLog
+from .measurement import to_log_like
 from .strides import LogGait, log_strides
 
 __all__ = ["SIGNALS", "Source", "as_source", "as_sources", "resample_strides",
@@ -138,17 +139,6 @@ class Source:
         return None
 
 
-def _measure_like(result, like: ExperimentLog | None) -> ExperimentLog:
-    from .measurement import LaserGeometry, to_log
-    kw = {}
-    if like is not None:
-        kw = dict(geometry=LaserGeometry(float(like.meta["laser_half_spacing_m"]),
-                                         float(like.meta["laser_mount_offset_m"])),
-                  lowpass_hz=like.meta.get("lowpass_hz"),
-                  lowpass_transition_hz=float(like.meta.get("lowpass_transition_hz") or 0.0))
-    return to_log(result, **kw)
-
-
 def _status(name, result, gait: LogGait | None) -> str:
     if gait is not None and gait.n_steady_strides > 0:
         return "ok"
@@ -180,7 +170,7 @@ def as_source(obj, name: str | None = None, like: ExperimentLog | None = None,
         obj = obj.result
     if isinstance(obj, SimulationResult):
         name = name or (obj.provenance or {}).get("model") or "model"
-        lg = _measure_like(obj, like)
+        lg = to_log_like(obj, like)
         gait = log_strides(lg, transient_s=transient_s) if len(lg.t) > 2 else None
         return Source(name, [lg] if gait is not None else [],
                       [gait] if gait is not None else [], _status(name, obj, gait), obj)
