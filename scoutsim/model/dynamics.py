@@ -80,6 +80,10 @@ def project(q, dq, l, P, mi, mf):
       l = l0;
     * massive leg in flight: l limited to the stop l0 (and = l0 for an undamped leg);
     * ideal / Model I / passive: alpha := phi; Model II stuck motor joint: dalpha = 0.
+
+    Returns (sin theta, cos theta, sin g_b, cos g_b, sin g_f, cos g_f) of the projected
+    configuration, g = theta + phi the leg's angle from the world vertical (for a pinned
+    toe straight from the toe-hip vector), for :func:`evaluate_ws` to reuse.
     """
     model = int(P[P_MODEL])
     l0 = P[P_L0]
@@ -92,25 +96,36 @@ def project(q, dq, l, P, mi, mf):
         if P[P_CLAMP_LEGS] > 0.5:
             dq[3] = 0.0
             dq[4] = 0.0
+    sth = math.sin(q[2])
+    cth = math.cos(q[2])
+    sg0 = 0.0
+    cg0 = 1.0
+    sg1 = 0.0
+    cg1 = 1.0
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        hx, hy = hip_position(q, P, leg)
-        hvx, hvy = hip_velocity(q, dq, P, leg)
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        hx = q[0] + sL * cth
+        hy = q[1] + sL * sth
+        hvx = dq[0] - sL * sth * dq[2]
+        hvy = dq[1] + sL * cth * dq[2]
         if mode == STICK or mode == STRUT:
             px = mf[MF_ANCHOR_B + leg]
             ddx = px - hx
             ddy = -hy
             ll = math.sqrt(ddx * ddx + ddy * ddy)
             g = math.atan2(ddx, -ddy)
-            sg = math.sin(g)
-            cg = math.cos(g)
+            sg = ddx / ll
+            cg = -ddy / ll
             q[3 + leg] = g - q[2]
             dg = -(hvx * cg + hvy * sg) / ll
             dq[3 + leg] = dg - dq[2]
             l[leg] = ll
         elif mode == SLIDE:
             g = q[2] + q[3 + leg]
-            l[leg] = hy / math.cos(g)
+            sg = math.sin(g)
+            cg = math.cos(g)
+            l[leg] = hy / cg
         else:
             if massless:
                 td = P[P_TD_B + leg]
@@ -124,11 +139,21 @@ def project(q, dq, l, P, mi, mf):
             else:
                 if P[P_C] <= 0.0 or l[leg] > l0:
                     l[leg] = l0
+            g = q[2] + q[3 + leg]
+            sg = math.sin(g)
+            cg = math.cos(g)
+        if leg == 0:
+            sg0 = sg
+            cg0 = cg
+        else:
+            sg1 = sg
+            cg1 = cg
         if model != MODEL_II:
             q[5 + leg] = q[3 + leg]
             dq[5 + leg] = dq[3 + leg]
         elif mi[MI_MOTOR_B + leg] == STUCK:
             dq[5 + leg] = 0.0
+    return sth, cth, sg0, cg0, sg1, cg1
 
 
 @njit(cache=True, error_model="numpy")
@@ -344,6 +369,8 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
     row count."""
     if P[P_CLAMP_TORSO] > 0.5:
         for j in range(3):
+            for jj in range(NQ):
+                R[nr, jj] = 0.0
             R[nr, j] = 1.0
             r[nr] = 0.0
             rkind[nr] = 5
@@ -351,6 +378,8 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
             nr += 1
         if P[P_CLAMP_LEGS] > 0.5:
             for leg in range(2):
+                for jj in range(NQ):
+                    R[nr, jj] = 0.0
                 R[nr, 3 + leg] = 1.0
                 r[nr] = 0.0
                 rkind[nr] = 6
@@ -760,9 +789,10 @@ def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo):
+def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo, schur):
     """Solve the full KKT system [M R^T; R 0] x = b[o:o+nact+nr] (in place, original
-    ordering) with the factors of :func:`kkt_reduced_factor`; y[yo:] is scratch."""
+    ordering) with the factors of :func:`kkt_schur_factor` (``schur``) or
+    :func:`kkt_reduced_factor`; y[yo:] is scratch."""
     m = 5
     for i in range(m):
         y[yo + i] = b[o + i]
@@ -777,7 +807,10 @@ def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, y
             continue
         y[yo + m + nc] = b[o + nact + rr]
         nc += 1
-    lu_solve(A, piv, y, yo, m + nc)
+    if schur:
+        kkt_schur_solve(A, nc, y, yo)
+    else:
+        lu_solve(A, piv, y, yo, m + nc)
     ddth = y[yo + 2]
     if nact == 7:
         if free0:
@@ -796,6 +829,174 @@ def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, y
             nc += 1
     for i in range(m):
         b[o + i] = y[yo + i]
+
+
+# --- structured KKT solve (Schur complements) ----------------------------------------------
+# Layout of the factors in A (MAX_KKT x MAX_KKT):
+#   A[0:5, 0:5]        M5^-1 (the reduced mass matrix, free gears folded into theta)
+#   A[5+c, 0:5]        constraint row c (non-stuck rows, in order)
+#   A[5+c, 5:10]       Y[:, c] = M5^-1 R_c^T
+#   A[5+c, 10:10+nc]   Cholesky factor of S = R M5^-1 R^T (lower triangle, row c)
+SCHUR_MAX_ROWS = MAX_KKT - 10
+
+
+@njit(cache=True, error_model="numpy")
+def kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1):
+    """Factor the reduced KKT system of :func:`kkt_reduced_factor` by Schur complements,
+    using the structure of the mass matrix: the torso translations have the scalar inertia
+    m (M[0,0] = M[1,1] = total mass, M[0,1] = 0), so M5^-1 follows from the 3 x 3 Schur
+    complement C - B^T B / m of the rotational block; the constraint rows then give the
+    SPD matrix S = R M5^-1 R^T, factored by Cholesky. Needs M5 positive definite (every
+    body with mass and inertia; the massless-leg model uses the LU path). Returns
+    (ok, nc); ok False if M5 or S is numerically singular."""
+    m = M[0, 0]
+    im = 1.0 / m
+    # C' = C - B^T B / m, B = M[0:2, 2:5], C = M[2:5, 2:5] (theta with the free gears folded)
+    c00 = M[2, 2]
+    if nact == 7:
+        if free0:
+            c00 -= M[2, 5] * M[2, 5] / M[5, 5]
+        if free1:
+            c00 -= M[2, 6] * M[2, 6] / M[6, 6]
+    b00 = M[0, 2]
+    b01 = M[0, 3]
+    b02 = M[0, 4]
+    b10 = M[1, 2]
+    b11 = M[1, 3]
+    b12 = M[1, 4]
+    s00 = c00 - im * (b00 * b00 + b10 * b10)
+    s01 = M[2, 3] - im * (b00 * b01 + b10 * b11)
+    s02 = M[2, 4] - im * (b00 * b02 + b10 * b12)
+    s11 = M[3, 3] - im * (b01 * b01 + b11 * b11)
+    s12 = M[3, 4] - im * (b01 * b02 + b11 * b12)
+    s22 = M[4, 4] - im * (b02 * b02 + b12 * b12)
+    # symmetric 3 x 3 inverse by cofactors
+    a00 = s11 * s22 - s12 * s12
+    a01 = s02 * s12 - s01 * s22
+    a02 = s01 * s12 - s02 * s11
+    det = s00 * a00 + s01 * a01 + s02 * a02
+    scale = max(s00, max(s11, s22))
+    if not (det > 1e-13 * scale * scale * scale):
+        return False, 0
+    idet = 1.0 / det
+    i00 = a00 * idet
+    i01 = a01 * idet
+    i02 = a02 * idet
+    i11 = (s00 * s22 - s02 * s02) * idet
+    i12 = (s01 * s02 - s00 * s12) * idet
+    i22 = (s00 * s11 - s01 * s01) * idet
+    A[2, 2] = i00
+    A[2, 3] = i01
+    A[2, 4] = i02
+    A[3, 2] = i01
+    A[3, 3] = i11
+    A[3, 4] = i12
+    A[4, 2] = i02
+    A[4, 3] = i12
+    A[4, 4] = i22
+    # W = B Ci (2 x 3); M5^-1: tc block -W/m, tt block I/m + W B^T / m^2
+    w00 = b00 * i00 + b01 * i01 + b02 * i02
+    w01 = b00 * i01 + b01 * i11 + b02 * i12
+    w02 = b00 * i02 + b01 * i12 + b02 * i22
+    w10 = b10 * i00 + b11 * i01 + b12 * i02
+    w11 = b10 * i01 + b11 * i11 + b12 * i12
+    w12 = b10 * i02 + b11 * i12 + b12 * i22
+    A[0, 2] = -im * w00
+    A[0, 3] = -im * w01
+    A[0, 4] = -im * w02
+    A[1, 2] = -im * w10
+    A[1, 3] = -im * w11
+    A[1, 4] = -im * w12
+    A[2, 0] = A[0, 2]
+    A[3, 0] = A[0, 3]
+    A[4, 0] = A[0, 4]
+    A[2, 1] = A[1, 2]
+    A[3, 1] = A[1, 3]
+    A[4, 1] = A[1, 4]
+    im2 = im * im
+    A[0, 0] = im + im2 * (w00 * b00 + w01 * b01 + w02 * b02)
+    A[0, 1] = im2 * (w00 * b10 + w01 * b11 + w02 * b12)
+    A[1, 0] = A[0, 1]
+    A[1, 1] = im + im2 * (w10 * b10 + w11 * b11 + w12 * b12)
+    # constraint rows, Y = M5^-1 R^T, S = R Y
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == 3.0:
+            continue
+        row = 5 + nc
+        for j in range(5):
+            A[row, j] = R[rr, j]
+        for i in range(5):
+            acc = 0.0
+            for j in range(5):
+                acc += A[i, j] * R[rr, j]
+            A[row, 5 + i] = acc
+        nc += 1
+    for c in range(nc):
+        for d in range(c + 1):
+            acc = 0.0
+            for j in range(5):
+                acc += A[5 + c, j] * A[5 + d, 5 + j]
+            A[5 + c, 10 + d] = acc
+    # Cholesky of S in place (lower triangle)
+    for c in range(nc):
+        for d in range(c + 1):
+            acc = A[5 + c, 10 + d]
+            for e in range(d):
+                acc -= A[5 + c, 10 + e] * A[5 + d, 10 + e]
+            if c == d:
+                if not (acc > 1e-13 * A[5 + c, 10 + c] + 1e-300):
+                    return False, nc
+                A[5 + c, 10 + c] = math.sqrt(acc)
+            else:
+                A[5 + c, 10 + d] = acc / A[5 + d, 10 + d]
+    return True, nc
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def kkt_schur_solve(A, nc, y, yo):
+    """Solve the reduced KKT system with the factors of :func:`kkt_schur_factor`, right-hand
+    side y[yo:yo+5+nc] = [forces; constraint right-hand sides], in place: ddq then the
+    multipliers."""
+    x0 = y[yo + 0]
+    x1 = y[yo + 1]
+    x2 = y[yo + 2]
+    x3 = y[yo + 3]
+    x4 = y[yo + 4]
+    z0 = A[0, 0] * x0 + A[0, 1] * x1 + A[0, 2] * x2 + A[0, 3] * x3 + A[0, 4] * x4
+    z1 = A[1, 0] * x0 + A[1, 1] * x1 + A[1, 2] * x2 + A[1, 3] * x3 + A[1, 4] * x4
+    z2 = A[2, 0] * x0 + A[2, 1] * x1 + A[2, 2] * x2 + A[2, 3] * x3 + A[2, 4] * x4
+    z3 = A[3, 0] * x0 + A[3, 1] * x1 + A[3, 2] * x2 + A[3, 3] * x3 + A[3, 4] * x4
+    z4 = A[4, 0] * x0 + A[4, 1] * x1 + A[4, 2] * x2 + A[4, 3] * x3 + A[4, 4] * x4
+    if nc > 0:
+        # t = R z - r, then S nu = t (forward / back substitution with the Cholesky factor)
+        for c in range(nc):
+            row = 5 + c
+            acc = (A[row, 0] * z0 + A[row, 1] * z1 + A[row, 2] * z2 + A[row, 3] * z3
+                   + A[row, 4] * z4 - y[yo + row])
+            for e in range(c):
+                acc -= A[row, 10 + e] * y[yo + 5 + e]
+            y[yo + row] = acc / A[row, 10 + c]
+        for c in range(nc - 1, -1, -1):
+            row = 5 + c
+            acc = y[yo + row]
+            for e in range(c + 1, nc):
+                acc -= A[5 + e, 10 + c] * y[yo + 5 + e]
+            y[yo + row] = acc / A[row, 10 + c]
+        # ddq = z - Y nu
+        for c in range(nc):
+            row = 5 + c
+            nu = y[yo + row]
+            z0 -= A[row, 5] * nu
+            z1 -= A[row, 6] * nu
+            z2 -= A[row, 7] * nu
+            z3 -= A[row, 8] * nu
+            z4 -= A[row, 9] * nu
+    y[yo + 0] = z0
+    y[yo + 1] = z1
+    y[yo + 2] = z2
+    y[yo + 3] = z3
+    y[yo + 4] = z4
 
 
 @njit(cache=True, error_model="numpy")
@@ -825,7 +1026,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         dq[i] = s[NQ + i]
     l[0] = s[IL_B]
     l[1] = s[IL_B + 1]
-    project(q, dq, l, P, mi, mf)
+    sth, cth, sgl0, cgl0, sgl1, cgl1 = project(q, dq, l, P, mi, mf)
 
     Q = wk[WK_Q_:WK_Q_ + NQ]
     h = wk[WK_H:WK_H + NQ]
@@ -852,8 +1053,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     il = npl * P[P_IL]
     th = q[2]
     dth = dq[2]
-    sth = math.sin(th)
-    cth = math.cos(th)
     massless = P[P_MASSLESS] > 0.5
 
     # mass matrix, Coriolis vector, gravity (SPEC.md 2); as mass_matrix() / coriolis()
@@ -866,23 +1065,12 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     Q[1] -= P[P_MT] * grav
     mlg = ml * grav
     epot = P[P_MT] * grav * q[1]
-    sgl0 = 0.0
-    cgl0 = 0.0
-    sgl1 = 0.0
-    cgl1 = 0.0
     for leg in range(2):
         sL = (2.0 * leg - 1.0) * Lh
         kk = 3 + leg
-        g = th + q[kk]
         dg = dth + dq[kk]
-        sg = math.sin(g)
-        cg = math.cos(g)
-        if leg == 0:
-            sgl0 = sg
-            cgl0 = cg
-        else:
-            sgl1 = sg
-            cgl1 = cg
+        sg = sgl0 if leg == 0 else sgl1
+        cg = cgl0 if leg == 0 else cgl1
         jth_x = -sL * sth + d * cg
         jth_y = sL * cth + d * sg
         jph_x = d * cg
@@ -959,8 +1147,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
     rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
     for i in range(MAX_ROWS):
-        for j in range(NQ):
-            R[i, j] = 0.0
         r[i] = 0.0
     nr = 0
     for leg in range(2):
@@ -997,6 +1183,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             Q[1] += fy
             Q[2] += jt_th_x * fx + jt_th_y * fy
             Q[kk] += jt_ph_x * fx + jt_ph_y * fy
+            for j in range(NQ):
+                R[nr, j] = 0.0
             R[nr, 0] = cg
             R[nr, 1] = sg
             R[nr, 2] = sL * sph + ll
@@ -1007,6 +1195,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             nr += 1
             if mode == STRUT:
                 w = P[P_STRUT_OMEGA]
+                for j in range(NQ):
+                    R[nr, j] = 0.0
                 R[nr, 0] = sg
                 R[nr, 1] = -cg
                 R[nr, 2] = -sL * cph
@@ -1036,6 +1226,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
         else:
             if massless:
+                for j in range(NQ):
+                    R[nr, j] = 0.0
                 R[nr, kk] = 1.0
                 if P[P_TD_WORLD] > 0.5:
                     R[nr, 2] = 1.0
@@ -1053,6 +1245,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             LG[2 * LG_TOEY + leg] = hy - ll * cg
             LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
         if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            for j in range(NQ):
+                R[nr, j] = 0.0
             R[nr, 5 + leg] = 1.0
             r[nr] = 0.0
             rkind[nr] = 3.0
@@ -1078,9 +1272,17 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         b[nact + rr] = r[rr]
     free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
     free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
-    ok, nred = kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1)
+    # structured (Schur-complement) factorization whenever the mass matrix is positive
+    # definite; the LU path keeps the massless-leg model (zero leg inertia)
+    schur = (not massless and nr <= SCHUR_MAX_ROWS and M[0, 1] == 0.0
+             and M[0, 0] == M[1, 1])
+    if schur:
+        ok, nred = kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1)
+    else:
+        ok, nred = kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1)
     if ok:
-        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y)
+        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y,
+                          schur)
 
     for i in range(NQ):
         ds[i] = dq[i]
@@ -1108,7 +1310,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                 b2[5 + leg] = 1.0
                 b2[3 + leg] = -1.0
                 kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
-                                  WK_Y)
+                                  WK_Y, schur)
                 # U: response of ddq to a unit belt torque pair, -npl G w
                 for i in range(nact):
                     stiff[NQ + i, leg] = -npl * b2[i]
@@ -1178,7 +1380,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                     b2[i] = 0.0
                 b2[5 + leg] = 1.0
                 kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
-                                  WK_Y)
+                                  WK_Y, schur)
                 for i in range(nact):
                     stiff[NQ + i, 2 + leg] = -npl * b2[i]
                 stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
