@@ -42,6 +42,12 @@ from .layout import CIRCUIT_OPEN, CIRCUIT_SHORT, P_CIRCUIT, P_CLAMP_LEGS, P_CLAM
 MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS
 NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
+#: Motor-side damping rate [1/s] from which evaluate_ws puts it into the stiff factors (the
+#: two motor columns). Below it the explicit part of the ARK methods is stable and accurate
+#: at steps up to the 1 ms control period (|h lambda| <= 1, inside the explicit stability
+#: interval of ARK3 / ARK4); above it (user robots with a light gear train or strong
+#: back-EMF) the damping is treated implicitly.
+STIFF_MOTOR_RATE = 1000.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -1361,7 +1367,10 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                     stiff[NQ + 3 + leg, vcol] = -cb
 
             # motor-side damping on alpha: joint viscous friction and, while the current is
-            # limited by the torque-speed line, the back-EMF
+            # limited by the torque-speed line, the back-EMF; only where it is stiff, i.e.
+            # its rate on the gear train's own inertia, n d_m / M_aa, is at least
+            # STIFF_MOTOR_RATE (Scout II: ~400 /s on the torque-speed line, so these columns
+            # stay zero and the ARK step runs at rank 2)
             r_a = P[P_RA]
             for leg in range(2):
                 if mi[MI_MOTOR_B + leg] == STUCK:
@@ -1376,6 +1385,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                                              (v_lo > -imax and ic < v_lo)):
                     dm += P[P_ETA] * P[P_KT] * P[P_KW] / r_a
                 dm *= N * N
+                if npl * dm < STIFF_MOTOR_RATE * M[5 + leg, 5 + leg]:
+                    continue    # not stiff: left to the explicit part (column stays zero)
                 for i in range(n):
                     b2[i] = 0.0
                 b2[5 + leg] = 1.0

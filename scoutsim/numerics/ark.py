@@ -2,11 +2,14 @@
 
 Model II is stiff: each belt damper (c_b per physical leg) acts against the gear train's
 reflected inertia and gives a relative gear/leg mode with eigenvalue ~ -6e3 ... -1.4e4 /s,
-which holds an explicit method to ~0.1 ms steps. Everything else is slow (|lambda| < 200 /s).
+which holds an explicit method to ~0.1 ms steps. Everything else is slow: |lambda| < 500 /s,
+the fastest being the back-EMF damping of a motor on its torque-speed line (~400 /s).
 
-Splitting. At the start of each step the model supplies a rank-2 factorization
-L = U V^T of the belt-damper part of the Jacobian (``dynamics.evaluate_ws`` with
-``want_stiff``); the right-hand side is split *exactly* as
+Splitting. At the start of each step the model supplies a low-rank factorization
+L = U V^T of the stiff part of the Jacobian (``dynamics.evaluate_ws`` with ``want_stiff``):
+the belt dampers (rank 2), plus the motor damping where it is stiff
+(``dynamics.STIFF_MOTOR_RATE``, rank 4; not for Scout II). The right-hand side is split
+*exactly* as
 
     f(y) = [f(y) - L y] + L y,
 
@@ -16,8 +19,8 @@ ERK + L-stable, stiffly accurate ESDIRK (gamma = 1/4), order 4 with an embedded 
 solution. Because L is constant within a step the splitting is exact and the pair keeps its
 order whatever L is; L only has to capture the stiff modes for stability. Each implicit
 stage solves (I - h gamma U V^T) Y = rhs by the Sherman-Morrison-Woodbury formula (a 2 x 2
-system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the physics is
-f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
+or 4 x 4 system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the
+physics is f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
 atol + rtol max(|y|, |y_new|)). Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
 """
 
@@ -131,7 +134,9 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     Z (Z_ROWS, Z_COLS) is scratch. Returns (error_norm, ok, evaluations)."""
     ok = True
     nfev = 0
-    R = NSTIFF
+    # rank of the splitting: the two motor-damping columns are zero unless the motor
+    # damping is stiff (dynamics.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
+    R = NSTIFF if (SF0[NQ + 5, NSTIFF + 2] != 0.0 or SF0[NQ + 6, NSTIFF + 3] != 0.0) else 2
     hg = h * GAMMA
     VU = Z[NSTAGE:NSTAGE + R]            # V^T U
     Si = Z[NSTAGE + R:NSTAGE + 2 * R]    # (I - h gamma V^T U)^-1
@@ -139,11 +144,11 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         for b in range(R):
             acc = 0.0
             for i in range(U0, U1):
-                acc += SF0[i, R + a] * SF0[i, b]
+                acc += SF0[i, NSTIFF + a] * SF0[i, b]
             VU[a, b] = acc
         acc = 0.0
         for i in range(NS):
-            acc += SF0[i, R + a] * y[i]
+            acc += SF0[i, NSTIFF + a] * y[i]
         Z[0, a] = acc
     if not invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3:NSTAGE + 2 * R + 7]):
         return np.inf, False, nfev
@@ -170,7 +175,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
                     r += SF0[i, a] * w[a]
             tmp[i] = r
             for a in range(R):
-                m[a] += SF0[i, R + a] * r
+                m[a] += SF0[i, NSTIFF + a] * r
         # Y = W^-1 rhs
         apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
         # z = V^T Y = m + (V^T U) p
@@ -197,7 +202,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         e *= h
         tmp[i] = e
         for a in range(R):
-            m[a] += SF0[i, R + a] * e
+            m[a] += SF0[i, NSTIFF + a] * e
     apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
     err = 0.0
     for i in range(NS):
