@@ -22,6 +22,7 @@ from .control.bounding import BoundingController, controller_array
 from .model import layout as L
 from .model.dynamics import NSTIFF
 from .model.packing import robot_array
+from .numerics.dopri5 import eval_workspace
 from .numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
 from .parameters import (ControllerParameters, RobotParameters, validate_parameters,
                          validate_robot)
@@ -259,7 +260,9 @@ class HybridEngine:
         n_total = int(round(duration / dt)) + 1
         self.k_last = n_total - 1
         self.cmd = np.zeros(2)
-        self.hwork = np.array([integrator.initial_step, 0.0])
+        # [step-size guess, ARK factors valid, evaluation workspace valid] (hybrid.run)
+        self.hwork = np.array([integrator.initial_step, 0.0, 0.0])
+        self.ew = eval_workspace()
         self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
         self.out_t = np.zeros(n_total + 1)
         self.out_s = np.zeros((n_total + 1, L.NS))
@@ -285,6 +288,7 @@ class HybridEngine:
             min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
             self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
             self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed, self.sfwork,
+            self.ew,
             _METHODS[self.integ.method])
         if self.nev > self.ev.shape[0] - 64:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])

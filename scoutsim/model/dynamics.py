@@ -683,7 +683,9 @@ WK_RKIND = WK_B2 + MAX_KKT
 WK_RLEG = WK_RKIND + MAX_ROWS
 WK_LEG = WK_RLEG + MAX_ROWS  # per-leg scalars, 16 slots x 2 legs
 WK_Y = WK_LEG + 32         # reduced KKT right-hand side / solution
-WK_SIZE = WK_Y + MAX_KKT
+WK_META = WK_Y + MAX_KKT   # what evaluate_command_change needs of the last evaluation:
+WK_SIZE = WK_META + 9      # [Schur path, row count, KKT ok, V_b, sin/cos g_b, sin/cos g_f,
+                           #  energy]
 WA_R = MAX_KKT             # rows of wA holding the constraint rows R
 WA_M = WA_R + MAX_ROWS     # rows of wA holding the mass matrix M
 WA_ROWS = WA_M + NQ
@@ -1005,6 +1007,127 @@ def kkt_schur_solve(A, nc, y, yo):
     y[yo + 4] = z4
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
+                 vb, energy):
+    """The outputs aux of :func:`evaluate_ws` from its per-leg scalars LG and the KKT
+    solution b (multipliers b[nact:nact+nr]); the ground force of a pinned toe is summed
+    afresh, so a second call after a new solve (:func:`evaluate_command_change`) is
+    exact."""
+    model = int(P[P_MODEL])
+    npl = P[P_NP]
+    N = P[P_N]
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            sg = sgl0 if leg == 0 else sgl1
+            cg = cgl0 if leg == 0 else cgl1
+            LG[2 * LG_GT + leg] = -LG[2 * LG_FAX + leg] * sg
+            LG[2 * LG_GN + leg] = LG[2 * LG_FAX + leg] * cg
+    for rr in range(nr):
+        lam = -b[nact + rr] if ok else 0.0
+        leg = int(rleg[rr])
+        sg = sgl0 if leg == 0 else sgl1
+        cg = cgl0 if leg == 0 else cgl1
+        kind = int(rkind[rr])
+        if kind == 1:
+            LG[2 * LG_GT + leg] += lam * cg
+            LG[2 * LG_GN + leg] += lam * sg
+        elif kind == 2:
+            LG[2 * LG_STRUT + leg] = lam
+            LG[2 * LG_GT + leg] += lam * sg
+            LG[2 * LG_GN + leg] -= lam * cg
+        elif kind == 3:
+            LG[2 * LG_HOLD + leg] = lam / (npl * N)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        o = leg * NAUX_LEG
+        aux[o + A_GT] = LG[2 * LG_GT + leg]
+        aux[o + A_GN] = LG[2 * LG_GN + leg]
+        aux[o + A_FAX] = LG[2 * LG_FAX + leg] if mode != STRUT else -LG[2 * LG_STRUT + leg]
+        aux[o + A_TAU_CMD] = cmd[leg]
+        aux[o + A_TAU_APP] = LG[2 * LG_TAPP + leg]
+        aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
+        aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
+        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
+        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+            aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
+        else:
+            aux[o + A_HOLD] = LG[2 * LG_TFRIC + leg]
+        aux[o + A_TOE_X] = LG[2 * LG_TOEX + leg]
+        aux[o + A_TOE_Y] = LG[2 * LG_TOEY + leg]
+        aux[o + A_SLIP_V] = LG[2 * LG_TOEVX + leg]
+        aux[o + A_STRUT] = LG[2 * LG_STRUT + leg]
+        aux[o + A_TAU_BELT] = LG[2 * LG_TBELT + leg]
+    aux[A_VBATT] = vb
+    aux[A_ENERGY] = energy
+    aux[A_KKT_OK] = 1.0 if ok else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
+    """Update ds = f(s) and the outputs aux for new commanded torques ``cmd`` at the state
+    and modes of the last :func:`evaluate_ws` call on this workspace (made with
+    ``want_aux``); ds and aux are filled completely (they need not hold that evaluation).
+
+    The commands enter the dynamics only through the delivered hip torques (SPEC.md 4:
+    current limits, torque-speed line, battery), i.e. the right-hand side of the KKT system,
+    whose factorization is kept: the change of torque is solved with those factors and added
+    to the accelerations and multipliers. Equal to a fresh evaluation up to round-off, for
+    the cost of one solve. Returns the KKT flag."""
+    model = int(P[P_MODEL])
+    nact = 7 if model == MODEL_II else 5
+    meta = wk[WK_META:WK_META + 9]
+    ok = meta[2] > 0.5
+    if not ok:
+        return False
+    schur = meta[0] > 0.5
+    nr = int(meta[1])
+    n = nact + nr
+    dq = wk[WK_DQ:WK_DQ + NQ]
+    q = wk[WK_Q:WK_Q + NQ]
+    LG = wk[WK_LEG:WK_LEG + 32]
+    b = wk[WK_B:WK_B + MAX_KKT]
+    b2 = wk[WK_B2:WK_B2 + MAX_KKT]
+    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    A = wA[0:MAX_KKT]
+    M = wA[WA_M:WA_M + NQ]
+    npl = P[P_NP]
+    vb = battery_voltage(dq, cmd, P)
+    for i in range(n):
+        b2[i] = 0.0
+    row = 5 if model == MODEL_II else 3
+    for leg in range(2):
+        om = LG[2 * LG_OM + leg]
+        cur = motor_current(cmd[leg], om, vb, P)
+        tapp = delivered_torque(cur, om, P)
+        if model != MODEL_PASSIVE:
+            b2[row + leg] = npl * (tapp - LG[2 * LG_TAPP + leg])
+        LG[2 * LG_CUR + leg] = cur
+        LG[2 * LG_TAPP + leg] = tapp
+    free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
+    free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
+    kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk, WK_Y,
+                      schur)
+    for i in range(n):
+        b[i] += b2[i]
+    for i in range(NQ):
+        ds[i] = dq[i]
+        ds[NQ + i] = 0.0
+    for i in range(nact):
+        ds[NQ + i] = b[i]
+    if model != MODEL_II:
+        ds[NQ + 5] = ds[NQ + 3]
+        ds[NQ + 6] = ds[NQ + 4]
+    ds[IL_B] = LG[2 * LG_LDOT]
+    ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
+    meta[3] = vb
+    fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, meta[4], meta[5],
+                 meta[6], meta[7], vb, meta[8])
+    return ok
+
+
 @njit(cache=True, error_model="numpy")
 def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want_aux):
     """:func:`evaluate` without allocations, on the scratch arrays of
@@ -1289,6 +1412,15 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     if ok:
         kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y,
                           schur)
+    meta = wk[WK_META:WK_META + 9]
+    meta[0] = 1.0 if schur else 0.0
+    meta[1] = nr
+    meta[2] = 1.0 if ok else 0.0
+    meta[3] = vb
+    meta[4] = sgl0
+    meta[5] = cgl0
+    meta[6] = sgl1
+    meta[7] = cgl1
 
     for i in range(NQ):
         ds[i] = dq[i]
@@ -1399,48 +1531,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     if not want_aux:
         aux[A_KKT_OK] = 1.0 if ok else 0.0
         return ok
-    for rr in range(nr):
-        lam = -b[nact + rr] if ok else 0.0
-        leg = int(rleg[rr])
-        sg = sgl0 if leg == 0 else sgl1
-        cg = cgl0 if leg == 0 else cgl1
-        kind = int(rkind[rr])
-        if kind == 1:
-            LG[2 * LG_GT + leg] += lam * cg
-            LG[2 * LG_GN + leg] += lam * sg
-        elif kind == 2:
-            LG[2 * LG_STRUT + leg] = lam
-            LG[2 * LG_GT + leg] += lam * sg
-            LG[2 * LG_GN + leg] -= lam * cg
-        elif kind == 3:
-            LG[2 * LG_HOLD + leg] = lam / (npl * N)
-    for leg in range(2):
-        mode = mi[MI_CONTACT_B + leg]
-        if mode == STICK or mode == STRUT:
-            sg = sgl0 if leg == 0 else sgl1
-            cg = cgl0 if leg == 0 else cgl1
-            LG[2 * LG_GT + leg] += -LG[2 * LG_FAX + leg] * sg
-            LG[2 * LG_GN + leg] += LG[2 * LG_FAX + leg] * cg
-        o = leg * NAUX_LEG
-        aux[o + A_GT] = LG[2 * LG_GT + leg]
-        aux[o + A_GN] = LG[2 * LG_GN + leg]
-        aux[o + A_FAX] = LG[2 * LG_FAX + leg] if mode != STRUT else -LG[2 * LG_STRUT + leg]
-        aux[o + A_TAU_CMD] = cmd[leg]
-        aux[o + A_TAU_APP] = LG[2 * LG_TAPP + leg]
-        aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
-        aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
-        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
-        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
-            aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
-        else:
-            aux[o + A_HOLD] = LG[2 * LG_TFRIC + leg]
-        aux[o + A_TOE_X] = LG[2 * LG_TOEX + leg]
-        aux[o + A_TOE_Y] = LG[2 * LG_TOEY + leg]
-        aux[o + A_SLIP_V] = LG[2 * LG_TOEVX + leg]
-        aux[o + A_STRUT] = LG[2 * LG_STRUT + leg]
-        aux[o + A_TAU_BELT] = LG[2 * LG_TBELT + leg]
-    aux[A_VBATT] = vb
-    aux[A_ENERGY] = 0.5 * ekin + epot
+    meta[8] = 0.5 * ekin + epot
+    fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
+                 vb, meta[8])
     aux[A_KKT_OK] = 1.0 if ok else 0.0
     return ok
 

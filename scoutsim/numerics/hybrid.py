@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from ..control.bounding import bounding_step
-from ..model.dynamics import evaluate_ws, impact, project_state
+from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, A_TOE_Y,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
@@ -135,16 +135,20 @@ def leave_contact(s, mi, leg):
 @njit(cache=True, error_model="numpy")
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
-    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace())
+    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace(), False)
 
 
 @njit(cache=True, error_model="numpy")
-def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
+def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=False):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
     or to a slide if the leg still pushes, SPEC.md 3), a strut in compression becomes a
     spring leg, a stuck motor joint loaded beyond breakaway slips, a slipping joint at rest
-    sticks if stiction can hold it. Returns the updated event count."""
+    sticks if stiction can hold it. Returns the updated event count.
+
+    ``command_only``: s is projected and ds, aux and the workspace ``ew`` hold its last
+    evaluation with the same modes, only ``cmd`` has changed (a new control sample after a
+    plain step): the first evaluation is then :func:`evaluate_command_change`."""
     W = body_weight(P)
     # a contact force counts as pulling only beyond rounding: a massless undamped leg
     # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
@@ -152,9 +156,12 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew):
     gn_tol = -1e-9 * W
     coulomb = P[P_MU] < 1e300
     model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
-    for _ in range(12):
-        project_state(s, P, mi, mf)
-        evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+    for it in range(12):
+        if it == 0 and command_only:
+            evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
+        else:
+            project_state(s, P, mi, mf)
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
         changed = False
         for leg in range(2):
             o = leg * NAUX_LEG
@@ -608,7 +615,7 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 
 @njit(cache=True, error_model="numpy")
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork,
+        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew,
         method=METHOD_AUTO):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
@@ -618,7 +625,11 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     (default), METHOD_DOPRI5 or METHOD_ARK3 / METHOD_ARK4 (Model II only). ``hwork``:
     [step-size guess, 1 if ``sfwork`` (NS, 2 NSTIFF) holds the ARK stiff factors of the
     last step], both carried between calls so that a run cut into calls (chunks, a Python
-    controller) integrates exactly as one call would. Returns (k, n_out, nev, status, t)."""
+    controller) integrates exactly as one call would. ``ew`` (:func:`eval_workspace`) is
+    the evaluation workspace, kept across calls too: while hwork[2] = 1 it holds the last
+    evaluation at ``s`` (K[0]), so a new command is applied to it with
+    :func:`evaluate_command_change` instead of a fresh evaluation.
+    Returns (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
     tmp = np.zeros(NS)
@@ -630,7 +641,6 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     imp = np.zeros(7)
     ds = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
-    ew = eval_workspace()
     SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[1] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
@@ -653,7 +663,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
-        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew)
+        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew, hwork[2] > 0.5)
+        hwork[2] = 0.0
         stats[S_NFEV] += 1
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
@@ -669,6 +680,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                                  sf_ok or meth == METHOD_DOPRI5)
         sf_ok = True
         hwork[1] = 1.0
+        # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
+        # state after an event), with the command of the period just ended
+        hwork[2] = 1.0 if status == ST_RUNNING else 0.0
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
