@@ -48,13 +48,16 @@ class IntegratorSettings:
         atol 1e-9; the paper's Working Model runs used an adaptive Kutta-Merson integrator
         at 1e-10, and 1e-8 reproduces their gait metrics to better than 1e-4, see
         tests/numerics). "ark3" / "ark4": additive Runge-Kutta 3(2) / 4(3) with the
-        Model II belt spring-dampers and motor damping implicit (scoutsim/numerics/ark.py),
+        Model II belt dampers (and stiff motor damping) implicit (scoutsim/numerics/ark.py),
         for the stiff Model II. "auto": Model II with ``rtol`` unset or >= 1e-7 -> "ark3"
-        (default rtol 1e-5 / atol 1e-6: about 5x faster than the reference, 10 s gait
-        metrics within 1e-5 of the rtol 1e-10 reference in speed, frequency and duty
-        factors, tests/test_simulation.py); every other case -> "dopri5".
+        (default rtol 1e-5 / atol 1e-6, velocities 1e-5: about 10x faster than the
+        reference, 10 s gait metrics within 3e-5 of the rtol 1e-10 reference,
+        tests/test_simulation.py); every other case -> "dopri5".
     rtol, atol : relative / absolute local error tolerance (SI units of each state
-        component); None = the method's default (:data:`DEFAULT_TOLERANCES`).
+        component); None = the method's default (:data:`DEFAULT_TOLERANCES`). The ARK
+        methods apply ``atol`` to positions, angles and leg lengths and 10 x ``atol`` to
+        the velocities (``ark.VELOCITY_ATOL_FACTOR``: a 0.1 s time scale between the two
+        units).
     initial_step : first step guess [s].
 
     :meth:`resolve` gives the concrete settings a run uses (recorded in its provenance).

@@ -50,7 +50,12 @@ def test_virtual_leg_of_two_equals_one_with_lumped_parameters(model):
 
 
 def test_model_II_approaches_model_I_in_the_rigid_limit():
-    """Belt stiffer and gear inertia smaller -> Model II -> Model I (no joint friction)."""
+    """Belt stiffer and gear inertia smaller -> Model II -> Model I (no joint friction).
+
+    Both models at converged tolerances (a model limit, not an integrator test): at the
+    stiffest setting the run ends with a grazing lift-off whose time moves by 2.6 ms for
+    state differences of 2e-5 (measured with the default ARK3), which would hide the
+    1.6e-4 model difference."""
     base = RobotParameters(joint_stiction=0.0, joint_damping=0.0)
     ctrl = ControllerParameters(sense_motor_angle=False)
     ref = scoutsim.simulate(base, ctrl, None, 0.25, model="I", integrator=TIGHT)
@@ -59,7 +64,8 @@ def test_model_II_approaches_model_I_in_the_rigid_limit():
         rob = dataclasses.replace(base, belt_stiffness=base.belt_stiffness * f,
                                   driven_gear_inertia=base.driven_gear_inertia / f,
                                   drive_gear_inertia=base.drive_gear_inertia / f)
-        r = scoutsim.simulate(rob, ctrl, None, 0.25, model="II")
+        r = scoutsim.simulate(rob, ctrl, None, 0.25, model="II",
+                              integrator=IntegratorSettings(method="dopri5"))
         n = min(len(r.t), len(ref.t))
         errs.append(np.max(np.abs(r.state[:n, :3] - ref.state[:n, :3])))
     assert errs[2] < errs[1] < errs[0]
@@ -163,15 +169,16 @@ def test_experimental_ark4_method_agrees_with_reference():
         IntegratorSettings(method="euler")
 
 
-def test_experimental_ark3_gait_metrics_agree_with_reference():
-    """ARK3 at its working tolerance: steady gait metrics within 1e-4 of the reference."""
+def test_default_integrator_gait_metrics_agree_with_reference():
+    """The default settings (ARK3, rtol 1e-5 / atol 1e-6, velocities 1e-5): steady gait
+    metrics within 1e-4 of the reference."""
     keys = ("mean_speed_m_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
             "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m")
     ref = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=0.8,
                             integrator=IntegratorSettings(rtol=1e-10, atol=1e-10)).summary()
-    ark = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=0.8,
-                            integrator=IntegratorSettings(method="ark3", rtol=1e-5,
-                                                          atol=1e-6)).summary()
+    default = IntegratorSettings().resolve("II")
+    assert default.method == "ark3"
+    ark = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=0.8).summary()
     assert ref["n_steady_strides"] >= 7 and ark["n_steady_strides"] >= 7
     for k in keys:
         assert ark[k] == pytest.approx(ref[k], rel=1e-4), k

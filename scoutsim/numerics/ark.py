@@ -21,7 +21,7 @@ order whatever L is; L only has to capture the stiff modes for stability. Each i
 stage solves (I - h gamma U V^T) Y = rhs by the Sherman-Morrison-Woodbury formula (a 2 x 2
 or 4 x 4 system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the
 physics is f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
-atol + rtol max(|y|, |y_new|)). Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
+atol + rtol max(|y|, |y_new|)), except that velocities get VELOCITY_ATOL_FACTOR x atol. Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
 """
 
 from __future__ import annotations
@@ -37,6 +37,13 @@ from ..model.layout import NQ, NS
 # matrix); the loops over U skip the zero rows.
 U0 = NQ
 U1 = 2 * NQ
+# Absolute tolerance of the velocity components (rows NQ .. 2 NQ - 1) in units of atol, i.e.
+# a 0.1 s time scale between position [m, rad] and velocity [m/s, rad/s] tolerances. With
+# one atol for both (1e-6), the error control chased 1e-6 rad/s on the leg and gear rates
+# each time they pass through zero and took 20-40 small steps after a motor joint reversed;
+# measured on 10 s of Model II at the default: 15 % fewer evaluations, gait metrics
+# unchanged (within 3e-5 of the converged reference either way). docs/model.md.
+VELOCITY_ATOL_FACTOR = 10.0
 
 NSTAGE = 6
 Z_ROWS = NSTAGE + 2 * NSTIFF + 3 + 4   # rows of the scratch array Z (2 NSTIFF columns)
@@ -122,7 +129,7 @@ def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1
                     Z, eval_end, want_sf, AE3, AD3, B3, EW3, GAMMA3, 4)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
              eval_end, want_sf, AE, AD, B, EW, GAMMA, ns):
     """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
@@ -207,7 +214,8 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     err = 0.0
     for i in range(NS):
         e = tmp[i]
-        sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+        at = atol * VELOCITY_ATOL_FACTOR if (i >= NQ and i < 2 * NQ) else atol
+        sc = at + rtol * max(abs(y[i]), abs(y_new[i]))
         err += (e / sc) ** 2
     err = np.sqrt(err / NS)
     if ok and (eval_end or err <= 1.0):

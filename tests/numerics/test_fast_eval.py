@@ -140,3 +140,34 @@ def test_ark_method_matches_reference_model_ii():
     assert np.max(np.abs(a.events[:, 0] - b.events[:, 0])) < 1e-6
     for fa, fb in ((a.pitch, b.pitch), (a.height, b.height)):
         assert np.max(np.abs(fa - fb)) <= 1e-5 * np.max(np.abs(fa))
+
+
+@pytest.mark.parametrize("robot,model,mu,kw", CONFIGS[:3])
+def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
+    """A new command applied to the kept KKT factors (evaluate_command_change, used at every
+    control sample) gives the derivative and outputs of a fresh evaluation, to round-off."""
+    P, cases = _cases(robot, model, mu, **kw)
+    wk, wA, piv = D.new_eval_workspace()
+    st = np.zeros((L.NS, 2 * D.NSTIFF))
+    rng = np.random.default_rng(1)
+    worst = 0.0
+    changed = 0
+    for s, mi, mf, cmd in cases:
+        for motor in ([0, 0], [1, -1]):
+            mi2 = mi.copy()
+            mi2[2:4] = motor
+            d1, a1 = np.zeros(L.NS), np.zeros(L.NAUX)
+            d2, a2 = np.zeros(L.NS), np.zeros(L.NAUX)
+            D.evaluate_ws(s, P, mi2, mf, cmd, d1, a1, wk, wA, piv, True, st, True)
+            d0 = d1.copy()
+            new = cmd + rng.normal(0.0, 10.0, 2)
+            ok2 = D.evaluate_command_change(P, mi2, new, d2, a2, wk, wA, piv)
+            ok1 = D.evaluate_ws(s, P, mi2, mf, new, d1, a1, wk, wA, piv, False, st, True)
+            assert ok1 == ok2
+            changed += not np.allclose(d0, d1)   # the new command does act
+            for x, y in ((d1, d2), (a1, a2)):
+                fl = 64 * np.finfo(float).eps * max(np.max(np.abs(x)), 1.0)
+                worst = max(worst, np.max(np.abs(x - y) / (1e-10 * np.abs(x) + fl)))
+    # (a stuck motor or a saturated current can leave the derivative as it was)
+    assert changed > len(cases) // 2
+    assert worst < 1.0
