@@ -367,6 +367,17 @@ def battery_voltage(dq, cmd, P):
     return vb
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def new_row(R, r, rkind, rleg, nr, rhs, kind, leg):
+    """Start constraint row nr of :func:`evaluate_ws`: zero R[nr], set its right-hand side,
+    kind and leg (the caller fills the nonzero entries of R[nr])."""
+    for j in range(NQ):
+        R[nr, j] = 0.0
+    r[nr] = rhs
+    rkind[nr] = kind
+    rleg[nr] = leg
+
+
 @njit(cache=True, error_model="numpy")
 def add_clamp_rows(P, R, r, rkind, rleg, nr):
     """Bench-rig clamps as constraint rows (issue 5, docs/identification.md): with
@@ -375,21 +386,13 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
     row count."""
     if P[P_CLAMP_TORSO] > 0.5:
         for j in range(3):
-            for jj in range(NQ):
-                R[nr, jj] = 0.0
+            new_row(R, r, rkind, rleg, nr, 0.0, 5.0, 0)
             R[nr, j] = 1.0
-            r[nr] = 0.0
-            rkind[nr] = 5
-            rleg[nr] = 0
             nr += 1
         if P[P_CLAMP_LEGS] > 0.5:
             for leg in range(2):
-                for jj in range(NQ):
-                    R[nr, jj] = 0.0
+                new_row(R, r, rkind, rleg, nr, 0.0, 6.0, leg)
                 R[nr, 3 + leg] = 1.0
-                r[nr] = 0.0
-                rkind[nr] = 6
-                rleg[nr] = leg
                 nr += 1
     return nr
 
@@ -1080,6 +1083,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     meta = wk[WK_META:WK_META + 9]
     ok = meta[2] > 0.5
     if not ok:
+        aux[A_KKT_OK] = 0.0
         return False
     schur = meta[0] > 0.5
     nr = int(meta[1])
@@ -1275,8 +1279,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     # contact forces and constraint rows
     rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
     rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
-    for i in range(MAX_ROWS):
-        r[i] = 0.0
     nr = 0
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
@@ -1312,26 +1314,19 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             Q[1] += fy
             Q[2] += jt_th_x * fx + jt_th_y * fy
             Q[kk] += jt_ph_x * fx + jt_ph_y * fy
-            for j in range(NQ):
-                R[nr, j] = 0.0
+            new_row(R, r, rkind, rleg, nr, -(bx * cg + by * sg + 2.0 * ld * dg), 1.0, leg)
             R[nr, 0] = cg
             R[nr, 1] = sg
             R[nr, 2] = sL * sph + ll
             R[nr, kk] = ll
-            r[nr] = -(bx * cg + by * sg + 2.0 * ld * dg)
-            rkind[nr] = 1.0
-            rleg[nr] = leg
             nr += 1
             if mode == STRUT:
                 w = P[P_STRUT_OMEGA]
-                for j in range(NQ):
-                    R[nr, j] = 0.0
+                new_row(R, r, rkind, rleg, nr, -(bx * sg - by * cg) + ll * dg * dg
+                        + 2.0 * w * ld + w * w * (ll - l0), 2.0, leg)
                 R[nr, 0] = sg
                 R[nr, 1] = -cg
                 R[nr, 2] = -sL * cph
-                r[nr] = -(bx * sg - by * cg) + ll * dg * dg + 2.0 * w * ld + w * w * (ll - l0)
-                rkind[nr] = 2.0
-                rleg[nr] = leg
                 nr += 1
             LG[2 * LG_TOEX + leg] = mf[MF_ANCHOR_B + leg]
         elif mode == SLIDE:
@@ -1355,14 +1350,10 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
         else:
             if massless:
-                for j in range(NQ):
-                    R[nr, j] = 0.0
+                new_row(R, r, rkind, rleg, nr, 0.0, 4.0, leg)
                 R[nr, kk] = 1.0
                 if P[P_TD_WORLD] > 0.5:
                     R[nr, 2] = 1.0
-                r[nr] = 0.0
-                rkind[nr] = 4.0
-                rleg[nr] = leg
                 nr += 1
                 ld = 0.0
             elif c > 0.0 and ll < l0:
@@ -1374,12 +1365,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
             LG[2 * LG_TOEY + leg] = hy - ll * cg
             LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
         if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
-            for j in range(NQ):
-                R[nr, j] = 0.0
+            new_row(R, r, rkind, rleg, nr, 0.0, 3.0, leg)
             R[nr, 5 + leg] = 1.0
-            r[nr] = 0.0
-            rkind[nr] = 3.0
-            rleg[nr] = leg
             nr += 1
     nr = add_clamp_rows(P, R, r, rkind, rleg, nr)
 
@@ -1402,9 +1389,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
     free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
     # structured (Schur-complement) factorization whenever the mass matrix is positive
-    # definite; the LU path keeps the massless-leg model (zero leg inertia)
-    schur = (not massless and nr <= SCHUR_MAX_ROWS and M[0, 1] == 0.0
-             and M[0, 0] == M[1, 1])
+    # definite (its translation block is m I by construction, above); the LU path keeps
+    # the massless-leg model (zero leg inertia)
+    schur = not massless and nr <= SCHUR_MAX_ROWS
     if schur:
         ok, nred = kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1)
     else:
@@ -1534,7 +1521,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     meta[8] = 0.5 * ekin + epot
     fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
                  vb, meta[8])
-    aux[A_KKT_OK] = 1.0 if ok else 0.0
     return ok
 
 

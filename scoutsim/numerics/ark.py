@@ -21,7 +21,8 @@ order whatever L is; L only has to capture the stiff modes for stability. Each i
 stage solves (I - h gamma U V^T) Y = rhs by the Sherman-Morrison-Woodbury formula (a 2 x 2
 or 4 x 4 system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the
 physics is f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
-atol + rtol max(|y|, |y_new|)), except that velocities get VELOCITY_ATOL_FACTOR x atol. Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
+atol + rtol max(|y|, |y_new|)), except that velocities get VELOCITY_ATOL_FACTOR x atol.
+Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
 """
 
 from __future__ import annotations
