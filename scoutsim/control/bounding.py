@@ -26,8 +26,8 @@ documents the interface a user-supplied controller must have.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import kernel
 from ..model.layout import (
     IALB, IL_B, IPHB, LS_BRAKE, LS_FLIGHT, LS_RETRACTION, NQ, P_ETA, P_IMAX, P_KT, P_KW,
     P_L0, P_N, P_RA, P_VB,
@@ -65,7 +65,7 @@ def controller_array(c: ControllerParameters | None) -> np.ndarray:
     return a
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def retraction_torque(rate, P):
     """Stance-retraction command, eqs. (2)-(5) at the leg, per physical leg [N m].
 
@@ -84,7 +84,7 @@ def retraction_torque(rate, P):
     return tau
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def sensed(s, C, leg):
     """Sensor readings (angle [rad], rate [rad/s], leg length [m]) of one leg."""
     if C[C_SENSE_ALPHA] > 0.5:
@@ -92,7 +92,7 @@ def sensed(s, C, leg):
     return s[IPHB + leg], s[NQ + IPHB + leg], s[IL_B + leg]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def bounding_step(s, P, C, ls, cmd, transitions):
     """One controller sample: update leg states ``ls`` and hold commands ``cmd``.
 

@@ -26,8 +26,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from ..jit import allocating, kernel
 from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
@@ -50,7 +50,7 @@ NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
 STIFF_MOTOR_RATE = 1000.0
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def solve_dense(A, b, n):
     """Solve A[:n,:n] x = b[:n] in place by Gaussian elimination with partial pivoting
     (:func:`lu_factor` then :func:`lu_solve`; deterministic, systems of at most 13 x 13).
@@ -62,21 +62,21 @@ def solve_dense(A, b, n):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def hip_position(q, P, leg):
     """Hip position (hx, hy) [m] of virtual leg ``leg`` (0 back, 1 front), SPEC.md 1."""
     sL = (2.0 * leg - 1.0) * P[P_L]
     return q[0] + sL * math.cos(q[2]), q[1] + sL * math.sin(q[2])
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def hip_velocity(q, dq, P, leg):
     """Hip velocity [m/s]."""
     sL = (2.0 * leg - 1.0) * P[P_L]
     return dq[0] - sL * math.sin(q[2]) * dq[2], dq[1] + sL * math.cos(q[2]) * dq[2]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def project(q, dq, l, P, mi, mf):
     """Make the dependent coordinates consistent with the active constraints (in place).
 
@@ -162,7 +162,7 @@ def project(q, dq, l, P, mi, mf):
     return sth, cth, sg0, cg0, sg1, cg1
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def mass_matrix(q, P, M):
     """Fill M (7 x 7) with the generalized mass matrix at q (SPEC.md 2, 5)."""
     for i in range(NQ):
@@ -212,7 +212,7 @@ def mass_matrix(q, P, M):
             M[i, j] = M[j, i]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def coriolis(q, dq, P, h):
     """Fill h (7) with the velocity-product terms, M ddq + h = Q (leg bodies only)."""
     for i in range(NQ):
@@ -235,7 +235,7 @@ def coriolis(q, dq, P, h):
         h[3 + leg] += ml * d * (math.cos(g) * ax + math.sin(g) * ay)
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def kinetic_energy(q, dq, P):
     """Kinetic energy 1/2 dq^T M dq [J]."""
     M = np.empty((NQ, NQ))
@@ -247,7 +247,7 @@ def kinetic_energy(q, dq, P):
     return 0.5 * e
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def potential_energy(q, l, P):
     """Gravity + leg springs + Model II belt springs [J]."""
     g = P[P_G]
@@ -266,7 +266,7 @@ def potential_energy(q, l, P):
     return e
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def motor_current(cmd_torque, omega_m, vb, P):
     """Motor current [A] delivered for a commanded leg torque (per physical leg) [N m].
 
@@ -304,7 +304,7 @@ def motor_current(cmd_torque, omega_m, vb, P):
 LOSS_SPEED_REG = 1.0
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def _loss_branch(tau0, d, idle, cl):
     """Delivered torque for output motion in direction d = +-1 (see delivered_torque)."""
     if tau0 * d > 0.0:                      # motoring: forward power flow
@@ -315,7 +315,7 @@ def _loss_branch(tau0, d, idle, cl):
     return -d * (abs(tau0) + idle) / (1.0 - cl)   # back-driven: reverse power flow
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def delivered_torque(cur, omega_m, P):
     """Torque delivered to the leg / driven gear, per physical leg [N m], for motor current
     ``cur`` [A] at motor speed ``omega_m`` relative to the torso [rad/s] (docs/model.md,
@@ -341,7 +341,7 @@ def delivered_torque(cur, omega_m, P):
             + 0.5 * (1.0 - w) * _loss_branch(tau0, -1.0, idle, cl))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def battery_voltage(dq, cmd, P):
     """Battery terminal voltage V_b [V] (SPEC.md 4).
 
@@ -367,7 +367,7 @@ def battery_voltage(dq, cmd, P):
     return vb
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def new_row(R, r, rkind, rleg, nr, rhs, kind, leg):
     """Start constraint row nr of :func:`evaluate_ws`: zero R[nr], set its right-hand side,
     kind and leg (the caller fills the nonzero entries of R[nr])."""
@@ -378,7 +378,7 @@ def new_row(R, r, rkind, rleg, nr, rhs, kind, leg):
     rleg[nr] = leg
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def add_clamp_rows(P, R, r, rkind, rleg, nr):
     """Bench-rig clamps as constraint rows (issue 5, docs/identification.md): with
     P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (kind 5); with P_CLAMP_LEGS also ddphi = 0 for
@@ -397,7 +397,7 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
     return nr
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
     for cross-checks of the optimized :func:`evaluate_ws`.
@@ -697,14 +697,14 @@ LG_FAX, LG_LDOT, LG_GT, LG_GN, LG_TOEX, LG_TOEY, LG_TOEVX, LG_CUR, LG_OM, LG_TAP
     LG_TBELT, LG_TFRIC, LG_HOLD, LG_STRUT = range(14)
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def new_eval_workspace():
     """Scratch arrays for :func:`evaluate_ws` (wk, wA, piv)."""
     return (np.zeros(WK_SIZE), np.zeros((WA_ROWS, MAX_KKT)),
             np.zeros(MAX_KKT, dtype=np.int64))
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def lu_factor(A, piv, n):
     """LU factorization with partial pivoting of A[:n,:n] in place (multipliers below the
     diagonal, row interchanges in piv). The same operations as :func:`solve_dense`, so
@@ -744,7 +744,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def lu_solve(A, piv, b, o, n):
     """Solve with the factors of :func:`lu_factor`; right-hand side b[o:o+n], in place."""
     for k in range(n):
@@ -765,7 +765,7 @@ def lu_solve(A, piv, b, o, n):
         b[o + i] = acc / A[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
     """Assemble and factor the KKT matrix with the Model II gear coordinates eliminated.
 
@@ -799,7 +799,7 @@ def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
     return lu_factor(A, piv, n), n
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo, schur):
     """Solve the full KKT system [M R^T; R 0] x = b[o:o+nact+nr] (in place, original
     ordering) with the factors of :func:`kkt_schur_factor` (``schur``) or
@@ -851,7 +851,7 @@ def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, y
 SCHUR_MAX_ROWS = MAX_KKT - 10
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1):
     """Factor the reduced KKT system of :func:`kkt_reduced_factor` by Schur complements,
     using the structure of the mass matrix: the torso translations have the scalar inertia
@@ -964,7 +964,7 @@ def kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1):
     return True, nc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def kkt_schur_solve(A, nc, y, yo):
     """Solve the reduced KKT system with the factors of :func:`kkt_schur_factor`, right-hand
     side y[yo:yo+5+nc] = [forces; constraint right-hand sides], in place: ddq then the
@@ -1010,7 +1010,7 @@ def kkt_schur_solve(A, nc, y, yo):
     y[yo + 4] = z4
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
                  vb, energy):
     """The outputs aux of :func:`evaluate_ws` from its per-leg scalars LG and the KKT
@@ -1067,7 +1067,7 @@ def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl
     aux[A_KKT_OK] = 1.0 if ok else 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     """Update ds = f(s) and the outputs aux for new commanded torques ``cmd`` at the state
     and modes of the last :func:`evaluate_ws` call on this workspace (made with
@@ -1132,7 +1132,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     return ok
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want_aux):
     """:func:`evaluate` without allocations, on the scratch arrays of
     :func:`new_eval_workspace`.
@@ -1524,7 +1524,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     return ok
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def evaluate(s, P, mi, mf, cmd, ds, aux):
     """Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
 
@@ -1551,14 +1551,14 @@ def evaluate(s, P, mi, mf, cmd, ds, aux):
     return evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, False, stiff, True)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def project_state(s, P, mi, mf):
     """Project the dependent coordinates of a full state vector in place."""
     # views: project() writes the dependent coordinates straight into s
     project(s[0:NQ], s[NQ:2 * NQ], s[IL_B:IL_B + 2], P, mi, mf)
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def impact(s, P, mi, mf, out):
     """Rigid-body impact onto the constraints of the current modes (SPEC.md 3), in place.
 

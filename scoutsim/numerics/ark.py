@@ -28,8 +28,8 @@ Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import kernel
 from ..model.dynamics import NSTIFF, evaluate_ws
 from ..model.layout import NQ, NS
 
@@ -114,7 +114,7 @@ EW3 = B3 - BHAT3
 AD3 = AI3 - AE3
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
          eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
@@ -122,7 +122,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
                     Z, eval_end, want_sf, AE, AD, B, EW, GAMMA, NSTAGE)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
           eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
@@ -130,7 +130,7 @@ def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1
                     Z, eval_end, want_sf, AE3, AD3, B3, EW3, GAMMA3, 4)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline="always")
 def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
              eval_end, want_sf, AE, AD, B, EW, GAMMA, ns):
     """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
@@ -227,7 +227,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     return err, ok, nfev
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
     """x := W^-1 x = x + h gamma U S^-1 V^T x (Sherman-Morrison-Woodbury), given
     m = V^T x and Si = S^-1 = (I - h gamma V^T U)^-1; leaves p = h gamma S^-1 m in pp."""
@@ -243,7 +243,7 @@ def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
         x[i] = acc
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def invert_small(VU, hg, Si, R, M):
     """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4); M (4, 8) is
     scratch."""
@@ -280,7 +280,7 @@ def invert_small(VU, hg, Si, R, M):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def dense(y, y1, h, K, theta, out):
     """Cubic Hermite continuous extension on (y, K[0]) -> (y1, K[6]) at t + theta*h."""
     t2 = theta * theta

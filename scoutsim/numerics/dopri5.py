@@ -9,8 +9,8 @@ continuous extension as SciPy. Error-per-step control with the RMS norm
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import allocating, kernel
 from ..model.dynamics import NSTIFF, evaluate_ws, new_eval_workspace
 from ..model.layout import NAUX, NS
 
@@ -42,7 +42,7 @@ PD = np.array([
 ])
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
     """One Dormand-Prince step of size h from y, with K[0] = f(y) already filled.
 
@@ -76,7 +76,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
     return np.sqrt(err / NS), ok
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def dense(y, h, K, theta, out):
     """Continuous extension: state at t + theta*h (0 <= theta <= 1) after a step from y."""
     t1 = theta
@@ -97,7 +97,7 @@ def new_workspace():
     return (np.zeros((7, NS)), np.zeros(NS), np.zeros(NS), np.zeros(NAUX))
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def eval_workspace():
     """Evaluation workspace tuple (wk, wA, piv, stiff) for :func:`evaluate_ws`."""
     wk, wA, piv = new_eval_workspace()

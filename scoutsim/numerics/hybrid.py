@@ -20,8 +20,8 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
 
+from ..jit import allocating, kernel
 from ..control.bounding import bounding_step
 from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
 from ..model.layout import (
@@ -68,12 +68,12 @@ MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
 WHOLE_PERIOD_FRACTION = 0.5
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def body_weight(P):
     return (P[P_MT] + 2.0 * P[P_NP] * P[P_ML]) * P[P_G]
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
@@ -114,7 +114,7 @@ def event_values(s, aux, P, mi, out):
     out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def log_event(ev, nev, t, kind, leg, v1, v2, v3):
     if nev < ev.shape[0]:
         ev[nev, 0] = t
@@ -126,19 +126,19 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
     return nev + 1
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def leave_contact(s, mi, leg):
     """Switch a leg to flight (its current leg length is kept as the toe's state)."""
     mi[MI_CONTACT_B + leg] = FLIGHT
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
     return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace(), False)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=False):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
@@ -237,7 +237,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
     return nev
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     """Pin the toe where it touched the ground and apply the impact (SPEC.md 3)."""
     o = leg * NAUX_LEG
@@ -271,7 +271,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     return nev, ok
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     """Mode transition for event slot k at time t (state s already at the event)."""
     ok = True
@@ -337,7 +337,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     return nev, ok
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def record_friction(aux, P, mi, stats):
     """Track the largest friction ratio |Ft|/Fn needed by a pinned toe (Fn > 5 % weight)."""
     W = body_weight(P)
@@ -352,7 +352,7 @@ def record_friction(aux, P, mi, stats):
                     stats[S_MAX_FRICTION] = r
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
             Z, eval_end, want_sf=True):
     """One step of the selected method; returns (error_norm, ok, evaluations).
@@ -367,7 +367,7 @@ def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew
     return err, ok, 6
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
@@ -377,7 +377,7 @@ def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
 AdvanceScratch = namedtuple("AdvanceScratch", "e_end pending mi_before e_tmp aux_tmp")
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
             ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z, sc,
             fresh=False):
@@ -596,7 +596,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     return t, nev, ST_RUNNING
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
     """Append one row (time, state, outputs, leg states and modes) to the time series."""
     out_t[n_out] = t
@@ -613,7 +613,7 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
     return n_out + 1
 
 
-@njit(cache=True, error_model="numpy")
+@allocating
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew,
         method=METHOD_AUTO):
