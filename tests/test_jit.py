@@ -1,0 +1,63 @@
+"""The compiled core's declarations (scoutsim/jit.py): every compiled function says whether
+it runs with reference counting, and the non-allocating kernels really run without it."""
+
+import numpy as np
+import pytest
+from numba import njit
+from numba.core.caching import NullCache
+from numba.core.errors import TypingError
+from numba.core.registry import CPUDispatcher
+
+from scoutsim import jit
+from scoutsim.control import bounding
+from scoutsim.model import dynamics
+from scoutsim.numerics import ark, dopri5, hybrid
+
+MODULES = (dynamics, ark, dopri5, hybrid, bounding)
+
+
+def dispatchers(module):
+    return {name: obj for name, obj in vars(module).items()
+            if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__}
+
+
+@pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
+def test_every_compiled_function_declares_its_reference_counting(module):
+    found = dispatchers(module)
+    assert found, f"no compiled functions found in {module.__name__}"
+    for name, d in found.items():
+        opts = d.targetoptions
+        assert "_nrt" in opts, f"{module.__name__}.{name} is not declared with jit.kernel/allocating"
+        assert opts.get("error_model") == "numpy", name
+        assert not isinstance(d._cache, NullCache), f"{name} is not cached on disk"
+
+
+def test_the_hot_loop_runs_without_reference_counting():
+    for f in (dynamics.evaluate_ws, dynamics.evaluate_command_change, dynamics.project_state,
+              ark.step3, hybrid.advance, hybrid.settle_ws, hybrid.event_values,
+              bounding.bounding_step):
+        assert f.targetoptions["_nrt"] is False, f.py_func.__name__
+    # the functions that allocate keep it
+    for f in (hybrid.run, hybrid.touchdown, dynamics.impact, dynamics.evaluate):
+        assert f.targetoptions["_nrt"] is True, f.py_func.__name__
+
+
+def test_a_kernel_cannot_allocate():
+    # the property the kernels rely on is enforced by Numba, not by convention
+    def make(n):
+        return np.zeros(n)
+
+    with pytest.raises(TypingError):
+        njit(_nrt=False)(make)(3)
+    np.testing.assert_array_equal(njit(_nrt=True)(make)(3), np.zeros(3))
+
+
+def test_kernel_and_allocating_set_the_options():
+    def f(x):
+        return x + 1.0
+
+    k = jit.kernel(f)
+    a = jit.allocating(inline="always")(f)
+    assert k.targetoptions["_nrt"] is False and k.targetoptions["inline"] == "never"
+    assert a.targetoptions["_nrt"] is True and a.targetoptions["inline"] == "always"
+    assert k.py_func is f and a.py_func is f
