@@ -228,7 +228,9 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
         the base configuration every point modifies (``simulate`` arguments; the sweep's
         floor defaults to the Coulomb mu = 0.8 on which the Table I controller bounds).
     out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv``.
-    workers : local processes (default all cores). scheduler : Dask address or Client.
+    workers : local processes (default all cores; a pool started for this call).
+    scheduler : Dask address or Client, or a ``concurrent.futures.Executor`` to reuse
+        (worker start-up is paid once; see :mod:`scoutsim.analysis.parallel`).
     resume : skip points already in ``out/points.jsonl`` with the same settings.
     orbit : also find each steadily bounding point's periodic orbit by Newton from its run's
         last strides and record its period, spectral radius, stability and residual

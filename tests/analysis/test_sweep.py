@@ -1,4 +1,5 @@
-"""Parameter sweeps: grid/random points, failing points, resume, Parquet, Dask = local."""
+"""Parameter sweeps: grid/random points, failing points, resume, Parquet, Dask = kept
+executor = local."""
 
 import json
 import math
@@ -70,6 +71,19 @@ def test_dask_cluster_gives_the_same_table_as_local(tmp_path):
             distributed.Client(cluster) as client:
         remote = sweep(pts, model="II", duration=0.5, scheduler=client)
     assert json.dumps(local.rows, sort_keys=True) == json.dumps(remote.rows, sort_keys=True)
+
+
+def test_a_kept_executor_gives_the_same_table_and_stays_open():
+    import concurrent.futures as cf
+    import multiprocessing
+    pts = grid_points(GRID)
+    local = sweep(pts, model="II", duration=0.5, workers=1)
+    with cf.ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
+        first = sweep(pts, model="II", duration=0.5, scheduler=pool)
+        # the pool is the caller's: still usable for the next sweep
+        second = sweep(pts[:2], model="II", duration=0.5, scheduler=pool)
+    assert json.dumps(local.rows, sort_keys=True) == json.dumps(first.rows, sort_keys=True)
+    assert second.rows == first.rows[:2]
 
 
 def test_map_plot(tmp_path):
