@@ -27,7 +27,7 @@ def test_every_compiled_function_declares_its_reference_counting(module):
     assert found, f"no compiled functions found in {module.__name__}"
     for name, d in found.items():
         opts = d.targetoptions
-        assert "_nrt" in opts, f"{module.__name__}.{name} is not declared with jit.kernel/allocating"
+        assert "_nrt" in opts, f"{module.__name__}.{name}: not declared by jit.kernel/allocating"
         assert opts.get("error_model") == "numpy", name
         assert not isinstance(d._cache, NullCache), f"{name} is not cached on disk"
 

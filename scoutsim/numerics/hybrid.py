@@ -21,8 +21,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from ..jit import allocating, kernel
 from ..control.bounding import bounding_step
+from ..jit import allocating, kernel
 from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, A_TOE_Y,
