@@ -1011,6 +1011,25 @@ def kkt_schur_solve(A, nc, y, yo):
 
 
 @kernel(inline="always")
+def fill_derivative(ds, dq, b, LG, nact, model, ok):
+    """ds = [dq, ddq, dl]: the accelerations are the first ``nact`` entries of the KKT
+    solution b (zero if the factorization failed, ``ok`` False), the leg-length rates come
+    from the per-leg scalars LG; outside Model II the gear angles follow the legs
+    (alpha = phi)."""
+    for i in range(NQ):
+        ds[i] = dq[i]
+        ds[NQ + i] = 0.0
+    if ok:
+        for i in range(nact):
+            ds[NQ + i] = b[i]
+    if model != MODEL_II:
+        ds[NQ + 5] = ds[NQ + 3]
+        ds[NQ + 6] = ds[NQ + 4]
+    ds[IL_B] = LG[2 * LG_LDOT]
+    ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
+
+
+@kernel(inline="always")
 def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
                  vb, energy):
     """The outputs aux of :func:`evaluate_ws` from its per-leg scalars LG and the KKT
@@ -1116,16 +1135,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
                       schur)
     for i in range(n):
         b[i] += b2[i]
-    for i in range(NQ):
-        ds[i] = dq[i]
-        ds[NQ + i] = 0.0
-    for i in range(nact):
-        ds[NQ + i] = b[i]
-    if model != MODEL_II:
-        ds[NQ + 5] = ds[NQ + 3]
-        ds[NQ + 6] = ds[NQ + 4]
-    ds[IL_B] = LG[2 * LG_LDOT]
-    ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
+    fill_derivative(ds, dq, b, LG, nact, model, ok)
     meta[3] = vb
     fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, meta[4], meta[5],
                  meta[6], meta[7], vb, meta[8])
@@ -1409,17 +1419,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     meta[6] = sgl1
     meta[7] = cgl1
 
-    for i in range(NQ):
-        ds[i] = dq[i]
-        ds[NQ + i] = 0.0
-    if ok:
-        for i in range(nact):
-            ds[NQ + i] = b[i]
-    if model != MODEL_II:
-        ds[NQ + 5] = ds[NQ + 3]
-        ds[NQ + 6] = ds[NQ + 4]
-    ds[IL_B] = LG[2 * LG_LDOT]
-    ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
+    fill_derivative(ds, dq, b, LG, nact, model, ok)
 
     if want_stiff:
         for i in range(NS):
