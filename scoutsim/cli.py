@@ -30,13 +30,16 @@ import sys
 import time
 from pathlib import Path
 
-from .analysis.basin import BASIN_COLUMNS, basin_stats, run_basin_tasks
+from .analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS, DEFAULT_PITCH_RATES,
+                             DEFAULT_SPEEDS, basin_stats, basin_tasks, floor_label,
+                             run_basin_tasks)
+from .parameters import DEFAULT_FRICTION_COEFFICIENT
 
 __all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_timeseries_csv",
            "format_summary", "format_basin"]
 
 MODELS = ("ideal", "I", "II", "passive")
-_LIST_OPTIONS = ("--speeds", "--pitch-rates", "--heights", "--model", "--models")
+_LIST_OPTIONS = ("--speeds", "--pitch-rates", "--heights", "--model", "--models", "--floors", "--pitch-rate")
 
 #: Unit of each ``result.columns()`` name, by prefix (first match wins); written into the
 #: header of ``timeseries.csv`` as ``name [unit]``. Mode columns are codes without a unit.
@@ -61,9 +64,8 @@ class _UsageError(Exception):
 # -----------------------------------------------------------------------------------------
 # argument types
 # -----------------------------------------------------------------------------------------
-#: Toe friction of the CLI's Scout II jobs: Coulomb mu on carpet [assumed]. The Table I
-#: controller does not bound on a no-slip floor (docs/model.md, "Toe friction").
-SCOUT_FLOOR_FRICTION = 0.8
+#: Toe friction of the CLI's jobs: the package's one default floor
+SCOUT_FLOOR_FRICTION = DEFAULT_FRICTION_COEFFICIENT
 
 
 def _positive_float(text: str) -> float:
@@ -95,6 +97,15 @@ def _friction(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be >= 0 "
                                          "('inf' = no slip)")
     return v
+
+
+def _friction_list(text: str) -> list:
+    vals = [_friction(x.strip()) for x in text.split(",") if x.strip()]
+    if not vals:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: give at least one value")
+    if len(set(vals)) != len(vals):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: a floor is repeated")
+    return vals
 
 
 def _positive_int(text: str) -> int:
@@ -178,9 +189,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="integrator absolute tolerance (default: 1e-9)")
     common.add_argument("--friction", type=_friction, default=SCOUT_FLOOR_FRICTION, metavar="MU",
                         help="Coulomb friction coefficient of the toes (default: "
-                             f"{SCOUT_FLOOR_FRICTION}, the carpet the paper's experiments ran "
-                             "on; 'inf' = no slip, the default of simulate(); see "
-                             "docs/model.md)")
+                             f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
+                             "paper's experiments ran; 'inf' = no slip; see docs/model.md)")
     common.add_argument("--no-progress", action="store_true",
                         help="no progress bar (it is also off when stderr is not a terminal)")
 
@@ -204,23 +214,31 @@ def build_parser() -> argparse.ArgumentParser:
 
     basin = sub.add_parser(
         "basin", parents=[common],
-        help="fraction of a grid of initial states that reaches steady bounding, per model",
-        description="Run a grid of initial states (forward speed x pitch rate x height) for "
-                    "each model in parallel and report the fraction that reaches steady "
-                    "bounding (GaitMetrics.is_steady_bounding: completed, >= 7 steady strides "
-                    "after the 2 s transient, stride-period CV <= 5 %%). Starts with a toe "
-                    "below the ground are recorded as invalid_start and left out of the "
-                    "fraction. Writes basin.csv and basin.json to DIR.")
+        help="basin map: which starts reach steady bounding, per model and floor",
+        description="Run a grid of initial states (forward speed x pitch rate x height; "
+                    "level torso, legs at their touchdown angles) for each model and floor in "
+                    "parallel and report the fraction that reaches steady bounding "
+                    "(GaitMetrics.is_steady_bounding: completed, >= 7 steady strides after "
+                    "the 2 s transient, stride-period CV <= 5 %%) and the cycle's speed. "
+                    "Starts with a toe below the ground are recorded as invalid_start and "
+                    "left out of the fraction. Writes basin.csv, basin.json and the map "
+                    "basin.png to DIR.")
     basin.add_argument("--model", type=_model_list, default=["ideal", "I", "II"], metavar="LIST",
                        help="comma-separated models (default: ideal,I,II)")
-    basin.add_argument("--speeds", type=_float_list(), default=[0.8, 1.1, 1.4, 1.7],
-                       metavar="LIST", help="initial forward speeds [m/s] "
-                       "(default: 0.8,1.1,1.4,1.7)")
-    basin.add_argument("--pitch-rates", type=_float_list(), default=[-100.0, -50.0, 0.0, 50.0],
-                       metavar="LIST", help="initial pitch rates [deg/s] "
-                       "(default: -100,-50,0,50)")
-    basin.add_argument("--heights", type=_float_list(positive=True), default=[0.36, 0.40],
-                       metavar="LIST", help="initial torso COM heights [m] (default: 0.36,0.40)")
+    basin.add_argument("--floors", type=_friction_list, default=None, metavar="LIST",
+                       help="comma-separated toe friction coefficients, 'inf' = no slip "
+                            f"(default: {SCOUT_FLOOR_FRICTION:g},inf; --friction MU runs one)")
+    basin.add_argument("--speeds", type=_float_list(), default=list(DEFAULT_SPEEDS),
+                       metavar="LIST", help="initial forward speeds [m/s] (default: "
+                       + ",".join(f"{v:g}" for v in DEFAULT_SPEEDS) + ")")
+    basin.add_argument("--pitch-rates", type=_float_list(), default=list(DEFAULT_PITCH_RATES),
+                       metavar="LIST", help="initial pitch rates [deg/s], positive = nose "
+                       "rising (default: " + ",".join(f"{v:g}" for v in DEFAULT_PITCH_RATES)
+                       + ")")
+    basin.add_argument("--heights", type=_float_list(positive=True), default=list(DEFAULT_HEIGHTS),
+                       metavar="LIST", help="initial torso COM heights [m] (default: "
+                       + ",".join(f"{v:g}" for v in DEFAULT_HEIGHTS) + ")")
+    basin.add_argument("--no-plots", action="store_true", help="do not write basin.png")
     basin.add_argument("--workers", type=_positive_int, default=None, metavar="N",
                        help="parallel processes (default: os.cpu_count(); 1 runs in this "
                             "process)")
@@ -443,6 +461,8 @@ def main(argv=None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(_join_list_values(argv))
+        # (basin: a floor given with --friction replaces the default pair of floors)
+        args.friction_given = any(a == "--friction" or a.startswith("--friction=") for a in argv)
     except SystemExit as exc:  # --help, --version or a usage error (argparse printed it)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     if args.command is None:
@@ -650,18 +670,24 @@ def _cmd_run(args) -> int:
 # scoutsim basin
 # -----------------------------------------------------------------------------------------
 def format_basin(per: dict, n_grid: int, duration: float) -> str:
-    """The human-readable basin table."""
-    head = ("model", "starts", "invalid", "valid", "steady", "fraction", "fell", "other")
-    lines = [f"scoutsim basin: {n_grid} starts per model, {duration:g} s each; fraction = "
-             "steady bounding / valid starts",
-             "  " + "  ".join(f"{h:>8}" for h in head)]
-    for m, s in per.items():
+    """The human-readable basin table (one row per model and floor)."""
+    head = ("model", "floor", "starts", "invalid", "valid", "steady", "fraction", "fell",
+            "other", "cycle m/s")
+    lines = [f"scoutsim basin: {n_grid} starts per model and floor, {duration:g} s each; "
+             "fraction = steady bounding / valid starts; cycle m/s = median speed of the "
+             "starts that bound",
+             "  " + "  ".join(f"{h:>9}" for h in head)]
+    for key, s in per.items():
         frac = s["fraction_steady_bounding"]
         fell = s["outcomes"].get("fell", 0)
         other = s["n_valid"] - s["outcomes"].get("completed", 0) - fell
-        vals = (m, s["n_starts"], s["n_invalid_start"], s["n_valid"], s["n_steady_bounding"],
-                "n/a" if frac is None else f"{frac:.3f}", fell, other)
-        lines.append("  " + "  ".join(f"{v!s:>8}" for v in vals))
+        v = s.get("median_cycle_speed_m_s")
+        mu = s.get("friction")
+        vals = (s.get("model", key), "-" if mu is None else floor_label(mu), s["n_starts"],
+                s["n_invalid_start"], s["n_valid"], s["n_steady_bounding"],
+                "n/a" if frac is None else f"{frac:.3f}", fell, other,
+                "-" if v is None else f"{v:.3f}")
+        lines.append("  " + "  ".join(f"{x!s:>9}" for x in vals))
     return "\n".join(lines)
 
 
@@ -673,9 +699,10 @@ def _cmd_basin(args) -> int:
     workers = args.workers or os.cpu_count() or 1
     progress = (not args.no_progress) and sys.stderr.isatty()
     grid = [(v, w, h) for v in args.speeds for w in args.pitch_rates for h in args.heights]
-    tasks = [{"model": m, "speed": v, "pitch_rate_deg_s": w, "height": h, "robot": robot,
-              "controller": controller, "duration": args.duration, "integrator": integ,
-              "friction": args.friction} for m in models for (v, w, h) in grid]
+    floors = (args.floors if args.floors is not None else
+              [args.friction] if getattr(args, "friction_given", False) else list(DEFAULT_FLOORS))
+    tasks = basin_tasks(models, floors, args.speeds, args.pitch_rates, args.heights,
+                        args.duration, robot, controller, integ)
     if args.duration < 5.0:
         print(f"scoutsim basin: note: --duration {args.duration:g} s is short; steady bounding "
               "needs >= 7 strides after the 2 s transient, so (almost) no start can qualify",
@@ -691,12 +718,13 @@ def _cmd_basin(args) -> int:
         w.writeheader()
         for r in rows:
             w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
-    per = basin_stats(rows, models)
+    per = basin_stats(rows, models, floors if len(floors) > 1 else None)
     summary = {
         "fraction_steady_bounding": {m: s["fraction_steady_bounding"] for m, s in per.items()},
         "models": per,
         "grid": {"speeds_m_s": args.speeds, "pitch_rates_deg_s": args.pitch_rates,
                  "heights_m": args.heights, "duration_s": args.duration,
+                 "floors": ["inf" if math.isinf(mu) else mu for mu in floors],
                  "n_starts_per_model": len(grid)},
         "criterion": "GaitMetrics.is_steady_bounding(): outcome completed, >= 7 steady "
                      "strides after the 2 s transient, stride-period CV <= 0.05; "
@@ -705,6 +733,13 @@ def _cmd_basin(args) -> int:
         "workers": workers,
     }
     (out / "basin.json").write_text(_dumps(summary) + "\n")
+    written = "basin.csv, basin.json"
+    if not args.no_plots:
+        from .plotting import plot_basin_map
+        from .simulation import InitialState
+        d = InitialState()
+        plot_basin_map(rows, out / "basin.png", default_start=(d.dx, math.degrees(d.dtheta)))
+        written += ", basin.png"
 
     print(format_basin(per, len(grid), args.duration))
     n_invalid = sum(s["n_invalid_start"] for s in per.values())
@@ -714,7 +749,7 @@ def _cmd_basin(args) -> int:
               f"{example['speed']:g} m/s, pitch rate {example['pitch_rate_deg_s']:g} deg/s, "
               f"height {example['height']:g} m: {example.get('error', '')}")
     print(f"wall time {wall:.1f} s with {min(workers, len(tasks))} worker(s); "
-          f"wrote basin.csv, basin.json to {out}/")
+          f"wrote {written} to {out}/")
     errors = [r for r in rows if r["outcome"] == "error"]
     for r in errors[:5]:
         print(f"scoutsim basin: start model {r['model']}, speed {r['speed']:g}, pitch rate "

@@ -24,6 +24,14 @@ from importlib import resources
 from os import PathLike
 from pathlib import Path
 
+#: The default floor of every simulation, command and study: Coulomb friction mu = 1.0 at
+#: the toe [assumed: rubber-covered toes on carpet, where the paper's experiments ran; the
+#: paper gives no value]. mu = inf is a no-slip floor (SPEC's idealisation), an option.
+#: Why 1.0: from the default start, ideal, Model I and Model II all reach the bounding
+#: cycle from every start of a neighbourhood around it on this floor (docs/model.md,
+#: "Default start and floor"); on a no-slip floor Model II does from fewer than half.
+DEFAULT_FRICTION_COEFFICIENT = 1.0
+
 
 @dataclass(frozen=True)
 class RobotParameters:
@@ -79,6 +87,25 @@ class RobotParameters:
         k_b, lumped backlash/belt torsional spring [N m/rad] (Table II, 7 N m/deg).
     belt_damping : float
         c_b, lumped belt damper [N m s/rad] (Table II, 4 N m/(deg/s)).
+    belt_backlash : float
+        Total angular play of the hip unit [rad] (assumed, default 0: the paper lumps
+        backlash into the belt spring). With play b the belt spring acts only beyond
+        |alpha - phi| = b / 2: tau_spring = k_b (delta - sign(delta) b / 2) there, 0 inside
+        (a dead zone); the belt damper acts throughout (docs/model.md, "Effects beyond the
+        paper's models").
+    leg_friction_force : float
+        Coulomb friction of the telescopic leg's sliding joint [N], per physical leg
+        (assumed, default 0), opposing the leg-length rate; regularised linearly over
+        |dl/dt| < ``dynamics.LEG_FRICTION_SPEED`` (1 mm/s), so it holds a leg whose net
+        spring force is below it almost still (stiction).
+    leg_friction_side_load_coefficient : float
+        Additional leg friction per unit side load of the sliding joint [-] (assumed,
+        default 0): friction force += coefficient x |hip torque| / l, the bending load the
+        hip torque puts on the leg's bushings (torque-dependent friction, paper Sec. IV.B).
+    leg_damping_angle_coefficient : float
+        a_phi [1/rad^2] (assumed, default 0): the leg damper is c (1 + a_phi phi^2), rising
+        with the leg's angle phi from the torso normal (angle-dependent damping, paper
+        Sec. IV.B).
     torque_constant : float
         Motor torque constant K_T [N m/A] (assumed).
     speed_constant : float
@@ -118,6 +145,10 @@ class RobotParameters:
     joint_damping: float = 6.2e-7 * 180.0 / math.pi
     belt_stiffness: float = 7.0 * 180.0 / math.pi
     belt_damping: float = 4.0 * 180.0 / math.pi
+    belt_backlash: float = 0.0
+    leg_friction_force: float = 0.0
+    leg_friction_side_load_coefficient: float = 0.0
+    leg_damping_angle_coefficient: float = 0.0
     torque_constant: float = 0.0389
     speed_constant: float = 0.0389
     armature_resistance: float = 1.2
@@ -223,6 +254,8 @@ UNITS: dict[str, dict[str, float]] = {
     "stiffness": {"N/m": 1.0, "N/mm": 1.0e3},
     "damping": {"N s/m": 1.0, "N s/mm": 1.0e3},
     "torque": {"N m": 1.0, "mN m": 1.0e-3},
+    "force": {"N": 1.0},
+    "per squared angle": {"1/rad^2": 1.0, "1/deg^2": (180.0 / math.pi) ** 2},
     "rotational stiffness": {"N m/rad": 1.0, "N m/deg": 180.0 / math.pi},
     "rotational damping": {"N m s/rad": 1.0, "N m/(rad/s)": 1.0, "N m/(deg/s)": 180.0 / math.pi},
     "torque constant": {"N m/A": 1.0, "mN m/A": 1.0e-3},
@@ -315,6 +348,9 @@ _RULES: dict[str, _Range] = {
     "drive_gear_inertia": _NON_NEGATIVE, "driven_gear_inertia": _NON_NEGATIVE,
     "joint_stiction": _NON_NEGATIVE, "joint_damping": _NON_NEGATIVE,
     "belt_stiffness": _POSITIVE, "belt_damping": _NON_NEGATIVE,
+    "belt_backlash": _Range(0.0, True, math.radians(45.0), True),
+    "leg_friction_force": _NON_NEGATIVE, "leg_friction_side_load_coefficient": _NON_NEGATIVE,
+    "leg_damping_angle_coefficient": _NON_NEGATIVE,
     "torque_constant": _POSITIVE, "speed_constant": _POSITIVE,
     "armature_resistance": _POSITIVE, "current_limit": _POSITIVE,
     "battery_voltage": _POSITIVE, "battery_resistance": _NON_NEGATIVE,

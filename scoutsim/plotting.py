@@ -315,3 +315,68 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     fig.suptitle(f"Torque-speed, {_model_label(result)} ({result.outcome})")
     _save(fig, path)
     return fig
+
+
+def plot_basin_map(rows, path=None, default_start=None) -> Figure:
+    """The basin of the bounding cycle as a map: one panel per model (rows) and floor
+    (columns) over initial forward speed x pitch rate [deg/s]; a cell's colour is the share
+    of the grid's start heights from which the run reaches steady bounding (green: all,
+    yellow: some, red: none), its label the mean speed of the cycle reached [m/s].
+    ``rows``: :attr:`scoutsim.analysis.basin.BasinResult.rows` (or the CLI's basin.csv rows);
+    ``default_start``: (speed [m/s], pitch rate [deg/s]) marked with a star."""
+    from matplotlib.colors import ListedColormap
+    from .analysis.basin import floor_label
+    models = list(dict.fromkeys(r["model"] for r in rows))
+    floors = list(dict.fromkeys(float(r["friction"]) for r in rows))
+    speeds = sorted({float(r["speed"]) for r in rows})
+    rates = sorted({float(r["pitch_rate_deg_s"]) for r in rows})
+    heights = sorted({float(r["height"]) for r in rows})
+    cmap = ListedColormap(["#d9544d", "#f2c14e", "#4caf50"])
+    fig = Figure(figsize=(3.4 * len(floors) + 1.0, 2.9 * len(models) + 0.6), layout="constrained")
+    axes = fig.subplots(len(models), len(floors), squeeze=False, sharex=True, sharey=True)
+    for i, m in enumerate(models):
+        for j, mu in enumerate(floors):
+            ax = axes[i, j]
+            share = np.full((len(rates), len(speeds)), np.nan)
+            vel = [[[] for _ in speeds] for _ in rates]
+            cnt = np.zeros_like(share)
+            for r in rows:
+                if r["model"] != m or float(r["friction"]) != mu or r["outcome"] == "invalid_start":
+                    continue
+                a, b = rates.index(float(r["pitch_rate_deg_s"])), speeds.index(float(r["speed"]))
+                ok = str(r["steady_bounding"]) in ("True", "true", "1")
+                share[a, b] = (0.0 if np.isnan(share[a, b]) else share[a, b]) + ok
+                cnt[a, b] += 1
+                if ok and r["mean_speed_m_s"] not in (None, ""):
+                    vel[a][b].append(float(r["mean_speed_m_s"]))
+            frac = np.where(cnt > 0, share / np.maximum(cnt, 1), np.nan)
+            level = np.where(np.isnan(frac), np.nan, np.where(frac >= 1.0, 2, np.where(frac > 0, 1, 0)))
+            ds, dr = (speeds[1] - speeds[0] if len(speeds) > 1 else 0.2,
+                      rates[1] - rates[0] if len(rates) > 1 else 50.0)
+            ax.imshow(level, origin="lower", cmap=cmap, vmin=0, vmax=2, aspect="auto",
+                      extent=(speeds[0] - ds / 2, speeds[-1] + ds / 2, rates[0] - dr / 2,
+                              rates[-1] + dr / 2))
+            for a in range(len(rates)):
+                for b in range(len(speeds)):
+                    if vel[a][b]:
+                        ax.text(speeds[b], rates[a], f"{np.mean(vel[a][b]):.2f}", ha="center",
+                                va="center", fontsize=6)
+            if default_start is not None:
+                ax.plot([default_start[0]], [default_start[1]], marker="*", ms=12, mfc="white",
+                        mec="black")
+            valid = cnt.sum()
+            n_ok = np.nansum(share)
+            ax.set_title(f"{_MODEL_LABELS.get(m, m)}, {floor_label(mu)}: "
+                         f"{n_ok / valid if valid else float('nan'):.2f}", fontsize=9)
+            if i == len(models) - 1:
+                ax.set_xlabel("initial forward speed [m/s]")
+            if j == 0:
+                ax.set_ylabel("initial pitch rate [deg/s]")
+    fig.legend(handles=[Patch(color=cmap(2), label="bounds (every height)"),
+                        Patch(color=cmap(1), label="bounds (some heights)"),
+                        Patch(color=cmap(0), label="falls / no steady bound")],
+               loc="outside lower center", ncol=3, fontsize=8)
+    fig.suptitle("Basin of the bounding cycle (heights " + ", ".join(f"{h:g}" for h in heights)
+                 + " m; labels: cycle speed m/s)", fontsize=10)
+    _save(fig, path)
+    return fig

@@ -235,8 +235,13 @@ class SimulationResult:
             meta = json.loads(str(z["meta"]))
             if meta.get("format") != "scoutsim.result/1":
                 raise ValueError(f"{path}: not a scoutsim result file")
+            events = z["events"]
+            if events.shape[1] < L.NEVREC:
+                # saved before the transition audit columns existed: they are unknown
+                pad = np.full((events.shape[0], L.NEVREC - events.shape[1]), np.nan)
+                events = np.hstack([events, pad])
             return cls(t=z["t"], state=z["state"], aux=z["aux"], modes=z["modes"],
-                       events=z["events"], outcome=meta["outcome"], t_end=meta["t_end"],
+                       events=events, outcome=meta["outcome"], t_end=meta["t_end"],
                        stats=meta["stats"], provenance=meta["provenance"])
 
     def columns(self) -> dict:

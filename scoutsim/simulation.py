@@ -21,11 +21,11 @@ from . import __version__
 from .control.bounding import BoundingController, controller_array
 from .model import layout as L
 from .model.dynamics import NSTIFF
-from .model.packing import robot_array
+from .model.packing import default_friction, robot_array
 from .numerics.dopri5 import eval_workspace
 from .numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
-from .parameters import (ControllerParameters, RobotParameters, validate_parameters,
-                         validate_robot)
+from .parameters import (ControllerParameters, RobotParameters,
+                         validate_parameters, validate_robot)
 from .result import SimulationResult
 
 Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
@@ -100,18 +100,24 @@ class IntegratorSettings:
 class InitialState:
     """Initial state of the robot (SI units, angles in rad; SPEC.md 1 conventions).
 
-    The default is how such a robot is set going (SPEC.md 3): dropped with both legs in
-    flight at their touchdown angles, torso pitched nose-up by 4 deg, from a torso-COM height
-    of 0.33 m (toes about 2 cm above the ground), moving forward at 1.2 m/s
-    (see docs/model.md, "Default start"). Leg lengths default to l0.
+    The default is how such a robot is set going into a bound: released in flight with
+    both legs at their touchdown angles, torso level at a COM height of 0.33 m (toes about
+    2 cm above the ground), moving forward at 1.2 m/s with the nose rising at 150 deg/s,
+    the motion the robot has after its front legs push off in its own bound (at front
+    lift-off the cycle pitches up at 90-100 deg/s and moves at 1.3-1.6 m/s). The controller
+    has no torso feedback, so a start without pitch motion tends not to enter bounding;
+    from this one, ideal, Model I and Model II all reach their bounding cycles, and so do
+    all their neighbours (speed 1.0-1.4 m/s, pitch rate 100-200 deg/s, height 0.32-0.35 m)
+    on the default floor (docs/model.md, "Default start and floor"). Leg lengths default
+    to l0.
     """
 
     x: float = 0.0
     y: float = 0.33
-    theta: float = math.radians(4.0)
+    theta: float = 0.0
     dx: float = 1.2
     dy: float = 0.0
-    dtheta: float = 0.0
+    dtheta: float = math.radians(150.0)
     phi_back: float | None = None
     phi_front: float | None = None
     dphi_back: float = 0.0
@@ -318,7 +324,8 @@ class HybridEngine:
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,
              model: str = "II", integrator: IntegratorSettings | None = None,
-             friction_coefficient: float = math.inf, pitch_limit_deg: float = 60.0,
+             friction_coefficient: float | None = None,
+             pitch_limit_deg: float = 60.0,
              passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
              progress: bool = False, chunk_seconds: float = 1.0) -> SimulationResult:
     """Simulate the planar Scout II model.
@@ -341,8 +348,11 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         Actuation / transmission variant (SPEC.md 4-5).
     integrator : IntegratorSettings, optional
         Tolerances of the reference integrator.
-    friction_coefficient : float
-        Coulomb coefficient of the toe; ``inf`` (default) = no slip.
+    friction_coefficient : float, optional
+        Coulomb coefficient of the toe; ``inf`` = no slip. Default (None): the package's
+        default floor, :data:`~scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT` (1.0),
+        except for massless legs, whose ground force lies along the leg (SPEC: they carry
+        axial force only), for which slip is not defined: no slip.
     pitch_limit_deg : float
         |pitch| [deg] that counts as a fall (SPEC.md 3).
     passive_touchdown_angles : (back, front) [rad]
@@ -363,6 +373,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     """
     robot = validate_robot(robot if robot is not None else RobotParameters())
     integ = (integrator or IntegratorSettings()).resolve(model)
+    if friction_coefficient is None:
+        friction_coefficient = default_friction(robot)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
     if not (0.0 < pitch_limit_deg < 90.0):

@@ -185,13 +185,13 @@ def _read_basin(out):
 def test_basin_writes_one_row_per_start_and_excludes_invalid_starts(tmp_path, capsys):
     out = tmp_path / "basin"
     code = main(["basin", "--model", "I,II", "--speeds", "1.1", "--pitch-rates", "-50,0",
-                 "--heights", "0.30,0.36", "--duration", "0.3", "--out", str(out),
+                 "--heights", "0.30,0.36", "--duration", "0.3", "--floors", "1.0", "--out", str(out),
                  "--workers", "1", "--no-progress"])
     assert code == 0
     rows, summary = _read_basin(out)
     assert len(rows) == 2 * 1 * 2 * 2
-    assert list(rows[0]) == ["model", "speed", "pitch_rate_deg_s", "height", "outcome",
-                             "steady_bounding", "mean_speed_m_s", "n_steady_strides"]
+    assert list(rows[0]) == ["model", "friction", "speed", "pitch_rate_deg_s", "height",
+                             "outcome", "steady_bounding", "mean_speed_m_s", "n_steady_strides"]
     assert sorted({float(r["pitch_rate_deg_s"]) for r in rows}) == [-50.0, 0.0]
     # at 0.30 m a toe starts below the ground (legs at their touchdown angles)
     for r in rows:
@@ -210,7 +210,7 @@ def test_basin_writes_one_row_per_start_and_excludes_invalid_starts(tmp_path, ca
 
 def test_basin_with_a_process_pool_matches_serial(tmp_path):
     args = ["basin", "--model", "I", "--speeds", "1.0,1.3", "--pitch-rates", "0",
-            "--heights", "0.36", "--duration", "0.3", "--no-progress"]
+            "--heights", "0.36", "--duration", "0.3", "--no-progress", "--friction", "1.0"]
     assert main(args + ["--out", str(tmp_path / "a"), "--workers", "2"]) == 0
     assert main(args + ["--out", str(tmp_path / "b"), "--workers", "1"]) == 0
     rows_a, _ = _read_basin(tmp_path / "a")
@@ -232,7 +232,7 @@ def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch,
     monkeypatch.setattr(scoutsim.simulation, "simulate", broken)
     code = main(["basin", "--model", "I", "--speeds", "1.1", "--pitch-rates", "0",
                  "--heights", "0.36", "--duration", "0.3", "--out", str(tmp_path),
-                 "--workers", "1", "--no-progress"])
+                 "--workers", "1", "--no-progress", "--floors", "inf"])
     assert code == 1
     rows, summary = _read_basin(tmp_path)
     assert [r["outcome"] for r in rows] == ["error"]

@@ -137,7 +137,7 @@ def test_save_load_lossless(tmp_path):
     p = r.save(tmp_path / "run.npz")
     q = SimulationResult.load(p)
     for name in ("t", "state", "aux", "modes", "events"):
-        assert np.array_equal(getattr(r, name), getattr(q, name))
+        assert np.array_equal(getattr(r, name), getattr(q, name), equal_nan=True)
     assert q.provenance == r.provenance and q.outcome == r.outcome
 
 

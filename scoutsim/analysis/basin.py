@@ -3,9 +3,15 @@
 The paper calls the Table I controller robust on the robot; a simulator in which only a
 narrow set of starts reaches steady bounding tells us a modelling assumption is off. This
 module runs a grid of starts (forward speed, pitch rate, torso height; the rest of
-:class:`~scoutsim.simulation.InitialState` at its defaults) per model variant, in parallel
-processes, and reports the fraction that reaches steady bounding
-(:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`).
+:class:`~scoutsim.simulation.InitialState` at its defaults, i.e. level torso, legs at their
+touchdown angles) per model variant and floor, in parallel processes, and reports the
+fraction that reaches steady bounding
+(:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`) and the speed of the cycle
+reached; :func:`scoutsim.plotting.plot_basin_map` draws it as a map.
+
+The default grid spans pitch rates of both signs, -150 to +250 deg/s, wide enough to show
+the basin's edges: the controller has no torso feedback, and the starts that enter bounding
+are those with the nose rising, the motion the robot has after its front legs push off.
 """
 
 from __future__ import annotations
@@ -16,15 +22,23 @@ import math
 import os
 from dataclasses import dataclass, field
 
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from .parallel import map_tasks
 
-DEFAULT_SPEEDS = (0.8, 1.1, 1.4, 1.7)            # m/s
-DEFAULT_PITCH_RATES = (-100.0, -50.0, 0.0, 50.0)  # deg/s (edge unit: converted once below)
-DEFAULT_HEIGHTS = (0.36, 0.40)                   # m
+DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
+DEFAULT_PITCH_RATES = (-150.0, -100.0, -50.0, 0.0, 50.0, 100.0, 150.0, 200.0, 250.0)  # deg/s
+DEFAULT_HEIGHTS = (0.33, 0.38)                                                     # m
+#: floors of the default map: the package's default floor and the no-slip idealisation
+DEFAULT_FLOORS = (DEFAULT_FRICTION_COEFFICIENT, math.inf)
 
 
-BASIN_COLUMNS = ("model", "speed", "pitch_rate_deg_s", "height", "outcome", "steady_bounding",
-                 "mean_speed_m_s", "n_steady_strides")
+BASIN_COLUMNS = ("model", "friction", "speed", "pitch_rate_deg_s", "height", "outcome",
+                 "steady_bounding", "mean_speed_m_s", "n_steady_strides")
+
+
+def floor_label(mu: float) -> str:
+    """'no slip' or 'mu = 1.0'."""
+    return "no slip" if math.isinf(mu) else f"mu = {mu:g}"
 
 
 def basin_task(task: dict) -> dict:
@@ -32,6 +46,7 @@ def basin_task(task: dict) -> dict:
     from .. import simulation
     InitialState, simulate = simulation.InitialState, simulation.simulate
     row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
+    row["friction"] = task["friction"]
     try:
         init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),
                             y=task["height"])
@@ -57,6 +72,7 @@ def basin_task(task: dict) -> dict:
 
 def _basin_error_row(task: dict, exc: Exception) -> dict:
     row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
+    row["friction"] = task["friction"]
     row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
                n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
     return row
@@ -68,34 +84,45 @@ def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=N
                      progress=progress, desc="basin", error_row=_basin_error_row)
 
 
-def basin_stats(rows: list[dict], models: list[str]) -> dict:
+def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
+    """Per model (and floor, keys "MODEL @ FLOOR" when ``floors`` is given): starts,
+    invalid starts, steady starts, fraction, outcomes, median cycle speed [m/s]."""
     per = {}
-    for m in models:
-        mine = [r for r in rows if r["model"] == m]
+    keys = ([(m, None) for m in models] if floors is None else
+            [(m, mu) for mu in floors for m in models])
+    for m, mu in keys:
+        mine = [r for r in rows if r["model"] == m and (mu is None or r["friction"] == mu)]
+        speeds = sorted(r["mean_speed_m_s"] for r in mine
+                        if r["steady_bounding"] and r["mean_speed_m_s"] is not None)
         invalid = sum(r["outcome"] == "invalid_start" for r in mine)
         valid = len(mine) - invalid
         steady = sum(bool(r["steady_bounding"]) for r in mine if r["outcome"] != "invalid_start")
         outcomes = {}
         for r in mine:
             outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
-        per[m] = {"n_starts": len(mine), "n_invalid_start": invalid, "n_valid": valid,
-                  "n_steady_bounding": steady,
-                  "fraction_steady_bounding": (steady / valid) if valid else None,
-                  "outcomes": outcomes}
+        key = m if mu is None else f"{m} @ {floor_label(mu)}"
+        per[key] = {"model": m, "friction": mu, "n_starts": len(mine),
+                    "n_invalid_start": invalid, "n_valid": valid,
+                    "n_steady_bounding": steady,
+                    "fraction_steady_bounding": (steady / valid) if valid else None,
+                    "median_cycle_speed_m_s": (speeds[len(speeds) // 2] if speeds else None),
+                    "outcomes": outcomes}
     return per
 
 
 
 @dataclass
 class BasinResult:
-    """Per-start outcomes and the steady-bounding fraction per model."""
+    """Per-start outcomes and the steady-bounding fraction per model and floor."""
 
     rows: list
     settings: dict = field(default_factory=dict)
 
-    def fraction(self, model: str):
-        """Fraction of valid starts of ``model`` that reach steady bounding (None if none)."""
-        valid = [r for r in self.rows if r["model"] == model and r["outcome"] != "invalid_start"]
+    def fraction(self, model: str, friction: float | None = None):
+        """Fraction of valid starts of ``model`` (on floor ``friction``; None = all floors)
+        that reach steady bounding (None if there are none)."""
+        valid = [r for r in self.rows if r["model"] == model and r["outcome"] != "invalid_start"
+                 and (friction is None or r["friction"] == friction)]
         if not valid:
             return None
         return sum(r["steady_bounding"] for r in valid) / len(valid)
@@ -103,9 +130,13 @@ class BasinResult:
     def models(self):
         return list(dict.fromkeys(r["model"] for r in self.rows))
 
+    def floors(self):
+        return list(dict.fromkeys(r["friction"] for r in self.rows))
+
     def summary(self) -> dict:
-        """Per model: starts, invalid starts, steady starts, fraction, outcomes."""
-        return basin_stats(self.rows, self.models())
+        """Per model and floor: starts, invalid starts, steady starts, fraction, outcomes,
+        median cycle speed."""
+        return basin_stats(self.rows, self.models(), self.floors())
 
     def to_csv(self, path):
         with open(path, "w", newline="") as f:
@@ -115,31 +146,43 @@ class BasinResult:
                 w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
 
 
+def basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, robot=None,
+                controller=None, integrator=None) -> list[dict]:
+    """One task per (floor, model, speed, pitch rate, height), in that nesting order."""
+    return [{"model": m, "speed": float(v), "pitch_rate_deg_s": float(w), "height": float(y),
+             "robot": robot, "controller": controller, "duration": duration,
+             "integrator": integrator, "friction": float(mu)}
+            for mu, m, v, w, y in itertools.product(floors, models, speeds, pitch_rates_deg_s,
+                                                    heights)]
+
+
 def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
                         pitch_rates_deg_s=DEFAULT_PITCH_RATES, heights=DEFAULT_HEIGHTS,
                         duration: float = 10.0, robot=None, controller=None,
-                        friction_coefficient: float = math.inf, workers: int | None = None,
-                        progress: bool = False, integrator=None) -> BasinResult:
+                        friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+                        workers: int | None = None, progress: bool = False, integrator=None,
+                        floors=None) -> BasinResult:
     """Run the grid of starts and classify each (see module docstring).
 
     Parameters
     ----------
     models : model variants ("ideal", "I", "II").
     speeds : initial forward speeds [m/s].
-    pitch_rates_deg_s : initial pitch rates [deg/s].
+    pitch_rates_deg_s : initial pitch rates [deg/s] (positive: nose rising).
     heights : initial torso-COM heights [m].
     duration : simulated time per start [s].
-    friction_coefficient : toe Coulomb coefficient (inf = no slip).
+    friction_coefficient : toe Coulomb coefficient (inf = no slip), when ``floors`` is None.
+    floors : several toe Coulomb coefficients (e.g. :data:`DEFAULT_FLOORS`); every start
+        is run on each.
     workers : processes (default: all cores; 1 = in this process).
     """
-    tasks = [{"model": m, "speed": float(v), "pitch_rate_deg_s": float(w), "height": float(y),
-              "robot": robot, "controller": controller, "duration": duration,
-              "integrator": integrator, "friction": friction_coefficient}
-             for m, v, w, y in itertools.product(models, speeds, pitch_rates_deg_s, heights)]
+    floors = tuple(floors) if floors is not None else (friction_coefficient,)
+    tasks = basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, robot,
+                        controller, integrator)
     workers = workers or os.cpu_count() or 1
     rows = run_basin_tasks(tasks, workers, progress)
     return BasinResult(rows=rows, settings={
         "models": list(models), "speeds_m_s": list(speeds),
         "pitch_rates_deg_s": list(pitch_rates_deg_s), "heights_m": list(heights),
         "duration_s": duration,
-        "friction_coefficient": None if math.isinf(friction_coefficient) else friction_coefficient})
+        "floors": [None if math.isinf(mu) else mu for mu in floors]})

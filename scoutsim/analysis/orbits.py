@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import layout as L
-from ..parameters import RobotParameters
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
 from ..simulation import HybridState, InitialState, IntegratorSettings, simulate
 
 __all__ = ["MapError", "ApexMap", "PassiveOrbit", "ControlledCycle", "ControlledOrbit",
@@ -137,6 +137,11 @@ def _passive_rhs(rob: RobotParameters, anchors):
     return rhs
 
 
+#: two events of the passive stride are simultaneous when the second one's function (toe
+#: height or leg extension beyond l0) is within this distance [m] of zero at the first
+SIMULTANEOUS_EVENT_TOL = 1e-12
+
+
 def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     """From apex z, run the passive model until both legs have had a stance and both are in
     flight; return (state at the last lift-off, its time, order of first touchdowns)."""
@@ -152,6 +157,10 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     def toe_y(u, leg):
         sL = (2 * leg - 1) * Lh
         return u[1] + sL * math.sin(u[2]) - l0 * math.cos(gammas[leg])
+
+    def leg_length(u, leg):
+        sL = (2 * leg - 1) * Lh
+        return math.hypot(u[0] + sL * math.cos(u[2]) - anchors[leg], u[1] + sL * math.sin(u[2]))
 
     for leg in (0, 1):
         if toe_y(u, leg) < 0.0:
@@ -194,14 +203,30 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
         kind, leg = meaning[i]
         if kind == "arm":
             armed[leg] = True
-        elif kind == "touchdown":
-            sL = (2 * leg - 1) * Lh
-            anchors[leg] = u[0] + sL * math.cos(u[2]) + l0 * math.sin(gammas[leg])
-            had_stance[leg] = True
-            first_td[leg] = min(first_td[leg], t)
-        else:
-            anchors[leg] = None
-            armed[leg] = toe_y(u, leg) > 0.0
+            continue
+        # Simultaneous events (a pronk's two touchdowns and two lift-offs) are one
+        # transition: the other leg's event counts as reached at this instant when its
+        # function is within SIMULTANEOUS_EVENT_TOL of zero, whichever side rounding put it
+        # on (otherwise a toe found 1e-17 m below the ground at the first touchdown would
+        # never see its own crossing, and the result would depend on the machine).
+        for lg in (leg, 1 - leg):
+            if lg != leg:
+                if anchors[lg] is None and kind == "touchdown" and armed[lg]:
+                    if toe_y(u, lg) > SIMULTANEOUS_EVENT_TOL:
+                        continue
+                elif anchors[lg] is not None and kind == "liftoff":
+                    if leg_length(u, lg) - l0 < -SIMULTANEOUS_EVENT_TOL:
+                        continue
+                else:
+                    continue
+            if kind == "touchdown":
+                sL = (2 * lg - 1) * Lh
+                anchors[lg] = u[0] + sL * math.cos(u[2]) + l0 * math.sin(gammas[lg])
+                had_stance[lg] = True
+                first_td[lg] = min(first_td[lg], t)
+            else:
+                anchors[lg] = None
+                armed[lg] = toe_y(u, lg) > SIMULTANEOUS_EVENT_TOL
     raise MapError("too many phases in one stride")
 
 
@@ -554,12 +579,12 @@ def _liftoff_states(result):
     return te, np.column_stack(cols)
 
 
-def controlled_cycle(*, model: str = "II", friction_coefficient: float = 0.8,
+def controlled_cycle(*, model: str = "II", friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
                      duration: float = 12.0, robot=None, controller=None,
                      initial_state: InitialState | None = None,
                      integrator: IntegratorSettings | None = None,
                      n_tail: int = 10) -> ControlledCycle:
-    """Converged bounding cycle of the controlled robot (default Model II on mu = 0.8).
+    """Converged bounding cycle of the controlled robot (default Model II on the default floor).
 
     Simulation-only estimate (no restarts; :func:`controlled_fixed_point` is the Newton
     solution on the sampled stride map). The cycle is found by converging simulation (mean of the last ``n_tail`` back-leg lift-off
@@ -638,7 +663,7 @@ def section_state(result):
     return result.hybrid_state(int(round(te[-2] / dt)))
 
 
-def controlled_stride_map(hs, *, model: str = "II", friction_coefficient: float = 0.8,
+def controlled_stride_map(hs, *, model: str = "II", friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
                           robot=None, controller=None,
                           integrator: IntegratorSettings | None = None,
                           max_period: float = 0.6):
@@ -703,7 +728,7 @@ class ControlledOrbit:
 
 
 def controlled_fixed_point(start=None, *, model: str = "II",
-                           friction_coefficient: float = 0.8, robot=None, controller=None,
+                           friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, robot=None, controller=None,
                            integrator: IntegratorSettings | None = None,
                            settle_duration: float = 12.0, tol: float = 1e-10,
                            max_iter: int = 10, jacobian_step: float = 1e-6) -> ControlledOrbit:

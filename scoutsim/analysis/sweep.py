@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..parameters import ControllerParameters, RobotParameters
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
 from .parallel import map_tasks
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
@@ -216,7 +216,7 @@ class SweepResult:
 
 
 def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,
-          controller=None, initial_state=None, friction_coefficient: float = 0.8,
+          controller=None, initial_state=None, friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
           out=None, workers: int | None = None, scheduler=None, progress: bool = False,
           resume: bool = True, orbit: bool = False) -> SweepResult:
     """Run every point (see module docstring).
@@ -226,7 +226,7 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
     points : list of {name: value} (see :func:`grid_points`, :func:`random_points`).
     model, duration, robot, controller, initial_state, friction_coefficient :
         the base configuration every point modifies (``simulate`` arguments; the sweep's
-        floor defaults to the Coulomb mu = 0.8 on which the Table I controller bounds).
+        floor defaults to the package's default floor, Coulomb mu = 1.0).
     out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv``.
     workers : local processes (default all cores; a pool started for this call).
     scheduler : Dask address or Client, or a ``concurrent.futures.Executor`` to reuse

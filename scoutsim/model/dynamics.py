@@ -35,9 +35,10 @@ from .layout import (
     MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_C, P_CB, P_D, P_ETA, P_G, P_IL, P_IMAX,
     P_IT, P_J1, P_J2, P_K, P_KB, P_KT, P_KW, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT,
     P_C_LOAD, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, SLIDE,
-    STICK, STRUT, STUCK,
+    SLIP_NEG, SLIP_POS, STICK, STRUT, STUCK,
 )
 from .layout import CIRCUIT_OPEN, CIRCUIT_SHORT, P_CIRCUIT, P_CLAMP_LEGS, P_CLAMP_TORSO
+from .layout import P_BACKLASH, P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE
 
 MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS
@@ -235,6 +236,64 @@ def coriolis(q, dq, P, h):
         h[3 + leg] += ml * d * (math.cos(g) * ax + math.sin(g) * ay)
 
 
+#: Speed [m/s] below which the telescopic leg's Coulomb friction is regularised linearly
+#: (``RobotParameters.leg_friction_force``): a leg loaded below the friction level creeps
+#: at less than this speed instead of sticking exactly.
+LEG_FRICTION_SPEED = 1e-3
+
+
+@kernel(inline="always")
+def belt_spring_deflection(delta, P):
+    """Deflection [rad] the belt spring sees at gear/leg angle difference ``delta`` [rad]:
+    with the hip unit's play b (``P_BACKLASH``, 0 = the paper's model) the spring is slack
+    for |delta| <= b / 2 (dead zone) and deflected by the excess beyond it."""
+    h = 0.5 * P[P_BACKLASH]
+    if delta > h:
+        return delta - h
+    if delta < -h:
+        return delta + h
+    return 0.0
+
+
+@kernel(inline="always")
+def leg_damping(phi, P):
+    """Leg damper [N s/m] per physical leg at leg angle ``phi`` [rad]: c (1 + a phi^2)
+    (a = ``P_LEG_C_ANGLE``, 0 = Table III's constant c)."""
+    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi * phi)
+
+
+@kernel(inline="always")
+def leg_friction_level(tau_hip, ll, P):
+    """Coulomb friction level [N] of one physical leg's sliding joint: a constant part and
+    a part proportional to the side load |tau_hip| / l of the hip torque (0 = off)."""
+    return P[P_LEG_FRIC] + P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll
+
+
+@kernel(inline="always")
+def leg_axial_force(k, c, l0, ll, ld, fc):
+    """Axial force of one physical leg [N], compression positive: spring, damper and the
+    sliding joint's Coulomb friction ``fc`` (regularised over LEG_FRICTION_SPEED)."""
+    sat = ld / LEG_FRICTION_SPEED
+    if sat > 1.0:
+        sat = 1.0
+    elif sat < -1.0:
+        sat = -1.0
+    return k * (l0 - ll) - c * ld - fc * sat
+
+
+@kernel(inline="always")
+def flight_leg_rate(k, c, l0, ll, fc):
+    """dl/dt [m/s] of a massive leg's massless toe in flight, from its force balance
+    leg_axial_force(...) = 0 (it relaxes towards l0; SPEC.md 2); 0 at the stop."""
+    if c <= 0.0 or ll >= l0:
+        return 0.0
+    f = k * (l0 - ll)
+    lin = f / (c + fc / LEG_FRICTION_SPEED)
+    if lin <= LEG_FRICTION_SPEED:
+        return lin
+    return (f - fc) / c
+
+
 @allocating
 def kinetic_energy(q, dq, P):
     """Kinetic energy 1/2 dq^T M dq [J]."""
@@ -245,6 +304,13 @@ def kinetic_energy(q, dq, P):
         for j in range(NQ):
             e += dq[i] * M[i, j] * dq[j]
     return 0.5 * e
+
+
+@allocating
+def state_energy(s, P):
+    """Total mechanical energy of a full state vector s [J]: kinetic plus potential (gravity,
+    leg springs, Model II belts); the same quantity as the ``energy`` output."""
+    return kinetic_energy(s[0:NQ], s[NQ:2 * NQ], P) + potential_energy(s[0:NQ], s[IL_B:IL_B + 2], P)
 
 
 @kernel
@@ -261,7 +327,7 @@ def potential_energy(q, l, P):
         dl = P[P_L0] - l[leg]
         e += 0.5 * npl * P[P_K] * dl * dl
         if int(P[P_MODEL]) == MODEL_II:
-            b = q[5 + leg] - q[3 + leg]
+            b = belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
             e += 0.5 * npl * P[P_KB] * b * b
     return e
 
@@ -433,7 +499,6 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     grav = P[P_G]
     l0 = P[P_L0]
     k = P[P_K]
-    c = P[P_C]
     d = P[P_D]
     N = P[P_N]
     th = q[2]
@@ -473,7 +538,8 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
                 tf += P[P_TAU_S] * mm
             tau_fric[leg] = tf
             Q[5 + leg] -= npl * N * tf
-            tb = P[P_KB] * (q[5 + leg] - q[3 + leg]) + P[P_CB] * (dq[5 + leg] - dq[3 + leg])
+            tb = (P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
+                  + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))
             tau_belt[leg] = tb
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
@@ -512,10 +578,16 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         bx = -sL * math.cos(th) * dth * dth
         by = -sL * math.sin(th) * dth * dth
         kk = 3 + leg
+        # leg damper and sliding-joint friction (both as Table III unless the effects
+        # beyond the paper are switched on)
+        c_l = leg_damping(q[kk], P)
+        tau_hip = (tau_belt[leg] if model == MODEL_II else
+                   (tau_app[leg] if model != MODEL_PASSIVE else 0.0))
+        fc_l = leg_friction_level(tau_hip, ll, P)
         if mode == STICK or mode == STRUT:
             ld = -(hvx * sg - hvy * cg)           # dl/dt = -dhip . u
             ldot[leg] = ld
-            F = npl * (k * (l0 - ll) - c * ld)
+            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
             if mode == STRUT:
                 F = npl * k * (l0 - ll)
             Fax[leg] = F
@@ -551,7 +623,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             # toe on the ground (height 0), l = hy / cos(g)
             ld = hvy / cg + hy * sg * dg / (cg * cg)
             ldot[leg] = ld
-            F = npl * (k * (l0 - ll) - c * ld)
+            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
             Fax[leg] = F
             mu = P[P_MU]
             sig = 0.0
@@ -578,10 +650,8 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
                 row_leg[nr] = leg
                 nr += 1
                 ld = 0.0
-            elif c > 0.0 and ll < l0:
-                ld = (k / c) * (l0 - ll)
             else:
-                ld = 0.0
+                ld = flight_leg_rate(k, c_l, l0, ll, fc_l)
             ldot[leg] = ld
             toe_x[leg] = hx + ll * sg
             toe_y[leg] = hy - ll * cg
@@ -1188,7 +1258,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     grav = P[P_G]
     l0 = P[P_L0]
     k = P[P_K]
-    c = P[P_C]
     d = P[P_D]
     N = P[P_N]
     Lh = P[P_L]
@@ -1245,7 +1314,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         dl = l0 - l[leg]
         epot += 0.5 * npl * k * dl * dl
         if model == MODEL_II:
-            bd = q[5 + leg] - q[kk]
+            bd = belt_spring_deflection(q[5 + leg] - q[kk], P)
             epot += 0.5 * npl * P[P_KB] * bd * bd
     if model == MODEL_II:
         j1 = npl * P[P_J1]
@@ -1279,7 +1348,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                 tf += P[P_TAU_S] * mm
             LG[2 * LG_TFRIC + leg] = tf
             Q[5 + leg] -= npl * N * tf
-            tb = P[P_KB] * (q[5 + leg] - q[3 + leg]) + P[P_CB] * (dq[5 + leg] - dq[3 + leg])
+            tb = (P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
+                  + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))
             LG[2 * LG_TBELT + leg] = tb
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
@@ -1308,13 +1378,19 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         bx = -sL * cth * dth * dth
         by = -sL * sth * dth * dth
         kk = 3 + leg
+        # leg damper and sliding-joint friction (as Table III unless the effects beyond
+        # the paper are switched on)
+        c_l = leg_damping(q[kk], P)
+        tau_hip = (LG[2 * LG_TBELT + leg] if model == MODEL_II else
+                   (LG[2 * LG_TAPP + leg] if model != MODEL_PASSIVE else 0.0))
+        fc_l = leg_friction_level(tau_hip, ll, P)
         # sin(phi), cos(phi) of the leg angle relative to the torso
         sph = sg * cth - cg * sth
         cph = cg * cth + sg * sth
         if mode == STICK or mode == STRUT:
             ld = -(hvx * sg - hvy * cg)
             LG[2 * LG_LDOT + leg] = ld
-            F = npl * (k * (l0 - ll) - c * ld)
+            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
             if mode == STRUT:
                 F = npl * k * (l0 - ll)
             LG[2 * LG_FAX + leg] = F
@@ -1342,7 +1418,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         elif mode == SLIDE:
             ld = hvy / cg + hy * sg * dg / (cg * cg)
             LG[2 * LG_LDOT + leg] = ld
-            F = npl * (k * (l0 - ll) - c * ld)
+            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
             LG[2 * LG_FAX + leg] = F
             mu = P[P_MU]
             sig = 0.0
@@ -1366,10 +1442,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                     R[nr, 2] = 1.0
                 nr += 1
                 ld = 0.0
-            elif c > 0.0 and ll < l0:
-                ld = (k / c) * (l0 - ll)
             else:
-                ld = 0.0
+                ld = flight_leg_rate(k, c_l, l0, ll, fc_l)
             LG[2 * LG_LDOT + leg] = ld
             LG[2 * LG_TOEX + leg] = hx + ll * sg
             LG[2 * LG_TOEY + leg] = hy - ll * cg
@@ -1562,11 +1636,13 @@ def project_state(s, P, mi, mf):
 def impact(s, P, mi, mf, out):
     """Rigid-body impact onto the constraints of the current modes (SPEC.md 3), in place.
 
-    Solves ``[M R^T; R 0] [dq+; Lambda] = [M dq-; r]`` where R holds the velocity
+    Solves ``[M R^T; R 0] [dq+; Lambda] = [M dq-; 0]`` where R holds the velocity
     constraints that act impulsively: every pinned toe (perpendicular and, for a strut,
     axial), massless flight legs, and in Model II a rigid belt for each leg (the belt damper
-    is far stiffer than the gear-train inertia over an impact: alpha' - phi' keeps its
-    value). Stiction cannot carry an impulse, so stuck motor joints do not constrain it.
+    is far stiffer than the gear-train inertia over an impact: alpha' = phi' after it).
+    Stiction cannot carry an impulse, so stuck motor joints do not constrain it. Every row
+    is homogeneous, so dq+ is the M-orthogonal projection of dq- onto the constrained
+    velocities and the kinetic energy lost, 1/2 |dq- - dq+|_M^2, is never negative.
 
     out[leg*3 + 0..2]: normal impulse, tangential impulse [N s] of each pinned toe;
     out[6]: kinetic energy lost [J]. Returns False if singular.
@@ -1627,9 +1703,13 @@ def impact(s, P, mi, mf, out):
             rkind[nr] = 4
             nr += 1
         if model == MODEL_II:
+            # rigid belt over the impact: the gear rate equals the leg rate after it (the
+            # belt damper, 80 us against the gear train, evens out the relative rate
+            # within the impact; the energy of that relative motion is part of the logged
+            # impact loss). A homogeneous row: the impact can only remove energy.
             R[nr, 5 + leg] = 1.0
             R[nr, 3 + leg] = -1.0
-            r[nr] = dq0[5 + leg] - dq0[3 + leg]
+            r[nr] = 0.0
             rleg[nr] = leg
             rkind[nr] = 3
             nr += 1
@@ -1676,9 +1756,26 @@ def impact(s, P, mi, mf, out):
     s[NQ:2 * NQ] = dq
     s[IL_B:IL_B + 2] = l
     if model == MODEL_II:
-        # a stuck joint was carried along by the impulse: it now slips with the gear train
+        # Stiction carries no impulse, so every motor joint's stick/slip mode follows its
+        # new gear rate (SPEC.md 3): the rigid belt moves the gear train with the leg, which
+        # can reverse a slipping joint; a joint left at exactly zero rate is stuck (settle()
+        # releases it if stiction cannot hold it). Keeping the old slip direction would
+        # leave a joint "slipping" against its motion, which settle() could only reconcile
+        # with an impulse that stiction cannot give.
         for leg in range(2):
-            if mi[MI_MOTOR_B + leg] == STUCK:
-                mi[MI_MOTOR_B + leg] = 1 if dq[5 + leg] >= 0.0 else -1
+            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], P)
     project_state(s, P, mi, mf)
     return True
+
+
+@kernel(inline="always")
+def motor_mode_from_rate(w, P):
+    """Stick/slip mode of a Model II motor joint whose gear rate is ``w`` [rad/s] with no
+    other information: slipping in the direction of motion; at exactly zero rate stuck if
+    the joint has stiction (a joint without stiction is never stuck: nothing could release
+    it, so it "slips" with zero Coulomb torque)."""
+    if w > 0.0:
+        return SLIP_POS
+    if w < 0.0:
+        return SLIP_NEG
+    return STUCK if P[P_TAU_S] > 0.0 else SLIP_POS

@@ -68,7 +68,12 @@ NMF = 2
 P_CLAMP_TORSO = 38   # 1: torso x, y, theta held fixed (free swing, flight steps, stall)
 P_CLAMP_LEGS = 39    # 1: leg angles phi held fixed relative to the torso (stall)
 P_CIRCUIT = 40       # CIRCUIT_*: what drives the motor current
-NP_ = 41
+# effects beyond the paper's models (RobotParameters docs; 0 = off)
+P_BACKLASH = 41      # total play of the belt spring's dead zone [rad]
+P_LEG_FRIC = 42      # Coulomb friction of the telescopic leg [N], per physical leg
+P_LEG_FRIC_SIDE = 43 # leg friction per unit side load |tau_hip| / l [-]
+P_LEG_C_ANGLE = 44   # leg damper factor (1 + a phi^2) [1/rad^2]
+NP_ = 45
 
 # --- motor circuit (P_CIRCUIT) -----------------------------------------------------------
 CIRCUIT_AMPLIFIER = 0   # current amplifier with the limits of SPEC.md 4 (normal operation)
@@ -131,9 +136,44 @@ EVENT_KIND_NAMES = {
     EK_CTRL_TOUCHDOWN: "controller_touchdown", EK_CTRL_LIFTOFF: "controller_liftoff",
     EK_CTRL_SWEEP: "controller_sweep_limit",
 }
-# event record: [t, kind, leg, v1, v2, v3]
+# event record: [t, kind, leg, v1, v2, v3, energy_before, energy_after, violations]
 # touchdown: v1 = normal impulse [N s], v2 = tangential impulse, v3 = kinetic energy lost [J]
-NEVREC = 6
+# Transition audit (every plant transition, numerics/hybrid.py): the records logged while one
+# transition is processed (an event, the events simultaneous with it and the mode changes
+# they cause) carry the total mechanical energy [J] just before it and after the modes have
+# settled, and a bit mask of the mode invariants violated after it (V_* below; 0 = none).
+# Controller records carry NaN energies (they are not plant transitions).
+EVR_T = 0
+EVR_KIND = 1
+EVR_LEG = 2
+EVR_V1 = 3
+EVR_V2 = 4
+EVR_V3 = 5
+EVR_E_BEFORE = 6
+EVR_E_AFTER = 7
+EVR_VIOLATIONS = 8
+NEVREC = 9
+
+# --- transition invariants (bits of EVR_VIOLATIONS), checked after every transition -------
+V_GROUND_PULLS = 1        # a pinned toe or strut whose ground normal force pulls
+V_OUTSIDE_CONE = 2        # a pinned toe (Coulomb floor) needing more than mu |F_n|
+V_SLIDE_DIRECTION = 4     # a sliding toe moving against its recorded slide direction
+V_SLIDE_NOT_PUSHING = 8   # a sliding toe whose leg no longer pushes
+V_TOE_BELOW_GROUND = 16   # a toe in flight below the ground
+V_STICTION_EXCEEDED = 32  # a stuck motor joint held by more than its stiction
+V_SLIP_DIRECTION = 64     # a slipping motor joint moving against its slip direction
+V_STRUT_COMPRESSED = 128  # a rigid strut in compression (should be a spring leg again)
+V_SINGULAR = 256          # the constrained dynamics could not be solved
+V_BEYOND_STOP = 512       # a spring leg with its pinned toe extended beyond the stop l0
+VIOLATION_NAMES = {
+    V_GROUND_PULLS: "ground pulls a pinned toe", V_OUTSIDE_CONE: "pinned toe outside the "
+    "friction cone", V_SLIDE_DIRECTION: "toe slides against its slide direction",
+    V_SLIDE_NOT_PUSHING: "sliding leg does not push", V_TOE_BELOW_GROUND: "toe in flight below "
+    "the ground", V_STICTION_EXCEEDED: "stuck motor joint beyond breakaway",
+    V_SLIP_DIRECTION: "motor joint slips against its slip direction",
+    V_STRUT_COMPRESSED: "strut in compression", V_SINGULAR: "constrained dynamics singular",
+    V_BEYOND_STOP: "pinned leg extended beyond its stop",
+}
 
 # --- controller leg states ------------------------------------------------------------
 LS_FLIGHT = 0

@@ -7,11 +7,18 @@ import math
 
 import numpy as np
 
-from ..parameters import RobotParameters
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
 from . import layout as L
 
 
-def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: float = math.inf,
+def default_friction(robot: RobotParameters) -> float:
+    """The default floor for ``robot``: Coulomb mu = DEFAULT_FRICTION_COEFFICIENT, except
+    for massless legs (axial force only, slip not defined): no slip."""
+    massless = robot.leg_mass == 0.0 and robot.leg_inertia == 0.0
+    return math.inf if massless else DEFAULT_FRICTION_COEFFICIENT
+
+
+def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: float | None = None,
                 passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
                 pitch_limit: float = math.radians(60.0), strut_omega: float = 200.0,
                 clamp_torso: bool = False, clamp_legs: bool = False,
@@ -22,9 +29,9 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     ----------
     robot : RobotParameters (SI, per physical leg).
     model : "ideal", "I", "II" or "passive" (no actuators).
-    friction_coefficient : Coulomb coefficient mu of the toe; ``inf`` = no slip (default;
-        a stance that loses normal force while the leg still pushes then slides
-        frictionlessly, SPEC.md 3).
+    friction_coefficient : Coulomb coefficient mu of the toe; ``inf`` = no slip (a stance
+        that loses normal force while the leg still pushes then slides frictionlessly).
+        None (default): :func:`default_friction` of the robot.
     passive_touchdown_angles : (back, front) [rad], massless legs only: angle at which a
         massless leg is placed in flight.
     passive_touchdown_world : massless legs only: angles from the world vertical (True) or
@@ -38,6 +45,8 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     motor_circuit : "amplifier" (normal operation, SPEC.md 4), "open" (motor leads open:
         zero current) or "short" (leads shorted: i = -K_w w_m / R_A, back-EMF braking).
     """
+    if friction_coefficient is None:
+        friction_coefficient = default_friction(robot)
     if model not in L.MODEL_NAMES:
         raise ValueError(f"model = {model!r} is not allowed: must be one of "
                          f"{sorted(L.MODEL_NAMES)}")
@@ -71,6 +80,10 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_ETA] = robot.efficiency
     P[L.P_TAU_IDLE] = robot.gearbox_idle_loss_torque
     P[L.P_C_LOAD] = robot.gearbox_load_loss_coefficient
+    P[L.P_BACKLASH] = robot.belt_backlash
+    P[L.P_LEG_FRIC] = robot.leg_friction_force
+    P[L.P_LEG_FRIC_SIDE] = robot.leg_friction_side_load_coefficient
+    P[L.P_LEG_C_ANGLE] = robot.leg_damping_angle_coefficient
     P[L.P_J1] = robot.drive_gear_inertia
     P[L.P_J2] = robot.driven_gear_inertia
     P[L.P_TAU_S] = robot.joint_stiction

@@ -23,16 +23,21 @@ import numpy as np
 
 from ..control.bounding import bounding_step
 from ..jit import allocating, kernel
-from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
+from ..model.dynamics import (evaluate_command_change, evaluate_ws, impact, project_state,
+                               state_energy)
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, A_TOE_Y,
+    A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X,
+    A_TOE_Y,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
     EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START, EK_TOUCHDOWN,
-    EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
+    EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, EVR_E_AFTER, EVR_E_BEFORE, EVR_VIOLATIONS,
+    FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
     MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NS,
-    P_G, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM,
+    NQ, P_G, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM,
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
-    ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK,
+    ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK, V_GROUND_PULLS, V_OUTSIDE_CONE,
+    V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION,
+    V_BEYOND_STOP, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
 )
 from . import ark
 from .dopri5 import dense, eval_workspace, step
@@ -59,6 +64,20 @@ S_HMAX = 9
 NSTAT = 10
 
 EVENT_TIME_TOL = 1e-13
+#: an event function counts as at its zero on a step that ends within this time of it [s]
+#: (measured with the function's slope over the step; SPEC.md 7 asks for 1e-9 s)
+EVENT_STATE_TOL = 1e-10
+#: a pending event counts as reached at another event's instant when its (normalised)
+#: function is below this: toe height 3e-13 m, a force of 2.4e-10 N on Scout II
+SIMULTANEOUS_EVENT_TOL = 1e-12
+#: Speeds below which a sliding toe [m/s] or a slipping motor joint [rad/s, motor side] that
+#: moves against its recorded direction counts as at rest (the event that stops it is
+#: located to EVENT_TIME_TOL, so the rate at a located zero crossing is a little off zero,
+#: by at most ~1e-6 for Scout II's largest accelerations).
+SLIDE_SPEED_TOL = 1e-6
+#: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
+LEG_STOP_SPEED_TOL = 1e-6
+MOTOR_SPEED_TOL = 1e-4
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
 MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
 # A control period starts with one step over the whole period when the carried step-size
@@ -123,7 +142,80 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
         ev[nev, 3] = v1
         ev[nev, 4] = v2
         ev[nev, 5] = v3
+        ev[nev, EVR_E_BEFORE] = np.nan
+        ev[nev, EVR_E_AFTER] = np.nan
+        ev[nev, EVR_VIOLATIONS] = 0.0
     return nev + 1
+
+
+@kernel
+def mode_violations(s, aux, P, mi):
+    """Bit mask (layout.V_*) of the mode invariants that the state ``s``, its outputs
+    ``aux`` (an evaluation of ``s`` in modes ``mi``) and the modes violate: after every
+    transition the modes must agree with the velocities and forces. The tolerances are
+    those of the transition rules, widened by a margin for rounding (1e-6 of body weight
+    for forces)."""
+    W = body_weight(P)
+    ftol = 1e-6 * W
+    coulomb = P[P_MU] < 1e300
+    bits = 0
+    if aux[A_KKT_OK] < 0.5:
+        bits |= V_SINGULAR
+    for leg in range(2):
+        o = leg * NAUX_LEG
+        mode = mi[MI_CONTACT_B + leg]
+        gn = aux[o + A_GN]
+        if mode == STICK or mode == STRUT:
+            if gn < -ftol:
+                bits |= V_GROUND_PULLS
+            if mode == STICK and coulomb and (abs(aux[o + A_GT]) >
+                                              P[P_MU] * gn * (1.0 + 1e-6) + ftol):
+                bits |= V_OUTSIDE_CONE
+            if mode == STRUT and aux[o + A_STRUT] < -ftol:
+                bits |= V_STRUT_COMPRESSED
+            if mode == STICK and s[IL_B + leg] > P[P_L0] + 1e-6:
+                # (1 um: a strut's length is Baumgarte-stabilised, not projected, and
+                # drifts by ~3e-8 m before it ends)
+                bits |= V_BEYOND_STOP
+        elif mode == SLIDE:
+            if coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
+                bits |= V_SLIDE_DIRECTION
+            if aux[o + A_FAX] < -ftol or gn < -ftol:
+                bits |= V_SLIDE_NOT_PUSHING
+        elif aux[o + A_TOE_Y] < -1e-9 and P[P_MASSLESS] < 0.5:
+            # (a massless leg is placed kinematically at its touchdown angle in flight, which
+            # can put its toe below the ground just after lift-off: the passive model's
+            # convention, SPEC.md 2; it touches down when the toe comes down through it)
+            bits |= V_TOE_BELOW_GROUND
+        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0:
+            mm = mi[MI_MOTOR_B + leg]
+            if mm == STUCK:
+                if abs(aux[o + A_HOLD]) > P[P_TAU_S] * (1.0 + 1e-6):
+                    bits |= V_STICTION_EXCEEDED
+            elif aux[o + A_OMEGA_M] * mm < -MOTOR_SPEED_TOL:
+                bits |= V_SLIP_DIRECTION
+    return bits
+
+
+@kernel
+def stamp_transition(ev, nev0, nev, e_before, e_after, bits):
+    """Write the transition audit (energies before / after [J], violated invariants) into
+    the event records nev0 .. nev-1 logged while one transition was processed."""
+    for j in range(nev0, min(nev, ev.shape[0])):
+        ev[j, EVR_E_BEFORE] = e_before
+        ev[j, EVR_E_AFTER] = e_after
+        ev[j, EVR_VIOLATIONS] = bits
+
+
+@kernel
+def stance_leg_rate(s, P, leg):
+    """dl/dt [m/s] of a leg whose toe is pinned: minus the hip velocity along the leg."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    th = s[2]
+    g = th + s[3 + leg]
+    hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
+    hvy = s[NQ + 1] + sL * math.cos(th) * s[NQ + 2]
+    return -(hvx * math.sin(g) - hvy * math.cos(g))
 
 
 @kernel
@@ -157,7 +249,9 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
     coulomb = P[P_MU] < 1e300
     model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
     for it in range(12):
-        if it == 0 and command_only:
+        if it == 0 and command_only and P[P_LEG_FRIC_SIDE] == 0.0:
+            # (a side-load leg friction depends on the hip torque, so on the command, in
+            # the leg force: then a fresh evaluation)
             evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
         else:
             project_state(s, P, mi, mf)
@@ -198,17 +292,13 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     leave_contact(s, mi, leg)
                     nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
                     changed = True
-                elif coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -1e-9:
-                    # sliding against its friction direction: try sticking at the toe
-                    mi[MI_CONTACT_B + leg] = STICK
-                    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
-                    project_state(s, P, mi, mf)
-                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
-                    if abs(aux[o + A_GT]) > P[P_MU] * aux[o + A_GN] * (1.0 + 1e-9) + 1e-9 * W:
-                        mi[MI_CONTACT_B + leg] = SLIDE
-                        mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
-                    else:
-                        nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+                elif coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
+                    # the toe slides against its recorded direction (its velocity jumped, e.g.
+                    # at the other leg's touchdown impact): friction opposes the motion it
+                    # has, so the direction follows the velocity. Pinning the moving toe
+                    # instead would take an impulse that the sliding contact cannot give
+                    # (the massless toe on its compliant leg carries none).
+                    mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
                     changed = True
             if model2:
                 mm = mi[MI_MOTOR_B + leg]
@@ -218,16 +308,12 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                         mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
                         nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
                         changed = True
-                elif aux[o + A_OMEGA_M] * mm < -1e-9:
-                    # moving against its friction direction: re-examine as stuck
-                    mi[MI_MOTOR_B + leg] = STUCK
-                    project_state(s, P, mi, mf)
-                    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
-                    hold = aux[o + A_HOLD]
-                    if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
-                        mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
-                    else:
-                        nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, hold, 0.0, 0.0)
+                elif aux[o + A_OMEGA_M] * mm < -MOTOR_SPEED_TOL:
+                    # slipping against its recorded direction (a stale mode, e.g. a resumed
+                    # state): the Coulomb torque opposes the motion the joint has. Stopping
+                    # it (sticking) would take an impulse that stiction cannot give; a
+                    # joint comes to rest only through its rate's zero crossing (an event).
+                    mi[MI_MOTOR_B + leg] = -mm
                     changed = True
         if not changed:
             # ds and aux are those of the (projected) state as it stands
@@ -246,6 +332,19 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     s_pre = s.copy()
     mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
+    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0] * (1.0 - 1e-12)
+            and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
+        # the toe lands with the leg at its stop while the hip moves away from it: the
+        # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
+        # well (the leg lands as a rigid strut, SPEC.md 3); settle() makes it a spring leg
+        # again once the strut is in compression
+        for i in range(s.shape[0]):
+            s[i] = s_pre[i]
+        for i in range(mi.shape[0]):
+            mi[i] = mi_pre[i]
+        mi[MI_CONTACT_B + leg] = STRUT
+        stats[S_NSTRUT] += 1
+        ok = impact(s, P, mi, mf, imp)
     pn = imp[3 * leg]
     pt = imp[3 * leg + 1]
     if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
@@ -374,6 +473,81 @@ def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
                        method >= METHOD_ARK4, SF0, True)
 
 
+@kernel
+def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, cmd, y_new,
+                 aux_new, tmp, rtol, atol, ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp):
+    """Make the step from ``s`` end on the earliest zero of the armed event functions
+    themselves (not of their continuous-extension interpolants).
+
+    ``y_new`` holds the step of length th0 h located on the continuous extension for event
+    ``kmin``; ``e_start`` / ``e_full`` are the event values at the step's start (armed ones
+    > 0) and at its full length h. The step stands if, on it, the smallest armed event
+    function g = min_i e_i has crossed (<= 0) by no more than EVENT_STATE_TOL of its slope;
+    otherwise g's zero is located by Illinois iterations on redone steps. Using g, not
+    e_kmin alone, keeps a refinement from stepping over another event. Returns
+    (he, event slot, evaluations); y_new holds the step to he."""
+    nf = 0
+    a = 0.0
+    fa = 1.0
+    b = 1.0
+    fb = -1.0
+    for i in range(NEV):
+        if armed[i] and e_start[i] < fa:
+            fa = e_start[i]
+        if armed[i] and e_full[i] < 0.0 and e_full[i] > fb:
+            fb = e_full[i]
+    th = th0
+    side = 0
+    k = kmin
+    for it in range(60):
+        for i in range(NS):
+            ybuf[i] = y_new[i]
+        project_state(ybuf, P, mi, mf)
+        evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+        nf += 1
+        event_values(ybuf, aux_tmp, P, mi, e_tmp)
+        fc = 1.0
+        for i in range(NEV):
+            if armed[i] and e_tmp[i] < fc:
+                fc = e_tmp[i]
+                k = i
+        slope = abs(e_full[k] - e_start[k]) / h
+        if fc <= 0.0 and fc >= -slope * EVENT_STATE_TOL:
+            return th * h, k, nf
+        if fc > 0.0:
+            a = th
+            fa = fc
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = th
+            fb = fc
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        done = (b - a) * h < EVENT_TIME_TOL
+        th = b if done else (a * fb - b * fa) / (fb - fa)
+        err, ok, nfs = do_step(method, s, th * h, K, P, mi, mf, cmd, y_new, aux_new, tmp,
+                               rtol, atol, ew, SF0, SF1, Z, True, False)
+        nf += nfs
+        if done:
+            break
+    # bracket closed to EVENT_TIME_TOL: the step to b, where g <= 0
+    for i in range(NS):
+        ybuf[i] = y_new[i]
+    project_state(ybuf, P, mi, mf)
+    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+    nf += 1
+    event_values(ybuf, aux_tmp, P, mi, e_tmp)
+    fc = 1.0
+    for i in range(NEV):
+        if armed[i] and e_tmp[i] < fc:
+            fc = e_tmp[i]
+            k = i
+    return th * h, k, nf
+
+
 AdvanceScratch = namedtuple("AdvanceScratch", "e_end pending mi_before e_tmp aux_tmp")
 
 
@@ -497,6 +671,16 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 err, ok, nf = do_step(method, s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp,
                                       rtol, atol, ew, SF0, SF1, Z, True, False)
                 stats[S_NFEV] += nf
+                # The continuous extension is only an interpolant: on a stiff component (a
+                # gear rate in the belt transient after a touchdown, under ARK's cubic
+                # Hermite) its zero can lie microseconds from that of the step itself, and
+                # a transition applied there is applied to the wrong state (a joint "at
+                # rest" that still turns). Check the event function on the redone step and,
+                # if it is not at its zero, locate the zero on the steps themselves.
+                he, kmin, nf = refine_event(kmin, s, h, thmin, armed, e_old, e_end, method, K,
+                                            P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
+                                            ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp)
+                stats[S_NFEV] += nf
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -506,8 +690,16 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             n_events_here += 1
             if n_events_here > MAX_EVENTS_PER_PERIOD:
                 return t, nev, ST_NUMERICAL_FAILURE
+            # transition audit: mechanical energy before the transition
+            nev0 = nev
+            e_before = aux[A_ENERGY]
             # apply the event, then any other armed event that has also been reached at
-            # this instant (simultaneous touchdowns of a pitch-free landing, ...)
+            # this instant (simultaneous touchdowns of a pitch-free landing, ...): reached
+            # means crossing within the step (negative at its full length) and within
+            # SIMULTANEOUS_EVENT_TOL of zero, on either side, so that which of two
+            # simultaneous events rounding puts first decides nothing; a function at zero
+            # that moves away (a massless toe re-placed at ground level as it lifts off)
+            # is not an event
             for i in range(NEV):
                 pending[i] = armed[i]
             kcur = kmin
@@ -518,17 +710,20 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     mi_before[i] = mi[i]
                 nev, ok = apply_event(kcur, t, s, P, mi, mf, aux, ev, nev, stats, imp)
                 if kcur == EV_FALL_HEIGHT or kcur == EV_FALL_PITCH:
+                    stamp_transition(ev, nev0, nev, e_before, e_before, 0)
                     return t, nev, ST_FELL
                 if not ok:
+                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
                     return t, nev, ST_NUMERICAL_FAILURE
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew)
                 stats[S_NFEV] += 1
                 if aux[A_KKT_OK] < 0.5:
+                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
                     return t, nev, ST_NUMERICAL_FAILURE
                 event_values(s, aux, P, mi, e_old)
                 kcur = -1
                 for i in range(NEV):
-                    if pending[i] and e_old[i] <= 0.0:
+                    if pending[i] and e_old[i] <= SIMULTANEOUS_EVENT_TOL and e_end[i] < 0.0:
                         # only if the slot still means the same thing (its leg's modes
                         # unchanged)
                         same = True
@@ -543,6 +738,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                             break
                 if kcur < 0:
                     break
+            stamp_transition(ev, nev0, nev, e_before, aux[A_ENERGY],
+                             mode_violations(s, aux, P, mi))
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
             if method >= METHOD_ARK4:
@@ -640,6 +837,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ybuf = np.zeros(NS)
     imp = np.zeros(7)
     ds = np.zeros(NS)
+    s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
     SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[1] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
@@ -663,9 +861,17 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
+        nev0 = nev
+        for i in range(NS):
+            s_prev[i] = s[i]
         nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew, hwork[2] > 0.5)
         hwork[2] = 0.0
         stats[S_NFEV] += 1
+        if nev > nev0:
+            # the new command changed a mode (a joint breaks away, a toe starts to slide):
+            # audit it like an event (rare: the energy before is computed only here)
+            stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
+                             mode_violations(s, aux, P, mi))
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
         if aux[A_KKT_OK] < 0.5:

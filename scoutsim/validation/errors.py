@@ -8,7 +8,7 @@ Procedure (paper Sec. IV.C; SPEC.md 8):
 1. Every experiment log is split into strides (:func:`~scoutsim.validation.strides.log_strides`);
    its steady strides, pooled over all runs, are the experimental strides.
 2. Every model is simulated (default start, the robot/controller parameters given, toe
-   friction 0.8, at least 10 s and at least as long as the longest log) and the simulation
+   friction of the default floor, at least 10 s and at least as long as the longest log) and the simulation
    is passed through the *same* measurement chain as the logs
    (:func:`~scoutsim.validation.measurement.to_log`, noise-free, with the laser geometry and
    low-pass settings of the first log), then split into strides the same way. Comparing
@@ -47,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from .strides import LogGait, log_strides
 
 __all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
@@ -261,7 +262,7 @@ def assess_errors(experiment_strides: list, model_runs: dict, n_runs: int = 1,
 
 
 def simulate_model(model: str, duration: float, robot=None, controller=None,
-                   friction_coefficient: float = 0.8, initial_state=None, integrator=None,
+                   friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, initial_state=None, integrator=None,
                    like=None, transient_s: float = 2.0, progress: bool = False) -> ModelRun:
     """Simulate one model and measure it like the log ``like`` (noise-free)."""
     from ..simulation import simulate
@@ -282,7 +283,7 @@ def simulate_model(model: str, duration: float, robot=None, controller=None,
 
 
 def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
-            duration: float | None = None, friction_coefficient: float = 0.8,
+            duration: float | None = None, friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
             transient_s: float = 2.0, initial_state=None, integrator=None,
             progress: bool = False) -> ErrorTable:
     """Fig. 12 error table of ``models`` against the experiment ``logs`` (module docstring).

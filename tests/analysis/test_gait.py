@@ -70,6 +70,8 @@ def make_result(duration=8.0, lo=None, outcome="completed", x_wiggle=0.0,
         if tl + FRONT_AFTER < t_end:
             rows.append([tl + FRONT_AFTER, L.EK_LIFTOFF, L.FRONT, 0, 0, 0])
     rows.extend(list(e) for e in extra_events)
+    # transition-audit columns (energy before / after, violations): not used by the gait
+    rows = [list(r) + [np.nan] * (L.NEVREC - len(r)) for r in rows]
     events = np.array(sorted(rows), dtype=float).reshape(-1, L.NEVREC)
     events = events[events[:, 0] <= t_end]
     return SimulationResult(
@@ -131,7 +133,7 @@ def test_stance_intervals_and_open_stance_at_end():
 def test_leg_starting_in_stance():
     lo = back_liftoffs()
     r = make_result(lo=lo)
-    r.events = np.vstack([[[0.05, L.EK_LIFTOFF, L.FRONT, 0, 0, 0]], r.events])
+    r.events = np.vstack([[[0.05, L.EK_LIFTOFF, L.FRONT, 0, 0, 0] + [np.nan] * 3], r.events])
     front = stance_intervals(r, "front")
     assert front[0, 0] == r.t[0] and front[0, 1] == 0.05
 

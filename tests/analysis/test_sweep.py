@@ -99,8 +99,8 @@ def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
     from scoutsim.analysis.sweep import ORBIT_COLUMNS
     pts = [{"controller.touchdown_angle_front": math.radians(24.0),
             "controller.touchdown_angle_back": math.radians(16.0)},
-           {"controller.touchdown_angle_front": math.radians(18.0),
-            "controller.touchdown_angle_back": math.radians(16.0)}]
+           {"controller.touchdown_angle_front": math.radians(14.0),
+            "controller.touchdown_angle_back": math.radians(28.0)}]
     res = sweep(pts, duration=6.0, workers=1, out=tmp_path, orbit=True)
     bound, fell = res.rows
     assert bound["steady_bounding"] and bound["orbit_status"] == "ok"

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 import scoutsim
+import scoutsim.parameters
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -20,8 +21,9 @@ def _baseline():
 
 
 def test_model_ii_state_agrees_with_scipy_solve_ivp():
-    t, nev, s = _baseline().run(0.12, "II", rtol=1e-10, atol=1e-10)
-    r = scoutsim.simulate(duration=0.12, model="II",
+    mu = scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT
+    t, nev, s = _baseline().run(0.21, "II", rtol=1e-10, atol=1e-10, friction_coefficient=mu)
+    r = scoutsim.simulate(duration=0.21, model="II", friction_coefficient=mu,
                           integrator=scoutsim.IntegratorSettings(rtol=1e-10, atol=1e-10))
     assert t == r.t[-1]
     assert len(r.event_times("touchdown")) >= 2          # both touchdowns inside the window

@@ -1,0 +1,136 @@
+"""Transition audit: energy accounting and mode consistency at every plant transition.
+
+Every discontinuity of the hybrid model (touchdown impact, lift-off, slide / stick, strut,
+motor-joint stick / slip, the massless passive touchdown, a mode change caused by a new
+command) is a *transition*. The compiled run loop records, for each one, the total
+mechanical energy just before it and after the modes have settled, and a bit mask of the
+mode invariants that the state violates afterwards (``layout.V_*``: a pinned toe the ground
+pulls, a stuck joint beyond breakaway, a joint slipping against its motion, ...). This
+module reads those records and checks the two laws every transition must obey:
+
+* **energy**: mechanical energy may only drop, and only by a logged loss with a physical
+  cause: the kinetic energy a touchdown impact dissipates (logged with its impulse). Every
+  other transition leaves the energy unchanged (forces change, the state does not jump);
+* **consistency**: after the transition the modes agree with the velocities and forces.
+
+    audit = scoutsim.analysis.transitions.audit_transitions(result)
+    audit.ok, audit.problems(), audit.n_transitions, audit.total_logged_loss_J
+
+The records cost nothing extra in a run (the energies are evaluated anyway); the audit is
+meant for tests and for users who change the model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import layout as L
+
+#: default tolerance of the energy balance of one transition, relative to the larger of the
+#: energies before and after it and 1 J (Scout II holds about 80 J of mechanical energy)
+ENERGY_REL_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Transition:
+    """One plant transition: the event records it logged and its audit."""
+
+    t: float                 #: time [s]
+    kinds: tuple             #: names of the event records it logged, in order
+    legs: tuple              #: leg of each record (0 back, 1 front, -1 none)
+    energy_before_J: float
+    energy_after_J: float
+    logged_loss_J: float     #: kinetic energy the touchdown impacts of this transition lost
+    violations: int          #: bit mask of layout.V_*
+
+    @property
+    def unexplained_loss_J(self) -> float:
+        """Energy lost beyond the logged losses [J] (negative: energy gained)."""
+        return (self.energy_before_J - self.energy_after_J) - self.logged_loss_J
+
+    def violation_names(self) -> list:
+        return [name for bit, name in L.VIOLATION_NAMES.items() if self.violations & bit]
+
+
+@dataclass(frozen=True)
+class TransitionAudit:
+    transitions: tuple
+    rel_tol: float = ENERGY_REL_TOL
+
+    @property
+    def n_transitions(self) -> int:
+        return len(self.transitions)
+
+    @property
+    def total_logged_loss_J(self) -> float:
+        return float(sum(tr.logged_loss_J for tr in self.transitions))
+
+    @property
+    def total_energy_drop_J(self) -> float:
+        """Sum over transitions of the energy before minus after [J]."""
+        return float(sum(tr.energy_before_J - tr.energy_after_J for tr in self.transitions))
+
+    def problems(self) -> list:
+        """One line per transition that breaks energy accounting or mode consistency."""
+        out = []
+        for tr in self.transitions:
+            what = "+".join(tr.kinds)
+            if not (np.isfinite(tr.energy_before_J) and np.isfinite(tr.energy_after_J)):
+                out.append(f"t = {tr.t:.9f} s {what}: energy not finite")
+                continue
+            scale = max(abs(tr.energy_before_J), abs(tr.energy_after_J), 1.0)
+            if abs(tr.unexplained_loss_J) > self.rel_tol * scale:
+                out.append(f"t = {tr.t:.9f} s {what}: energy {tr.energy_before_J:.9f} -> "
+                           f"{tr.energy_after_J:.9f} J, logged loss {tr.logged_loss_J:.3e} J, "
+                           f"unexplained {tr.unexplained_loss_J:+.3e} J")
+            if tr.logged_loss_J < -self.rel_tol * scale:
+                out.append(f"t = {tr.t:.9f} s {what}: an impact gained energy "
+                           f"({-tr.logged_loss_J:.3e} J)")
+            if tr.violations:
+                out.append(f"t = {tr.t:.9f} s {what}: " + ", ".join(tr.violation_names()))
+        return out
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems()
+
+
+def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudit:
+    """The transition audit of a :class:`~scoutsim.result.SimulationResult`.
+
+    ``rel_tol``: energy balance tolerance of one transition, relative to its energy scale.
+    Results saved before the audit existed carry no audit columns: ValueError."""
+    ev = np.asarray(result.events)
+    if ev.ndim != 2 or ev.shape[1] < L.NEVREC:
+        raise ValueError("these events carry no transition audit (a result saved by an "
+                         "older scoutsim): re-run the simulation")
+    names = L.EVENT_KIND_NAMES
+    out = []
+    cur = None
+    for row in ev:
+        eb, ea = row[L.EVR_E_BEFORE], row[L.EVR_E_AFTER]
+        if np.isnan(eb):
+            cur = None          # a controller record: not a plant transition
+            continue
+        key = (row[L.EVR_T], eb, ea if not np.isnan(ea) else None)
+        if cur is None or cur["key"] != key:
+            cur = {"key": key, "rows": []}
+            out.append(cur)
+        cur["rows"].append(row)
+    trs = []
+    for g in out:
+        rows = g["rows"]
+        loss = sum(r[L.EVR_V3] for r in rows if int(r[L.EVR_KIND]) == L.EK_TOUCHDOWN)
+        bits = 0
+        for r in rows:
+            bits |= int(r[L.EVR_VIOLATIONS])
+        trs.append(Transition(
+            t=float(rows[0][L.EVR_T]),
+            kinds=tuple(names.get(int(r[L.EVR_KIND]), "?") for r in rows),
+            legs=tuple(int(r[L.EVR_LEG]) for r in rows),
+            energy_before_J=float(rows[0][L.EVR_E_BEFORE]),
+            energy_after_J=float(rows[0][L.EVR_E_AFTER]),
+            logged_loss_J=float(loss), violations=bits))
+    return TransitionAudit(tuple(trs), rel_tol)
