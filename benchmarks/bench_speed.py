@@ -5,7 +5,7 @@
 Measures in one run, on one core:
 * first-call compile time (fresh Numba cache in a new process);
 * cached start-up: wall time of ``scoutsim run --duration 1`` in a new process;
-* wall time of 10 s of Model II bounding (default start, Coulomb floor mu = 0.8) with the
+* wall time of 10 s of Model II bounding (default start, default floor mu = 1.0) with the
   default integrator settings (best of 3) -> real-time factor, and with the DOPRI5
   reference at its default tolerance;
 * the same model in plain Python integrated by SciPy solve_ivp (benchmarks/scipy_baseline.py,
@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-MU = 0.8   # the floor on which the Table I controller bounds (README, docs/model.md)
+MU = 1.0   # the default floor (scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT)
 
 
 def sub(cmd, env=None):

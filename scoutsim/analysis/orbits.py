@@ -34,8 +34,8 @@ stays on the same sample, so its fixed point is a periodic orbit lasting a whole
 control periods; Newton's method (forward-difference Jacobian, least-squares steps because
 pinned legs and stuck motor joints make some coordinates dependent) converges on it to a
 residual ~1e-12, and the eigenvalues of the Jacobian are its Floquet multipliers. On the
-Scout II defaults (Model II, mu 0.8) the orbit lasts 231 ms with spectral radius 0.888
-(a real multiplier -0.888: successive strides alternate about the orbit), and a long
+Scout II defaults (Model II, default floor) the orbit lasts 234 ms with spectral radius
+0.925 (a real multiplier -0.925: successive strides alternate about the orbit), and a long
 simulation from the default start settles onto it at that rate (tests/analysis).
 :func:`controlled_cycle` is the simulation-only estimate (mean of converged strides,
 multipliers fitted to the transient), kept as a cross-check.
