@@ -33,7 +33,8 @@ from ..model.layout import (
     EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, EVR_E_AFTER, EVR_E_BEFORE, EVR_VIOLATIONS,
     FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
     MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NS,
-    NQ, P_G, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM,
+    NQ, P_G, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
+    P_TAU_S, P_THETA_LIM,
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK, V_GROUND_PULLS, V_OUTSIDE_CONE,
     V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION,
@@ -75,9 +76,9 @@ SIMULTANEOUS_EVENT_TOL = 1e-12
 #: located to EVENT_TIME_TOL, so the rate at a located zero crossing is a little off zero,
 #: by at most ~1e-6 for Scout II's largest accelerations).
 SLIDE_SPEED_TOL = 1e-6
+MOTOR_SPEED_TOL = 1e-4
 #: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
 LEG_STOP_SPEED_TOL = 1e-6
-MOTOR_SPEED_TOL = 1e-4
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
 MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
 # A control period starts with one step over the whole period when the carried step-size
@@ -473,6 +474,38 @@ def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
                        method >= METHOD_ARK4, SF0, True)
 
 
+@kernel(inline="always")
+def illinois_update(th, fc, a, fa, b, fb, side):
+    """One bracket update of the Illinois method (regula falsi with the stale end's value
+    halved): the new point ``th`` with value ``fc`` replaces the end of its sign. Returns
+    (a, fa, b, fb, side)."""
+    if fc > 0.0:
+        if side == -1:
+            fb *= 0.5
+        return th, fc, b, fb, -1
+    if side == 1:
+        fa *= 0.5
+    return a, fa, th, fc, 1
+
+
+@kernel(inline="always")
+def smallest_armed_event(y, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed):
+    """The smallest armed event function at state ``y`` (evaluated on a projected copy)
+    and its slot: (value, slot)."""
+    for i in range(NS):
+        ybuf[i] = y[i]
+    project_state(ybuf, P, mi, mf)
+    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+    event_values(ybuf, aux_tmp, P, mi, e_tmp)
+    fc = 1.0
+    k = -1
+    for i in range(NEV):
+        if armed[i] and e_tmp[i] < fc:
+            fc = e_tmp[i]
+            k = i
+    return fc, k
+
+
 @kernel
 def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, cmd, y_new,
                  aux_new, tmp, rtol, atol, ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp):
@@ -500,32 +533,15 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
     side = 0
     k = kmin
     for it in range(60):
-        for i in range(NS):
-            ybuf[i] = y_new[i]
-        project_state(ybuf, P, mi, mf)
-        evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+        fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp,
+                                      armed)
         nf += 1
-        event_values(ybuf, aux_tmp, P, mi, e_tmp)
-        fc = 1.0
-        for i in range(NEV):
-            if armed[i] and e_tmp[i] < fc:
-                fc = e_tmp[i]
-                k = i
+        if kk >= 0:
+            k = kk
         slope = abs(e_full[k] - e_start[k]) / h
         if fc <= 0.0 and fc >= -slope * EVENT_STATE_TOL:
             return th * h, k, nf
-        if fc > 0.0:
-            a = th
-            fa = fc
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = th
-            fb = fc
-            if side == 1:
-                fa *= 0.5
-            side = 1
+        a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
         done = (b - a) * h < EVENT_TIME_TOL
         th = b if done else (a * fb - b * fa) / (fb - fa)
         err, ok, nfs = do_step(method, s, th * h, K, P, mi, mf, cmd, y_new, aux_new, tmp,
@@ -534,17 +550,10 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
         if done:
             break
     # bracket closed to EVENT_TIME_TOL: the step to b, where g <= 0
-    for i in range(NS):
-        ybuf[i] = y_new[i]
-    project_state(ybuf, P, mi, mf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+    fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed)
     nf += 1
-    event_values(ybuf, aux_tmp, P, mi, e_tmp)
-    fc = 1.0
-    for i in range(NEV):
-        if armed[i] and e_tmp[i] < fc:
-            fc = e_tmp[i]
-            k = i
+    if kk >= 0:
+        k = kk
     return th * h, k, nf
 
 
@@ -646,18 +655,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                         project_state(ybuf, P, mi, mf)
                         event_values(ybuf, aux_tmp, P, mi, e_tmp)
                         fc = e_tmp[k]
-                        if fc > 0.0:
-                            a = th
-                            fa = fc
-                            if side == -1:
-                                fb *= 0.5
-                            side = -1
-                        else:
-                            b = th
-                            fb = fc
-                            if side == 1:
-                                fa *= 0.5
-                            side = 1
+                        a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
                         if (b - a) * h < EVENT_TIME_TOL or fc == 0.0:
                             break
                     th = b
