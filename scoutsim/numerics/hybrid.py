@@ -77,6 +77,10 @@ SIMULTANEOUS_EVENT_TOL = 1e-12
 #: by at most ~1e-6 for Scout II's largest accelerations).
 SLIDE_SPEED_TOL = 1e-6
 MOTOR_SPEED_TOL = 1e-4
+#: a stick -> slip function (normalised by body weight) this close below zero right after
+#: a transition is armed: the stick rule of settle() accepts |F_t| <= mu F_n (1 + 1e-9) +
+#: 1e-9 W, i.e. values down to about -2e-9
+CONE_ARM_TOL = 1e-8
 #: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
 LEG_STOP_SPEED_TOL = 1e-6
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
@@ -740,6 +744,14 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                              mode_violations(s, aux, P, mi))
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
+            for leg in range(2):
+                # a toe that sticks on the edge of the friction cone (a slide come to rest
+                # with the friction at mu F_n) starts with its stick -> slip function at
+                # zero, within the stick rule's tolerance: armed, so that it fires at once
+                # if the force leaves the cone (otherwise it could leave it unnoticed)
+                kc = leg * NEV_CONTACT + 2
+                if mi[MI_CONTACT_B + leg] == STICK and e_old[kc] > -CONE_ARM_TOL:
+                    armed[kc] = True
             if method >= METHOD_ARK4:
                 # stiff factors at the post-event state (settle() filled K0 and aux)
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)

@@ -250,3 +250,14 @@ def test_simultaneous_touchdowns_are_decided_alike_whatever_rounding_does(eps):
     assert len(td_b) == len(td_f) >= 5
     assert np.max(np.abs(td_b - td_f)) < 1e-9
     assert audit_transitions(r).problems() == []
+
+
+@pytest.mark.parametrize("model", ["I", "II"])
+def test_pinned_toe_stays_inside_the_friction_cone_on_a_coulomb_floor(model):
+    """Coulomb's law in stance: a pinned toe never needs more than mu F_n (checked at every
+    accepted step by max_friction_ratio), including a toe that sticks again on the edge
+    of the cone after a slide (its stick -> slip event must be armed there)."""
+    mu = 1.0
+    r = scoutsim.simulate(duration=10.0, model=model, friction_coefficient=mu)
+    assert r.event_times("slide_start").size > 0 and r.event_times("stick").size > 0
+    assert r.stats["max_friction_ratio"] <= mu * (1.0 + 1e-6)
