@@ -20,7 +20,7 @@ import numpy as np
 from . import __version__
 from .control.bounding import BoundingController, controller_array
 from .model import layout as L
-from .model.dynamics import NSTIFF
+from .model.dynamics import NSTIFF, motor_mode_from_rate
 from .model.packing import default_friction, robot_array
 from .numerics.dopri5 import eval_workspace
 from .numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
@@ -239,17 +239,15 @@ STAT_NAMES = ("rhs_evaluations", "steps", "rejected_steps", "events", "end_of_st
               "max_step_s")
 
 
-def fresh_modes(s: np.ndarray, joint_stiction: float):
-    """Mode arrays (mi, mf) of a start from state ``s`` with both toes in flight: a motor
-    joint at rest starts stuck if stiction can hold it; without stiction it is never stuck
-    (no event could release it), so it starts "slipping" with zero Coulomb torque, the
-    free, viscously damped joint."""
+def fresh_modes(s: np.ndarray, P: np.ndarray):
+    """Mode arrays (mi, mf) of a start from state ``s`` with both toes in flight; each
+    motor joint's stick/slip mode from its gear rate by the same rule as after an impact
+    (:func:`~scoutsim.model.dynamics.motor_mode_from_rate`: slipping in the direction of
+    motion; at rest stuck if it has stiction, else "slipping" with zero Coulomb torque)."""
     mi = np.zeros(L.NMI, dtype=np.int64)
     mf = np.zeros(L.NMF)
     for leg in range(2):
-        w = s[L.NQ + 5 + leg]
-        mi[L.MI_MOTOR_B + leg] = (L.STUCK if w == 0.0 and joint_stiction > 0.0 else
-                                  (L.SLIP_NEG if w < 0 else L.SLIP_POS))
+        mi[L.MI_MOTOR_B + leg] = motor_mode_from_rate(float(s[L.NQ + 5 + leg]), P)
         mi[L.MI_SLIDE_DIR_B + leg] = 1
     return mi, mf
 
@@ -431,7 +429,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             mf[L.MF_ANCHOR_B + leg] = init.toe_anchors[leg]
             ls[leg] = init.leg_states[leg]
     else:
-        mi, mf = fresh_modes(s, robot.joint_stiction)
+        mi, mf = fresh_modes(s, P)
     eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ)
     wall0 = time.perf_counter()
     bar = None

@@ -41,12 +41,16 @@ def floor_label(mu: float) -> str:
     return "no slip" if math.isinf(mu) else f"mu = {mu:g}"
 
 
+def _start_of(task: dict) -> dict:
+    """The identifying columns of one start's row."""
+    return {k: task[k] for k in ("model", "friction", "speed", "pitch_rate_deg_s", "height")}
+
+
 def basin_task(task: dict) -> dict:
     """Run one start of the basin grid (top level so that worker processes can import it)."""
     from .. import simulation
     InitialState, simulate = simulation.InitialState, simulation.simulate
-    row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
-    row["friction"] = task["friction"]
+    row = _start_of(task)
     try:
         init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),
                             y=task["height"])
@@ -71,8 +75,7 @@ def basin_task(task: dict) -> dict:
 
 
 def _basin_error_row(task: dict, exc: Exception) -> dict:
-    row = {k: task[k] for k in ("model", "speed", "pitch_rate_deg_s", "height")}
-    row["friction"] = task["friction"]
+    row = _start_of(task)
     row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
                n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
     return row

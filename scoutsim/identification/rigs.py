@@ -248,7 +248,7 @@ def run_configuration(robot: RobotParameters, model: str, P: np.ndarray, C: np.n
         k on, the controller's touchdown-angle commands [rad].
     """
     s = np.array(s0, dtype=float)
-    mi, mf = fresh_modes(s, P[L.P_TAU_S])
+    mi, mf = fresh_modes(s, P)
     integrator = integrator.resolve(model)
     eng = HybridEngine(P, np.array(C, dtype=float), s, mi, mf, np.zeros(2, dtype=np.int64),
                        duration, dt, integrator)
