@@ -119,13 +119,18 @@ NEV = 10
 # event kinds written to the event log
 EK_TOUCHDOWN = 1
 EK_LIFTOFF = 2
-EK_SLIDE_START = 3     # toe starts to slide (end-of-stance consistency or Coulomb)
+EK_SLIDE_START = 3     # toe starts to slide (v3: SLIDE_CAUSE_*)
 EK_STICK = 4           # sliding toe sticks again
 EK_STRUT_START = 5
 EK_STRUT_END = 6
 EK_MOTOR_STICK = 7
 EK_MOTOR_SLIP = 8
 EK_FALL = 9
+# v3 of a slide_start record: why the toe slides
+SLIDE_CAUSE_LEG_PUSHES = 0      # a pinned toe the ground would pull while the leg still pushes
+SLIDE_CAUSE_CONE = 1            # the friction force reached mu F_n (Coulomb floor)
+SLIDE_CAUSE_NO_PIN_IMPULSE = 2  # touchdown whose pinning impulse the floor cannot give
+SLIDE_CAUSE_STUB = 3            # a leg at its stop whose toe is pressed into the ground
 EK_CTRL_TOUCHDOWN = 10   # controller detects touchdown
 EK_CTRL_LIFTOFF = 11     # controller detects lift-off
 EK_CTRL_SWEEP = 12       # controller passes the sweep limit
@@ -165,6 +170,7 @@ V_SLIP_DIRECTION = 64     # a slipping motor joint moving against its slip direc
 V_STRUT_COMPRESSED = 128  # a rigid strut in compression (should be a spring leg again)
 V_SINGULAR = 256          # the constrained dynamics could not be solved
 V_BEYOND_STOP = 512       # a spring leg with its pinned toe extended beyond the stop l0
+V_TOE_ENTERS_GROUND = 1024  # a toe in flight at ground level moving or accelerating into it
 VIOLATION_NAMES = {
     V_GROUND_PULLS: "ground pulls a pinned toe", V_OUTSIDE_CONE: "pinned toe outside the "
     "friction cone", V_SLIDE_DIRECTION: "toe slides against its slide direction",
@@ -173,6 +179,7 @@ VIOLATION_NAMES = {
     V_SLIP_DIRECTION: "motor joint slips against its slip direction",
     V_STRUT_COMPRESSED: "strut in compression", V_SINGULAR: "constrained dynamics singular",
     V_BEYOND_STOP: "pinned leg extended beyond its stop",
+    V_TOE_ENTERS_GROUND: "toe in flight at the ground moving into it",
 }
 
 # --- controller leg states ------------------------------------------------------------

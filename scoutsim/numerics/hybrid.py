@@ -23,22 +23,24 @@ import numpy as np
 
 from ..control.bounding import bounding_step
 from ..jit import allocating, kernel
-from ..model.dynamics import (evaluate_command_change, evaluate_ws, impact, project_state,
-                               state_energy)
+from ..model.dynamics import (evaluate_command_change, evaluate_ws, impact, leg_damping,
+                              project_state, state_energy)
 from ..model.layout import (
     A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X,
     A_TOE_Y,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
     EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START, EK_TOUCHDOWN,
     EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, EVR_E_AFTER, EVR_E_BEFORE, EVR_VIOLATIONS,
-    FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
+    FLIGHT, IL_B, ITH, IY, MF_ANCHOR_B, MI_CONTACT_B,
     MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NS,
-    NQ, P_G, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
+    NQ, P_G, P_K, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
     P_TAU_S, P_THETA_LIM,
     P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK, V_GROUND_PULLS, V_OUTSIDE_CONE,
     V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION,
     V_BEYOND_STOP, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
+    V_TOE_ENTERS_GROUND, SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_CONE, SLIDE_CAUSE_NO_PIN_IMPULSE,
+    SLIDE_CAUSE_STUB,
 )
 from . import ark
 from .dopri5 import dense, eval_workspace, step
@@ -83,6 +85,15 @@ MOTOR_SPEED_TOL = 1e-4
 CONE_ARM_TOL = 1e-8
 #: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
 LEG_STOP_SPEED_TOL = 1e-6
+#: a toe at ground level moving down faster than this [m/s] enters the ground
+TOE_REST_SPEED = 1e-7
+#: a toe at ground level that would rise at most this height [m] before
+#: its (downward) acceleration brings it back counts as pressed into the ground: the touchdown
+#: event of so short a hop (microseconds) can fall within one step and be missed
+TOE_HOP_TOL = 1e-9
+#: a toe in flight counts as at ground level within this height [m] (a released strut's toe
+#: is lifted by its ~3e-8 m of length drift)
+TOE_AT_GROUND_TOL = 1e-7
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
 MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
 # A control period starts with one step over the whole period when the carried step-size
@@ -154,9 +165,10 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
 
 
 @kernel
-def mode_violations(s, aux, P, mi):
-    """Bit mask (layout.V_*) of the mode invariants that the state ``s``, its outputs
-    ``aux`` (an evaluation of ``s`` in modes ``mi``) and the modes violate: after every
+def mode_violations(s, ds, aux, P, mi):
+    """Bit mask (layout.V_*) of the mode invariants that the state ``s``, its derivative
+    ``ds`` and outputs ``aux`` (an evaluation of ``s`` in modes ``mi``) and the modes
+    violate: after every
     transition the modes must agree with the velocities and forces. The tolerances are
     those of the transition rules, widened by a margin for rounding (1e-6 of body weight
     for forces)."""
@@ -185,13 +197,17 @@ def mode_violations(s, aux, P, mi):
         elif mode == SLIDE:
             if coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
                 bits |= V_SLIDE_DIRECTION
-            if aux[o + A_FAX] < -ftol or gn < -ftol:
+            if ((aux[o + A_FAX] < -ftol or gn < -ftol)
+                    and not slide_toe_pressed(s, ds, aux, P, leg)):
                 bits |= V_SLIDE_NOT_PUSHING
-        elif aux[o + A_TOE_Y] < -1e-9 and P[P_MASSLESS] < 0.5:
+        elif P[P_MASSLESS] < 0.5:
             # (a massless leg is placed kinematically at its touchdown angle in flight, which
             # can put its toe below the ground just after lift-off: the passive model's
             # convention, SPEC.md 2; it touches down when the toe comes down through it)
-            bits |= V_TOE_BELOW_GROUND
+            if aux[o + A_TOE_Y] < -1e-9:
+                bits |= V_TOE_BELOW_GROUND
+            if flight_toe_enters_ground(s, ds, aux, P, leg):
+                bits |= V_TOE_ENTERS_GROUND
         if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0:
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
@@ -221,6 +237,107 @@ def stance_leg_rate(s, P, leg):
     hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
     hvy = s[NQ + 1] + sL * math.cos(th) * s[NQ + 2]
     return -(hvx * math.sin(g) - hvy * math.cos(g))
+
+
+#: toe_enters_ground results
+TOE_STAYS = 0          # the toe does not move into the ground
+TOE_PRESSED = 1        # at rest vertically at ground level, accelerating into the ground
+TOE_ENTERS = 2         # moving into the ground faster than TOE_REST_SPEED
+
+
+@kernel
+def toe_vertical_motion(s, ds, P, leg, ld):
+    """Rate [m/s] and acceleration [m/s^2] of the height of the toe of ``leg`` moving as in
+    flight: leg-length rate ``ld`` [m/s] (the flight rate) and the flight relaxation's
+    ldd = -k ld / c (exact for a constant damper without leg friction; first order
+    otherwise)."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    ll = s[IL_B + leg]
+    th = s[ITH]
+    dth = s[NQ + ITH]
+    ddth = ds[NQ + ITH]
+    g = th + s[3 + leg]
+    dg = dth + s[NQ + 3 + leg]
+    ddg = ddth + ds[NQ + 3 + leg]
+    sg = math.sin(g)
+    cg = math.cos(g)
+    ldd = 0.0
+    c = leg_damping(s[3 + leg], P)
+    if ld != 0.0 and c > 0.0:
+        ldd = -P[P_K] * ld / c
+    # toe height y + sL sin(th) - l cos(g)
+    vy = s[NQ + IY] + sL * math.cos(th) * dth - ld * cg + ll * sg * dg
+    ay = (ds[NQ + IY] + sL * (math.cos(th) * ddth - math.sin(th) * dth * dth)
+          - ldd * cg + 2.0 * ld * sg * dg + ll * (cg * dg * dg + sg * ddg))
+    return vy, ay
+
+
+@kernel
+def toe_enters_ground(s, ds, P, leg, ld):
+    """Whether the toe of ``leg``, at ground level, would move into the ground in flight
+    (TOE_* above; ``ld``: its flight leg-length rate [m/s]; ``ds``: the state derivative of
+    an evaluation in which the leg carries no force, or a small one: flight, or a slide
+    about to end).
+
+    The toe stub: a leg swept through with its toe at the ground (a back leg swung forward
+    from behind the hip, its toe going down as the leg nears the vertical), or a toe released
+    at rest whose leg goes on extending. Pinned, the ground would have to pull the toe;
+    released to flight, the toe moves into the ground. The consistent contact is a slide in
+    which the leg is compressed as it is swept on (settle_ws). A hop of at most TOE_HOP_TOL
+    counts as pressed."""
+    if P[P_MASSLESS] > 0.5:
+        return TOE_STAYS
+    vy, ay = toe_vertical_motion(s, ds, P, leg, ld)
+    if vy < -TOE_REST_SPEED:
+        return TOE_ENTERS
+    if ay >= 0.0:
+        return TOE_STAYS
+    return TOE_PRESSED if vy * vy <= -2.0 * ay * TOE_HOP_TOL else TOE_STAYS
+
+
+@kernel
+def flight_toe_enters_ground(s, ds, aux, P, leg):
+    """A leg in flight whose toe is at ground level (within TOE_AT_GROUND_TOL: a released
+    strut's toe) and pressed into it, or at or below it and moving into it (its touchdown
+    event cannot fire: it is armed only above the ground)."""
+    toe_y = aux[leg * NAUX_LEG + A_TOE_Y]
+    if toe_y > TOE_AT_GROUND_TOL:
+        return False
+    k = toe_enters_ground(s, ds, P, leg, ds[IL_B + leg])
+    return k == TOE_PRESSED or (k == TOE_ENTERS and toe_y <= 0.0)
+
+
+@kernel
+def slide_toe_pressed(s, ds, aux, P, leg):
+    """A sliding toe whose leg force has come to (or just below) zero but which would be
+    pressed into the ground in flight (toe_enters_ground): the slide goes on, its leg loads
+    again. Its flight leg-length rate is the slide's plus F / c (the damper balances the
+    force F when the toe is free)."""
+    ld = ds[IL_B + leg]
+    c = P[P_NP] * leg_damping(s[3 + leg], P)
+    fax = aux[leg * NAUX_LEG + A_FAX]
+    if c > 0.0:
+        ld += fax / c
+    elif fax < 0.0:
+        return False   # an undamped leg pulling: beyond its stop
+    return toe_enters_ground(s, ds, P, leg, ld) == TOE_PRESSED
+
+
+@kernel
+def start_stub_slide(t, s, mi, aux, ev, nev, leg):
+    """A toe pressed into the ground at the leg's stop slides (toe_enters_ground):
+    in the direction the toe moves, or, at rest, away from the force that pinned it."""
+    o = leg * NAUX_LEG
+    mi[MI_CONTACT_B + leg] = SLIDE
+    v = aux[o + A_SLIP_V]
+    if v > SLIDE_SPEED_TOL:
+        mi[MI_SLIDE_DIR_B + leg] = 1
+    elif v < -SLIDE_SPEED_TOL:
+        mi[MI_SLIDE_DIR_B + leg] = -1
+    else:
+        mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+    return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX],
+                     SLIDE_CAUSE_STUB)
 
 
 @kernel
@@ -266,13 +383,21 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
             o = leg * NAUX_LEG
             mode = mi[MI_CONTACT_B + leg]
             gn = aux[o + A_GN]
-            if mode == STICK:
+            if mode == FLIGHT:
+                if flight_toe_enters_ground(s, ds, aux, P, leg):
+                    # a toe stub (a released pinned toe, or one swept down onto the
+                    # ground at the stop): slides, its leg compressed as it is swept
+                    nev = start_stub_slide(t, s, mi, aux, ev, nev, leg)
+                    stats[S_NEND_SLIDE] += 1
+                    changed = True
+            elif mode == STICK:
                 if gn < gn_tol:
                     if aux[o + A_FAX] > 1e-9 * W and P[P_MASSLESS] < 0.5:
                         mi[MI_CONTACT_B + leg] = SLIDE
                         gt = aux[o + A_GT]
                         mi[MI_SLIDE_DIR_B + leg] = -1 if gt > 0.0 else 1
-                        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX], 0.0)
+                        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
+                                        SLIDE_CAUSE_LEG_PUSHES)
                         stats[S_NEND_SLIDE] += 1
                     else:
                         leave_contact(s, mi, leg)
@@ -281,7 +406,8 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                 elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
                     mi[MI_CONTACT_B + leg] = SLIDE
                     mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
-                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX], 1.0)
+                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
+                                    SLIDE_CAUSE_CONE)
                     changed = True
             elif mode == STRUT:
                 if gn < gn_tol:
@@ -293,7 +419,10 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
                     changed = True
             elif mode == SLIDE:
-                if gn < gn_tol or aux[o + A_FAX] <= 0.0:
+                if ((gn < gn_tol or aux[o + A_FAX] <= 0.0)
+                        and not slide_toe_pressed(s, ds, aux, P, leg)):
+                    # (a slide at the stop whose toe is pressed into the ground starts with
+                    # its leg force at zero, to rounding, and loads as the leg is swept on)
                     leave_contact(s, mi, leg)
                     nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
                     changed = True
@@ -355,7 +484,8 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
         # Coulomb floor: the pinning impulse lies outside the friction cone (for a
         # massless toe on a compliant leg the only cone-consistent impulse is zero):
-        # no impulse, the toe lands sliding
+        # no impulse, the toe lands sliding. (A no-slip floor pins the toe whatever the
+        # impulse's direction, docs/model.md: its impulse ratio is reported instead.)
         for i in range(s.shape[0]):
             s[i] = s_pre[i]
         for i in range(mi.shape[0]):
@@ -364,7 +494,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         mi[MI_SLIDE_DIR_B + leg] = 1 if aux[o + A_SLIP_V] >= 0.0 else -1
         project_state(s, P, mi, mf)
         nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
-        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, 0.0, 0.0, 2.0)
+        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, 0.0, 0.0, SLIDE_CAUSE_NO_PIN_IMPULSE)
         return nev, True
     if pn > 0.0:
         r = abs(pt) / pn
@@ -394,7 +524,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
                     mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
                     stats[S_NEND_SLIDE] += 1
                     nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
-                                    aux[o + A_FAX], 0.0)
+                                    aux[o + A_FAX], SLIDE_CAUSE_LEG_PUSHES)
                 else:
                     leave_contact(s, mi, leg)
                     nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
@@ -406,7 +536,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
                 mi[MI_CONTACT_B + leg] = SLIDE
                 mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
                 nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
-                                aux[o + A_FAX], 1.0)
+                                aux[o + A_FAX], SLIDE_CAUSE_CONE)
         elif mode == SLIDE:
             if slot == 0:
                 leave_contact(s, mi, leg)
@@ -476,6 +606,20 @@ def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
                        method >= METHOD_ARK4, SF0, True)
+
+
+@kernel(inline="always")
+def dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf, tmp, aux_tmp, ew,
+                       e_tmp):
+    """Event functions (into e_tmp) at the fraction ``th`` of the step of size ``h`` from
+    ``s`` to ``y_new``, on the method's continuous extension (one evaluation)."""
+    if method >= METHOD_ARK4:
+        ark.dense(s, y_new, h, K, th, ybuf)
+    else:
+        dense(s, h, K, th, ybuf)
+    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+    project_state(ybuf, P, mi, mf)
+    event_values(ybuf, aux_tmp, P, mi, e_tmp)
 
 
 @kernel(inline="always")
@@ -636,12 +780,33 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         for i in range(NEV):
             e_end[i] = e_new[i]
         for k in range(NEV):
-            if armed[k] and e_end[k] < 0.0:
+            hop = (not armed[k] and e_end[k] < 0.0 and k < 2 * NEV_CONTACT
+                   and k % NEV_CONTACT == 0 and mi[MI_CONTACT_B + k // NEV_CONTACT] == FLIGHT
+                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and P[P_MASSLESS] < 0.5)
+            if (armed[k] or hop) and e_end[k] < 0.0:
                 # Illinois on the continuous extension, bracket [0, 1]
                 a = 0.0
                 fa = e_old[k]
                 b = 1.0
                 fb = e_end[k]
+                if hop:
+                    # a toe that left the ground at the start of this step (its touchdown
+                    # is armed only once it is seen above the ground) and ends it below:
+                    # a hop shorter than the step. Look for an instant above the ground
+                    # (halving towards the start) to bracket its landing; none: it never
+                    # rose, and the step goes on (settle_ws has decided it stays in flight)
+                    thp = 0.5
+                    for _ in range(40):
+                        dense_event_values(method, s, y_new, h, K, thp, P, mi, mf, cmd, ybuf,
+                                           tmp, aux_tmp, ew, e_tmp)
+                        stats[S_NFEV] += 1
+                        if e_tmp[k] > 0.0:
+                            a = thp
+                            fa = e_tmp[k]
+                            break
+                        thp *= 0.5
+                    if fa <= 0.0:
+                        continue
                 if fa <= 0.0:
                     th = 0.0
                 else:
@@ -649,15 +814,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     th = 1.0
                     for _ in range(100):
                         th = (a * fb - b * fa) / (fb - fa)
-                        if method >= METHOD_ARK4:
-                            ark.dense(s, y_new, h, K, th, ybuf)
-                        else:
-                            dense(s, h, K, th, ybuf)
-                        evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False,
-                                    ew[3], True)
+                        dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf,
+                                           tmp, aux_tmp, ew, e_tmp)
                         stats[S_NFEV] += 1
-                        project_state(ybuf, P, mi, mf)
-                        event_values(ybuf, aux_tmp, P, mi, e_tmp)
                         fc = e_tmp[k]
                         a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
                         if (b - a) * h < EVENT_TIME_TOL or fc == 0.0:
@@ -741,7 +900,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 if kcur < 0:
                     break
             stamp_transition(ev, nev0, nev, e_before, aux[A_ENERGY],
-                             mode_violations(s, aux, P, mi))
+                             mode_violations(s, K0, aux, P, mi))
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
             for leg in range(2):
@@ -881,7 +1040,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
             # audit it like an event (rare: the energy before is computed only here)
             stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
-                             mode_violations(s, aux, P, mi))
+                             mode_violations(s, K[0], aux, P, mi))
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
         if aux[A_KKT_OK] < 0.5:
