@@ -777,6 +777,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         # earliest triggered event
         kmin = -1
         thmin = 2.0
+        th_hop = 2.0
         for i in range(NEV):
             e_end[i] = e_new[i]
         for k in range(NEV):
@@ -793,20 +794,21 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     # a toe that left the ground at the start of this step (its touchdown
                     # is armed only once it is seen above the ground) and ends it below:
                     # a hop shorter than the step. Look for an instant above the ground
-                    # (halving towards the start) to bracket its landing; none: it never
-                    # rose, and the step goes on (settle_ws has decided it stays in flight)
+                    # (halving towards the start): the step is then cut there (below),
+                    # the toe is seen above the ground and its landing is located like any
+                    # touchdown; none: it never rose, and the step goes on (settle_ws has
+                    # decided it stays in flight)
                     thp = 0.5
                     for _ in range(40):
                         dense_event_values(method, s, y_new, h, K, thp, P, mi, mf, cmd, ybuf,
                                            tmp, aux_tmp, ew, e_tmp)
                         stats[S_NFEV] += 1
                         if e_tmp[k] > 0.0:
-                            a = thp
-                            fa = e_tmp[k]
+                            if thp < th_hop:
+                                th_hop = thp
                             break
                         thp *= 0.5
-                    if fa <= 0.0:
-                        continue
+                    continue
                 if fa <= 0.0:
                     th = 0.0
                 else:
@@ -825,6 +827,11 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 if th < thmin:
                     thmin = th
                     kmin = k
+        if th_hop < 1.0 and th_hop < thmin:
+            # a hop shorter than the step, before any other event: cut the step where the
+            # toe is above the ground
+            h *= th_hop
+            continue
         if kmin >= 0:
             # redo the step exactly to the event time
             he = thmin * h
