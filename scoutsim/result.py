@@ -38,7 +38,7 @@ class SimulationResult:
     aux : (n, NAUX) outputs: ground forces, torques, currents, motor speeds, belt
         deflection, battery voltage, energy (``layout.A_*``).
     modes : (n, 6) int8: controller leg states (back, front), plant contact modes (back,
-        front), motor-joint stiction modes (back, front).
+        front), motor-joint stiction modes (back, front); columns ``layout.RM_*``.
     events : (m, 6) [t, kind, leg, v1, v2, v3] (``layout.EK_*``).
     outcome : "completed", "fell", "numerical_failure" or "interrupted".
     t_end : time the run reached [s].
@@ -144,11 +144,11 @@ class SimulationResult:
 
     def leg_state(self, leg):
         """Controller leg state per sample: 0 flight, 1 stance-retraction, 2 stance-brake."""
-        return self.modes[:, _leg(leg)].astype(int)
+        return self.modes[:, L.RM_LEG_STATE_B + _leg(leg)].astype(int)
 
     def contact_mode(self, leg):
         """Plant contact mode per sample: 0 flight, 1 stick, 2 slide, 3 strut."""
-        return self.modes[:, 2 + _leg(leg)].astype(int)
+        return self.modes[:, L.RM_CONTACT_B + _leg(leg)].astype(int)
 
     def hybrid_state(self, k: int):
         """The complete hybrid state at recorded sample ``k`` (continuous state, plant and
@@ -163,8 +163,9 @@ class SimulationResult:
         m = self.modes[k].astype(int)
         aux = self.aux[k]
         return HybridState(
-            state=self.state[k], leg_states=(m[0], m[1]), contact_modes=(m[2], m[3]),
-            motor_modes=(m[4], m[5]),
+            state=self.state[k], leg_states=(m[L.RM_LEG_STATE_B], m[L.RM_LEG_STATE_F]),
+            contact_modes=(m[L.RM_CONTACT_B], m[L.RM_CONTACT_F]),
+            motor_modes=(m[L.RM_MOTOR_B], m[L.RM_MOTOR_F]),
             slide_directions=tuple(1 if aux[leg * L.NAUX_LEG + L.A_SLIP_V] >= 0.0 else -1
                                    for leg in range(2)),
             toe_anchors=tuple(float(aux[leg * L.NAUX_LEG + L.A_TOE_X]) for leg in range(2)))
@@ -255,7 +256,7 @@ class SimulationResult:
         cols["battery_voltage"] = self.aux[:, L.A_VBATT]
         cols["energy"] = self.aux[:, L.A_ENERGY]
         for leg in range(2):
-            cols[f"leg_state_{L.LEG_NAMES[leg]}"] = self.modes[:, leg].astype(float)
-            cols[f"contact_mode_{L.LEG_NAMES[leg]}"] = self.modes[:, 2 + leg].astype(float)
-            cols[f"motor_joint_mode_{L.LEG_NAMES[leg]}"] = self.modes[:, 4 + leg].astype(float)
+            for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
+                               (L.RM_MOTOR_B, "motor_joint_mode")):
+                cols[f"{what}_{L.LEG_NAMES[leg]}"] = self.modes[:, base + leg].astype(float)
         return cols

@@ -23,7 +23,8 @@ from .model import layout as L
 from .model.dynamics import NSTIFF, motor_mode_from_rate
 from .model.packing import default_friction, robot_array
 from .numerics.dopri5 import eval_workspace
-from .numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NSTAT, S_HMIN, run
+from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW, NSTAT,
+                              S_HMIN, STAT_NAMES, run)
 from .parameters import (ControllerParameters, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult
@@ -234,11 +235,6 @@ def default_initial_state(model: str = "II") -> InitialState:
     return InitialState()
 
 
-STAT_NAMES = ("rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
-              "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio", "min_step_s",
-              "max_step_s")
-
-
 def fresh_modes(s: np.ndarray, P: np.ndarray):
     """Mode arrays (mi, mf) of a start from state ``s`` with both toes in flight; each
     motor joint's stick/slip mode from its gear rate by the same rule as after an impact
@@ -268,13 +264,14 @@ class HybridEngine:
         self.k_last = n_total - 1
         self.cmd = np.zeros(2)
         # [step-size guess, ARK factors valid, evaluation workspace valid] (hybrid.run)
-        self.hwork = np.array([integrator.initial_step, 0.0, 0.0])
+        self.hwork = np.zeros(NHW)
+        self.hwork[HW_STEP] = integrator.initial_step
         self.ew = eval_workspace()
         self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
         self.out_t = np.zeros(n_total + 1)
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
-        self.out_ls = np.zeros((n_total + 1, 6), dtype=np.int8)
+        self.out_ls = np.zeros((n_total + 1, L.NRM), dtype=np.int8)
         self.ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
         self.stats = np.zeros(NSTAT)
         self.stats[S_HMIN] = np.inf

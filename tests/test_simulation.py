@@ -9,6 +9,7 @@ import pytest
 import scoutsim
 from scoutsim import (BoundingController, ControllerParameters, InitialState,
                       IntegratorSettings, RobotParameters, SimulationResult)
+from scoutsim.model import layout as L
 
 TIGHT = IntegratorSettings(rtol=1e-10, atol=1e-10)
 
@@ -98,7 +99,7 @@ def test_stiction_holds_below_breakaway_and_releases_above(tau_leg, moves):
         assert travel > 1e-3
     else:
         assert travel < 1e-12
-        assert np.all(r.modes[:, 4] == 0)   # stuck all along
+        assert np.all(r.modes[:, L.RM_MOTOR_B] == L.STUCK)   # stuck all along
 
 
 def test_without_stiction_any_torque_moves_the_joint():
@@ -108,7 +109,7 @@ def test_without_stiction_any_torque_moves_the_joint():
     init = InitialState(y=5.0, theta=0.0, dx=0.0, dtheta=0.0)
     r = scoutsim.simulate(robot, ConstantTorque(0.05), init, 0.05, model="II",
                           integrator=TIGHT)
-    assert np.all(r.modes[:, 4] != 0)
+    assert np.all(r.modes[:, L.RM_MOTOR_B] != L.STUCK)
     assert np.max(np.abs(r.motor_angle("back") - r.motor_angle("back")[0])) > 1e-6
 
 

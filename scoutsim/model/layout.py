@@ -53,6 +53,17 @@ MI_SLIDE_DIR_B = 4
 MI_SLIDE_DIR_F = 5
 NMI = 6
 
+# --- recorded modes (one row per sample: SimulationResult.modes, int8) --------------------
+RM_LEG_STATE_B = 0   # controller leg state (LS_*), back
+RM_LEG_STATE_F = 1
+RM_CONTACT_B = 2     # plant contact mode (FLIGHT, STICK, SLIDE, STRUT), back
+RM_CONTACT_F = 3
+RM_MOTOR_B = 4       # motor-joint stiction mode (SLIP_NEG, STUCK, SLIP_POS), back
+RM_MOTOR_F = 5
+NRM = 6
+RECORDED_MODE_NAMES = ("leg_state_back", "leg_state_front", "contact_mode_back",
+                       "contact_mode_front", "motor_joint_mode_back", "motor_joint_mode_front")
+
 # --- float mode array mf --------------------------------------------------------------
 MF_ANCHOR_B = 0   # toe anchor x [m] while pinned
 MF_ANCHOR_F = 1

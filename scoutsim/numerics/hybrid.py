@@ -35,7 +35,7 @@ from ..model.layout import (
     MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NS,
     NQ, P_G, P_K, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
     P_TAU_S, P_THETA_LIM,
-    P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
+    P_TORSO_H, P_TORSO_LEN, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK, V_GROUND_PULLS, V_OUTSIDE_CONE,
     V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION,
     V_BEYOND_STOP, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
@@ -64,7 +64,18 @@ S_MAX_FRICTION = 6    # largest |Ft|/Fn in stance with Fn above 5 % body weight
 S_MAX_IMPULSE_RATIO = 7
 S_HMIN = 8
 S_HMAX = 9
-NSTAT = 10
+S_NSTUB = 10          # toe-stub slides (toe_enters_ground)
+NSTAT = 11
+#: result.stats keys, in slot order
+STAT_NAMES = ("rhs_evaluations", "steps", "rejected_steps", "events", "end_of_stance_slides",
+              "strut_phases", "max_friction_ratio", "max_impact_impulse_ratio", "min_step_s",
+              "max_step_s", "toe_stub_slides")
+
+# slots of run()'s hwork array, carried between calls
+HW_STEP = 0           # step-size guess [s]
+HW_STIFF_VALID = 1    # 1: the ARK stiff factors sfwork are valid
+HW_EVAL_KEPT = 2      # 1: the evaluation workspace holds the last evaluation of the state
+NHW = 3
 
 EVENT_TIME_TOL = 1e-13
 #: an event function counts as at its zero on a step that ends within this time of it [s]
@@ -388,7 +399,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     # a toe stub (a released pinned toe, or one swept down onto the
                     # ground at the stop): slides, its leg compressed as it is swept
                     nev = start_stub_slide(t, s, mi, aux, ev, nev, leg)
-                    stats[S_NEND_SLIDE] += 1
+                    stats[S_NSTUB] += 1
                     changed = True
             elif mode == STICK:
                 if gn < gn_tol:
@@ -714,7 +725,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             fresh=False):
     """Integrate from t to t_end (one control period) with events.
 
-    hwork[0] carries the step-size guess between calls. ``method``: METHOD_DOPRI5 or
+    hwork[HW_STEP] carries the step-size guess between calls. ``method``: METHOD_DOPRI5 or
     METHOD_ARK4 (SF0, SF1, Z: its stiff-factor and stage scratch). ``fresh``: K[0] and aux
     already hold f(s) and its outputs (and SF0 usable stiff factors). Returns
     (t, nev, status)."""
@@ -741,7 +752,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     for i in range(NEV):
         if e_old[i] > 0.0:
             armed[i] = True
-    h = hwork[0]
+    h = hwork[HW_STEP]
     if h >= WHOLE_PERIOD_FRACTION * (t_end - t):
         h = t_end - t
     while t < t_end:
@@ -962,10 +973,10 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         hnext = h * fac
         if last:
             # keep the unclipped guess for the next control period
-            hnext = max(hnext, hwork[0] if hwork[0] < 10 * h else h)
+            hnext = max(hnext, hwork[HW_STEP] if hwork[HW_STEP] < 10 * h else h)
         h = hnext
-        hwork[0] = h
-    hwork[0] = h if h > 1e-7 else 1e-7
+        hwork[HW_STEP] = h
+    hwork[HW_STEP] = h if h > 1e-7 else 1e-7
     return t, nev, ST_RUNNING
 
 
@@ -977,12 +988,10 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
         out_s[n_out, i] = s[i]
     for i in range(NAUX):
         out_aux[n_out, i] = aux[i]
-    out_ls[n_out, 0] = ls[0]
-    out_ls[n_out, 1] = ls[1]
-    out_ls[n_out, 2] = mi[MI_CONTACT_B]
-    out_ls[n_out, 3] = mi[MI_CONTACT_B + 1]
-    out_ls[n_out, 4] = mi[MI_MOTOR_B]
-    out_ls[n_out, 5] = mi[MI_MOTOR_B + 1]
+    for leg in range(2):
+        out_ls[n_out, RM_LEG_STATE_B + leg] = ls[leg]
+        out_ls[n_out, RM_CONTACT_B + leg] = mi[MI_CONTACT_B + leg]
+        out_ls[n_out, RM_MOTOR_B + leg] = mi[MI_MOTOR_B + leg]
     return n_out + 1
 
 
@@ -999,7 +1008,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     [step-size guess, 1 if ``sfwork`` (NS, 2 NSTIFF) holds the ARK stiff factors of the
     last step], both carried between calls so that a run cut into calls (chunks, a Python
     controller) integrates exactly as one call would. ``ew`` (:func:`eval_workspace`) is
-    the evaluation workspace, kept across calls too: while hwork[2] = 1 it holds the last
+    the evaluation workspace, kept across calls too: while hwork[HW_EVAL_KEPT] = 1 it holds the last
     evaluation at ``s`` (K[0]), so a new command is applied to it with
     :func:`evaluate_command_change` instead of a fresh evaluation.
     Returns (k, n_out, nev, status, t)."""
@@ -1015,12 +1024,12 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ds = np.zeros(NS)
     s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
-    SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[1] = 1: valid)
+    SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
     sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
                         np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX))
-    sf_ok = hwork[1] > 0.5   # SF0 holds stiff factors from an earlier step
+    sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
     meth = method
     if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
         meth = METHOD_DOPRI5
@@ -1040,8 +1049,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
-        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew, hwork[2] > 0.5)
-        hwork[2] = 0.0
+        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew,
+                        hwork[HW_EVAL_KEPT] > 0.5)
+        hwork[HW_EVAL_KEPT] = 0.0
         stats[S_NFEV] += 1
         if nev > nev0:
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
@@ -1061,10 +1071,10 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                                  ybuf, imp, ew, meth, SF0, SF1, Z, sc,
                                  sf_ok or meth == METHOD_DOPRI5)
         sf_ok = True
-        hwork[1] = 1.0
+        hwork[HW_STIFF_VALID] = 1.0
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
         # state after an event), with the command of the period just ended
-        hwork[2] = 1.0 if status == ST_RUNNING else 0.0
+        hwork[HW_EVAL_KEPT] = 1.0 if status == ST_RUNNING else 0.0
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)

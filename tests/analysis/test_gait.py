@@ -247,8 +247,8 @@ def test_motor_saturation_fraction_and_belt_deflection():
     r = make_result()
     rp = scoutsim.RobotParameters()
     o = L.BACK * L.NAUX_LEG
-    r.modes[1000:2000, L.BACK] = L.LS_RETRACTION
-    r.modes[2000:2500, L.BACK] = L.LS_BRAKE
+    r.modes[1000:2000, L.RM_LEG_STATE_B] = L.LS_RETRACTION
+    r.modes[2000:2500, L.RM_LEG_STATE_B] = L.LS_BRAKE
     r.aux[:, L.A_VBATT] = rp.battery_voltage
     r.aux[:, o + L.A_CURRENT] = -3.0                      # inside the limits
     r.aux[:, o + L.A_OMEGA_M] = -100.0

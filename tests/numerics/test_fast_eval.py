@@ -26,9 +26,9 @@ def _cases(robot, model, mu, **kw):
         s = r.state[n].copy()
         mi = np.zeros(L.NMI, dtype=np.int64)
         mf = np.zeros(L.NMF)
-        mi[0:2] = r.modes[n, 2:4]
-        mi[2:4] = r.modes[n, 4:6]
-        mi[4:6] = 1 if n % 2 else -1
+        mi[L.MI_CONTACT_B:L.MI_CONTACT_B + 2] = r.modes[n, L.RM_CONTACT_B:L.RM_CONTACT_B + 2]
+        mi[L.MI_MOTOR_B:L.MI_MOTOR_B + 2] = r.modes[n, L.RM_MOTOR_B:L.RM_MOTOR_B + 2]
+        mi[L.MI_SLIDE_DIR_B:L.MI_SLIDE_DIR_B + 2] = 1 if n % 2 else -1
         for leg in range(2):
             mf[leg] = r.aux[n, leg * L.NAUX_LEG + L.A_TOE_X]
         cmd = np.array([r.aux[n, L.A_TAU_CMD], r.aux[n, L.NAUX_LEG + L.A_TAU_CMD]])

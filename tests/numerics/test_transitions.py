@@ -244,7 +244,7 @@ def test_stale_slip_direction_is_reconciled_without_an_impulse():
     r = scoutsim.simulate(initial_state=NOSE_UP, duration=1.0, model="II",
                           friction_coefficient=math.inf)
     k = next(k for k in range(len(r.t))
-             if r.modes[k, 4] == L.SLIP_NEG and r.state[k, L.NQ + L.IALB] < -1.0)
+             if r.modes[k, L.RM_MOTOR_B] == L.SLIP_NEG and r.state[k, L.NQ + L.IALB] < -1.0)
     hs = r.hybrid_state(k)
     stale = HybridState(state=hs.state, leg_states=hs.leg_states,
                         contact_modes=hs.contact_modes, motor_modes=(L.SLIP_POS, hs.motor_modes[1]),
@@ -252,7 +252,7 @@ def test_stale_slip_direction_is_reconciled_without_an_impulse():
     a = scoutsim.simulate(initial_state=hs, duration=0.05, model="II", friction_coefficient=math.inf)
     b = scoutsim.simulate(initial_state=stale, duration=0.05, model="II",
                           friction_coefficient=math.inf)
-    assert b.modes[0, 4] == L.SLIP_NEG
+    assert b.modes[0, L.RM_MOTOR_B] == L.SLIP_NEG
     assert b.state[0, L.NQ + L.IALB] == a.state[0, L.NQ + L.IALB]
     assert np.array_equal(a.state, b.state)
 
