@@ -35,12 +35,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
+from .model import layout as L
+from .plotting import LEG_STATE_LINE_COLORS
+
 __all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS",
            "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
-LEG_STATE_COLORS = ("tab:blue", "tab:orange", "tab:green")
-_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
+_STATE_NAMES = L.LEG_STATE_NAMES
 #: Length of a ground-force arrow per newton [m/N] (the robot's weight, about 203 N, is
 #: drawn 0.2 m long).
 FORCE_SCALE_M_PER_N = 1.0e-3
@@ -95,7 +98,6 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     t0, t1 : time window [s] (default: the whole run)
     figsize, dpi : size of the frames (default 640 x 320 pixels)
     """
-    from .model import layout as L
     times = frame_times(result, fps, t0, t1)
     t = np.asarray(result.t, dtype=float)
     idx = np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, t.size - 1)

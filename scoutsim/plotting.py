@@ -21,16 +21,20 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
+from .model import layout as L
+
 __all__ = ["plot_run", "plot_torque_speed", "LEG_STATE_COLORS", "motor_limits"]
 
 _LEG_NAMES = ("back", "front")
 _LEG_INDEX = {"back": 0, "front": 1, 0: 0, 1: 1}
 _LEG_COLORS = ("tab:blue", "tab:red")
 
-#: Background colour of each controller leg state (paper Sec. II: flight,
-#: stance-retraction, stance-brake), indexed by the state code of ``result.leg_state``.
+#: Colour of each controller leg state (paper Sec. II: flight, stance-retraction,
+#: stance-brake), indexed by the state code of ``result.leg_state``: lines (legs in the
+#: animation and the film strips) and, pale, the same hues as backgrounds (plot_run).
+LEG_STATE_LINE_COLORS = ("tab:blue", "tab:orange", "tab:green")
 LEG_STATE_COLORS = ("#d6e9ff", "#ffd9a8", "#c9efc4")
-_LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+_LEG_STATE_NAMES = L.LEG_STATE_NAMES
 
 _MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
                  "passive": "passive (no controller)"}

@@ -38,7 +38,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..plotting import _save, draw_motor_limits, motor_limits
+from ..model import layout as L
+from ..plotting import LEG_STATE_LINE_COLORS, _save, draw_motor_limits, motor_limits
 from .phase import Source, _label, _style, as_source, as_sources, phase_compare, plot_phase
 
 __all__ = ["robot_pose", "fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "fig_phase", "plot_log",
@@ -228,7 +229,7 @@ def robot_pose(log, k: int, robot=None) -> dict:
 
 def _draw_snapshots(ax, lg, times, robot, spacing: float = 0.95):
     """A film strip: the robot at ``times`` laid side by side (``spacing`` [m] apart)."""
-    state_colors = ("tab:blue", "tab:red", "tab:purple")   # flight, retraction, brake
+    state_colors = LEG_STATE_LINE_COLORS
     for j, tj in enumerate(times):
         k = int(np.clip(np.searchsorted(lg.t, tj), 0, len(lg.t) - 1))
         pose = robot_pose(lg, k, robot)
@@ -243,7 +244,7 @@ def _draw_snapshots(ax, lg, times, robot, spacing: float = 0.95):
         ax.text(x0, float(np.max(pose["torso"][:, 1])) + 0.04, f"({chr(97 + j)})",
                 ha="center", fontsize=8)
     ax.axhline(0.0, color="k", lw=0.8)
-    for lab, col in zip(("flight", "stance-retraction", "stance-brake"), state_colors):
+    for lab, col in zip(L.LEG_STATE_NAMES, state_colors):
         ax.plot([], [], color=col, lw=2, label=lab)
     ax.plot([], [], color="0.3", lw=2, label="back leg")
     ax.plot([], [], color="0.3", lw=1.6, ls="--", label="front leg")
