@@ -4,8 +4,7 @@ Poulakakis, Smith & Buehler, "Experimentally Validated Bounding Models for the S
 Quadrupedal Robot", ICRA 2004. See README.md and docs/.
 """
 
-__version__ = "0.1.0"
-
+from ._version import __version__  # noqa: E402
 from .parameters import (  # noqa: E402
     ControllerParameters, ParameterError, RobotParameters, load_controller, load_parameters,
     load_robot,

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .model import layout as L
+from .state import HybridState
 
 _LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
 
@@ -155,7 +156,6 @@ class SimulationResult:
         controller modes, toe anchors) as a :class:`~scoutsim.simulation.HybridState`:
         ``simulate(..., initial_state=result.hybrid_state(k))`` continues this run from
         t[k] (its time restarts at 0)."""
-        from .simulation import HybridState
         n = len(self.t)
         if not (isinstance(k, (int, np.integer)) and -n <= k < n):
             raise ValueError(f"k = {k!r} is not allowed: must be an integer sample index in "

@@ -48,8 +48,7 @@ def _start_of(task: dict) -> dict:
 
 def basin_task(task: dict) -> dict:
     """Run one start of the basin grid (top level so that worker processes can import it)."""
-    from .. import simulation
-    InitialState, simulate = simulation.InitialState, simulation.simulate
+    from ..simulation import InitialState, simulate
     row = _start_of(task)
     try:
         init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),

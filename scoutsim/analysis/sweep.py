@@ -110,7 +110,7 @@ def _orbit_columns(result, robot, ctrl, task) -> dict:
 
 def sweep_task(task: dict) -> dict:
     """Run one point (top level: picklable for worker processes and Dask)."""
-    from .. import simulation
+    from ..simulation import simulate
     point = task["point"]
     row = dict(point)
     try:
@@ -121,7 +121,7 @@ def sweep_task(task: dict) -> dict:
             rob_changes["legs_per_virtual_leg"] = int(rob_changes["legs_per_virtual_leg"])
         robot = dataclasses.replace(task["robot"], **rob_changes)
         ctrl = dataclasses.replace(task["controller"], **ctl_changes)
-        r = simulation.simulate(robot, ctrl, task["initial_state"], task["duration"],
+        r = simulate(robot, ctrl, task["initial_state"], task["duration"],
                                 model=task["model"],
                                 friction_coefficient=task["friction_coefficient"])
         s = r.summary()

@@ -36,7 +36,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..control.bounding import C_TD_B, C_TD_F, controller_array
 from ..model import layout as L
 from ..model.packing import robot_array

@@ -75,6 +75,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .sensors import LaserGeometry, fft_lowpass, pitch_height_from_lasers
+
 __all__ = ["ExperimentLog", "LogError", "load_log", "load_dataset", "save_log",
            "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "COLUMN_UNITS", "DEFAULT_META",
            "LOG_SUFFIXES"]
@@ -231,7 +233,6 @@ class ExperimentLog:
 
     def _torso(self):
         if "torso" not in self._cache:
-            from .measurement import LaserGeometry, fft_lowpass, pitch_height_from_lasers
             fc = self.meta.get("lowpass_hz")
             tw = float(self.meta.get("lowpass_transition_hz") or 0.0)
             fs = self.sample_rate

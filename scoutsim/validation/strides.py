@@ -13,7 +13,7 @@ instead of the simulator's continuous-time events:
   and height, :attr:`ExperimentLog.pitch`, over the samples from lift-off to lift-off
   inclusive). ``mean_speed_m_s`` is NaN: the robot did not log its forward position.
 - **Steady strides**: start at or after ``transient_s``, lie entirely at least
-  :data:`~scoutsim.validation.measurement.EDGE_S` inside the record (no filter edge
+  :data:`~scoutsim.validation.sensors.EDGE_S` inside the record (no filter edge
   effects), and belong to the final contiguous block whose periods are within
   ``period_tolerance`` of the median period of the last seven candidates (as in
   :func:`scoutsim.analysis.gait.gait_metrics`).
@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.gait import STRIDE_METRICS, Stride, converged_tail, stance_overlap
-from .measurement import EDGE_S
+from .sensors import EDGE_S
 
 __all__ = ["log_strides", "LogGait", "stance_intervals_log", "STRIDE_METRICS"]
 
