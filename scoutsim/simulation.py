@@ -23,8 +23,9 @@ from .model import layout as L
 from .model.dynamics import NSTIFF, motor_mode_from_rate
 from .model.packing import default_friction, robot_array
 from .numerics.dopri5 import eval_workspace
+from .loop import run
 from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW, NSTAT,
-                              S_HMIN, STAT_NAMES, run)
+                              S_HMIN, STAT_NAMES)
 from .parameters import (ControllerParameters, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult
@@ -165,7 +166,7 @@ def fresh_modes(s: np.ndarray, P: np.ndarray):
 
 
 class HybridEngine:
-    """One run of the compiled hybrid model (:func:`scoutsim.numerics.hybrid.run`): its
+    """One run of the compiled hybrid model (:func:`scoutsim.loop.run`): its
     time-series buffers and everything carried from one call to the next (state, modes,
     controller states, step-size guess, ARK splitting, armed events). :func:`simulate` and
     the bench rigs (:mod:`scoutsim.identification.rigs`) drive it in chunks of control
@@ -179,7 +180,7 @@ class HybridEngine:
         n_total = int(round(duration / dt)) + 1
         self.k_last = n_total - 1
         self.cmd = np.zeros(2)
-        # [step-size guess, ARK factors valid, evaluation workspace valid] (hybrid.run)
+        # [step-size guess, ARK factors valid, evaluation workspace valid] (loop.run)
         self.hwork = np.zeros(NHW)
         self.hwork[HW_STEP] = integrator.initial_step
         self.ew = eval_workspace()

@@ -8,12 +8,12 @@ from numba.core.caching import NullCache
 from numba.core.errors import TypingError
 from numba.core.registry import CPUDispatcher
 
-from scoutsim import jit
+from scoutsim import jit, loop
 from scoutsim.control import bounding
 from scoutsim.model import dynamics
 from scoutsim.numerics import ark, dopri5, hybrid
 
-MODULES = (dynamics, ark, dopri5, hybrid, bounding)
+MODULES = (dynamics, ark, dopri5, hybrid, loop, bounding)
 
 
 def dispatchers(module):
@@ -38,7 +38,7 @@ def test_the_hot_loop_runs_without_reference_counting():
               bounding.bounding_step):
         assert f.targetoptions["_nrt"] is False, f.py_func.__name__
     # the functions that allocate keep it
-    for f in (hybrid.run, hybrid.touchdown, dynamics.impact, dynamics.evaluate):
+    for f in (loop.run, hybrid.touchdown, dynamics.impact, dynamics.evaluate):
         assert f.targetoptions["_nrt"] is True, f.py_func.__name__
 
 

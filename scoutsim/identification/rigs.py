@@ -238,7 +238,7 @@ def run_configuration(robot: RobotParameters, model: str, P: np.ndarray, C: np.n
                       s0: np.ndarray, duration: float, dt: float,
                       integrator: IntegratorSettings, *, builtin: bool = True, cmd=None,
                       schedule=None, provenance: dict | None = None) -> SimulationResult:
-    """Run the compiled hybrid model (:func:`scoutsim.numerics.hybrid.run`, the engine of
+    """Run the compiled hybrid model (:func:`scoutsim.loop.run`, the engine of
     :func:`scoutsim.simulate`) on a given parameter array ``P``, controller array ``C`` and
     start state ``s0``, in 1 s chunks as :func:`scoutsim.simulate` does.
 

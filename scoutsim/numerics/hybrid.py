@@ -21,21 +21,20 @@ from collections import namedtuple
 
 import numpy as np
 
-from ..control.bounding import bounding_step
 from ..jit import allocating, kernel
 from ..model.dynamics import (evaluate_command_change, evaluate_ws, impact, leg_damping,
-                              project_state, state_energy)
+                              project_state)
 from ..model.layout import (
     A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X,
     A_TOE_Y,
-    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
+    EK_FALL, EK_LIFTOFF, EK_MOTOR_SLIP,
     EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START, EK_TOUCHDOWN,
     EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, EVR_E_AFTER, EVR_E_BEFORE, EVR_VIOLATIONS,
     FLIGHT, IL_B, ITH, IY, MF_ANCHOR_B, MI_CONTACT_B,
     MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX, NMI, NAUX_LEG, NEV, NEV_CONTACT, NS,
     NQ, P_G, P_K, P_L, P_L0, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
     P_TAU_S, P_THETA_LIM,
-    P_TORSO_H, P_TORSO_LEN, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
+    P_TORSO_H, P_TORSO_LEN, SLIDE, SLIP_NEG, SLIP_POS, ST_FELL,
     ST_NUMERICAL_FAILURE, ST_RUNNING, STICK, STRUT, STUCK, V_GROUND_PULLS, V_OUTSIDE_CONE,
     V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION,
     V_BEYOND_STOP, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
@@ -978,109 +977,3 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         hwork[HW_STEP] = h
     hwork[HW_STEP] = h if h > 1e-7 else 1e-7
     return t, nev, ST_RUNNING
-
-
-@kernel
-def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
-    """Append one row (time, state, outputs, leg states and modes) to the time series."""
-    out_t[n_out] = t
-    for i in range(NS):
-        out_s[n_out, i] = s[i]
-    for i in range(NAUX):
-        out_aux[n_out, i] = aux[i]
-    for leg in range(2):
-        out_ls[n_out, RM_LEG_STATE_B + leg] = ls[leg]
-        out_ls[n_out, RM_CONTACT_B + leg] = mi[MI_CONTACT_B + leg]
-        out_ls[n_out, RM_MOTOR_B + leg] = mi[MI_MOTOR_B + leg]
-    return n_out + 1
-
-
-@allocating
-def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew,
-        method=METHOD_AUTO):
-    """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
-
-    At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
-    is the caller's) updates the held commands, the modes are settled, the sample is
-    recorded, then the plant is integrated to the next sample. ``method``: METHOD_AUTO
-    (default), METHOD_DOPRI5 or METHOD_ARK3 / METHOD_ARK4 (Model II only). ``hwork``:
-    [step-size guess, 1 if ``sfwork`` (NS, 2 NSTIFF) holds the ARK stiff factors of the
-    last step], both carried between calls so that a run cut into calls (chunks, a Python
-    controller) integrates exactly as one call would. ``ew`` (:func:`eval_workspace`) is
-    the evaluation workspace, kept across calls too: while hwork[HW_EVAL_KEPT] = 1 it holds the last
-    evaluation at ``s`` (K[0]), so a new command is applied to it with
-    :func:`evaluate_command_change` instead of a fresh evaluation.
-    Returns (k, n_out, nev, status, t)."""
-    K = np.zeros((7, NS))
-    y_new = np.zeros(NS)
-    tmp = np.zeros(NS)
-    aux = np.zeros(NAUX)
-    aux_new = np.zeros(NAUX)
-    e_old = np.zeros(NEV)
-    e_new = np.zeros(NEV)
-    ybuf = np.zeros(NS)
-    imp = np.zeros(7)
-    ds = np.zeros(NS)
-    s_prev = np.zeros(NS)
-    tr = np.zeros(2, dtype=np.int64)
-    SF0 = sfwork          # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
-    SF1 = np.zeros((NS, 2 * ark.NSTIFF))
-    Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
-    sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
-                        np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX))
-    sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
-    meth = method
-    if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
-        meth = METHOD_DOPRI5
-    t = k_start * dt
-    k = k_start
-    while k < k_stop:
-        t = k * dt
-        if builtin:
-            bounding_step(s, P, C, ls, cmd, tr)
-            for leg in range(2):
-                if tr[leg] & 1:
-                    nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 2:
-                    nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 4:
-                    nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
-        nev0 = nev
-        for i in range(NS):
-            s_prev[i] = s[i]
-        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew,
-                        hwork[HW_EVAL_KEPT] > 0.5)
-        hwork[HW_EVAL_KEPT] = 0.0
-        stats[S_NFEV] += 1
-        if nev > nev0:
-            # the new command changed a mode (a joint breaks away, a toe starts to slide):
-            # audit it like an event (rare: the energy before is computed only here)
-            stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
-                             mode_violations(s, K[0], aux, P, mi))
-        # record the sample
-        n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
-        if aux[A_KKT_OK] < 0.5:
-            return k, n_out, nev, ST_NUMERICAL_FAILURE, t
-        if k >= k_last:
-            k += 1
-            break
-        t_next = (k + 1) * dt
-        t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
-                                 tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp, ew, meth, SF0, SF1, Z, sc,
-                                 sf_ok or meth == METHOD_DOPRI5)
-        sf_ok = True
-        hwork[HW_STIFF_VALID] = 1.0
-        # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
-        # state after an event), with the command of the period just ended
-        hwork[HW_EVAL_KEPT] = 1.0 if status == ST_RUNNING else 0.0
-        if status != ST_RUNNING:
-            # record the final state (fall or failure) off the grid
-            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
-            n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
-            return k + 1, n_out, nev, status, t
-        k += 1
-        if nev > ev.shape[0] - 64:
-            break
-    return k, n_out, nev, ST_RUNNING, t
