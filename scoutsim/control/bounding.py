@@ -14,8 +14,8 @@ Control actions, torque per physical leg at the leg:
 
 * flight: tau = kp (phi_td - phi) - kd dphi;
 * stance-retraction: tau = -tau_max + A dphi, tau_max = N eta K_T V_bar / R_A,
-  A = -N^2 eta K_T K_w / R_A (eqs. 2-3, leg side); clipped to -N eta K_T i_max (eq. 4)
-  and to 0 from above (eq. 5);
+  A = -N^2 eta K_T K_w / R_A (eqs. 2-3, leg side); a positive command is set to 0 (eq. 5),
+  one below -N eta K_T i_max to that limit (eq. 4);
 * stance-brake: tau = kp_b (phi_sweep - phi) - kd_b dphi.
 
 The compiled version (:func:`bounding_step`) runs inside the integrator loop; the Python
@@ -77,10 +77,14 @@ def retraction_torque(rate, P):
     slope = -N * N * eta * kt * P[P_KW] / P[P_RA]
     tau = -tau_max + slope * rate
     lim = N * eta * kt * P[P_IMAX]
-    if abs(tau) > lim:
-        tau = -lim
+    # eq. (5) before eq. (4): read literally in the paper's order, (4) would turn a positive
+    # command larger than the current limit (a leg spun backwards beyond 1.4 x the motor's
+    # no-load speed) into full negative torque; the paper's footnote 2 gives (4) for
+    # "excessively large torques" at small rates and (5) for a "change of sign"
     if tau >= 0.0:
         tau = 0.0
+    elif tau < -lim:
+        tau = -lim
     return tau
 
 

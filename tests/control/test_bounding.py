@@ -1,0 +1,128 @@
+"""The Table I bounding controller, tested directly (paper Sec. II, Figs. 3-4, eqs. 2-5):
+its leg-state machine and its control actions, through the controller interface a user
+controller has (``reset`` / ``command(t, sensors)``). Expected values are computed here
+from the paper's formulas and the robot's parameters, not from the controller's code."""
+
+import math
+
+import numpy as np
+import pytest
+
+from scoutsim import BoundingController, ControllerParameters, RobotParameters
+from scoutsim.model import layout as L
+from scoutsim.simulation import Sensors
+
+ROBOT = RobotParameters()
+TABLE_I = ControllerParameters()
+L0 = ROBOT.leg_rest_length
+#: eq. (3) at the leg (through the gears, N and eta): offset and slope of the torque-speed
+#: line, and eq. (4)'s current-limit torque
+TAU_MAX = ROBOT.gear_ratio * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.battery_voltage \
+    / ROBOT.armature_resistance
+A = -(ROBOT.gear_ratio ** 2) * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.speed_constant \
+    / ROBOT.armature_resistance
+TAU_LIMIT = ROBOT.gear_ratio * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.current_limit
+
+
+def controller(params=TABLE_I, compression=(0.0, 0.0), angle=(0.3, 0.3)):
+    c = BoundingController(params)
+    c.reset(ROBOT, sensors(angle, (0.0, 0.0), compression))
+    return c
+
+
+def sensors(angle, rate, compression):
+    return Sensors(hip_angle=np.array(angle, dtype=float), hip_rate=np.array(rate, dtype=float),
+                   leg_length=L0 - np.array(compression, dtype=float))
+
+
+def in_stance_retraction(rate_back):
+    """A controller whose back leg is in stance-retraction (touchdown detected, angle above
+    the sweep limit), commanded at back hip rate ``rate_back``."""
+    c = controller()
+    td = 2.0 * TABLE_I.touchdown_compression
+    tau = c.command(0.0, sensors((0.2, 0.2), (rate_back, 0.0), (td, 0.0)))
+    assert c.leg_states[L.BACK] == L.LS_RETRACTION
+    return tau[L.BACK]
+
+
+@pytest.mark.parametrize("rate", [-8.5, -7.5, -6.5, -5.8])
+def test_stance_retraction_commands_the_motor_torque_speed_line_eqs_2_3(rate):
+    tau = -TAU_MAX + A * rate
+    assert -TAU_LIMIT < tau < 0.0          # inside the limits at these rates
+    assert in_stance_retraction(rate) == pytest.approx(tau, rel=1e-12)
+
+
+def test_stance_retraction_is_clipped_at_the_current_limit_eq_4():
+    # at small hip rates the line asks for more torque than the amplifier's current allows
+    for rate in (0.0, -1.0, 2.0):
+        assert abs(-TAU_MAX + A * rate) > TAU_LIMIT
+        assert in_stance_retraction(rate) == pytest.approx(-TAU_LIMIT, rel=1e-12)
+
+
+def test_stance_retraction_never_commands_a_positive_torque_eq_5():
+    """Beyond the motor's no-load speed (the leg spun backwards) the line asks for a
+    positive torque: none is commanded (eq. 5), however large the line's value, which at
+    1.5 x no-load exceeds the current limit (eq. 4 applies to the "excessively large
+    torques" of small rates, paper footnote 2, not to a change of sign)."""
+    no_load_rate = TAU_MAX / A                  # where the line crosses zero (negative)
+    assert no_load_rate < 0.0
+    assert -TAU_MAX + A * 1.5 * no_load_rate > TAU_LIMIT
+    for rate in (1.05 * no_load_rate, 1.5 * no_load_rate):
+        assert in_stance_retraction(rate) == 0.0
+
+
+def test_flight_is_a_pd_servo_to_the_touchdown_angle():
+    c = controller()
+    angle, rate = (0.1, 0.5), (1.0, -2.0)
+    tau = c.command(0.0, sensors(angle, rate, (0.0, 0.0)))
+    assert tuple(c.leg_states) == (L.LS_FLIGHT, L.LS_FLIGHT)
+    p = TABLE_I
+    assert tau[L.BACK] == pytest.approx(
+        p.flight_kp_back * (p.touchdown_angle_back - angle[0]) - p.flight_kd_back * rate[0])
+    assert tau[L.FRONT] == pytest.approx(
+        p.flight_kp_front * (p.touchdown_angle_front - angle[1]) - p.flight_kd_front * rate[1])
+
+
+def test_stance_brake_is_a_pd_servo_to_the_sweep_limit():
+    c = controller()
+    td = 2.0 * TABLE_I.touchdown_compression
+    angle, rate = (-0.05, -0.02), (-1.5, 0.5)
+    tau = c.command(0.0, sensors(angle, rate, (td, td)))
+    # touchdown and the sweep limit in the same sample: straight to stance-brake
+    assert tuple(c.leg_states) == (L.LS_BRAKE, L.LS_BRAKE)
+    p = TABLE_I
+    assert tau[L.BACK] == pytest.approx(
+        p.brake_kp_back * (p.sweep_limit_back - angle[0]) - p.brake_kd_back * rate[0])
+    assert tau[L.FRONT] == pytest.approx(
+        p.brake_kp_front * (p.sweep_limit_front - angle[1]) - p.brake_kd_front * rate[1])
+
+
+def test_leg_state_machine_follows_fig_3_with_hysteresis():
+    p = TABLE_I.replace(touchdown_compression=6e-3, liftoff_compression=4e-3)
+    c = controller(p)
+    between = 5e-3                 # between the lift-off and touchdown thresholds
+    seq = [  # (compression of the back leg [m], back hip angle [rad]) -> expected state
+        ((between, 0.2), L.LS_FLIGHT),      # not yet touchdown: above lift-off is not enough
+        ((7e-3, 0.2), L.LS_RETRACTION),     # touchdown detected
+        ((between, 0.1), L.LS_RETRACTION),  # hysteresis: stays in stance
+        ((between, -0.01), L.LS_BRAKE),     # sweep limit (0) passed
+        ((between, 0.05), L.LS_BRAKE),      # the brake holds: no way back to retraction
+        ((3.9e-3, 0.05), L.LS_FLIGHT),      # lift-off detected
+        ((between, 0.05), L.LS_FLIGHT),     # hysteresis: stays in flight
+    ]
+    for (comp, ang), expected in seq:
+        c.command(0.0, sensors((ang, 0.3), (0.0, 0.0), (comp, 0.0)))
+        assert c.leg_states[L.BACK] == expected, (comp, ang)
+        assert c.leg_states[L.FRONT] == L.LS_FLIGHT      # the front leg never touched down
+
+
+def test_a_leg_already_compressed_at_the_start_starts_in_stance():
+    c = controller(compression=(2.0 * TABLE_I.touchdown_compression, 0.0))
+    assert tuple(c.leg_states) == (L.LS_RETRACTION, L.LS_FLIGHT)
+
+
+def test_the_controller_has_no_torso_feedback():
+    """The commands depend on the hip sensors only (paper: "no torso feedback"): the
+    Sensors interface carries no torso state at all."""
+    assert set(Sensors._fields) == {"hip_angle", "hip_rate", "leg_length"}
+    assert math.isfinite(in_stance_retraction(-7.0))
