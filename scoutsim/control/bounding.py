@@ -41,6 +41,14 @@ from ..parameters import ControllerParameters
 NC = 16
 
 
+#: ControllerParameters field -> slot of the compiled controller's array, for the fields a
+#: run may change while it runs (a schedule of set-points, e.g. a bench rig's steps)
+SCHEDULABLE = {
+    "touchdown_angle_back": C_TD_B, "touchdown_angle_front": C_TD_F,
+    "sweep_limit_back": C_SW_B, "sweep_limit_front": C_SW_F,
+}
+
+
 def controller_array(c: ControllerParameters | None) -> np.ndarray:
     """Pack ControllerParameters into the compiled controller's array (None = disabled)."""
     a = np.zeros(NC)

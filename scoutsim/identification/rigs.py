@@ -37,17 +37,14 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .._version import __version__
-from ..control.bounding import C_TD_B, C_TD_F, controller_array
 from ..model import layout as L
-from ..model.packing import robot_array
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
-from ..simulation import HybridEngine, IntegratorSettings, fresh_modes
+from ..simulation import IntegratorSettings, run_bench
 from ..validation.logs import ExperimentLog
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",
-           "rig_log", "with_toe_mass", "HIP_PARAMETERS", "hip_parameters", "stall_deflection",
-           "run_configuration"]
+           "rig_log", "with_toe_mass", "HIP_PARAMETERS", "hip_parameters", "stall_deflection"]
 
 RIG_NAMES = ("free-swing", "flight-steps", "stall")
 
@@ -234,43 +231,6 @@ def with_toe_mass(robot: RobotParameters, toe_mass: float) -> RobotParameters:
     return robot.replace(leg_mass=m2, leg_com_distance=d2, leg_inertia=i2)
 
 
-def run_configuration(robot: RobotParameters, model: str, P: np.ndarray, C: np.ndarray,
-                      s0: np.ndarray, duration: float, dt: float,
-                      integrator: IntegratorSettings, *, builtin: bool = True, cmd=None,
-                      schedule=None, provenance: dict | None = None) -> SimulationResult:
-    """Run the compiled hybrid model (:func:`scoutsim.loop.run`, the engine of
-    :func:`scoutsim.simulate`) on a given parameter array ``P``, controller array ``C`` and
-    start state ``s0``, in 1 s chunks as :func:`scoutsim.simulate` does.
-
-    builtin : the compiled Table I controller sets the commands (else ``cmd`` [N m] per
-        physical leg is held for the whole run).
-    schedule : optional list of (k, touchdown_back, touchdown_front): from control sample
-        k on, the controller's touchdown-angle commands [rad].
-    """
-    s = np.array(s0, dtype=float)
-    mi, mf = fresh_modes(s, P)
-    integrator = integrator.resolve(model)
-    eng = HybridEngine(P, np.array(C, dtype=float), s, mi, mf, np.zeros(2, dtype=np.int64),
-                       duration, dt, integrator)
-    if cmd is not None:
-        eng.cmd[:] = cmd
-    chunk = max(1, int(round(1.0 / dt)))
-    sched = sorted(schedule or [], key=lambda e: e[0])
-    si = 0
-    while eng.running:
-        while si < len(sched) and sched[si][0] <= eng.k:
-            eng.C[C_TD_B] = sched[si][1]
-            eng.C[C_TD_F] = sched[si][2]
-            si += 1
-        k_stop = eng.k + chunk
-        if si < len(sched):
-            k_stop = min(k_stop, int(sched[si][0]))
-        eng.advance(k_stop, builtin)
-    return eng.result(dict(provenance or {}, model=model, robot=asdict(robot),
-                           control_period_s=dt, integrator=asdict(integrator),
-                           scoutsim_version=__version__, duration_s=duration))
-
-
 def _clamped_state(clamp_height, phi_b, phi_f, robot):
     s = np.zeros(L.NS)
     s[L.IY] = clamp_height
@@ -319,13 +279,11 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
     prov = {"rig": {"name": rig.name, **asdict(rig)}}
     if isinstance(rig, FreeSwing):
         rb = with_toe_mass(robot, rig.toe_mass)
-        P = robot_array(rb, model, clamp_torso=True, motor_circuit=rig.motor)
         s0 = _clamped_state(rig.clamp_height, rig.release_angle_back, rig.release_angle_front,
                             rb)
-        return run_configuration(robot, model, P, controller_array(None), s0, rig.duration,
-                                 dt, integ, builtin=True, provenance=prov)
+        return run_bench(rb, model, s0, rig.duration, clamp_torso=True,
+                         motor_circuit=rig.motor, dt=dt, integrator=integ, provenance=prov)
     if isinstance(rig, FlightSteps):
-        P = robot_array(robot, model, clamp_torso=True)
         n = int(round(rig.duration / dt)) + 1
         if touchdown_commands is None:
             td = rig.commands(np.arange(n) * dt)
@@ -335,20 +293,20 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
                 raise ValueError(f"touchdown_commands has shape {td.shape}; must be ({n}, 2) "
                                  "(one row per control sample of the rig's duration)")
         change = np.flatnonzero(np.any(td[1:] != td[:-1], axis=1)) + 1
-        schedule = [(0, td[0, 0], td[0, 1])] + [(int(k), td[k, 0], td[k, 1]) for k in change]
+        schedule = [(int(k), {"touchdown_angle_back": td[k, 0],
+                              "touchdown_angle_front": td[k, 1]})
+                    for k in np.concatenate([[0], change])]
         pb = td[0, 0] if rig.initial_angle_back is None else rig.initial_angle_back
         pf = td[0, 1] if rig.initial_angle_front is None else rig.initial_angle_front
         s0 = _clamped_state(rig.clamp_height, pb, pf, robot)
-        C = controller_array(cparams)
-        return run_configuration(robot, model, P, C, s0, rig.duration, dt, integ,
-                                 builtin=True, schedule=schedule,
-                                 provenance=prov | {"controller": asdict(cparams)})
+        return run_bench(robot, model, s0, rig.duration, clamp_torso=True,
+                         controller=cparams, schedule=schedule, dt=dt, integrator=integ,
+                         provenance=prov | {"controller": asdict(cparams)})
     if isinstance(rig, Stall):
-        P = robot_array(robot, model, clamp_torso=True, clamp_legs=True)
         s0 = _clamped_state(rig.clamp_height, rig.leg_angle, rig.leg_angle, robot)
         tau = robot.max_leg_torque if rig.torque is None else rig.torque
-        return run_configuration(robot, model, P, controller_array(None), s0, rig.duration,
-                                 dt, integ, builtin=False, cmd=(tau, tau), provenance=prov)
+        return run_bench(robot, model, s0, rig.duration, clamp_torso=True, clamp_legs=True,
+                         held_torques=(tau, tau), dt=dt, integrator=integ, provenance=prov)
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 
 

@@ -9,24 +9,22 @@ import math
 import numpy as np
 import pytest
 
-from scoutsim.control.bounding import controller_array
 from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stall, rig_log,
-                                          run_configuration, run_rig, stall_deflection)
+                                          run_rig, stall_deflection)
 from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.simulation import (IntegratorSettings, _state_vector, default_initial_state,
-                                 simulate)
+                                 run_bench, simulate)
 
 
 def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():
-    """The rig path (robot_array + run_configuration) without clamps is simulate()."""
+    """The bench engine (run_bench) without clamps is simulate()."""
     robot = RobotParameters()
     ctrl = ControllerParameters()
     ref = simulate(robot, ctrl, duration=0.4, model="II")
-    P = robot_array(robot, "II")          # clamp_torso = clamp_legs = False
     s0 = _state_vector(default_initial_state("II"), robot, ctrl, (0.0, 0.0), True)
-    res = run_configuration(robot, "II", P, controller_array(ctrl), s0, 0.4,
-                            ctrl.control_period, IntegratorSettings())
+    res = run_bench(robot, "II", s0, 0.4, controller=ctrl, dt=ctrl.control_period,
+                    integrator=IntegratorSettings())
     assert np.array_equal(res.t, ref.t)
     assert np.array_equal(res.state, ref.state)
     assert np.array_equal(res.aux, ref.aux)
