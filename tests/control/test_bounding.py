@@ -71,30 +71,33 @@ def test_stance_retraction_never_commands_a_positive_torque_eq_5():
         assert in_stance_retraction(rate) == 0.0
 
 
-def test_flight_is_a_pd_servo_to_the_touchdown_angle():
-    c = controller()
-    angle, rate = (0.1, 0.5), (1.0, -2.0)
-    tau = c.command(0.0, sensors(angle, rate, (0.0, 0.0)))
-    assert tuple(c.leg_states) == (L.LS_FLIGHT, L.LS_FLIGHT)
-    p = TABLE_I
-    assert tau[L.BACK] == pytest.approx(
-        p.flight_kp_back * (p.touchdown_angle_back - angle[0]) - p.flight_kd_back * rate[0])
-    assert tau[L.FRONT] == pytest.approx(
-        p.flight_kp_front * (p.touchdown_angle_front - angle[1]) - p.flight_kd_front * rate[1])
+def pd_torque(kp, kd, target, angle, rate):
+    """A PD servo's torque [N m]: kp (target - angle) - kd rate."""
+    return kp * (target - angle) - kd * rate
 
 
-def test_stance_brake_is_a_pd_servo_to_the_sweep_limit():
+@pytest.mark.parametrize("state", ["flight", "brake"])
+def test_flight_and_stance_brake_are_pd_servos(state):
+    """Flight servos to the touchdown angle with the flight gains; stance-brake to the
+    sweep limit with the brake gains (Table I), each leg with its own."""
     c = controller()
-    td = 2.0 * TABLE_I.touchdown_compression
-    angle, rate = (-0.05, -0.02), (-1.5, 0.5)
-    tau = c.command(0.0, sensors(angle, rate, (td, td)))
-    # touchdown and the sweep limit in the same sample: straight to stance-brake
-    assert tuple(c.leg_states) == (L.LS_BRAKE, L.LS_BRAKE)
     p = TABLE_I
-    assert tau[L.BACK] == pytest.approx(
-        p.brake_kp_back * (p.sweep_limit_back - angle[0]) - p.brake_kd_back * rate[0])
-    assert tau[L.FRONT] == pytest.approx(
-        p.brake_kp_front * (p.sweep_limit_front - angle[1]) - p.brake_kd_front * rate[1])
+    if state == "flight":
+        angle, rate, comp = (0.1, 0.5), (1.0, -2.0), 0.0
+        expected_state = L.LS_FLIGHT
+        gains = [(p.flight_kp_back, p.flight_kd_back, p.touchdown_angle_back),
+                 (p.flight_kp_front, p.flight_kd_front, p.touchdown_angle_front)]
+    else:
+        # touchdown and the sweep limit in the same sample: straight to stance-brake
+        angle, rate, comp = (-0.05, -0.02), (-1.5, 0.5), 2.0 * p.touchdown_compression
+        expected_state = L.LS_BRAKE
+        gains = [(p.brake_kp_back, p.brake_kd_back, p.sweep_limit_back),
+                 (p.brake_kp_front, p.brake_kd_front, p.sweep_limit_front)]
+    tau = c.command(0.0, sensors(angle, rate, (comp, comp)))
+    assert tuple(c.leg_states) == (expected_state, expected_state)
+    for leg in (L.BACK, L.FRONT):
+        kp, kd, target = gains[leg]
+        assert tau[leg] == pytest.approx(pd_torque(kp, kd, target, angle[leg], rate[leg]))
 
 
 def test_leg_state_machine_follows_fig_3_with_hysteresis():
