@@ -20,11 +20,60 @@ declared with one of two decorators:
 
 Both cache their machine code on disk and use NumPy's error model (a division by zero
 gives inf / nan, it does not raise).
+
+The on-disk cache lives in a directory named by a digest of every compiled-core source
+(``model/``, ``numerics/``, ``control/``, ``loop.py``, this file): Numba by itself checks
+only the timestamp of a function's own file, so a cached function that inlines a callee
+from another module would keep the old callee after that module is edited (a stale
+result, silently). With the digest, any edit of the core compiles it afresh; directories
+of other digests are removed. The directory is ``scoutsim/__pycache__/numba-<digest>``,
+or, where the package is not writable, ``~/.cache/scoutsim/numba-<digest>``; a
+``NUMBA_CACHE_DIR`` set by the user is respected as is.
 """
 
 from __future__ import annotations
 
-from numba import njit
+import hashlib
+import os
+import shutil
+from pathlib import Path
+
+from numba import config, njit
+
+_PACKAGE = Path(__file__).resolve().parent
+#: the sources of the compiled core (a change in any of them invalidates the cache)
+CORE_SOURCES = ("model/*.py", "numerics/*.py", "control/*.py", "loop.py", "jit.py")
+
+
+def core_digest(package: Path = _PACKAGE) -> str:
+    """Digest of the compiled core's sources (names and contents) under ``package``."""
+    h = hashlib.sha256()
+    files = sorted({f for pattern in CORE_SOURCES for f in package.glob(pattern)})
+    for f in files:
+        h.update(f.relative_to(package).as_posix().encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _cache_dir() -> Path:
+    digest = core_digest()
+    for base in (_PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
+        try:
+            base.mkdir(parents=True, exist_ok=True)
+            probe = base / f".write-test-{os.getpid()}"
+            probe.touch()
+            probe.unlink()
+        except OSError:
+            continue
+        for old in base.glob("numba-*"):
+            if old.name != f"numba-{digest}":
+                shutil.rmtree(old, ignore_errors=True)
+        return base / f"numba-{digest}"
+    return _PACKAGE / "__pycache__" / f"numba-{digest}"
+
+
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    config.CACHE_DIR = str(_cache_dir())
 
 _COMMON = dict(cache=True, error_model="numpy")
 

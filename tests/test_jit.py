@@ -61,3 +61,23 @@ def test_kernel_and_allocating_set_the_options():
     assert k.targetoptions["_nrt"] is False and k.targetoptions["inline"] == "never"
     assert a.targetoptions["_nrt"] is True and a.targetoptions["inline"] == "always"
     assert k.py_func is f and a.py_func is f
+
+
+def test_the_compiled_cache_is_keyed_by_every_core_source(tmp_path):
+    """An edit of any compiled-core module (not only of a function's own file, which is
+    all Numba checks) gives a new cache directory; other modules do not."""
+    import pathlib
+    import shutil
+    pkg = pathlib.Path(jit.__file__).parent
+    copy = tmp_path / "scoutsim"
+    shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    d0 = jit.core_digest(copy)
+    assert d0 == jit.core_digest(pkg)
+    with open(copy / "analysis" / "gait.py", "a") as f:
+        f.write("\n# not part of the compiled core\n")
+    assert jit.core_digest(copy) == d0
+    with open(copy / "model" / "layout.py", "a") as f:
+        f.write("\n# an edit of a module that compiled functions import\n")
+    assert jit.core_digest(copy) != d0
+    assert pathlib.Path(jit.config.CACHE_DIR).name == f"numba-{d0}" or \
+        "NUMBA_CACHE_DIR" in __import__("os").environ
