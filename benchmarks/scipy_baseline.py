@@ -23,7 +23,9 @@ from scoutsim.control.bounding import bounding_step, controller_array
 from scoutsim.model import layout as L
 from scoutsim.model.dynamics import evaluate, project_state
 from scoutsim.model.packing import robot_array
-from scoutsim.numerics.hybrid import NSTAT, apply_event, event_values, settle
+from scoutsim.numerics.events import event_values
+from scoutsim.numerics.stats import NSTAT
+from scoutsim.numerics.transitions import apply_event, settle
 from scoutsim.simulation import _state_vector
 
 

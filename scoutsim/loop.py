@@ -21,10 +21,11 @@ from .model.layout import (
     RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
-from .numerics.hybrid import (
-    HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5, S_NFEV,
-    AdvanceScratch, advance, log_event, mode_violations, settle_ws, stamp_transition,
-)
+from .numerics.events import log_event, mode_violations, stamp_transition
+from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO,
+                              METHOD_DOPRI5, AdvanceScratch, advance)
+from .numerics.stats import S_NFEV
+from .numerics.transitions import settle_ws
 
 __all__ = ["run", "record_sample"]
 

@@ -24,8 +24,8 @@ from .model.dynamics import NSTIFF, motor_mode_from_rate
 from .model.packing import default_friction, robot_array
 from .numerics.dopri5 import eval_workspace
 from .loop import run
-from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW, NSTAT,
-                              S_HMIN, STAT_NAMES)
+from .numerics.hybrid import HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW
+from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult

@@ -11,9 +11,9 @@ from numba.core.registry import CPUDispatcher
 from scoutsim import jit, loop
 from scoutsim.control import bounding
 from scoutsim.model import dynamics
-from scoutsim.numerics import ark, dopri5, hybrid
+from scoutsim.numerics import ark, dopri5, events, hybrid, transitions
 
-MODULES = (dynamics, ark, dopri5, hybrid, loop, bounding)
+MODULES = (dynamics, ark, dopri5, events, transitions, hybrid, loop, bounding)
 
 
 def dispatchers(module):
@@ -34,11 +34,11 @@ def test_every_compiled_function_declares_its_reference_counting(module):
 
 def test_the_hot_loop_runs_without_reference_counting():
     for f in (dynamics.evaluate_ws, dynamics.evaluate_command_change, dynamics.project_state,
-              ark.step3, hybrid.advance, hybrid.settle_ws, hybrid.event_values,
+              ark.step3, hybrid.advance, transitions.settle_ws, events.event_values,
               bounding.bounding_step):
         assert f.targetoptions["_nrt"] is False, f.py_func.__name__
     # the functions that allocate keep it
-    for f in (loop.run, hybrid.touchdown, dynamics.impact, dynamics.evaluate):
+    for f in (loop.run, transitions.touchdown, dynamics.impact, dynamics.evaluate):
         assert f.targetoptions["_nrt"] is True, f.py_func.__name__
 
 

@@ -154,7 +154,7 @@ EVENT_KIND_NAMES = {
 }
 # event record: [t, kind, leg, v1, v2, v3, energy_before, energy_after, violations]
 # touchdown: v1 = normal impulse [N s], v2 = tangential impulse, v3 = kinetic energy lost [J]
-# Transition audit (every plant transition, numerics/hybrid.py): the records logged while one
+# Transition audit (every plant transition, numerics/events.py): the records logged while one
 # transition is processed (an event, the events simultaneous with it and the mode changes
 # they cause) carry the total mechanical energy [J] just before it and after the modes have
 # settled, and a bit mask of the mode invariants violated after it (V_* below; 0 = none).

@@ -1,0 +1,304 @@
+"""Mode transitions of the hybrid model: what happens at an event, and the rules that make
+the modes agree with the forces after a reset or a new command (docs/model.md, "Events and
+transitions"): touchdown impacts, lift-off or slide at the end of stance, the strut,
+stick and slip of the toe and of the Model II motor joints, the toe stub.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..jit import allocating, kernel
+from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
+from ..model.layout import (
+    A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
+    EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
+    EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV_CONTACT, NQ, P_L, P_L0,
+    P_LEG_FRIC_SIDE, P_MASSLESS, P_MODEL, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
+    SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
+    STICK, STRUT, STUCK,
+)
+from .dopri5 import eval_workspace
+from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, flight_toe_enters_ground,
+                     log_event, slide_toe_pressed)
+from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
+
+#: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
+LEG_STOP_SPEED_TOL = 1e-6
+
+
+@kernel
+def stance_leg_rate(s, P, leg):
+    """dl/dt [m/s] of a leg whose toe is pinned: minus the hip velocity along the leg."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    th = s[2]
+    g = th + s[3 + leg]
+    hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
+    hvy = s[NQ + 1] + sL * math.cos(th) * s[NQ + 2]
+    return -(hvx * math.sin(g) - hvy * math.cos(g))
+
+
+
+@kernel
+def start_stub_slide(t, s, mi, aux, ev, nev, leg):
+    """A toe pressed into the ground at the leg's stop slides (toe_enters_ground):
+    in the direction the toe moves, or, at rest, away from the force that pinned it."""
+    o = leg * NAUX_LEG
+    mi[MI_CONTACT_B + leg] = SLIDE
+    v = aux[o + A_SLIP_V]
+    if v > SLIDE_SPEED_TOL:
+        mi[MI_SLIDE_DIR_B + leg] = 1
+    elif v < -SLIDE_SPEED_TOL:
+        mi[MI_SLIDE_DIR_B + leg] = -1
+    else:
+        mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+    return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX],
+                     SLIDE_CAUSE_STUB)
+
+
+@kernel
+def leave_contact(s, mi, leg):
+    """Switch a leg to flight (its current leg length is kept as the toe's state)."""
+    mi[MI_CONTACT_B + leg] = FLIGHT
+
+
+@allocating
+def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
+    """:func:`settle_ws` with its own evaluation workspace."""
+    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace(), False)
+
+
+@kernel
+def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=False):
+    """Make the modes consistent with the forces at the current state (after a reset or a
+    change of command): a pinned toe the ground would have to pull is released (to flight,
+    or to a slide if the leg still pushes, SPEC.md 3), a strut in compression becomes a
+    spring leg, a stuck motor joint loaded beyond breakaway slips, a slipping joint at rest
+    sticks if stiction can hold it. Returns the updated event count.
+
+    ``command_only``: s is projected and ds, aux and the workspace ``ew`` hold its last
+    evaluation with the same modes, only ``cmd`` has changed (a new control sample after a
+    plain step): the first evaluation is then :func:`evaluate_command_change`."""
+    W = body_weight(P)
+    # a contact force counts as pulling only beyond rounding: a massless undamped leg
+    # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
+    # release it at once (the toe would then be disarmed at height <= 0 and fall through)
+    gn_tol = -1e-9 * W
+    coulomb = P[P_MU] < 1e300
+    model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
+    for it in range(12):
+        if it == 0 and command_only and P[P_LEG_FRIC_SIDE] == 0.0:
+            # (a side-load leg friction depends on the hip torque, so on the command, in
+            # the leg force: then a fresh evaluation)
+            evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
+        else:
+            project_state(s, P, mi, mf)
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+        changed = False
+        for leg in range(2):
+            o = leg * NAUX_LEG
+            mode = mi[MI_CONTACT_B + leg]
+            gn = aux[o + A_GN]
+            if mode == FLIGHT:
+                if flight_toe_enters_ground(s, ds, aux, P, leg):
+                    # a toe stub (a released pinned toe, or one swept down onto the
+                    # ground at the stop): slides, its leg compressed as it is swept
+                    nev = start_stub_slide(t, s, mi, aux, ev, nev, leg)
+                    stats[S_NSTUB] += 1
+                    changed = True
+            elif mode == STICK:
+                if gn < gn_tol:
+                    if aux[o + A_FAX] > 1e-9 * W and P[P_MASSLESS] < 0.5:
+                        mi[MI_CONTACT_B + leg] = SLIDE
+                        gt = aux[o + A_GT]
+                        mi[MI_SLIDE_DIR_B + leg] = -1 if gt > 0.0 else 1
+                        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
+                                        SLIDE_CAUSE_LEG_PUSHES)
+                        stats[S_NEND_SLIDE] += 1
+                    else:
+                        leave_contact(s, mi, leg)
+                        nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
+                    mi[MI_CONTACT_B + leg] = SLIDE
+                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
+                                    SLIDE_CAUSE_CONE)
+                    changed = True
+            elif mode == STRUT:
+                if gn < gn_tol:
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif aux[o + A_STRUT] < 0.0:
+                    mi[MI_CONTACT_B + leg] = STICK
+                    nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
+                    changed = True
+            elif mode == SLIDE:
+                if ((gn < gn_tol or aux[o + A_FAX] <= 0.0)
+                        and not slide_toe_pressed(s, ds, aux, P, leg)):
+                    # (a slide at the stop whose toe is pressed into the ground starts with
+                    # its leg force at zero, to rounding, and loads as the leg is swept on)
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    changed = True
+                elif coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
+                    # the toe slides against its recorded direction (its velocity jumped, e.g.
+                    # at the other leg's touchdown impact): friction opposes the motion it
+                    # has, so the direction follows the velocity. Pinning the moving toe
+                    # instead would take an impulse that the sliding contact cannot give
+                    # (the massless toe on its compliant leg carries none).
+                    mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
+                    changed = True
+            if model2:
+                mm = mi[MI_MOTOR_B + leg]
+                if mm == STUCK:
+                    hold = aux[o + A_HOLD]
+                    if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
+                        mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
+                        nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
+                        changed = True
+                elif aux[o + A_OMEGA_M] * mm < -MOTOR_SPEED_TOL:
+                    # slipping against its recorded direction (a stale mode, e.g. a resumed
+                    # state): the Coulomb torque opposes the motion the joint has. Stopping
+                    # it (sticking) would take an impulse that stiction cannot give; a
+                    # joint comes to rest only through its rate's zero crossing (an event).
+                    mi[MI_MOTOR_B + leg] = -mm
+                    changed = True
+        if not changed:
+            # ds and aux are those of the (projected) state as it stands
+            return nev
+    project_state(s, P, mi, mf)
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+    return nev
+
+
+@allocating
+def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
+    """Pin the toe where it touched the ground and apply the impact (SPEC.md 3)."""
+    o = leg * NAUX_LEG
+    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+    mi[MI_CONTACT_B + leg] = STICK
+    s_pre = s.copy()
+    mi_pre = mi.copy()
+    ok = impact(s, P, mi, mf, imp)
+    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0] * (1.0 - 1e-12)
+            and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
+        # the toe lands with the leg at its stop while the hip moves away from it: the
+        # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
+        # well (the leg lands as a rigid strut, SPEC.md 3); settle() makes it a spring leg
+        # again once the strut is in compression
+        for i in range(s.shape[0]):
+            s[i] = s_pre[i]
+        for i in range(mi.shape[0]):
+            mi[i] = mi_pre[i]
+        mi[MI_CONTACT_B + leg] = STRUT
+        stats[S_NSTRUT] += 1
+        ok = impact(s, P, mi, mf, imp)
+    pn = imp[3 * leg]
+    pt = imp[3 * leg + 1]
+    if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
+        # Coulomb floor: the pinning impulse lies outside the friction cone (for a
+        # massless toe on a compliant leg the only cone-consistent impulse is zero):
+        # no impulse, the toe lands sliding. (A no-slip floor pins the toe whatever the
+        # impulse's direction, docs/model.md: its impulse ratio is reported instead.)
+        for i in range(s.shape[0]):
+            s[i] = s_pre[i]
+        for i in range(mi.shape[0]):
+            mi[i] = mi_pre[i]
+        mi[MI_CONTACT_B + leg] = SLIDE
+        mi[MI_SLIDE_DIR_B + leg] = 1 if aux[o + A_SLIP_V] >= 0.0 else -1
+        project_state(s, P, mi, mf)
+        nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
+        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, 0.0, 0.0, SLIDE_CAUSE_NO_PIN_IMPULSE)
+        return nev, True
+    if pn > 0.0:
+        r = abs(pt) / pn
+        if r > stats[S_MAX_IMPULSE_RATIO]:
+            stats[S_MAX_IMPULSE_RATIO] = r
+    # stiction carries no impulse: impact() released stuck joints; settle() re-examines
+    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[6])
+    return nev, ok
+
+
+@kernel
+def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
+    """Mode transition for event slot k at time t (state s already at the event)."""
+    ok = True
+    if k < 2 * NEV_CONTACT:
+        leg = k // NEV_CONTACT
+        slot = k % NEV_CONTACT
+        mode = mi[MI_CONTACT_B + leg]
+        o = leg * NAUX_LEG
+        if mode == FLIGHT:
+            nev, ok = touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp)
+        elif mode == STICK:
+            if slot == 0:
+                # normal force reached zero: lift-off, or a slide if the leg still pushes
+                if aux[o + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
+                    mi[MI_CONTACT_B + leg] = SLIDE
+                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                    stats[S_NEND_SLIDE] += 1
+                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
+                                    aux[o + A_FAX], SLIDE_CAUSE_LEG_PUSHES)
+                else:
+                    leave_contact(s, mi, leg)
+                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            elif slot == 1:
+                mi[MI_CONTACT_B + leg] = STRUT
+                stats[S_NSTRUT] += 1
+                nev = log_event(ev, nev, t, EK_STRUT_START, leg, aux[o + A_GN], 0.0, 0.0)
+            else:
+                mi[MI_CONTACT_B + leg] = SLIDE
+                mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+                nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
+                                aux[o + A_FAX], SLIDE_CAUSE_CONE)
+        elif mode == SLIDE:
+            if slot == 0:
+                leave_contact(s, mi, leg)
+                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            else:
+                # slide velocity reached zero: stick here; settle() slides on (possibly
+                # reversed) if the friction cone cannot hold the toe
+                mi[MI_CONTACT_B + leg] = STICK
+                mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+                nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+        elif mode == STRUT:
+            if slot == 0:
+                leave_contact(s, mi, leg)
+                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+            else:
+                mi[MI_CONTACT_B + leg] = STICK
+                nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
+    elif k < EV_FALL_HEIGHT:
+        leg = k - EV_MOTOR_B
+        o = leg * NAUX_LEG
+        if mi[MI_MOTOR_B + leg] == STUCK:
+            hold = aux[o + A_HOLD]
+            mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
+            nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
+        else:
+            # a slipping joint comes to rest: stuck; settle() lets it slip on if the
+            # holding torque needed exceeds the breakaway level
+            mi[MI_MOTOR_B + leg] = STUCK
+            nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, aux[o + A_HOLD], 0.0, 0.0)
+    else:
+        nev = log_event(ev, nev, t, EK_FALL, -1, s[1], s[2], 0.0)
+    return nev, ok
+
+
+@kernel
+def record_friction(aux, P, mi, stats):
+    """Track the largest friction ratio |Ft|/Fn needed by a pinned toe (Fn > 5 % weight)."""
+    W = body_weight(P)
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            o = leg * NAUX_LEG
+            gn = aux[o + A_GN]
+            if gn > 0.05 * W:
+                r = abs(aux[o + A_GT]) / gn
+                if r > stats[S_MAX_FRICTION]:
+                    stats[S_MAX_FRICTION] = r
+
