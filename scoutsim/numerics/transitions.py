@@ -58,9 +58,33 @@ def start_stub_slide(t, s, mi, aux, ev, nev, leg):
 
 
 @kernel
-def leave_contact(s, mi, leg):
-    """Switch a leg to flight (its current leg length is kept as the toe's state)."""
+def lift_off(t, s, mi, ev, nev, leg):
+    """The toe of ``leg`` leaves the ground (its current leg length is kept as the toe's
+    state); logged. Returns the event count."""
     mi[MI_CONTACT_B + leg] = FLIGHT
+    return log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+
+
+@kernel
+def slide_from_pin(t, mi, aux, ev, nev, leg, cause):
+    """A pinned toe starts to slide, away from the force that held it (``cause``:
+    SLIDE_CAUSE_LEG_PUSHES or SLIDE_CAUSE_CONE); logged. Returns the event count."""
+    o = leg * NAUX_LEG
+    mi[MI_CONTACT_B + leg] = SLIDE
+    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+    return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX], cause)
+
+
+@kernel
+def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
+    """A pinned toe whose normal force has reached zero (or that the ground would have to
+    pull): it slides if its leg still pushes, otherwise it lifts off (the end-of-stance
+    rule: releasing a toe its leg still pushes would drive it into the ground). Returns
+    the event count."""
+    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
+        stats[S_NEND_SLIDE] += 1
+        return slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_LEG_PUSHES)
+    return lift_off(t, s, mi, ev, nev, leg)
 
 
 @allocating
@@ -109,27 +133,14 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     changed = True
             elif mode == STICK:
                 if gn < gn_tol:
-                    if aux[o + A_FAX] > 1e-9 * W and P[P_MASSLESS] < 0.5:
-                        mi[MI_CONTACT_B + leg] = SLIDE
-                        gt = aux[o + A_GT]
-                        mi[MI_SLIDE_DIR_B + leg] = -1 if gt > 0.0 else 1
-                        nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
-                                        SLIDE_CAUSE_LEG_PUSHES)
-                        stats[S_NEND_SLIDE] += 1
-                    else:
-                        leave_contact(s, mi, leg)
-                        nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
                     changed = True
                 elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
-                    mi[MI_CONTACT_B + leg] = SLIDE
-                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
-                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, gn, aux[o + A_FAX],
-                                    SLIDE_CAUSE_CONE)
+                    nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
                     changed = True
             elif mode == STRUT:
                 if gn < gn_tol:
-                    leave_contact(s, mi, leg)
-                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    nev = lift_off(t, s, mi, ev, nev, leg)
                     changed = True
                 elif aux[o + A_STRUT] < 0.0:
                     mi[MI_CONTACT_B + leg] = STICK
@@ -140,8 +151,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                         and not slide_toe_pressed(s, ds, aux, P, leg)):
                     # (a slide at the stop whose toe is pressed into the ground starts with
                     # its leg force at zero, to rounding, and loads as the leg is swept on)
-                    leave_contact(s, mi, leg)
-                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                    nev = lift_off(t, s, mi, ev, nev, leg)
                     changed = True
                 elif coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
                     # the toe slides against its recorded direction (its velocity jumped, e.g.
@@ -236,28 +246,16 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
         elif mode == STICK:
             if slot == 0:
                 # normal force reached zero: lift-off, or a slide if the leg still pushes
-                if aux[o + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
-                    mi[MI_CONTACT_B + leg] = SLIDE
-                    mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
-                    stats[S_NEND_SLIDE] += 1
-                    nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
-                                    aux[o + A_FAX], SLIDE_CAUSE_LEG_PUSHES)
-                else:
-                    leave_contact(s, mi, leg)
-                    nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
             elif slot == 1:
                 mi[MI_CONTACT_B + leg] = STRUT
                 stats[S_NSTRUT] += 1
                 nev = log_event(ev, nev, t, EK_STRUT_START, leg, aux[o + A_GN], 0.0, 0.0)
             else:
-                mi[MI_CONTACT_B + leg] = SLIDE
-                mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
-                nev = log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN],
-                                aux[o + A_FAX], SLIDE_CAUSE_CONE)
+                nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
         elif mode == SLIDE:
             if slot == 0:
-                leave_contact(s, mi, leg)
-                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 # slide velocity reached zero: stick here; settle() slides on (possibly
                 # reversed) if the friction cone cannot hold the toe
@@ -266,8 +264,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
                 nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
         elif mode == STRUT:
             if slot == 0:
-                leave_contact(s, mi, leg)
-                nev = log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+                nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 mi[MI_CONTACT_B + leg] = STICK
                 nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
