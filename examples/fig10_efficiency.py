@@ -52,7 +52,7 @@ def main(argv=None):
 
     const = RobotParameters()
     lossy = const.replace(gearbox_idle_loss_torque=IDLE, gearbox_load_loss_coefficient=C_LOAD)
-    from scoutsim.cli import SCOUT_FLOOR_FRICTION          # the paper's carpet (0.8)
+    from scoutsim.cli import SCOUT_FLOOR_FRICTION          # the default floor (mu = 1.0)
     kw = dict(duration=DURATION, model="II", friction_coefficient=SCOUT_FLOOR_FRICTION)
     runs = {"constant 65.3 %": simulate(const, **kw),
             "idle + load losses": simulate(lossy, **kw)}

@@ -31,8 +31,6 @@ LAYERS = {
 KNOWN_VIOLATIONS = {
     # result.gait(): a convenience accessor on the result, deferred import of analysis
     ("scoutsim.result", "scoutsim.analysis.gait"),
-    # the command line imports the package root's re-exports instead of their modules
-    ("scoutsim.cli", "scoutsim"),
 }
 
 

@@ -1,0 +1,96 @@
+"""Command-line interface: the ``scoutsim`` console script and its sub-commands, one module
+each (``scoutsim COMMAND --help`` for the options):
+
+    run       simulate one bounding run, print a summary, write data and plots
+    basin     basin map: which starts reach steady bounding, per model and floor
+    compare   Fig. 12 errors of the models against experiment logs
+    plot      figure of one saved run (result.npz) or one experiment log
+    animate   stick-figure animation of a saved run (GIF or MP4)
+    orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
+    sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
+    identify  fit Model II hip-unit parameters to bench-rig logs
+    rig       run a virtual bench rig and write its log
+
+This module assembles the parser and dispatches; ``_common`` holds the argument types, the
+options several sub-commands share and the input/output helpers.
+
+Presentation layer: all computation is SI (angles in rad); degrees appear only in what is
+printed and plotted, converted here with :func:`math.degrees` / :func:`math.radians`.
+
+Exit codes: 0 success (also when the robot fell: the summary says so), 1 numerical failure
+(``run``, a model in ``compare``), a crashed start (``basin``) or no periodic orbit found
+(``orbit``), 2 bad usage, parameter file, initial state, input file or experiment log,
+130 interrupted (Ctrl-C; the data computed so far is still written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from . import animate, basin, compare, identify, orbit, plot, rig, run, sweep
+from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
+from .basin import format_basin
+from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
+
+__all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_timeseries_csv",
+           "format_summary", "format_basin", "MODELS", "SCOUT_FLOOR_FRICTION"]
+
+#: the sub-command modules, in the order of ``scoutsim --help``
+COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, identify, rig)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``scoutsim`` argument parser with all sub-commands (:data:`COMMANDS`)."""
+    from .._version import __version__
+    parser = argparse.ArgumentParser(
+        prog="scoutsim",
+        description="Simulate planar Scout II bounding (Poulakakis, Smith & Buehler, ICRA 2004).",
+        epilog="examples:\n"
+               "  scoutsim run                       # Model II, 10 s, results in scoutsim_out/\n"
+               "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
+               "  scoutsim run --json --no-plots     # summary as JSON on stdout\n"
+               "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
+               "  scoutsim compare run1.csv run2.csv --models I,II --out cmp\n"
+               "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
+               "  scoutsim plot scoutsim_out/result.npz --out run.pdf --t0 3 --t1 4\n"
+               "  scoutsim animate scoutsim_out/result.npz --out run.gif --t0 3 --t1 4",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
+    sub = parser.add_subparsers(dest="command",
+                                metavar="{" + ",".join(c.NAME for c in COMMANDS) + "}")
+    common = simulation_options()
+    for command in COMMANDS:
+        command.register(sub, common)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``scoutsim`` console script; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    try:
+        args = parser.parse_args(join_list_values(argv))
+        # (basin: a floor given with --friction replaces the default pair of floors)
+        args.friction_given = any(a == "--friction" or a.startswith("--friction=") for a in argv)
+    except SystemExit as exc:  # --help, --version or a usage error (argparse printed it)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    try:
+        return args.func(args)
+    except UsageError as exc:
+        print(f"scoutsim {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"scoutsim {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `scoutsim run --json | head`
+        try:  # keep Python from complaining again when it flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+        return 1

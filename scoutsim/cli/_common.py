@@ -1,0 +1,290 @@
+"""What the ``scoutsim`` sub-commands share: the usage error, argument types, the options
+that several sub-commands define alike, and the helpers that load their inputs and write
+their outputs.
+
+Every user-facing problem is raised as :class:`UsageError`; ``scoutsim.cli.main`` prints it
+as ``scoutsim COMMAND: error: MESSAGE`` and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+
+#: the models that run the bounding controller
+CONTROLLED_MODELS = ("ideal", "I", "II")
+#: every model ``scoutsim run`` accepts
+MODELS = CONTROLLED_MODELS + ("passive",)
+
+#: Toe friction of the CLI's jobs: the package's one default floor
+SCOUT_FLOOR_FRICTION = DEFAULT_FRICTION_COEFFICIENT
+
+#: options whose value is a comma-separated list that may start with a minus sign
+_LIST_OPTIONS = ("--speeds", "--pitch-rates", "--heights", "--model", "--models", "--floors",
+                 "--pitch-rate")
+
+
+class UsageError(Exception):
+    """A problem with the user's input: message on stderr, exit code 2."""
+
+
+@contextmanager
+def usage_errors(*types: type[BaseException]):
+    """Turn the given exceptions (default: ``ValueError``) raised inside the block into a
+    :class:`UsageError` with the same message."""
+    try:
+        yield
+    except (types or (ValueError,)) as exc:
+        raise UsageError(str(exc)) from None
+
+
+# -----------------------------------------------------------------------------------------
+# argument types
+# -----------------------------------------------------------------------------------------
+def _number(text: str, ok, allowed: str) -> float:
+    """``text`` as a float for argparse, which must satisfy ``ok`` (``allowed`` says how)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not ok(v):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be {allowed}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    return _number(text, lambda v: math.isfinite(v) and v > 0, "a finite number > 0")
+
+
+def finite_float(text: str) -> float:
+    return _number(text, math.isfinite, "finite")
+
+
+def friction(text: str) -> float:
+    return _number(text, lambda v: v >= 0, ">= 0 ('inf' = no slip)")
+
+
+def friction_list(text: str) -> list:
+    vals = [friction(x.strip()) for x in text.split(",") if x.strip()]
+    if not vals:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: give at least one value")
+    if len(set(vals)) != len(vals):
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: a floor is repeated")
+    return vals
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: must be >= 1")
+    return v
+
+
+def float_list(positive: bool = False):
+    def parse(text: str) -> list[float]:
+        items = [s.strip() for s in text.split(",")]
+        if not items or any(s == "" for s in items):
+            raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of numbers")
+        return [(positive_float if positive else finite_float)(s) for s in items]
+    return parse
+
+
+def model_list(text: str) -> list[str]:
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    if not items:
+        raise argparse.ArgumentTypeError("give at least one model")
+    bad = [m for m in items if m not in MODELS]
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown model(s) {bad}; choose from {', '.join(MODELS)}")
+    return list(dict.fromkeys(items))
+
+
+def join_list_values(argv: list[str]) -> list[str]:
+    """Let ``--pitch-rates -100,-50`` work: argparse would take "-100,-50" for an option."""
+    out, i = [], 0
+    while i < len(argv):
+        tok = argv[i]
+        if (tok in _LIST_OPTIONS and i + 1 < len(argv) and len(argv[i + 1]) > 1
+                and argv[i + 1][0] == "-" and (argv[i + 1][1].isdigit() or argv[i + 1][1] == ".")):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+# -----------------------------------------------------------------------------------------
+# options defined alike by several sub-commands
+# -----------------------------------------------------------------------------------------
+def add_out_option(parser, default: str = "scoutsim_out", *, note: str = ", created if needed"):
+    parser.add_argument("--out", default=default, metavar="DIR",
+                        help=f"output directory{note} (default: {default})")
+
+
+def add_friction_option(parser, help: str):
+    parser.add_argument("--friction", type=friction, default=SCOUT_FLOOR_FRICTION, metavar="MU",
+                        help=help)
+
+
+def add_no_progress_option(parser):
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (it is also off when stderr is not a terminal)")
+
+
+def add_models_option(parser, flag: str):
+    """A comma-separated list of models, by default the controlled ones."""
+    parser.add_argument(flag, type=model_list, default=list(CONTROLLED_MODELS), metavar="LIST",
+                        help="comma-separated models (default: "
+                             + ",".join(CONTROLLED_MODELS) + ")")
+
+
+def add_time_window_options(parser, t0_help: str, t1_help: str):
+    parser.add_argument("--t0", type=finite_float, default=None, metavar="S", help=t0_help)
+    parser.add_argument("--t1", type=finite_float, default=None, metavar="S", help=t1_help)
+
+
+def simulation_options() -> argparse.ArgumentParser:
+    """The parent parser of the sub-commands that simulate runs (run, basin, sweep)."""
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--duration", type=positive_float, default=10.0, metavar="S",
+                        help="simulated time per run [s] (default: 10)")
+    common.add_argument("--robot", metavar="FILE",
+                        help="TOML robot/controller file with the layout of "
+                             "scoutsim/data/scout2.toml; unset entries keep the Scout II "
+                             "defaults")
+    add_out_option(common)
+    common.add_argument("--rtol", type=positive_float, default=None, metavar="X",
+                        help="integrator relative tolerance (default: 1e-8)")
+    common.add_argument("--atol", type=positive_float, default=None, metavar="X",
+                        help="integrator absolute tolerance (default: 1e-9)")
+    add_friction_option(common, "Coulomb friction coefficient of the toes (default: "
+                                f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
+                                "paper's experiments ran; 'inf' = no slip; see docs/model.md)")
+    add_no_progress_option(common)
+    return common
+
+
+# -----------------------------------------------------------------------------------------
+# checks and inputs
+# -----------------------------------------------------------------------------------------
+def check_logs_or_example(args, missing: str):
+    """Exactly one of LOG arguments and --example; ``missing`` is the message for neither."""
+    if args.example and args.logs:
+        raise UsageError("give log files or --example, not both")
+    if not args.example and not args.logs:
+        raise UsageError(missing)
+
+
+def check_time_window(args):
+    if args.t0 is not None and args.t1 is not None and not args.t1 > args.t0:
+        raise UsageError(f"--t0 {args.t0:g} --t1 {args.t1:g} is not allowed: need t1 > t0")
+
+
+def show_progress(args) -> bool:
+    """Progress bar unless --no-progress or stderr is not a terminal."""
+    return (not args.no_progress) and sys.stderr.isatty()
+
+
+def load_parameters(path):
+    """(robot, controller) from the user's TOML file (or the defaults); UsageError if bad."""
+    from ..parameters import load_parameters
+    if path is not None:
+        p = Path(path)
+        if not p.exists():
+            raise UsageError(f"robot file '{path}' not found")
+        if not p.is_file():
+            raise UsageError(f"robot file '{path}' is not a file")
+    try:
+        return load_parameters(path)
+    except OSError as exc:
+        raise UsageError(f"cannot read robot file '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise UsageError(f"robot file '{path}' is not UTF-8 text: {exc}") from None
+    except ValueError as exc:  # ParameterError (names the field) and other bad values
+        raise UsageError(str(exc)) from None
+
+
+def load_robot(path):
+    """The robot of the user's TOML file, or None (the callee's default) without one."""
+    if not path:
+        return None
+    robot, _ = load_parameters(path)
+    return robot
+
+
+def integrator(args):
+    """IntegratorSettings from --rtol / --atol (unset: the defaults)."""
+    from ..simulation import IntegratorSettings
+    kw = {}
+    if args.rtol is not None:
+        kw["rtol"] = args.rtol
+    if args.atol is not None:
+        kw["atol"] = args.atol
+    with usage_errors():
+        return IntegratorSettings(**kw)
+
+
+def input_file(path: str) -> Path:
+    p = Path(path)
+    if not p.exists():
+        raise UsageError(f"input '{path}' not found")
+    if not p.is_file():
+        raise UsageError(f"input '{path}' is not a file")
+    return p
+
+
+def load_result(p: Path):
+    """A result.npz written by ``scoutsim run``."""
+    from ..result import SimulationResult
+    if p.suffix.lower() != ".npz":
+        raise UsageError(f"input '{p}' is not a saved result: expected a .npz written by "
+                         "`scoutsim run` (result.npz)")
+    try:
+        return SimulationResult.load(p)
+    except (OSError, ValueError, KeyError) as exc:
+        raise UsageError(f"cannot read result '{p}': {exc}") from None
+
+
+# -----------------------------------------------------------------------------------------
+# outputs
+# -----------------------------------------------------------------------------------------
+def out_dir(path) -> Path:
+    """The output directory, created if needed."""
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"cannot create output directory '{out}': {exc.strerror or exc}") from None
+    return out
+
+
+def json_safe(v):
+    """Replace non-finite floats by None (strict JSON has no NaN / Infinity)."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [json_safe(x) for x in v]
+    return v
+
+
+def dumps(obj) -> str:
+    """Strict, indented JSON (non-finite floats as null)."""
+    return json.dumps(json_safe(obj), indent=2, allow_nan=False)
+
+
+def write_json(path: Path, obj) -> Path:
+    """Write :func:`dumps` of ``obj`` and a newline to ``path``."""
+    path.write_text(dumps(obj) + "\n")
+    return path

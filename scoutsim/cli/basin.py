@@ -1,0 +1,153 @@
+"""``scoutsim basin``: the basin map. Run a grid of initial states (forward speed x pitch
+rate x height) for each model and floor in parallel, report the fraction of valid starts
+that reach steady bounding and the cycle's speed, and write basin.csv, basin.json and the
+map basin.png.
+
+    scoutsim basin [--model LIST] [--floors LIST] [--speeds LIST] [--pitch-rates LIST]
+                   [--heights LIST] [--duration S] [--robot FILE] [--out DIR] [--workers N]
+                   [--no-progress] [--no-plots]
+
+Exit code 1 if a start crashed (the table and files are still written).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import sys
+import time
+
+from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
+                              DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_stats, basin_tasks,
+                              floor_label, run_basin_tasks)
+from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, float_list, friction_list,
+                      integrator, load_parameters, out_dir, positive_int, show_progress,
+                      write_json)
+
+NAME = "basin"
+
+
+def _defaults(values) -> str:
+    return ",".join(f"{v:g}" for v in values)
+
+
+def register(sub, common) -> None:
+    basin = sub.add_parser(
+        NAME, parents=[common],
+        help="basin map: which starts reach steady bounding, per model and floor",
+        description="Run a grid of initial states (forward speed x pitch rate x height; "
+                    "level torso, legs at their touchdown angles) for each model and floor in "
+                    "parallel and report the fraction that reaches steady bounding "
+                    "(GaitMetrics.is_steady_bounding: completed, >= 7 steady strides after "
+                    "the 2 s transient, stride-period CV <= 5 %%) and the cycle's speed. "
+                    "Starts with a toe below the ground are recorded as invalid_start and "
+                    "left out of the fraction. Writes basin.csv, basin.json and the map "
+                    "basin.png to DIR.")
+    add_models_option(basin, "--model")
+    basin.add_argument("--floors", type=friction_list, default=None, metavar="LIST",
+                       help="comma-separated toe friction coefficients, 'inf' = no slip "
+                            f"(default: {SCOUT_FLOOR_FRICTION:g},inf; --friction MU runs one)")
+    basin.add_argument("--speeds", type=float_list(), default=list(DEFAULT_SPEEDS),
+                       metavar="LIST", help="initial forward speeds [m/s] (default: "
+                       + _defaults(DEFAULT_SPEEDS) + ")")
+    basin.add_argument("--pitch-rates", type=float_list(), default=list(DEFAULT_PITCH_RATES),
+                       metavar="LIST", help="initial pitch rates [deg/s], positive = nose "
+                       "rising (default: " + _defaults(DEFAULT_PITCH_RATES) + ")")
+    basin.add_argument("--heights", type=float_list(positive=True), default=list(DEFAULT_HEIGHTS),
+                       metavar="LIST", help="initial torso COM heights [m] (default: "
+                       + _defaults(DEFAULT_HEIGHTS) + ")")
+    basin.add_argument("--no-plots", action="store_true", help="do not write basin.png")
+    basin.add_argument("--workers", type=positive_int, default=None, metavar="N",
+                       help="parallel processes (default: os.cpu_count(); 1 runs in this "
+                            "process)")
+    basin.set_defaults(func=execute)
+
+
+def format_basin(per: dict, n_grid: int, duration: float) -> str:
+    """The human-readable basin table (one row per model and floor)."""
+    head = ("model", "floor", "starts", "invalid", "valid", "steady", "fraction", "fell",
+            "other", "cycle m/s")
+    lines = [f"scoutsim basin: {n_grid} starts per model and floor, {duration:g} s each; "
+             "fraction = steady bounding / valid starts; cycle m/s = median speed of the "
+             "starts that bound",
+             "  " + "  ".join(f"{h:>9}" for h in head)]
+    for key, s in per.items():
+        frac = s["fraction_steady_bounding"]
+        fell = s["outcomes"].get("fell", 0)
+        other = s["n_valid"] - s["outcomes"].get("completed", 0) - fell
+        v = s.get("median_cycle_speed_m_s")
+        mu = s.get("friction")
+        vals = (s.get("model", key), "-" if mu is None else floor_label(mu), s["n_starts"],
+                s["n_invalid_start"], s["n_valid"], s["n_steady_bounding"],
+                "n/a" if frac is None else f"{frac:.3f}", fell, other,
+                "-" if v is None else f"{v:.3f}")
+        lines.append("  " + "  ".join(f"{x!s:>9}" for x in vals))
+    return "\n".join(lines)
+
+
+def execute(args) -> int:
+    robot, controller = load_parameters(args.robot)
+    integ = integrator(args)
+    out = out_dir(args.out)
+    models = args.model
+    workers = args.workers or os.cpu_count() or 1
+    progress = show_progress(args)
+    grid = [(v, w, h) for v in args.speeds for w in args.pitch_rates for h in args.heights]
+    floors = (args.floors if args.floors is not None else
+              [args.friction] if getattr(args, "friction_given", False) else list(DEFAULT_FLOORS))
+    tasks = basin_tasks(models, floors, args.speeds, args.pitch_rates, args.heights,
+                        args.duration, robot, controller, integ)
+    if args.duration < 5.0:
+        print(f"scoutsim basin: note: --duration {args.duration:g} s is short; steady bounding "
+              "needs >= 7 strides after the 2 s transient, so (almost) no start can qualify",
+              file=sys.stderr)
+
+    wall0 = time.perf_counter()
+    rows = run_basin_tasks(tasks, workers, progress)
+    wall = time.perf_counter() - wall0
+
+    csv_path = out / "basin.csv"
+    with open(csv_path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=BASIN_COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
+    per = basin_stats(rows, models, floors if len(floors) > 1 else None)
+    summary = {
+        "fraction_steady_bounding": {m: s["fraction_steady_bounding"] for m, s in per.items()},
+        "models": per,
+        "grid": {"speeds_m_s": args.speeds, "pitch_rates_deg_s": args.pitch_rates,
+                 "heights_m": args.heights, "duration_s": args.duration,
+                 "floors": ["inf" if math.isinf(mu) else mu for mu in floors],
+                 "n_starts_per_model": len(grid)},
+        "criterion": "GaitMetrics.is_steady_bounding(): outcome completed, >= 7 steady "
+                     "strides after the 2 s transient, stride-period CV <= 0.05; "
+                     "invalid_start excluded from the denominator",
+        "wall_time_s": wall,
+        "workers": workers,
+    }
+    write_json(out / "basin.json", summary)
+    written = "basin.csv, basin.json"
+    if not args.no_plots:
+        from ..plotting import plot_basin_map
+        from ..simulation import InitialState
+        d = InitialState()
+        plot_basin_map(rows, out / "basin.png", default_start=(d.dx, math.degrees(d.dtheta)))
+        written += ", basin.png"
+
+    print(format_basin(per, len(grid), args.duration))
+    n_invalid = sum(s["n_invalid_start"] for s in per.values())
+    if n_invalid:
+        example = next(r for r in rows if r["outcome"] == "invalid_start")
+        print(f"{n_invalid} invalid start(s) (toe below the ground), e.g. speed "
+              f"{example['speed']:g} m/s, pitch rate {example['pitch_rate_deg_s']:g} deg/s, "
+              f"height {example['height']:g} m: {example.get('error', '')}")
+    print(f"wall time {wall:.1f} s with {min(workers, len(tasks))} worker(s); "
+          f"wrote {written} to {out}/")
+    errors = [r for r in rows if r["outcome"] == "error"]
+    for r in errors[:5]:
+        print(f"scoutsim basin: start model {r['model']}, speed {r['speed']:g}, pitch rate "
+              f"{r['pitch_rate_deg_s']:g}, height {r['height']:g} crashed: {r['error']}",
+              file=sys.stderr)
+    return 1 if errors else 0

@@ -1,0 +1,104 @@
+"""``scoutsim orbit``: a periodic bounding orbit and its Floquet multipliers
+(docs/orbits.md). With --passive, the conservative massless-leg model's bound through a
+level-torso apex (touchdown angles solved for); otherwise the controlled robot's orbit,
+found by Newton's method on the stride map sampled at the controller's back-leg lift-off.
+
+    scoutsim orbit [--passive] [--speed V] [--apex-height H] [--pitch-rate W]
+                   [--model {ideal,I,II}] [--friction MU] [--duration S] [--json]
+
+Exit code 1 if no periodic orbit is found.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, add_friction_option, dumps,
+                      finite_float, positive_float)
+
+NAME = "orbit"
+
+
+def register(sub, common) -> None:
+    orbit = sub.add_parser(
+        NAME, help="periodic bounding orbit and its Floquet multipliers (docs/orbits.md)",
+        description="--passive: the conservative massless-leg model's periodic bound through "
+                    "a level-torso apex of the given speed, height and pitch rate; solves for "
+                    "the touchdown angles (from the world vertical) and prints them, the "
+                    "period, the multipliers of the apex return map and the map residual. "
+                    "Without --passive: the controlled robot's periodic orbit (Newton on the "
+                    "stride map sampled where the controller detects back-leg lift-off, "
+                    "started from a converged run), its touchdown angles from the world "
+                    "vertical, period, Floquet multipliers and residual.")
+    orbit.add_argument("--passive", action="store_true",
+                       help="the passive conservative model (massless legs, "
+                            "docs/specification.md, section 2)")
+    orbit.add_argument("--speed", type=positive_float, default=1.3, metavar="V",
+                       help="--passive: forward speed at the apex [m/s] (default: 1.3)")
+    orbit.add_argument("--apex-height", type=positive_float, default=0.35, metavar="H",
+                       help="--passive: torso COM height at the apex [m] (default: 0.35)")
+    orbit.add_argument("--pitch-rate", type=finite_float, default=0.0, metavar="W",
+                       help="--passive: pitch rate at the apex [deg/s] (default: 0)")
+    orbit.add_argument("--model", choices=CONTROLLED_MODELS, default="II",
+                       help="controlled model (default: II)")
+    add_friction_option(orbit, f"controlled: toe friction (default: {SCOUT_FLOOR_FRICTION})")
+    orbit.add_argument("--duration", type=positive_float, default=12.0, metavar="S",
+                       help="controlled: simulated time to the Newton start [s] (default: 12)")
+    orbit.add_argument("--json", action="store_true", help="print one JSON object")
+    orbit.set_defaults(func=execute)
+
+
+def execute(args) -> int:
+    from ..analysis.orbits import MapError, controlled_fixed_point, passive_bounding_orbit
+    try:
+        if args.passive:
+            orb = passive_bounding_orbit(args.speed, args.apex_height,
+                                         math.radians(args.pitch_rate))
+        else:
+            orb = controlled_fixed_point(model=args.model, friction_coefficient=args.friction,
+                                         settle_duration=args.duration)
+    except MapError as exc:
+        print(f"scoutsim orbit: {exc}", file=sys.stderr)
+        return 1
+    d = orb.to_dict()
+    if args.json:
+        print(dumps(d))
+    elif args.passive:
+        _print_passive(args, orb, d)
+    else:
+        _print_controlled(args, orb, d)
+    return 0
+
+
+def _print_passive(args, orb, d) -> None:
+    print(f"scoutsim orbit: passive model, apex speed {args.speed:g} m/s, height "
+          f"{args.apex_height:g} m, pitch rate {args.pitch_rate:g} deg/s, torso level")
+    print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.6f} / "
+          f"{d['touchdown_angle_front_deg']:.6f} deg (from the world vertical)")
+    print(f"  period                        {d['period_s']:.6f} s")
+    print("  eigenvalues                   " + ", ".join(
+        f"{m.real:.6f}{m.imag:+.6f}j" for m in orb.multipliers)
+          + f"  (|.| = {', '.join(f'{abs(m):.4f}' for m in orb.multipliers)})")
+    print(f"  residual max|P(z)-z|          {d['residual']:.2e}")
+
+
+def _print_controlled(args, orb, d) -> None:
+    import numpy as np
+    print(f"scoutsim orbit: model {args.model}, Table I controller at 1 kHz, mu = "
+          f"{args.friction:g}; section: the sample at which the controller detects back-leg "
+          "lift-off; Newton on the sampled stride map")
+    print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "
+          f"{d['touchdown_angle_front_deg']:.4f} deg (from the world vertical, on the orbit)")
+    print(f"  period                        {d['period_s']:.6f} s "
+          f"({round(d['period_s'] * 1000)} control periods), mean speed "
+          f"{d['mean_speed_m_s']:.4f} m/s")
+    for name, v in d["state"].items():
+        print(f"    {name:<18} {v: .9f}")
+    mags = np.abs(orb.multipliers)
+    big = np.argsort(-mags)[:6]
+    print("  largest multipliers           " + ", ".join(
+        f"{orb.multipliers[i].real:.4f}{orb.multipliers[i].imag:+.4f}j" for i in big)
+          + f"  (spectral radius {mags.max():.4f}: {'stable' if orb.stable else 'unstable'})")
+    print(f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
+          "Newton iterations")

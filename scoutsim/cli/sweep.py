@@ -1,0 +1,132 @@
+"""``scoutsim sweep``: a parameter sweep. Run a grid or a random sample of robot/controller
+parameters (``robot.<field>`` / ``controller.<field>``, SI units; a ``_deg`` suffix takes
+degrees) in local processes or on a Dask cluster, and write sweep.parquet, sweep.csv, the
+checkpoint points.jsonl (an interrupted sweep resumes) and, for a two-parameter grid, maps.
+
+    scoutsim sweep (--grid NAME=START:STOP:NUM ... | --random NAME=LOW:HIGH ... [--samples N])
+                   [--seed N] [--model {ideal,I,II}] [--workers N] [--scheduler ADDRESS]
+                   [--no-resume] [--orbit] [--duration S] [--robot FILE] [--out DIR]
+                   [--rtol X] [--atol X] [--friction MU] [--no-progress]
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+from ._common import (CONTROLLED_MODELS, UsageError, load_parameters, out_dir, positive_int,
+                      show_progress, usage_errors)
+
+NAME = "sweep"
+
+
+def register(sub, common) -> None:
+    sw = sub.add_parser(
+        NAME, parents=[common],
+        help="parameter sweep (grid or random sample) in parallel or on a Dask cluster",
+        description="Run a grid or random sample of robot/controller parameters, named "
+                    "robot.<field> or controller.<field> (SI units as in RobotParameters / "
+                    "ControllerParameters; a _deg suffix on an angle field takes degrees), "
+                    "and write sweep.parquet, sweep.csv, the checkpoint points.jsonl (an "
+                    "interrupted sweep resumes) and, for a two-parameter grid, map.png. "
+                    "Example: scoutsim sweep --grid controller.touchdown_angle_front_deg="
+                    "15:27:20 --grid controller.touchdown_angle_back_deg=13:25:20 "
+                    "--duration 2")
+    sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:NUM",
+                    help="grid axis (repeatable): NUM values from START to STOP")
+    sw.add_argument("--random", action="append", default=[], metavar="NAME=LOW:HIGH",
+                    help="uniformly sampled parameter (repeatable), with --samples")
+    sw.add_argument("--samples", type=positive_int, default=100, metavar="N",
+                    help="number of random points (default: 100)")
+    sw.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    sw.add_argument("--model", choices=CONTROLLED_MODELS, default="II",
+                    help="model (default: II)")
+    sw.add_argument("--workers", type=positive_int, default=None, metavar="N",
+                    help="local processes (default: all cores)")
+    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask distributed scheduler address (e.g. tcp://host:8786)")
+    sw.add_argument("--no-resume", action="store_true",
+                    help="recompute every point even if DIR/points.jsonl has it")
+    sw.add_argument("--orbit", action="store_true",
+                    help="also find each bounding point's periodic orbit (Newton) and record "
+                         "its period and Floquet stability (a few s per point)")
+    sw.set_defaults(func=execute)
+
+
+def _sweep_axis(text: str, n_parts: int):
+    """'name=a:b[:n]' -> (SI name, floats); a _deg suffix converts degrees once, here."""
+    name, sep, rng = text.partition("=")
+    parts = rng.split(":")
+    if not sep or len(parts) != n_parts:
+        form = "NAME=START:STOP:NUM" if n_parts == 3 else "NAME=LOW:HIGH"
+        raise UsageError(f"{text!r} is not allowed: must be {form}")
+    try:
+        vals = [float(v) for v in parts]
+    except ValueError:
+        raise UsageError(f"{text!r}: the range must be numbers") from None
+    if name.endswith("_deg"):
+        name = name[:-4]
+        vals = [math.radians(v) for v in vals[:2]] + vals[2:]
+    return name, vals
+
+
+def _points(args):
+    """The sweep's points from --grid axes or --random bounds."""
+    import numpy as np
+    from ..analysis.sweep import grid_points, random_points
+    with usage_errors():
+        if args.grid:
+            axes = {}
+            for g in args.grid:
+                name, (a, b, n) = _sweep_axis(g, 3)
+                if n < 1 or n != int(n):
+                    raise UsageError(f"{g!r}: NUM must be a whole number >= 1")
+                axes[name] = np.linspace(a, b, int(n))
+            return grid_points(axes)
+        bounds = {}
+        for g in args.random:
+            name, (a, b) = _sweep_axis(g, 2)
+            bounds[name] = (a, b)
+        return random_points(bounds, args.samples, args.seed)
+
+
+def execute(args) -> int:
+    from ..analysis.sweep import sweep
+    if bool(args.grid) == bool(args.random):
+        raise UsageError("give either --grid axes or --random parameters")
+    points = _points(args)
+    robot, controller = load_parameters(args.robot)
+    out = out_dir(args.out)
+    progress = show_progress(args)
+    wall0 = time.perf_counter()
+    res = sweep(points, model=args.model, duration=args.duration, robot=robot,
+                controller=controller, friction_coefficient=args.friction, out=out,
+                workers=args.workers, scheduler=args.scheduler, progress=progress,
+                resume=not args.no_resume, orbit=args.orbit)
+    wall = time.perf_counter() - wall0
+    outcomes = {}
+    for r in res.rows:
+        outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
+    steady = sum(bool(r.get("steady_bounding")) for r in res.rows)
+    print(f"scoutsim sweep: {len(points)} points of model {args.model}, {args.duration:g} s "
+          f"each ({res.settings['n_resumed']} resumed from {out}/points.jsonl)")
+    print("  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
+    print(f"  steady bounding: {steady}")
+    print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
+    if args.grid and len(res.parameters) == 2:
+        res.plot_map(res.parameters[0], res.parameters[1], "average_speed_m_s",
+                     path=out / "map.png")
+        print(f"  map of the average speed: {out}/map.png")
+        if args.orbit:
+            res.plot_map(res.parameters[0], res.parameters[1], "orbit_spectral_radius",
+                         path=out / "stability.png")
+            print(f"  map of the orbit's spectral radius (< 1: stable): {out}/stability.png")
+    if args.orbit:
+        stable = sum(bool(r.get("orbit_stable")) for r in res.rows)
+        print(f"  periodic orbits found and stable: {stable} of {steady} bounding points")
+    errors = [r for r in res.rows if r["outcome"] == "error"]
+    for r in errors[:3]:
+        print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} failed: "
+              f"{r['error']}", file=sys.stderr)
+    return 0
