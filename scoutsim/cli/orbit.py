@@ -33,7 +33,7 @@ def register(sub, common) -> None:
                     "vertical, period, Floquet multipliers and residual.")
     orbit.add_argument("--passive", action="store_true",
                        help="the passive conservative model (massless legs, "
-                            "docs/specification.md, section 2)")
+                            "docs/orbits.md)")
     orbit.add_argument("--speed", type=positive_float, default=1.3, metavar="V",
                        help="--passive: forward speed at the apex [m/s] (default: 1.3)")
     orbit.add_argument("--apex-height", type=positive_float, default=0.35, metavar="H",
