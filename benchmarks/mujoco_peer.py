@@ -14,7 +14,7 @@ torso slide x / slide z / hinge pitch; per virtual leg a hip hinge with the leg 
 prismatic joint carrying the leg spring/damper and a 0.01 kg toe (scoutsim: massless; its
 mass is carved out of the leg body so leg + toe keep scoutsim's leg mass, COM and hip
 inertia) with a joint limit at l0. Toe-ground (default ``toe="pin"``): scoutsim's contact
-(SPEC.md 3) built from MuJoCo parts and decided on MuJoCo's state at every step: touchdown
+(docs/specification.md section 3) built from MuJoCo parts and decided on MuJoCo's state at every step: touchdown
 (toe reaches the floor moving down) activates a connect equality pinning the toe to a
 0.001 kg ground point sliding along x; stick locks that point (joint equality), a slide
 (|F_t| > mu F_n on the lock) releases it under Coulomb friction (frictionloss mu F_n);
@@ -341,7 +341,7 @@ def run_mujoco(model: str, o: MjOptions, duration: float, robot: RobotParameters
     per_step = o.stance == "force" or pin
     fn = np.zeros((nsamp * nsub if per_step else 0, 2))
     if pin:
-        # scoutsim's contact (SPEC.md 3) on MuJoCo's state: touchdown when the toe reaches
+        # scoutsim's contact (docs/specification.md section 3) on MuJoCo's state: touchdown when the toe reaches
         # the floor moving down -> the toe is pinned (connect equality) to its ground point,
         # which slides along x under Coulomb friction mu F_n (frictionloss, the pin's normal
         # force of the previous step); lift-off when the pin's normal force goes negative

@@ -19,9 +19,10 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from scoutsim import ControllerParameters, RobotParameters, default_initial_state
-from scoutsim.control.bounding import bounding_step, controller_array
+from scoutsim.control.bounding import bounding_step, controller_array, sense
 from scoutsim.model import layout as L
-from scoutsim.model.dynamics import evaluate, project_state
+from scoutsim.model.evaluate import evaluate
+from scoutsim.model.kinematics import project_state
 from scoutsim.model.packing import robot_array
 from scoutsim.numerics.events import event_values
 from scoutsim.numerics.stats import NSTAT
@@ -32,7 +33,7 @@ from scoutsim.simulation import _state_vector
 def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):
     robot, ctrl = RobotParameters(), ControllerParameters()
     P = robot_array(robot, model, friction_coefficient=friction_coefficient)
-    C = controller_array(ctrl)
+    C = controller_array(ctrl, robot)
     s = _state_vector(default_initial_state(), robot, ctrl, (0, 0), True)
     mi = np.zeros(L.NMI, dtype=np.int64)
     mi[L.MI_MOTOR_B:L.MI_MOTOR_B + 2] = L.STUCK
@@ -41,6 +42,7 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
     ls = np.zeros(2, dtype=np.int64)
     cmd = np.zeros(2)
     tr = np.zeros(2, dtype=np.int64)
+    y = np.zeros(L.NSN)
     ds = np.zeros(L.NS)
     aux = np.zeros(L.NAUX)
     ev = np.zeros((100000, L.NEVREC))
@@ -74,7 +76,8 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
     events = [make_event(k) for k in range(L.NEV)]
     for k in range(n):
         t = k * dt
-        bounding_step(s, P, C, ls, cmd, tr)
+        sense(s, C, y)
+        bounding_step(y, C, ls, cmd, tr)
         nev = settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats)
         t_end = (k + 1) * dt
         while t < t_end - 1e-15:

@@ -46,7 +46,7 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from scoutsim import simulate
-    from scoutsim.model import dynamics
+    from scoutsim.model import actuator
     from scoutsim.model.packing import robot_array
     from scoutsim.parameters import RobotParameters
 
@@ -94,7 +94,7 @@ def main(argv=None):
     # motoring efficiency against the delivered torque
     P = robot_array(lossy, "I")
     cur = np.linspace(0.01, const.current_limit, 400)
-    tau_out = np.array([dynamics.delivered_torque(i, 500.0, P) for i in cur])
+    tau_out = np.array([actuator.delivered_torque(i, 500.0, P) for i in cur])
     eff = tau_out / (const.gear_ratio * const.torque_constant * cur)
     ax = axs[1, 0]
     ax.plot(tau_out, 100 * eff, label="idle + load losses (motoring)")

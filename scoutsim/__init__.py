@@ -6,8 +6,8 @@ Quadrupedal Robot", ICRA 2004. See README.md and docs/.
 
 from ._version import __version__  # noqa: E402
 from .parameters import (  # noqa: E402
-    ControllerParameters, ParameterError, RobotParameters, load_controller, load_parameters,
-    load_robot,
+    ControllerParameters, Environment, ParameterError, RobotParameters, load_controller,
+    load_parameters, load_robot,
 )
 from .result import SimulationResult  # noqa: E402
 from .simulation import (  # noqa: E402
@@ -17,6 +17,7 @@ from .control.bounding import BoundingController  # noqa: E402
 
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
-    "default_initial_state", "RobotParameters", "ControllerParameters", "ParameterError",
+    "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
+    "ParameterError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
 ]

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .control.bounding import bounding_step
+from .control.bounding import bounding_step, sense
 from .jit import allocating, kernel
-from .model.dynamics import evaluate_ws, state_energy
+from .model.evaluate import evaluate_ws
+from .model.rigid_body import state_energy
 from .model.layout import (
     A_ENERGY, A_KKT_OK, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
-    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, P_MODEL, RM_CONTACT_B, RM_LEG_STATE_B,
+    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, NSN, P_MODEL, RM_CONTACT_B, RM_LEG_STATE_B,
     RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
@@ -74,6 +75,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ds = np.zeros(NS)
     s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
+    y = np.zeros(NSN)
     SF0 = sfwork   # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
@@ -88,7 +90,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     while k < k_stop:
         t = k * dt
         if builtin:
-            bounding_step(s, P, C, ls, cmd, tr)
+            sense(s, C, y)
+            bounding_step(y, C, ls, cmd, tr)
             for leg in range(2):
                 if tr[leg] & 1:
                     nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)

@@ -1,4 +1,4 @@
-"""Robot and controller parameters (SPEC.md sections 2, 4, 5, 6; paper Tables I-III).
+"""Robot and controller parameters (docs/specification.md sections 2, 4, 5, 6; paper Tables I-III).
 
 All fields are SI (angles in rad). The defaults live once, as data, in
 ``scoutsim/data/scout2.toml`` with unit and provenance; :func:`load_robot` and
@@ -6,8 +6,8 @@ All fields are SI (angles in rad). The defaults live once, as data, in
 convert units once, and validate every value.
 
 Mass and hip-unit quantities are per *physical* leg. A virtual leg lumps
-``legs_per_virtual_leg`` physical legs (SPEC.md section 1); the compiled model multiplies
-per-leg quantities by that number in exactly one place (``scoutsim.model.dynamics``).
+``legs_per_virtual_leg`` physical legs (docs/specification.md section 1); the compiled model multiplies
+per-leg quantities by that number in exactly one place (the compiled model, ``scoutsim.model``).
 """
 
 from __future__ import annotations
@@ -26,11 +26,48 @@ from pathlib import Path
 
 #: The default floor of every simulation, command and study: Coulomb friction mu = 1.0 at
 #: the toe [assumed: rubber-covered toes on carpet, where the paper's experiments ran; the
-#: paper gives no value]. mu = inf is a no-slip floor (SPEC's idealisation), an option.
+#: paper gives no value]. mu = inf is a no-slip floor (the specification's idealisation), an option.
 #: Why 1.0: from the default start, ideal, Model I and Model II all reach the bounding
 #: cycle from every start of a neighbourhood around it on this floor (docs/model.md,
 #: "Default start and floor"); on a no-slip floor Model II does from fewer than half.
 DEFAULT_FRICTION_COEFFICIENT = 1.0
+
+
+@dataclass(frozen=True)
+class Environment:
+    """The world the robot runs in: a flat, rigid, level floor at y = 0 with Coulomb
+    friction at the toe (docs/specification.md section 3).
+
+    Attributes
+    ----------
+    friction_coefficient : float or None
+        Coulomb coefficient mu [-] of the toe on the floor, > 0; ``math.inf`` is a no-slip
+        floor. None (default): :data:`DEFAULT_FRICTION_COEFFICIENT` (1.0), except for
+        massless legs (their ground force lies along the leg, so slip is not defined):
+        no slip.
+    """
+
+    friction_coefficient: float | None = None
+
+    def __post_init__(self):
+        mu = self.friction_coefficient
+        if mu is not None and not (isinstance(mu, numbers.Real) and not isinstance(mu, bool)
+                                   and mu > 0.0):
+            raise ParameterError(f"Environment.friction_coefficient = {mu!r} is not allowed: "
+                                 "must be a number > 0 (inf for a no-slip floor) or None")
+
+    def friction_for(self, robot: "RobotParameters") -> float:
+        """The toe's Coulomb coefficient mu [-] for ``robot`` on this floor (the default
+        rule above when ``friction_coefficient`` is None)."""
+        if self.friction_coefficient is not None:
+            return float(self.friction_coefficient)
+        massless = robot.leg_mass == 0.0 and robot.leg_inertia == 0.0
+        return math.inf if massless else DEFAULT_FRICTION_COEFFICIENT
+
+
+def floor_label(mu: float) -> str:
+    """Name of a floor by its toe friction coefficient mu [-]: 'no slip' (inf) or 'mu = 1.0'."""
+    return "no slip" if math.isinf(mu) else f"mu = {mu:g}"
 
 
 @dataclass(frozen=True)
@@ -96,7 +133,7 @@ class RobotParameters:
     leg_friction_force : float
         Coulomb friction of the telescopic leg's sliding joint [N], per physical leg
         (assumed, default 0), opposing the leg-length rate; regularised linearly over
-        |dl/dt| < ``dynamics.LEG_FRICTION_SPEED`` (1 mm/s), so it holds a leg whose net
+        |dl/dt| < ``model.leg.LEG_FRICTION_SPEED`` (1 mm/s), so it holds a leg whose net
         spring force is below it almost still (stiction).
     leg_friction_side_load_coefficient : float
         Additional leg friction per unit side load of the sliding joint [-] (assumed,
@@ -156,10 +193,10 @@ class RobotParameters:
     battery_voltage: float = 36.0
     battery_resistance: float = 0.0
 
-    # -- derived quantities (SPEC.md section 4) ------------------------------------------
+    # -- derived quantities (docs/specification.md section 4) ------------------------------------------
     @property
     def gear_ratio(self) -> float:
-        """Combined gear ratio N = planetary x sprocket [-] (SPEC.md 4: 102.18)."""
+        """Combined gear ratio N = planetary x sprocket [-] (docs/specification.md section 4: 102.18)."""
         return self.planetary_ratio * self.sprocket_ratio
 
     @property
@@ -173,9 +210,35 @@ class RobotParameters:
         return 0.5 * self.hip_spacing
 
     @property
+    def torque_per_amp(self) -> float:
+        """Hip torque per ampere of motor current, N eta K_T [N m/A] (the compiled model's
+        counterpart is ``scoutsim.model.actuator.torque_per_amp``)."""
+        return self.gear_ratio * self.efficiency * self.torque_constant
+
+    @property
+    def stall_torque(self) -> float:
+        """Torque-speed line at zero speed, at one physical leg: N eta K_T V / R_A [N m]
+        (tau_max of the paper's eq. (3), written at the leg)."""
+        return self.torque_per_amp * self.battery_voltage / self.armature_resistance
+
+    @property
+    def torque_speed_slope(self) -> float:
+        """Torque lost per unit leg speed on the torque-speed line, at one physical leg:
+        N^2 eta K_T K_w / R_A [N m s/rad] (minus the slope A of the paper's eq. (3), written
+        at the leg)."""
+        N = self.gear_ratio
+        return N * N * self.efficiency * self.torque_constant * self.speed_constant \
+            / self.armature_resistance
+
+    @property
+    def no_load_speed(self) -> float:
+        """Leg speed where the torque-speed line crosses zero torque, V / (K_w N) [rad/s]."""
+        return self.battery_voltage / (self.speed_constant * self.gear_ratio)
+
+    @property
     def max_leg_torque(self) -> float:
         """Current-limited torque at one physical leg, N eta K_T i_max [N m]."""
-        return self.gear_ratio * self.efficiency * self.torque_constant * self.current_limit
+        return self.torque_per_amp * self.current_limit
 
     @property
     def total_mass(self) -> float:
@@ -189,7 +252,7 @@ class RobotParameters:
 
 @dataclass(frozen=True)
 class ControllerParameters:
-    """Bounding controller settings (paper Sec. II, Table I; SPEC.md section 6), SI units.
+    """Bounding controller settings (paper Sec. II, Table I; docs/specification.md section 6), SI units.
 
     Gains are per physical leg, leg side (N m/rad, N m s/rad). Angles are relative to the
     torso [rad], positive with the toe ahead of the hip.

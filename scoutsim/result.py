@@ -20,6 +20,31 @@ from .state import HybridState
 _LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
 
 
+#: Unit of each :meth:`SimulationResult.columns` name, by prefix (first match wins):
+#: (prefix, SI unit, exact match). Mode columns are codes without a unit.
+COLUMN_UNITS = (
+    ("t", "s", True), ("x", "m", True), ("y", "m", True), ("theta", "rad", True),
+    ("phi_", "rad", False), ("alpha_", "rad", False), ("dx", "m/s", True),
+    ("dy", "m/s", True), ("dtheta", "rad/s", True), ("dphi_", "rad/s", False),
+    ("dalpha_", "rad/s", False), ("leg_length_", "m", False), ("ground_force_", "N", False),
+    ("leg_axial_force_", "N", False), ("hip_torque_", "N m", False),
+    ("motor_current_", "A", False), ("motor_speed_", "rad/s", False),
+    ("belt_deflection_", "rad", False), ("stiction_holding_torque_", "N m", False),
+    ("toe_x_", "m", False), ("toe_y_", "m", False), ("toe_velocity_x_", "m/s", False),
+    ("strut_force_", "N", False), ("belt_torque_", "N m", False),
+    ("battery_voltage", "V", True), ("energy", "J", True),
+)
+
+
+def column_unit(name: str) -> str | None:
+    """Unit of a :meth:`SimulationResult.columns` name (None for mode codes and unknown
+    names)."""
+    for prefix, unit, exact in COLUMN_UNITS:
+        if (name == prefix) if exact else name.startswith(prefix):
+            return unit
+    return None
+
+
 def _leg(leg) -> int:
     try:
         return _LEGS[leg]
@@ -244,6 +269,31 @@ class SimulationResult:
             return cls(t=z["t"], state=z["state"], aux=z["aux"], modes=z["modes"],
                        events=events, outcome=meta["outcome"], t_end=meta["t_end"],
                        stats=meta["stats"], provenance=meta["provenance"])
+
+    def to_dataframe(self):
+        """All time series as a :class:`pandas.DataFrame` indexed by time ``t`` [s], one
+        column per :meth:`columns` name (SI; mode columns as integer codes, see
+        ``layout.LEG_STATE_NAMES`` / ``CONTACT_NAMES``); ``df.attrs["units"]`` maps each
+        column to its unit. Needs pandas (``pip install pandas``)."""
+        try:
+            import pandas as pd
+        except ImportError as exc:
+            raise ImportError("SimulationResult.to_dataframe needs pandas: pip install pandas "
+                              "(or pip install 'scoutsim[dataframe]')") from exc
+        cols = self.columns()
+        for n in cols:
+            if column_unit(n) is None:
+                cols[n] = cols[n].astype(np.int8)
+        df = pd.DataFrame(cols).set_index("t")
+        df.attrs["units"] = {n: column_unit(n) for n in cols}
+        return df
+
+    def plot(self, path=None, t_range=None):
+        """Time histories of the run (pitch, height, leg angles and states, hip torques) as a
+        Matplotlib figure, saved to ``path`` if given: a convenience for
+        :func:`scoutsim.presentation.plots.plot_run`."""
+        from .presentation.plots import plot_run
+        return plot_run(self, path, t_range)
 
     def columns(self) -> dict:
         """All time series as named 1-D arrays (for CSV export / DataFrames)."""

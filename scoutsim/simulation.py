@@ -20,13 +20,15 @@ import numpy as np
 from ._version import __version__
 from .control.bounding import SCHEDULABLE, BoundingController, controller_array
 from .model import layout as L
-from .model.dynamics import NSTIFF, motor_mode_from_rate
-from .model.packing import default_friction, robot_array
+from .model.evaluate import NSTIFF
+from .model.transmission import motor_mode_from_rate
+from .model.packing import robot_array
+from .model.sensors import read_sensors
 from .numerics.dopri5 import eval_workspace
 from .loop import run
 from .numerics.hybrid import HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
-from .parameters import (ControllerParameters, RobotParameters,
+from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult
 from .state import HybridState, InitialState
@@ -155,7 +157,7 @@ def default_initial_state(model: str = "II") -> InitialState:
 def fresh_modes(s: np.ndarray, P: np.ndarray):
     """Mode arrays (mi, mf) of a start from state ``s`` with both toes in flight; each
     motor joint's stick/slip mode from its gear rate by the same rule as after an impact
-    (:func:`~scoutsim.model.dynamics.motor_mode_from_rate`: slipping in the direction of
+    (:func:`~scoutsim.model.transmission.motor_mode_from_rate`: slipping in the direction of
     motion; at rest stuck if it has stiction, else "slipping" with zero Coulomb torque)."""
     mi = np.zeros(L.NMI, dtype=np.int64)
     mf = np.zeros(L.NMF)
@@ -262,7 +264,7 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     """
     P = robot_array(robot, model, clamp_torso=clamp_torso, clamp_legs=clamp_legs,
                     motor_circuit=motor_circuit)
-    C = controller_array(controller)
+    C = controller_array(controller, robot)
     s = np.array(start_state, dtype=float)
     mi, mf = fresh_modes(s, P)
     integrator = (integrator or IntegratorSettings(method="dopri5")).resolve(model)
@@ -294,7 +296,8 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
 
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,
-             model: str = "II", integrator: IntegratorSettings | None = None,
+             model: str = "II", environment: Environment | None = None,
+             integrator: IntegratorSettings | None = None,
              friction_coefficient: float | None = None,
              pitch_limit_deg: float = 60.0,
              passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
@@ -316,16 +319,18 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}
-        Actuation / transmission variant (SPEC.md 4-5).
+        Actuation / transmission variant (docs/specification.md sections 4-5).
+    environment : Environment, optional
+        The floor (:class:`~scoutsim.parameters.Environment`); default ``Environment()``:
+        Coulomb mu = :data:`~scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT` (1.0), no
+        slip for massless legs (their ground force lies along the leg).
     integrator : IntegratorSettings, optional
         Tolerances of the reference integrator.
     friction_coefficient : float, optional
-        Coulomb coefficient of the toe; ``inf`` = no slip. Default (None): the package's
-        default floor, :data:`~scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT` (1.0),
-        except for massless legs, whose ground force lies along the leg (SPEC: they carry
-        axial force only), for which slip is not defined: no slip.
+        Shortcut for ``environment=Environment(friction_coefficient=...)``: Coulomb
+        coefficient of the toe, ``inf`` = no slip (not together with ``environment``).
     pitch_limit_deg : float
-        |pitch| [deg] that counts as a fall (SPEC.md 3).
+        |pitch| [deg] that counts as a fall (docs/specification.md section 3).
     passive_touchdown_angles : (back, front) [rad]
         Massless-leg configuration only: where the legs are placed in flight.
     passive_touchdown_world : bool
@@ -344,8 +349,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     """
     robot = validate_robot(robot if robot is not None else RobotParameters())
     integ = (integrator or IntegratorSettings()).resolve(model)
-    if friction_coefficient is None:
-        friction_coefficient = default_friction(robot)
+    if environment is not None and friction_coefficient is not None:
+        raise ValueError("friction_coefficient and environment are not allowed together: "
+                         "give the floor's friction in environment=Environment(...)")
+    if environment is None:
+        environment = Environment(friction_coefficient=friction_coefficient)
+    friction_coefficient = environment.friction_for(robot)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
     if not (0.0 < pitch_limit_deg < 90.0):
@@ -378,7 +387,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                     passive_touchdown_world=passive_touchdown_world,
                     pitch_limit=math.radians(pitch_limit_deg))
     # the compiled controller runs unless the model is passive or the user brings their own
-    C = controller_array(cparams if user_ctrl is None else None)
+    C = controller_array(cparams if user_ctrl is None else None, robot)
     dt = cparams.control_period if cparams is not None else 1e-3
     init = initial_state or default_initial_state(model)
     resume = isinstance(init, HybridState)
@@ -455,7 +464,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
 
 
 def _sensors(s, cparams, model):
-    use_alpha = cparams is not None and cparams.sense_motor_angle and model == "II"
-    i0 = L.IALB if use_alpha else L.IPHB
-    return Sensors(hip_angle=s[i0:i0 + 2].copy(), hip_rate=s[L.NQ + i0:L.NQ + i0 + 2].copy(),
-                   leg_length=s[L.IL_B:L.IL_B + 2].copy())
+    """The readings a Python controller gets (as the compiled one, model/sensors.py)."""
+    y = np.zeros(L.NSN)
+    read_sensors(s, cparams is not None and cparams.sense_motor_angle and model == "II", y)
+    return Sensors(hip_angle=y[L.SN_ANGLE_B:L.SN_ANGLE_B + 2].copy(),
+                   hip_rate=y[L.SN_RATE_B:L.SN_RATE_B + 2].copy(),
+                   leg_length=y[L.SN_LENGTH_B:L.SN_LENGTH_B + 2].copy())

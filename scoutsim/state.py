@@ -18,7 +18,7 @@ __all__ = ["InitialState", "HybridState"]
 
 @dataclass(frozen=True)
 class InitialState:
-    """Initial state of the robot (SI units, angles in rad; SPEC.md 1 conventions).
+    """Initial state of the robot (SI units, angles in rad; docs/specification.md section 1 conventions).
 
     The default is how such a robot is set going into a bound: released in flight with
     both legs at their touchdown angles, torso level at a COM height of 0.33 m (toes about

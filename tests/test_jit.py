@@ -10,10 +10,13 @@ from numba.core.registry import CPUDispatcher
 
 from scoutsim import jit, loop
 from scoutsim.control import bounding
-from scoutsim.model import dynamics
+from scoutsim.model import (
+    actuator, contact, evaluate, impact, kinematics, kkt, leg, rigid_body, transmission, workspace,
+)
 from scoutsim.numerics import ark, dopri5, events, hybrid, transitions
 
-MODULES = (dynamics, ark, dopri5, events, transitions, hybrid, loop, bounding)
+MODULES = (kinematics, rigid_body, leg, actuator, transmission, contact, kkt, workspace,
+           impact, evaluate, ark, dopri5, events, transitions, hybrid, loop, bounding)
 
 
 def dispatchers(module):
@@ -33,12 +36,12 @@ def test_every_compiled_function_declares_its_reference_counting(module):
 
 
 def test_the_hot_loop_runs_without_reference_counting():
-    for f in (dynamics.evaluate_ws, dynamics.evaluate_command_change, dynamics.project_state,
+    for f in (evaluate.evaluate_ws, evaluate.evaluate_command_change, kinematics.project_state,
               ark.step3, hybrid.advance, transitions.settle_ws, events.event_values,
               bounding.bounding_step):
         assert f.targetoptions["_nrt"] is False, f.py_func.__name__
     # the functions that allocate keep it
-    for f in (loop.run, transitions.touchdown, dynamics.impact, dynamics.evaluate):
+    for f in (loop.run, transitions.touchdown, impact.impact, evaluate.evaluate):
         assert f.targetoptions["_nrt"] is True, f.py_func.__name__
 
 

@@ -1,11 +1,11 @@
 """Independent symbolic derivation of the planar Scout II equations of motion (SymPy).
 
 This script derives the Lagrangian dynamics from scratch, from the kinetic and potential
-energies written down directly from SPEC.md sections 1, 2 and 5 -- it shares no code with
-``scoutsim.model.dynamics`` and is used by ``tests/model/test_eom_independent.py`` to
+energies written down directly from docs/specification.md sections 1, 2 and 5 -- it shares no code with
+``scoutsim.model.rigid_body`` and is used by ``tests/model/test_eom_independent.py`` to
 cross-check the compiled implementation.
 
-Model (SPEC.md 1, 2, 5)
+Model (docs/specification.md section 1, 2, 5)
 -----------------------
 Generalized coordinates ``q = [x, y, theta, phi_b, phi_f, alpha_b, alpha_f]``.
 

@@ -7,7 +7,7 @@ module runs a grid of starts (forward speed, pitch rate, torso height; the rest 
 touchdown angles) per model variant and floor, in parallel processes, and reports the
 fraction that reaches steady bounding
 (:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`) and the speed of the cycle
-reached; :func:`scoutsim.plotting.plot_basin_map` draws it as a map.
+reached; :func:`scoutsim.presentation.plots.plot_basin_map` draws it as a map.
 
 The default grid spans pitch rates of both signs, -150 to +250 deg/s, wide enough to show
 the basin's edges: the controller has no torso feedback, and the starts that enter bounding
@@ -22,7 +22,7 @@ import math
 import os
 from dataclasses import dataclass, field
 
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, floor_label
 from .parallel import map_tasks
 
 DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
@@ -34,11 +34,6 @@ DEFAULT_FLOORS = (DEFAULT_FRICTION_COEFFICIENT, math.inf)
 
 BASIN_COLUMNS = ("model", "friction", "speed", "pitch_rate_deg_s", "height", "outcome",
                  "steady_bounding", "mean_speed_m_s", "n_steady_strides")
-
-
-def floor_label(mu: float) -> str:
-    """'no slip' or 'mu = 1.0'."""
-    return "no slip" if math.isinf(mu) else f"mu = {mu:g}"
 
 
 def _start_of(task: dict) -> dict:

@@ -1,6 +1,6 @@
-"""Strides and gait metrics of a bounding run (SPEC.md section 8; paper Sec. IV).
+"""Strides and gait metrics of a bounding run (docs/specification.md section 8; paper Sec. IV).
 
-A **stride** runs from one back-leg lift-off to the next (SPEC.md 8; paper Sec. IV.C:
+A **stride** runs from one back-leg lift-off to the next (docs/specification.md section 8; paper Sec. IV.C:
 "steady state strides defined by the back leg lift-off event"). For every stride this module
 computes the quantities the paper compares between simulation and experiment (Fig. 12):
 stride frequency, duty factor of each virtual leg, maximum and minimum torso pitch and COM
@@ -145,7 +145,7 @@ def stance_intervals(result, leg) -> np.ndarray:
     """Stance intervals of one virtual leg from the plant's contact events.
 
     A stance starts at a ``"touchdown"`` event and ends at the next ``"liftoff"`` event of
-    the same leg (continuous-time event times; SPEC.md 8). A ``"slide_start"`` or any other
+    the same leg (continuous-time event times; docs/specification.md section 8). A ``"slide_start"`` or any other
     event does not end a stance. A stance still open at the end of the data ends at
     ``result.t_end``. If the first contact event of the leg is a lift-off, the leg started
     the run on the ground and that stance starts at the first sample time ``result.t[0]``.
@@ -198,7 +198,7 @@ def stance_overlap(intervals: np.ndarray, a: float, b: float) -> float:
 # -----------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Stride:
-    """Metrics of one stride, back-leg lift-off to the next (SPEC.md 8; paper Sec. IV).
+    """Metrics of one stride, back-leg lift-off to the next (docs/specification.md section 8; paper Sec. IV).
 
     Supports attribute access (``s.period_s``) and mapping access (``s["period_s"]``,
     ``dict(s)``).
@@ -312,7 +312,7 @@ def _strides(result, transient_s, stances):
 # -----------------------------------------------------------------------------------------
 @dataclass
 class GaitMetrics:
-    """Strides and steady-state gait metrics of one run (SPEC.md 8; paper Sec. IV, Fig. 12).
+    """Strides and steady-state gait metrics of one run (docs/specification.md section 8; paper Sec. IV, Fig. 12).
 
     Build with :func:`gait_metrics`. The mean attributes (``mean_speed_m_s``,
     ``stride_frequency_hz``, ``duty_factor_back``, ...; see :data:`STRIDE_METRICS`) are the
@@ -440,7 +440,7 @@ class GaitMetrics:
         Paper Fig. 11: "the motors are saturated most of the time". A sample with
         controller leg state stance-retraction (``leg_state == 1``) counts as saturated
         when the motor's operating point lies on the boundary of what the amplifier and
-        motor can deliver (SPEC.md 4): on the current limit, |i| >= (1 - 1e-3) i_max, or
+        motor can deliver (docs/specification.md section 4): on the current limit, |i| >= (1 - 1e-3) i_max, or
         on the torque-speed line, |R_A i + K_w w_m| >= (1 - 1e-3) V_b. The retraction
         law (eqs. 2-5) commands exactly that boundary, so this measures how much of the
         retraction the motor spends there rather than below it (eq. 5's zero torque, or
@@ -485,7 +485,7 @@ class GaitMetrics:
 
     # -- export ---------------------------------------------------------------------------
     def summary(self, result) -> dict:
-        """JSON-safe run summary (SPEC.md 8; paper Fig. 12 quantities).
+        """JSON-safe run summary (docs/specification.md section 8; paper Fig. 12 quantities).
 
         Keys, in order: :data:`SUMMARY_KEYS` (outcome, steady-state means, the maximum
         ratio |tangential|/normal ground force ``max_friction_ratio`` from
@@ -547,7 +547,7 @@ def converged_tail(strides, tol):
 
 
 def gait_metrics(result, transient_s: float = 2.0, period_tolerance: float = 0.05) -> GaitMetrics:
-    """Split a run into strides and compute the gait metrics (SPEC.md 8; paper Sec. IV).
+    """Split a run into strides and compute the gait metrics (docs/specification.md section 8; paper Sec. IV).
 
     Parameters
     ----------

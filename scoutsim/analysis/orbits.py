@@ -1,7 +1,7 @@
 """Periodic orbits (Poincaré analysis) of bounding: return maps, fixed points, Floquet
 multipliers and a one-parameter continuation (docs/orbits.md).
 
-Passive conservative model (SPEC.md 2: massless, undamped legs placed in flight at
+Passive conservative model (docs/specification.md section 2: massless, undamped legs placed in flight at
 prescribed touchdown angles from the world vertical, ``model="passive"``):
 
 * **Section**: the torso apex in double flight, ``dy = 0`` with ``y`` at a maximum. The
@@ -71,7 +71,7 @@ class MapError(RuntimeError):
 
 
 def passive_robot(robot: RobotParameters | None = None) -> RobotParameters:
-    """The massless-leg conservative configuration (SPEC.md 2) of ``robot`` (default Scout II):
+    """The massless-leg conservative configuration (docs/specification.md section 2) of ``robot`` (default Scout II):
     leg mass, leg inertia and leg damping set to zero."""
     import dataclasses
     base = robot if robot is not None else RobotParameters()
@@ -111,7 +111,7 @@ def _glitched(events) -> bool:
 
 
 def _passive_rhs(rob: RobotParameters, anchors):
-    """Torso equations of the massless-leg passive model (SPEC.md 2): up to two undamped
+    """Torso equations of the massless-leg passive model (docs/specification.md section 2): up to two undamped
     axial springs k_v = legs_per_virtual_leg * k between the hips and pinned toes."""
     m, I, g = rob.torso_mass, rob.torso_inertia, rob.gravity
     k = rob.legs_per_virtual_leg * rob.leg_stiffness
@@ -243,7 +243,7 @@ def passive_apex_map(z, touchdown_angles, *, robot: RobotParameters | None = Non
     rtol : integrator tolerance (rtol = atol; SciPy DOP853 with located events).
     max_period : longest stride looked for [s].
 
-    The passive equations (SPEC.md 2: torso with up to two undamped massless springs) are
+    The passive equations (docs/specification.md section 2: torso with up to two undamped massless springs) are
     integrated here with SciPy's DOP853, phase by phase with located touchdown (toe height
     0, descending) and lift-off (l = l0) events. They are the same model as
     ``simulate(..., model="passive")`` with ``passive_robot()`` and world-referenced

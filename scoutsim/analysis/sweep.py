@@ -180,39 +180,10 @@ class SweepResult:
         pq.write_table(pa.table(self.columns()), path)
 
     def plot_map(self, x: str, y: str, value: str = "mean_speed_m_s", path=None):
-        """Map of ``value`` over two swept parameters (grid sweeps); non-steady points
-        hatched. Angles (names ending in 'angle' / 'limit') are shown in degrees."""
-        from matplotlib.figure import Figure
-        xs = self.column(x)
-        ys = self.column(y)
-        vs = self.column(value)
-        ux, uy = np.unique(xs), np.unique(ys)
-        Z = np.full((len(uy), len(ux)), np.nan)
-        steady = np.zeros_like(Z, dtype=bool)
-        for xi, yi, v, r in zip(xs, ys, vs, self.rows):
-            j, i = np.searchsorted(ux, xi), np.searchsorted(uy, yi)
-            Z[i, j] = v
-            steady[i, j] = bool(r.get("steady_bounding"))
-
-        def edge(name, vals):
-            deg = name.endswith(("angle_front", "angle_back", "limit_front", "limit_back"))
-            return (np.degrees(vals), f"{name} [deg]") if deg else (vals, name + " [SI]")
-        gx, lx = edge(x, ux)
-        gy, ly = edge(y, uy)
-        fig = Figure(figsize=(6.5, 5))
-        ax = fig.add_subplot()
-        m = ax.pcolormesh(gx, gy, Z, shading="nearest", cmap="viridis")
-        fig.colorbar(m, ax=ax, label=value)
-        for i in range(len(uy)):
-            for j in range(len(ux)):
-                if not steady[i, j]:
-                    ax.plot(gx[j], gy[i], "x", color="w", ms=5)
-        ax.set_xlabel(lx)
-        ax.set_ylabel(ly)
-        ax.set_title(f"{value} (x: not steady bounding)")
-        if path is not None:
-            fig.savefig(path, dpi=120, bbox_inches="tight")
-        return fig
+        """Map of ``value`` over two swept parameters (grid sweeps); a convenience for
+        :func:`scoutsim.presentation.plots.plot_sweep_map` (needs Matplotlib)."""
+        from ..presentation.plots import plot_sweep_map
+        return plot_sweep_map(self, x, y, value, path)
 
 
 def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,

@@ -34,7 +34,7 @@ def register(sub, common) -> None:
 
 
 def execute(args) -> int:
-    from ..animation import ANIMATION_SUFFIXES, save_animation
+    from ..presentation.animation import ANIMATION_SUFFIXES, save_animation
     p = input_file(args.input)
     check_time_window(args)
     out = Path(args.out)

@@ -20,7 +20,8 @@ import time
 
 from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_stats, basin_tasks,
-                              floor_label, run_basin_tasks)
+                              run_basin_tasks)
+from ..parameters import floor_label
 from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, float_list, friction_list,
                       integrator, load_parameters, out_dir, positive_int, show_progress,
                       write_json)
@@ -130,7 +131,7 @@ def execute(args) -> int:
     write_json(out / "basin.json", summary)
     written = "basin.csv, basin.json"
     if not args.no_plots:
-        from ..plotting import plot_basin_map
+        from ..presentation.plots import plot_basin_map
         from ..simulation import InitialState
         d = InitialState()
         plot_basin_map(rows, out / "basin.png", default_start=(d.dx, math.degrees(d.dtheta)))

@@ -88,7 +88,7 @@ def execute(args) -> int:
     print(table.format())
     written = ["errors.csv", "errors_detail.csv", "errors.md"]
     if not args.no_plots:
-        from ..validation.figures import write_figures
+        from ..presentation.paper_figures import write_figures
         from ..validation.phase import phase_compare
         figs = write_figures(logs, table, out, transient_s=args.transient)
         written += [p.name for p in figs.values()]

@@ -62,10 +62,10 @@ def execute(args) -> int:
     t_range = None if (args.t0 is None and args.t1 is None) else (t0, t1)
     with usage_errors():
         if is_log:
-            from ..validation.figures import plot_log
+            from ..presentation.paper_figures import plot_log
             plot_log(obj, out, t_range=t_range)
         else:
-            from ..plotting import plot_run
+            from ..presentation.plots import plot_run
             plot_run(obj, out, t_range=t_range)
     print(f"wrote {out}")
     return 0

@@ -16,25 +16,19 @@ import sys
 import time
 from pathlib import Path
 
+from ..result import COLUMN_UNITS, column_unit
+from ..state import InitialState
 from ._common import (MODELS, dumps, finite_float, integrator, load_parameters, out_dir,
                       positive_float, show_progress, usage_errors, write_json)
 
 NAME = "run"
 
-#: Unit of each ``result.columns()`` name, by prefix (first match wins); written into the
-#: header of ``timeseries.csv`` as ``name [unit]``. Mode columns are codes without a unit.
-TIMESERIES_UNITS = (
-    ("t", "s", True), ("x", "m", True), ("y", "m", True), ("theta", "rad", True),
-    ("phi_", "rad", False), ("alpha_", "rad", False), ("dx", "m/s", True),
-    ("dy", "m/s", True), ("dtheta", "rad/s", True), ("dphi_", "rad/s", False),
-    ("dalpha_", "rad/s", False), ("leg_length_", "m", False), ("ground_force_", "N", False),
-    ("leg_axial_force_", "N", False), ("hip_torque_", "N m", False),
-    ("motor_current_", "A", False), ("motor_speed_", "rad/s", False),
-    ("belt_deflection_", "rad", False), ("stiction_holding_torque_", "N m", False),
-    ("toe_x_", "m", False), ("toe_y_", "m", False), ("toe_velocity_x_", "m/s", False),
-    ("strut_force_", "N", False), ("belt_torque_", "N m", False),
-    ("battery_voltage", "V", True), ("energy", "J", True),
-)
+#: Unit of each ``result.columns()`` name (one home: :data:`scoutsim.result.COLUMN_UNITS`),
+#: written into the header of ``timeseries.csv`` as ``name [unit]``.
+TIMESERIES_UNITS = COLUMN_UNITS
+
+
+_DEFAULT_START = InitialState()
 
 
 def register(sub, common) -> None:
@@ -45,24 +39,17 @@ def register(sub, common) -> None:
     run.add_argument("--model", choices=MODELS, default="II",
                      help="actuator/transmission model (default: II)")
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
-                     help="initial forward speed [m/s] (default: 1.2)")
+                     help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g})")
     run.add_argument("--height", type=positive_float, default=None, metavar="Y",
-                     help="initial torso COM height [m] (default: 0.33)")
+                     help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g})")
     run.add_argument("--pitch-rate", type=finite_float, default=None, metavar="W",
-                     help="initial pitch rate [deg/s] (default: 0)")
+                     help="initial pitch rate [deg/s] (default: "
+                     f"{math.degrees(_DEFAULT_START.dtheta):g})")
     run.add_argument("--no-plots", action="store_true", help="do not write run.png and "
                      "torque_speed.png")
     run.add_argument("--json", action="store_true",
                      help="print the summary as JSON on stdout instead of the table")
     run.set_defaults(func=execute)
-
-
-def column_unit(name: str) -> str | None:
-    """Unit of a ``result.columns()`` name (None for codes and unknown names)."""
-    for prefix, unit, exact in TIMESERIES_UNITS:
-        if (name == prefix) if exact else name.startswith(prefix):
-            return unit
-    return None
 
 
 def write_timeseries_csv(result, path) -> Path:
@@ -154,7 +141,7 @@ def execute(args) -> int:
     result.save(files[1])
     write_json(files[2], summary)
     if not args.no_plots:
-        from ..plotting import plot_run, plot_torque_speed
+        from ..presentation.plots import plot_run, plot_torque_speed
         plot_run(result, out / "run.png")
         plot_torque_speed(result, "both", out / "torque_speed.png")
         files += [out / "run.png", out / "torque_speed.png"]

@@ -1,8 +1,12 @@
-"""The Scout II bounding controller (paper Sec. II, Fig. 3-4, eqs. 2-5, Table I; SPEC.md 6).
+"""The Scout II bounding controller (paper Sec. II, Fig. 3-4, eqs. 2-5, Table I;
+docs/specification.md section 6).
 
-Per virtual leg, no torso feedback, sampled at 1 kHz with zero-order hold. Sensors: hip
-angle and rate relative to the torso (the motor-side angle alpha in Model II by default)
-and leg length. Leg states and transitions:
+Per virtual leg, no torso feedback, sampled at 1 kHz with zero-order hold. The controller
+sees only its sensor readings (``layout.SN_*``, read by :mod:`scoutsim.model.sensors`: hip
+angle and rate relative to the torso, the motor-side angle alpha in Model II by default,
+and leg length) and its own parameters (:func:`controller_array`: Table I, plus the motor
+constants of eqs. 2-4 and the leg rest length, packed once from the robot); never the
+plant's state or parameter array. Leg states and transitions:
 
 * flight -> stance-retraction when the leg compression l0 - l exceeds the touchdown
   threshold;
@@ -29,16 +33,20 @@ import numpy as np
 
 from ..jit import kernel
 from ..model.layout import (
-    IALB, IL_B, IPHB, LS_BRAKE, LS_FLIGHT, LS_RETRACTION, NQ, P_ETA, P_IMAX, P_KT, P_KW,
-    P_L0, P_N, P_RA, P_VB,
+    LS_BRAKE, LS_FLIGHT, LS_RETRACTION, NSN, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B,
 )
-from ..model.packing import robot_array
-from ..parameters import ControllerParameters
+from ..model.sensors import read_sensors
+from ..parameters import ControllerParameters, RobotParameters
 
 # controller parameter array layout
 (C_TD_B, C_TD_F, C_SW_B, C_SW_F, C_KPF_B, C_KDF_B, C_KPF_F, C_KDF_F, C_KPB_B, C_KDB_B,
  C_KPB_F, C_KDB_F, C_TD_COMP, C_LO_COMP, C_SENSE_ALPHA, C_ENABLED) = range(16)
-NC = 16
+# what the controller knows of the robot (packed once by controller_array)
+C_L0 = 16          # leg rest length l0 [m] (compression = l0 - sensed length)
+C_TAU_MAX = 17     # tau_max = N eta K_T V_bar / R_A of eq. (3), at the leg [N m]
+C_SLOPE = 18       # A = -N^2 eta K_T K_w / R_A of eq. (2), at the leg [N m s/rad]
+C_TAU_LIMIT = 19   # N eta K_T i_max of eq. (4), at the leg [N m]
+NC = 20
 
 
 #: ControllerParameters field -> slot of the compiled controller's array, for the fields a
@@ -49,11 +57,25 @@ SCHEDULABLE = {
 }
 
 
-def controller_array(c: ControllerParameters | None) -> np.ndarray:
-    """Pack ControllerParameters into the compiled controller's array (None = disabled)."""
+def retraction_constants(robot: RobotParameters) -> tuple[float, float, float]:
+    """(tau_max, A, torque limit) of the stance-retraction law, eqs. (2)-(4), at the leg
+    [N m, N m s/rad, N m] from the motor's constants: tau_max = N eta K_T V / R_A,
+    A = -N^2 eta K_T K_w / R_A, limit = N eta K_T i_max (the robot's torque-speed line
+    and current limit, :class:`~scoutsim.parameters.RobotParameters`)."""
+    return robot.stall_torque, -robot.torque_speed_slope, robot.max_leg_torque
+
+
+def controller_array(c: ControllerParameters | None,
+                     robot: RobotParameters | None = None) -> np.ndarray:
+    """Pack ControllerParameters, and what the controller knows of ``robot`` (leg rest
+    length, the motor constants of eqs. 2-4; default Scout II), into the compiled
+    controller's array (``c`` None = disabled)."""
     a = np.zeros(NC)
     if c is None:
         return a
+    robot = robot if robot is not None else RobotParameters()
+    a[C_L0] = robot.leg_rest_length
+    a[C_TAU_MAX], a[C_SLOPE], a[C_TAU_LIMIT] = retraction_constants(robot)
     a[C_TD_B] = c.touchdown_angle_back
     a[C_TD_F] = c.touchdown_angle_front
     a[C_SW_B] = c.sweep_limit_back
@@ -74,17 +96,12 @@ def controller_array(c: ControllerParameters | None) -> np.ndarray:
 
 
 @kernel
-def retraction_torque(rate, P):
+def retraction_torque(rate, C):
     """Stance-retraction command, eqs. (2)-(5) at the leg, per physical leg [N m].
 
     rate: hip angular rate relative to the torso [rad/s]."""
-    N = P[P_N]
-    eta = P[P_ETA]
-    kt = P[P_KT]
-    tau_max = N * eta * kt * P[P_VB] / P[P_RA]
-    slope = -N * N * eta * kt * P[P_KW] / P[P_RA]
-    tau = -tau_max + slope * rate
-    lim = N * eta * kt * P[P_IMAX]
+    tau = -C[C_TAU_MAX] + C[C_SLOPE] * rate
+    lim = C[C_TAU_LIMIT]
     # eq. (5) before eq. (4): read literally in the paper's order, (4) would turn a positive
     # command larger than the current limit (a leg spun backwards beyond 1.4 x the motor's
     # no-load speed) into full negative torque; the paper's footnote 2 gives (4) for
@@ -97,16 +114,9 @@ def retraction_torque(rate, P):
 
 
 @kernel
-def sensed(s, C, leg):
-    """Sensor readings (angle [rad], rate [rad/s], leg length [m]) of one leg."""
-    if C[C_SENSE_ALPHA] > 0.5:
-        return s[IALB + leg], s[NQ + IALB + leg], s[IL_B + leg]
-    return s[IPHB + leg], s[NQ + IPHB + leg], s[IL_B + leg]
-
-
-@kernel
-def bounding_step(s, P, C, ls, cmd, transitions):
-    """One controller sample: update leg states ``ls`` and hold commands ``cmd``.
+def bounding_step(y, C, ls, cmd, transitions):
+    """One controller sample from the sensor readings ``y`` (``layout.SN_*``): update leg
+    states ``ls`` and hold commands ``cmd``.
 
     transitions[leg] is set to a bit mask of what happened this sample (1 touchdown
     detected, 2 sweep limit passed, 4 lift-off detected)."""
@@ -116,10 +126,11 @@ def bounding_step(s, P, C, ls, cmd, transitions):
         transitions[0] = 0
         transitions[1] = 0
         return
-    l0 = P[P_L0]
+    l0 = C[C_L0]
     for leg in range(2):
-        ang, rate, ll = sensed(s, C, leg)
-        comp = l0 - ll
+        ang = y[SN_ANGLE_B + leg]
+        rate = y[SN_RATE_B + leg]
+        comp = l0 - y[SN_LENGTH_B + leg]
         sweep = C[C_SW_B + leg]
         tr = 0
         st = ls[leg]
@@ -139,7 +150,7 @@ def bounding_step(s, P, C, ls, cmd, transitions):
         if st == LS_FLIGHT:
             cmd[leg] = C[C_KPF_B + 2 * leg] * (C[C_TD_B + leg] - ang) - C[C_KDF_B + 2 * leg] * rate
         elif st == LS_RETRACTION:
-            cmd[leg] = retraction_torque(rate, P)
+            cmd[leg] = retraction_torque(rate, C)
         else:
             cmd[leg] = C[C_KPB_B + 2 * leg] * (sweep - ang) - C[C_KDB_B + 2 * leg] * rate
 
@@ -164,10 +175,10 @@ class BoundingController:
     def __init__(self, params: ControllerParameters | None = None):
         self.params = params or ControllerParameters()
         self.leg_states = np.zeros(2, dtype=np.int64)
-        self._P = None
+        self._C = None
 
     def reset(self, robot, initial_sensors=None):
-        self._P = robot_array(robot, "I")
+        self._C = controller_array(self.params, robot)
         self.leg_states[:] = LS_FLIGHT
         if initial_sensors is not None:
             for leg in range(2):
@@ -176,20 +187,22 @@ class BoundingController:
                     self.leg_states[leg] = LS_RETRACTION
 
     def command(self, t, sensors):
-        C = controller_array(self.params)
-        s = np.zeros(16)
-        s[IALB:IALB + 2] = sensors.hip_angle
-        s[IPHB:IPHB + 2] = sensors.hip_angle
-        s[NQ + IALB:NQ + IALB + 2] = sensors.hip_rate
-        s[NQ + IPHB:NQ + IPHB + 2] = sensors.hip_rate
-        s[IL_B:IL_B + 2] = sensors.leg_length
+        if self._C is None:
+            raise RuntimeError("BoundingController.command before reset(robot): the "
+                               "controller needs the robot's motor constants")
+        y = np.zeros(NSN)
+        y[SN_ANGLE_B:SN_ANGLE_B + 2] = sensors.hip_angle
+        y[SN_RATE_B:SN_RATE_B + 2] = sensors.hip_rate
+        y[SN_LENGTH_B:SN_LENGTH_B + 2] = sensors.leg_length
         cmd = np.zeros(2)
         tr = np.zeros(2, dtype=np.int64)
-        bounding_step(s, self._P, C, self.leg_states, cmd, tr)
+        bounding_step(y, self._C, self.leg_states, cmd, tr)
         return float(cmd[0]), float(cmd[1])
 
 
-def max_retraction_torque(P) -> float:
-    """tau_max of eq. (3) at the leg [N m] (for reports)."""
-    return P[P_N] * P[P_ETA] * P[P_KT] * P[P_VB] / P[P_RA]
+@kernel
+def sense(s, C, y):
+    """Read the sensors this controller uses (motor side if ``sense_motor_angle``) from the
+    plant state s into y: the one place where the run loop crosses the boundary."""
+    read_sensors(s, C[C_SENSE_ALPHA] > 0.5, y)
 

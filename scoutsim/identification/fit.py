@@ -36,7 +36,7 @@ the cost is evaluated at the interval's ends x +- t_q s / S_k v_k, and a directi
 which it rises by less than ``flat_ratio`` (1/4) of that, or by more than 4 times, is
 *undetermined* (infinite variance): the quadratic model behind the interval does not hold
 there. This catches what finite differences alone cannot: a combination the model does
-not depend on at all (with the torso clamped only J_2 + N^2 J_1 enters, SPEC.md 5, a
+not depend on at all (with the torso clamped only J_2 + N^2 J_1 enters, docs/specification.md section 5, a
 curved valley in ln J_1, ln J_2) still shows a small nonzero singular value from the
 stencil's curvature, which would give a false interval; along the straight singular
 direction the cost then rises thousands of times faster than predicted, because the
@@ -395,41 +395,17 @@ class IdentificationResult:
         return path
 
     def plot(self, out_dir) -> list:
-        """One figure per log: logged vs fitted encoder angle (and current), residuals."""
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        """One figure per log, ``out_dir/fit_<n>.png``: logged vs fitted (and starting)
+        encoder angle and current, residuals; a convenience for
+        :func:`scoutsim.presentation.identification_plots.plot_fit` (needs Matplotlib).
+        Returns the paths written."""
+        from ..presentation.identification_plots import plot_fit
         files = []
         for i, d in enumerate(self.data):
             fit_a, fit_c, _ = simulate_log(d, self.robot)
-            st_a, st_c, _ = simulate_log(d, self.start_robot)
-            t = d.log.t - d.log.t[0]
-            nrow = 3 if d.current is not None else 2
-            fig, axs = plt.subplots(nrow, 1, figsize=(8, 2.6 * nrow), sharex=True)
-            for leg in d.legs:
-                nm = ("back", "front")[leg]
-                axs[0].plot(t, np.degrees(d.angle[:, leg]), ".", ms=1.5, alpha=0.5,
-                            label=f"{nm}: log")
-                axs[0].plot(t, np.degrees(fit_a[:, leg]), "-", lw=1, label=f"{nm}: fitted")
-                axs[0].plot(t, np.degrees(st_a[:, leg]), ":", lw=1, label=f"{nm}: start")
-                axs[1].plot(t, np.degrees(d.angle[:, leg] - fit_a[:, leg]), lw=0.6,
-                            label=f"{nm}")
-                if d.current is not None:
-                    axs[2].plot(t, d.current[:, leg], ".", ms=1.5, alpha=0.5, label=f"{nm}: log")
-                    axs[2].plot(t, fit_c[:, leg], "-", lw=1, label=f"{nm}: fitted")
-            axs[0].set_ylabel("encoder angle [deg]")
-            axs[1].set_ylabel("residual [deg]")
-            axs[0].legend(fontsize=7, ncol=2)
-            axs[1].legend(fontsize=7)
-            if d.current is not None:
-                axs[2].set_ylabel("motor current [A]")
-                axs[2].legend(fontsize=7, ncol=2)
-            axs[-1].set_xlabel("t [s]")
-            axs[0].set_title(f"{d.rig.name}: {d.name}", fontsize=9)
-            fig.tight_layout()
+            start_a, _, _ = simulate_log(d, self.start_robot)
             f = Path(out_dir) / f"fit_{i + 1}.png"
-            fig.savefig(f, dpi=110)
-            plt.close(fig)
+            plot_fit(d, fit_a, fit_c, start_a, f)
             files.append(f)
         return files
 
@@ -659,7 +635,7 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
             start=float(getattr(base, n)), bounds=(math.exp(xlo[i]), math.exp(xhi[i])),
             true=(float(true[n]) if n in true else None))
     # the combination the clamped rigs determine when both gear inertias are fitted:
-    # the reflected gear-train inertia J_2 + N^2 J_1 (SPEC.md 5)
+    # the reflected gear-train inertia J_2 + N^2 J_1 (docs/specification.md section 5)
     combos = {}
     if "drive_gear_inertia" in names and "driven_gear_inertia" in names:
         i1, i2 = names.index("drive_gear_inertia"), names.index("driven_gear_inertia")

@@ -48,7 +48,7 @@ __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_ri
 
 RIG_NAMES = ("free-swing", "flight-steps", "stall")
 
-#: The Model II hip-unit parameters (SPEC.md 5) and the transmission-loss parameters
+#: The Model II hip-unit parameters (docs/specification.md section 5) and the transmission-loss parameters
 #: (docs/model.md), with their SI units: what the rigs exercise and identification fits.
 HIP_PARAMETERS = {
     "drive_gear_inertia": "kg m^2", "driven_gear_inertia": "kg m^2",
@@ -373,7 +373,7 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
         "encoder": "motor-side angle alpha (motor encoder), at the leg",
         "sensor_noise": None if noise is None else asdict(noise),
         "noise_seed": seed if (seed is None or isinstance(seed, int)) else str(seed),
-        "torque_per_amp_nm_a": robot.gear_ratio * robot.efficiency * robot.torque_constant,
+        "torque_per_amp_nm_a": robot.torque_per_amp,
         "true_parameters": hip_parameters(robot),
         "robot": asdict(robot),
     }

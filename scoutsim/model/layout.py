@@ -1,7 +1,7 @@
 """Index layout of the compiled model's flat arrays.
 
 The compiled core (Numba) works on flat float64/int64 arrays; this module is the one place
-that names their slots. Leg index 0 is the back virtual leg, 1 the front (SPEC.md 1:
+that names their slots. Leg index 0 is the back virtual leg, 1 the front (docs/specification.md section 1:
 back hip at -L, front hip at +L along the torso axis).
 """
 
@@ -31,6 +31,9 @@ MODEL_I = 1
 MODEL_II = 2
 MODEL_PASSIVE = 3
 MODEL_NAMES = {"ideal": MODEL_IDEAL, "I": MODEL_I, "II": MODEL_II, "passive": MODEL_PASSIVE}
+#: display name of each model variant (tables, legends, titles)
+MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
+                "passive": "passive (no controller)"}
 
 # --- contact modes (per leg) ------------------------------------------------------------
 FLIGHT = 0
@@ -38,6 +41,17 @@ STICK = 1   # toe pinned at its anchor, spring/damper along the leg axis
 SLIDE = 2   # toe on the ground sliding (frictionless or Coulomb)
 STRUT = 3   # leg at its stop l0 with the toe pinned: rigid strut
 CONTACT_NAMES = ("flight", "stick", "slide", "strut")
+
+# --- constraint-row kinds (model/contact.py, model/kkt.py, model/impact.py) ---------------
+# Each row of the constraint Jacobian R carries its kind and its leg; the kinds decide how a
+# row's multiplier is read (ground force, strut force, holding torque) and which rows the
+# reduced KKT solve eliminates (ROW_GEAR).
+ROW_TOE_ACROSS = 1   # pinned toe: no toe velocity across the leg (spring leg or strut)
+ROW_TOE_ALONG = 2    # strut: no toe velocity along the leg (leg length held at the stop)
+ROW_GEAR = 3         # on the Model II gear angle: a stuck motor joint; the rigid belt of impact
+ROW_MASSLESS = 4     # massless leg in flight: its angle is prescribed
+ROW_CLAMP_TORSO = 5  # bench rig: torso x, y, theta held
+ROW_CLAMP_LEG = 6    # bench rig: leg angle phi held
 
 # --- motor-joint friction modes (Model II, per leg) -------------------------------------
 SLIP_NEG = -1
@@ -87,7 +101,7 @@ P_LEG_C_ANGLE = 44   # leg damper factor (1 + a phi^2) [1/rad^2]
 NP_ = 45
 
 # --- motor circuit (P_CIRCUIT) -----------------------------------------------------------
-CIRCUIT_AMPLIFIER = 0   # current amplifier with the limits of SPEC.md 4 (normal operation)
+CIRCUIT_AMPLIFIER = 0   # current amplifier with the limits of docs/specification.md section 4 (normal operation)
 CIRCUIT_OPEN = 1        # motor leads open: no current, the gear train is back-driven freely
 CIRCUIT_SHORT = 2       # motor leads shorted: i = -K_w w_m / R_A (back-EMF braking)
 CIRCUIT_NAMES = {"amplifier": CIRCUIT_AMPLIFIER, "open": CIRCUIT_OPEN, "short": CIRCUIT_SHORT}
@@ -192,6 +206,15 @@ VIOLATION_NAMES = {
     V_BEYOND_STOP: "pinned leg extended beyond its stop",
     V_TOE_ENTERS_GROUND: "toe in flight at the ground moving into it",
 }
+
+# --- sensor readings (model/sensors.py -> the controller) -------------------------------
+SN_ANGLE_B = 0    # hip angle relative to the torso [rad], back, front
+SN_ANGLE_F = 1
+SN_RATE_B = 2     # hip rate [rad/s]
+SN_RATE_F = 3
+SN_LENGTH_B = 4   # leg length [m]
+SN_LENGTH_F = 5
+NSN = 6
 
 # --- controller leg states ------------------------------------------------------------
 LS_FLIGHT = 0

@@ -7,15 +7,14 @@ import math
 
 import numpy as np
 
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
+from ..parameters import Environment, RobotParameters
 from . import layout as L
 
 
 def default_friction(robot: RobotParameters) -> float:
-    """The default floor for ``robot``: Coulomb mu = DEFAULT_FRICTION_COEFFICIENT, except
-    for massless legs (axial force only, slip not defined): no slip."""
-    massless = robot.leg_mass == 0.0 and robot.leg_inertia == 0.0
-    return math.inf if massless else DEFAULT_FRICTION_COEFFICIENT
+    """The default floor's Coulomb mu for ``robot`` (:meth:`Environment.friction_for`:
+    DEFAULT_FRICTION_COEFFICIENT, or no slip for massless legs)."""
+    return Environment().friction_for(robot)
 
 
 def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: float | None = None,
@@ -37,12 +36,12 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     passive_touchdown_world : massless legs only: angles from the world vertical (True) or
         relative to the torso (False).
     pitch_limit : |theta| [rad] beyond which the run counts as a fall (default 60 deg).
-    strut_omega : Baumgarte rate [rad/s] of the rigid-strut length constraint (SPEC.md 3).
+    strut_omega : Baumgarte rate [rad/s] of the rigid-strut length constraint (docs/specification.md section 3).
     clamp_torso : bench rigs only (issue 5): hold the torso's x, y, theta fixed by three
         extra constraint rows of the KKT system (docs/identification.md).
     clamp_legs : bench rigs only: also hold both leg angles phi fixed relative to the torso
         (the stall rig); needs ``clamp_torso``.
-    motor_circuit : "amplifier" (normal operation, SPEC.md 4), "open" (motor leads open:
+    motor_circuit : "amplifier" (normal operation, docs/specification.md section 4), "open" (motor leads open:
         zero current) or "short" (leads shorted: i = -K_w w_m / R_A, back-EMF braking).
     """
     if friction_coefficient is None:

@@ -6,9 +6,9 @@ which holds an explicit method to ~0.1 ms steps. Everything else is slow: |lambd
 the fastest being the back-EMF damping of a motor on its torque-speed line (~400 /s).
 
 Splitting. At the start of each step the model supplies a low-rank factorization
-L = U V^T of the stiff part of the Jacobian (``dynamics.evaluate_ws`` with ``want_stiff``):
+L = U V^T of the stiff part of the Jacobian (``model.evaluate.evaluate_ws`` with ``want_stiff``):
 the belt dampers (rank 2), plus the motor damping where it is stiff
-(``dynamics.STIFF_MOTOR_RATE``, rank 4; not for Scout II). The right-hand side is split
+(``model.evaluate.STIFF_MOTOR_RATE``, rank 4; not for Scout II). The right-hand side is split
 *exactly* as
 
     f(y) = [f(y) - L y] + L y,
@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import kernel
-from ..model.dynamics import NSTIFF, evaluate_ws
+from ..model.evaluate import NSTIFF, evaluate_ws
 from ..model.layout import NQ, NS
 
 # U (the first NSTIFF columns of the stiff factors) is zero outside the acceleration rows
@@ -143,7 +143,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
     ok = True
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
-    # damping is stiff (dynamics.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
+    # damping is stiff (model.evaluate.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
     R = NSTIFF if (SF0[NQ + 5, NSTIFF + 2] != 0.0 or SF0[NQ + 6, NSTIFF + 3] != 0.0) else 2
     hg = h * GAMMA
     VU = Z[NSTAGE:NSTAGE + R]            # V^T U

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import allocating, kernel
-from ..model.dynamics import NSTIFF, evaluate_ws, new_eval_workspace
+from ..model.evaluate import NSTIFF, evaluate_ws
+from ..model.workspace import new_eval_workspace
 from ..model.layout import NAUX, NS
 
 C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..jit import kernel
-from ..model.dynamics import leg_damping
+from ..model.leg import leg_damping
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
     EVR_E_BEFORE, EVR_VIOLATIONS, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
@@ -146,7 +146,7 @@ def mode_violations(s, ds, aux, P, mi):
         elif P[P_MASSLESS] < 0.5:
             # (a massless leg is placed kinematically at its touchdown angle in flight, which
             # can put its toe below the ground just after lift-off: the passive model's
-            # convention, SPEC.md 2; it touches down when the toe comes down through it)
+            # convention, docs/specification.md section 2; it touches down when the toe comes down through it)
             if aux[o + A_TOE_Y] < -1e-9:
                 bits |= V_TOE_BELOW_GROUND
             if flight_toe_enters_ground(s, ds, aux, P, leg):

@@ -23,7 +23,8 @@ from collections import namedtuple
 import numpy as np
 
 from ..jit import kernel
-from ..model.dynamics import evaluate_ws, project_state
+from ..model.evaluate import evaluate_ws
+from ..model.kinematics import project_state
 from ..model.layout import (
     A_ENERGY, A_KKT_OK, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, MI_CONTACT_B,
     MI_MOTOR_B, NAUX, NEV, NEV_CONTACT, NMI, NS, P_MASSLESS, STICK, ST_FELL,
@@ -51,7 +52,7 @@ NHW = 3
 
 EVENT_TIME_TOL = 1e-13
 #: an event function counts as at its zero on a step that ends within this time of it [s]
-#: (measured with the function's slope over the step; SPEC.md 7 asks for 1e-9 s)
+#: (measured with the function's slope over the step; docs/specification.md section 7 asks for 1e-9 s)
 EVENT_STATE_TOL = 1e-10
 #: a pending event counts as reached at another event's instant when its (normalised)
 #: function is below this: toe height 3e-13 m, a force of 2.4e-10 N on Scout II

@@ -9,7 +9,9 @@ from __future__ import annotations
 import math
 
 from ..jit import allocating, kernel
-from ..model.dynamics import evaluate_command_change, evaluate_ws, impact, project_state
+from ..model.evaluate import evaluate_command_change, evaluate_ws
+from ..model.impact import impact
+from ..model.kinematics import project_state
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
     EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
@@ -97,7 +99,7 @@ def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
 def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=False):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
-    or to a slide if the leg still pushes, SPEC.md 3), a strut in compression becomes a
+    or to a slide if the leg still pushes, docs/specification.md section 3), a strut in compression becomes a
     spring leg, a stuck motor joint loaded beyond breakaway slips, a slipping joint at rest
     sticks if stiction can hold it. Returns the updated event count.
 
@@ -186,7 +188,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
 
 @allocating
 def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
-    """Pin the toe where it touched the ground and apply the impact (SPEC.md 3)."""
+    """Pin the toe where it touched the ground and apply the impact (docs/specification.md section 3)."""
     o = leg * NAUX_LEG
     mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
     mi[MI_CONTACT_B + leg] = STICK
@@ -197,7 +199,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
             and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
         # the toe lands with the leg at its stop while the hip moves away from it: the
         # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
-        # well (the leg lands as a rigid strut, SPEC.md 3); settle() makes it a spring leg
+        # well (the leg lands as a rigid strut, docs/specification.md section 3); settle() makes it a spring leg
         # again once the strut is in compression
         for i in range(s.shape[0]):
             s[i] = s_pre[i]

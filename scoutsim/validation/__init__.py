@@ -1,4 +1,4 @@
-"""Simulation against experiment (paper Sec. IV.C, Fig. 12; SPEC.md 8).
+"""Simulation against experiment (paper Sec. IV.C, Fig. 12; docs/specification.md section 8).
 
 - :mod:`.logs`: the experiment log format, :func:`load_log`, :func:`load_dataset`,
   :class:`ExperimentLog`.

@@ -3,7 +3,7 @@
     table = compare(logs, models=("ideal", "I", "II"))
     print(table.format()); table.to_csv("errors.csv"); table.to_markdown()
 
-Procedure (paper Sec. IV.C; SPEC.md 8):
+Procedure (paper Sec. IV.C; docs/specification.md section 8):
 
 1. Every experiment log is split into strides (:func:`~scoutsim.validation.strides.log_strides`);
    its steady strides, pooled over all runs, are the experimental strides.

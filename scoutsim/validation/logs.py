@@ -4,7 +4,7 @@ A log is one bounding run of the robot (or a synthetic stand-in), sampled at the
 rate (1 kHz on Scout II). It is a table with one row per sample and the columns below,
 stored as CSV (``.csv``, or gzip-compressed ``.csv.gz``) or Parquet (``.parquet``/``.pq``;
 needs the optional dependency ``pyarrow``: ``pip install pyarrow`` or
-``pip install scoutsim[parquet]``). Units and signs are those of SPEC.md section 1; the unit
+``pip install scoutsim[parquet]``). Units and signs are those of docs/specification.md section 1; the unit
 is part of every column name.
 
 Columns
@@ -159,8 +159,7 @@ def _leg(leg) -> int:
 
 def _default_torque_per_amp() -> float:
     from ..parameters import RobotParameters
-    r = RobotParameters()
-    return r.gear_ratio * r.efficiency * r.torque_constant
+    return RobotParameters().torque_per_amp
 
 
 # -----------------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The experiment's measurement chain, simulated (SPEC.md 8; paper Sec. IV.B).
+"""The experiment's measurement chain, simulated (docs/specification.md section 8; paper Sec. IV.B).
 
 On Scout II, torso pitch and COM height were measured with two laser range finders at the
 front and back ends of the torso, and the laser data were low-pass filtered at 15 Hz after
@@ -30,6 +30,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..model import layout as L
+from ..parameters import RobotParameters
 from .logs import ExperimentLog
 from .sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
                       pitch_height_from_lasers)
@@ -56,10 +57,8 @@ class SensorNoise:
 def torque_per_amp(robot) -> float:
     """N eta K_T [N m/A] of a RobotParameters or its dict (``provenance["robot"]``)."""
     if isinstance(robot, dict):
-        n = robot["planetary_ratio"] * robot["sprocket_ratio"]
-        eta = robot["gearbox_efficiency"] * robot["sprocket_efficiency"]
-        return float(n * eta * robot["torque_constant"])
-    return float(robot.gear_ratio * robot.efficiency * robot.torque_constant)
+        robot = RobotParameters(**robot)
+    return float(robot.torque_per_amp)
 
 
 def torque_from_current(current, robot) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Strides and per-stride gait metrics of a log (SPEC.md 8; paper Sec. IV.C).
+"""Strides and per-stride gait metrics of a log (docs/specification.md section 8; paper Sec. IV.C).
 
 The same definitions as :mod:`scoutsim.analysis.gait`, applied to what a robot logs
 instead of the simulator's continuous-time events:

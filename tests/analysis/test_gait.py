@@ -1,4 +1,4 @@
-"""Tests of scoutsim.analysis.gait (SPEC.md 8) on hand-built results with known answers."""
+"""Tests of scoutsim.analysis.gait (docs/specification.md section 8) on hand-built results with known answers."""
 
 import dataclasses
 import json

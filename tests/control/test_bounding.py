@@ -129,3 +129,33 @@ def test_the_controller_has_no_torso_feedback():
     Sensors interface carries no torso state at all."""
     assert set(Sensors._fields) == {"hip_angle", "hip_rate", "leg_length"}
     assert math.isfinite(in_stance_retraction(-7.0))
+
+
+def test_the_controller_knows_the_robot_it_was_reset_with():
+    # eqs. 2-4 use the motor of the robot the controller runs on, packed at reset: a motor
+    # with twice the armature resistance halves tau_max and the slope A (eqs. 2-3)
+    robot = ROBOT.replace(armature_resistance=2.0 * ROBOT.armature_resistance)
+    c = BoundingController(TABLE_I)
+    c.reset(robot, sensors((0.3, 0.3), (0.0, 0.0), (0.0, 0.0)))
+    td = 2.0 * TABLE_I.touchdown_compression
+    rate = -7.0
+    tau = c.command(0.0, sensors((0.2, 0.2), (rate, 0.0), (td, 0.0)))[L.BACK]
+    assert tau == pytest.approx(-0.5 * TAU_MAX + 0.5 * A * rate, rel=1e-12)
+
+
+def test_a_command_before_reset_is_refused():
+    with pytest.raises(RuntimeError, match="reset"):
+        BoundingController(TABLE_I).command(0.0, sensors((0.2, 0.2), (0.0, 0.0), (0.0, 0.0)))
+
+
+@pytest.mark.parametrize("motor_side", [True, False])
+def test_the_sensors_read_the_motor_or_the_leg_side(motor_side):
+    from scoutsim.model.sensors import read_sensors
+    s = np.arange(L.NS, dtype=float) + 1.0
+    y = np.zeros(L.NSN)
+    read_sensors(s, motor_side, y)
+    q0 = L.IALB if motor_side else L.IPHB
+    for leg in (L.BACK, L.FRONT):
+        assert y[L.SN_ANGLE_B + leg] == s[q0 + leg]
+        assert y[L.SN_RATE_B + leg] == s[L.NQ + q0 + leg]
+        assert y[L.SN_LENGTH_B + leg] == s[L.IL_B + leg]

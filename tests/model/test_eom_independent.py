@@ -1,9 +1,9 @@
 """Cross-check of the compiled equations of motion against an independent SymPy derivation.
 
 ``tools/derive_eom.py`` derives M(q), h(q, dq), the gravity force, the energies and the toe
-kinematics from the kinetic and potential energy written down directly from SPEC.md 1, 2, 5
+kinematics from the kinetic and potential energy written down directly from docs/specification.md section 1, 2, 5
 (Lagrange's equations, no shared code). These tests compare them with
-``scoutsim.model.dynamics`` for random states (fixed seed), for Model II (gear inertias) and
+``scoutsim.model`` (rigid_body, evaluate) for random states (fixed seed), for Model II (gear inertias) and
 Model I (no gears), for the default robot and for a variant with one physical leg per
 virtual leg and a different leg COM distance. They also check the constrained stance
 dynamics (pinned toe) against an independently assembled KKT system and against finite
@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import dynamics as dyn
+from scoutsim.model import evaluate as ev
+from scoutsim.model import kinematics, rigid_body
 from scoutsim.model import layout as L
 from scoutsim.model.packing import robot_array
 
@@ -110,7 +111,7 @@ def test_mass_matrix(robot_name, model):
     prm = _params(robot, model)
     M = np.empty((7, 7))
     for q, _ in STATES:
-        dyn.mass_matrix(q, P, M)
+        rigid_body.mass_matrix(q, P, M)
         Ms = sym.mass_matrix(q, prm)
         _assert_close(M, Ms, f"M, model {model}, {robot_name}, q={q}")
         if model == "I":
@@ -131,7 +132,7 @@ def test_coriolis(robot_name, model):
     prm = _params(robot, model)
     h = np.empty(7)
     for q, dq in STATES:
-        dyn.coriolis(q, dq, P, h)
+        rigid_body.coriolis(q, dq, P, h)
         hs = sym.coriolis(q, dq, prm)
         _assert_close(h, hs, f"h, model {model}, {robot_name}, q={q}, dq={dq}")
         # the comparison is sensitive: the velocity products are not negligible, and a
@@ -180,7 +181,7 @@ def test_kinetic_energy(robot_name, model):
         t_quad = 0.5 * dq_ @ Ms @ dq_
         t_sym = sym.kinetic_energy(q, dq_, prm)
         assert t_sym == pytest.approx(t_quad, rel=1e-12)
-        assert dyn.kinetic_energy(q, dq_, P) == pytest.approx(t_quad, rel=RTOL)
+        assert rigid_body.kinetic_energy(q, dq_, P) == pytest.approx(t_quad, rel=RTOL)
 
 
 @pytest.mark.parametrize("robot_name", sorted(ROBOTS))
@@ -193,13 +194,13 @@ def test_potential_energy(robot_name, model):
     for q, _ in STATES:
         l = rng.uniform(0.25, robot.leg_rest_length, 2)
         v_sym = sym.potential_energy(q, l, prm)
-        v_c = dyn.potential_energy(q, l, P)
+        v_c = rigid_body.potential_energy(q, l, P)
         assert v_c == pytest.approx(v_sym, rel=RTOL, abs=1e-12)
         # gravity part alone: springs relaxed, belts undeflected
         q0 = q.copy()
         q0[5:7] = q0[3:5]
         l0 = np.full(2, robot.leg_rest_length)
-        assert dyn.potential_energy(q0, l0, P) == pytest.approx(
+        assert rigid_body.potential_energy(q0, l0, P) == pytest.approx(
             sym.potential_energy(q0, l0, prm), rel=RTOL)
     # the spring terms are really present in the comparison
     q = STATES[0][0]
@@ -251,8 +252,8 @@ def test_gravity_force_passive(robot_name):
         q = q.copy()
         q[5:7] = q[3:5]
         s = _flight_state(q, np.zeros(7), robot)
-        assert dyn.evaluate(s, P, mi, mf, cmd, ds, aux)
-        dyn.mass_matrix(q, P, M)
+        assert ev.evaluate(s, P, mi, mf, cmd, ds, aux)
+        rigid_body.mass_matrix(q, P, M)
         qg_compiled = M[:5, :5] @ ds[7:12]
         qg_sym = sym.gravity_force(q, prm)
         _assert_close(qg_compiled, qg_sym[:5], f"gravity force, {robot_name}, q={q}",
@@ -270,7 +271,7 @@ def test_gravity_force_passive(robot_name):
 @pytest.mark.parametrize("model", ("passive", "I"))
 def test_flight_dynamics_with_velocity(robot_name, model):
     """Both legs in flight, moving: M ddq + h = Q_grav + Q_hip with the hip torque acting
-    on phi only (torso reaction, SPEC.md 1). Checks the sign with which h enters."""
+    on phi only (torso reaction, docs/specification.md section 1). Checks the sign with which h enters."""
     robot = ROBOTS[robot_name]
     P = robot_array(robot, model)
     prm = _params(robot, model)
@@ -286,7 +287,7 @@ def test_flight_dynamics_with_velocity(robot_name, model):
         q[5:7] = q[3:5]
         dq[5:7] = dq[3:5]
         s = _flight_state(q, dq, robot)
-        assert dyn.evaluate(s, P, mi, mf, cmd, ds, aux)
+        assert ev.evaluate(s, P, mi, mf, cmd, ds, aux)
         Qa = np.zeros(7)
         if model == "I":
             # commanded torques are well inside all limits here
@@ -368,7 +369,7 @@ def _independent_stance_ddq(s, mi, robot, model):
     npl = robot.legs_per_virtual_leg
     Q = sym.gravity_force(q, prm) - sym.coriolis(q, dq, prm)
     if model == "II":
-        # hip unit forces (SPEC.md 5), zero command: belt spring/damper, joint friction
+        # hip unit forces (docs/specification.md section 5), zero command: belt spring/damper, joint friction
         Nr = robot.planetary_ratio * robot.sprocket_ratio
         for leg in range(2):
             tb = robot.belt_stiffness * (q[5 + leg] - q[3 + leg]) \
@@ -430,11 +431,11 @@ def test_stance_constrained_dynamics(robot_name, model, legs):
     for trial in range(4):
         s, mi, mf = _stance_state(robot, model, legs, rng)
         s0 = s.copy()
-        dyn.project_state(s, P, mi, mf)
+        kinematics.project_state(s, P, mi, mf)
         # the chosen state was already on the constraint: only dphi of stance legs changes
         np.testing.assert_allclose(s[:7], s0[:7], rtol=0, atol=1e-12)
         np.testing.assert_allclose(s[14:16], s0[14:16], rtol=0, atol=1e-12)
-        assert dyn.evaluate(s, P, mi, mf, cmd, ds, aux)
+        assert ev.evaluate(s, P, mi, mf, cmd, ds, aux)
         q, dq, l = s[:7], s[7:14], s[14:16]
         np.testing.assert_array_equal(ds[:7], dq)
         for leg in legs:
@@ -494,8 +495,8 @@ def test_stance_toe_finite_difference(model):
     hstep = 1e-5
     for _ in range(4):
         s, mi, mf = _stance_state(robot, model, (0,), rng)
-        dyn.project_state(s, P, mi, mf)
-        assert dyn.evaluate(s, P, mi, mf, cmd, ds, aux)
+        kinematics.project_state(s, P, mi, mf)
+        assert ev.evaluate(s, P, mi, mf, cmd, ds, aux)
         assert abs(_perp_toe_velocity(s, prm, 0)) < 1e-12
         wp = _perp_toe_velocity(s + hstep * ds, prm, 0)
         wm = _perp_toe_velocity(s - hstep * ds, prm, 0)

@@ -19,7 +19,7 @@ def passive(init, duration, td_deg=0.0, integ=TIGHT, robot=MASSLESS, **kw):
 
 
 def test_energy_conserved_passive_pronking_5s():
-    """Massless, undamped legs: the passive model is conservative (SPEC.md 2)."""
+    """Massless, undamped legs: the passive model is conservative (docs/specification.md section 2)."""
     r = passive(InitialState(y=0.36, theta=0.0, dx=0.0, dtheta=0.0), 5.0)
     assert r.outcome == "completed"
     n_td = len(r.event_times("touchdown"))
@@ -69,7 +69,7 @@ def test_touchdown_time_located_to_1e9_s():
 
 
 def test_liftoff_at_rest_length_for_undamped_massless_leg():
-    """SPEC.md 3: for an undamped massless leg lift-off is exactly l = l0 (and Fn = 0)."""
+    """docs/specification.md section 3: for an undamped massless leg lift-off is exactly l = l0 (and Fn = 0)."""
     r = passive(InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.0), 1.0, td_deg=4.0)
     lo = [e for e in r.event_table() if e["kind"] == "liftoff"]
     assert len(lo) >= 2

@@ -22,7 +22,8 @@ import pytest
 import scoutsim
 from scoutsim.analysis.transitions import audit_transitions
 from scoutsim.model import layout as L
-from scoutsim.model.dynamics import impact, kinetic_energy
+from scoutsim.model.impact import impact
+from scoutsim.model.rigid_body import kinetic_energy
 from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.simulation import HybridState, InitialState

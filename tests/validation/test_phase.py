@@ -7,8 +7,9 @@ import pytest
 
 from scoutsim import RobotParameters, simulate
 from scoutsim.validation import to_log
+from scoutsim.presentation.phase_plots import plot_phase
 from scoutsim.validation.phase import (SIGNALS, PhaseComparison, as_source, phase_compare,
-                                       plot_phase, resample_strides)
+                                       resample_strides)
 from scoutsim.simulation import InitialState
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the

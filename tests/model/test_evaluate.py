@@ -1,5 +1,5 @@
-"""The allocation-free evaluation (dynamics.evaluate_ws) reproduces the reference
-implementation (dynamics.evaluate_reference), and its stiff-Jacobian factors capture the
+"""The allocation-free evaluation (model.evaluate.evaluate_ws) reproduces the reference
+implementation (tests/model/reference_evaluator.py), and its stiff-Jacobian factors capture the
 belt-damper eigenvalues of Model II."""
 
 import math
@@ -9,9 +9,12 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState, RobotParameters
-from scoutsim.model import dynamics as D
+from scoutsim.model import evaluate as D
+from scoutsim.model import workspace as W
 from scoutsim.model import layout as L
 from scoutsim.model.packing import robot_array
+
+from .reference_evaluator import evaluate_reference
 
 MASSLESS = RobotParameters(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
 
@@ -49,7 +52,7 @@ CONFIGS = [
 @pytest.mark.parametrize("robot,model,mu,kw", CONFIGS)
 def test_evaluate_ws_matches_reference(robot, model, mu, kw):
     P, cases = _cases(robot, model, mu, **kw)
-    wk, wA, piv = D.new_eval_workspace()
+    wk, wA, piv = W.new_eval_workspace()
     st = np.zeros((L.NS, 2 * D.NSTIFF))
     worst = 0.0
     for s, mi, mf, cmd in cases:
@@ -63,7 +66,7 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
                 a1 = np.zeros(L.NAUX)
                 d2 = np.zeros(L.NS)
                 a2 = np.zeros(L.NAUX)
-                ok1 = D.evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
+                ok1 = evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
                 ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st, True)
                 assert ok1 == ok2
                 for x, y in ((d1, d2), (a1, a2)):
@@ -82,7 +85,7 @@ def test_inner_stage_evaluation_skips_only_the_outputs():
     """want_aux=False (the integrators' inner stages) gives the same derivative and stiff
     factors bit for bit and leaves the outputs untouched (except the KKT flag)."""
     P, cases = _cases(RobotParameters(), "II", 0.8)
-    wk, wA, piv = D.new_eval_workspace()
+    wk, wA, piv = W.new_eval_workspace()
     for s, mi, mf, cmd in cases:
         st1 = np.zeros((L.NS, 2 * D.NSTIFF))
         st2 = np.zeros((L.NS, 2 * D.NSTIFF))
@@ -101,7 +104,7 @@ def test_stiff_factors_capture_belt_eigenvalues():
     """U V^T has (nearly) the two fastest eigenvalues of the full Jacobian, and what it
     leaves to the explicit part is not stiff."""
     P, cases = _cases(RobotParameters(), "II", 0.8)
-    wk, wA, piv = D.new_eval_workspace()
+    wk, wA, piv = W.new_eval_workspace()
     st = np.zeros((L.NS, 2 * D.NSTIFF))
     aux = np.zeros(L.NAUX)
     for s, mi, mf, cmd in cases[::6]:
@@ -147,7 +150,7 @@ def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
     """A new command applied to the kept KKT factors (evaluate_command_change, used at every
     control sample) gives the derivative and outputs of a fresh evaluation, to round-off."""
     P, cases = _cases(robot, model, mu, **kw)
-    wk, wA, piv = D.new_eval_workspace()
+    wk, wA, piv = W.new_eval_workspace()
     st = np.zeros((L.NS, 2 * D.NSTIFF))
     rng = np.random.default_rng(1)
     worst = 0.0

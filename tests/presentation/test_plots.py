@@ -1,5 +1,5 @@
-"""Tests of scoutsim.plotting: figures render headless, carry units, and draw the motor
-limits of SPEC.md 4 where they belong."""
+"""Tests of scoutsim.presentation.plots: figures render headless, carry units, and draw the motor
+limits of docs/specification.md section 4 where they belong."""
 
 import sys
 
@@ -9,7 +9,8 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 import scoutsim
-from scoutsim.plotting import LEG_STATE_COLORS, motor_limits, plot_run, plot_torque_speed
+from scoutsim.presentation.plots import motor_limits, plot_run, plot_torque_speed
+from scoutsim.presentation.style import LEG_STATE_COLORS
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

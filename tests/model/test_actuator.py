@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scoutsim.model import dynamics as dyn
+from scoutsim.model import actuator
 from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ParameterError, RobotParameters, load_robot
 from scoutsim.simulation import simulate
@@ -57,17 +57,17 @@ def test_delivered_torque_function_directions():
         tau0 = k0 * cur
         s = np.sign(cur)
         # motoring: reduced, never reversed
-        tm = dyn.delivered_torque(cur, 50.0 * s, P)
+        tm = actuator.delivered_torque(cur, 50.0 * s, P)
         assert tm == pytest.approx(s * max(abs(tau0) - IDLE, 0.0) / (1 + CLOAD))
         assert abs(tm) <= abs(tau0) and tm * tau0 >= 0.0
         # back-driven: the leg must supply more than the constant-efficiency torque
-        tb = dyn.delivered_torque(cur, -50.0 * s, P)
+        tb = actuator.delivered_torque(cur, -50.0 * s, P)
         assert tb == pytest.approx((tau0 + s * IDLE) / (1 - CLOAD))
         loss = IDLE + CLOAD * abs(tb)
         assert abs(tb) - abs(tau0) == pytest.approx(loss)
     # unpowered, output turning: pure idle friction opposing the motion
-    assert dyn.delivered_torque(0.0, 50.0, P) == pytest.approx(-IDLE / (1 - CLOAD))
-    assert dyn.delivered_torque(0.0, 0.0, P) == 0.0
+    assert actuator.delivered_torque(0.0, 50.0, P) == pytest.approx(-IDLE / (1 - CLOAD))
+    assert actuator.delivered_torque(0.0, 0.0, P) == 0.0
 
 
 def test_losses_reduce_delivered_torque_in_motoring_samples(lossy_run):
@@ -78,7 +78,7 @@ def test_losses_reduce_delivered_torque_in_motoring_samples(lossy_run):
         tau = res.hip_torque_applied(leg)
         tau0 = k0 * res.motor_current(leg)
         om = res.motor_speed(leg)
-        motoring = (tau0 * om > 0) & (np.abs(om) >= dyn.LOSS_SPEED_REG)
+        motoring = (tau0 * om > 0) & (np.abs(om) >= actuator.LOSS_SPEED_REG)
         assert motoring.sum() > 10
         assert np.all(np.abs(tau[motoring]) <= np.abs(tau0[motoring]) + 1e-12)
         unclipped = motoring & (np.abs(tau0) > IDLE + 1e-9)
@@ -97,7 +97,7 @@ def test_efficiency_falls_at_low_torque(lossy_run):
     cur = np.concatenate([res.motor_current(l) for l in ("back", "front")])
     tau = np.concatenate([res.hip_torque_applied(l) for l in ("back", "front")])
     om = np.concatenate([res.motor_speed(l) for l in ("back", "front")])
-    motoring = (cur * om > 0) & (np.abs(om) >= dyn.LOSS_SPEED_REG)
+    motoring = (cur * om > 0) & (np.abs(om) >= actuator.LOSS_SPEED_REG)
     a = np.abs(cur[motoring])
     eff = np.abs(tau[motoring]) / (k * a)
     low = a < 1.0

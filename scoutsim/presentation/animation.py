@@ -1,6 +1,6 @@
 """Stick-figure animation of a bounding run.
 
-    from scoutsim.animation import animate, save_animation
+    from scoutsim.presentation.animation import animate, save_animation
     save_animation(result, "run.gif", fps=25, t0=3.0, t1=4.0)     # GIF via Pillow
     save_animation(result, "run.mp4", fps=30)                      # needs ffmpeg
     anim = animate(result, fps=25)      # matplotlib.animation.FuncAnimation (Jupyter: HTML)
@@ -8,7 +8,7 @@
 Each frame shows the torso as a box (length ``torso_length``, height ``torso_height``,
 rotated by the pitch), the two virtual legs from hip to toe coloured by their controller
 leg state (:data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake
-green; the same colours as the dots of :func:`scoutsim.plotting.plot_torque_speed`), the
+green; the same colours as the dots of :func:`scoutsim.presentation.plots.plot_torque_speed`), the
 ground reaction force on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the
 ground line with tick marks every 0.25 m (so the forward motion shows while the view
 follows the torso) and the time stamp.
@@ -35,15 +35,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from .model import layout as L
-from .plotting import LEG_STATE_LINE_COLORS
+from ..model import layout as L
+from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
 __all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS",
            "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
 LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
-_STATE_NAMES = L.LEG_STATE_NAMES
+_STATE_NAMES = LEG_STATE_NAMES
 #: Length of a ground-force arrow per newton [m/N] (the robot's weight, about 203 N, is
 #: drawn 0.2 m long).
 FORCE_SCALE_M_PER_N = 1.0e-3

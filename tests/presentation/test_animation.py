@@ -1,11 +1,11 @@
-"""Tests of scoutsim.animation and the `scoutsim plot` / `scoutsim animate` subcommands."""
+"""Tests of scoutsim.presentation.animation and the `scoutsim plot` / `scoutsim animate` subcommands."""
 
 import numpy as np
 import pytest
 from PIL import Image
 
 import scoutsim
-from scoutsim.animation import animate, frame_times, save_animation
+from scoutsim.presentation.animation import animate, frame_times, save_animation
 from scoutsim.cli import main
 
 
@@ -55,7 +55,7 @@ def test_bad_inputs(result, tmp_path, monkeypatch):
         frame_times(result, 10, 0.5, 3.0)
     with pytest.raises(ValueError, match="fps"):
         frame_times(result, 0)
-    import scoutsim.animation as A
+    import scoutsim.presentation.animation as A
     monkeypatch.setattr(A.shutil, "which", lambda name: None)
     with pytest.raises(RuntimeError, match="ffmpeg"):
         save_animation(result, tmp_path / "a.mp4", t0=0.0, t1=0.1)

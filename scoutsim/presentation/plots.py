@@ -1,5 +1,5 @@
-"""Figures of a bounding run (presentation layer; the only place besides the CLI output
-that shows angles in degrees).
+"""Figures of a bounding run: time histories, the torque-speed plane (paper Fig. 11), the
+basin map and sweep maps (presentation layer: angles in degrees only here, on the axes).
 
     fig = plot_run(result, "run.png")            # pitch, height, leg angles, hip torques
     fig = plot_torque_speed(result, "both", "ts.png")   # paper Fig. 11, with motor limits
@@ -14,56 +14,23 @@ In Jupyter, ``display(fig)`` (or a figure as the last expression of a cell) show
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from .model import layout as L
+from ..parameters import RobotParameters, floor_label
 
-__all__ = ["plot_run", "plot_torque_speed", "LEG_STATE_COLORS", "motor_limits"]
+from .style import (LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, LEG_STATE_LINE_COLORS,
+                    LEG_STATE_NAMES, leg_index, model_label, save_figure)
 
-_LEG_NAMES = ("back", "front")
-_LEG_INDEX = {"back": 0, "front": 1, 0: 0, 1: 1}
-_LEG_COLORS = ("tab:blue", "tab:red")
-
-#: Colour of each controller leg state (paper Sec. II: flight, stance-retraction,
-#: stance-brake), indexed by the state code of ``result.leg_state``: lines (legs in the
-#: animation and the film strips) and, pale, the same hues as backgrounds (plot_run).
-LEG_STATE_LINE_COLORS = ("tab:blue", "tab:orange", "tab:green")
-LEG_STATE_COLORS = ("#d6e9ff", "#ffd9a8", "#c9efc4")
-_LEG_STATE_NAMES = L.LEG_STATE_NAMES
-
-_MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
-                 "passive": "passive (no controller)"}
-
-
-def _leg(leg) -> int:
-    try:
-        return _LEG_INDEX[leg]
-    except (KeyError, TypeError):
-        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
-
-
-#: Resolution of PNG output [dots per inch]: legible, and quick to render (CLI start-up).
-PNG_DPI = 110
-
-
-def _save(fig: Figure, path) -> None:
-    if path is None:
-        return
-    path = Path(path)
-    if path.suffix.lower() not in (".png", ".pdf", ".svg"):
-        raise ValueError(f"path = '{path}' is not allowed: the suffix must be .png, .pdf or .svg")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=PNG_DPI if path.suffix.lower() == ".png" else None)
+__all__ = ["plot_run", "plot_torque_speed", "plot_basin_map", "plot_sweep_map",
+           "motor_limits", "draw_motor_limits"]
 
 
 def _model_label(result) -> str:
-    model = (result.provenance or {}).get("model")
-    return _MODEL_LABELS.get(model, f"model {model}")
+    return model_label((result.provenance or {}).get("model"))
 
 
 def _title(result) -> str:
@@ -156,8 +123,8 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     ax_height.set_ylabel("COM height [m]")
 
     has_controller = (result.provenance or {}).get("controller") is not None
-    for li, name in enumerate(_LEG_NAMES):
-        ax_leg.plot(ts, np.degrees(np.asarray(result.leg_angle(li))[sel]), color=_LEG_COLORS[li],
+    for li, name in enumerate(LEG_NAMES):
+        ax_leg.plot(ts, np.degrees(np.asarray(result.leg_angle(li))[sel]), color=LEG_COLORS[li],
                     lw=1.2, label=f"phi {name}")
         if has_controller:
             _state_bands(ax_leg, ts, np.asarray(result.leg_state(li))[sel],
@@ -165,19 +132,19 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     ax_leg.set_ylabel("leg angle phi [deg]")
     handles, labels = ax_leg.get_legend_handles_labels()
     if has_controller:
-        for k, name in enumerate(_LEG_STATE_NAMES):
+        for k, name in enumerate(LEG_STATE_NAMES):
             handles.append(Patch(facecolor=LEG_STATE_COLORS[k], edgecolor="0.5", lw=0.5))
             labels.append(name)
-        for li, name in enumerate(_LEG_NAMES):
+        for li, name in enumerate(LEG_NAMES):
             ax_leg.text(1.005, 0.25 + 0.5 * li, f"{name}\nstate", transform=ax_leg.transAxes,
-                        fontsize=7, va="center", ha="left", color=_LEG_COLORS[li])
+                        fontsize=7, va="center", ha="left", color=LEG_COLORS[li])
     ax_leg.legend(handles, labels, loc="upper left", fontsize=8, ncol=5, framealpha=0.85,
                   bbox_to_anchor=(0.0, 1.0))
 
-    for li, name in enumerate(_LEG_NAMES):
-        ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=_LEG_COLORS[li],
+    for li, name in enumerate(LEG_NAMES):
+        ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=LEG_COLORS[li],
                     lw=1.0, ls="--", label=f"{name} commanded")
-        ax_tau.plot(ts, np.asarray(result.hip_torque_applied(li))[sel], color=_LEG_COLORS[li],
+        ax_tau.plot(ts, np.asarray(result.hip_torque_applied(li))[sel], color=LEG_COLORS[li],
                     lw=1.2, label=f"{name} applied")
     ax_tau.axhline(0.0, color="0.6", lw=0.6)
     ax_tau.set_ylabel("hip torque per leg [N m]")
@@ -195,12 +162,12 @@ def plot_run(result, path=None, t_range=None) -> Figure:
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_tau.set_xlim(t0, t1)
     fig.suptitle(_title(result))
-    _save(fig, path)
+    save_figure(fig, path)
     return fig
 
 
 def motor_limits(robot: dict) -> dict:
-    """Actuator limits at one physical leg (SPEC.md 4; paper Sec. II, eq. (3)).
+    """Actuator limits at one physical leg (docs/specification.md section 4; paper Sec. II, eq. (3)).
 
     Parameters
     ----------
@@ -216,13 +183,10 @@ def motor_limits(robot: dict) -> dict:
         zero torque) and ``slope`` = N eta K_T K_w N / R_A [N m s/rad] (torque lost per unit
         leg speed).
     """
-    N = robot["planetary_ratio"] * robot["sprocket_ratio"]
-    eta = robot["gearbox_efficiency"] * robot["sprocket_efficiency"]
-    kt, kw, ra = robot["torque_constant"], robot["speed_constant"], robot["armature_resistance"]
-    v = robot["battery_voltage"]
-    return {"N": N, "eta": eta, "tau_current": N * eta * kt * robot["current_limit"],
-            "tau_stall": N * eta * kt * v / ra, "w_no_load": v / (kw * N),
-            "slope": N * eta * kt * kw * N / ra}
+    r = robot if isinstance(robot, RobotParameters) else RobotParameters(**robot)
+    return {"N": r.gear_ratio, "eta": r.efficiency, "tau_current": r.max_leg_torque,
+            "tau_stall": r.stall_torque, "w_no_load": r.no_load_speed,
+            "slope": r.torque_speed_slope}
 
 
 def _torque_speed_axes(ax, result, li: int) -> None:
@@ -238,11 +202,11 @@ def _torque_speed_axes(ax, result, li: int) -> None:
     states = np.asarray(result.leg_state(li))
     has_controller = (result.provenance or {}).get("controller") is not None
     if has_controller:
-        for k, name in enumerate(_LEG_STATE_NAMES):
+        for k, name in enumerate(LEG_STATE_NAMES):
             m = states == k
             if np.any(m):
                 ax.plot(tau[m], w[m], ls="none", marker=".", ms=2.0, alpha=0.6,
-                        color=("tab:blue", "tab:orange", "tab:green")[k], label=name)
+                        color=LEG_STATE_LINE_COLORS[k], label=name)
     else:
         ax.plot(tau, w, ls="none", marker=".", ms=2.0, alpha=0.6, color="tab:gray",
                 label="samples")
@@ -257,7 +221,7 @@ def _torque_speed_axes(ax, result, li: int) -> None:
     draw_motor_limits(ax, lim, xl, yl, note=note)
     ax.set_xlabel("applied hip torque per leg [N m]")
     ax.set_ylabel("leg angular speed [rad/s]")
-    ax.set_title(f"{_LEG_NAMES[li]} leg")
+    ax.set_title(f"{LEG_NAMES[li]} leg")
 
 
 def draw_motor_limits(ax, lim, xl, yl, *, note="", current_ls="--", line_ls="-."):
@@ -287,7 +251,7 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     the actuator's leg-side speed w = w_m / N (the leg rate dphi/dt for the ideal actuator
     and Model I, the driven-gear rate dalpha/dt for Model II) [rad/s]; the torque is what
     the actuator delivers per physical leg, N eta K_T i [N m]. Lines show the actuator's
-    limits (SPEC.md 4): the current limit tau = +-N eta K_T i_max (dashed) and the
+    limits (docs/specification.md section 4): the current limit tau = +-N eta K_T i_max (dashed) and the
     torque-speed lines tau = N eta K_T (+-V - K_w N w) / R_A at the battery voltage V
     (dash-dotted), with the parameters from ``result.provenance["robot"]``.
 
@@ -307,17 +271,17 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     if isinstance(leg, str) and leg == "both":
         legs = [0, 1]
     elif isinstance(leg, (list, tuple)):
-        legs = [_leg(x) for x in leg]
+        legs = [leg_index(x) for x in leg]
         if not legs:
             raise ValueError("leg = [] is not allowed: give at least one leg")
     else:
-        legs = [_leg(leg)]
+        legs = [leg_index(leg)]
     fig = Figure(figsize=(5.5 * len(legs), 5.0), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(legs), sharey=True, squeeze=False)[0])
     for ax, li in zip(axes, legs):
         _torque_speed_axes(ax, result, li)
     fig.suptitle(f"Torque-speed, {_model_label(result)} ({result.outcome})")
-    _save(fig, path)
+    save_figure(fig, path)
     return fig
 
 
@@ -329,7 +293,6 @@ def plot_basin_map(rows, path=None, default_start=None) -> Figure:
     ``rows``: :attr:`scoutsim.analysis.basin.BasinResult.rows` (or the CLI's basin.csv rows);
     ``default_start``: (speed [m/s], pitch rate [deg/s]) marked with a star."""
     from matplotlib.colors import ListedColormap
-    from .analysis.basin import floor_label
     models = list(dict.fromkeys(r["model"] for r in rows))
     floors = list(dict.fromkeys(float(r["friction"]) for r in rows))
     speeds = sorted({float(r["speed"]) for r in rows})
@@ -370,7 +333,7 @@ def plot_basin_map(rows, path=None, default_start=None) -> Figure:
                         mec="black")
             valid = cnt.sum()
             n_ok = np.nansum(share)
-            ax.set_title(f"{_MODEL_LABELS.get(m, m)}, {floor_label(mu)}: "
+            ax.set_title(f"{model_label(m)}, {floor_label(mu)}: "
                          f"{n_ok / valid if valid else float('nan'):.2f}", fontsize=9)
             if i == len(models) - 1:
                 ax.set_xlabel("initial forward speed [m/s]")
@@ -382,5 +345,41 @@ def plot_basin_map(rows, path=None, default_start=None) -> Figure:
                loc="outside lower center", ncol=3, fontsize=8)
     fig.suptitle("Basin of the bounding cycle (heights " + ", ".join(f"{h:g}" for h in heights)
                  + " m; labels: cycle speed m/s)", fontsize=10)
-    _save(fig, path)
+    save_figure(fig, path)
+    return fig
+
+
+def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=None) -> Figure:
+    """Map of ``value`` over two swept parameters of a grid sweep
+    (:class:`scoutsim.analysis.sweep.SweepResult`); points that do not reach steady bounding
+    are marked x. Angles (names ending in 'angle' / 'limit') are shown in degrees;
+    saved by suffix if ``path`` is given."""
+    xs = sweep.column(x)
+    ys = sweep.column(y)
+    vs = sweep.column(value)
+    ux, uy = np.unique(xs), np.unique(ys)
+    Z = np.full((len(uy), len(ux)), np.nan)
+    steady = np.zeros_like(Z, dtype=bool)
+    for xi, yi, v, r in zip(xs, ys, vs, sweep.rows):
+        j, i = np.searchsorted(ux, xi), np.searchsorted(uy, yi)
+        Z[i, j] = v
+        steady[i, j] = bool(r.get("steady_bounding"))
+
+    def edge(name, vals):
+        deg = name.endswith(("angle_front", "angle_back", "limit_front", "limit_back"))
+        return (np.degrees(vals), f"{name} [deg]") if deg else (vals, name + " [SI]")
+    gx, lx = edge(x, ux)
+    gy, ly = edge(y, uy)
+    fig = Figure(figsize=(6.5, 5), layout="constrained")
+    ax = fig.add_subplot()
+    m = ax.pcolormesh(gx, gy, Z, shading="nearest", cmap="viridis")
+    fig.colorbar(m, ax=ax, label=value)
+    for i in range(len(uy)):
+        for j in range(len(ux)):
+            if not steady[i, j]:
+                ax.plot(gx[j], gy[i], "x", color="w", ms=5)
+    ax.set_xlabel(lx)
+    ax.set_ylabel(ly)
+    ax.set_title(f"{value} (x: not steady bounding)")
+    save_figure(fig, path)
     return fig

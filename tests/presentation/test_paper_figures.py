@@ -1,4 +1,4 @@
-"""Tests of scoutsim.validation.figures (paper Figs. 5, 8-12 for any data set) and the
+"""Tests of scoutsim.presentation.paper_figures (paper Figs. 5, 8-12 for any data set) and the
 figure writing of `scoutsim compare`: figures render headless, are non-empty, label every
 axis with a unit, and say so when a model has no steady strides."""
 
@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from scoutsim import RobotParameters, simulate
 from scoutsim.validation import SensorNoise, save_log, to_log
-from scoutsim.validation import figures
+from scoutsim.presentation import paper_figures as figures
 from scoutsim.validation.errors import ModelRun, assess_errors
 from scoutsim.validation.strides import log_strides
 from scoutsim.simulation import InitialState
@@ -155,7 +155,7 @@ def test_fig9_has_leg_state_square_wave(exp_logs, sims):
 
 
 def test_fig11_draws_motor_limits(exp_logs, sims):
-    from scoutsim.plotting import motor_limits
+    from scoutsim.presentation.plots import motor_limits
     fig = figures.fig11(exp_logs, sims)
     lim = motor_limits(sims["II"].provenance["robot"])
     ax = fig.get_axes()[0]

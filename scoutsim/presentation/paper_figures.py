@@ -2,7 +2,7 @@
 
     from scoutsim.validation import load_dataset
     from scoutsim.validation.errors import compare
-    from scoutsim.validation import figures
+    from scoutsim.presentation import paper_figures as figures
     logs = load_dataset(["run1.csv", "run2.csv"])
     table = compare(logs)                         # simulates the models (ErrorTable)
     figures.fig8(logs, table, "fig8.png")         # models from table.models
@@ -38,9 +38,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..model import layout as L
-from ..plotting import LEG_STATE_LINE_COLORS, _save, draw_motor_limits, motor_limits
-from .phase import Source, _label, _style, as_source, as_sources, phase_compare, plot_phase
+from ..parameters import RobotParameters
+from ..validation.phase import Source, as_source, as_sources, phase_compare
+from .phase_plots import plot_phase
+from .plots import draw_motor_limits, motor_limits
+from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES, model_label, model_style, save_figure
 
 __all__ = ["robot_pose", "fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "fig_phase", "plot_log",
            "write_figures", "FIGURE_NAMES", "STATE_LEVELS"]
@@ -95,7 +97,7 @@ def _tag(src: Source, steady: bool) -> str:
 def _line_kw(src: Source, i: int, steady: bool) -> dict:
     """Style of a source's curve: the paper's styles; a non-steady (transient) stride thin
     and faint."""
-    col, ls = _style(src.name, i)
+    col, ls = model_style(src.name, i)
     lw = 1.6 if src.name == "experiment" else 1.4
     return dict(color=col, ls=ls, lw=lw if steady else 0.9, alpha=1.0 if steady else 0.55)
 
@@ -149,7 +151,7 @@ def _finish(fig: Figure, title: str, notes: list[str], path):
     import textwrap
     text = "\n".join(textwrap.wrap("; ".join(notes), 140)) if notes else ""
     fig.suptitle(title + ("\n" + text if text else ""), fontsize=10)
-    _save(fig, path)
+    save_figure(fig, path)
     return fig
 
 
@@ -198,8 +200,7 @@ def robot_pose(log, k: int, robot=None) -> dict:
 
     Leg length: the logged one if present; otherwise, in a stance state, the length that
     puts the toe on the ground (hip height / cos of the leg's world angle), in flight the
-    rest length l0 (SPEC.md 1: the leg is at its stop in flight)."""
-    from ..parameters import RobotParameters
+    rest length l0 (docs/specification.md section 1: the leg is at its stop in flight)."""
     rob = robot if robot is not None else RobotParameters()
     if isinstance(rob, dict):
         rob = RobotParameters(**rob)
@@ -244,7 +245,7 @@ def _draw_snapshots(ax, lg, times, robot, spacing: float = 0.95):
         ax.text(x0, float(np.max(pose["torso"][:, 1])) + 0.04, f"({chr(97 + j)})",
                 ha="center", fontsize=8)
     ax.axhline(0.0, color="k", lw=0.8)
-    for lab, col in zip(L.LEG_STATE_NAMES, state_colors):
+    for lab, col in zip(LEG_STATE_NAMES, state_colors):
         ax.plot([], [], color=col, lw=2, label=lab)
     ax.plot([], [], color="0.3", lw=2, label="back leg")
     ax.plot([], [], color="0.3", lw=1.6, ls="--", label="front leg")
@@ -436,14 +437,13 @@ def _robot_dict(robot, mods: dict, exp: Source) -> dict:
         r = ((lg.meta.get("simulation") or {}).get("robot"))
         if r:
             return r
-    from ..parameters import RobotParameters
     return dataclasses.asdict(RobotParameters())
 
 
 def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) -> Figure:
     """Leg angular speed [rad/s] against hip torque per leg [N m] (paper Fig. 11): the
     experiment's steady-stride samples as dots, each source's representative step as a
-    line, and the actuator limits of :func:`scoutsim.plotting.motor_limits` (current limit,
+    line, and the actuator limits of :func:`scoutsim.presentation.plots.motor_limits` (current limit,
     torque-speed lines at the battery voltage). ``robot``: RobotParameters or dict for the
     limits (default: the models' parameters, else Scout II)."""
     exp, mods = _prepare(logs, models, transient_s)
@@ -487,7 +487,7 @@ def fig12(table, path=None) -> Figure:
     """Bar chart of the mean (solid) and max (light) percent error per metric and model,
     from an :class:`~scoutsim.validation.errors.ErrorTable` (paper Fig. 12). Models without
     errors (no steady strides) are marked n/a and the figure says why."""
-    from .errors import ERROR_METRICS, METRIC_LABELS, ErrorTable
+    from ..validation.errors import ERROR_METRICS, METRIC_LABELS, ErrorTable
     if not isinstance(table, ErrorTable):
         raise TypeError(f"fig12 needs an ErrorTable (from errors.compare), not "
                         f"{type(table).__name__}")
@@ -501,26 +501,26 @@ def fig12(table, path=None) -> Figure:
     top = 0.0
     notes, na = [], []
     for i, m in enumerate(models):
-        col, _ = _style(m, i)
+        col, _ = model_style(m, i)
         mean = np.array([table.row(m, k).mean_percent_error for k in metrics], dtype=float)
         mx = np.array([table.row(m, k).max_percent_error for k in metrics], dtype=float)
         xi = x - 0.4 + width * (i + 0.5)
         ok = np.isfinite(mean)
         if ok.any():
             ax.bar(xi[ok], mx[ok], width * 0.9, color=col, alpha=0.3, edgecolor=col, lw=0.8,
-                   label=f"{_label(m)} max")
-            ax.bar(xi[ok], mean[ok], width * 0.9, color=col, label=f"{_label(m)} mean")
+                   label=f"{model_label(m)} max")
+            ax.bar(xi[ok], mean[ok], width * 0.9, color=col, label=f"{model_label(m)} mean")
             top = max(top, float(np.nanmax(np.where(np.isfinite(mx[ok]), mx[ok], 0.0))))
         else:
             from matplotlib.patches import Patch
             na.append(Patch(facecolor="none", edgecolor=col, hatch="//",
-                            label=f"{_label(m)}: n/a (no steady strides)"))
+                            label=f"{model_label(m)}: n/a (no steady strides)"))
         for xx in xi[~ok]:
             ax.text(xx, 0.0, "n/a", rotation=90, ha="center", va="bottom", fontsize=7,
                     color=col)
         if not ok.any():
             st = next((r.status for r in table.rows if r.model == m), "")
-            notes.append(f"{_label(m)}: {st}")
+            notes.append(f"{model_label(m)}: {st}")
     ax.set_xticks(x, [METRIC_LABELS.get(k, k) for k in metrics], rotation=15)
     ax.set_xlabel("gait metric [-]")
     ax.set_ylabel("percent error vs experiment [%]")
@@ -540,7 +540,7 @@ def fig12(table, path=None) -> Figure:
 # -----------------------------------------------------------------------------------------
 def fig_phase(logs, models=None, path=None, transient_s: float = 2.0, n_phase: int = 101):
     """Figure of the phase-normalized comparison
-    (:func:`scoutsim.validation.phase.phase_compare` + :func:`~.phase.plot_phase`)."""
+    (:func:`scoutsim.validation.phase.phase_compare` + :func:`~.phase_plots.plot_phase`)."""
     exp, mods = _prepare(logs, models, transient_s)
     return plot_phase(phase_compare(exp, mods, n_phase=n_phase, transient_s=transient_s),
                       path)
@@ -587,7 +587,7 @@ def plot_log(log, path=None, t_range=None) -> Figure:
     if log.synthetic:
         title += " (SYNTHETIC: generated by scoutsim)"
     fig.suptitle(title, fontsize=10)
-    _save(fig, path)
+    save_figure(fig, path)
     return fig
 
 
@@ -596,7 +596,7 @@ def write_figures(logs, models=None, out_dir=".", table=None, fmt: str = "png",
     """Write fig5, fig8, fig9, fig10, fig11, fig12 (needs an ErrorTable: ``table``, or
     ``models`` being one) and phase (+ phase_rms.csv) to ``out_dir`` in format ``fmt``
     (png, pdf, svg). Returns name -> path of what was written."""
-    from .errors import ErrorTable
+    from ..validation.errors import ErrorTable
     if fmt not in ("png", "pdf", "svg"):
         raise ValueError(f"fmt = {fmt!r} is not allowed: must be png, pdf or svg")
     if table is None and isinstance(models, ErrorTable):

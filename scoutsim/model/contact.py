@@ -1,0 +1,127 @@
+"""Ground contact of one leg (compiled): the leg force and the constraint rows of each
+contact mode (docs/specification.md section 3; docs/model.md "Contact").
+
+* stick (toe pinned at its anchor): the spring-damper leg force along the leg acts on the
+  hip; the toe cannot move across the leg (row ``ROW_TOE_ACROSS``, its multiplier the part
+  of the ground force across the leg);
+* strut (a pinned leg at its stop l0): as stick, and the leg length is held at l0 by a
+  second row ``ROW_TOE_ALONG`` (with Baumgarte stabilisation at ``P_STRUT_OMEGA``);
+* slide: the toe moves on the ground; the ground force is normal plus the Coulomb friction
+  mu F_n against the slide direction (frictionless with mu = inf), balanced against the
+  leg force along the leg;
+* flight: no ground force; a massive leg's length relaxes to l0 (model/leg.py), a massless
+  leg's angle is prescribed (row ``ROW_MASSLESS``).
+"""
+
+from __future__ import annotations
+
+from ..jit import kernel
+from .kkt import new_row
+from .layout import (
+    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, P_K, P_L, P_L0, P_MU, P_NP, P_STRUT_OMEGA,
+    P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT,
+)
+from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
+from .workspace import LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY
+
+
+@kernel(inline="always")
+def leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q, R, r, rkind,
+                rleg, nr, LG):
+    """Contact forces and constraint rows of virtual leg ``leg`` in its contact mode.
+
+    Adds the leg's ground and leg forces to the generalized forces Q, appends its rows
+    (R, right-hand sides r, kinds, legs) from row ``nr`` on, and writes the leg's per-leg
+    scalars LG (axial force, leg-length rate, ground force of a sliding toe, toe position
+    and velocity). ``sg, cg``: sin/cos of the leg's angle from the vertical;
+    ``tau_hip`` [N m]: the torque the hip applies to one physical leg (for the side-load
+    friction of the leg). Returns the new row count."""
+    npl = P[P_NP]
+    l0 = P[P_L0]
+    k = P[P_K]
+    mode = mi[MI_CONTACT_B + leg]
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    dth = dq[2]
+    dg = dth + dq[3 + leg]
+    hx = q[0] + sL * cth
+    hy = q[1] + sL * sth
+    hvx = dq[0] - sL * sth * dth
+    hvy = dq[1] + sL * cth * dth
+    ll = l[leg]
+    jt_th_x = -sL * sth + ll * cg
+    jt_th_y = sL * cth + ll * sg
+    jt_ph_x = ll * cg
+    jt_ph_y = ll * sg
+    bx = -sL * cth * dth * dth
+    by = -sL * sth * dth * dth
+    kk = 3 + leg
+    # leg damper and sliding-joint friction (as Table III unless the effects beyond the
+    # paper are switched on)
+    c_l = leg_damping(q[kk], P)
+    fc_l = leg_friction_level(tau_hip, ll, P)
+    # sin(phi), cos(phi) of the leg angle relative to the torso
+    sph = sg * cth - cg * sth
+    cph = cg * cth + sg * sth
+    if mode == STICK or mode == STRUT:
+        ld = -(hvx * sg - hvy * cg)
+        LG[2 * LG_LDOT + leg] = ld
+        F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
+        if mode == STRUT:
+            F = npl * k * (l0 - ll)
+        LG[2 * LG_FAX + leg] = F
+        fx = -F * sg
+        fy = F * cg
+        Q[0] += fx
+        Q[1] += fy
+        Q[2] += jt_th_x * fx + jt_th_y * fy
+        Q[kk] += jt_ph_x * fx + jt_ph_y * fy
+        new_row(R, r, rkind, rleg, nr, -(bx * cg + by * sg + 2.0 * ld * dg), ROW_TOE_ACROSS,
+                leg)
+        R[nr, 0] = cg
+        R[nr, 1] = sg
+        R[nr, 2] = sL * sph + ll
+        R[nr, kk] = ll
+        nr += 1
+        if mode == STRUT:
+            w = P[P_STRUT_OMEGA]
+            new_row(R, r, rkind, rleg, nr, -(bx * sg - by * cg) + ll * dg * dg
+                    + 2.0 * w * ld + w * w * (ll - l0), ROW_TOE_ALONG, leg)
+            R[nr, 0] = sg
+            R[nr, 1] = -cg
+            R[nr, 2] = -sL * cph
+            nr += 1
+        LG[2 * LG_TOEX + leg] = mf[MF_ANCHOR_B + leg]
+    elif mode == SLIDE:
+        ld = hvy / cg + hy * sg * dg / (cg * cg)
+        LG[2 * LG_LDOT + leg] = ld
+        F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
+        LG[2 * LG_FAX + leg] = F
+        mu = P[P_MU]
+        sig = 0.0
+        if mu < 1e300:
+            sig = mu * mi[MI_SLIDE_DIR_B + leg]
+        gn = F / (cg + sig * sg)
+        gt = -sig * gn
+        LG[2 * LG_GN + leg] = gn
+        LG[2 * LG_GT + leg] = gt
+        Q[0] += gt
+        Q[1] += gn
+        Q[2] += jt_th_x * gt + jt_th_y * gn
+        Q[kk] += jt_ph_x * gt + jt_ph_y * gn
+        LG[2 * LG_TOEX + leg] = hx + ll * sg
+        LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
+    else:
+        if massless:
+            new_row(R, r, rkind, rleg, nr, 0.0, ROW_MASSLESS, leg)
+            R[nr, kk] = 1.0
+            if P[P_TD_WORLD] > 0.5:
+                R[nr, 2] = 1.0
+            nr += 1
+            ld = 0.0
+        else:
+            ld = flight_leg_rate(k, c_l, l0, ll, fc_l)
+        LG[2 * LG_LDOT + leg] = ld
+        LG[2 * LG_TOEX + leg] = hx + ll * sg
+        LG[2 * LG_TOEY + leg] = hy - ll * cg
+        LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
+    return nr

@@ -1,0 +1,147 @@
+"""The touchdown impact (compiled): a rigid-body impact onto the constraints of the new
+modes (docs/specification.md section 3; docs/model.md "Impact")."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..jit import allocating
+from .kinematics import project, project_state
+from .kkt import MAX_ROWS, solve_dense
+from .layout import (
+    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_L, P_MASSLESS, P_MODEL,
+    P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK, STRUT,
+)
+from .rigid_body import kinetic_energy_at, mass_matrix
+from .transmission import motor_mode_from_rate
+
+
+@allocating
+def impact(s, P, mi, mf, out):
+    """Rigid-body impact onto the constraints of the current modes, in place.
+
+    Solves ``[M R^T; R 0] [dq+; Lambda] = [M dq-; 0]`` where R holds the velocity
+    constraints that act impulsively: every pinned toe (perpendicular and, for a strut,
+    axial), massless flight legs, and in Model II a rigid belt for each leg (the belt damper
+    is far stiffer than the gear-train inertia over an impact: alpha' = phi' after it).
+    Stiction cannot carry an impulse, so stuck motor joints do not constrain it. Every row
+    is homogeneous, so dq+ is the M-orthogonal projection of dq- onto the constrained
+    velocities and the kinetic energy lost, 1/2 |dq- - dq+|_M^2, is never negative.
+
+    out[leg*3 + 0..2]: normal impulse, tangential impulse [N s] of each pinned toe;
+    out[6]: kinetic energy lost [J]. Returns False if singular.
+    """
+    model = int(P[P_MODEL])
+    nact = 7 if model == MODEL_II else 5
+    q = s[0:NQ].copy()
+    dq = s[NQ:2 * NQ].copy()
+    l = s[IL_B:IL_B + 2].copy()
+    # stiction does not act impulsively: treat motor joints as free while projecting
+    mi2 = mi.copy()
+    mi2[MI_MOTOR_B] = 1
+    mi2[MI_MOTOR_B + 1] = 1
+    project(q, dq, l, P, mi2, mf)
+    M = np.empty((NQ, NQ))
+    mass_matrix(q, P, M)
+    dq0 = s[NQ:2 * NQ].copy()
+    if model != MODEL_II:
+        dq0[5] = dq0[3]
+        dq0[6] = dq0[4]
+    ke0 = kinetic_energy_at(M, dq0)
+    R = np.zeros((MAX_ROWS, NQ))
+    r = np.zeros(MAX_ROWS)
+    rleg = np.zeros(MAX_ROWS, dtype=np.int64)
+    rkind = np.zeros(MAX_ROWS, dtype=np.int64)
+    nr = 0
+    th = q[2]
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        g = th + q[3 + leg]
+        sg = math.sin(g)
+        cg = math.cos(g)
+        kk = 3 + leg
+        if mode == STICK or mode == STRUT:
+            R[nr, 0] = cg
+            R[nr, 1] = sg
+            R[nr, 2] = sL * math.sin(q[3 + leg]) + l[leg]
+            R[nr, kk] = l[leg]
+            rleg[nr] = leg
+            rkind[nr] = ROW_TOE_ACROSS
+            nr += 1
+            if mode == STRUT:
+                R[nr, 0] = sg
+                R[nr, 1] = -cg
+                R[nr, 2] = -sL * math.cos(q[3 + leg])
+                rleg[nr] = leg
+                rkind[nr] = ROW_TOE_ALONG
+                nr += 1
+        elif mode == FLIGHT and P[P_MASSLESS] > 0.5:
+            R[nr, kk] = 1.0
+            if P[P_TD_WORLD] > 0.5:
+                R[nr, 2] = 1.0
+            rleg[nr] = leg
+            rkind[nr] = ROW_MASSLESS
+            nr += 1
+        if model == MODEL_II:
+            # rigid belt over the impact: the gear rate equals the leg rate after it (the
+            # belt damper, 80 us against the gear train, evens out the relative rate
+            # within the impact; the energy of that relative motion is part of the logged
+            # impact loss). A homogeneous row: the impact can only remove energy.
+            R[nr, 5 + leg] = 1.0
+            R[nr, 3 + leg] = -1.0
+            r[nr] = 0.0
+            rleg[nr] = leg
+            rkind[nr] = ROW_GEAR
+            nr += 1
+    n = nact + nr
+    A = np.zeros((n, n))
+    b = np.zeros(n)
+    for i in range(nact):
+        acc = 0.0
+        for j in range(nact):
+            A[i, j] = M[i, j]
+            acc += M[i, j] * dq0[j]
+        b[i] = acc
+    for rr in range(nr):
+        for j in range(nact):
+            A[nact + rr, j] = R[rr, j]
+            A[j, nact + rr] = R[rr, j]
+        b[nact + rr] = r[rr]
+    ok = solve_dense(A, b, n)
+    for i in range(7):
+        out[i] = 0.0
+    if not ok:
+        return False
+    for i in range(nact):
+        dq[i] = b[i]
+    if model != MODEL_II:
+        dq[5] = dq[3]
+        dq[6] = dq[4]
+    for rr in range(nr):
+        lam = -b[nact + rr]
+        leg = rleg[rr]
+        g = th + q[3 + leg]
+        if rkind[rr] == ROW_TOE_ACROSS:
+            out[3 * leg] += lam * math.sin(g)
+            out[3 * leg + 1] += lam * math.cos(g)
+        elif rkind[rr] == ROW_TOE_ALONG:
+            out[3 * leg] -= lam * math.cos(g)
+            out[3 * leg + 1] += lam * math.sin(g)
+    out[6] = ke0 - kinetic_energy_at(M, dq)
+    s[0:NQ] = q
+    s[NQ:2 * NQ] = dq
+    s[IL_B:IL_B + 2] = l
+    if model == MODEL_II:
+        # Stiction carries no impulse, so every motor joint's stick/slip mode follows its
+        # new gear rate (docs/specification.md section 3): the rigid belt moves the gear train with the leg, which
+        # can reverse a slipping joint; a joint left at exactly zero rate is stuck (settle()
+        # releases it if stiction cannot hold it). Keeping the old slip direction would
+        # leave a joint "slipping" against its motion, which settle() could only reconcile
+        # with an impulse that stiction cannot give.
+        for leg in range(2):
+            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], P)
+    project_state(s, P, mi, mf)
+    return True

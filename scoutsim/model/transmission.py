@@ -1,0 +1,137 @@
+"""The transmission between motor and leg (compiled): ideal / Model I, and the Model II
+hip unit (docs/specification.md section 5; paper Sec. III, Table II, Fig. 6).
+
+Ideal and Model I: the gear output drives the leg angle phi directly (Model I adds the
+motor's torque-speed line and the battery; model/actuator.py). Model II: the motor drives a
+gear pair (drive gear J_1 on the motor shaft, driven gear J_2 at angle alpha relative to the
+torso, ratio N) that drives the leg through a belt modelled as a spring-damper
+(k_b, c_b) on alpha - phi; the motor joint has viscous friction b_J and stiction tau_s, so it
+is either stuck (alpha' = 0, a constraint row of kind ``ROW_GEAR``) or slipping
+(Coulomb torque tau_s against the motion). Everything the hip unit adds to the model is in
+this file: its inertia (:func:`add_gear_inertia`), its potential energy
+(:func:`belt_energy`), its generalized forces (:func:`hip_unit_forces`), the stuck joint's
+row (:func:`motor_joint_row`) and the joint's stick/slip mode after an impact
+(:func:`motor_mode_from_rate`). The effects beyond the paper (belt backlash) are off by
+default.
+"""
+
+from __future__ import annotations
+
+from ..jit import kernel
+from .kkt import new_row
+from .layout import (
+    MI_MOTOR_B, MODEL_II, MODEL_PASSIVE, P_B_J, P_BACKLASH, P_CB, P_J1, P_J2, P_KB, P_MODEL,
+    P_N, P_NP, P_TAU_S, ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
+)
+
+
+@kernel(inline="always")
+def motor_speed(dq, leg, P):
+    """Motor speed relative to the torso [rad/s] of leg ``leg``: N times the rate of the
+    coordinate the gear output turns (the driven gear alpha in Model II, the leg phi
+    otherwise)."""
+    return P[P_N] * (dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg])
+
+
+@kernel(inline="always")
+def belt_spring_deflection(delta, P):
+    """Deflection [rad] the belt spring sees at gear/leg angle difference ``delta`` [rad]:
+    with the hip unit's play b (``P_BACKLASH``, 0 = the paper's model) the spring is slack
+    for |delta| <= b / 2 (dead zone) and deflected by the excess beyond it."""
+    h = 0.5 * P[P_BACKLASH]
+    if delta > h:
+        return delta - h
+    if delta < -h:
+        return delta + h
+    return 0.0
+
+
+@kernel(inline="always")
+def belt_energy(q, leg, P):
+    """Potential energy [J] of the belt springs of virtual leg ``leg`` (Model II)."""
+    bd = belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
+    return 0.5 * P[P_NP] * P[P_KB] * bd * bd
+
+
+@kernel(inline="always")
+def add_gear_inertia(M, P):
+    """Add the Model II gear pairs to the mass matrix M (upper triangle): per virtual leg
+    n_p J_2 turning at theta + alpha and n_p J_1 at theta + N alpha, i.e. the reflected
+    inertia J_2 + N^2 J_1 on alpha and its coupling to the pitch."""
+    npl = P[P_NP]
+    j1 = npl * P[P_J1]
+    j2 = npl * P[P_J2]
+    N = P[P_N]
+    for leg in range(2):
+        a = 5 + leg
+        M[2, 2] += j1 + j2
+        M[2, a] += j2 + N * j1
+        M[a, a] += j2 + N * N * j1
+
+
+@kernel(inline="always")
+def joint_friction_torque(om, mode, P):
+    """Friction torque [N m] of a Model II motor joint at motor speed ``om`` [rad/s] in
+    stick/slip mode ``mode``: viscous b_J om, plus the Coulomb level tau_s in the slip
+    direction while slipping (a stuck joint's holding torque is a constraint force)."""
+    tf = P[P_B_J] * om
+    if mode != STUCK:
+        tf += P[P_TAU_S] * mode
+    return tf
+
+
+@kernel(inline="always")
+def belt_torque(q, dq, leg, P):
+    """Torque [N m] of the belt spring-damper on the leg of virtual leg ``leg``, per
+    physical leg: k_b (alpha - phi) (with the dead zone of the backlash) plus
+    c_b (alpha' - phi')."""
+    return (P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
+            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))
+
+
+@kernel(inline="always")
+def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
+    """Add the generalized forces of virtual leg ``leg``'s hip drive to Q for the delivered
+    torque ``tapp`` [N m per physical leg] at motor speed ``om`` [rad/s].
+
+    Ideal / Model I: tapp acts on the leg angle phi. Passive: nothing. Model II: tapp acts
+    on the driven gear alpha; the joint friction (at the motor, N times larger at alpha)
+    opposes it, and the belt couples alpha and phi. Returns (joint friction torque at the
+    motor, belt torque on the leg) [N m], both 0 outside Model II."""
+    model = int(P[P_MODEL])
+    npl = P[P_NP]
+    if model == MODEL_II:
+        Q[5 + leg] += npl * tapp
+        tf = joint_friction_torque(om, mode, P)
+        Q[5 + leg] -= npl * P[P_N] * tf
+        tb = belt_torque(q, dq, leg, P)
+        Q[3 + leg] += npl * tb
+        Q[5 + leg] -= npl * tb
+        return tf, tb
+    if model != MODEL_PASSIVE:
+        Q[3 + leg] += npl * tapp
+    return 0.0, 0.0
+
+
+@kernel(inline="always")
+def motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P):
+    """Append the row alpha'' = 0 of a stuck Model II motor joint (kind ``ROW_GEAR``; its
+    multiplier is the stiction holding torque). Returns the new row count."""
+    if int(P[P_MODEL]) == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+        new_row(R, r, rkind, rleg, nr, 0.0, ROW_GEAR, leg)
+        R[nr, 5 + leg] = 1.0
+        nr += 1
+    return nr
+
+
+@kernel(inline="always")
+def motor_mode_from_rate(w, P):
+    """Stick/slip mode of a Model II motor joint whose gear rate is ``w`` [rad/s] with no
+    other information: slipping in the direction of motion; at exactly zero rate stuck if
+    the joint has stiction (a joint without stiction is never stuck: nothing could release
+    it, so it "slips" with zero Coulomb torque)."""
+    if w > 0.0:
+        return SLIP_POS
+    if w < 0.0:
+        return SLIP_NEG
+    return STUCK if P[P_TAU_S] > 0.0 else SLIP_POS

@@ -1,0 +1,48 @@
+"""Figures and animation: everything scoutsim draws (the top layer; nothing below imports it
+except the deferred convenience accessors ``SimulationResult.plot``,
+``SweepResult.plot_map`` and ``IdentificationResult.plot``).
+
+Modules
+-------
+style                 colours of legs, leg states and models; model names; the file writer
+plots                 run time histories, torque-speed plane (paper Fig. 11), basin and sweep maps
+animation             stick-figure animation of a run (GIF / MP4)
+paper_figures         the paper's Figs. 5, 8-12 for an experiment and models
+phase_plots           the phase-normalized mean-stride comparison
+identification_plots  a rig log against the fitted hip-unit model
+
+Every function returns a :class:`matplotlib.figure.Figure` built without ``pyplot`` (no GUI
+backend, no global figure state, headless), saved to ``path`` in the format of its suffix
+(.png, .pdf, .svg) if given. Angles are shown in degrees here and nowhere else.
+
+The submodules are imported on first use (``scoutsim.presentation.plot_run`` works), so
+importing the package costs nothing until a figure is drawn.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: public name -> submodule that defines it
+_EXPORTS = {
+    "plot_run": "plots", "plot_torque_speed": "plots", "plot_basin_map": "plots",
+    "plot_sweep_map": "plots", "motor_limits": "plots",
+    "animate": "animation", "save_animation": "animation",
+    "fig5": "paper_figures", "fig8": "paper_figures", "fig9": "paper_figures",
+    "fig10": "paper_figures", "fig11": "paper_figures", "fig12": "paper_figures",
+    "fig_phase": "paper_figures", "plot_log": "paper_figures", "write_figures": "paper_figures",
+    "plot_phase": "phase_plots", "plot_fit": "identification_plots",
+    "save_figure": "style",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

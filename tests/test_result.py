@@ -1,0 +1,39 @@
+"""Tests of scoutsim.result: the table and figure views of a run."""
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim.model import layout as L
+from scoutsim.result import column_unit
+
+
+@pytest.fixture(scope="module")
+def run():
+    return scoutsim.simulate(duration=0.3, model="II")
+
+
+def test_every_column_has_a_unit_or_is_a_mode_code(run):
+    for name in run.columns():
+        unit = column_unit(name)
+        is_mode = name.startswith(("leg_state_", "contact_mode_", "motor_joint_mode_"))
+        assert (unit is None) == is_mode, name
+
+
+def test_to_dataframe_holds_every_sample_losslessly(run):
+    pd = pytest.importorskip("pandas")
+    df = run.to_dataframe()
+    assert isinstance(df, pd.DataFrame)
+    assert df.index.name == "t" and np.array_equal(df.index.to_numpy(), run.t)
+    assert len(df) == run.t.size
+    for i, n in enumerate(L.STATE_NAMES):
+        assert np.array_equal(df[n].to_numpy(), run.state[:, i])
+    assert np.array_equal(df["leg_state_back"].to_numpy(), run.leg_state("back"))
+    assert df.attrs["units"]["theta"] == "rad" and df.attrs["units"]["leg_state_back"] is None
+
+
+def test_plot_is_the_run_figure(run, tmp_path):
+    fig = run.plot(tmp_path / "run.png")
+    assert (tmp_path / "run.png").stat().st_size > 20_000
+    assert len(fig.get_axes()) >= 4
+    assert "Model II" in fig._suptitle.get_text()
