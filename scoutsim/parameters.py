@@ -33,6 +33,79 @@ from pathlib import Path
 DEFAULT_FRICTION_COEFFICIENT = 1.0
 
 
+# =========================================================================================
+# Units and the packaged defaults (scout2.toml: the one home of every default value)
+# =========================================================================================
+
+#: Allowed unit strings and their SI factors (SI value = value * factor), grouped by
+#: dimension. The first unit of each group, with factor 1, is the SI unit. This is the one
+#: place where degrees (and every other non-SI unit) are converted.
+UNITS: dict[str, dict[str, float]] = {
+    "length": {"m": 1.0, "cm": 1.0e-2, "mm": 1.0e-3},
+    "angle": {"rad": 1.0, "deg": math.pi / 180.0},
+    "time": {"s": 1.0, "ms": 1.0e-3},
+    "mass": {"kg": 1.0, "g": 1.0e-3},
+    "inertia": {"kg m^2": 1.0, "kg cm^2": 1.0e-4, "kg mm^2": 1.0e-6, "g cm^2": 1.0e-7},
+    "acceleration": {"m/s^2": 1.0},
+    "stiffness": {"N/m": 1.0, "N/mm": 1.0e3},
+    "damping": {"N s/m": 1.0, "N s/mm": 1.0e3},
+    "torque": {"N m": 1.0, "mN m": 1.0e-3},
+    "force": {"N": 1.0},
+    "per squared angle": {"1/rad^2": 1.0, "1/deg^2": (180.0 / math.pi) ** 2},
+    "rotational stiffness": {"N m/rad": 1.0, "N m/deg": 180.0 / math.pi},
+    "rotational damping": {"N m s/rad": 1.0, "N m/(rad/s)": 1.0, "N m/(deg/s)": 180.0 / math.pi},
+    "torque constant": {"N m/A": 1.0, "mN m/A": 1.0e-3},
+    "speed constant": {"V s/rad": 1.0, "V/(rad/s)": 1.0, "mV/rpm": 1.0e-3 * 60.0 / (2.0 * math.pi)},
+    "resistance": {"ohm": 1.0},
+    "current": {"A": 1.0, "mA": 1.0e-3},
+    "voltage": {"V": 1.0},
+    "dimensionless": {"1": 1.0},
+    "boolean": {"bool": 1.0},
+}
+
+#: unit string -> (dimension, SI factor); every unit string belongs to one dimension only.
+_UNIT_INDEX: dict[str, tuple[str, float]] = {
+    unit: (dim, factor) for dim, group in UNITS.items() for unit, factor in group.items()
+}
+assert len(_UNIT_INDEX) == sum(map(len, UNITS.values())), "unit strings must be unique"
+
+_PACKAGED_NAME = "scout2.toml"
+
+
+@lru_cache(maxsize=1)
+def _packaged() -> dict:
+    """Parsed packaged ``scout2.toml`` (importlib.resources, with a file-system fallback)."""
+    try:
+        text = resources.files(__package__ or "scoutsim").joinpath("data", _PACKAGED_NAME).read_text("utf-8")
+    except (OSError, TypeError, ValueError, ModuleNotFoundError):
+        # e.g. a namespace package under an editable install
+        text = (Path(__file__).resolve().parent / "data" / _PACKAGED_NAME).read_text("utf-8")
+    return tomllib.loads(text)
+
+
+def _packaged_defaults(*sections: str):
+    """Class decorator: every annotated field of the class gets, as its default, the SI value
+    of its entry in the packaged ``scout2.toml`` (in one of ``sections``), converted with the
+    entry's unit. The dataclass field list and the file must name the same parameters."""
+    def fill(cls):
+        data = _packaged()
+        entries = {n: e for sec in sections for n, e in data[sec].items()}
+        for name, kind in cls.__annotations__.items():
+            if name not in entries:
+                raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
+            entry = entries[name]
+            value = entry["value"]
+            if kind == "bool":
+                default = bool(value)
+            elif kind == "int":
+                default = int(value)
+            else:
+                default = float(value) * _UNIT_INDEX[entry["unit"]][1]
+            setattr(cls, name, default)
+        return cls
+    return fill
+
+
 @dataclass(frozen=True)
 class Environment:
     """The world the robot runs in: a flat, rigid, level floor at y = 0 with Coulomb
@@ -71,6 +144,7 @@ def floor_label(mu: float) -> str:
 
 
 @dataclass(frozen=True)
+@_packaged_defaults("robot", "transmission", "motor")
 class RobotParameters:
     """Physical parameters of the planar Scout II model (SI units).
 
@@ -157,41 +231,41 @@ class RobotParameters:
         Internal resistance shared by all motors [ohm]; 0 = ideal source (assumed).
     """
 
-    torso_mass: float = 20.865
-    torso_inertia: float = 1.3
-    leg_mass: float = 0.97
-    leg_inertia: float = 0.01
-    leg_stiffness: float = 3520.0
-    leg_damping: float = 55.0
-    hip_spacing: float = 0.552
-    leg_rest_length: float = 0.323
-    leg_com_distance: float = 0.1615
-    legs_per_virtual_leg: int = 2
-    gravity: float = 9.81
-    torso_length: float = 0.70
-    torso_height: float = 0.12
-    planetary_ratio: float = 72.38
-    sprocket_ratio: float = 48.0 / 34.0
-    gearbox_efficiency: float = 0.68
-    sprocket_efficiency: float = 0.96
-    gearbox_idle_loss_torque: float = 0.0
-    gearbox_load_loss_coefficient: float = 0.0
-    drive_gear_inertia: float = 3.5e-6
-    driven_gear_inertia: float = 1.0e-3
-    joint_stiction: float = 5.5e-3
-    joint_damping: float = 6.2e-7 * 180.0 / math.pi
-    belt_stiffness: float = 7.0 * 180.0 / math.pi
-    belt_damping: float = 4.0 * 180.0 / math.pi
-    belt_backlash: float = 0.0
-    leg_friction_force: float = 0.0
-    leg_friction_side_load_coefficient: float = 0.0
-    leg_damping_angle_coefficient: float = 0.0
-    torque_constant: float = 0.0389
-    speed_constant: float = 0.0389
-    armature_resistance: float = 1.2
-    current_limit: float = 12.0
-    battery_voltage: float = 36.0
-    battery_resistance: float = 0.0
+    torso_mass: float
+    torso_inertia: float
+    leg_mass: float
+    leg_inertia: float
+    leg_stiffness: float
+    leg_damping: float
+    hip_spacing: float
+    leg_rest_length: float
+    leg_com_distance: float
+    legs_per_virtual_leg: int
+    gravity: float
+    torso_length: float
+    torso_height: float
+    planetary_ratio: float
+    sprocket_ratio: float
+    gearbox_efficiency: float
+    sprocket_efficiency: float
+    gearbox_idle_loss_torque: float
+    gearbox_load_loss_coefficient: float
+    drive_gear_inertia: float
+    driven_gear_inertia: float
+    joint_stiction: float
+    joint_damping: float
+    belt_stiffness: float
+    belt_damping: float
+    belt_backlash: float
+    leg_friction_force: float
+    leg_friction_side_load_coefficient: float
+    leg_damping_angle_coefficient: float
+    torque_constant: float
+    speed_constant: float
+    armature_resistance: float
+    current_limit: float
+    battery_voltage: float
+    battery_resistance: float
 
     # -- derived quantities (docs/specification.md section 4) ------------------------------------------
     @property
@@ -251,6 +325,7 @@ class RobotParameters:
 
 
 @dataclass(frozen=True)
+@_packaged_defaults("controller")
 class ControllerParameters:
     """Bounding controller settings (paper Sec. II, Table I; docs/specification.md section 6), SI units.
 
@@ -278,22 +353,22 @@ class ControllerParameters:
         Model II only: sense the motor-side angle alpha (encoder) instead of phi.
     """
 
-    touchdown_angle_front: float = math.radians(21.0)
-    touchdown_angle_back: float = math.radians(19.0)
-    sweep_limit_front: float = 0.0
-    sweep_limit_back: float = 0.0
-    flight_kp_front: float = 250.0
-    flight_kd_front: float = 5.0
-    flight_kp_back: float = 250.0
-    flight_kd_back: float = 5.0
-    brake_kp_front: float = 300.0
-    brake_kd_front: float = 5.0
-    brake_kp_back: float = 300.0
-    brake_kd_back: float = 5.0
-    control_period: float = 1.0e-3
-    touchdown_compression: float = 8.0e-3
-    liftoff_compression: float = 6.0e-3
-    sense_motor_angle: bool = True
+    touchdown_angle_front: float
+    touchdown_angle_back: float
+    sweep_limit_front: float
+    sweep_limit_back: float
+    flight_kp_front: float
+    flight_kd_front: float
+    flight_kp_back: float
+    flight_kd_back: float
+    brake_kp_front: float
+    brake_kd_front: float
+    brake_kp_back: float
+    brake_kd_back: float
+    control_period: float
+    touchdown_compression: float
+    liftoff_compression: float
+    sense_motor_angle: bool
 
     def replace(self, **changes) -> "ControllerParameters":
         """Return a copy with some fields changed."""
@@ -304,37 +379,6 @@ class ControllerParameters:
 # Loading, unit conversion and validation
 # =========================================================================================
 
-#: Allowed unit strings and their SI factors (SI value = value * factor), grouped by
-#: dimension. The first unit of each group, with factor 1, is the SI unit. This is the one
-#: place where degrees (and every other non-SI unit) are converted.
-UNITS: dict[str, dict[str, float]] = {
-    "length": {"m": 1.0, "cm": 1.0e-2, "mm": 1.0e-3},
-    "angle": {"rad": 1.0, "deg": math.pi / 180.0},
-    "time": {"s": 1.0, "ms": 1.0e-3},
-    "mass": {"kg": 1.0, "g": 1.0e-3},
-    "inertia": {"kg m^2": 1.0, "kg cm^2": 1.0e-4, "kg mm^2": 1.0e-6, "g cm^2": 1.0e-7},
-    "acceleration": {"m/s^2": 1.0},
-    "stiffness": {"N/m": 1.0, "N/mm": 1.0e3},
-    "damping": {"N s/m": 1.0, "N s/mm": 1.0e3},
-    "torque": {"N m": 1.0, "mN m": 1.0e-3},
-    "force": {"N": 1.0},
-    "per squared angle": {"1/rad^2": 1.0, "1/deg^2": (180.0 / math.pi) ** 2},
-    "rotational stiffness": {"N m/rad": 1.0, "N m/deg": 180.0 / math.pi},
-    "rotational damping": {"N m s/rad": 1.0, "N m/(rad/s)": 1.0, "N m/(deg/s)": 180.0 / math.pi},
-    "torque constant": {"N m/A": 1.0, "mN m/A": 1.0e-3},
-    "speed constant": {"V s/rad": 1.0, "V/(rad/s)": 1.0, "mV/rpm": 1.0e-3 * 60.0 / (2.0 * math.pi)},
-    "resistance": {"ohm": 1.0},
-    "current": {"A": 1.0, "mA": 1.0e-3},
-    "voltage": {"V": 1.0},
-    "dimensionless": {"1": 1.0},
-    "boolean": {"bool": 1.0},
-}
-
-#: unit string -> (dimension, SI factor); every unit string belongs to one dimension only.
-_UNIT_INDEX: dict[str, tuple[str, float]] = {
-    unit: (dim, factor) for dim, group in UNITS.items() for unit, factor in group.items()
-}
-assert len(_UNIT_INDEX) == sum(map(len, UNITS.values())), "unit strings must be unique"
 
 #: TOML section -> dataclass whose fields it holds.
 SECTIONS: dict[str, type] = {
@@ -344,7 +388,6 @@ SECTIONS: dict[str, type] = {
     "controller": ControllerParameters,
 }
 
-_PACKAGED_NAME = "scout2.toml"
 _HALF_PI = 0.5 * math.pi
 
 
@@ -466,17 +509,6 @@ def _fmt_bound(x: float) -> str:
 
 def _is_bool(x: object) -> bool:
     return isinstance(x, bool) or type(x).__name__ in ("bool_", "bool")
-
-
-@lru_cache(maxsize=1)
-def _packaged() -> dict:
-    """Parsed packaged ``scout2.toml`` (importlib.resources, with a file-system fallback)."""
-    try:
-        text = resources.files(__package__ or "scoutsim").joinpath("data", _PACKAGED_NAME).read_text("utf-8")
-    except (OSError, TypeError, ValueError, ModuleNotFoundError):
-        # e.g. a namespace package under an editable install
-        text = (Path(__file__).resolve().parent / "data" / _PACKAGED_NAME).read_text("utf-8")
-    return tomllib.loads(text)
 
 
 @lru_cache(maxsize=1)

@@ -31,20 +31,9 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
     for cross-checks of the optimized ``evaluate_ws``.
 
-    Right-hand side ds = f(s) of the hybrid model in its current modes, and outputs.
-
-    Parameters
-    ----------
-    s : (16,) state [q, dq, l_b, l_f] (SI).
-    P : parameter array (layout.P_*).
-    mi, mf : integer / float mode arrays (contact modes, motor-joint modes, toe anchors).
-    cmd : (2,) commanded hip torque per physical leg, leg side [N m] (sample-and-hold).
-    ds : (16,) output derivative.
-    aux : (NAUX,) output ground forces, torques, currents, energy, ... (layout.A_*).
-
-    Returns
-    -------
-    bool : False if the constrained dynamics are singular.
+    Same arguments, outputs and return value as :func:`scoutsim.model.evaluate.evaluate`
+    (state ``s`` [SI], parameters ``P``, modes ``mi``/``mf``, command ``cmd`` [N m]; fills
+    ``ds`` and ``aux``; False if the constrained dynamics are singular).
     """
     model = int(P[P_MODEL])
     nact = 7 if model == MODEL_II else 5
