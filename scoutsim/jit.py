@@ -78,14 +78,61 @@ if not os.environ.get("NUMBA_CACHE_DIR"):
 _COMMON = dict(cache=True, error_model="numpy")
 
 
+def cache_directory() -> Path:
+    """Directory of the on-disk cache of the compiled core (this digest's)."""
+    return Path(config.CACHE_DIR)
+
+
+def core_is_compiled() -> bool:
+    """True if the compiled run loop (and with it the whole core it calls) is in the cache,
+    i.e. a simulation will not have to compile first (this process may still load it)."""
+    d = cache_directory()
+    return d.is_dir() and any(d.rglob("loop.run-*.nbi"))
+
+
+#: What a simulation compiles on its first call, and about how long it takes (the first
+#: call of ``loop.run``; measured on a 2-core machine, docs/model.md "Compile time").
+FIRST_COMPILE_NOTICE = ("compiling the simulator core with Numba (first run after an "
+                        "install or an update; about 1 min on a 2-core machine, then cached)")
+
+
+def _typed_by_kind(dispatcher):
+    """Make calls from compiled code to ``dispatcher`` compile one specialization per
+    argument *kind*, not one per constant value.
+
+    Numba types a constant argument of a call (``evaluate_ws(..., True)``, a leg index
+    ``0``) as a literal (``Literal[bool](True)``) and compiles the callee again for each
+    literal it meets. The right-hand side was compiled five times that way (20-40 s each,
+    two thirds of the first run's compilation). Here the argument types are widened to
+    their non-literal kind before the callee is compiled or looked up; the caller then
+    converts its constants to that kind."""
+    from numba.core import types
+
+    resolve = dispatcher.get_call_template
+
+    def get_call_template(args, kws):
+        return resolve(tuple(types.unliteral(a) for a in args),
+                       {k: types.unliteral(v) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
+
+
+def _compile(func, nrt: bool, inline: str):
+    deco = njit(**_COMMON, _nrt=nrt, inline=inline)
+    if inline != "never":   # inlined at the IR level: there is no callee to specialize
+        return deco if func is None else deco(func)
+    if func is None:
+        return lambda f: _typed_by_kind(deco(f))
+    return _typed_by_kind(deco(func))
+
+
 def kernel(func=None, *, inline: str = "never"):
     """Compile ``func`` as a non-allocating kernel (no reference counting);
     ``inline="always"`` inlines it into its callers at the Numba IR level."""
-    deco = njit(**_COMMON, _nrt=False, inline=inline)
-    return deco if func is None else deco(func)
+    return _compile(func, False, inline)
 
 
 def allocating(func=None, *, inline: str = "never"):
     """Compile ``func`` with reference counting (it allocates arrays)."""
-    deco = njit(**_COMMON, _nrt=True, inline=inline)
-    return deco if func is None else deco(func)
+    return _compile(func, True, inline)

@@ -260,3 +260,23 @@ def test_sweep_cli_bad_axis_is_a_usage_error(tmp_path, capsys):
                  "--out", str(tmp_path)]) == 2
     assert main(["sweep", "--grid", "robot.torso_mas=1:2:2", "--out", str(tmp_path)]) == 2
     assert "did you mean" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_a_simulating_command_says_it_compiles_unless_quiet(tmp_path, monkeypatch, capsys,
+                                                              quiet):
+    """Before the first compilation a simulating command says what it is doing (on stderr,
+    so a --json stdout stays clean); --quiet silences it."""
+    import scoutsim.jit
+    monkeypatch.setattr(scoutsim.jit, "core_is_compiled", lambda: False)
+    argv = ["run", "--duration", "0.01", "--no-plots", "--out", str(tmp_path)]
+    assert main(argv + (["--quiet"] if quiet else [])) == 0
+    err = capsys.readouterr().err
+    assert ("compiling" in err) is not quiet
+
+
+def test_no_compile_notice_when_the_core_is_cached(tmp_path, monkeypatch, capsys):
+    import scoutsim.jit
+    monkeypatch.setattr(scoutsim.jit, "core_is_compiled", lambda: True)
+    assert main(["run", "--duration", "0.01", "--no-plots", "--out", str(tmp_path)]) == 0
+    assert "compiling" not in capsys.readouterr().err

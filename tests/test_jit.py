@@ -66,6 +66,23 @@ def test_kernel_and_allocating_set_the_options():
     assert k.py_func is f and a.py_func is f
 
 
+def test_a_callee_is_compiled_once_whatever_constants_its_callers_pass():
+    """Constants passed from compiled code (True / False, leg index 0 / 1) do not give the
+    callee one specialization each: the right-hand side used to be compiled five times."""
+    def callee(x, flag, leg):
+        return x + (1.0 if flag else 0.0) + leg
+
+    c = jit.kernel(callee)
+    k = njit(lambda x: c(x, True, 0) + c(x, False, 1) + c(x, x > 0.0, 1))
+    assert k(1.0) == 2.0 + 2.0 + 3.0
+    assert len(c.signatures) == 1
+    assert "Literal" not in str(c.signatures[0])
+    # the mechanism: an undecorated Numba function does specialize on each constant
+    plain = njit(callee)
+    njit(lambda x: plain(x, True, 0) + plain(x, False, 1))(1.0)
+    assert len(plain.signatures) == 2
+
+
 def test_the_compiled_cache_is_keyed_by_every_core_source(tmp_path):
     """An edit of any compiled-core module (not only of a function's own file, which is
     all Numba checks) gives a new cache directory; other modules do not."""

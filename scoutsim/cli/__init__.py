@@ -39,6 +39,8 @@ __all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_tim
 
 #: the sub-command modules, in the order of ``scoutsim --help``
 COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, identify, rig)
+#: commands that simulate, so may have to compile the core first (a notice says so)
+COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, identify, rig)}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -79,6 +81,11 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    if args.command in COMPILING_COMMANDS and not getattr(args, "quiet", False):
+        from ..jit import FIRST_COMPILE_NOTICE, core_is_compiled
+        if not core_is_compiled():
+            print(f"scoutsim {args.command}: {FIRST_COMPILE_NOTICE} ...", file=sys.stderr,
+                  flush=True)
     try:
         return args.func(args)
     except UsageError as exc:

@@ -139,6 +139,9 @@ def add_friction_option(parser, help: str):
 def add_no_progress_option(parser):
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bar (it is also off when stderr is not a terminal)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="nothing on stderr but errors: no progress bar, no notice of "
+                             "the first run's compilation")
 
 
 def add_models_option(parser, flag: str):
@@ -164,9 +167,11 @@ def simulation_options() -> argparse.ArgumentParser:
                              "defaults")
     add_out_option(common)
     common.add_argument("--rtol", type=positive_float, default=None, metavar="X",
-                        help="integrator relative tolerance (default: 1e-8)")
+                        help="integrator relative tolerance (default: 1e-5 for Model II "
+                             "(ARK3), 1e-8 otherwise (DOPRI5))")
     common.add_argument("--atol", type=positive_float, default=None, metavar="X",
-                        help="integrator absolute tolerance (default: 1e-9)")
+                        help="integrator absolute tolerance (default: 1e-6 for Model II "
+                             "(ARK3), 1e-9 otherwise (DOPRI5))")
     add_friction_option(common, "Coulomb friction coefficient of the toes (default: "
                                 f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
                                 "paper's experiments ran; 'inf' = no slip; see docs/model.md)")
@@ -191,8 +196,8 @@ def check_time_window(args):
 
 
 def show_progress(args) -> bool:
-    """Progress bar unless --no-progress or stderr is not a terminal."""
-    return (not args.no_progress) and sys.stderr.isatty()
+    """Progress bar unless --no-progress, --quiet or stderr is not a terminal."""
+    return not (args.no_progress or getattr(args, "quiet", False)) and sys.stderr.isatty()
 
 
 def load_parameters(path):

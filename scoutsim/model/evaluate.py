@@ -81,7 +81,7 @@ def fill_derivative(ds, dq, b, LG, nact, model, ok):
     ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
 
 
-@kernel(inline="always")
+@kernel
 def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
                  vb, energy):
     """The outputs aux of :func:`evaluate_ws` from its per-leg scalars LG and the KKT
@@ -194,7 +194,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     return ok
 
 
-@kernel(inline="always")
+@kernel
 def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0, sgl1, cgl1,
                        M, A, piv, rkind, rleg, nact, nr, free0, free1, schur, wk, ok):
     """The rank-NSTIFF factorization of the stiff part of the Jacobian (see

@@ -238,7 +238,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         # change (measured: refreshing every 8th step saves ~2 % of a Model II run but
         # changes the step sequence, so 10 s gait metrics move by ~1e-3 at rtol 1e-5)
         err, ok, nf = do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
-                              ew, SF0, SF1, Z, False)
+                              ew, SF0, SF1, Z, False, True)
         stats[S_NFEV] += nf
         if not ok or not (err == err):
             h *= 0.25
@@ -367,7 +367,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 if not ok:
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
                     return t, nev, ST_NUMERICAL_FAILURE
-                nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew)
+                nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew, False)
                 stats[S_NFEV] += 1
                 if aux[A_KKT_OK] < 0.5:
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
