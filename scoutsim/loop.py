@@ -22,9 +22,9 @@ from .model.layout import (
     RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
-from .numerics.events import log_event, mode_violations, stamp_transition
+from .numerics.events import log_event, mode_violations, stamp_states, stamp_transition
 from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO,
-                              METHOD_DOPRI5, AdvanceScratch, advance)
+                              METHOD_DOPRI5, STEP_HEADROOM, AdvanceScratch, advance)
 from .numerics.stats import S_NFEV
 from .numerics.transitions import settle_ws
 
@@ -48,8 +48,8 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 
 @allocating
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew,
-        method=METHOD_AUTO):
+        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
+        stepc, method=METHOD_AUTO):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
@@ -61,7 +61,11 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     controller) integrates exactly as one call would. ``ew`` (:func:`eval_workspace`) is
     the evaluation workspace, kept across calls too: while hwork[HW_EVAL_KEPT] = 1 it holds
     the last evaluation at ``s`` (K[0]), so a new command is applied to it with
-    :func:`evaluate_command_change` instead of a fresh evaluation.
+    :func:`evaluate_command_change` instead of a fresh evaluation. ``ev`` (``NEVBUF``
+    columns) receives the event records with the state before / after each transition;
+    ``steps`` / ``stepc`` every integrator step if ``stepc[1]`` (see
+    :func:`~scoutsim.numerics.events.record_step`): the call returns at a sample before
+    ``steps`` has fewer than ``STEP_HEADROOM`` free rows (as before ``ev`` fills up).
     Returns (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
@@ -80,7 +84,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
     sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
-                        np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX))
+                        np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX),
+                        np.empty(NS), steps, stepc)
     sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
     meth = method
     if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
@@ -92,6 +97,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         if builtin:
             sense(s, C, y)
             bounding_step(y, C, ls, cmd, tr)
+            nevc = nev
             for leg in range(2):
                 if tr[leg] & 1:
                     nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
@@ -99,6 +105,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
+            stamp_states(ev, nevc, nev, s, s)
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
@@ -110,7 +117,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
             # audit it like an event (rare: the energy before is computed only here)
             stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
-                             mode_violations(s, K[0], aux, P, mi))
+                             mode_violations(s, K[0], aux, P, mi), s_prev, s)
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
         if aux[A_KKT_OK] < 0.5:
@@ -135,5 +142,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
             return k + 1, n_out, nev, status, t
         k += 1
         if nev > ev.shape[0] - 64:
+            break
+        if stepc[1] != 0 and stepc[0] > steps.shape[0] - STEP_HEADROOM:
             break
     return k, n_out, nev, ST_RUNNING, t

@@ -21,7 +21,8 @@ _LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
 
 
 #: Unit of each :meth:`SimulationResult.columns` name, by prefix (first match wins):
-#: (prefix, SI unit, exact match). Mode columns are codes without a unit.
+#: (prefix, SI unit, exact match). Mode columns and the ``dynamics_solved`` flag (1: the
+#: constrained dynamics solved, 0: singular) are codes without a unit.
 COLUMN_UNITS = (
     ("t", "s", True), ("x", "m", True), ("y", "m", True), ("theta", "rad", True),
     ("phi_", "rad", False), ("alpha_", "rad", False), ("dx", "m/s", True),
@@ -34,6 +35,10 @@ COLUMN_UNITS = (
     ("strut_force_", "N", False), ("belt_torque_", "N m", False),
     ("battery_voltage", "V", True), ("energy", "J", True),
 )
+
+
+#: ``format`` of the metadata of a run's tables (:meth:`SimulationResult.save_tables`)
+TABLES_FORMAT = "scoutsim.run/1"
 
 
 def column_unit(name: str) -> str | None:
@@ -65,11 +70,18 @@ class SimulationResult:
         deflection, battery voltage, energy (``layout.A_*``).
     modes : (n, 6) int8: controller leg states (back, front), plant contact modes (back,
         front), motor-joint stiction modes (back, front); columns ``layout.RM_*``.
-    events : (m, 6) [t, kind, leg, v1, v2, v3] (``layout.EK_*``).
+    events : (m, NEVREC) [t, kind, leg, v1, v2, v3, energy before / after, violations]
+        (``layout.EVR_*``, kinds ``layout.EK_*``).
     outcome : "completed", "fell", "numerical_failure" or "interrupted".
     t_end : time the run reached [s].
     stats : integrator statistics and contact diagnostics.
     provenance : parameters, model variant, tolerances, initial state, package version.
+    event_states : (m, 2, 16) the exact state of each event record just before its
+        transition and after its modes settled (``[:, layout.EVS_BEFORE]``,
+        ``[:, layout.EVS_AFTER]``; controller records: the state at their sample), or
+        None for results saved before it was recorded.
+    steps : (k, NSTEPREC) every integrator step (time, state, plant modes; ``layout.STP_*``)
+        if the run recorded them (``simulate(record_steps=True)``), else None.
     """
 
     t: np.ndarray
@@ -81,6 +93,8 @@ class SimulationResult:
     t_end: float
     stats: dict
     provenance: dict
+    event_states: np.ndarray | None = None
+    steps: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- torso -----------------------------------------------------------------------
@@ -250,13 +264,20 @@ class SimulationResult:
         path = Path(path)
         meta = {"outcome": self.outcome, "t_end": self.t_end, "stats": self.stats,
                 "provenance": self.provenance, "format": "scoutsim.result/1"}
+        extra = {name: a for name, a in (("event_states", self.event_states),
+                                         ("steps", self.steps)) if a is not None}
         np.savez_compressed(path, t=self.t, state=self.state, aux=self.aux, modes=self.modes,
-                            events=self.events, meta=np.array(json.dumps(meta, allow_nan=True)))
+                            events=self.events, meta=np.array(json.dumps(meta, allow_nan=True)),
+                            **extra)
         return path if path.suffix == ".npz" else path.with_suffix(path.suffix + ".npz")
 
     @classmethod
     def load(cls, path) -> "SimulationResult":
-        """Load a result written by :meth:`save`."""
+        """Load a result written by :meth:`save` (``.npz``) or by :meth:`save_tables` (the
+        directory, or its ``timeseries`` table), bit for bit."""
+        path = Path(path)
+        if path.is_dir() or not path.name.lower().endswith(".npz"):
+            return cls._load_tables(path)
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
             if meta.get("format") != "scoutsim.result/1":
@@ -268,7 +289,137 @@ class SimulationResult:
                 events = np.hstack([events, pad])
             return cls(t=z["t"], state=z["state"], aux=z["aux"], modes=z["modes"],
                        events=events, outcome=meta["outcome"], t_end=meta["t_end"],
-                       stats=meta["stats"], provenance=meta["provenance"])
+                       stats=meta["stats"], provenance=meta["provenance"],
+                       event_states=z["event_states"] if "event_states" in z.files else None,
+                       steps=z["steps"] if "steps" in z.files else None)
+
+    # -- tables (Parquet / compressed CSV: scoutsim.tables) ---------------------------
+    def event_columns(self) -> dict:
+        """The events as named columns: time [s], kind (code and name), leg (0 back, 1
+        front, -1 none), the kind's values v1-v3 (``layout`` "event record"), the
+        transition's energies before / after [J] and violated invariants (bit mask), and,
+        where recorded, the state just before (``<name>_before``) and after
+        (``<name>_after``) the transition (``STATE_NAMES``, SI)."""
+        ev = self.events
+        kinds = ev[:, L.EVR_KIND].astype(np.int8)
+        cols = {"t": ev[:, L.EVR_T], "kind": kinds,
+                "kind_name": np.array([L.EVENT_KIND_NAMES.get(int(k), "?") for k in kinds],
+                                      dtype=str),
+                "leg": ev[:, L.EVR_LEG].astype(np.int8),
+                "v1": ev[:, L.EVR_V1], "v2": ev[:, L.EVR_V2], "v3": ev[:, L.EVR_V3],
+                "energy_before": ev[:, L.EVR_E_BEFORE], "energy_after": ev[:, L.EVR_E_AFTER],
+                "violations": ev[:, L.EVR_VIOLATIONS].astype(np.int32)}
+        if self.event_states is not None:
+            for when, slot in (("before", L.EVS_BEFORE), ("after", L.EVS_AFTER)):
+                for i, n in enumerate(L.STATE_NAMES):
+                    cols[f"{n}_{when}"] = self.event_states[:, slot, i]
+        return cols
+
+    def step_columns(self) -> dict | None:
+        """The integrator steps (if recorded) as named columns: time [s] and state at the
+        end of each step, the plant modes during it."""
+        if self.steps is None:
+            return None
+        st = self.steps
+        cols = {"t": st[:, L.STP_T]}
+        for i, n in enumerate(L.STATE_NAMES):
+            cols[n] = st[:, L.STP_STATE + i]
+        for leg, name in enumerate(L.LEG_NAMES):
+            cols[f"contact_mode_{name}"] = st[:, L.STP_CONTACT_B + leg].astype(np.int8)
+            cols[f"motor_joint_mode_{name}"] = st[:, L.STP_MOTOR_B + leg].astype(np.int8)
+        return cols
+
+    def save_tables(self, directory, *, fmt: str | None = None) -> list[Path]:
+        """Write the run as tables into ``directory``: ``timeseries`` (every sample, every
+        :meth:`columns` name, with the outcome, statistics and provenance as metadata),
+        ``events`` (:meth:`event_columns`) and, if recorded, ``steps``
+        (:meth:`step_columns`); Parquet if pyarrow is installed, else gzip-compressed CSV
+        (``fmt``: "parquet" or "csv"). :meth:`load` reads them back bit for bit. Returns
+        the paths written."""
+        from .tables import default_format, write_table
+        fmt = fmt or default_format()
+        d = Path(directory)
+        series = self.columns()
+        for n in series:
+            if column_unit(n) is None:
+                series[n] = series[n].astype(np.int8)
+        meta = {"format": TABLES_FORMAT, "outcome": self.outcome, "t_end": self.t_end,
+                "stats": self.stats, "provenance": self.provenance,
+                "event_states": self.event_states is not None}
+        units = {n: column_unit(n) for n in series}
+        paths = [write_table(d / "timeseries", series, units=units, metadata=meta, fmt=fmt)]
+        ev = self.event_columns()
+        ev_units = {"t": "s", "energy_before": "J", "energy_after": "J"}
+        for n in ev:
+            for when in ("_before", "_after"):
+                if n.endswith(when) and not n.startswith("energy"):
+                    ev_units[n] = column_unit(n[:-len(when)])
+        paths.append(write_table(d / "events", ev, units=ev_units,
+                                 metadata={"format": TABLES_FORMAT}, fmt=fmt))
+        st = self.step_columns()
+        if st is not None:
+            paths.append(write_table(d / "steps", st,
+                                     units={n: column_unit(n) for n in st},
+                                     metadata={"format": TABLES_FORMAT}, fmt=fmt))
+        return paths
+
+    @classmethod
+    def _load_tables(cls, path: Path) -> "SimulationResult":
+        from .tables import SUFFIXES, TableError, read_table
+        if path.is_dir():
+            found = [path / f"timeseries{x}" for x in SUFFIXES.values()
+                     if (path / f"timeseries{x}").exists()]
+            if not found:
+                raise TableError(f"{path}: no timeseries table "
+                                 f"({', '.join('timeseries' + x for x in SUFFIXES.values())})")
+            path = found[0]
+        series, meta = read_table(path)
+        if meta.get("format") != TABLES_FORMAT:
+            raise TableError(f"{path}: not the time series of a scoutsim run")
+        suffix = next(x for x in SUFFIXES.values() if path.name.lower().endswith(x))
+        d = path.parent
+        n = len(series["t"])
+        state = np.column_stack([series[name] for name in L.STATE_NAMES]) if n else \
+            np.zeros((0, L.NS))
+        aux = np.zeros((n, L.NAUX))
+        for leg in range(2):
+            for j, name in enumerate(L.AUX_LEG_NAMES):
+                aux[:, leg * L.NAUX_LEG + j] = series[f"{name}_{L.LEG_NAMES[leg]}"]
+        aux[:, L.A_VBATT] = series["battery_voltage"]
+        aux[:, L.A_ENERGY] = series["energy"]
+        aux[:, L.A_KKT_OK] = series["dynamics_solved"]
+        modes = np.zeros((n, L.NRM), dtype=np.int8)
+        for leg in range(2):
+            for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
+                               (L.RM_MOTOR_B, "motor_joint_mode")):
+                modes[:, base + leg] = series[f"{what}_{L.LEG_NAMES[leg]}"]
+        ev, _ = read_table(d / f"events{suffix}")
+        m = len(ev["t"])
+        events = np.zeros((m, L.NEVREC))
+        for col, name in ((L.EVR_T, "t"), (L.EVR_KIND, "kind"), (L.EVR_LEG, "leg"),
+                          (L.EVR_V1, "v1"), (L.EVR_V2, "v2"), (L.EVR_V3, "v3"),
+                          (L.EVR_E_BEFORE, "energy_before"), (L.EVR_E_AFTER, "energy_after"),
+                          (L.EVR_VIOLATIONS, "violations")):
+            events[:, col] = ev[name]
+        event_states = None
+        if meta.get("event_states"):
+            event_states = np.zeros((m, 2, L.NS))
+            for when, slot in (("before", L.EVS_BEFORE), ("after", L.EVS_AFTER)):
+                for i, name in enumerate(L.STATE_NAMES):
+                    event_states[:, slot, i] = ev[f"{name}_{when}"]
+        steps = None
+        if (d / f"steps{suffix}").exists():
+            st, _ = read_table(d / f"steps{suffix}")
+            steps = np.zeros((len(st["t"]), L.NSTEPREC))
+            steps[:, L.STP_T] = st["t"]
+            for i, name in enumerate(L.STATE_NAMES):
+                steps[:, L.STP_STATE + i] = st[name]
+            for leg, name in enumerate(L.LEG_NAMES):
+                steps[:, L.STP_CONTACT_B + leg] = st[f"contact_mode_{name}"]
+                steps[:, L.STP_MOTOR_B + leg] = st[f"motor_joint_mode_{name}"]
+        return cls(t=series["t"], state=state, aux=aux, modes=modes, events=events,
+                   outcome=meta["outcome"], t_end=meta["t_end"], stats=meta["stats"],
+                   provenance=meta["provenance"], event_states=event_states, steps=steps)
 
     def to_dataframe(self):
         """All time series as a :class:`pandas.DataFrame` indexed by time ``t`` [s], one
@@ -305,6 +456,7 @@ class SimulationResult:
                 cols[f"{n}_{L.LEG_NAMES[leg]}"] = self.aux[:, leg * L.NAUX_LEG + j]
         cols["battery_voltage"] = self.aux[:, L.A_VBATT]
         cols["energy"] = self.aux[:, L.A_ENERGY]
+        cols["dynamics_solved"] = self.aux[:, L.A_KKT_OK]
         for leg in range(2):
             for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
                                (L.RM_MOTOR_B, "motor_joint_mode")):

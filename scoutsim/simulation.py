@@ -26,7 +26,8 @@ from .model.packing import robot_array
 from .model.sensors import read_sensors
 from .numerics.dopri5 import eval_workspace
 from .loop import run
-from .numerics.hybrid import HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW
+from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW,
+                              STEP_HEADROOM)
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
@@ -174,8 +175,11 @@ class HybridEngine:
     the bench rigs (:mod:`scoutsim.identification.rigs`) drive it in chunks of control
     samples; cutting a run into chunks does not change it."""
 
+    #: integrator steps the step buffer holds at first (about 2.5 s of a Model II run)
+    STEP_ROWS = 8192
+
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
-                 integrator: IntegratorSettings):
+                 integrator: IntegratorSettings, record_steps: bool = False):
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
         self.dt = dt
         self.integ = integrator
@@ -191,7 +195,13 @@ class HybridEngine:
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
         self.out_ls = np.zeros((n_total + 1, L.NRM), dtype=np.int8)
-        self.ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVREC))
+        self.ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVBUF))
+        # every integrator step if record_steps (numerics.events.record_step): room for
+        # STEP_ROWS steps beyond the headroom one control period may need (np.zeros:
+        # pages a run does not reach are never touched); doubled when it runs low
+        self.steps = np.zeros((STEP_HEADROOM + self.STEP_ROWS if record_steps else 0,
+                               L.NSTEPREC))
+        self.stepc = np.array([0, 1 if record_steps else 0], dtype=np.int64)
         self.stats = np.zeros(NSTAT)
         self.stats[S_HMIN] = np.inf
         self.armed = np.zeros(L.NEV, dtype=np.bool_)
@@ -211,10 +221,12 @@ class HybridEngine:
             min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
             self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
             self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed, self.sfwork,
-            self.ew,
+            self.ew, self.steps, self.stepc,
             _METHODS[self.integ.method])
         if self.nev > self.ev.shape[0] - 64:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
+        if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:
+            self.steps = np.concatenate([self.steps, np.zeros_like(self.steps)])
 
     def outcome(self, interrupted: bool = False) -> str:
         if interrupted:
@@ -224,10 +236,13 @@ class HybridEngine:
     def result(self, provenance: dict, interrupted: bool = False,
                extra_stats: dict | None = None) -> SimulationResult:
         n = self.n_out
+        m = min(self.nev, self.ev.shape[0])
         return SimulationResult(
             t=self.out_t[:n].copy(), state=self.out_s[:n].copy(),
             aux=self.out_aux[:n].copy(), modes=self.out_ls[:n].copy(),
-            events=self.ev[:min(self.nev, self.ev.shape[0])].copy(),
+            events=self.ev[:m, :L.NEVREC].copy(),
+            event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
+            steps=(self.steps[:self.stepc[0]].copy() if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
             t_end=float(self.t_now if self.status != L.ST_RUNNING else self.out_t[n - 1]),
             stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
@@ -294,6 +309,16 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
                            scoutsim_version=__version__, duration_s=duration))
 
 
+def warm_up() -> float:
+    """Make the compiled core ready in this process: load it from Numba's cache, compiling
+    it first if it is not there (minutes on a first run; :func:`scoutsim.jit.core_is_compiled`
+    tells which). Every later :func:`simulate` then runs at full speed from its first call.
+    Returns the wall time it took [s]."""
+    t0 = time.perf_counter()
+    simulate(duration=1e-3)
+    return time.perf_counter() - t0
+
+
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,
              model: str = "II", environment: Environment | None = None,
@@ -301,7 +326,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              friction_coefficient: float | None = None,
              pitch_limit_deg: float = 60.0,
              passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
-             progress: bool = False, chunk_seconds: float = 1.0) -> SimulationResult:
+             progress: bool = False, chunk_seconds: float = 1.0,
+             record_steps: bool = False) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -338,6 +364,13 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         to the torso (False).
     progress : bool
         Show a progress bar (tqdm) on stderr.
+    chunk_seconds : float
+        Simulated time [s] per call of the compiled loop (progress updates, interrupts);
+        the result does not depend on it.
+    record_steps : bool
+        Also record every integrator step (``result.steps``: time, state and plant modes at
+        the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
+        about 50 000 steps).
 
     Returns
     -------
@@ -412,7 +445,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             ls[leg] = init.leg_states[leg]
     else:
         mi, mf = fresh_modes(s, P)
-    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ)
+    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ, record_steps)
     wall0 = time.perf_counter()
     bar = None
     if progress:

@@ -17,7 +17,9 @@ from scoutsim.cli import main
 FIRST_KEYS = ["outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
               "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
               "height_min_m", "max_friction_ratio", "n_steady_strides"]
-RUN_FILES = ["timeseries.csv", "result.npz", "summary.json", "run.png", "torque_speed.png"]
+#: what `scoutsim run` writes by default, and with --plots --csv --npz
+DEFAULT_RUN_FILES = ["timeseries.parquet", "events.parquet", "summary.json"]
+RUN_FILES = DEFAULT_RUN_FILES + ["timeseries.csv", "result.npz", "run.png", "torque_speed.png"]
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +33,7 @@ def run_out(tmp_path_factory):
     capture.setattr(sys, "stderr", buf_err)
     try:
         code = main(["run", "--duration", "0.5", "--model", "II", "--out", str(out),
-                     "--no-progress", "--friction", "0.8"])
+                     "--no-progress", "--friction", "0.8", "--plots", "--csv", "--npz"])
     finally:
         capture.undo()
     return code, out, buf_out.getvalue(), buf_err.getvalue()
@@ -49,7 +51,7 @@ def test_run_prints_a_summary_table(run_out):
     _, _, stdout, _ = run_out
     for text in ("outcome", "mean forward speed", "stride frequency", "duty factor",
                  "pitch max / min", "height max / min", "friction ratio", "steady strides",
-                 "wall time", "real-time factor"):
+                 "real-time factor", "compiled core", "command wall time"):
         assert text in stdout, text
 
 
@@ -78,6 +80,54 @@ def test_csv_matches_the_saved_result(run_out):
     assert result.provenance["model"] == "II"
 
 
+def test_run_tables_load_back_bit_for_bit(run_out):
+    _, out, _, _ = run_out
+    npz = SimulationResult.load(out / "result.npz")
+    for source in (out, out / "timeseries.parquet"):
+        back = SimulationResult.load(source)
+        for name in ("t", "state", "aux", "modes", "events", "event_states"):
+            np.testing.assert_array_equal(getattr(back, name), getattr(npz, name), err_msg=name)
+        assert (back.outcome, back.t_end, back.stats, back.provenance) == \
+            (npz.outcome, npz.t_end, npz.stats, npz.provenance)
+
+
+def test_run_writes_only_tables_and_summary_by_default(tmp_path, capsys):
+    assert main(["run", "--duration", "0.2", "--out", str(tmp_path), "--no-progress"]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(DEFAULT_RUN_FILES)
+    assert "wrote timeseries.parquet, events.parquet, summary.json" in capsys.readouterr().out
+
+
+def test_run_csv_format_and_steps(tmp_path):
+    out = tmp_path / "csv"
+    assert main(["run", "--duration", "0.2", "--out", str(out), "--no-progress",
+                 "--format", "csv", "--steps"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["timeseries.csv.gz", "events.csv.gz", "steps.csv.gz", "summary.json"])
+    back = SimulationResult.load(out)
+    ref = scoutsim.simulate(duration=0.2, record_steps=True, friction_coefficient=1.0)
+    for name in ("t", "state", "aux", "modes", "events", "event_states", "steps"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(ref, name), err_msg=name)
+
+
+def test_plot_command_reads_a_run_directory(run_out, tmp_path, capsys):
+    _, out, _, _ = run_out
+    fig = tmp_path / "fig.png"
+    assert main(["plot", str(out), "--out", str(fig)]) == 0
+    assert fig.read_bytes().startswith(b"\x89PNG")
+    assert main(["plot", str(out / "timeseries.parquet"), "--out", str(fig)]) == 0
+
+
+def test_console_script_ends_fast_and_keeps_its_output(tmp_path):
+    """`python -m scoutsim run` ends with os._exit after flushing: every line printed and
+    every file written are there."""
+    proc = subprocess.run([sys.executable, "-m", "scoutsim", "run", "--duration", "0.05",
+                           "--out", str(tmp_path), "--no-progress"],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.rstrip().endswith(f"to {tmp_path}/")
+    assert SimulationResult.load(tmp_path).t[-1] == pytest.approx(0.05)
+
+
 def test_run_json_prints_the_summary_on_stdout(tmp_path, capsys):
     assert main(["run", "--duration", "0.3", "--model", "I", "--out", str(tmp_path),
                  "--no-progress", "--json", "--no-plots", "--rtol", "1e-7"]) == 0
@@ -85,7 +135,7 @@ def test_run_json_prints_the_summary_on_stdout(tmp_path, capsys):
     assert printed == json.loads((tmp_path / "summary.json").read_text())
     assert list(printed)[:len(FIRST_KEYS)] == FIRST_KEYS
     assert not (tmp_path / "run.png").exists()
-    prov = SimulationResult.load(tmp_path / "result.npz").provenance
+    prov = SimulationResult.load(tmp_path).provenance
     assert prov["integrator"]["rtol"] == 1e-7 and prov["model"] == "I"
 
 
@@ -121,7 +171,7 @@ def test_valid_robot_file_is_used(tmp_path):
     out = tmp_path / "out"
     assert main(["run", "--robot", str(robot), "--duration", "0.2", "--out", str(out),
                  "--no-progress", "--no-plots"]) == 0
-    prov = SimulationResult.load(out / "result.npz").provenance
+    prov = SimulationResult.load(out).provenance
     assert prov["robot"]["torso_mass"] == 21.5 and prov["robot"]["current_limit"] == 10.0
 
 

@@ -16,7 +16,8 @@ def run():
 def test_every_column_has_a_unit_or_is_a_mode_code(run):
     for name in run.columns():
         unit = column_unit(name)
-        is_mode = name.startswith(("leg_state_", "contact_mode_", "motor_joint_mode_"))
+        is_mode = (name.startswith(("leg_state_", "contact_mode_", "motor_joint_mode_"))
+                   or name == "dynamics_solved")
         assert (unit is None) == is_mode, name
 
 

@@ -11,11 +11,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+
+_IMPORTED_AT = time.perf_counter()
 
 #: the models that run the bounding controller
 CONTROLLED_MODELS = ("ideal", "I", "II")
@@ -195,6 +199,19 @@ def check_time_window(args):
         raise UsageError(f"--t0 {args.t0:g} --t1 {args.t1:g} is not allowed: need t1 > t0")
 
 
+def command_wall_time() -> float:
+    """Wall time [s] since this process started (Linux: from /proc, so the interpreter's
+    start-up and every import count; elsewhere: since :mod:`scoutsim.cli` was imported)."""
+    try:
+        with open("/proc/self/stat") as f:
+            start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        return max(uptime - start_ticks / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError, AttributeError):
+        return time.perf_counter() - _IMPORTED_AT
+
+
 def show_progress(args) -> bool:
     """Progress bar unless --no-progress, --quiet or stderr is not a terminal."""
     return not (args.no_progress or getattr(args, "quiet", False)) and sys.stderr.isatty()
@@ -239,24 +256,41 @@ def integrator(args):
         return IntegratorSettings(**kw)
 
 
-def input_file(path: str) -> Path:
+def input_file(path: str, *, directory_ok: bool = False) -> Path:
+    """``path`` as a Path; UsageError if it does not exist or is not a file (or, with
+    ``directory_ok``, a directory)."""
     p = Path(path)
     if not p.exists():
         raise UsageError(f"input '{path}' not found")
-    if not p.is_file():
+    if not (p.is_file() or (directory_ok and p.is_dir())):
         raise UsageError(f"input '{path}' is not a file")
     return p
 
 
+def is_saved_run(p: Path) -> bool:
+    """True if ``p`` is a run saved by ``scoutsim run``: its output directory, its
+    timeseries table or a result.npz (an experiment log is not)."""
+    from ..result import TABLES_FORMAT
+    from ..tables import TableError, read_metadata
+    if p.is_dir() or p.name.lower().endswith(".npz"):
+        return True
+    try:
+        return read_metadata(p)["metadata"].get("format") == TABLES_FORMAT
+    except (TableError, ImportError, OSError, ValueError, KeyError):
+        return False
+
+
 def load_result(p: Path):
-    """A result.npz written by ``scoutsim run``."""
+    """A run saved by ``scoutsim run``: its output directory (or timeseries table) or a
+    result.npz."""
     from ..result import SimulationResult
-    if p.suffix.lower() != ".npz":
-        raise UsageError(f"input '{p}' is not a saved result: expected a .npz written by "
-                         "`scoutsim run` (result.npz)")
+    from ..tables import TableError
+    if not is_saved_run(p):
+        raise UsageError(f"input '{p}' is not a saved run: expected the output directory of "
+                         "`scoutsim run`, its timeseries table or a result.npz")
     try:
         return SimulationResult.load(p)
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError, KeyError, TableError) as exc:
         raise UsageError(f"cannot read result '{p}': {exc}") from None
 
 

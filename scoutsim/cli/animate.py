@@ -1,7 +1,9 @@
-"""``scoutsim animate``: a stick-figure animation (GIF or MP4) of a result.npz written by
-``scoutsim run``: torso, legs coloured by controller leg state, ground forces, time stamp.
+"""``scoutsim animate``: a stick-figure animation (GIF or MP4) of a run saved by ``scoutsim
+run`` (its output directory or a result.npz): torso, legs coloured by controller leg
+state, ground forces, time stamp.
 
-    scoutsim animate RESULT.npz --out FILE.gif|.mp4 [--fps N] [--t0 S] [--t1 S] [--dpi N]
+    scoutsim animate RUN_DIR|RESULT.npz --out FILE.gif|.mp4 [--fps N] [--t0 S] [--t1 S]
+                     [--dpi N]
 """
 
 from __future__ import annotations
@@ -17,11 +19,13 @@ NAME = "animate"
 def register(sub, common) -> None:
     anim = sub.add_parser(
         NAME, help="stick-figure animation of a saved run (GIF or MP4)",
-        description="Animate a result.npz written by `scoutsim run`: torso box, legs "
+        description="Animate a run saved by `scoutsim run` (its output directory, "
+                    "timeseries table or result.npz): torso box, legs "
                     "coloured by controller leg state, ground-force arrows, ground line, "
                     "time stamp. Frames at t0 + k/fps, k = 0 .. floor((t1 - t0) fps). GIF "
                     "via Pillow; MP4 needs ffmpeg on the PATH.")
-    anim.add_argument("input", metavar="RESULT.npz", help="saved result (scoutsim run --out)")
+    anim.add_argument("input", metavar="RUN", help="saved run (the directory of scoutsim "
+                      "run --out, its timeseries table, or a result.npz)")
     anim.add_argument("--out", metavar="FILE", required=True, help="output .gif or .mp4")
     anim.add_argument("--fps", type=positive_float, default=25.0, metavar="N",
                       help="frames per simulated second, played back in real time "
@@ -35,7 +39,7 @@ def register(sub, common) -> None:
 
 def execute(args) -> int:
     from ..presentation.animation import ANIMATION_SUFFIXES, save_animation
-    p = input_file(args.input)
+    p = input_file(args.input, directory_ok=True)
     check_time_window(args)
     out = Path(args.out)
     if out.suffix.lower() not in ANIMATION_SUFFIXES:

@@ -19,8 +19,7 @@ NAME = "identify"
 
 
 def register(sub, common) -> None:
-    from ..identification.fit import DEFAULT_PARAMS
-    from ..identification.rigs import HIP_PARAMETERS
+    from ..identification.rigs import DEFAULT_PARAMS, HIP_PARAMETERS
     idf = sub.add_parser(
         NAME, help="fit Model II hip-unit parameters to bench-rig logs",
         description="Fit hip-unit parameters (nonlinear least squares with a multi-start "

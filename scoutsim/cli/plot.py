@@ -1,8 +1,9 @@
-"""``scoutsim plot``: a figure of one saved run (result.npz: pitch, height, leg angles with
-leg states, hip torques) or of one experiment log (measured pitch and height, leg angles,
-leg states, torques from current).
+"""``scoutsim plot``: a figure of one saved run (the output directory of ``scoutsim run``, its
+timeseries table or a result.npz: pitch, height, leg angles with leg states, hip torques;
+an overview and the last strides for runs over 4 s) or of one experiment log (measured
+pitch and height, leg angles, leg states, torques from current).
 
-    scoutsim plot RESULT.npz|LOG [--out FILE] [--t0 S] [--t1 S]
+    scoutsim plot RUN_DIR|RESULT.npz|LOG [--out FILE] [--t0 S] [--t1 S]
 """
 
 from __future__ import annotations
@@ -10,19 +11,22 @@ from __future__ import annotations
 from pathlib import Path
 
 from ._common import (UsageError, add_time_window_options, check_time_window, input_file,
-                      load_result, usage_errors)
+                      is_saved_run, load_result, usage_errors)
 
 NAME = "plot"
 
 
 def register(sub, common) -> None:
     plot = sub.add_parser(
-        NAME, help="figure of one saved run (result.npz) or one experiment log",
-        description="Plot one run: a result.npz written by `scoutsim run` (pitch, height, "
-                    "leg angles with leg states, hip torques) or an experiment log (.csv, "
-                    ".csv.gz, .parquet: measured pitch and height, leg angles, leg states, "
-                    "torques from current).")
-    plot.add_argument("input", metavar="RESULT.npz|LOG", help="saved result or experiment log")
+        NAME, help="figure of one saved run or one experiment log",
+        description="Plot one run: the output directory of `scoutsim run` (or its "
+                    "timeseries table, or a result.npz): pitch, height, leg angles with leg "
+                    "states, hip torques (runs over 4 s: an overview and the last strides); "
+                    "or an experiment log (.csv, .csv.gz, .parquet: measured pitch and "
+                    "height, leg angles, leg states, torques from current).")
+    plot.add_argument("input", metavar="RUN|LOG",
+                      help="saved run (directory, timeseries table, result.npz) or "
+                           "experiment log")
     plot.add_argument("--out", metavar="FILE", default=None,
                       help="output figure, .png, .pdf or .svg (default: INPUT's name with "
                            ".png, in the current directory)")
@@ -32,12 +36,14 @@ def register(sub, common) -> None:
 
 def execute(args) -> int:
     from ..validation.logs import LOG_SUFFIXES, LogError, load_log
-    p = input_file(args.input)
+    p = input_file(args.input, directory_ok=True)
     check_time_window(args)
     name = p.name.lower()
-    is_log = any(name.endswith(s) for s in LOG_SUFFIXES)
-    if not is_log and p.suffix.lower() != ".npz":
-        raise UsageError(f"input '{p}' is neither a saved result (.npz) nor an experiment log "
+    is_run = is_saved_run(p)
+    is_log = not is_run and any(name.endswith(s) for s in LOG_SUFFIXES)
+    if not is_log and not is_run:
+        raise UsageError(f"input '{p}' is neither a saved run (the output directory of "
+                         "`scoutsim run`, its timeseries table, a .npz) nor an experiment log "
                          f"({', '.join(LOG_SUFFIXES)})")
     if args.out is None:
         stem = p.name
@@ -66,6 +72,6 @@ def execute(args) -> int:
             plot_log(obj, out, t_range=t_range)
         else:
             from ..presentation.plots import plot_run
-            plot_run(obj, out, t_range=t_range)
+            plot_run(obj, out, t_range=t_range, overview="auto")
     print(f"wrote {out}")
     return 0

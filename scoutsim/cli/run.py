@@ -1,9 +1,19 @@
 """``scoutsim run``: simulate one bounding run, print a summary table (or JSON) and write
-the time series, the saved result, the summary and plots to the output directory.
+the run's tables and summary (and, on request, figures and the older file formats) to the
+output directory.
 
     scoutsim run [--model {ideal,I,II,passive}] [--duration S] [--robot FILE] [--out DIR]
                  [--rtol X] [--atol X] [--friction MU] [--speed V] [--height Y]
-                 [--pitch-rate W] [--no-plots] [--no-progress] [--json]
+                 [--pitch-rate W] [--steps] [--format {parquet,csv}] [--plots] [--csv]
+                 [--npz] [--no-progress] [--quiet] [--json]
+
+Written to DIR: ``timeseries.parquet`` (every control sample, every signal, with the
+outcome, statistics and provenance), ``events.parquet`` (every event with the exact state
+before and after its transition), ``summary.json``; ``steps.parquet`` with ``--steps``
+(every integrator step); ``.csv.gz`` instead of ``.parquet`` without pyarrow or with
+``--format csv``. ``--plots``: run.png and torque_speed.png; ``--csv``: the plain
+timeseries.csv; ``--npz``: result.npz. :meth:`scoutsim.SimulationResult.load` reads DIR
+(or result.npz) back bit for bit.
 
 Exit code 1 if the integration failed numerically, 130 if interrupted (the data so far is
 still written); a fall is a completed run (exit 0, the summary says so).
@@ -18,8 +28,9 @@ from pathlib import Path
 
 from ..result import COLUMN_UNITS, column_unit
 from ..state import InitialState
-from ._common import (MODELS, dumps, finite_float, integrator, load_parameters, out_dir,
-                      positive_float, show_progress, usage_errors, write_json)
+from ._common import (MODELS, command_wall_time, dumps, finite_float, integrator,
+                      load_parameters, out_dir, positive_float, show_progress, usage_errors,
+                      write_json)
 
 NAME = "run"
 
@@ -32,10 +43,12 @@ _DEFAULT_START = InitialState()
 
 
 def register(sub, common) -> None:
+    from ..tables import FORMATS
     run = sub.add_parser(
-        NAME, parents=[common], help="simulate one run, print a summary, write data and plots",
-        description="Simulate one bounding run and write to DIR: timeseries.csv, result.npz, "
-                    "summary.json, run.png and torque_speed.png.")
+        NAME, parents=[common], help="simulate one run, print a summary, write its tables",
+        description="Simulate one bounding run and write to DIR: timeseries and events tables "
+                    "(Parquet, or gzip-compressed CSV without pyarrow) and summary.json; "
+                    "figures with --plots. SimulationResult.load(DIR) reads the run back.")
     run.add_argument("--model", choices=MODELS, default="II",
                      help="actuator/transmission model (default: II)")
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
@@ -45,8 +58,22 @@ def register(sub, common) -> None:
     run.add_argument("--pitch-rate", type=finite_float, default=None, metavar="W",
                      help="initial pitch rate [deg/s] (default: "
                      f"{math.degrees(_DEFAULT_START.dtheta):g})")
-    run.add_argument("--no-plots", action="store_true", help="do not write run.png and "
-                     "torque_speed.png")
+    run.add_argument("--steps", action="store_true",
+                     help="also record every integrator step (steps table: time, state, "
+                          "plant modes)")
+    run.add_argument("--format", choices=FORMATS, default=None,
+                     help="format of the tables: parquet (default when pyarrow is "
+                          "installed) or csv (gzip-compressed, the default otherwise)")
+    run.add_argument("--plots", action="store_true",
+                     help="also draw run.png (pitch, height, leg angles and states, hip "
+                          "torques; runs over 4 s: an overview and the last strides) and "
+                          "torque_speed.png (paper Fig. 11)")
+    run.add_argument("--no-plots", action="store_true",
+                     help="no figures (the default; kept for older scripts)")
+    run.add_argument("--csv", action="store_true",
+                     help="also write timeseries.csv (plain CSV, one row per sample)")
+    run.add_argument("--npz", action="store_true",
+                     help="also write result.npz (the whole result in one NumPy file)")
     run.add_argument("--json", action="store_true",
                      help="print the summary as JSON on stdout instead of the table")
     run.set_defaults(func=execute)
@@ -78,8 +105,11 @@ def _pair(a, b, spec: str, unit: str) -> str:
 
 
 def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float,
-                   friction: float | None = None) -> str:
-    """The human-readable summary table of a run."""
+                   friction: float | None = None, load_s: float | None = None,
+                   command_wall_s: float | None = None) -> str:
+    """The human-readable summary table of a run: ``wall_s`` is the simulation's wall time
+    [s] (its real-time factor is t_end / wall_s), ``load_s`` the time the compiled core took
+    to get ready before it, ``command_wall_s`` the whole command's."""
     outcome = summary.get("outcome")
     if outcome != "completed" and t_end is not None:
         outcome = f"{outcome} at t = {t_end:.3f} s"
@@ -98,9 +128,15 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
         ("steady strides", _fmt(summary.get("n_steady_strides"), "d")
          + (f" (of {summary['n_strides']})" if summary.get("n_strides") is not None else "")),
         ("steady bounding", {True: "yes", False: "no"}.get(summary.get("steady_bounding"), "n/a")),
-        ("wall time", _fmt(wall_s, ".2f", "s")),
-        ("real-time factor", (f"{rtf:.2f}x (simulated / wall time)" if rtf else "n/a")),
+        ("simulation", (f"{wall_s:.3f} s wall, real-time factor {rtf:.0f}x" if rtf else
+                        _fmt(wall_s, ".3f", "s"))),
     ]
+    if load_s is not None:
+        rows.append(("compiled core", f"ready in {load_s:.2f} s (loaded from the cache, or "
+                                      "compiled on a first run)"))
+    if command_wall_s is not None:
+        rows.append(("command wall time", f"{command_wall_s:.2f} s (start-up, simulation, "
+                                          "outputs)"))
     width = max(len(k) for k, _ in rows)
     model = summary.get("model")
     floor = ("" if friction is None else
@@ -114,7 +150,7 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
 
 
 def execute(args) -> int:
-    from ..simulation import InitialState, simulate
+    from ..simulation import InitialState, simulate, warm_up
     robot, controller = load_parameters(args.robot)
     integ = integrator(args)
     changes = {}
@@ -128,21 +164,24 @@ def execute(args) -> int:
     out = out_dir(args.out)
     progress = show_progress(args)
 
+    load_s = warm_up()
     wall0 = time.perf_counter()
     with usage_errors():  # invalid initial state or option
         result = simulate(robot, controller, init, args.duration, model=args.model,
                           integrator=integ, friction_coefficient=args.friction,
-                          progress=progress)
+                          progress=progress, record_steps=args.steps)
     wall = time.perf_counter() - wall0
 
     summary = result.summary()
-    files = [out / "timeseries.csv", out / "result.npz", out / "summary.json"]
-    write_timeseries_csv(result, files[0])
-    result.save(files[1])
-    write_json(files[2], summary)
-    if not args.no_plots:
+    files = result.save_tables(out, fmt=args.format)
+    files.append(write_json(out / "summary.json", summary))
+    if args.csv:
+        files.append(write_timeseries_csv(result, out / "timeseries.csv"))
+    if args.npz:
+        files.append(result.save(out / "result.npz"))
+    if args.plots and not args.no_plots:
         from ..presentation.plots import plot_run, plot_torque_speed
-        plot_run(result, out / "run.png")
+        plot_run(result, out / "run.png", overview="auto")
         plot_torque_speed(result, "both", out / "torque_speed.png")
         files += [out / "run.png", out / "torque_speed.png"]
 
@@ -150,11 +189,12 @@ def execute(args) -> int:
         print(dumps(summary))
     else:
         print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end,
-                             friction=args.friction))
+                             friction=args.friction, load_s=load_s,
+                             command_wall_s=command_wall_time()))
         print(f"wrote {', '.join(f.name for f in files)} to {out}/")
     if result.outcome == "numerical_failure":
-        print("scoutsim run: the integration failed numerically (see summary.json and "
-              "result.npz); try a smaller --rtol", file=sys.stderr)
+        print("scoutsim run: the integration failed numerically (see summary.json and the "
+              "timeseries table); try a smaller --rtol", file=sys.stderr)
         return 1
     if result.outcome == "interrupted":
         return 130

@@ -66,18 +66,11 @@ from scipy.stats import qmc
 from ..parameters import RobotParameters, validate_robot
 from ..simulation import IntegratorSettings
 from ..validation.logs import ExperimentLog, LogError, load_log
-from .rigs import HIP_PARAMETERS, FlightSteps, FreeSwing, RigNoise, run_rig
+from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS, FlightSteps, FreeSwing, RigNoise, run_rig
 
 __all__ = ["identify", "IdentificationResult", "FittedParameter", "RigData", "prepare_log",
            "DEFAULT_PARAMS", "default_bounds"]
 
-#: Parameters fitted by default for each rig.
-DEFAULT_PARAMS = {
-    "free-swing": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
-                   "joint_damping", "belt_stiffness", "belt_damping"),
-    "flight-steps": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
-                     "joint_damping", "belt_stiffness", "belt_damping"),
-}
 #: Search box for parameters whose starting value is 0 (the transmission losses).
 _ZERO_START_BOX = {"gearbox_idle_loss_torque": (1e-3, 2.0),
                    "gearbox_load_loss_coefficient": (1e-3, 0.5)}

@@ -57,6 +57,14 @@ HIP_PARAMETERS = {
     "gearbox_load_loss_coefficient": "1",
 }
 
+#: Parameters fitted by default for each rig.
+DEFAULT_PARAMS = {
+    "free-swing": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
+                   "joint_damping", "belt_stiffness", "belt_damping"),
+    "flight-steps": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
+                     "joint_damping", "belt_stiffness", "belt_damping"),
+}
+
 
 def hip_parameters(robot: RobotParameters) -> dict:
     """The :data:`HIP_PARAMETERS` values of ``robot`` (SI)."""

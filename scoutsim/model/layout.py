@@ -183,6 +183,25 @@ EVR_E_BEFORE = 6
 EVR_E_AFTER = 7
 EVR_VIOLATIONS = 8
 NEVREC = 9
+# The run's event buffer carries, after those NEVREC columns, the exact state of every
+# plant transition (layout STATE_NAMES): just before it (at the located event time, before
+# impacts and mode changes) and after its modes have settled; controller records carry the
+# state at their sample (before = after). ``SimulationResult.event_states`` holds them as
+# (m, 2, NS): [:, EVS_BEFORE] and [:, EVS_AFTER].
+EVR_STATE_BEFORE = NEVREC
+EVR_STATE_AFTER = NEVREC + NS
+NEVBUF = NEVREC + 2 * NS
+EVS_BEFORE = 0
+EVS_AFTER = 1
+
+# --- integrator step records (simulate(record_steps=True), SimulationResult.steps) --------
+# One row per step of the integrator (accepted steps and the steps cut at located events):
+# the time [s] and state at its end and the plant modes during it.
+STP_T = 0
+STP_STATE = 1                      # .. STP_STATE + NS - 1, layout STATE_NAMES
+STP_CONTACT_B = 1 + NS             # contact mode of the back / front toe (CONTACT_NAMES)
+STP_MOTOR_B = 3 + NS               # motor-joint mode of the back / front leg (Model II)
+NSTEPREC = 5 + NS
 
 # --- transition invariants (bits of EVR_VIOLATIONS), checked after every transition -------
 V_GROUND_PULLS = 1        # a pinned toe or strut whose ground normal force pulls

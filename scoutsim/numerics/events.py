@@ -19,7 +19,8 @@ from ..jit import kernel
 from ..model.leg import leg_damping
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
-    EVR_E_BEFORE, EVR_VIOLATIONS, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
+    EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS, NEVBUF, NS,
+    STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
     IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV, NEV_CONTACT, NQ,
     P_G, P_K, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S,
     P_THETA_LIM, P_TORSO_H, P_TORSO_LEN, SLIDE, STICK, STRUT, STUCK, V_BEYOND_STOP,
@@ -104,7 +105,42 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
         ev[nev, EVR_E_BEFORE] = np.nan
         ev[nev, EVR_E_AFTER] = np.nan
         ev[nev, EVR_VIOLATIONS] = 0.0
+        if ev.shape[1] >= NEVBUF:
+            for i in range(2 * NS):   # unknown until the transition is stamped
+                ev[nev, EVR_STATE_BEFORE + i] = np.nan
     return nev + 1
+
+
+@kernel
+def stamp_states(ev, nev0, nev, s_before, s_after):
+    """Write the exact state just before one transition and after its modes have settled
+    (layout STATE_NAMES, SI) into the event records nev0 .. nev-1 logged while it was
+    processed (buffers of ``NEVBUF`` columns; narrower ones have no room for them)."""
+    if ev.shape[1] < NEVBUF:
+        return
+    for j in range(nev0, min(nev, ev.shape[0])):
+        for i in range(NS):
+            ev[j, EVR_STATE_BEFORE + i] = s_before[i]
+            ev[j, EVR_STATE_AFTER + i] = s_after[i]
+
+
+@kernel
+def record_step(steps, stepc, t, s, mi):
+    """Append one integrator step (its end time [s], the state there, the plant modes
+    during it; layout ``STP_*``) to ``steps`` if step recording is on (``stepc[1]``);
+    ``stepc[0]`` counts the rows. The run loop hands the buffer back to Python before it
+    can fill up (``numerics.hybrid.STEP_HEADROOM``)."""
+    if stepc[1] == 0:
+        return
+    n = stepc[0]
+    if n < steps.shape[0]:
+        steps[n, STP_T] = t
+        for i in range(NS):
+            steps[n, STP_STATE + i] = s[i]
+        for leg in range(2):
+            steps[n, STP_CONTACT_B + leg] = mi[MI_CONTACT_B + leg]
+            steps[n, STP_MOTOR_B + leg] = mi[MI_MOTOR_B + leg]
+    stepc[0] = n + 1
 
 
 @kernel
@@ -162,13 +198,15 @@ def mode_violations(s, ds, aux, P, mi):
 
 
 @kernel
-def stamp_transition(ev, nev0, nev, e_before, e_after, bits):
-    """Write the transition audit (energies before / after [J], violated invariants) into
-    the event records nev0 .. nev-1 logged while one transition was processed."""
+def stamp_transition(ev, nev0, nev, e_before, e_after, bits, s_before, s_after):
+    """Write the transition audit (energies before / after [J], violated invariants, the
+    states before / after: :func:`stamp_states`) into the event records nev0 .. nev-1 logged
+    while one transition was processed."""
     for j in range(nev0, min(nev, ev.shape[0])):
         ev[j, EVR_E_BEFORE] = e_before
         ev[j, EVR_E_AFTER] = e_after
         ev[j, EVR_VIOLATIONS] = bits
+    stamp_states(ev, nev0, nev, s_before, s_after)
 
 
 

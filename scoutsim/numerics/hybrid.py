@@ -32,7 +32,7 @@ from ..model.layout import (
 )
 from . import ark
 from .dopri5 import dense, step
-from .events import event_values, mode_violations, stamp_transition
+from .events import event_values, mode_violations, record_step, stamp_transition
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -63,6 +63,9 @@ SIMULTANEOUS_EVENT_TOL = 1e-12
 CONE_ARM_TOL = 1e-8
 MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
 MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
+#: free rows a step-record buffer must have at the start of a control period: the most
+#: steps one period can record (accepted steps and steps cut at events, within the guards)
+STEP_HEADROOM = MAX_STEPS_PER_PERIOD + MAX_EVENTS_PER_PERIOD + 2
 # A control period starts with one step over the whole period when the carried step-size
 # guess is at least this fraction of it (the command has just changed, so the guess is
 # only a guess; measured on 10 s of Model II at the default tolerance: 8 % fewer
@@ -189,7 +192,11 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
     return th * h, k, nf
 
 
-AdvanceScratch = namedtuple("AdvanceScratch", "e_end pending mi_before e_tmp aux_tmp")
+#: advance()'s scratch arrays, and the step recording (``steps``, ``stepc``:
+#: :func:`~scoutsim.numerics.events.record_step`) and the state before a transition
+#: (``s_before``, for the event records)
+AdvanceScratch = namedtuple("AdvanceScratch",
+                            "e_end pending mi_before e_tmp aux_tmp s_before steps stepc")
 
 
 @kernel
@@ -336,6 +343,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
+                record_step(sc.steps, sc.stepc, t, s, mi)
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
             evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3], True)
@@ -345,6 +353,9 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             # transition audit: mechanical energy before the transition
             nev0 = nev
             e_before = aux[A_ENERGY]
+            s_before = sc.s_before
+            for i in range(NS):
+                s_before[i] = s[i]
             # apply the event, then any other armed event that has also been reached at
             # this instant (simultaneous touchdowns of a pitch-free landing, ...): reached
             # means crossing within the step (negative at its full length) and within
@@ -362,15 +373,15 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     mi_before[i] = mi[i]
                 nev, ok = apply_event(kcur, t, s, P, mi, mf, aux, ev, nev, stats, imp)
                 if kcur == EV_FALL_HEIGHT or kcur == EV_FALL_PITCH:
-                    stamp_transition(ev, nev0, nev, e_before, e_before, 0)
+                    stamp_transition(ev, nev0, nev, e_before, e_before, 0, s_before, s)
                     return t, nev, ST_FELL
                 if not ok:
-                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
+                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew, False)
                 stats[S_NFEV] += 1
                 if aux[A_KKT_OK] < 0.5:
-                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR)
+                    stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
                 event_values(s, aux, P, mi, e_old)
                 kcur = -1
@@ -391,7 +402,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 if kcur < 0:
                     break
             stamp_transition(ev, nev0, nev, e_before, aux[A_ENERGY],
-                             mode_violations(s, K0, aux, P, mi))
+                             mode_violations(s, K0, aux, P, mi), s_before, s)
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
             for leg in range(2):
@@ -438,6 +449,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             t = t_end
         else:
             t = t + h
+        record_step(sc.steps, sc.stepc, t, s, mi)
         fac = 5.0 if err == 0.0 else 0.9 * err ** expo
         if fac > 5.0:
             fac = 5.0

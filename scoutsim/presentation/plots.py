@@ -67,7 +67,13 @@ def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) ->
                                              transform=ax.get_xaxis_transform(), zorder=0))
 
 
-def plot_run(result, path=None, t_range=None) -> Figure:
+#: runs longer than this [s] get an overview (``plot_run(..., overview="auto")``)
+LONG_RUN_S = 4.0
+#: strides the detail panels of an overview figure show (the last ones of the run)
+DETAIL_STRIDES = 3
+
+
+def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     """Time histories of a run: pitch, COM height, leg angles with leg states, hip torques.
 
     Four stacked panels share the time axis [s]:
@@ -81,6 +87,10 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     4. hip torque per physical leg [N m]: commanded (dashed) and delivered by the actuator,
        N eta K_T i (solid).
 
+    With an overview, two panels above them show pitch and COM height over the whole run
+    and the four panels show the last :data:`DETAIL_STRIDES` strides (the last second if
+    the run has fewer), shaded in the overview.
+
     Parameters
     ----------
     result : SimulationResult
@@ -88,13 +98,24 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     path : str or path-like, optional
         Save the figure there; the format follows the suffix (.png, .pdf, .svg).
     t_range : (t0, t1), optional
-        Time window to show [s] (default: the whole run).
+        Time window to show [s] (default: the whole run; with an overview: the last
+        strides).
+    overview : bool or "auto"
+        Add the whole-run overview; "auto": for runs longer than :data:`LONG_RUN_S`
+        when no ``t_range`` is given.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
+    if overview not in (True, False, "auto"):
+        raise ValueError(f"overview = {overview!r} is not allowed: must be True, False or "
+                         "'auto'")
     t = np.asarray(result.t, dtype=float)
+    if overview == "auto":
+        overview = t_range is None and t.size > 1 and float(t[-1] - t[0]) > LONG_RUN_S
+    if overview and t_range is None and t.size:
+        t_range = (_last_strides_start(result), float(t[-1]))
     if t_range is not None:
         try:
             t0, t1 = (float(v) for v in t_range)
@@ -108,11 +129,57 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     else:
         sel = np.arange(t.size)
         t0, t1 = (float(t[0]), float(t[-1])) if t.size else (0.0, 1.0)
-    ts = t[sel]
 
-    fig = Figure(figsize=(10, 9.5), layout="constrained")
-    ax_pitch, ax_height, ax_leg, ax_tau = fig.subplots(4, 1, sharex=True)
+    if overview:
+        fig = Figure(figsize=(10, 12.5), layout="constrained")
+        top, bottom = fig.subfigures(2, 1, height_ratios=[2.6, 9.5])
+        _draw_overview(top.subplots(1, 2), result, t, t0, t1)
+        axes = bottom.subplots(4, 1, sharex=True)
+        bottom.suptitle(f"last {DETAIL_STRIDES} strides", fontsize=10)
+    else:
+        fig = Figure(figsize=(10, 9.5), layout="constrained")
+        axes = fig.subplots(4, 1, sharex=True)
+    _draw_run_panels(axes, result, t[sel], sel, t0, t1)
+    fig.suptitle(_title(result))
+    save_figure(fig, path)
+    return fig
 
+
+def _last_strides_start(result) -> float:
+    """Start [s] of the last DETAIL_STRIDES strides of a run (1 s before its end if it has
+    fewer)."""
+    t_end = float(result.t[-1])
+    try:
+        strides = result.strides
+    except Exception:   # a run too short or too broken for stride analysis
+        strides = []
+    if len(strides) >= DETAIL_STRIDES:
+        return float(strides[-DETAIL_STRIDES]["t_start"])
+    return max(float(result.t[0]), t_end - 1.0)
+
+
+def _draw_overview(axes, result, t, t0, t1) -> None:
+    """Pitch and COM height over the whole run, the detail window [t0, t1] shaded."""
+    ax_p, ax_h = axes
+    ax_p.plot(t, np.degrees(np.asarray(result.pitch)), color="k", lw=0.6)
+    ax_p.set_ylabel("pitch [deg]")
+    ax_h.plot(t, np.asarray(result.height), color="k", lw=0.6)
+    ax_h.set_ylabel("COM height [m]")
+    for ax in axes:
+        ax.axvspan(t0, t1, color="tab:blue", alpha=0.15, lw=0, label="detail below")
+        if result.outcome == "fell":
+            ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
+        ax.set_xlabel("time [s]")
+        ax.grid(True, lw=0.4, alpha=0.5)
+        if t.size:
+            ax.set_xlim(float(t[0]), float(t[-1]))
+    ax_p.legend(loc="upper right", fontsize=8)
+    ax_p.set_title("whole run", fontsize=10)
+
+
+def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
+    """The four stacked panels of :func:`plot_run` for the samples ``sel`` (times ``ts``)."""
+    ax_pitch, ax_height, ax_leg, ax_tau = axes
     ax_pitch.plot(ts, np.degrees(np.asarray(result.pitch)[sel]), color="k", lw=1.2,
                   label="pitch theta")
     ax_pitch.axhline(0.0, color="0.6", lw=0.6)
@@ -152,18 +219,15 @@ def plot_run(result, path=None, t_range=None) -> Figure:
     ax_tau.legend(loc="upper left", fontsize=8, ncol=4, framealpha=0.85)
 
     if result.outcome == "fell" and t0 <= result.t_end <= t1:
-        for ax in (ax_pitch, ax_height, ax_leg, ax_tau):
+        for ax in axes:
             ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
         ax_pitch.plot([], [], color="crimson", lw=1.0, ls=":", label="fall")
     ax_pitch.legend(loc="upper left", fontsize=8)
     ax_height.legend(loc="upper left", fontsize=8)
 
-    for ax in (ax_pitch, ax_height, ax_leg, ax_tau):
+    for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_tau.set_xlim(t0, t1)
-    fig.suptitle(_title(result))
-    save_figure(fig, path)
-    return fig
 
 
 def motor_limits(robot: dict) -> dict:

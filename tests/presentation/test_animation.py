@@ -86,9 +86,9 @@ def test_cli_plot_result_and_log(saved, result, tmp_path, capsys, monkeypatch):
     (["plot", "missing.npz"], "not found"),
     (["plot", "{npz}", "--out", "x.jpg"], "suffix"),
     (["plot", "{npz}", "--t0", "0.5", "--t1", "0.2"], "t1 > t0"),
-    (["plot", "{txt}"], "neither a saved result"),
+    (["plot", "{txt}"], "neither a saved run"),
     (["animate", "{npz}", "--out", "x.avi"], "suffix"),
-    (["animate", "{txt}", "--out", "x.gif"], "not a saved result"),
+    (["animate", "{txt}", "--out", "x.gif"], "not a saved run"),
     (["animate", "{npz}", "--out", "x.gif", "--t0", "0.5", "--t1", "5"], "covers"),
     (["animate", "{bad_npz}", "--out", "x.gif"], "cannot read result"),
 ])

@@ -155,3 +155,22 @@ def test_torque_speed_single_leg_and_bad_leg(result_II):
     assert len(fig.get_axes()) == 1 and "front" in fig.get_axes()[0].get_title()
     with pytest.raises(ValueError, match="leg"):
         plot_torque_speed(result_II, "middle")
+
+
+def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
+    from scoutsim.presentation.plots import DETAIL_STRIDES
+    fig = plot_run(result_II, overview=True)
+    axes = fig.get_axes()
+    assert len(axes) == 6
+    overview, detail = axes[:2], axes[2:]
+    t = result_II.t
+    assert overview[0].get_xlim() == pytest.approx((t[0], t[-1]))
+    t0, t1 = detail[-1].get_xlim()
+    assert t1 == pytest.approx(t[-1])
+    strides = result_II.strides
+    assert t0 == pytest.approx(strides[-DETAIL_STRIDES]["t_start"])
+    # "auto": only runs longer than LONG_RUN_S get the overview
+    assert len(plot_run(result_II, overview="auto").get_axes()) == \
+        (6 if t[-1] - t[0] > 4.0 else 4)
+    with pytest.raises(ValueError, match="overview"):
+        plot_run(result_II, overview="yes")
