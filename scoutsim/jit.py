@@ -96,6 +96,10 @@ FIRST_COMPILE_NOTICE = ("compiling the simulator core with Numba (first run afte
                         "install or an update; about 1 min on a 2-core machine, then cached)")
 
 
+#: parameters whose integer constants compile their own specializations (branch pruning)
+SPECIALIZING_PARAMETERS = ("method",)
+
+
 def _typed_by_kind(dispatcher):
     """Make calls from compiled code to ``dispatcher`` compile one specialization per
     argument *kind*, not one per constant value.
@@ -105,14 +109,25 @@ def _typed_by_kind(dispatcher):
     literal it meets. The right-hand side was compiled five times that way (20-40 s each,
     two thirds of the first run's compilation). Here the argument types are widened to
     their non-literal kind before the callee is compiled or looked up; the caller then
-    converts its constants to that kind."""
+    converts its constants to that kind.
+
+    The one exception is a parameter named ``method`` (:data:`SPECIALIZING_PARAMETERS`):
+    the integration method stays a literal, so each method compiles its own specialization
+    of the integrator with the other methods' branches pruned, and a run compiles only the
+    method it uses (:func:`scoutsim.loop.run_entry`)."""
     from numba.core import types
 
     resolve = dispatcher.get_call_template
+    code = dispatcher.py_func.__code__
+    names = code.co_varnames[:code.co_argcount]
+    keep = {i for i, n in enumerate(names) if n in SPECIALIZING_PARAMETERS}
+
+    def widen(a, literal_ok):
+        return a if literal_ok and isinstance(a, types.IntegerLiteral) else types.unliteral(a)
 
     def get_call_template(args, kws):
-        return resolve(tuple(types.unliteral(a) for a in args),
-                       {k: types.unliteral(v) for k, v in kws.items()})
+        return resolve(tuple(widen(a, i in keep) for i, a in enumerate(args)),
+                       {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
 
     dispatcher.get_call_template = get_call_template
     return dispatcher

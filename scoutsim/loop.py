@@ -18,7 +18,7 @@ from .model.evaluate import evaluate_ws
 from .model.rigid_body import state_energy
 from .model.layout import (
     A_ENERGY, A_KKT_OK, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
-    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, NSN, P_MODEL, RM_CONTACT_B, RM_LEG_STATE_B,
+    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, NSN, RM_CONTACT_B, RM_LEG_STATE_B,
     RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
@@ -28,7 +28,7 @@ from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_
 from .numerics.stats import S_NFEV
 from .numerics.transitions import settle_ws
 
-__all__ = ["run", "record_sample"]
+__all__ = ["run", "run_entry", "effective_method", "record_sample"]
 
 
 @kernel
@@ -49,13 +49,14 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 @allocating
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
-        stepc, method=METHOD_AUTO):
+        stepc, method):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
     is the caller's) updates the held commands, the modes are settled, the sample is
-    recorded, then the plant is integrated to the next sample. ``method``: METHOD_AUTO
-    (default), METHOD_DOPRI5 or METHOD_ARK3 / METHOD_ARK4 (Model II only). ``hwork``:
+    recorded, then the plant is integrated to the next sample. ``method``: METHOD_DOPRI5 or
+    METHOD_ARK3 / METHOD_ARK4 (Model II only), a compile-time constant: call the
+    specialization :func:`run_entry` returns. ``hwork``:
     [step-size guess, 1 if ``sfwork`` (NS, 2 NSTIFF) holds the ARK stiff factors of the
     last step], both carried between calls so that a run cut into calls (chunks, a Python
     controller) integrates exactly as one call would. ``ew`` (:func:`eval_workspace`) is
@@ -87,9 +88,6 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                         np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX),
                         np.empty(NS), steps, stepc)
     sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
-    meth = method
-    if meth == METHOD_AUTO or (meth >= METHOD_ARK4 and int(P[P_MODEL]) != MODEL_II):
-        meth = METHOD_DOPRI5
     t = k_start * dt
     k = k_start
     while k < k_stop:
@@ -128,8 +126,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         t_next = (k + 1) * dt
         t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
                                  tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp, ew, meth, SF0, SF1, Z, sc,
-                                 sf_ok or meth == METHOD_DOPRI5)
+                                 ybuf, imp, ew, method, SF0, SF1, Z, sc,
+                                 sf_ok or method == METHOD_DOPRI5)
         sf_ok = True
         hwork[HW_STIFF_VALID] = 1.0
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
@@ -146,3 +144,29 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         if stepc[1] != 0 and stepc[0] > steps.shape[0] - STEP_HEADROOM:
             break
     return k, n_out, nev, ST_RUNNING, t
+
+
+#: compiled entry points of :func:`run`, by (method, argument types)
+_ENTRIES = {}
+
+
+def effective_method(method: int, model: int) -> int:
+    """The method :func:`run` integrates with: the ARK methods exist for Model II (its belt
+    splitting) only, DOPRI5 otherwise and for METHOD_AUTO."""
+    if method == METHOD_AUTO or (method >= METHOD_ARK4 and model != MODEL_II):
+        return METHOD_DOPRI5
+    return method
+
+
+def run_entry(method: int, args: tuple):
+    """The compiled :func:`run` for one integration method, called with ``args`` (every
+    argument of :func:`run` but ``method``): compiled (or loaded from the cache) for the
+    method as a constant, so a run compiles and loads only its own method's integrator."""
+    from numba import typeof
+    from numba.core import types
+    argtypes = tuple(typeof(a) for a in args)
+    key = (method, argtypes)
+    entry = _ENTRIES.get(key)
+    if entry is None:
+        entry = _ENTRIES[key] = run.compile(argtypes + (types.literal(method),))
+    return entry

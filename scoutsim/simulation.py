@@ -25,9 +25,9 @@ from .model.transmission import motor_mode_from_rate
 from .model.packing import robot_array
 from .model.sensors import read_sensors
 from .numerics.dopri5 import eval_workspace
-from .loop import run
-from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5, NHW,
-                              STEP_HEADROOM)
+from .loop import effective_method, run_entry
+from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5,
+                              NHW, STEP_HEADROOM)
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
@@ -216,13 +216,15 @@ class HybridEngine:
     def advance(self, k_stop: int, builtin: bool):
         """Run control samples k .. k_stop - 1 (the compiled controller if ``builtin``,
         else the held ``self.cmd``)."""
-        self.k, self.n_out, self.nev, self.status, self.t_now = run(
-            self.s, self.P, self.mi, self.mf, self.C, self.ls, self.cmd, self.k,
-            min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
-            self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
-            self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed, self.sfwork,
-            self.ew, self.steps, self.stepc,
-            _METHODS[self.integ.method])
+        args = (self.s, self.P, self.mi, self.mf, self.C, self.ls, self.cmd, self.k,
+                min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
+                self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
+                self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
+                self.sfwork, self.ew, self.steps, self.stepc)
+        method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
+                                  int(self.P[L.P_MODEL]))
+        self.k, self.n_out, self.nev, self.status, self.t_now = run_entry(method, args)(
+            *args, method)
         if self.nev > self.ev.shape[0] - 64:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
         if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:

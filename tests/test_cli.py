@@ -12,7 +12,7 @@ import pytest
 
 import scoutsim
 from scoutsim import SimulationResult
-from scoutsim.cli import main
+from scoutsim.cli import build_parser, main
 
 FIRST_KEYS = ["outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
               "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
@@ -330,3 +330,22 @@ def test_no_compile_notice_when_the_core_is_cached(tmp_path, monkeypatch, capsys
     monkeypatch.setattr(scoutsim.jit, "core_is_compiled", lambda: True)
     assert main(["run", "--duration", "0.01", "--no-plots", "--out", str(tmp_path)]) == 0
     assert "compiling" not in capsys.readouterr().err
+
+
+def test_progress_messages_go_to_stderr_unless_quiet(monkeypatch, capsys):
+    import argparse
+    from scoutsim.cli._common import progress_messages
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    say = progress_messages(argparse.Namespace(no_progress=False, quiet=False), "orbit")
+    say("Newton iteration 0")
+    err = capsys.readouterr().err
+    assert err.startswith("scoutsim orbit [") and err.rstrip().endswith("Newton iteration 0")
+    for flags in (dict(no_progress=True, quiet=False), dict(no_progress=False, quiet=True)):
+        assert progress_messages(argparse.Namespace(**flags), "orbit") is None
+
+
+@pytest.mark.parametrize("command", ["run", "basin", "sweep", "compare", "identify", "orbit"])
+def test_every_long_command_takes_quiet(command):
+    args = build_parser().parse_args([command, "--quiet"] + (
+        ["--example"] if command in ("compare", "identify") else []))
+    assert args.quiet is True

@@ -731,7 +731,8 @@ def controlled_fixed_point(start=None, *, model: str = "II",
                            friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, robot=None, controller=None,
                            integrator: IntegratorSettings | None = None,
                            settle_duration: float = 12.0, tol: float = 1e-10,
-                           max_iter: int = 10, jacobian_step: float = 1e-6) -> ControlledOrbit:
+                           max_iter: int = 10, jacobian_step: float = 1e-6,
+                           progress=None) -> ControlledOrbit:
     """Periodic orbit of the controlled robot (Table I law at 1 kHz) by Newton's method on
     the sampled stride map :func:`controlled_stride_map`, and its Floquet multipliers.
 
@@ -746,11 +747,14 @@ def controlled_fixed_point(start=None, *, model: str = "II",
     coordinates of pinned legs and stuck motor joints make ``dP/dz - I`` rank deficient).
     Default integrator: DOPRI5 at rtol 1e-11 / atol 1e-12, so the map is accurate well
     below ``tol``. MapError if the discrete modes at the section change or no fixed point
-    is found within ``max_iter`` iterations."""
+    is found within ``max_iter`` iterations. ``progress``: optional callable(str), told
+    the settling run and each Newton iteration's residual."""
     integ = integrator or IntegratorSettings(rtol=1e-11, atol=1e-12)
     kw = dict(model=model, friction_coefficient=friction_coefficient, robot=robot,
               controller=controller, integrator=integ)
+    say = progress or (lambda message: None)
     if start is None:
+        say(f"settling: {settle_duration:g} s of model {model} to a Newton start")
         start = simulate(robot, controller, None, settle_duration, model=model,
                          friction_coefficient=friction_coefficient)
     if not isinstance(start, HybridState):
@@ -765,6 +769,7 @@ def controlled_fixed_point(start=None, *, model: str = "II",
         F = z1 - z
         res = float(np.max(np.abs(F)))
         hist.append(res)
+        say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
         if _discrete(h1) != disc:
             raise MapError(f"the discrete state at the section changed ({disc} -> "
                            f"{_discrete(h1)}): not a period-1 orbit of this section")

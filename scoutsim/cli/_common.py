@@ -212,6 +212,19 @@ def command_wall_time() -> float:
         return time.perf_counter() - _IMPORTED_AT
 
 
+def progress_messages(args, command: str):
+    """A callable(str) that prints a progress message on stderr (``scoutsim COMMAND
+    [elapsed s]: message``) when :func:`show_progress` allows, else None."""
+    if not show_progress(args):
+        return None
+    t0 = time.perf_counter()
+
+    def say(message: str) -> None:
+        print(f"scoutsim {command} [{time.perf_counter() - t0:6.1f} s]: {message}",
+              file=sys.stderr, flush=True)
+    return say
+
+
 def show_progress(args) -> bool:
     """Progress bar unless --no-progress, --quiet or stderr is not a terminal."""
     return not (args.no_progress or getattr(args, "quiet", False)) and sys.stderr.isatty()

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import time
 
-from ._common import (UsageError, add_out_option, check_logs_or_example, load_robot, out_dir,
-                      positive_int, usage_errors)
+from ._common import (UsageError, add_no_progress_option, add_out_option,
+                      check_logs_or_example, load_robot, out_dir, positive_int,
+                      progress_messages, usage_errors)
 
 NAME = "identify"
 
@@ -50,6 +51,7 @@ def register(sub, common) -> None:
                      help="interval confidence level (default: 0.95)")
     idf.add_argument("--no-plots", action="store_true", help="do not write fit figures")
     idf.add_argument("--json", action="store_true", help="print identified.json to stdout")
+    add_no_progress_option(idf)
     idf.set_defaults(func=execute)
 
 
@@ -77,7 +79,8 @@ def execute(args) -> int:
             logs = args.logs
             rig = args.rig
         res = identify(logs, params, rig=rig, robot=robot, n_starts=args.starts,
-                       n_local=args.local, seed=args.seed, confidence=args.confidence)
+                       n_local=args.local, seed=args.seed, confidence=args.confidence,
+                       progress=progress_messages(args, NAME))
     wall = time.perf_counter() - wall0
     path = res.save(out, figures=not args.no_plots)
     if args.json:

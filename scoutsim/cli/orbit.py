@@ -14,8 +14,9 @@ from __future__ import annotations
 import math
 import sys
 
-from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, add_friction_option, dumps,
-                      finite_float, positive_float)
+from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, add_friction_option,
+                      add_no_progress_option, dumps, finite_float, positive_float,
+                      progress_messages)
 
 NAME = "orbit"
 
@@ -46,6 +47,7 @@ def register(sub, common) -> None:
     orbit.add_argument("--duration", type=positive_float, default=12.0, metavar="S",
                        help="controlled: simulated time to the Newton start [s] (default: 12)")
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
+    add_no_progress_option(orbit)
     orbit.set_defaults(func=execute)
 
 
@@ -57,7 +59,8 @@ def execute(args) -> int:
                                          math.radians(args.pitch_rate))
         else:
             orb = controlled_fixed_point(model=args.model, friction_coefficient=args.friction,
-                                         settle_duration=args.duration)
+                                         settle_duration=args.duration,
+                                         progress=progress_messages(args, NAME))
     except MapError as exc:
         print(f"scoutsim orbit: {exc}", file=sys.stderr)
         return 1

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
+from numba.extending import overload
 
 from ..jit import kernel
 from ..model.evaluate import evaluate_ws
@@ -73,22 +74,76 @@ STEP_HEADROOM = MAX_STEPS_PER_PERIOD + MAX_EVENTS_PER_PERIOD + 2
 WHOLE_PERIOD_FRACTION = 0.5
 
 
-@kernel
+# --- the method, chosen when the integrator is compiled ---------------------------------
+# ``method`` reaches the integrator as a compile-time constant (jit.SPECIALIZING_PARAMETERS,
+# loop.run_entry). The two functions below are resolved from it while the caller is being
+# compiled, so a run compiles only its own method's stepper and continuous extension
+# (a Model II run at the default tolerance neither DOPRI5 nor ARK4: 10 % of the first run's
+# compilation, docs/model.md "Compile time").
+
+
+def method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                SF1, Z, eval_end, want_sf):
+    """One step of ``method`` (a constant); compiled code only (:func:`_method_step`)."""
+    raise NotImplementedError("method_step is resolved when a kernel is compiled")
+
+
+@overload(method_step, prefer_literal=True, inline="always")
+def _method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                 SF1, Z, eval_end, want_sf):
+    m = getattr(method, "literal_value", None)
+    if m == METHOD_ARK4:
+        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                 SF1, Z, eval_end, want_sf):
+            return ark.step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                            SF1, Z, eval_end, want_sf)
+        return impl
+    if m == METHOD_ARK3:
+        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                 SF1, Z, eval_end, want_sf):
+            return ark.step3(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew,
+                             SF0, SF1, Z, eval_end, want_sf)
+        return impl
+    if m == METHOD_DOPRI5:
+        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
+                 SF1, Z, eval_end, want_sf):
+            err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
+            return err, ok, 6
+        return impl
+    return None   # not a method constant: no implementation (a typing error names it)
+
+
+def method_dense(method, s, y_new, h, K, th, out):
+    """The continuous extension of ``method``'s last step (a constant) at the fraction
+    ``th`` into ``out``; compiled code only (:func:`_method_dense`)."""
+    raise NotImplementedError("method_dense is resolved when a kernel is compiled")
+
+
+@overload(method_dense, prefer_literal=True, inline="always")
+def _method_dense(method, s, y_new, h, K, th, out):
+    m = getattr(method, "literal_value", None)
+    if m == METHOD_ARK4 or m == METHOD_ARK3:
+        def impl(method, s, y_new, h, K, th, out):
+            ark.dense(s, y_new, h, K, th, out)
+        return impl
+    if m == METHOD_DOPRI5:
+        def impl(method, s, y_new, h, K, th, out):
+            dense(s, h, K, th, out)
+        return impl
+    return None
+
+
+@kernel(inline="always")
 def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
             Z, eval_end, want_sf=True):
-    """One step of the selected method; returns (error_norm, ok, evaluations).
-    ``want_sf``: the ARK methods also refresh the stiff factors at the step's end (SF1)."""
-    if method == METHOD_ARK4:
-        return ark.step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                        SF1, Z, eval_end, want_sf)
-    if method == METHOD_ARK3:
-        return ark.step3(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                         SF1, Z, eval_end, want_sf)
-    err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
-    return err, ok, 6
+    """One step of the selected method (a constant, :func:`method_step`); returns
+    (error_norm, ok, evaluations). ``want_sf``: the ARK methods also refresh the stiff
+    factors at the step's end (SF1)."""
+    return method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew,
+                       SF0, SF1, Z, eval_end, want_sf)
 
 
-@kernel
+@kernel(inline="always")
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
     return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
@@ -100,10 +155,7 @@ def dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf, tmp, au
                        e_tmp):
     """Event functions (into e_tmp) at the fraction ``th`` of the step of size ``h`` from
     ``s`` to ``y_new``, on the method's continuous extension (one evaluation)."""
-    if method >= METHOD_ARK4:
-        ark.dense(s, y_new, h, K, th, ybuf)
-    else:
-        dense(s, h, K, th, ybuf)
+    method_dense(method, s, y_new, h, K, th, ybuf)
     evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
     project_state(ybuf, P, mi, mf)
     event_values(ybuf, aux_tmp, P, mi, e_tmp)

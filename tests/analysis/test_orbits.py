@@ -88,9 +88,20 @@ def test_controlled_cycle_converges():
 # -----------------------------------------------------------------------------------------
 # controlled robot: Newton on the sampled stride map
 # -----------------------------------------------------------------------------------------
+#: progress messages of the controlled fixed point below
+_MESSAGES = []
+
+
 @pytest.fixture(scope="module")
 def controlled():
-    return O.controlled_fixed_point()
+    return O.controlled_fixed_point(progress=_MESSAGES.append)
+
+
+def test_controlled_fixed_point_reports_its_progress(controlled):
+    assert _MESSAGES[0].startswith("settling: 12 s of model II")
+    iterations = [m for m in _MESSAGES if m.startswith("Newton iteration")]
+    assert len(iterations) == len(controlled.history)
+    assert iterations[-1].endswith(f"{controlled.history[-1]:.2e}")
 
 
 @pytest.fixture(scope="module")
