@@ -1,10 +1,10 @@
 """Command-line interface: the ``scoutsim`` console script and its sub-commands, one module
 each (``scoutsim COMMAND --help`` for the options):
 
-    run       simulate one bounding run, print a summary, write data and plots
+    run       simulate one bounding run, print a summary, write its tables
     basin     basin map: which starts reach steady bounding, per model and floor
     compare   Fig. 12 errors of the models against experiment logs
-    plot      figure of one saved run (result.npz) or one experiment log
+    plot      figure of one saved run or one experiment log
     animate   stick-figure animation of a saved run (GIF or MP4)
     orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
     sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
@@ -50,14 +50,15 @@ def build_parser() -> argparse.ArgumentParser:
         prog="scoutsim",
         description="Simulate planar Scout II bounding (Poulakakis, Smith & Buehler, ICRA 2004).",
         epilog="examples:\n"
-               "  scoutsim run                       # Model II, 10 s, results in scoutsim_out/\n"
+               "  scoutsim run                       # Model II, 10 s, tables in scoutsim_out/\n"
+               "  scoutsim run --plots --steps       # also figures and every integrator step\n"
                "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
-               "  scoutsim run --json --no-plots     # summary as JSON on stdout\n"
+               "  scoutsim run --json                # summary as JSON on stdout\n"
                "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
                "  scoutsim compare run1.csv run2.csv --models I,II --out cmp\n"
                "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
-               "  scoutsim plot scoutsim_out/result.npz --out run.pdf --t0 3 --t1 4\n"
-               "  scoutsim animate scoutsim_out/result.npz --out run.gif --t0 3 --t1 4",
+               "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"
+               "  scoutsim animate scoutsim_out --out run.gif --t0 3 --t1 4",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
     sub = parser.add_subparsers(dest="command",

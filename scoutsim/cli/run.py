@@ -80,7 +80,8 @@ def register(sub, common) -> None:
 
 
 def write_timeseries_csv(result, path) -> Path:
-    """Write ``result.columns()`` as CSV, one row per sample, header ``name [unit]``."""
+    """Write ``result.columns()`` as CSV, one row per sample, header ``name [unit]``; floats
+    with 17 significant digits, so ``np.loadtxt`` reads every value back bit for bit."""
     import numpy as np
     cols = result.columns()
     names = list(cols)
@@ -88,7 +89,8 @@ def write_timeseries_csv(result, path) -> Path:
     data = np.column_stack([np.asarray(cols[n], dtype=float) for n in names]) if names else \
         np.zeros((0, 0))
     path = Path(path)
-    np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.12g")
+    # 17 significant digits: every float64 reads back to the same bits
+    np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.17g")
     return path
 
 
