@@ -103,7 +103,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
                 if tr[leg] & 4:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
-            stamp_states(ev, nevc, nev, s, s)
+            if nev > nevc:
+                stamp_states(ev, nevc, nev, s, s)
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]

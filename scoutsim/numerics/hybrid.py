@@ -395,7 +395,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
-                record_step(sc.steps, sc.stepc, t, s, mi)
+                if sc.stepc[1] != 0:   # (tested here: no call when steps are not recorded)
+                    record_step(sc.steps, sc.stepc, t, s, mi)
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
             evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3], True)
@@ -501,7 +502,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             t = t_end
         else:
             t = t + h
-        record_step(sc.steps, sc.stepc, t, s, mi)
+        if sc.stepc[1] != 0:
+            record_step(sc.steps, sc.stepc, t, s, mi)
         fac = 5.0 if err == 0.0 else 0.9 * err ** expo
         if fac > 5.0:
             fac = 5.0
