@@ -365,7 +365,10 @@ class SimulationResult:
 
     @classmethod
     def _load_tables(cls, path: Path) -> "SimulationResult":
+        from .run_directory import check_run_directory
         from .tables import SUFFIXES, TableError, read_table
+        # a run directory with a manifest must have been written completely
+        check_run_directory(path if path.is_dir() else path.parent)
         if path.is_dir():
             found = [path / f"timeseries{x}" for x in SUFFIXES.values()
                      if (path / f"timeseries{x}").exists()]

@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 from ..result import COLUMN_UNITS, column_unit
+from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ._common import (MODELS, command_wall_time, dumps, finite_float, integrator,
                       load_parameters, out_dir, positive_float, show_progress, usage_errors,
@@ -175,17 +176,23 @@ def execute(args) -> int:
     wall = time.perf_counter() - wall0
 
     summary = result.summary()
-    files = result.save_tables(out, fmt=args.format)
-    files.append(write_json(out / "summary.json", summary))
-    if args.csv:
-        files.append(write_timeseries_csv(result, out / "timeseries.csv"))
-    if args.npz:
-        files.append(result.save(out / "result.npz"))
-    if args.plots and not args.no_plots:
-        from ..presentation.plots import plot_run, plot_torque_speed
-        plot_run(result, out / "run.png", overview="auto")
-        plot_torque_speed(result, "both", out / "torque_speed.png")
-        files += [out / "run.png", out / "torque_speed.png"]
+    interrupted = result.outcome == "interrupted"
+    info = {"scoutsim_version": result.provenance.get("scoutsim_version"),
+            "model": args.model, "duration_s": args.duration, "t_end": result.t_end}
+    with RunDirectory(out, command=" ".join(["scoutsim"] + sys.argv[1:]), info=info) as rd:
+        for path in result.save_tables(out, fmt=args.format):
+            rd.add(path.name)
+        rd.write("summary.json", lambda p: write_json(p, summary))
+        if args.csv:
+            rd.write("timeseries.csv", lambda p: write_timeseries_csv(result, p))
+        if args.npz:
+            rd.write("result.npz", lambda p: result.save(p))
+        if args.plots and not args.no_plots:
+            from ..presentation.plots import plot_run, plot_torque_speed
+            rd.write("run.png", lambda p: plot_run(result, p, overview="auto"))
+            rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
+        rd.finish(outcome=result.outcome, partial=interrupted)
+    files = [out / name for name in rd.files] + [out / MANIFEST]
 
     if args.json:
         print(dumps(summary))

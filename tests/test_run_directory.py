@@ -1,0 +1,137 @@
+"""A run's output directory: one run per directory, files written whole or not at all, a
+manifest that says whether the run's files are all there (issue 15, item 1)."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim import SimulationResult
+from scoutsim.cli import main
+from scoutsim.run_directory import (MANIFEST, IncompleteRunError, RunDirectory, atomic_write,
+                                    check_run_directory, read_manifest)
+
+
+def test_atomic_write_leaves_no_trace_when_the_writer_fails(tmp_path):
+    target = tmp_path / "data.json"
+    target.write_text("old")
+
+    def failing(p):
+        p.write_text("half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(target, failing)
+    assert target.read_text() == "old"
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["data.json"]
+
+
+def test_a_directory_holds_one_run(tmp_path):
+    (tmp_path / "notes.txt").write_text("mine")
+    with RunDirectory(tmp_path, command="first") as rd:
+        rd.write("a.txt", lambda p: p.write_text("1"))
+        rd.write("b.txt", lambda p: p.write_text("22"))
+        rd.finish(outcome="completed", partial=False)
+    m = check_run_directory(tmp_path)
+    assert m["status"] == "complete" and m["files"] == {"a.txt": {"bytes": 1},
+                                                        "b.txt": {"bytes": 2}}
+    with RunDirectory(tmp_path, command="second") as rd:
+        assert read_manifest(tmp_path)["status"] == "writing"
+        with pytest.raises(IncompleteRunError, match="cut off"):
+            check_run_directory(tmp_path)
+        rd.write("a.txt", lambda p: p.write_text("333"))
+        rd.finish(outcome="interrupted", partial=True)
+    # the first run's b.txt is gone, the user's file stays
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["a.txt", MANIFEST, "notes.txt"]
+    assert check_run_directory(tmp_path)["status"] == "partial"
+    (tmp_path / "a.txt").write_text("")          # a listed file that changed size
+    with pytest.raises(IncompleteRunError, match="a.txt"):
+        check_run_directory(tmp_path)
+
+
+def test_writing_cut_off_by_ctrl_c_is_never_taken_for_a_run(tmp_path, monkeypatch, capsys):
+    import scoutsim.cli.run as run_cli
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run_cli, "write_json", interrupted)
+    assert main(["run", "--duration", "0.1", "--out", str(tmp_path), "--no-progress"]) == 130
+    assert read_manifest(tmp_path)["status"] == "writing"
+    assert not list(tmp_path.glob("*.partial*"))
+    with pytest.raises(IncompleteRunError):
+        SimulationResult.load(tmp_path)
+    capsys.readouterr()
+    assert main(["plot", str(tmp_path), "--out", str(tmp_path / "x.png")]) == 2
+    assert "cut off" in capsys.readouterr().err
+
+
+def test_an_interrupted_simulation_is_written_as_partial_with_exit_130(tmp_path, monkeypatch):
+    real = scoutsim.simulation.simulate
+
+    def stopped(*args, **kwargs):
+        r = real(*args, **kwargs)
+        r.outcome = "interrupted"
+        return r
+
+    monkeypatch.setattr(scoutsim.simulation, "simulate", stopped)
+    assert main(["run", "--duration", "0.2", "--out", str(tmp_path), "--no-progress"]) == 130
+    m = check_run_directory(tmp_path)
+    assert m["status"] == "partial" and m["outcome"] == "interrupted"
+    assert SimulationResult.load(tmp_path).outcome == "interrupted"
+    assert json.loads((tmp_path / "summary.json").read_text())["outcome"] == "interrupted"
+
+
+def _start_run(out, duration):
+    return subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration",
+                             str(duration), "--out", str(out), "--no-progress"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+def _assert_consistent(out):
+    """Whatever moment a run was stopped at: either the directory says its files are not
+    all there (and loading refuses it), or every file is whole and the run loads."""
+    try:
+        manifest = check_run_directory(out)
+    except IncompleteRunError:
+        with pytest.raises(IncompleteRunError):
+            SimulationResult.load(out)
+        return "incomplete"
+    if manifest is None:
+        assert not list(out.glob("*.parquet")) and not (out / "summary.json").exists()
+        return "nothing"
+    r = SimulationResult.load(out)
+    assert np.all(np.diff(r.t) > 0) and r.t[-1] == pytest.approx(r.t_end)
+    return manifest["status"]
+
+
+@pytest.mark.parametrize("delay_s", [0.3, 1.0, 1.6, 2.4])
+def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, delay_s):
+    scoutsim.simulate(duration=0.01)      # the core is compiled before the clock starts
+    out = tmp_path / "out"
+    proc = _start_run(out, 150)
+    time.sleep(delay_s)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=60)
+    _assert_consistent(out)
+
+
+def test_sigint_while_simulating_writes_the_data_so_far_as_partial(tmp_path):
+    scoutsim.simulate(duration=0.01)
+    out = tmp_path / "out"
+    # about 12 s of simulation on the development machine, start-up 0.7 s: a signal after
+    # 4 s lands in the simulation on machines twice as fast or twice as slow
+    proc = _start_run(out, 3000)
+    time.sleep(4.0)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=120) == 130, proc.stderr.read().decode()
+    status = _assert_consistent(out)
+    assert status == "partial"
+    r = SimulationResult.load(out)
+    assert r.outcome == "interrupted" and 0 < r.t_end < 3000
