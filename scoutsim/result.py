@@ -194,7 +194,8 @@ class SimulationResult:
         """The complete hybrid state at recorded sample ``k`` (continuous state, plant and
         controller modes, toe anchors) as a :class:`~scoutsim.simulation.HybridState`:
         ``simulate(..., initial_state=result.hybrid_state(k))`` continues this run from
-        t[k] (its time restarts at 0)."""
+        t[k] (its time restarts at 0), to the integration tolerance: the integrator's own
+        state is not carried (see :class:`~scoutsim.state.HybridState`)."""
         n = len(self.t)
         if not (isinstance(k, (int, np.integer)) and -n <= k < n):
             raise ValueError(f"k = {k!r} is not allowed: must be an integer sample index in "

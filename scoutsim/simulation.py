@@ -11,6 +11,7 @@ the integrator settings (:class:`IntegratorSettings`).
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections import namedtuple
 from dataclasses import asdict, dataclass
@@ -311,6 +312,40 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
                            scoutsim_version=__version__, duration_s=duration))
 
 
+#: bytes a run holds per control sample: time, state, outputs (float64) and modes (int8)
+BYTES_PER_SAMPLE = 8 * (1 + L.NS + L.NAUX) + L.NRM
+#: ... and per integrator step when steps are recorded (about 5 steps per sample, Model II)
+BYTES_PER_STEP = 8 * L.NSTEPREC
+STEPS_PER_SAMPLE = 5
+
+
+def physical_memory_bytes() -> int | None:
+    """This machine's physical memory [bytes], or None where the OS does not say."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_run_memory(duration: float, *, record_steps: bool = False, dt: float = 1e-3,
+                     memory_bytes: int | None = None) -> int:
+    """The memory a run of ``duration`` [s] needs for its time series [bytes]; ValueError
+    if that is more than half of this machine's memory (``memory_bytes``, default: the
+    physical memory), saying how long a run can be (a longer one can be split: resume from
+    ``result.hybrid_state(-1)``)."""
+    per_sample = BYTES_PER_SAMPLE + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
+    need = int(duration / dt + 2) * per_sample
+    have = physical_memory_bytes() if memory_bytes is None else memory_bytes
+    if have is not None and need > have // 2:
+        longest = (have // 2) / per_sample * dt
+        raise ValueError(f"duration = {duration:g} s is not allowed on this machine: the run's "
+                         f"time series would need {need / 1e9:.3g} GB of memory, more than half "
+                         f"of its {have / 1e9:.3g} GB; at most about {longest:.4g} s per run "
+                         "(split a longer run: resume from result.hybrid_state(-1); "
+                         "simulate(..., check_memory=False) tries anyway)")
+    return need
+
+
 def warm_up() -> float:
     """Make the compiled core ready in this process: load it from Numba's cache, compiling
     it first if it is not there (minutes on a first run; :func:`scoutsim.jit.core_is_compiled`
@@ -329,7 +364,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              pitch_limit_deg: float = 60.0,
              passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
              progress: bool = False, chunk_seconds: float = 1.0,
-             record_steps: bool = False) -> SimulationResult:
+             record_steps: bool = False, check_memory: bool = True) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -343,7 +378,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
     initial_state : InitialState or HybridState, optional
         Start state (default: :func:`default_initial_state`); a :class:`HybridState`
-        (e.g. ``result.hybrid_state(k)``) resumes a run exactly at one of its samples.
+        (e.g. ``result.hybrid_state(k)``) resumes a run at one of its samples, to the
+        integration tolerance (see :class:`~scoutsim.state.HybridState`).
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}
@@ -373,6 +409,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         Also record every integrator step (``result.steps``: time, state and plant modes at
         the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
         about 50 000 steps).
+    check_memory : bool
+        Refuse (ValueError) a run whose time series would not fit in this machine's memory
+        (:func:`check_run_memory`) before allocating anything; False to try anyway.
 
     Returns
     -------
@@ -394,6 +433,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
     if not (0.0 < pitch_limit_deg < 90.0):
         raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+    if check_memory:
+        check_run_memory(duration, record_steps=record_steps)
 
     user_ctrl = None
     if model == "passive":

@@ -18,7 +18,7 @@ FIRST_KEYS = ["outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_b
               "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
               "height_min_m", "max_friction_ratio", "n_steady_strides"]
 #: what `scoutsim run` writes by default, and with --plots --csv --npz
-DEFAULT_RUN_FILES = ["timeseries.parquet", "events.parquet", "summary.json"]
+DEFAULT_RUN_FILES = ["timeseries.parquet", "events.parquet", "summary.json", "manifest.json"]
 RUN_FILES = DEFAULT_RUN_FILES + ["timeseries.csv", "result.npz", "run.png", "torque_speed.png"]
 
 
@@ -94,7 +94,8 @@ def test_run_tables_load_back_bit_for_bit(run_out):
 def test_run_writes_only_tables_and_summary_by_default(tmp_path, capsys):
     assert main(["run", "--duration", "0.2", "--out", str(tmp_path), "--no-progress"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(DEFAULT_RUN_FILES)
-    assert "wrote timeseries.parquet, events.parquet, summary.json" in capsys.readouterr().out
+    assert "wrote timeseries.parquet, events.parquet, summary.json, manifest.json" in \
+        capsys.readouterr().out
 
 
 def test_run_csv_format_and_steps(tmp_path):
@@ -102,7 +103,8 @@ def test_run_csv_format_and_steps(tmp_path):
     assert main(["run", "--duration", "0.2", "--out", str(out), "--no-progress",
                  "--format", "csv", "--steps"]) == 0
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["timeseries.csv.gz", "events.csv.gz", "steps.csv.gz", "summary.json"])
+        ["timeseries.csv.gz", "events.csv.gz", "steps.csv.gz", "summary.json",
+         "manifest.json"])
     back = SimulationResult.load(out)
     ref = scoutsim.simulate(duration=0.2, record_steps=True, friction_coefficient=1.0)
     for name in ("t", "state", "aux", "modes", "events", "event_states", "steps"):

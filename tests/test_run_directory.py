@@ -2,7 +2,6 @@
 manifest that says whether the run's files are all there (issue 15, item 1)."""
 
 import json
-import os
 import signal
 import subprocess
 import sys

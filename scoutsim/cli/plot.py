@@ -66,6 +66,10 @@ def execute(args) -> int:
     t0 = float(t[0]) if args.t0 is None else args.t0
     t1 = float(t[-1]) if args.t1 is None else args.t1
     t_range = None if (args.t0 is None and args.t1 is None) else (t0, t1)
+    if t_range is not None and len(t) and not (t0 < float(t[-1]) and t1 > float(t[0])):
+        raise UsageError(f"--t0 {t0:g} --t1 {t1:g} is not allowed: the window must overlap "
+                         f"the {'log' if is_log else 'run'} ({float(t[0]):g} .. "
+                         f"{float(t[-1]):g} s)")
     with usage_errors():
         if is_log:
             from ..presentation.paper_figures import plot_log

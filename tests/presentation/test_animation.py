@@ -86,6 +86,7 @@ def test_cli_plot_result_and_log(saved, result, tmp_path, capsys, monkeypatch):
     (["plot", "missing.npz"], "not found"),
     (["plot", "{npz}", "--out", "x.jpg"], "suffix"),
     (["plot", "{npz}", "--t0", "0.5", "--t1", "0.2"], "t1 > t0"),
+    (["plot", "{npz}", "--t0", "100", "--t1", "200"], "must overlap the run"),
     (["plot", "{txt}"], "neither a saved run"),
     (["animate", "{npz}", "--out", "x.avi"], "suffix"),
     (["animate", "{txt}", "--out", "x.gif"], "not a saved run"),
