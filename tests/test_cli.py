@@ -193,29 +193,15 @@ def test_no_subcommand_prints_help(capsys):
     assert "usage: scoutsim" in out and "run" in out and "basin" in out
 
 
-def test_numerical_failure_exits_1_and_still_writes(tmp_path, monkeypatch):
-    real = scoutsim.simulation.simulate
-
-    def failing(*args, **kwargs):
-        r = real(*args, **kwargs)
-        r.outcome = "numerical_failure"
-        return r
-
-    monkeypatch.setattr(scoutsim.simulation, "simulate", failing)
+def test_numerical_failure_exits_1_and_still_writes(tmp_path, force_outcome):
+    force_outcome("numerical_failure")
     assert main(["run", "--duration", "0.1", "--model", "I", "--out", str(tmp_path),
                  "--no-progress", "--no-plots"]) == 1
     assert json.loads((tmp_path / "summary.json").read_text())["outcome"] == "numerical_failure"
 
 
-def test_fall_exits_0_and_summary_says_so(tmp_path, monkeypatch, capsys):
-    real = scoutsim.simulation.simulate
-
-    def falling(*args, **kwargs):
-        r = real(*args, **kwargs)
-        r.outcome = "fell"
-        return r
-
-    monkeypatch.setattr(scoutsim.simulation, "simulate", falling)
+def test_fall_exits_0_and_summary_says_so(tmp_path, force_outcome, capsys):
+    force_outcome("fell")
     assert main(["run", "--duration", "0.1", "--model", "I", "--out", str(tmp_path),
                  "--no-progress", "--no-plots"]) == 0
     assert "fell at t =" in capsys.readouterr().out

@@ -71,15 +71,8 @@ def test_writing_cut_off_by_ctrl_c_is_never_taken_for_a_run(tmp_path, monkeypatc
     assert "cut off" in capsys.readouterr().err
 
 
-def test_an_interrupted_simulation_is_written_as_partial_with_exit_130(tmp_path, monkeypatch):
-    real = scoutsim.simulation.simulate
-
-    def stopped(*args, **kwargs):
-        r = real(*args, **kwargs)
-        r.outcome = "interrupted"
-        return r
-
-    monkeypatch.setattr(scoutsim.simulation, "simulate", stopped)
+def test_an_interrupted_simulation_is_written_as_partial_with_exit_130(tmp_path, force_outcome):
+    force_outcome("interrupted")
     assert main(["run", "--duration", "0.2", "--out", str(tmp_path), "--no-progress"]) == 130
     m = check_run_directory(tmp_path)
     assert m["status"] == "partial" and m["outcome"] == "interrupted"

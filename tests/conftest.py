@@ -1,0 +1,20 @@
+"""Fixtures shared by the test modules."""
+
+import pytest
+
+import scoutsim
+
+
+@pytest.fixture
+def force_outcome(monkeypatch):
+    """``force_outcome("fell")``: every ``scoutsim.simulation.simulate`` call of the test
+    runs as usual and then reports that outcome (to test what a command does with it)."""
+    real = scoutsim.simulation.simulate
+
+    def force(outcome: str) -> None:
+        def simulate(*args, **kwargs):
+            r = real(*args, **kwargs)
+            r.outcome = outcome
+            return r
+        monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
+    return force
