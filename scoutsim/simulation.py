@@ -208,6 +208,7 @@ class HybridEngine:
         self.armed = np.zeros(L.NEV, dtype=np.bool_)
         self.n_out = self.nev = self.k = 0
         self.status = L.ST_RUNNING
+        self._entry = None        # the compiled run loop for this engine's method
         self.t_now = 0.0
 
     @property
@@ -222,10 +223,12 @@ class HybridEngine:
                 self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
                 self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
                 self.sfwork, self.ew, self.steps, self.stepc)
-        method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
-                                  int(self.P[L.P_MODEL]))
-        self.k, self.n_out, self.nev, self.status, self.t_now = run_entry(method, args)(
-            *args, method)
+        if self._entry is None:   # the argument types stay those of the first call
+            self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
+                                            int(self.P[L.P_MODEL]))
+            self._entry = run_entry(self._method, args)
+        self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,
+                                                                            self._method)
         if self.nev > self.ev.shape[0] - 64:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
         if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:
