@@ -491,6 +491,13 @@ class _Spec:
         return next(iter(UNITS[self.dimension]))
 
 
+def field_dimension(name: str) -> str | None:
+    """Physical dimension ("angle", "mass", ...) of a RobotParameters / ControllerParameters
+    field (from the packaged scout2.toml), or None for an unknown name."""
+    spec = _schema().get(name)
+    return None if spec is None else spec.dimension
+
+
 def _fmt(x: object) -> str:
     """Short, noise-free text for a value (``-1.0``, ``95.0``, ``nan``, ``2``, ``true``)."""
     if isinstance(x, bool):

@@ -337,3 +337,26 @@ def test_every_long_command_takes_quiet(command):
     args = build_parser().parse_args([command, "--quiet"] + (
         ["--example"] if command in ("compare", "identify") else []))
     assert args.quiet is True
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--grid", "robot.torso_mass_deg=10:20:2"], "robot.torso_mass' is not an angle"),
+    (["--grid", "robot.torso_mass=10:20:2", "--grid", "robot.torso_mass=11:12:2"],
+     "robot.torso_mass is given twice"),
+    (["--random", "robot.torso_mass=20:10"], "LOW must be below HIGH"),
+    (["--random", "robot.torso_mass=10:10"], "LOW must be below HIGH"),
+    (["--grid", "robot.torso_mass=1:2:1e9"], "the grid has 1e+09 points, more than --max-points"),
+    (["--random", "robot.torso_mass=10:20", "--samples", "200001"], "more than --max-points"),
+    (["--grid", "robot.torso_mass=inf:2:2"], "finite numbers"),
+])
+def test_sweep_refuses_bad_axes_before_starting(argv, message, tmp_path, capsys):
+    assert main(["sweep", *argv, "--out", str(tmp_path), "--duration", "0.1"]) == 2
+    assert message in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())      # nothing was started
+
+
+def test_sweep_deg_suffix_still_takes_degrees_for_an_angle():
+    from scoutsim.cli.sweep import _sweep_axis
+    name, vals = _sweep_axis("controller.touchdown_angle_front_deg=15:27:20", 3)
+    assert name == "controller.touchdown_angle_front"
+    assert vals == [math.radians(15.0), math.radians(27.0), 20.0]

@@ -40,6 +40,9 @@ def register(sub, common) -> None:
     sw.add_argument("--samples", type=positive_int, default=100, metavar="N",
                     help="number of random points (default: 100)")
     sw.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    sw.add_argument("--max-points", type=positive_int, default=100_000, metavar="N",
+                    help="refuse sweeps of more points than this before starting "
+                         "(default: 100000)")
     sw.add_argument("--model", choices=CONTROLLED_MODELS, default="II",
                     help="model (default: II)")
     sw.add_argument("--workers", type=positive_int, default=None, metavar="N",
@@ -65,10 +68,24 @@ def _sweep_axis(text: str, n_parts: int):
         vals = [float(v) for v in parts]
     except ValueError:
         raise UsageError(f"{text!r}: the range must be numbers") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise UsageError(f"{text!r}: the range must be finite numbers")
     if name.endswith("_deg"):
-        name = name[:-4]
+        from ..parameters import field_dimension
+        base = name[:-4]
+        if field_dimension(base.partition(".")[2]) != "angle":
+            raise UsageError(f"{text!r} is not allowed: the _deg suffix takes degrees for "
+                             f"an angle; {base!r} is not an angle (give it in SI units, "
+                             "without the suffix)")
+        name = base
         vals = [math.radians(v) for v in vals[:2]] + vals[2:]
     return name, vals
+
+
+def _unique(name: str, seen: set, text: str) -> None:
+    if name in seen:
+        raise UsageError(f"{text!r}: {name} is given twice (one axis per parameter)")
+    seen.add(name)
 
 
 def _points(args):
@@ -76,18 +93,31 @@ def _points(args):
     import numpy as np
     from ..analysis.sweep import grid_points, random_points
     with usage_errors():
+        seen = set()
         if args.grid:
-            axes = {}
+            sizes = {}
             for g in args.grid:
                 name, (a, b, n) = _sweep_axis(g, 3)
+                _unique(name, seen, g)
                 if n < 1 or n != int(n):
                     raise UsageError(f"{g!r}: NUM must be a whole number >= 1")
-                axes[name] = np.linspace(a, b, int(n))
-            return grid_points(axes)
+                sizes[name] = (a, b, int(n))
+            total = math.prod(n for _, _, n in sizes.values())
+            if total > args.max_points:
+                raise UsageError(f"the grid has {total:.4g} points, more than --max-points "
+                                 f"{args.max_points} (at about 0.1 s per point of 10 s); "
+                                 "raise --max-points to run it anyway")
+            return grid_points({k: np.linspace(a, b, n) for k, (a, b, n) in sizes.items()})
         bounds = {}
         for g in args.random:
             name, (a, b) = _sweep_axis(g, 2)
+            _unique(name, seen, g)
+            if not a < b:
+                raise UsageError(f"{g!r} is not allowed: LOW must be below HIGH")
             bounds[name] = (a, b)
+        if args.samples > args.max_points:
+            raise UsageError(f"--samples {args.samples} is more than --max-points "
+                             f"{args.max_points}; raise --max-points to run it anyway")
         return random_points(bounds, args.samples, args.seed)
 
 
