@@ -423,11 +423,13 @@ class GaitMetrics:
     def is_steady_bounding(self, min_strides: int = 7, max_period_cv: float = 0.05) -> bool:
         """Whether the run is steady bounding.
 
-        True iff the outcome is "completed", there are at least ``min_strides`` steady
-        strides (the paper used >= 7 per run, Sec. IV.C) and the stride-period coefficient
-        of variation is at most ``max_period_cv``.
+        True iff the robot did not fall and the integration did not fail (outcome
+        "completed", or "interrupted": stopped by the user while it ran), there are at least
+        ``min_strides`` steady strides (the paper used >= 7 per run, Sec. IV.C) and the
+        stride-period coefficient of variation is at most ``max_period_cv``.
         """
-        if self.outcome != "completed" or self.n_steady_strides < min_strides:
+        if (self.outcome not in ("completed", "interrupted")
+                or self.n_steady_strides < min_strides):
             return False
         cv = self.stride_period_cv
         return cv is not None and cv <= max_period_cv

@@ -124,6 +124,10 @@ def sweep_task(task: dict) -> dict:
         r = simulate(robot, ctrl, task["initial_state"], task["duration"],
                                 model=task["model"],
                                 friction_coefficient=task["friction_coefficient"])
+        if r.outcome == "interrupted":
+            # Ctrl-C reached the run (simulate() returns the data so far): the point is
+            # not done and must not be recorded as if it were; the sweep stops
+            raise KeyboardInterrupt
         s = r.summary()
         row.update({k: s.get(k) for k in SUMMARY_COLUMNS if k in s})
         # whole-run average speed: defined even for runs too short for steady strides

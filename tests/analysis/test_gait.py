@@ -327,3 +327,15 @@ def test_slow_transient_after_transient_time_is_not_steady():
     assert g.stride_period_cv == pytest.approx(0.0, abs=1e-12)
     assert g.period_s == pytest.approx(0.30)
     assert g.is_steady_bounding()
+
+
+def test_an_interrupted_run_that_was_bounding_is_steady_bounding():
+    """A run the user stopped while it bounded steadily (outcome "interrupted") counts as
+    steady bounding, like the same run completed; a fall or a failure does not."""
+    r = scoutsim.simulate(duration=5.0)
+    assert r.gait().is_steady_bounding()
+    for outcome, steady in (("interrupted", True), ("fell", False),
+                            ("numerical_failure", False)):
+        forced = dataclasses.replace(r, outcome=outcome, _cache={})
+        assert gait_metrics(forced).is_steady_bounding() is steady, outcome
+        assert forced.summary()["steady_bounding"] is steady
