@@ -176,7 +176,8 @@ class HybridEngine:
     the bench rigs (:mod:`scoutsim.identification.rigs`) drive it in chunks of control
     samples; cutting a run into chunks does not change it."""
 
-    #: integrator steps the step buffer holds at first (about 2.5 s of a Model II run)
+    #: integrator steps the step buffer holds at first (about 6 s of a Model II run at the
+    #: default tolerance: 1.3 steps per control period)
     STEP_ROWS = 8192
 
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
@@ -196,7 +197,7 @@ class HybridEngine:
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
         self.out_ls = np.zeros((n_total + 1, L.NRM), dtype=np.int8)
-        self.ev = np.zeros((max(1024, int(200 * duration) + 256), L.NEVBUF))
+        self.ev = np.zeros((max(1024, int(EVENT_ROWS_PER_S * duration) + 256), L.NEVBUF))
         # every integrator step if record_steps (numerics.events.record_step): room for
         # STEP_ROWS steps beyond the headroom one control period may need (np.zeros:
         # pages a run does not reach are never touched); doubled when it runs low
@@ -317,9 +318,13 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
 
 #: bytes a run holds per control sample: time, state, outputs (float64) and modes (int8)
 BYTES_PER_SAMPLE = 8 * (1 + L.NS + L.NAUX) + L.NRM
-#: ... and per integrator step when steps are recorded (about 5 steps per sample, Model II)
+#: ... per integrator step when steps are recorded, and steps per sample counted for it
+#: (measured 1.3 for Model II at the default tolerance and for Model I; 3 leaves room)
 BYTES_PER_STEP = 8 * L.NSTEPREC
-STEPS_PER_SAMPLE = 5
+STEPS_PER_SAMPLE = 3
+#: the event buffer: rows per second of run and bytes per row (HybridEngine)
+EVENT_ROWS_PER_S = 200
+BYTES_PER_EVENT = 8 * L.NEVBUF
 
 
 def physical_memory_bytes() -> int | None:
@@ -336,8 +341,9 @@ def check_run_memory(duration: float, *, record_steps: bool = False, dt: float =
     if that is more than half of this machine's memory (``memory_bytes``, default: the
     physical memory), saying how long a run can be (a longer one can be split: resume from
     ``result.hybrid_state(-1)``)."""
-    per_sample = BYTES_PER_SAMPLE + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
-    need = int(duration / dt + 2) * per_sample
+    per_sample = (BYTES_PER_SAMPLE + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
+                  + EVENT_ROWS_PER_S * dt * BYTES_PER_EVENT)
+    need = int(int(duration / dt + 2) * per_sample)
     have = physical_memory_bytes() if memory_bytes is None else memory_bytes
     if have is not None and need > have // 2:
         longest = (have // 2) / per_sample * dt

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .run_directory import atomic_write
+
 __all__ = ["FORMATS", "SUFFIXES", "default_format", "write_table", "read_table",
            "read_metadata", "table_path", "TableError"]
 
@@ -59,8 +61,8 @@ def write_table(stem, columns: dict, *, units: dict | None = None,
                 metadata: dict | None = None, fmt: str | None = None) -> Path:
     """Write ``columns`` (name -> 1-D array, equal lengths) to ``stem`` + the format's
     suffix; ``units`` (name -> unit string) and ``metadata`` (JSON-safe, NaN allowed) are
-    stored with it. The file is written under a temporary name and renamed into place, so
-    a reader never sees half a table. Returns the path."""
+    stored with it. The file is written whole or not at all
+    (:func:`scoutsim.run_directory.atomic_write`). Returns the path."""
     fmt = fmt or default_format()
     path = table_path(stem, fmt)
     cols = {n: np.asarray(c) for n, c in columns.items()}
@@ -70,13 +72,8 @@ def write_table(stem, columns: dict, *, units: dict | None = None,
     info = {"columns": {n: {"dtype": c.dtype.str if c.dtype.kind != "U" else "str",
                             "unit": (units or {}).get(n)} for n, c in cols.items()},
             "metadata": metadata or {}}
-    tmp = path.with_name(path.name + ".partial")
-    if fmt == "parquet":
-        _write_parquet(tmp, cols, info)
-    else:
-        _write_csv(tmp, cols, info)
-    tmp.replace(path)
-    return path
+    writer = _write_parquet if fmt == "parquet" else _write_csv
+    return atomic_write(path, lambda tmp: writer(tmp, cols, info))
 
 
 def _arrow_column(pa, c: np.ndarray):

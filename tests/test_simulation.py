@@ -203,12 +203,13 @@ def test_resuming_at_a_sample_continues_the_run_to_the_tolerance(method, bound_r
 
 
 def test_a_run_too_long_for_memory_is_refused_before_anything_is_allocated():
-    from scoutsim.simulation import BYTES_PER_SAMPLE, check_run_memory
-    # 60 s: 60 001 samples of time, state (16), outputs (31) and modes (6 bytes): 390 bytes
-    # each (the README's 23.7 MB); half of 100 MB holds 128 205 samples, 128.2 s
-    assert check_run_memory(60.0, memory_bytes=10**12) == 60_002 * BYTES_PER_SAMPLE
+    from scoutsim.simulation import check_run_memory
+    # per control sample: time, state (16), outputs (31) as float64 and 6 mode bytes = 390
+    # bytes, plus the event buffer's 0.2 rows of 41 float64 = 65.6 bytes: 455.6 bytes;
+    # 60 s = 60 002 rows: 27 336 911 bytes; half of 100 MB holds 109 745 samples, 109.7 s
+    assert check_run_memory(60.0, memory_bytes=10**12) == 27_336_911
     with pytest.raises(ValueError, match=r"duration = 1000 s is not allowed on this machine"
-                                         r".*at most about 128\.2 s per run"):
+                                         r".*at most about 109\.7 s per run"):
         check_run_memory(1000.0, memory_bytes=100_000_000)
     with pytest.raises(ValueError, match="duration = 1e\\+09 s is not allowed"):
         scoutsim.simulate(duration=1e9)
