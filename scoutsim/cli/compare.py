@@ -6,8 +6,9 @@ errors_detail.csv, errors.md and (unless --no-plots) the figures and phase_rms.c
     scoutsim compare (LOG... | --example) [--models LIST] [--duration S] [--robot FILE]
                      [--out DIR] [--friction MU] [--transient S] [--no-progress] [--no-plots]
 
-Exit code 2 for an unreadable or bad experiment log, 1 if a model's simulation failed
-numerically.
+Exit code 2 for an unreadable or bad experiment log (including one too short to hold a
+steady stride, one with no stride detected, or logs without any steady stride), 1 if a
+model's simulation failed numerically.
 """
 
 from __future__ import annotations

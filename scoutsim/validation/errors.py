@@ -5,8 +5,11 @@
 
 Procedure (paper Sec. IV.C; docs/specification.md section 8):
 
-1. Every experiment log is split into strides (:func:`~scoutsim.validation.strides.log_strides`);
-   its steady strides, pooled over all runs, are the experimental strides.
+1. Every experiment log is split into strides
+   (:func:`~scoutsim.validation.strides.experiment_strides`: a log too short to hold one
+   steady stride, or with no stride detected, is refused with a LogError); its steady
+   strides, pooled over all runs, are the experimental strides. If no log has a steady
+   stride, :func:`compare` raises LogError (the table would be empty).
 2. Every model is simulated (default start, the robot/controller parameters given, toe
    friction of the default floor, at least 10 s and at least as long as the longest log) and the simulation
    is passed through the *same* measurement chain as the logs
@@ -48,7 +51,8 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from .strides import LogGait, log_strides
+from .sensors import EDGE_S
+from .strides import LogGait, experiment_strides, log_strides
 
 __all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
            "percent_errors", "rank_paired_model_values", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]
@@ -295,8 +299,15 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
     robot, controller : parameters of the simulations (defaults: Scout II, Table I)
     duration : simulated time per model [s]; default max(10 s, longest log)
     transient_s : strides starting earlier (from each record's start) are not steady
+
+    Raises
+    ------
+    LogError
+        For a log too short to hold one steady stride or with no stride detected
+        (:func:`~scoutsim.validation.strides.experiment_strides`), and when no log has a
+        steady stride; before any model is simulated.
     """
-    from .logs import ExperimentLog
+    from .logs import ExperimentLog, LogError
     if isinstance(logs, ExperimentLog):
         logs = [logs]
     logs = list(logs)
@@ -304,14 +315,28 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
         raise ValueError("compare needs at least one log")
     exp = []
     notes = []
+    n_strides = []
     for lg in logs:
-        g = log_strides(lg, transient_s=transient_s)
+        g = experiment_strides(lg, transient_s=transient_s)
         if g.n_steady_strides == 0:
             notes.append(f"log {lg.name}: no steady strides ({g.n_strides} strides in all)")
         elif g.n_steady_strides < 7:
             notes.append(f"log {lg.name}: only {g.n_steady_strides} steady strides (the paper "
                          "used >= 7 per run)")
         exp.extend(g.steady_strides)
+        n_strides.append(g.n_strides)
+    if not exp:
+        counts = "; ".join(f"{lg.path or lg.name}: {n} strides, none steady"
+                           for lg, n in zip(logs, n_strides))
+        raise LogError(
+            f"no steady strides in {'the log' if len(logs) == 1 else 'any log'} ({counts}): "
+            "a steady stride starts at least "
+            f"{max(float(transient_s), EDGE_S):g} s after the start of its record "
+            f"(transient_s), ends at least {EDGE_S:g} s before its end (EDGE_S), and belongs "
+            "to the final run of strides whose periods agree within 5 % of the median of "
+            "the last seven (the gait has settled); without one there is nothing to compare: "
+            "give longer or steadier logs",
+            logs[0].path if len(logs) == 1 else None)
     if duration is None:
         duration = max([MIN_MODEL_DURATION_S] + [lg.duration for lg in logs])
     runs = {m: simulate_model(m, duration, robot, controller, friction_coefficient,
