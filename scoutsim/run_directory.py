@@ -21,7 +21,7 @@ import os
 from pathlib import Path
 
 __all__ = ["MANIFEST", "RunDirectory", "atomic_write", "read_manifest", "check_run_directory",
-           "IncompleteRunError"]
+           "add_to_manifest", "IncompleteRunError"]
 
 #: name of the manifest file
 MANIFEST = "manifest.json"
@@ -84,6 +84,19 @@ def check_run_directory(directory) -> dict | None:
             raise IncompleteRunError(f"{d}: {name} is missing or not the file the manifest "
                                      "lists")
     return manifest
+
+
+def add_to_manifest(directory, names) -> None:
+    """List files written (atomically) after the run's manifest was finished, e.g. figures
+    made from a finished sweep's table; the manifest is rewritten atomically."""
+    d = Path(directory)
+    manifest = read_manifest(d)
+    if manifest is None:
+        raise IncompleteRunError(f"{d}: no manifest to add {list(names)} to")
+    for name in names:
+        manifest["files"][name] = {"bytes": (d / name).stat().st_size}
+    text = json.dumps(manifest, indent=2, allow_nan=True) + "\n"
+    atomic_write(d / MANIFEST, lambda p: p.write_text(text))
 
 
 class RunDirectory:

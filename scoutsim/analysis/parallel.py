@@ -11,15 +11,51 @@ a pool (``benchmarks/bench_sweep.py`` measures both). Tasks travel to the worker
 batches (:data:`MAX_BATCH`). Results come back in task order whatever the completion
 order, and ``on_result`` sees each one as soon as its batch returns (checkpointing), so an
 interrupted run keeps what it finished.
+
+What the local pool survives (``tests/analysis/test_parallel.py`` and the process tests
+of ``tests/analysis/test_sweep_processes.py``):
+
+- **Ctrl-C** (SIGINT to the parent, or to the whole process group from a terminal): the
+  workers ignore SIGINT; the parent keeps the results that had already arrived, stops the
+  workers at once and raises ``KeyboardInterrupt``. A task whose run was cut is never
+  reported as done.
+- **A killed worker** (SIGKILL, the out-of-memory killer, a crash) breaks the pool: the
+  tasks that had not started are run again without penalty, and the tasks of the batches
+  that were running in a worker when it died are retried once, each alone in a worker of
+  its own; a task whose worker dies again is reported as failed with the reason
+  (:class:`WorkerDiedError`), the others complete.
+- **A killed parent**: each worker watches its parent and exits within
+  :data:`PARENT_POLL_S` seconds of the parent's death (plus the rest of the compiled call
+  it is in); no worker outlives the sweep.
 """
 
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import functools
 import multiprocessing
 import os
+import signal
 import sys
+import threading
+
+__all__ = ["map_tasks", "WorkerDiedError", "SchedulerUnreachableError", "MAX_BATCH",
+           "SCHEDULER_TIMEOUT_S"]
+
+#: seconds a worker waits between looks at its parent (it exits when the parent is gone)
+PARENT_POLL_S = 0.5
+#: seconds to wait for a Dask scheduler to answer before giving up with a clear message
+SCHEDULER_TIMEOUT_S = 10.0
+
+
+class WorkerDiedError(RuntimeError):
+    """The worker process running a task died (killed, out of memory, crashed) while
+    running it, on the first try and on the retry."""
+
+
+class SchedulerUnreachableError(ConnectionError):
+    """The Dask scheduler given did not answer within :data:`SCHEDULER_TIMEOUT_S`."""
 
 
 def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
@@ -38,7 +74,12 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
     progress : show a tqdm bar on stderr.
     on_result : callable(index, result), called as each result arrives.
     error_row : callable(task, exception) -> result for a task whose worker failed
-        (default: re-raise).
+        (an exception raised by ``func``, or :class:`WorkerDiedError`; default: re-raise).
+
+    Raises
+    ------
+    KeyboardInterrupt : Ctrl-C; the results that had arrived went to ``on_result``.
+    SchedulerUnreachableError : a scheduler address that does not answer.
     """
     from tqdm import tqdm
     n = len(tasks)
@@ -59,41 +100,17 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
 
     try:
         if isinstance(scheduler, cf.Executor):
-            _map_executor(scheduler, func, tasks, done, failed)
+            _map_executor(scheduler, func, tasks, list(range(n)), done, failed)
         elif scheduler is not None:
             _map_dask(func, tasks, scheduler, done, failed)
         elif (workers or os.cpu_count() or 1) == 1 or n <= 1:
             for i, task in enumerate(tasks):
                 done(i, func(task))
         else:
-            ctx = multiprocessing.get_context("spawn")
-            with cf.ProcessPoolExecutor(max_workers=min(workers or os.cpu_count() or 1, n),
-                                        mp_context=ctx) as pool:
-                try:
-                    _map_executor(pool, func, tasks, done, failed)
-                except BaseException:
-                    pool.shutdown(wait=False, cancel_futures=True)
-                    raise
+            _map_local(func, tasks, min(workers or os.cpu_count() or 1, n), done, failed)
     finally:
         bar.close()
     return out
-
-
-def _map_executor(pool, func, tasks, done, failed):
-    """Submit the tasks in batches to a ``concurrent.futures`` executor; results as they
-    complete. On an interruption the batches not yet started are cancelled (the pool
-    stays the caller's)."""
-    nw = getattr(pool, "_max_workers", None) or os.cpu_count() or 1
-    batches = _batches(len(tasks), nw)
-    runner = functools.partial(_run_batch, func)
-    futures = {pool.submit(runner, [tasks[i] for i in b]): b for b in batches}
-    try:
-        for fut in cf.as_completed(futures):
-            _collect(futures[fut], fut, done, failed)
-    except BaseException:
-        for fut in futures:
-            fut.cancel()
-        raise
 
 
 # Tasks go to the workers in batches: enough batches that each worker gets several (load
@@ -105,13 +122,47 @@ BATCHES_PER_WORKER = 8
 MAX_BATCH = 16
 
 
-def _batches(n: int, workers: int) -> list[list[int]]:
+def _batches(indices: list[int], workers: int) -> list[list[int]]:
+    n = len(indices)
     size = max(1, min(MAX_BATCH, n // (BATCHES_PER_WORKER * max(1, workers))))
-    return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
+    return [indices[i:i + size] for i in range(0, n, size)]
 
 
-def _run_batch(func, batch):
+# -----------------------------------------------------------------------------------------
+# in a worker
+# -----------------------------------------------------------------------------------------
+#: shared array (one slot per batch of the current pool): the pid of the worker that
+#: started the batch, 0 before (set in the workers of a pool started by _map_local)
+_STARTED = None
+
+
+def _worker_init(started) -> None:
+    """Initialiser of every local pool worker: ignore SIGINT (the parent decides what an
+    interruption stops), watch the parent, remember where to say which batch it runs."""
+    global _STARTED
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _STARTED = started
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        threading.Thread(target=_exit_when_orphaned, args=(parent,), daemon=True,
+                         name="scoutsim-parent-watch").start()
+
+
+def _exit_when_orphaned(parent) -> None:
+    """Exit this worker at once when its parent process has died (SIGKILL of a sweep
+    leaves no worker behind). The parent's sentinel becomes ready when it dies; the
+    ``getppid`` check covers a sentinel that cannot be waited on."""
+    ppid = os.getppid()
+    while True:
+        parent.join(PARENT_POLL_S)
+        if not parent.is_alive() or os.getppid() != ppid:
+            os._exit(1)
+
+
+def _run_batch(func, batch_id, batch):
     """Run a batch in a worker; each task's result or exception, in order."""
+    if batch_id is not None and _STARTED is not None:
+        _STARTED[batch_id] = os.getpid()
     out = []
     for task in batch:
         try:
@@ -121,6 +172,9 @@ def _run_batch(func, batch):
     return out
 
 
+# -----------------------------------------------------------------------------------------
+# in the parent
+# -----------------------------------------------------------------------------------------
 def _collect(indices, fut, done, failed):
     try:
         results = fut.result()
@@ -135,6 +189,124 @@ def _collect(indices, fut, done, failed):
             failed(i, val)
 
 
+def _map_executor(pool, func, tasks, indices, done, failed):
+    """Submit the tasks in batches to a caller's ``concurrent.futures`` executor; results as
+    they complete. On an interruption the batches not yet started are cancelled (the pool
+    stays the caller's); a batch whose worker died fails its tasks."""
+    nw = getattr(pool, "_max_workers", None) or os.cpu_count() or 1
+    futures = {pool.submit(_run_batch, func, None, [tasks[i] for i in b]): b
+               for b in _batches(indices, nw)}
+    try:
+        for fut in cf.as_completed(futures):
+            _collect(futures[fut], fut, done, failed)
+    except BaseException:
+        for fut in futures:
+            fut.cancel()
+        raise
+
+
+def _new_pool(workers: int, started=None):
+    ctx = multiprocessing.get_context("spawn")
+    if started is None:
+        started = ctx.Array("q", 1, lock=False)
+    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                  initializer=_worker_init, initargs=(started,)), started
+
+
+@contextlib.contextmanager
+def _workers_ignore_sigint():
+    """Ignore SIGINT while the pool spawns its workers (in ``submit``): a spawned process
+    keeps an ignored signal through ``exec`` and Python then leaves it ignored, so a
+    Ctrl-C can never reach a worker still importing, before its initialiser runs. Only the
+    main thread can change a handler; elsewhere this does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _stop_pool(pool) -> None:
+    """End a pool at once: cancel what has not started and kill the workers (they ignore
+    SIGINT, and a run in compiled code would otherwise finish its batch first). Python
+    3.11's executor has no public call for it (3.14 adds ``kill_workers``)."""
+    for p in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            p.kill()
+        except (OSError, AttributeError, ValueError):
+            pass
+    pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _map_local(func, tasks, workers, done, failed):
+    """Batches on a pool of ``workers`` spawn processes, surviving dead workers (module
+    docstring). Each round runs what is left on a fresh pool; when a worker dies, the
+    batches that had not started go to the next round and the tasks of the batches that
+    were running are retried one at a time (:func:`_retry_alone`)."""
+    todo = list(range(len(tasks)))
+    ctx = multiprocessing.get_context("spawn")
+    while todo:
+        batches = _batches(todo, workers)
+        started = ctx.Array("q", len(batches), lock=False)
+        pool, _ = _new_pool(min(workers, len(batches)), started)
+        futures: dict = {}
+        finished: set[int] = set()
+        try:
+            with _workers_ignore_sigint():
+                for b, batch in enumerate(batches):
+                    futures[pool.submit(_run_batch, func, b, [tasks[i] for i in batch])] = b
+            for fut in cf.as_completed(futures):
+                b = futures[fut]
+                if isinstance(fut.exception(), cf.process.BrokenProcessPool):
+                    continue             # sorted out below, once every future has settled
+                finished.add(b)
+                _collect(batches[b], fut, done, failed)
+        except BaseException:
+            # Ctrl-C: keep what has arrived, then stop the workers at once
+            for fut, b in futures.items():
+                if b not in finished and fut.done() and not fut.cancelled() \
+                        and fut.exception() is None:
+                    finished.add(b)
+                    _collect(batches[b], fut, done, failed)
+            _stop_pool(pool)
+            raise
+        pool.shutdown(wait=True)
+        lost = [b for b in range(len(batches)) if b not in finished]
+        suspects = [i for b in lost if started[b] != 0 for i in batches[b]]
+        todo = [i for b in lost if started[b] == 0 for i in batches[b]]
+        if suspects:
+            _retry_alone(func, tasks, suspects, done, failed)
+
+
+def _retry_alone(func, tasks, indices, done, failed):
+    """Run each task whose batch was in a worker when it died once more, alone in a one-
+    worker pool (so a second death is that task's own); a second death fails it."""
+    pool, _ = _new_pool(1)
+    try:
+        for i in indices:
+            with _workers_ignore_sigint():
+                fut = pool.submit(_run_batch, func, None, [tasks[i]])
+            try:
+                fut.result()
+            except cf.process.BrokenProcessPool:
+                pool.shutdown(wait=True)
+                failed(i, WorkerDiedError(
+                    "the worker process running this task died twice (killed by a signal, "
+                    "out of memory or crashed); it was retried once, alone"))
+                pool, _ = _new_pool(1)
+                continue
+            except Exception:  # noqa: BLE001 - reported by _collect
+                pass
+            _collect([i], fut, done, failed)
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
 def _map_dask(func, tasks, scheduler, done, failed):
     try:
         from distributed import Client, as_completed
@@ -142,15 +314,30 @@ def _map_dask(func, tasks, scheduler, done, failed):
         raise RuntimeError("scheduler given but dask.distributed is not installed: "
                            "pip install 'dask[distributed]'") from exc
     own = not isinstance(scheduler, Client)
-    client = Client(scheduler) if own else scheduler
+    if own:
+        try:
+            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+        except (OSError, TimeoutError) as exc:
+            raise SchedulerUnreachableError(
+                f"scheduler = {scheduler!r}: no Dask scheduler answered there within "
+                f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}); start one with "
+                "`dask scheduler` (and workers with `dask worker ADDRESS`), and give its "
+                "address as tcp://HOST:PORT") from None
+    else:
+        client = scheduler
+    futures = []
     try:
         nw = max(1, len(client.scheduler_info().get("workers", {})))
-        batches = _batches(len(tasks), nw)
-        futures = client.map(functools.partial(_run_batch, func),
+        batches = _batches(list(range(len(tasks))), nw)
+        futures = client.map(functools.partial(_run_batch, func, None),
                              [[tasks[i] for i in b] for b in batches], pure=False)
         index = {f.key: b for f, b in zip(futures, batches)}
         for fut in as_completed(futures):
             _collect(index[fut.key], fut, done, failed)
+    except BaseException:
+        if futures:
+            client.cancel(futures)
+        raise
     finally:
         if own:
             client.close()

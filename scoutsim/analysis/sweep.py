@@ -9,8 +9,10 @@ cycle's regularity (steady bounding, stride-period coefficient of variation) and
 stride map from the run's last strides). Points run in parallel on all local
 cores by default or on a Dask cluster (``scheduler``); each finished point is appended at
 once to a checkpoint file in the output directory, so an interrupted sweep resumes
-without recomputing what it finished, and a failing point is recorded with its error
-without stopping the sweep. The table is written as Parquet (``pyarrow``) and CSV.
+without recomputing what it finished (a point cut by Ctrl-C is never recorded; a last
+line cut by a kill is skipped), and a failing point is recorded with its error without
+stopping the sweep (a point whose worker process dies is retried once, then recorded as
+an error with the reason; see :mod:`scoutsim.analysis.parallel`). The table is written as Parquet (``pyarrow``) and CSV.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
+from ..run_directory import RunDirectory
 from .parallel import map_tasks
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
@@ -193,7 +196,7 @@ class SweepResult:
 def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,
           controller=None, initial_state=None, friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
           out=None, workers: int | None = None, scheduler=None, progress: bool = False,
-          resume: bool = True, orbit: bool = False) -> SweepResult:
+          resume: bool = True, orbit: bool = False, command: str = "") -> SweepResult:
     """Run every point (see module docstring).
 
     Parameters
@@ -202,11 +205,14 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
     model, duration, robot, controller, initial_state, friction_coefficient :
         the base configuration every point modifies (``simulate`` arguments; the sweep's
         floor defaults to the package's default floor, Coulomb mu = 1.0).
-    out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv``.
+    out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv`` and
+        ``manifest.json`` ("complete" once the tables are written whole; "partial", with no
+        table, after an interruption: the same call again resumes).
     workers : local processes (default all cores; a pool started for this call).
     scheduler : Dask address or Client, or a ``concurrent.futures.Executor`` to reuse
         (worker start-up is paid once; see :mod:`scoutsim.analysis.parallel`).
     resume : skip points already in ``out/points.jsonl`` with the same settings.
+    command : the command line that asked for the sweep, recorded in ``out/manifest.json``.
     orbit : also find each steadily bounding point's periodic orbit by Newton from its run's
         last strides and record its period, spectral radius, stability and residual
         (:data:`ORBIT_COLUMNS`; a few seconds per point).
@@ -226,18 +232,16 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
                 else dataclasses.asdict(initial_state), "orbit": bool(orbit)}
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
-    ck = None
+    ck = rd = None
     if out is not None:
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        ck = out / "points.jsonl"
-        if resume and ck.exists():
-            for line in ck.read_text().splitlines():
-                try:
-                    rec = json.loads(line)
-                except json.JSONDecodeError:
-                    continue       # a line cut by an interruption
-                done[rec["key"]] = rec["row"]
+        # the directory's manifest lists the tables once they are written whole; entering
+        # removes an earlier sweep's tables (never the checkpoint) so none looks current
+        rd = RunDirectory(out, command=command, info={"kind": "sweep", "checkpoint": CHECKPOINT,
+                                                      "n_points": len(points)}).__enter__()
+        ck = out / CHECKPOINT
+        if resume:
+            done = read_checkpoint(ck)
         elif ck.exists():
             ck.unlink()
     todo = [i for i, k in enumerate(keys) if k not in done]
@@ -253,7 +257,14 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
 
     try:
         new_rows = map_tasks(sweep_task, tasks, workers=workers, scheduler=scheduler,
-                             progress=progress, desc="sweep", on_result=on_result)
+                             progress=progress, desc="sweep", on_result=on_result,
+                             error_row=_error_row)
+    except KeyboardInterrupt:
+        if fh is not None:
+            fh.close()
+            fh = None
+            rd.finish(outcome="interrupted", partial=True)   # no table: the sweep goes on
+        raise                                                # when it is run again
     finally:
         if fh is not None:
             fh.close()
@@ -263,13 +274,53 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
     res = SweepResult(rows=rows, parameters=names,
                       settings=settings | {"n_points": len(points), "n_resumed":
                                            len(points) - len(todo)})
-    if out is not None:
-        res.to_csv(out / "sweep.csv")
+    if rd is not None:
+        rd.write("sweep.csv", res.to_csv)
         try:
-            res.to_parquet(out / "sweep.parquet")
+            rd.write("sweep.parquet", res.to_parquet)
         except RuntimeError:
             pass
+        rd.finish(outcome="completed", partial=False)
     return res
+
+
+#: name of the checkpoint file in a sweep's output directory: one JSON record per finished
+#: point, appended and flushed as each point arrives
+CHECKPOINT = "points.jsonl"
+
+
+def read_checkpoint(path) -> dict:
+    """The finished points of a checkpoint file, ``{key: row}`` (empty if there is none).
+
+    A last line cut by a kill (no newline at its end) is skipped and cut off the file, so
+    that the records appended next start on a line of their own."""
+    path = Path(path)
+    if not path.exists():
+        return {}
+    data = path.read_bytes()
+    whole = data[:data.rfind(b"\n") + 1]
+    if len(whole) != len(data):
+        with open(path, "r+b") as f:
+            f.truncate(len(whole))
+    done = {}
+    for line in whole.decode("utf-8", errors="replace").splitlines():
+        try:
+            rec = json.loads(line)
+            done[rec["key"]] = rec["row"]
+        except (json.JSONDecodeError, KeyError, TypeError):
+            continue       # a damaged record: that point runs again
+    return done
+
+
+def _error_row(task: dict, exc: BaseException) -> dict:
+    """The row of a point whose worker process failed (it died twice, see
+    :func:`scoutsim.analysis.parallel.map_tasks`); ``sweep_task`` records its own errors."""
+    row = dict(task["point"])
+    row.update({k: None for k in SUMMARY_COLUMNS})
+    row.update(outcome="error", steady_bounding=False, error=f"{type(exc).__name__}: {exc}")
+    if task.get("orbit"):
+        row.update({k: None for k in ORBIT_COLUMNS})
+    return row
 
 
 def _json(v):

@@ -1,7 +1,9 @@
 """``scoutsim sweep``: a parameter sweep. Run a grid or a random sample of robot/controller
 parameters (``robot.<field>`` / ``controller.<field>``, SI units; a ``_deg`` suffix takes
 degrees) in local processes or on a Dask cluster, and write sweep.parquet, sweep.csv, the
-checkpoint points.jsonl (an interrupted sweep resumes) and, for a two-parameter grid, maps.
+checkpoint points.jsonl (an interrupted sweep resumes: Ctrl-C exits with status 130 and
+keeps every finished point) and, for a two-parameter grid, maps; manifest.json lists the
+files of a complete sweep.
 
     scoutsim sweep (--grid NAME=START:STOP:NUM ... | --random NAME=LOW:HIGH ... [--samples N])
                    [--seed N] [--model {ideal,I,II}] [--workers N] [--scheduler ADDRESS]
@@ -122,7 +124,9 @@ def _points(args):
 
 
 def execute(args) -> int:
-    from ..analysis.sweep import sweep
+    from ..analysis.parallel import SchedulerUnreachableError
+    from ..analysis.sweep import CHECKPOINT, read_checkpoint, sweep
+    from ..run_directory import add_to_manifest, atomic_write
     if bool(args.grid) == bool(args.random):
         raise UsageError("give either --grid axes or --random parameters")
     points = _points(args)
@@ -130,10 +134,19 @@ def execute(args) -> int:
     out = out_dir(args.out)
     progress = show_progress(args)
     wall0 = time.perf_counter()
-    res = sweep(points, model=args.model, duration=args.duration, robot=robot,
-                controller=controller, friction_coefficient=args.friction, out=out,
-                workers=args.workers, scheduler=args.scheduler, progress=progress,
-                resume=not args.no_resume, orbit=args.orbit)
+    try:
+        with usage_errors(SchedulerUnreachableError):
+            res = sweep(points, model=args.model, duration=args.duration, robot=robot,
+                        controller=controller, friction_coefficient=args.friction, out=out,
+                        workers=args.workers, scheduler=args.scheduler, progress=progress,
+                        resume=not args.no_resume, orbit=args.orbit,
+                        command=" ".join(["scoutsim"] + sys.argv[1:]))
+    except KeyboardInterrupt:
+        n_done = len(read_checkpoint(out / CHECKPOINT))
+        print(f"scoutsim sweep: interrupted; {n_done} of {len(points)} points are done and "
+              f"kept in {out}/{CHECKPOINT} (no table written): run the same command again "
+              "to finish the rest", file=sys.stderr)
+        return 130
     wall = time.perf_counter() - wall0
     outcomes = {}
     for r in res.rows:
@@ -145,12 +158,14 @@ def execute(args) -> int:
     print(f"  steady bounding: {steady}")
     print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
     if args.grid and len(res.parameters) == 2:
-        res.plot_map(res.parameters[0], res.parameters[1], "average_speed_m_s",
-                     path=out / "map.png")
+        atomic_write(out / "map.png", lambda p: res.plot_map(
+            res.parameters[0], res.parameters[1], "average_speed_m_s", path=p))
+        add_to_manifest(out, ["map.png"])
         print(f"  map of the average speed: {out}/map.png")
         if args.orbit:
-            res.plot_map(res.parameters[0], res.parameters[1], "orbit_spectral_radius",
-                         path=out / "stability.png")
+            atomic_write(out / "stability.png", lambda p: res.plot_map(
+                res.parameters[0], res.parameters[1], "orbit_spectral_radius", path=p))
+            add_to_manifest(out, ["stability.png"])
             print(f"  map of the orbit's spectral radius (< 1: stable): {out}/stability.png")
     if args.orbit:
         stable = sum(bool(r.get("orbit_stable")) for r in res.rows)

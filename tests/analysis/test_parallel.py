@@ -1,0 +1,64 @@
+"""The local process pool under failure: a worker that dies costs only its own tasks
+(retried once, alone, then reported failed with the reason), tasks that had not started
+run again, and an unreachable Dask scheduler is named within seconds."""
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from scoutsim.analysis.parallel import (SchedulerUnreachableError, WorkerDiedError,
+                                        map_tasks)
+
+
+def _square_or_die(task):
+    """Square the number; task 3 kills its worker process every time."""
+    if task == 3:
+        os.kill(os.getpid(), signal.SIGKILL)
+    time.sleep(0.02)
+    return task * task
+
+
+def _square_or_die_once(task):
+    """Square the number; task (3, marker) kills its worker the first time only."""
+    n, marker = task
+    if n == 3 and not Path(marker).exists():
+        Path(marker).write_text("died once")
+        os.kill(os.getpid(), signal.SIGKILL)
+    time.sleep(0.02)
+    return n * n
+
+
+def _failed(task, exc):
+    return ("failed", type(exc).__name__, str(exc))
+
+
+def test_a_task_that_kills_its_worker_fails_alone_and_the_others_complete():
+    out = map_tasks(_square_or_die, list(range(12)), workers=2, error_row=_failed)
+    assert out[3][:2] == ("failed", "WorkerDiedError")
+    assert "retried once" in out[3][2]
+    assert [o for i, o in enumerate(out) if i != 3] == [i * i for i in range(12) if i != 3]
+
+
+def test_without_an_error_row_a_dead_worker_raises_and_names_the_cause():
+    with pytest.raises(WorkerDiedError, match="died twice"):
+        map_tasks(_square_or_die, list(range(6)), workers=2)
+
+
+def test_a_worker_killed_once_costs_nothing(tmp_path):
+    marker = str(tmp_path / "died")
+    out = map_tasks(_square_or_die_once, [(i, marker) for i in range(12)], workers=2)
+    assert Path(marker).exists()           # the worker did die once
+    assert out == [i * i for i in range(12)]
+
+
+def test_an_unreachable_scheduler_is_named_within_seconds(monkeypatch):
+    import scoutsim.analysis.parallel as parallel
+    monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
+    t0 = time.perf_counter()
+    with pytest.raises(SchedulerUnreachableError, match=r"tcp://127\.0\.0\.1:9.*no Dask "
+                                                         r"scheduler answered"):
+        map_tasks(_square_or_die_once, [(1, "x"), (2, "x")], scheduler="tcp://127.0.0.1:9")
+    assert time.perf_counter() - t0 < 10     # (Dask's own default: 30 s, then a traceback)
