@@ -470,6 +470,81 @@ _RULES: dict[str, _Range] = {
 
 
 @dataclass(frozen=True)
+class _Limit:
+    """Largest physically meaningful value of a field (SI) and why."""
+
+    hi: float
+    why: str
+
+
+#: Size scales of the bounds below: far outside any legged robot that exists (Scout II:
+#: 25 kg, 0.55 m, 1 g), so they refuse only values no robot has (1e308 kg, lengths in
+#: kilometres, ...), which would otherwise overflow or make the equations of motion
+#: numerically singular. Values inside them can still make a run fail; such a failure is
+#: diagnosed after the run (:mod:`scoutsim.failure`).
+_MASS_MAX = 1.0e5        # kg: 100 t
+_LENGTH_MAX = 100.0      # m
+_GRAVITY_MAX = 1.0e3     # m/s^2: about 100 g (Jupiter's surface gravity is 24.8 m/s^2)
+_FORCE_MAX = _MASS_MAX * _GRAVITY_MAX           # N: the heaviest robot under the largest g
+_TORQUE_MAX = _FORCE_MAX * _LENGTH_MAX          # N m: that force at the largest lever
+_INERTIA_MAX = _MASS_MAX * _LENGTH_MAX ** 2     # kg m^2: the heaviest mass at the largest size
+#: leg spring: a solid steel bar 0.1 m thick and 0.3 m long is E A / l = 5e9 N/m
+_LEG_STIFFNESS_MAX = 1.0e10
+#: rotational spring: a solid steel shaft 1 m thick and 1 m long is G J / l = 8e9 N m/rad
+_ROT_STIFFNESS_MAX = 1.0e10
+
+#: Single-field physical bounds (SI), checked after the rules of :data:`_RULES` (which give
+#: the lower end). Controller gains have none: the current limit bounds the torque they
+#: command.
+_LIMITS: dict[str, _Limit] = {
+    **{n: _Limit(_MASS_MAX, "a mass of at most 100 t")
+       for n in ("torso_mass", "leg_mass")},
+    **{n: _Limit(_INERTIA_MAX, "100 t at a radius of gyration of 100 m")
+       for n in ("torso_inertia", "leg_inertia", "drive_gear_inertia", "driven_gear_inertia")},
+    **{n: _Limit(_LENGTH_MAX, "a robot at most 100 m in size")
+       for n in ("hip_spacing", "leg_rest_length", "torso_length", "torso_height")},
+    "gravity": _Limit(_GRAVITY_MAX, "about 100 g"),
+    "leg_stiffness": _Limit(_LEG_STIFFNESS_MAX, "a solid steel bar 0.1 m thick and 0.3 m "
+                                                "long is 5e9 N/m"),
+    # critical damping 2 sqrt(k m) of the stiffest leg under the heaviest robot: 6e7 N s/m
+    "leg_damping": _Limit(1.0e8, "above the critical damping of the stiffest allowed leg "
+                                 "under the heaviest allowed robot"),
+    **{n: _Limit(1.0e4, "a single reduction stage of at most 10^4 : 1")
+       for n in ("planetary_ratio", "sprocket_ratio")},
+    **{n: _Limit(_TORQUE_MAX, "the weight of 100 t under 100 g at a 100 m lever")
+       for n in ("gearbox_idle_loss_torque", "joint_stiction")},
+    "belt_stiffness": _Limit(_ROT_STIFFNESS_MAX, "a solid steel shaft 1 m thick and 1 m "
+                                                 "long is 8e9 N m/rad"),
+    # critical damping 2 sqrt(k J) of the stiffest spring on the largest inertia: 6e9
+    **{n: _Limit(1.0e10, "above the critical damping of the stiffest allowed spring on the "
+                         "largest allowed inertia")
+       for n in ("belt_damping", "joint_damping")},
+    "leg_friction_force": _Limit(_FORCE_MAX, "the weight of 100 t under 100 g"),
+    "leg_friction_side_load_coefficient": _Limit(10.0, "a friction coefficient; dry friction "
+                                                       "coefficients are below about 2"),
+    "leg_damping_angle_coefficient": _Limit(1.0e4, "the damper 10^4 times stronger at 1 rad "
+                                                   "than at 0"),
+    # (K_T [N m/A] and K_w [V s/rad] are the same number for an ideal DC motor)
+    **{n: _Limit(1.0e3, "the largest torque motors have about 100 N m/A = V s/rad")
+       for n in ("torque_constant", "speed_constant")},
+    **{n: _Limit(1.0e6, "1 Mohm passes microamperes at robot voltages")
+       for n in ("armature_resistance", "battery_resistance")},
+    "current_limit": _Limit(1.0e5, "100 kA"),
+    "battery_voltage": _Limit(1.0e4, "10 kV"),
+}
+
+
+assert set(_LIMITS) <= set(_RULES), "a physical bound needs a lower-end rule"
+
+
+def physical_limit(name: str) -> float | None:
+    """Largest value [SI] :func:`validate_robot` / :func:`validate_controller` accept for a
+    field (the physical bound of the field), or None if it has none."""
+    limit = _LIMITS.get(name)
+    return None if limit is None else limit.hi
+
+
+@dataclass(frozen=True)
 class _Spec:
     """Schema of one field, taken from the packaged TOML and the dataclass annotation."""
 
@@ -553,9 +628,16 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
             return bool(value)
         expected = "true or false"
     elif not _is_bool(value) and isinstance(value, numbers.Real):
+        try:
+            x = float(value)
+        except OverflowError:   # an integer beyond the float range (Python API only)
+            rule = _RULES.get(spec.name)
+            text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
+            digits = len(str(abs(int(value))))
+            raise ParameterError(f"{spec.label} = an integer of {digits} digits is not allowed: "
+                                 f"must be finite and {text}{where}", spec.name) from None
         if spec.kind == "float":
-            return float(value)
-        x = float(value)
+            return x
         if math.isfinite(x) and x.is_integer():
             return int(x)
         raise ParameterError(f"{spec.label} = {_fmt(value)} is not allowed: must be an integer "
@@ -688,6 +770,18 @@ def _check_fields(obj: object, origins) -> None:
             _fail(spec, value, f"must be finite and {text}", origins)
         if rule is not None and not rule.contains(value):
             _fail(spec, value, f"must be {text}", origins)
+        limit = _LIMITS.get(name)
+        if limit is not None and value > limit.hi:
+            _fail(spec, value, f"must be {_describe_limit(rule, limit, spec)} ({limit.why})",
+                  origins)
+
+
+def _describe_limit(rule: _Range, limit: _Limit, spec: _Spec) -> str:
+    """The whole allowed interval of a field with a physical bound, in its display unit."""
+    lo = _fmt_bound(rule.lo / spec.factor)
+    hi = f"{limit.hi / spec.factor:.9g}"
+    unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
+    return f"in {'[' if rule.lo_closed else '('}{lo}, {hi}]{unit}"
 
 
 def _validate_robot(p: RobotParameters, origins) -> RobotParameters:
@@ -741,8 +835,10 @@ def validate_robot(p: RobotParameters) -> RobotParameters:
     Raises
     ------
     ParameterError
-        On a wrong type, a NaN/infinite value or a value outside its allowed range; the
-        message names the field, the value (in the paper's unit) and the allowed range.
+        On a wrong type, a NaN/infinite value or a value outside its allowed range (its
+        sign rule, or a physical bound far beyond any legged robot: a mass above 100 t, a
+        length above 100 m, ...; :func:`physical_limit`); the message names the field, the
+        value (in the paper's unit) and the allowed range.
     """
     return _validate_robot(p, {})
 

@@ -9,11 +9,13 @@ JSON).
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .failure import diagnose_failure
 from .model import layout as L
 from .state import HybridState
 
@@ -72,7 +74,8 @@ class SimulationResult:
         front), motor-joint stiction modes (back, front); columns ``layout.RM_*``.
     events : (m, NEVREC) [t, kind, leg, v1, v2, v3, energy before / after, violations]
         (``layout.EVR_*``, kinds ``layout.EK_*``).
-    outcome : "completed", "fell", "numerical_failure" or "interrupted".
+    outcome : "completed", "fell", "numerical_failure" or "interrupted"
+        (:attr:`failure` says why a run failed numerically).
     t_end : time the run reached [s].
     stats : integrator statistics and contact diagnostics.
     provenance : parameters, model variant, tolerances, initial state, package version.
@@ -252,8 +255,23 @@ class SimulationResult:
         return self.gait().strides
 
     def summary(self) -> dict:
-        """The run summary (outcome and steady-state gait metrics), JSON-safe."""
-        return self.gait().summary(self)
+        """The run summary (outcome and steady-state gait metrics), JSON-safe; a run that
+        failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
+        what happened, parameters far from the Scout II defaults, advice)."""
+        out = self.gait().summary(self)
+        if self.failure is not None:
+            out["failure"] = self.failure.to_dict()
+        return out
+
+    @property
+    def failure(self):
+        """Why the run failed numerically (:class:`~scoutsim.failure.FailureDiagnosis`:
+        ``kind``, ``t``, ``what``, ``parameters`` far from the Scout II defaults,
+        ``message()``), or None if it did not (outcome other than "numerical_failure")."""
+        key = ("failure", self.outcome)
+        if key not in self._cache:
+            self._cache[key] = diagnose_failure(self)
+        return self._cache[key]
 
     @property
     def fell(self) -> bool:
@@ -279,6 +297,16 @@ class SimulationResult:
         path = Path(path)
         if path.is_dir() or not path.name.lower().endswith(".npz"):
             return cls._load_tables(path)
+        try:
+            return cls._load_npz(path)
+        except (EOFError, zipfile.BadZipFile, KeyError, json.JSONDecodeError) as exc:
+            size = path.stat().st_size
+            what = "it is empty (0 bytes)" if size == 0 else \
+                f"it is cut off or damaged ({size} bytes: {type(exc).__name__}: {exc})"
+            raise ValueError(f"{path}: not a readable scoutsim result: {what}") from None
+
+    @classmethod
+    def _load_npz(cls, path: Path) -> "SimulationResult":
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
             if meta.get("format") != "scoutsim.result/1":
@@ -340,29 +368,39 @@ class SimulationResult:
         from .tables import default_format, write_table
         fmt = fmt or default_format()
         d = Path(directory)
+        paths = []
+        for name, (cols, units) in self.tables().items():
+            meta = self.series_metadata() if name == "timeseries" else {"format": TABLES_FORMAT}
+            paths.append(write_table(d / name, cols, units=units, metadata=meta, fmt=fmt))
+        return paths
+
+    def tables(self) -> dict:
+        """The run's tables as ``{name: (columns, units)}``: ``timeseries``, ``events`` and,
+        if recorded, ``steps`` (what :meth:`save_tables` writes, and a streamed run writes
+        piece by piece: :mod:`scoutsim.streaming`)."""
         series = self.columns()
         for n in series:
             if column_unit(n) is None:
                 series[n] = series[n].astype(np.int8)
-        meta = {"format": TABLES_FORMAT, "outcome": self.outcome, "t_end": self.t_end,
-                "stats": self.stats, "provenance": self.provenance,
-                "event_states": self.event_states is not None}
-        units = {n: column_unit(n) for n in series}
-        paths = [write_table(d / "timeseries", series, units=units, metadata=meta, fmt=fmt)]
+        out = {"timeseries": (series, {n: column_unit(n) for n in series})}
         ev = self.event_columns()
         ev_units = {"t": "s", "energy_before": "J", "energy_after": "J"}
         for n in ev:
             for when in ("_before", "_after"):
                 if n.endswith(when) and not n.startswith("energy"):
                     ev_units[n] = column_unit(n[:-len(when)])
-        paths.append(write_table(d / "events", ev, units=ev_units,
-                                 metadata={"format": TABLES_FORMAT}, fmt=fmt))
+        out["events"] = (ev, ev_units)
         st = self.step_columns()
         if st is not None:
-            paths.append(write_table(d / "steps", st,
-                                     units={n: column_unit(n) for n in st},
-                                     metadata={"format": TABLES_FORMAT}, fmt=fmt))
-        return paths
+            out["steps"] = (st, {n: column_unit(n) for n in st})
+        return out
+
+    def series_metadata(self) -> dict:
+        """The metadata of the ``timeseries`` table: outcome, end time, statistics,
+        provenance."""
+        return {"format": TABLES_FORMAT, "outcome": self.outcome, "t_end": self.t_end,
+                "stats": self.stats, "provenance": self.provenance,
+                "event_states": self.event_states is not None}
 
     @classmethod
     def _load_tables(cls, path: Path) -> "SimulationResult":

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from pathlib import Path
 from collections import namedtuple
 from dataclasses import asdict, dataclass
 
@@ -145,15 +146,48 @@ def _state_vector(init: InitialState, robot: RobotParameters,
     return s
 
 
-def default_initial_state(model: str = "II") -> InitialState:
-    """The documented default start (see :class:`InitialState`).
+def default_initial_state(model: str = "II", robot: RobotParameters | None = None,
+                          passive_touchdown_angles=(0.0, 0.0)) -> InitialState:
+    """The documented default start of ``model`` (see :class:`InitialState`).
 
-    For the passive model (legs placed at the passive touchdown angles, vertical by
-    default) the start is level at 0.36 m with 1 m/s forward: the controlled robot's
-    nose-up start would put a vertical back leg's toe below the ground."""
-    if model == "passive":
-        return InitialState(y=0.36, theta=0.0, dx=1.0)
-    return InitialState()
+    Parameters
+    ----------
+    model : {"II", "I", "ideal", "passive"}
+        The model the start is for.
+    robot : RobotParameters, optional
+        The robot (default: Scout II); only the passive start depends on it (through its
+        leg rest length l0).
+    passive_touchdown_angles : (back, front) [rad]
+        Passive model only: where its legs are placed (as for :func:`simulate`).
+
+    Returns
+    -------
+    InitialState
+        The controlled models: ``InitialState()``. The passive model: the same but 1 m/s
+        forward, legs at the passive touchdown angles, and the COM height at which the
+        lower toe clears the ground by the same margin as the lower toe of the controlled
+        start (24.6 mm for Scout II: 0.348 m with vertical legs).
+    """
+    if model != "passive":
+        return InitialState()
+    # The controlled start is released in flight, torso level at y0, legs at the
+    # controller's touchdown angles phi_td (19 / 21 deg from the torso normal): each toe is
+    # l0 cos(phi_td) below its hip, so the lower one (the back leg, closer to vertical)
+    # clears the ground by y0 - l0 cos(19 deg) = 24.6 mm, a 71 ms fall before touchdown.
+    # The passive model has no flight servo: its legs are placed at the passive touchdown
+    # angles (vertical by default), l0 cos(gamma) below the hips, so at the same y0 a
+    # vertical leg's toe would clear the ground by 7 mm only. Raise the start by the
+    # difference of the two toe drops: the passive robot then falls the same 24.6 mm to
+    # its first touchdown. (With a level torso both hips are at y, so the hip spacing
+    # does not enter, and world and torso-relative angles coincide.)
+    robot = robot if robot is not None else RobotParameters()
+    ctrl = ControllerParameters()
+    l0 = robot.leg_rest_length
+    start = InitialState()
+    drop_controlled = l0 * max(math.cos(ctrl.touchdown_angle_back),
+                               math.cos(ctrl.touchdown_angle_front))
+    drop_passive = l0 * max(math.cos(a) for a in passive_touchdown_angles)
+    return start.replace(y=start.y - drop_controlled + drop_passive, dx=1.0)
 
 
 def fresh_modes(s: np.ndarray, P: np.ndarray):
@@ -181,12 +215,18 @@ class HybridEngine:
     STEP_ROWS = 8192
 
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
-                 integrator: IntegratorSettings, record_steps: bool = False):
+                 integrator: IntegratorSettings, record_steps: bool = False,
+                 rows: int | None = None):
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
         self.dt = dt
         self.integ = integrator
         n_total = int(round(duration / dt)) + 1
         self.k_last = n_total - 1
+        # rows: the samples one call may record when a RunStream empties the buffers after
+        # each call (memory bounded); None: the whole run
+        if rows is not None:
+            n_total = min(n_total, rows + 1)
+            duration = min(duration, rows * dt)
         self.cmd = np.zeros(2)
         # [step-size guess, ARK factors valid, evaluation workspace valid] (loop.run)
         self.hwork = np.zeros(NHW)
@@ -208,6 +248,7 @@ class HybridEngine:
         self.stats[S_HMIN] = np.inf
         self.armed = np.zeros(L.NEV, dtype=np.bool_)
         self.n_out = self.nev = self.k = 0
+        self.event_records_lost = 0
         self.status = L.ST_RUNNING
         self._entry = None        # the compiled run loop for this engine's method
         self.t_now = 0.0
@@ -230,6 +271,13 @@ class HybridEngine:
             self._entry = run_entry(self._method, args)
         self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,
                                                                             self._method)
+        if self.nev > self.ev.shape[0]:
+            # one control period logged more records than the buffer had left (the loop
+            # makes room between periods, 64 rows at least): log_event dropped them but
+            # counted them. Count them as lost, and go on writing right after the last row
+            # kept (no empty rows in the table)
+            self.event_records_lost += self.nev - self.ev.shape[0]
+            self.nev = self.ev.shape[0]
         if self.nev > self.ev.shape[0] - 64:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
         if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:
@@ -241,7 +289,10 @@ class HybridEngine:
         return "completed" if self.status == L.ST_RUNNING else L.STATUS_NAMES[self.status]
 
     def result(self, provenance: dict, interrupted: bool = False,
-               extra_stats: dict | None = None) -> SimulationResult:
+               extra_stats: dict | None = None,
+               last_sample_t: float | None = None) -> SimulationResult:
+        """The run as a result (``last_sample_t``: the time of the last sample when a
+        RunStream has taken the samples out of the buffers)."""
         n = self.n_out
         m = min(self.nev, self.ev.shape[0])
         return SimulationResult(
@@ -251,8 +302,11 @@ class HybridEngine:
             event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
             steps=(self.steps[:self.stepc[0]].copy() if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
-            t_end=float(self.t_now if self.status != L.ST_RUNNING else self.out_t[n - 1]),
+            t_end=float(self.t_now if self.status != L.ST_RUNNING else
+                        self.out_t[n - 1] if n else last_sample_t),
             stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
+            | ({"event_records_lost": float(self.event_records_lost)}
+               if self.event_records_lost else {})
             | (extra_stats or {}),
             provenance=provenance)
 
@@ -350,8 +404,37 @@ def check_run_memory(duration: float, *, record_steps: bool = False, dt: float =
         raise ValueError(f"duration = {duration:g} s is not allowed on this machine: the run's "
                          f"time series would need {need / 1e9:.3g} GB of memory, more than half "
                          f"of its {have / 1e9:.3g} GB; at most about {longest:.4g} s per run "
-                         "(split a longer run: resume from result.hybrid_state(-1); "
-                         "simulate(..., check_memory=False) tries anyway)")
+                         "(stream it to disk: simulate(..., stream_to=DIR), scoutsim run "
+                         "--stream; simulate(..., check_memory=False) tries anyway)")
+    return need
+
+
+#: bytes per control sample of a streamed run's tables on disk (time series and events),
+#: with a margin: Parquet (zstd) of a 12 s Model II run takes 370 B per sample (the
+#: doubles hardly compress)
+BYTES_PER_SAMPLE_ON_DISK = 500
+#: simulated seconds per piece a streamed run writes (memory: about 4 MB per 10 s)
+STREAM_CHUNK_SECONDS = 10.0
+
+
+def check_stream_disk(duration: float, directory, *, record_steps: bool = False,
+                      dt: float = 1e-3) -> int:
+    """The disk space a streamed run of ``duration`` [s] needs for its tables [bytes] (an
+    upper bound); ValueError if the file system of ``directory`` has less free space,
+    saying how long a run fits."""
+    import shutil
+    per_sample = BYTES_PER_SAMPLE_ON_DISK * (1 + (STEPS_PER_SAMPLE if record_steps else 0))
+    need = int((duration / dt + 2) * per_sample)
+    d = Path(directory)
+    while not d.exists() and d != d.parent:
+        d = d.parent
+    free = shutil.disk_usage(d).free
+    if need > free:
+        raise ValueError(f"duration = {duration:g} s is not allowed here: the streamed run's "
+                         f"tables would need up to {need / 1e9:.3g} GB on disk, and {d} has "
+                         f"{free / 1e9:.3g} GB free; at most about {free / per_sample * dt:.4g} "
+                         "s fit (simulate(..., check_memory=False), scoutsim run "
+                         "--no-size-check, tries anyway)")
     return need
 
 
@@ -373,7 +456,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              pitch_limit_deg: float = 60.0,
              passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
              progress: bool = False, chunk_seconds: float = 1.0,
-             record_steps: bool = False, check_memory: bool = True) -> SimulationResult:
+             record_steps: bool = False, check_memory: bool = True,
+             stream_to=None, keep_seconds: float | None = None,
+             table_format: str | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -421,6 +506,19 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     check_memory : bool
         Refuse (ValueError) a run whose time series would not fit in this machine's memory
         (:func:`check_run_memory`) before allocating anything; False to try anyway.
+        A streamed run is checked against the free disk space instead
+        (:func:`check_stream_disk`).
+    stream_to : directory, optional
+        Stream the run to this directory as it is computed (:mod:`scoutsim.streaming`):
+        the ``timeseries``, ``events`` (and ``steps``) tables and a manifest, written chunk
+        by chunk, so the memory a run needs does not grow with its duration. The returned
+        result then holds only the last ``keep_seconds`` of the run (outcome, end time and
+        statistics are the whole run's); ``SimulationResult.load(stream_to)`` reads all.
+    keep_seconds : float, optional
+        With ``stream_to``: seconds at the end of the run kept in memory and returned
+        (default :data:`scoutsim.streaming.DEFAULT_KEEP_SECONDS`, 60 s).
+    table_format : {"parquet", "csv"}, optional
+        With ``stream_to``: the tables' format (default Parquet if pyarrow is installed).
 
     Returns
     -------
@@ -428,7 +526,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         Time series at the control samples, events, outcome and provenance. A run that
         falls or fails numerically returns normally with ``outcome`` saying so and the data
         up to that point; a KeyboardInterrupt also returns the data computed so far
-        (``outcome = "interrupted"``).
+        (``outcome = "interrupted"``; a streamed run writes it, marked partial).
     """
     robot = validate_robot(robot if robot is not None else RobotParameters())
     integ = (integrator or IntegratorSettings()).resolve(model)
@@ -442,7 +540,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
     if not (0.0 < pitch_limit_deg < 90.0):
         raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
-    if check_memory:
+    if stream_to is None and (keep_seconds is not None or table_format is not None):
+        raise ValueError("keep_seconds and table_format are only allowed with stream_to")
+    if check_memory and stream_to is None:
         check_run_memory(duration, record_steps=record_steps)
 
     user_ctrl = None
@@ -474,7 +574,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     # the compiled controller runs unless the model is passive or the user brings their own
     C = controller_array(cparams if user_ctrl is None else None, robot)
     dt = cparams.control_period if cparams is not None else 1e-3
-    init = initial_state or default_initial_state(model)
+    init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
     if resume:
         s = np.array(init.state)
@@ -497,14 +597,24 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             ls[leg] = init.leg_states[leg]
     else:
         mi, mf = fresh_modes(s, P)
-    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ, record_steps)
+    chunk = max(1, int(round(chunk_seconds / dt))) if user_ctrl is None else 1
+    stream = None
+    if stream_to is not None:
+        from .streaming import DEFAULT_KEEP_SECONDS, RunStream
+        stream = RunStream(stream_to, fmt=table_format, keep_seconds=(
+            DEFAULT_KEEP_SECONDS if keep_seconds is None else keep_seconds))
+        if check_memory:
+            check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
+        if user_ctrl is None:      # fewer, larger pieces: each costs ~5 ms of table writing
+            chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
+    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ, record_steps,
+                       rows=None if stream is None else chunk + 2)
     wall0 = time.perf_counter()
     bar = None
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=round(duration, 3), unit="s", unit_scale=False, desc=f"Model {model}",
                    leave=False, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
-    chunk = max(1, int(round(chunk_seconds / dt))) if user_ctrl is None else 1
     if user_ctrl is not None and hasattr(user_ctrl, "reset"):
         user_ctrl.reset(robot, _sensors(s, cparams, model))
     interrupted = False
@@ -521,10 +631,16 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                     ls[:] = states
             k_prev = eng.k
             eng.advance(eng.k + chunk, user_ctrl is None)
+            if stream is not None:
+                stream.take(eng)
             if bar is not None:
                 bar.update(round((eng.k - k_prev) * dt, 6))
     except KeyboardInterrupt:
         interrupted = True
+    except BaseException:
+        if stream is not None:
+            stream.abort()
+        raise
     finally:
         if bar is not None:
             bar.close()
@@ -545,7 +661,16 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "passive_touchdown_world": passive_touchdown_world,
         "control_period_s": dt,
     }
-    return eng.result(provenance, interrupted, {"wall_time_s": wall})
+    if stream is None:
+        return eng.result(provenance, interrupted, {"wall_time_s": wall})
+    try:
+        stream.take(eng)       # a Ctrl-C between the compiled call and take(): its rows
+    except BaseException:
+        stream.abort()
+        raise
+    whole = eng.result(provenance, interrupted, {"wall_time_s": wall},
+                       last_sample_t=stream.last_sample_t)
+    return stream.finish(whole, partial=interrupted)
 
 
 def _sensors(s, cparams, model):

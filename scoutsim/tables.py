@@ -17,6 +17,8 @@ from __future__ import annotations
 import gzip
 import importlib.util
 import json
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +26,7 @@ import numpy as np
 from .run_directory import atomic_write
 
 __all__ = ["FORMATS", "SUFFIXES", "default_format", "write_table", "read_table",
-           "read_metadata", "table_path", "TableError"]
+           "read_metadata", "table_path", "TableWriter", "TableError"]
 
 #: table formats and the suffix of their files
 SUFFIXES = {"parquet": ".parquet", "csv": ".csv.gz"}
@@ -69,9 +71,7 @@ def write_table(stem, columns: dict, *, units: dict | None = None,
     lengths = {len(c) for c in cols.values()}
     if len(lengths) > 1:
         raise ValueError(f"columns of unequal length: {sorted(lengths)}")
-    info = {"columns": {n: {"dtype": c.dtype.str if c.dtype.kind != "U" else "str",
-                            "unit": (units or {}).get(n)} for n, c in cols.items()},
-            "metadata": metadata or {}}
+    info = {"columns": _column_info(cols, units), "metadata": metadata or {}}
     writer = _write_parquet if fmt == "parquet" else _write_csv
     return atomic_write(path, lambda tmp: writer(tmp, cols, info))
 
@@ -91,29 +91,167 @@ def _arrow_column(pa, c: np.ndarray):
     return pa.Array.from_buffers(pa.from_numpy_dtype(c.dtype), len(c), [None, pa.py_buffer(c)])
 
 
-def _write_parquet(path: Path, cols: dict, info: dict) -> None:
+def _column_info(cols: dict, units: dict | None) -> dict:
+    return {n: {"dtype": c.dtype.str if c.dtype.kind != "U" else "str",
+                "unit": (units or {}).get(n)} for n, c in cols.items()}
+
+
+def _arrow_table(cols: dict):
     import pyarrow as pa
+    return pa.table({n: _arrow_column(pa, c) for n, c in cols.items()})
+
+
+#: Parquet compression: zstd at a low level is about as fast as snappy here, files about
+#: half the size
+_PARQUET_OPTIONS = {"compression": "zstd", "compression_level": 1}
+
+
+def _write_parquet(path: Path, cols: dict, info: dict) -> None:
     import pyarrow.parquet as pq
-    table = pa.table({n: _arrow_column(pa, c) for n, c in cols.items()})
-    table = table.replace_schema_metadata({_KEY: json.dumps(info, allow_nan=True)})
-    # zstd at a low level: about as fast as snappy here, files about half the size
-    pq.write_table(table, path, compression="zstd", compression_level=1)
+    table = _arrow_table(cols).replace_schema_metadata(
+        {_KEY: json.dumps(info, allow_nan=True)})
+    pq.write_table(table, path, **_PARQUET_OPTIONS)
+
+
+def _csv_head(info: dict) -> str:
+    """The metadata line and the header line of a CSV table."""
+    header = ",".join(f"{n} [{u}]" if (u := d["unit"]) else n
+                      for n, d in info["columns"].items())
+    return f"# {_KEY}: {json.dumps(info, allow_nan=True)}\n{header}\n"
+
+
+def _csv_rows(f, cols: dict) -> None:
+    """Write the rows of ``cols`` to the open text file ``f``."""
+    names = list(cols)
+    if not names or len(cols[names[0]]) == 0:
+        return
+    fmts = ["%s" if cols[n].dtype.kind in "USO" else
+            "%d" if cols[n].dtype.kind in "iub" else "%.17g" for n in names]
+    rows = np.empty((len(cols[names[0]]), len(names)), dtype=object)
+    for j, n in enumerate(names):
+        rows[:, j] = cols[n]
+    np.savetxt(f, rows, fmt=fmts, delimiter=",")
 
 
 def _write_csv(path: Path, cols: dict, info: dict) -> None:
-    names = list(cols)
-    header = ",".join(f"{n} [{u}]" if (u := info["columns"][n]["unit"]) else n
-                      for n in names)
     with gzip.open(path, "wt", compresslevel=1, newline="\n") as f:
-        f.write(f"# {_KEY}: {json.dumps(info, allow_nan=True)}\n{header}\n")
-        if not names or len(cols[names[0]]) == 0:
+        f.write(_csv_head(info))
+        _csv_rows(f, cols)
+
+
+class TableWriter:
+    """A table written in pieces, for data that does not fit in memory at once: rows are
+    appended as they arrive and the metadata (known only at the end) is added by
+    :meth:`close`; :func:`read_table` reads the result as if :func:`write_table` had
+    written it whole.
+
+        w = TableWriter("out/timeseries", units={"t": "s"})
+        w.append(columns)            # as often as needed, same names and dtypes
+        w.close(metadata={...})      # -> out/timeseries.parquet, renamed into place
+
+    Until :meth:`close` the rows are in a temporary file (``NAME.partial.SUFFIX``), so a
+    table that was cut off is never taken for a whole one; :meth:`abort` removes it.
+    Parquet gets one row group per :data:`ROW_GROUP_ROWS` rows (the rows in between are
+    held in memory); CSV is written as two gzip members, the metadata and header line
+    first, the rows (streamed to a second temporary file) appended to it by copying.
+    """
+
+    #: rows gathered before a Parquet row group is written (a streamed run appends 10 000
+    #: rows at a time: one row group each, ~5 MB of a time series' 60 columns in memory)
+    ROW_GROUP_ROWS = 8192
+
+    def __init__(self, stem, *, units: dict | None = None, fmt: str | None = None):
+        self.fmt = fmt or default_format()
+        self.path = table_path(stem, self.fmt)
+        self.units = dict(units or {})
+        suffix = SUFFIXES[self.fmt]
+        self._tmp = self.path.with_name(self.path.name[:-len(suffix)] + ".partial" + suffix)
+        self._body = self.path.with_name(self.path.name[:-len(suffix)] + ".partial.rows"
+                                         + suffix)
+        self._columns: dict | None = None        # name -> {"dtype", "unit"}
+        self._pending: list[dict] = []
+        self._n_pending = 0
+        self._writer = None
+        self._file = None
+        self.n_rows = 0
+
+    def append(self, columns: dict) -> None:
+        """Add rows: ``columns`` name -> 1-D array, the same names and dtypes each time."""
+        cols = {n: np.asarray(c) for n, c in columns.items()}
+        lengths = {len(c) for c in cols.values()}
+        if len(lengths) > 1:
+            raise ValueError(f"columns of unequal length: {sorted(lengths)}")
+        info = _column_info(cols, self.units)
+        if self._columns is None:
+            self._columns = info
+        elif info != self._columns:
+            raise ValueError(f"{self.path}: appended columns differ from the first ones "
+                             "(names or dtypes)")
+        n = lengths.pop() if lengths else 0
+        self.n_rows += n
+        if self.fmt == "csv":
+            if self._file is None:
+                self._file = gzip.open(self._body, "wt", compresslevel=1, newline="\n")
+            _csv_rows(self._file, cols)
             return
-        fmts = ["%s" if cols[n].dtype.kind in "USO" else
-                "%d" if cols[n].dtype.kind in "iub" else "%.17g" for n in names]
-        rows = np.empty((len(cols[names[0]]), len(names)), dtype=object)
-        for j, n in enumerate(names):
-            rows[:, j] = cols[n]
-        np.savetxt(f, rows, fmt=fmts, delimiter=",")
+        self._pending.append(cols)
+        self._n_pending += n
+        if self._n_pending >= self.ROW_GROUP_ROWS:
+            self._flush()
+
+    def _flush(self) -> None:
+        if not self._pending:
+            return
+        import pyarrow.parquet as pq
+        cols = {n: np.concatenate([p[n] for p in self._pending]) for n in self._columns}
+        table = _arrow_table(cols)
+        if self._writer is None:
+            self._writer = pq.ParquetWriter(self._tmp, table.schema, **_PARQUET_OPTIONS)
+        self._writer.write_table(table)
+        self._pending, self._n_pending = [], 0
+
+    def close(self, metadata: dict | None = None) -> Path:
+        """Finish the table with its ``metadata`` and rename it into place; the path."""
+        if self._columns is None:
+            raise ValueError(f"{self.path}: no rows were appended (the column names and "
+                             "dtypes come from the first append)")
+        info = {"columns": self._columns, "metadata": metadata or {}}
+        try:
+            if self.fmt == "parquet":
+                self._flush()
+                self._writer.add_key_value_metadata({_KEY: json.dumps(info, allow_nan=True)})
+                self._writer.close()
+                self._writer = None
+            else:
+                if self._file is not None:
+                    self._file.close()
+                    self._file = None
+                with open(self._tmp, "wb") as out:
+                    out.write(gzip.compress(_csv_head(info).encode(), compresslevel=1))
+                    if self._body.exists():
+                        with open(self._body, "rb") as body:
+                            shutil.copyfileobj(body, out, 1 << 20)
+                self._body.unlink(missing_ok=True)
+            os.replace(self._tmp, self.path)
+        except BaseException:
+            self.abort()
+            raise
+        return self.path
+
+    def abort(self) -> None:
+        """Give the table up: close and remove the temporary files."""
+        for f in (self._writer, self._file):
+            try:
+                if f is not None:
+                    f.close()
+            except Exception:  # noqa: BLE001 - removing it is all that is left to do
+                pass
+        self._writer = self._file = None
+        for p in (self._tmp, self._body):
+            try:
+                p.unlink()
+            except OSError:
+                pass
 
 
 def read_metadata(path) -> dict:
@@ -124,7 +262,9 @@ def read_metadata(path) -> dict:
     try:
         if fmt == "parquet":
             import pyarrow.parquet as pq
-            raw = (pq.read_schema(path).metadata or {}).get(_KEY.encode())
+            # the file's key-value metadata: the schema's (write_table) or added at the
+            # end (TableWriter)
+            raw = (pq.ParquetFile(path).metadata.metadata or {}).get(_KEY.encode())
         else:
             with gzip.open(path, "rt") as f:
                 first = f.readline()

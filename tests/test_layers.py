@@ -21,6 +21,7 @@ LAYERS = {
     "scoutsim.model": 1,
     "scoutsim.numerics": 2, "scoutsim.control": 2,
     "scoutsim.state": 3, "scoutsim.loop": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
+    "scoutsim.failure": 3, "scoutsim.streaming": 3,
     "scoutsim.analysis": 4, "scoutsim.validation": 4, "scoutsim.identification": 4,
     "scoutsim.presentation": 5, "scoutsim.cli": 5,
     # the package root re-exports the public API: nothing inside imports it

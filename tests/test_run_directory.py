@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -127,3 +128,45 @@ def test_sigint_while_simulating_writes_the_data_so_far_as_partial(tmp_path):
     assert status == "partial"
     r = SimulationResult.load(out)
     assert r.outcome == "interrupted" and 0 < r.t_end < 3000
+
+
+@pytest.mark.parametrize("fault", ["directory in the way", "disk full"])
+def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
+        tmp_path, monkeypatch, capsys, fault):
+    """A directory where summary.json goes, or a full disk: a clear message instead of a
+    traceback, and the computed run saved to the temporary directory (not lost)."""
+    import errno
+    import re
+    import tempfile
+
+    import scoutsim.tables
+    from scoutsim.cli import main
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    out = tmp_path / "out"
+    if fault == "directory in the way":
+        (out / "summary.json").mkdir(parents=True)
+    else:
+        def full(*args, **kwargs):
+            raise OSError(errno.ENOSPC, "No space left on device", str(out / "x"))
+        monkeypatch.setattr(scoutsim.tables, "write_table", full)
+    assert main(["run", "--duration", "0.5", "--no-progress", "--out", str(out)]) == 74
+    err = capsys.readouterr().err
+    assert "could not write the run's files" in err and "Traceback" not in err
+    assert ("Is a directory" if fault == "directory in the way" else "No space left") in err
+    rescued = Path(re.search(r"saved instead to (\S+\.npz)", err).group(1))
+    r = SimulationResult.load(rescued)
+    assert r.t_end == pytest.approx(0.5) and r.outcome == "completed"
+    with pytest.raises(IncompleteRunError):     # the directory does not pass for a run
+        check_run_directory(out)
+
+
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04 cut here"])
+def test_plot_of_an_empty_or_truncated_npz_is_a_clear_error(tmp_path, capsys, content):
+    from scoutsim.cli import main
+    bad = tmp_path / "result.npz"
+    bad.write_bytes(content)
+    assert main(["plot", str(bad), "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert "not a readable scoutsim result" in err and "Traceback" not in err
+    assert ("empty" if not content else "cut off or damaged") in err

@@ -215,7 +215,29 @@ def test_a_run_too_long_for_memory_is_refused_before_anything_is_allocated():
         scoutsim.simulate(duration=1e9)
 
 
-def test_cli_refuses_a_run_too_long_for_memory(capsys):
+def test_cli_streams_a_run_too_long_for_memory_and_refuses_one_too_long_for_the_disk(
+        tmp_path, capsys):
     from scoutsim.cli import main
-    assert main(["run", "--duration", "1e9", "--no-progress"]) == 2
-    assert "not allowed on this machine" in capsys.readouterr().err
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "earlier.txt").write_text("kept")
+    assert main(["run", "--duration", "1e9", "--no-progress", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "would not fit in memory: streaming" in err
+    assert "1e+09 s is not allowed here" in err and "on disk" in err
+    assert [p.name for p in out.iterdir()] == ["earlier.txt"]    # refused before touching it
+
+
+def test_event_records_that_overflow_one_period_are_counted_not_left_as_empty_rows():
+    """A motor speed constant 1e4 times Scout II's (0.0389 -> 389 V s/rad, within the
+    allowed range) makes the motor joints chatter: some control periods log more event
+    records than the buffer has left. They used to become rows of zeros in the events
+    table; now none is empty, they stay in time order, and the loss is counted."""
+    import dataclasses
+    robot = scoutsim.RobotParameters()
+    robot = dataclasses.replace(robot, speed_constant=robot.speed_constant * 1e4)
+    r = scoutsim.simulate(robot, duration=1.0)
+    assert not np.any(np.all(r.events == 0.0, axis=1))
+    assert np.all(np.diff(r.events[:, L.EVR_T]) >= 0.0)
+    assert r.stats["event_records_lost"] > 0
+    assert "event_records_lost" not in scoutsim.simulate(duration=1.0).stats

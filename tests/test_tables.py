@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from scoutsim.tables import FORMATS, TableError, read_metadata, read_table, write_table
+from scoutsim.tables import (FORMATS, TableError, TableWriter, read_metadata, read_table,
+                             write_table)
 
 pytest.importorskip("pyarrow")
 
@@ -75,3 +76,44 @@ def test_bad_inputs(tmp_path):
     (tmp_path / "broken.parquet").write_bytes(b"not parquet")
     with pytest.raises(TableError, match="cannot read"):
         read_table(tmp_path / "broken.parquet")
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_a_table_written_in_pieces_reads_back_as_the_whole(tmp_path, fmt, monkeypatch):
+    """TableWriter (streamed runs): rows appended in uneven pieces, several Parquet row
+    groups, metadata added at the end: read_table gives what write_table of the whole
+    gives, bit for bit."""
+    monkeypatch.setattr(TableWriter, "ROW_GROUP_ROWS", 10)
+    cols = _columns(57)
+    meta = {"outcome": "fell", "t_end": 1.25}
+    w = TableWriter(tmp_path / "piecewise", units={"t": "s"}, fmt=fmt)
+    for a, b in ((0, 1), (1, 23), (23, 23), (23, 57)):
+        w.append({n: c[a:b] for n, c in cols.items()})
+        assert not w.path.exists()               # nothing looks whole before close()
+    path = w.close(metadata=meta)
+    whole, meta_whole = read_table(write_table(tmp_path / "whole", cols, units={"t": "s"},
+                                               metadata=meta, fmt=fmt))
+    back, meta_back = read_table(path)
+    assert meta_back == meta_whole and read_metadata(path) == read_metadata(
+        tmp_path / ("whole" + path.name[len("piecewise"):]))
+    for n in cols:
+        assert back[n].dtype == whole[n].dtype, n
+        assert back[n].tobytes() == whole[n].tobytes(), n
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([path.name, "whole" +
+                                                                path.name[len("piecewise"):]])
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+        assert pq.ParquetFile(path).metadata.num_row_groups == 2   # rows 0-22, 23-56
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_an_aborted_or_inconsistent_piecewise_table_leaves_nothing(tmp_path, fmt):
+    cols = _columns(5)
+    w = TableWriter(tmp_path / "cut", fmt=fmt)
+    w.append(cols)
+    with pytest.raises(ValueError, match="differ from the first"):
+        w.append({"t": cols["t"]})
+    w.abort()
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="no rows were appended"):
+        TableWriter(tmp_path / "none", fmt=fmt).close()

@@ -20,7 +20,9 @@ printed and plotted, converted here with :func:`math.degrees` / :func:`math.radi
 Exit codes: 0 success (also when the robot fell: the summary says so), 1 numerical failure
 (``run``, a model in ``compare``), a crashed start (``basin``) or no periodic orbit found
 (``orbit``), 2 bad usage, parameter file, initial state, input file or experiment log,
-130 interrupted (Ctrl-C; the data computed so far is still written).
+74 the outputs could not be written (``run``: a full disk, a directory where a file
+goes; the run's data are saved to the temporary directory instead, the message says
+where), 130 interrupted (Ctrl-C; the data computed so far is still written).
 """
 
 from __future__ import annotations

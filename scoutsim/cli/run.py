@@ -29,7 +29,7 @@ from pathlib import Path
 from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
-from ._common import (MODELS, command_wall_time, dumps, finite_float, integrator,
+from ._common import (MODELS, UsageError, command_wall_time, dumps, finite_float, integrator,
                       load_parameters, out_dir, positive_float, show_progress, usage_errors,
                       write_json)
 
@@ -53,9 +53,12 @@ def register(sub, common) -> None:
     run.add_argument("--model", choices=MODELS, default="II",
                      help="actuator/transmission model (default: II)")
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
-                     help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g})")
+                     help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
+                          "passive model: scoutsim.simulation.default_initial_state)")
     run.add_argument("--height", type=positive_float, default=None, metavar="Y",
-                     help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g})")
+                     help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g}; "
+                          "passive model: higher, so that its hanging legs clear the ground "
+                          "by the same margin)")
     run.add_argument("--pitch-rate", type=finite_float, default=None, metavar="W",
                      help="initial pitch rate [deg/s] (default: "
                      f"{math.degrees(_DEFAULT_START.dtheta):g})")
@@ -75,9 +78,87 @@ def register(sub, common) -> None:
                      help="also write timeseries.csv (plain CSV, one row per sample)")
     run.add_argument("--npz", action="store_true",
                      help="also write result.npz (the whole result in one NumPy file)")
+    run.add_argument("--stream", action="store_true",
+                     help="write the tables as the run is computed, keeping only its last "
+                          "--keep seconds in memory (for runs too long for memory; the "
+                          "summary and figures cover the kept end). Chosen by itself when "
+                          "the run would not fit in memory")
+    run.add_argument("--keep", type=positive_float, default=None, metavar="S",
+                     help="with --stream: seconds at the end of the run kept in memory for "
+                          "the summary and figures (default: 60)")
+    run.add_argument("--no-size-check", action="store_true",
+                     help="skip the checks of the memory and disk space the run needs (and "
+                          "do not stream because of them)")
     run.add_argument("--json", action="store_true",
                      help="print the summary as JSON on stdout instead of the table")
     run.set_defaults(func=execute)
+
+
+#: exit status of a run whose outputs could not be written (BSD sysexits EX_IOERR)
+EXIT_WRITE_FAILED = 74
+
+
+def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
+    """Write the run's files into ``out`` (``rd``: the streamed run's directory, whose
+    tables are written already, or None); the finished RunDirectory."""
+    if rd is None:
+        rd = RunDirectory(out, command=command, info=info).__enter__()
+        for path in result.save_tables(out, fmt=args.format):
+            rd.add(path.name)
+    else:
+        rd.info = info           # (the streamed tables are already written and listed)
+    rd.write("summary.json", lambda p: write_json(p, summary))
+    if args.csv:
+        rd.write("timeseries.csv", lambda p: write_timeseries_csv(result, p))
+    if args.npz:
+        rd.write("result.npz", lambda p: result.save(p))
+    if args.plots and not args.no_plots:
+        from ..presentation.plots import plot_run, plot_torque_speed
+        rd.write("run.png", lambda p: plot_run(result, p, overview="auto"))
+        rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
+    rd.finish(outcome=result.outcome, partial=interrupted)
+    return rd
+
+
+def _rescue(result) -> str:
+    """Save a run whose output directory failed somewhere else (the system's temporary
+    directory, then the home directory): what was computed is not lost. The message."""
+    import os
+    import tempfile
+    name = f"scoutsim_rescued_{os.getpid()}_{int(time.time())}.npz"
+    for d in (Path(tempfile.gettempdir()), Path.home()):
+        try:
+            path = result.save(d / name)
+        except OSError:
+            continue
+        return (f"scoutsim run: the run's data were saved instead to {path} "
+                "(SimulationResult.load reads it)")
+    return "scoutsim run: the run's data could not be saved anywhere (no space left?)"
+
+
+def _stream_choice(args) -> bool:
+    """Whether the run streams its tables to disk: asked with --stream, or chosen because
+    the run would not fit in memory (said on stderr)."""
+    from ..simulation import check_run_memory
+    if args.keep is not None and not args.stream:
+        raise UsageError("--keep is only allowed with --stream")
+    try:
+        if not args.no_size_check:
+            check_run_memory(args.duration, record_steps=args.steps)
+        fits = True
+    except ValueError:
+        fits = False
+    stream = args.stream or not fits
+    if stream and (args.csv or args.npz):
+        raise UsageError(f"{'--csv' if args.csv else '--npz'} is not allowed with a streamed "
+                         "run (it needs the whole time series in memory): read the streamed "
+                         "tables instead (SimulationResult.load(DIR))")
+    if stream and not args.stream:
+        from ..streaming import DEFAULT_KEEP_SECONDS
+        print(f"scoutsim run: {args.duration:g} s would not fit in memory: streaming the "
+              "tables to disk as they are computed (the summary covers the last "
+              f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)", file=sys.stderr)
+    return stream
 
 
 def write_timeseries_csv(result, path) -> Path:
@@ -153,7 +234,7 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
 
 
 def execute(args) -> int:
-    from ..simulation import InitialState, simulate, warm_up
+    from ..simulation import default_initial_state, simulate, warm_up
     robot, controller = load_parameters(args.robot)
     integ = integrator(args)
     changes = {}
@@ -163,35 +244,42 @@ def execute(args) -> int:
         changes["y"] = args.height
     if args.pitch_rate is not None:
         changes["dtheta"] = math.radians(args.pitch_rate)
-    init = InitialState(**changes)
+    # the model's default start (the passive model's is higher: its legs hang at the
+    # passive touchdown angles), with the options given
+    init = default_initial_state(args.model, robot).replace(**changes)
     out = out_dir(args.out)
     progress = show_progress(args)
 
+    stream = _stream_choice(args)
     load_s = warm_up()
+    command = " ".join(["scoutsim"] + sys.argv[1:])
+    info = {"model": args.model, "duration_s": args.duration, "streamed": stream}
+    # a streamed run's directory is entered when its first rows arrive (streaming.RunStream)
+    rd = RunDirectory(out, command=command, info=info) if stream else None
     wall0 = time.perf_counter()
     with usage_errors():  # invalid initial state or option
         result = simulate(robot, controller, init, args.duration, model=args.model,
                           integrator=integ, friction_coefficient=args.friction,
-                          progress=progress, record_steps=args.steps)
+                          progress=progress, record_steps=args.steps, stream_to=rd,
+                          check_memory=not args.no_size_check,
+                          **({"keep_seconds": args.keep, "table_format": args.format}
+                             if stream else {}))
     wall = time.perf_counter() - wall0
 
     summary = result.summary()
     interrupted = result.outcome == "interrupted"
-    info = {"scoutsim_version": result.provenance.get("scoutsim_version"),
-            "model": args.model, "duration_s": args.duration, "t_end": result.t_end}
-    with RunDirectory(out, command=" ".join(["scoutsim"] + sys.argv[1:]), info=info) as rd:
-        for path in result.save_tables(out, fmt=args.format):
-            rd.add(path.name)
-        rd.write("summary.json", lambda p: write_json(p, summary))
-        if args.csv:
-            rd.write("timeseries.csv", lambda p: write_timeseries_csv(result, p))
-        if args.npz:
-            rd.write("result.npz", lambda p: result.save(p))
-        if args.plots and not args.no_plots:
-            from ..presentation.plots import plot_run, plot_torque_speed
-            rd.write("run.png", lambda p: plot_run(result, p, overview="auto"))
-            rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
-        rd.finish(outcome=result.outcome, partial=interrupted)
+    info |= {"scoutsim_version": result.provenance.get("scoutsim_version"),
+             "t_end": result.t_end}
+    try:
+        rd = _write_outputs(args, out, result, summary, rd, command, info, interrupted)
+    except OSError as exc:        # a full disk, a directory where a file goes, permissions
+        print(f"scoutsim run: error: could not write the run's files to {out}/: "
+              f"{exc.strerror or exc}" + (f" ({name})" if (name := exc.filename2 or exc.filename)
+                                          else ""),
+              file=sys.stderr)
+        if not stream:
+            print(_rescue(result), file=sys.stderr)
+        return EXIT_WRITE_FAILED
     files = [out / name for name in rd.files] + [out / MANIFEST]
 
     if args.json:
@@ -200,10 +288,21 @@ def execute(args) -> int:
         print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end,
                              friction=args.friction, load_s=load_s,
                              command_wall_s=command_wall_time()))
+        if args.model == "passive" and result.outcome == "fell" and robot.leg_mass > 0:
+            print("  (passive model: no actuators, so legs with mass swing freely at the hips "
+                  "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
+                  "passively: see scoutsim orbit --passive)")
+        if stream:
+            kept = result.provenance["stream"]["kept_from_s"]
+            print(f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "
+                  "the tables hold the whole run)")
         print(f"wrote {', '.join(f.name for f in files)} to {out}/")
     if result.outcome == "numerical_failure":
-        print("scoutsim run: the integration failed numerically (see summary.json and the "
-              "timeseries table); try a smaller --rtol", file=sys.stderr)
+        # what stopped the run and what to check: the parameters far from the Scout II
+        # defaults, or the integrator tolerance (SimulationResult.failure)
+        print(f"scoutsim run: the integration failed numerically: "
+              f"{result.failure.message(cli=True)} (see summary.json and the timeseries "
+              "table)", file=sys.stderr)
         return 1
     if result.outcome == "interrupted":
         return 130

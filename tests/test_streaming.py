@@ -1,0 +1,152 @@
+"""Runs streamed to disk (scoutsim.streaming): the same tables as the run held in memory,
+bit for bit; the returned result is the run's kept end; interrupts and falls write what
+was computed; memory does not grow with the duration; disk space is checked first."""
+
+import json
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim.result import SimulationResult
+from scoutsim.run_directory import check_run_directory
+from scoutsim.simulation import HybridEngine, check_stream_disk, simulate
+from scoutsim.tables import FORMATS, read_table
+
+pytest.importorskip("pyarrow")
+
+
+def _same_tables(d1, d2, names=("timeseries", "events")):
+    for name in names:
+        p1 = next(d1.glob(f"{name}.*"))
+        p2 = next(d2.glob(f"{name}.*"))
+        a, ma = read_table(p1)
+        b, mb = read_table(p2)
+        assert list(a) == list(b), name
+        for n in a:
+            assert a[n].dtype == b[n].dtype and a[n].tobytes() == b[n].tobytes(), (name, n)
+        if name == "timeseries":
+            for m in (ma, mb):
+                m["provenance"].pop("stream", None)
+                m["stats"].pop("wall_time_s")
+            assert json.dumps(ma, sort_keys=True) == json.dumps(mb, sort_keys=True)
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_a_streamed_run_writes_the_tables_of_the_run_held_in_memory(tmp_path, fmt):
+    """25 s in three 10 s pieces (STREAM_CHUNK_SECONDS) with the steps recorded."""
+    kw = dict(duration=25.0, model="II", record_steps=True)
+    whole = simulate(**kw)
+    (tmp_path / "memory").mkdir()
+    whole.save_tables(tmp_path / "memory", fmt=fmt)
+    kept = simulate(**kw, stream_to=tmp_path / "streamed", keep_seconds=4.0, table_format=fmt)
+    _same_tables(tmp_path / "memory", tmp_path / "streamed",
+                 ("timeseries", "events", "steps"))
+    manifest = check_run_directory(tmp_path / "streamed")
+    assert manifest["status"] == "complete" and len(manifest["files"]) == 3
+    # the returned result: the last 4 s, and the whole run's outcome, end and statistics
+    i0 = int(np.searchsorted(whole.t, whole.t[-1] - 4.0))
+    assert kept.t[0] == whole.t[i0] == 21.0 and np.array_equal(kept.state, whole.state[i0:])
+    assert np.array_equal(kept.aux, whole.aux[i0:]) and np.array_equal(kept.modes,
+                                                                       whole.modes[i0:])
+    j0 = int(np.searchsorted(whole.events[:, 0], kept.t[0]))
+    np.testing.assert_array_equal(kept.events, whole.events[j0:])
+    np.testing.assert_array_equal(kept.event_states, whole.event_states[j0:])
+    assert kept.steps[0, 0] >= kept.t[0] and np.array_equal(kept.steps[-1], whole.steps[-1])
+    assert (kept.outcome, kept.t_end) == (whole.outcome, whole.t_end)
+    assert {k: v for k, v in kept.stats.items() if k != "wall_time_s"} == \
+        {k: v for k, v in whole.stats.items() if k != "wall_time_s"}
+    assert kept.provenance["stream"]["n_samples"] == len(whole.t) == 25001
+    back = SimulationResult.load(tmp_path / "streamed")
+    assert np.array_equal(back.state, whole.state) and back.t_end == whole.t_end
+
+
+def test_a_streamed_fall_ends_where_the_run_in_memory_ends(tmp_path):
+    import math
+
+    from scoutsim import InitialState
+    # a start pitched 4 deg nose-up on a mu = 0.8 floor: Model I falls (as in
+    # tests/validation/test_validation.py)
+    kw = dict(duration=30.0, model="I", friction_coefficient=0.8,
+              initial_state=InitialState(theta=math.radians(4.0), dtheta=0.0))
+    whole = simulate(**kw)
+    assert whole.outcome == "fell"
+    kept = simulate(**kw, stream_to=tmp_path / "s")
+    assert (kept.outcome, kept.t_end) == (whole.outcome, whole.t_end)
+    assert np.array_equal(kept.state[-1], whole.state[-1])
+    back = SimulationResult.load(tmp_path / "s")
+    assert np.array_equal(back.t, whole.t) and back.outcome == "fell"
+    assert check_run_directory(tmp_path / "s")["status"] == "complete"
+
+
+def test_ctrl_c_in_a_streamed_run_writes_what_was_computed_as_partial(tmp_path, monkeypatch):
+    whole = simulate(duration=40.0)
+    real = HybridEngine.advance
+    calls = []
+
+    def advance(self, *args):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(self, *args)
+
+    monkeypatch.setattr(HybridEngine, "advance", advance)
+    kept = simulate(duration=40.0, stream_to=tmp_path / "s")
+    assert kept.outcome == "interrupted"
+    assert check_run_directory(tmp_path / "s")["status"] == "partial"
+    back = SimulationResult.load(tmp_path / "s")
+    n = len(back.t)
+    assert n == 20000                      # two 10 s pieces: samples k = 0 .. 19 999
+    assert np.array_equal(back.state, whole.state[:n]) and back.outcome == "interrupted"
+
+
+def test_memory_of_a_streamed_run_does_not_grow_with_its_duration(tmp_path):
+    simulate(duration=0.1)
+
+    def peak(duration, **kw):
+        tracemalloc.start()
+        simulate(duration=duration, **kw)
+        out = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return out
+
+    streamed = {d: peak(d, stream_to=tmp_path / f"s{d:g}", keep_seconds=2.0)
+                for d in (40.0, 160.0)}
+    in_memory = peak(160.0)
+    # streamed, the peak is that of one 10 s piece and its tables (about 20 MB on the
+    # development machine) whatever the duration; held in memory, 160 s took 140 MB
+    assert streamed[160.0] < 1.2 * streamed[40.0]
+    assert streamed[160.0] < in_memory / 4
+
+
+def test_disk_space_is_checked_before_a_streamed_run_starts(tmp_path):
+    with pytest.raises(ValueError, match=r"duration = 1e\+09 s is not allowed here: .* on "
+                                         r"disk.* GB free; at most about"):
+        check_stream_disk(1e9, tmp_path / "not yet")
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "keep.txt").write_text("an earlier run")
+    with pytest.raises(ValueError, match="on disk"):
+        scoutsim.simulate(duration=1e9, stream_to=tmp_path / "old")
+    assert [p.name for p in (tmp_path / "old").iterdir()] == ["keep.txt"]
+
+
+def test_keep_seconds_only_with_stream_to():
+    with pytest.raises(ValueError, match="only allowed with stream_to"):
+        simulate(duration=0.1, keep_seconds=3.0)
+
+
+def test_cli_stream_writes_the_tables_of_the_run_in_memory(tmp_path, capsys):
+    from scoutsim.cli import main
+    base = ["run", "--duration", "12", "--no-progress"]
+    assert main([*base, "--out", str(tmp_path / "memory")]) == 0
+    assert main([*base, "--stream", "--keep", "3", "--out", str(tmp_path / "streamed")]) == 0
+    out = capsys.readouterr().out
+    assert "streamed run: the summary covers t = 9 - 12 s" in out
+    _same_tables(tmp_path / "memory", tmp_path / "streamed")
+    manifest = check_run_directory(tmp_path / "streamed")
+    assert manifest["status"] == "complete" and manifest["streamed"] is True
+    assert {"timeseries.parquet", "events.parquet", "summary.json"} <= set(manifest["files"])
+    assert main([*base, "--stream", "--csv", "--out", str(tmp_path / "x")]) == 2
+    assert "--csv is not allowed with a streamed run" in capsys.readouterr().err
+    assert main([*base, "--keep", "3", "--out", str(tmp_path / "x")]) == 2
