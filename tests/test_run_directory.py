@@ -170,3 +170,46 @@ def test_plot_of_an_empty_or_truncated_npz_is_a_clear_error(tmp_path, capsys, co
     err = capsys.readouterr().err
     assert "not a readable scoutsim result" in err and "Traceback" not in err
     assert ("empty" if not content else "cut off or damaged") in err
+
+
+def _wait_for_writing(out, proc, timeout=120.0):
+    """Wait until the run writes its files (a temporary NAME.partial.* file exists)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if any(".partial" in p.name for p in out.glob("*")):
+            return
+        assert proc.poll() is None, proc.stderr.read().decode()
+        time.sleep(0.002)
+    raise AssertionError("the run never started writing")
+
+
+def test_ctrl_c_while_writing_completes_the_outputs_then_exits_130(tmp_path):
+    """A real process: SIGINT while the outputs are written holds until they are whole."""
+    scoutsim.simulate(duration=0.01)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration", "200",
+                             "--csv", "--out", str(out), "--no-progress"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _wait_for_writing(out, proc)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=120) == 130
+    assert "they will be complete in a moment" in proc.stderr.read().decode()
+    assert _assert_consistent(out) == "complete"
+    assert SimulationResult.load(out).t_end == pytest.approx(200.0)
+    assert (out / "timeseries.csv").exists()
+
+
+def test_a_second_ctrl_c_while_writing_abandons_the_outputs_cleanly(tmp_path):
+    scoutsim.simulate(duration=0.01)
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration", "200",
+                             "--csv", "--out", str(out), "--no-progress"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _wait_for_writing(out, proc)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=120) == 130
+    # abandoned (refused as incomplete), or finished just before the second signal
+    assert _assert_consistent(out) in ("incomplete", "complete")
+    assert not [p for p in out.glob("*") if ".partial" in p.name]

@@ -22,8 +22,11 @@ still written); a fall is a completed run (exit 0, the summary says so).
 from __future__ import annotations
 
 import math
+import signal
 import sys
+import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from ..result import COLUMN_UNITS, column_unit
@@ -118,6 +121,34 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
         rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
     rd.finish(outcome=result.outcome, partial=interrupted)
     return rd
+
+
+class _Deferred:
+    asked = False
+
+
+@contextmanager
+def _ctrl_c_deferred():
+    """While the outputs are written, a first Ctrl-C is held until they are whole (the
+    command then exits 130); a second one abandons them (KeyboardInterrupt: the directory
+    keeps saying "writing"). Writing a run takes a fraction of its computing."""
+    state = _Deferred()
+    if threading.current_thread() is not threading.main_thread():
+        yield state
+        return
+
+    def handler(signum, frame):
+        if state.asked:
+            raise KeyboardInterrupt
+        state.asked = True
+        print("scoutsim run: writing the outputs; they will be complete in a moment "
+              "(Ctrl-C again to abandon them)", file=sys.stderr, flush=True)
+
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        yield state
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _rescue(result) -> str:
@@ -271,7 +302,8 @@ def execute(args) -> int:
     info |= {"scoutsim_version": result.provenance.get("scoutsim_version"),
              "t_end": result.t_end}
     try:
-        rd = _write_outputs(args, out, result, summary, rd, command, info, interrupted)
+        with _ctrl_c_deferred() as deferred:
+            rd = _write_outputs(args, out, result, summary, rd, command, info, interrupted)
     except OSError as exc:        # a full disk, a directory where a file goes, permissions
         print(f"scoutsim run: error: could not write the run's files to {out}/: "
               f"{exc.strerror or exc}" + (f" ({name})" if (name := exc.filename2 or exc.filename)
@@ -304,6 +336,6 @@ def execute(args) -> int:
               f"{result.failure.message(cli=True)} (see summary.json and the timeseries "
               "table)", file=sys.stderr)
         return 1
-    if result.outcome == "interrupted":
+    if result.outcome == "interrupted" or deferred.asked:
         return 130
     return 0
