@@ -417,6 +417,19 @@ BYTES_PER_SAMPLE_ON_DISK = 500
 STREAM_CHUNK_SECONDS = 10.0
 
 
+#: wall seconds per simulated second of each model with the default integrator: an upper
+#: estimate for refusing absurd requests (development machine, 2 cores, one of them busy:
+#: Model II 4.0-6.6 ms, Model I 2-3.6 ms, ideal 2-2.9 ms, passive 4.3 ms; the slower
+#: figure doubled for a slower machine; benchmarks/bench_speed.py measures the speed)
+WALL_S_PER_SIMULATED_S = {"II": 13e-3, "I": 7e-3, "ideal": 6e-3, "passive": 9e-3}
+
+
+def expected_wall_time(duration: float, model: str = "II") -> float:
+    """An upper estimate of the wall time [s] a run of ``duration`` [s] of ``model`` takes
+    with the default integrator (:data:`WALL_S_PER_SIMULATED_S`)."""
+    return duration * WALL_S_PER_SIMULATED_S.get(model, max(WALL_S_PER_SIMULATED_S.values()))
+
+
 def check_stream_disk(duration: float, directory, *, record_steps: bool = False,
                       dt: float = 1e-3) -> int:
     """The disk space a streamed run of ``duration`` [s] needs for its tables [bytes] (an

@@ -360,3 +360,21 @@ def test_sweep_deg_suffix_still_takes_degrees_for_an_angle():
     name, vals = _sweep_axis("controller.touchdown_angle_front_deg=15:27:20", 3)
     assert name == "controller.touchdown_angle_front"
     assert vals == [math.radians(15.0), math.radians(27.0), 20.0]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["run", "--duration", "1e7"], "the run would take about 36.1 h"),
+    (["sweep", "--grid", "controller.touchdown_angle_front_deg=15:27:1000", "--duration",
+      "600", "--workers", "2", "--max-hours", "1"], "the sweep of 1000 points would take "
+                                                     "about 1.08 h"),
+    (["basin", "--speeds", "1,1.2", "--duration", "1e6"], "the basin map of 36 starts"),
+])
+def test_jobs_expected_to_take_too_long_are_refused_before_starting(argv, message, tmp_path,
+                                                                     capsys):
+    """Simulated time times an upper estimate of the wall time per simulated second
+    (Model II 13 ms: 1e7 s -> 36.1 h; 1000 x 600 s on 2 workers -> 1.08 h), against
+    --max-hours (default 24)."""
+    assert main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "raise --max-hours" in err
+    assert not list(tmp_path.iterdir())            # refused before anything was written

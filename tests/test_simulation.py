@@ -222,6 +222,9 @@ def test_cli_streams_a_run_too_long_for_memory_and_refuses_one_too_long_for_the_
     out.mkdir()
     (out / "earlier.txt").write_text("kept")
     assert main(["run", "--duration", "1e9", "--no-progress", "--out", str(out)]) == 2
+    assert "would take about 3.61e+03 h" in capsys.readouterr().err   # 1e9 s at 13 ms/s
+    assert main(["run", "--duration", "1e9", "--no-progress", "--out", str(out),
+                 "--max-hours", "1e9"]) == 2
     err = capsys.readouterr().err
     assert "would not fit in memory: streaming" in err
     assert "1e+09 s is not allowed here" in err and "on disk" in err

@@ -180,7 +180,30 @@ def simulation_options() -> argparse.ArgumentParser:
                                 f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
                                 "paper's experiments ran; 'inf' = no slip; see docs/model.md)")
     add_no_progress_option(common)
+    common.add_argument("--max-hours", type=positive_float, default=DEFAULT_MAX_HOURS,
+                        metavar="H",
+                        help="refuse a job expected to take longer than H hours of wall time "
+                             f"before starting (default: {DEFAULT_MAX_HOURS:g}; an estimate "
+                             "from the simulator's speed on a slow machine)")
     return common
+
+
+#: the longest job (wall time [h]) the commands start without --max-hours
+DEFAULT_MAX_HOURS = 24.0
+
+
+def check_expected_time(args, simulated_s: dict, *, workers: int = 1,
+                        per_run_s: float = 0.0, runs: int = 1, what: str = "the run") -> None:
+    """UsageError if a job of ``simulated_s`` ({model: simulated seconds}; plus
+    ``per_run_s`` for each of ``runs`` runs), spread over ``workers`` processes, is expected
+    to take longer than ``args.max_hours``."""
+    from ..simulation import expected_wall_time
+    wall = sum(expected_wall_time(sim_s, model) for model, sim_s in simulated_s.items())
+    hours = (wall + per_run_s * runs) / max(1, workers) / 3600.0
+    if hours > args.max_hours:
+        raise UsageError(f"{what} would take about {hours:.3g} h of wall time (estimated from "
+                         f"the simulator's speed on a slow machine), more than --max-hours "
+                         f"{args.max_hours:g}; raise --max-hours to run it anyway")
 
 
 # -----------------------------------------------------------------------------------------

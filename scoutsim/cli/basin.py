@@ -22,9 +22,9 @@ from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_stats, basin_tasks,
                               run_basin_tasks)
 from ..parameters import floor_label
-from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, float_list, friction_list,
-                      integrator, load_parameters, out_dir, positive_int, show_progress,
-                      write_json)
+from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, check_expected_time, float_list,
+                      friction_list, integrator, load_parameters, out_dir, positive_int,
+                      show_progress, write_json)
 
 NAME = "basin"
 
@@ -97,6 +97,8 @@ def execute(args) -> int:
     grid = [(v, w, h) for v in args.speeds for w in args.pitch_rates for h in args.heights]
     floors = (args.floors if args.floors is not None else
               [args.friction] if getattr(args, "friction_given", False) else list(DEFAULT_FLOORS))
+    check_expected_time(args, {m: len(grid) * len(floors) * args.duration for m in models},
+                        workers=workers, what=f"the basin map of {len(grid)} starts")
     tasks = basin_tasks(models, floors, args.speeds, args.pitch_rates, args.heights,
                         args.duration, robot, controller, integ)
     if args.duration < 5.0:

@@ -32,9 +32,9 @@ from pathlib import Path
 from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
-from ._common import (MODELS, UsageError, command_wall_time, dumps, finite_float, integrator,
-                      load_parameters, out_dir, positive_float, show_progress, usage_errors,
-                      write_json)
+from ._common import (MODELS, UsageError, check_expected_time, command_wall_time, dumps,
+                      finite_float, integrator, load_parameters, out_dir, positive_float,
+                      show_progress, usage_errors, write_json)
 
 NAME = "run"
 
@@ -281,6 +281,7 @@ def execute(args) -> int:
     out = out_dir(args.out)
     progress = show_progress(args)
 
+    check_expected_time(args, {args.model: args.duration})
     stream = _stream_choice(args)
     load_s = warm_up()
     command = " ".join(["scoutsim"] + sys.argv[1:])

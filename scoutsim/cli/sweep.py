@@ -14,11 +14,15 @@ files of a complete sweep.
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 
-from ._common import (CONTROLLED_MODELS, UsageError, load_parameters, out_dir, positive_int,
-                      show_progress, usage_errors)
+from ._common import (CONTROLLED_MODELS, UsageError, check_expected_time, load_parameters,
+                      out_dir, positive_int, show_progress, usage_errors)
+
+#: wall seconds of --orbit per point (Newton on the stride map; "a few seconds")
+ORBIT_SECONDS_PER_POINT = 5.0
 
 NAME = "sweep"
 
@@ -130,6 +134,10 @@ def execute(args) -> int:
     if bool(args.grid) == bool(args.random):
         raise UsageError("give either --grid axes or --random parameters")
     points = _points(args)
+    check_expected_time(args, {args.model: len(points) * args.duration}, runs=len(points),
+                        per_run_s=ORBIT_SECONDS_PER_POINT if args.orbit else 0.0,
+                        workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
+                        what=f"the sweep of {len(points)} points")
     robot, controller = load_parameters(args.robot)
     out = out_dir(args.out)
     progress = show_progress(args)
