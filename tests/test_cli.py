@@ -3,9 +3,10 @@ messages, and the basin sweep."""
 
 import csv
 import json
-import subprocess
 import math
+import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -378,3 +379,16 @@ def test_jobs_expected_to_take_too_long_are_refused_before_starting(argv, messag
     err = capsys.readouterr().err
     assert message in err and "raise --max-hours" in err
     assert not list(tmp_path.iterdir())            # refused before anything was written
+
+
+def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_within_seconds(
+        tmp_path, monkeypatch, capsys):
+    import scoutsim.analysis.parallel as parallel
+    monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
+    t0 = time.perf_counter()
+    assert main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
+                 "--duration", "0.2", "--scheduler", "tcp://127.0.0.1:9",
+                 "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "no Dask scheduler answered there within 2 s" in err and "Traceback" not in err
+    assert time.perf_counter() - t0 < 10
