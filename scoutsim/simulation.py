@@ -302,8 +302,10 @@ class HybridEngine:
             event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
             steps=(self.steps[:self.stepc[0]].copy() if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
+            # (a run stopped before its first sample, e.g. by Ctrl-C: where it started)
             t_end=float(self.t_now if self.status != L.ST_RUNNING else
-                        self.out_t[n - 1] if n else last_sample_t),
+                        self.out_t[n - 1] if n else
+                        last_sample_t if last_sample_t is not None else self.t_now),
             stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
             | ({"event_records_lost": float(self.event_records_lost)}
                if self.event_records_lost else {})

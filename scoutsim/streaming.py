@@ -123,6 +123,8 @@ class RunStream:
         the run as a result."""
         whole.provenance["stream"] = {"directory": str(self.dir), "n_samples": self.n_samples,
                                       "keep_seconds": self.keep_seconds}
+        if not self._opened:      # stopped before its first rows: a directory that says so
+            self._open()
         try:
             for name, w in self._writers.items():
                 meta = whole.series_metadata() if name == "timeseries" else \
@@ -144,6 +146,9 @@ class RunStream:
 
     def _kept_result(self, whole: SimulationResult) -> SimulationResult:
         ch = self._kept
+        if not ch:                # nothing computed (stopped before the first sample)
+            whole.provenance["stream"]["kept_from_s"] = None
+            return whole
         t = np.concatenate([c.t for c in ch]) if ch else np.zeros(0)
         start = (t[-1] - self.keep_seconds) if len(t) else 0.0
         i0 = int(np.searchsorted(t, start, side="left"))

@@ -150,3 +150,19 @@ def test_cli_stream_writes_the_tables_of_the_run_in_memory(tmp_path, capsys):
     assert main([*base, "--stream", "--csv", "--out", str(tmp_path / "x")]) == 2
     assert "--csv is not allowed with a streamed run" in capsys.readouterr().err
     assert main([*base, "--keep", "3", "--out", str(tmp_path / "x")]) == 2
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_ctrl_c_before_the_first_sample_returns_an_empty_interrupted_run(tmp_path, monkeypatch,
+                                                                         streamed):
+    """Ctrl-C as the run starts (found by a sweep's process test: it raised TypeError)."""
+    def advance(self, *args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(HybridEngine, "advance", advance)
+    kw = {"stream_to": tmp_path / "s"} if streamed else {}
+    r = simulate(duration=5.0, **kw)
+    assert r.outcome == "interrupted" and r.t_end == 0.0 and len(r.t) == 0
+    assert r.summary()["outcome"] == "interrupted"
+    if streamed:
+        assert check_run_directory(tmp_path / "s")["status"] == "partial"

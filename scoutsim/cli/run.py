@@ -325,7 +325,7 @@ def execute(args) -> int:
             print("  (passive model: no actuators, so legs with mass swing freely at the hips "
                   "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
                   "passively: see scoutsim orbit --passive)")
-        if stream:
+        if stream and result.provenance["stream"]["kept_from_s"] is not None:
             kept = result.provenance["stream"]["kept_from_s"]
             print(f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "
                   "the tables hold the whole run)")
