@@ -16,8 +16,9 @@ What the local pool survives (``tests/analysis/test_parallel.py`` and the proces
 of ``tests/analysis/test_sweep_processes.py``):
 
 - **Ctrl-C** (SIGINT to the parent, or to the whole process group from a terminal): the
-  workers ignore SIGINT; the parent keeps the results that had already arrived, stops the
-  workers at once and raises ``KeyboardInterrupt``. A task whose run was cut is never
+  workers ignore SIGINT (they are spawned with it blocked, then ignore it); the parent
+  keeps the results that had already arrived, stops the workers at once and raises
+  ``KeyboardInterrupt``. A task whose run was cut is never
   reported as done.
 - **A killed worker** (SIGKILL, the out-of-memory killer, a crash) breaks the pool: the
   tasks that had not started are run again without penalty, and the tasks of the batches
@@ -215,18 +216,19 @@ def _new_pool(workers: int, started=None):
 
 @contextlib.contextmanager
 def _workers_ignore_sigint():
-    """Ignore SIGINT while the pool spawns its workers (in ``submit``): a spawned process
-    keeps an ignored signal through ``exec`` and Python then leaves it ignored, so a
-    Ctrl-C can never reach a worker still importing, before its initialiser runs. Only the
-    main thread can change a handler; elsewhere this does nothing."""
+    """Block SIGINT in this thread while the pool spawns its workers (in ``submit``): a
+    spawned process keeps the signal mask through ``exec``, so a Ctrl-C can never reach a
+    worker still importing, before its initialiser ignores SIGINT; the threads the pool
+    starts here keep it blocked too. A Ctrl-C meanwhile is held, not lost: it is delivered
+    here when the block ends."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _stop_pool(pool) -> None:

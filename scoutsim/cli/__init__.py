@@ -119,8 +119,12 @@ def console_main() -> None:
     pyarrow) would add about 0.15-0.3 s to every such command and does nothing a user
     needs."""
     argv = sys.argv[1:]
-    code = main(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
+    try:
+        code = main(argv)
+    except KeyboardInterrupt:   # Ctrl-C while the command starts (imports, options)
+        print(f"scoutsim {command or ''}: interrupted".replace("  ", " "), file=sys.stderr)
+        code = 130
     if command in FAST_EXIT_COMMANDS:
         try:
             sys.stdout.flush()
