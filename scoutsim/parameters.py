@@ -765,11 +765,13 @@ def _check_fields(obj: object, origins) -> None:
         if spec.kind == "bool":
             continue
         rule = _RULES.get(name)
-        text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
-        if not math.isfinite(value):
-            _fail(spec, value, f"must be finite and {text}", origins)
-        if rule is not None and not rule.contains(value):
-            _fail(spec, value, f"must be {text}", origins)
+        finite = math.isfinite(value)
+        if not finite or (rule is not None and not rule.contains(value)):
+            # (the message is composed only for a value that fails: every simulate()
+            # checks every field)
+            text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
+            _fail(spec, value, f"must be finite and {text}" if not finite else f"must be {text}",
+                  origins)
         limit = _LIMITS.get(name)
         if limit is not None and value > limit.hi:
             _fail(spec, value, f"must be {_describe_limit(rule, limit, spec)} ({limit.why})",

@@ -296,11 +296,11 @@ class HybridEngine:
         n = self.n_out
         m = min(self.nev, self.ev.shape[0])
         return SimulationResult(
-            t=self.out_t[:n].copy(), state=self.out_s[:n].copy(),
-            aux=self.out_aux[:n].copy(), modes=self.out_ls[:n].copy(),
-            events=self.ev[:m, :L.NEVREC].copy(),
+            t=_kept(self.out_t, n), state=_kept(self.out_s, n),
+            aux=_kept(self.out_aux, n), modes=_kept(self.out_ls, n),
+            events=self.ev[:m, :L.NEVREC].copy(),      # (contiguous: a few hundred kB)
             event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
-            steps=(self.steps[:self.stepc[0]].copy() if self.stepc[1] else None),
+            steps=(_kept(self.steps, int(self.stepc[0])) if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
             # (a run stopped before its first sample, e.g. by Ctrl-C: where it started)
             t_end=float(self.t_now if self.status != L.ST_RUNNING else
@@ -311,6 +311,14 @@ class HybridEngine:
                if self.event_records_lost else {})
             | (extra_stats or {}),
             provenance=provenance)
+
+
+def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` rows of an engine buffer for a result: a view when the run filled
+    most of the buffer (the engine is dropped after the run: copying 10 s of samples
+    took 2.4 ms of a 42 ms run), a copy when it ended early (a run that fell at 1 s of
+    10 s would otherwise keep the whole buffer alive)."""
+    return buffer[:n] if 2 * n >= buffer.shape[0] else buffer[:n].copy()
 
 
 def run_bench(robot: RobotParameters, model: str, start_state, duration: float, *,
