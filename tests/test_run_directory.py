@@ -81,9 +81,9 @@ def test_an_interrupted_simulation_is_written_as_partial_with_exit_130(tmp_path,
     assert json.loads((tmp_path / "summary.json").read_text())["outcome"] == "interrupted"
 
 
-def _start_run(out, duration):
+def _start_run(out, duration, *options):
     return subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration",
-                             str(duration), "--out", str(out), "--no-progress"],
+                             str(duration), "--out", str(out), "--no-progress", *options],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 
 
@@ -187,9 +187,7 @@ def test_ctrl_c_while_writing_completes_the_outputs_then_exits_130(tmp_path):
     """A real process: SIGINT while the outputs are written holds until they are whole."""
     scoutsim.simulate(duration=0.01)
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration", "200",
-                             "--csv", "--out", str(out), "--no-progress"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = _start_run(out, 200, "--csv")        # (--csv: writing takes about a second)
     _wait_for_writing(out, proc)
     proc.send_signal(signal.SIGINT)
     assert proc.wait(timeout=120) == 130
@@ -202,9 +200,7 @@ def test_ctrl_c_while_writing_completes_the_outputs_then_exits_130(tmp_path):
 def test_a_second_ctrl_c_while_writing_abandons_the_outputs_cleanly(tmp_path):
     scoutsim.simulate(duration=0.01)
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration", "200",
-                             "--csv", "--out", str(out), "--no-progress"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    proc = _start_run(out, 200, "--csv")        # (--csv: writing takes about a second)
     _wait_for_writing(out, proc)
     proc.send_signal(signal.SIGINT)
     time.sleep(0.05)

@@ -32,6 +32,7 @@ from pathlib import Path
 from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
+from ..streaming import DEFAULT_KEEP_SECONDS
 from ._common import (MODELS, UsageError, check_expected_time, command_wall_time, dumps,
                       finite_float, integrator, load_parameters, out_dir, positive_float,
                       show_progress, usage_errors, write_json)
@@ -88,7 +89,7 @@ def register(sub, common) -> None:
                           "the run would not fit in memory")
     run.add_argument("--keep", type=positive_float, default=None, metavar="S",
                      help="with --stream: seconds at the end of the run kept in memory for "
-                          "the summary and figures (default: 60)")
+                          f"the summary and figures (default: {DEFAULT_KEEP_SECONDS:g})")
     run.add_argument("--no-size-check", action="store_true",
                      help="skip the checks of the memory and disk space the run needs (and "
                           "do not stream because of them)")
@@ -185,7 +186,6 @@ def _stream_choice(args) -> bool:
                          "run (it needs the whole time series in memory): read the streamed "
                          "tables instead (SimulationResult.load(DIR))")
     if stream and not args.stream:
-        from ..streaming import DEFAULT_KEEP_SECONDS
         print(f"scoutsim run: {args.duration:g} s would not fit in memory: streaming the "
               "tables to disk as they are computed (the summary covers the last "
               f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)", file=sys.stderr)
