@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import os
 import time
+import warnings
 from pathlib import Path
 from collections import namedtuple
 from dataclasses import asdict, dataclass
@@ -549,7 +550,11 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         Time series at the control samples, events, outcome and provenance. A run that
         falls or fails numerically returns normally with ``outcome`` saying so and the data
         up to that point; a KeyboardInterrupt also returns the data computed so far
-        (``outcome = "interrupted"``; a streamed run writes it, marked partial).
+        (``outcome = "interrupted"``; a streamed run writes it, marked partial). A streamed
+        run whose tables the disk refuses (full) stops there with ``outcome =
+        "write_failed"`` (and a RuntimeWarning): the tables keep what was written, as far
+        as the disk allows (``result.provenance["stream"]``: ``write_error``,
+        ``written_until_s``, ``tables_kept``), the result the run's last ``keep_seconds``.
     """
     robot = validate_robot(robot if robot is not None else RobotParameters())
     integ = (integrator or IntegratorSettings()).resolve(model)
@@ -660,6 +665,11 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                 bar.update(round((eng.k - k_prev) * dt, 6))
     except KeyboardInterrupt:
         interrupted = True
+    except OSError as exc:
+        if stream is None or exc is not stream.write_error:
+            raise
+        # the disk refused a piece of a streamed run (full): the run stops there and
+        # returns what it has (outcome "write_failed", below)
     except BaseException:
         if stream is not None:
             stream.abort()
@@ -686,14 +696,26 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     }
     if stream is None:
         return eng.result(provenance, interrupted, {"wall_time_s": wall})
-    try:
-        stream.take(eng)       # a Ctrl-C between the compiled call and take(): its rows
-    except BaseException:
-        stream.abort()
-        raise
+    if stream.write_error is None:
+        try:
+            stream.take(eng)   # a Ctrl-C between the compiled call and take(): its rows
+        except OSError as exc:
+            if exc is not stream.write_error:
+                stream.abort()
+                raise
+        except BaseException:
+            stream.abort()
+            raise
     whole = eng.result(provenance, interrupted, {"wall_time_s": wall},
                        last_sample_t=stream.last_sample_t)
-    return stream.finish(whole, partial=interrupted)
+    if stream.write_error is not None:
+        whole.outcome = "write_failed"
+        warnings.warn(f"simulate: the streamed run's tables could not be written to "
+                      f"{stream.dir} ({stream.write_error}); the run stopped at t = "
+                      f"{whole.t_end:g} s: the result holds its last "
+                      f"{stream.keep_seconds:g} s, result.provenance['stream'] says what the "
+                      "tables kept", RuntimeWarning, stacklevel=2)
+    return stream.finish(whole, partial=interrupted or stream.write_error is not None)
 
 
 def _sensors(s, cparams, model):

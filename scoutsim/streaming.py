@@ -65,8 +65,12 @@ class RunStream:
         self._writers: dict[str, TableWriter] = {}
         self._kept: list[SimulationResult] = []     # chunks within the kept window
         self.n_samples = 0
-        #: time of the last sample written [s] (None before the first)
+        #: time of the last sample computed [s] (None before the first)
         self.last_sample_t: float | None = None
+        #: time of the last sample handed to the time-series table [s]
+        self.written_until_s: float | None = None
+        #: the OSError that stopped the writing (a full disk), or None
+        self.write_error: OSError | None = None
 
     # -- while the run goes -----------------------------------------------------------
     def _open(self) -> None:
@@ -92,18 +96,30 @@ class RunStream:
             event_states=eng.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
             steps=eng.steps[:nst].copy() if eng.stepc[1] else None,
             outcome="running", t_end=float(eng.t_now), stats={}, provenance={})
-        for name, (cols, units) in chunk.tables().items():
+        # kept (and the buffers emptied) before writing: a piece the disk refuses is still
+        # in the returned result
+        eng.n_out = eng.nev = 0
+        eng.stepc[0] = 0
+        self._keep(chunk)
+        if n:
+            self.last_sample_t = float(chunk.t[-1])
+        tables = chunk.tables()
+        # the time series last: if the disk refuses a piece, the events and steps tables
+        # may hold it while the time series (whose metadata says where the run got to)
+        # does not
+        for name in sorted(tables, key=lambda name: name == "timeseries"):
+            cols, units = tables[name]
             w = self._writers.get(name)
             if w is None:
                 w = self._writers[name] = TableWriter(self.dir / name, units=units,
                                                       fmt=self.fmt)
-            w.append(cols)
-        eng.n_out = eng.nev = 0
-        eng.stepc[0] = 0
+            try:
+                w.append(cols)
+            except OSError as exc:
+                self.write_error = exc
+                raise
         self.n_samples += n
-        if n:
-            self.last_sample_t = float(chunk.t[-1])
-        self._keep(chunk)
+        self.written_until_s = self.last_sample_t
 
     def _keep(self, chunk: SimulationResult) -> None:
         self._kept.append(chunk)
@@ -125,6 +141,9 @@ class RunStream:
                                       "keep_seconds": self.keep_seconds}
         if not self._opened:      # stopped before its first rows: a directory that says so
             self._open()
+        if self.write_error is not None:
+            self._salvage(whole)
+            return self._kept_result(whole)
         try:
             for name, w in self._writers.items():
                 meta = whole.series_metadata() if name == "timeseries" else \
@@ -137,6 +156,31 @@ class RunStream:
         if self._own:
             self._rd.finish(outcome=whole.outcome, partial=partial)
         return self._kept_result(whole)
+
+    def _salvage(self, whole: SimulationResult) -> None:
+        """After a write error (``whole.outcome`` "write_failed"): close each table with
+        the rows it has, as far as the disk allows (a table that cannot be closed is
+        removed), and mark the directory partial; what happened goes into the provenance.
+        Nothing here raises: the caller still gets the kept end of the run."""
+        info = whole.provenance["stream"]
+        info["write_error"] = f"{self.write_error.strerror or self.write_error}"
+        info["written_until_s"] = self.written_until_s
+        info["tables_kept"] = []
+        for name, w in self._writers.items():
+            meta = whole.series_metadata() if name == "timeseries" else {"format": TABLES_FORMAT}
+            if name == "timeseries":
+                meta["t_end"] = self.written_until_s    # where its samples end
+            try:
+                w.close(metadata=meta)
+            except Exception:  # noqa: BLE001 - the disk's or pyarrow's error: close() removed
+                continue       # the table's files, the others may still be kept
+            self._rd.add(w.path.name)
+            info["tables_kept"].append(w.path.name)
+        if self._own:
+            try:
+                self._rd.finish(outcome=whole.outcome, partial=True)
+            except OSError:
+                pass                                    # the manifest keeps saying "writing"
 
     def abort(self) -> None:
         """Give the tables up (their temporary files are removed; the manifest keeps

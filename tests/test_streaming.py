@@ -167,3 +167,63 @@ def test_ctrl_c_before_the_first_sample_returns_an_empty_interrupted_run(tmp_pat
     assert r.summary()["outcome"] == "interrupted"
     if streamed:
         assert check_run_directory(tmp_path / "s")["status"] == "partial"
+
+
+def _disk_full_at_the_second_piece(monkeypatch):
+    """TableWriter.append fails as a full disk does at the time series' second piece."""
+    import errno
+
+    from scoutsim.tables import TableWriter
+    real = TableWriter.append
+    calls = {"timeseries": 0}
+
+    def append(self, columns):
+        if self.path.name.startswith("timeseries"):
+            calls["timeseries"] += 1
+            if calls["timeseries"] == 2:
+                raise OSError(errno.ENOSPC, "No space left on device", str(self._tmp))
+        return real(self, columns)
+
+    monkeypatch.setattr(TableWriter, "append", append)
+
+
+def test_a_full_disk_stops_a_streamed_run_and_keeps_what_was_written(tmp_path, monkeypatch):
+    whole = simulate(duration=40.0)
+    _disk_full_at_the_second_piece(monkeypatch)
+    with pytest.warns(RuntimeWarning, match="could not be written"):
+        kept = simulate(duration=40.0, stream_to=tmp_path / "s", keep_seconds=15.0)
+    # the run stopped after its second 10 s piece; the result holds it
+    assert kept.outcome == "write_failed" and kept.t_end == pytest.approx(19.999)
+    i0 = int(np.searchsorted(whole.t, 19.999 - 15.0 - 1e-9))     # the last 15 s, 4.999 on
+    assert kept.t[0] == pytest.approx(4.999) and np.array_equal(kept.state,
+                                                                whole.state[i0:20000])
+    info = kept.provenance["stream"]
+    assert info["write_error"] == "No space left on device"
+    assert info["written_until_s"] == pytest.approx(9.999)
+    assert sorted(info["tables_kept"]) == ["events.parquet", "timeseries.parquet"]
+    manifest = check_run_directory(tmp_path / "s")
+    assert manifest["status"] == "partial" and manifest["outcome"] == "write_failed"
+    back = SimulationResult.load(tmp_path / "s")       # the first piece, whole
+    assert np.array_equal(back.state, whole.state[:10000]) and back.t_end == pytest.approx(9.999)
+
+
+def test_cli_full_disk_in_a_streamed_run_exits_74_and_saves_the_kept_end(
+        tmp_path, monkeypatch, capsys):
+    import re
+    import tempfile
+
+    from scoutsim.cli import main
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    _disk_full_at_the_second_piece(monkeypatch)
+    out = tmp_path / "out"
+    with pytest.warns(RuntimeWarning):
+        code = main(["run", "--duration", "40", "--stream", "--keep", "5", "--no-progress",
+                     "--out", str(out)])
+    assert code == 74
+    err = capsys.readouterr().err
+    assert "No space left on device; the run stopped at t = 19.999 s" in err
+    assert re.search(r"keeps (events|timeseries)\.parquet, (events|timeseries)\.parquet "
+                     r"\(samples up to t = 9\.999 s\)", err)
+    rescued = SimulationResult.load(re.search(r"saved instead to (\S+\.npz)", err).group(1))
+    assert rescued.t[0] == pytest.approx(14.999) and rescued.t_end == pytest.approx(19.999)
+    assert check_run_directory(out)["status"] == "partial"

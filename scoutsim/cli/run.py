@@ -152,7 +152,26 @@ def _ctrl_c_deferred():
         signal.signal(signal.SIGINT, previous)
 
 
-def _rescue(result) -> str:
+def _streamed_write_failed(result, out, rd) -> int:
+    """A streamed run whose tables the disk refused: say what the directory kept, mark it
+    partial, save the kept end of the run elsewhere."""
+    info = result.provenance["stream"]
+    print(f"scoutsim run: error: could not write the run's tables to {out}/: "
+          f"{info['write_error']}; the run stopped at t = {result.t_end:g} s", file=sys.stderr)
+    kept = ", ".join(info["tables_kept"]) or "no table"
+    until = info["written_until_s"]
+    print(f"scoutsim run: {out}/ keeps {kept}" + (f" (samples up to t = {until:g} s)"
+                                                   if until is not None else ""),
+          file=sys.stderr)
+    try:
+        rd.finish(outcome=result.outcome, partial=True)
+    except OSError:
+        pass                            # (the manifest keeps saying "writing")
+    print(_rescue(result, f"the run's last {info['keep_seconds']:g} s"), file=sys.stderr)
+    return EXIT_WRITE_FAILED
+
+
+def _rescue(result, what: str = "the run's data") -> str:
     """Save a run whose output directory failed somewhere else (the system's temporary
     directory, then the home directory): what was computed is not lost. The message."""
     import os
@@ -163,9 +182,9 @@ def _rescue(result) -> str:
             path = result.save(d / name)
         except OSError:
             continue
-        return (f"scoutsim run: the run's data were saved instead to {path} "
+        return (f"scoutsim run: {what} saved instead to {path} "
                 "(SimulationResult.load reads it)")
-    return "scoutsim run: the run's data could not be saved anywhere (no space left?)"
+    return f"scoutsim run: {what} could not be saved anywhere (no space left?)"
 
 
 def _stream_choice(args) -> bool:
@@ -297,6 +316,8 @@ def execute(args) -> int:
                           **({"keep_seconds": args.keep, "table_format": args.format}
                              if stream else {}))
     wall = time.perf_counter() - wall0
+    if result.outcome == "write_failed":
+        return _streamed_write_failed(result, out, rd)
 
     summary = result.summary()
     interrupted = result.outcome == "interrupted"
