@@ -62,3 +62,18 @@ def test_an_unreachable_scheduler_is_named_within_seconds(monkeypatch):
                                                          r"scheduler answered"):
         map_tasks(_square_or_die_once, [(1, "x"), (2, "x")], scheduler="tcp://127.0.0.1:9")
     assert time.perf_counter() - t0 < 10     # (Dask's own default: 30 s, then a traceback)
+
+
+def test_on_a_dask_cluster_a_task_that_kills_its_worker_fails_alone():
+    """Dask reschedules the tasks of a dead worker itself and gives one up after
+    ``distributed.scheduler.allowed-failures`` deaths (KilledWorker): that task gets its
+    error row, the others complete."""
+    distributed = pytest.importorskip("distributed")
+    import dask
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
+            distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                     dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        out = map_tasks(_square_or_die, list(range(8)), scheduler=client, error_row=_failed)
+    assert out[3][:2] == ("failed", "KilledWorker")
+    assert [o for i, o in enumerate(out) if i != 3] == [i * i for i in range(8) if i != 3]
