@@ -25,6 +25,10 @@ of ``tests/analysis/test_sweep_processes.py``):
   that were running in a worker when it died are retried once, each alone in a worker of
   its own; a task whose worker dies again is reported as failed with the reason
   (:class:`WorkerDiedError`), the others complete.
+- **On a Dask cluster** Dask reschedules a dead worker's tasks and gives a task up after
+  ``distributed.scheduler.allowed-failures`` deaths (KilledWorker); since the tasks held by a
+  worker die with the one that kills it, each task given up is run once more alone, and
+  only a second KilledWorker fails it.
 - **A killed parent**: each worker watches its parent and exits within
   :data:`PARENT_POLL_S` seconds of the parent's death (plus the rest of the compiled call
   it is in); no worker outlives the sweep.
@@ -327,6 +331,7 @@ def _map_dask(func, tasks, scheduler, done, failed):
                 "address as tcp://HOST:PORT") from None
     else:
         client = scheduler
+    from distributed import KilledWorker
     futures = []
     try:
         nw = max(1, len(client.scheduler_info().get("workers", {})))
@@ -334,8 +339,24 @@ def _map_dask(func, tasks, scheduler, done, failed):
         futures = client.map(functools.partial(_run_batch, func, None),
                              [[tasks[i] for i in b] for b in batches], pure=False)
         index = {f.key: b for f, b in zip(futures, batches)}
+        suspects = []
         for fut in as_completed(futures):
+            if fut.status == "error" and isinstance(fut.exception(), KilledWorker):
+                suspects += index[fut.key]      # sorted out below, one at a time
+                continue
             _collect(index[fut.key], fut, done, failed)
+        # Dask gave these up because workers died while they were there; but a worker
+        # runs or holds several tasks, and the others die with the one that kills it. Each
+        # runs once more alone, nothing else in flight: a KilledWorker now is its own.
+        for i in suspects:
+            futures = [client.submit(_run_batch, func, None, [tasks[i]], pure=False)]
+            try:
+                futures[0].result()
+            except KilledWorker:
+                pass
+            except Exception:  # noqa: BLE001 - reported by _collect
+                pass
+            _collect([i], futures[0], done, failed)
     except BaseException:
         if futures:
             client.cancel(futures)

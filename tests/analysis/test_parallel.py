@@ -64,15 +64,18 @@ def test_an_unreachable_scheduler_is_named_within_seconds(monkeypatch):
     assert time.perf_counter() - t0 < 10     # (Dask's own default: 30 s, then a traceback)
 
 
-def test_on_a_dask_cluster_a_task_that_kills_its_worker_fails_alone():
+@pytest.mark.parametrize("n_workers, threads", [(2, 1), (1, 2)])
+def test_on_a_dask_cluster_a_task_that_kills_its_worker_fails_alone(n_workers, threads):
     """Dask reschedules the tasks of a dead worker itself and gives one up after
-    ``distributed.scheduler.allowed-failures`` deaths (KilledWorker): that task gets its
-    error row, the others complete."""
+    ``distributed.scheduler.allowed-failures`` deaths (KilledWorker), also an innocent
+    task the worker held (seen in CI: task 1 given up with task 3); each given-up task runs
+    once more alone: only the one that kills its worker gets its error row. (With one
+    worker of two threads, the task running beside the killer is given up every time.)"""
     distributed = pytest.importorskip("distributed")
     import dask
     with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
-            distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                     dashboard_address=None) as cluster, \
+            distributed.LocalCluster(n_workers=n_workers, threads_per_worker=threads,
+                                     processes=True, dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         out = map_tasks(_square_or_die, list(range(8)), scheduler=client, error_row=_failed)
     assert out[3][:2] == ("failed", "KilledWorker")
