@@ -8,6 +8,7 @@ JSON).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import zipfile
 from dataclasses import dataclass, field
@@ -274,6 +275,20 @@ class SimulationResult:
             self._cache[key] = diagnose_failure(self)
         return self._cache[key]
 
+    def window(self, t0: float, t1: float) -> "SimulationResult":
+        """The samples, events and steps with t0 <= t <= t1 [s] (outcome, end time,
+        statistics and provenance stay the whole run's)."""
+        def cut(a, t):
+            return a[(t >= t0) & (t <= t1)]
+        return dataclasses.replace(
+            self, t=cut(self.t, self.t), state=cut(self.state, self.t),
+            aux=cut(self.aux, self.t), modes=cut(self.modes, self.t),
+            events=cut(self.events, self.events[:, L.EVR_T]),
+            event_states=(None if self.event_states is None else
+                          cut(self.event_states, self.events[:, L.EVR_T])),
+            steps=None if self.steps is None else cut(self.steps, self.steps[:, L.STP_T]),
+            _cache={})
+
     @property
     def fell(self) -> bool:
         return self.outcome == "fell"
@@ -292,14 +307,20 @@ class SimulationResult:
         return path if path.suffix == ".npz" else path.with_suffix(path.suffix + ".npz")
 
     @classmethod
-    def load(cls, path) -> "SimulationResult":
-        """Load a result written by :meth:`save` (``.npz``) or by :meth:`save_tables` (the
-        directory, or its ``timeseries`` table), bit for bit."""
+    def load(cls, path, *, t_range: tuple[float, float] | None = None) -> "SimulationResult":
+        """Load a result written by :meth:`save` (``.npz``) or by :meth:`save_tables` or a
+        streamed run (the directory, or its ``timeseries`` table), bit for bit.
+
+        ``t_range`` = (t0, t1) [s]: only the samples, events and steps in that window (from
+        Parquet tables only the row groups that hold them are read: a window of a long
+        streamed run needs the memory of the window); outcome, end time, statistics and
+        provenance stay the whole run's."""
         path = Path(path)
         if path.is_dir() or not path.name.lower().endswith(".npz"):
-            return cls._load_tables(path)
+            return cls._load_tables(path, t_range)
         try:
-            return cls._load_npz(path)
+            r = cls._load_npz(path)
+            return r if t_range is None else r.window(*t_range)
         except (EOFError, zipfile.BadZipFile, KeyError, json.JSONDecodeError) as exc:
             size = path.stat().st_size
             what = "it is empty (0 bytes)" if size == 0 else \
@@ -404,7 +425,7 @@ class SimulationResult:
                 "event_states": self.event_states is not None}
 
     @classmethod
-    def _load_tables(cls, path: Path) -> "SimulationResult":
+    def _load_tables(cls, path: Path, t_range=None) -> "SimulationResult":
         from .run_directory import check_run_directory
         from .tables import SUFFIXES, TableError, read_table
         # a run directory with a manifest must have been written completely
@@ -416,7 +437,7 @@ class SimulationResult:
                 raise TableError(f"{path}: no timeseries table "
                                  f"({', '.join('timeseries' + x for x in SUFFIXES.values())})")
             path = found[0]
-        series, meta = read_table(path)
+        series, meta = read_table(path, t_range=t_range)
         if meta.get("format") != TABLES_FORMAT:
             raise TableError(f"{path}: not the time series of a scoutsim run")
         suffix = next(x for x in SUFFIXES.values() if path.name.lower().endswith(x))
@@ -436,7 +457,7 @@ class SimulationResult:
             for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
                                (L.RM_MOTOR_B, "motor_joint_mode")):
                 modes[:, base + leg] = series[f"{what}_{L.LEG_NAMES[leg]}"]
-        ev, _ = read_table(d / f"events{suffix}")
+        ev, _ = read_table(d / f"events{suffix}", t_range=t_range)
         m = len(ev["t"])
         events = np.zeros((m, L.NEVREC))
         for col, name in ((L.EVR_T, "t"), (L.EVR_KIND, "kind"), (L.EVR_LEG, "leg"),
@@ -452,7 +473,7 @@ class SimulationResult:
                     event_states[:, slot, i] = ev[f"{name}_{when}"]
         steps = None
         if (d / f"steps{suffix}").exists():
-            st, _ = read_table(d / f"steps{suffix}")
+            st, _ = read_table(d / f"steps{suffix}", t_range=t_range)
             steps = np.zeros((len(st["t"]), L.NSTEPREC))
             steps[:, L.STP_T] = st["t"]
             for i, name in enumerate(L.STATE_NAMES):

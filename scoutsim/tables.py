@@ -278,18 +278,28 @@ def read_metadata(path) -> dict:
     return json.loads(raw)
 
 
-def read_table(path) -> tuple[dict, dict]:
-    """(columns, metadata) of a table written by :func:`write_table`, with the dtypes it
-    was written with."""
+def read_table(path, *, t_range: tuple[float, float] | None = None) -> tuple[dict, dict]:
+    """(columns, metadata) of a table written by :func:`write_table` (or
+    :class:`TableWriter`), with the dtypes it was written with.
+
+    ``t_range`` = (t0, t1): only the rows with t0 <= column ``t`` <= t1 [s]. A Parquet
+    table reads only the row groups that can hold them (their statistics), so a window of a
+    run streamed to disk costs what the window holds; a CSV table is read whole, then cut.
+    """
     path = Path(path)
     info = read_metadata(path)
     spec = info["columns"]
     if _format_of(path) == "parquet":
         import pyarrow.parquet as pq
-        table = pq.read_table(path)
+        filters = None if t_range is None else [("t", ">=", float(t_range[0])),
+                                                ("t", "<=", float(t_range[1]))]
+        table = pq.read_table(path, filters=filters)
         cols = {n: table.column(n).to_numpy(zero_copy_only=False) for n in spec}
     else:
         cols = _read_csv(path, spec)
+        if t_range is not None:
+            keep = (cols["t"] >= t_range[0]) & (cols["t"] <= t_range[1])
+            cols = {n: c[keep] for n, c in cols.items()}
     for n, d in spec.items():
         cols[n] = cols[n].astype(str) if d["dtype"] == "str" else cols[n].astype(d["dtype"])
     return cols, info["metadata"]

@@ -38,3 +38,19 @@ def test_plot_is_the_run_figure(run, tmp_path):
     assert (tmp_path / "run.png").stat().st_size > 20_000
     assert len(fig.get_axes()) >= 4
     assert "Model II" in fig._suptitle.get_text()
+
+
+def test_a_window_of_a_saved_run_loads_the_same_from_tables_and_npz(tmp_path):
+    import scoutsim
+    from scoutsim import SimulationResult
+    r = scoutsim.simulate(duration=3.0)
+    r.save_tables(tmp_path)
+    r.save(tmp_path / "r.npz")
+    ref = r.window(1.0, 2.0)
+    assert ref.t[0] == 1.0 and ref.t[-1] == 2.0 and len(ref.t) == 1001
+    assert np.all((ref.events[:, 0] >= 1.0) & (ref.events[:, 0] <= 2.0))
+    for loaded in (SimulationResult.load(tmp_path, t_range=(1.0, 2.0)),
+                   SimulationResult.load(tmp_path / "r.npz", t_range=(1.0, 2.0))):
+        assert np.array_equal(loaded.state, ref.state)
+        np.testing.assert_array_equal(loaded.events, ref.events)
+        assert loaded.t_end == r.t_end and loaded.outcome == r.outcome

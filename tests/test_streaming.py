@@ -227,3 +227,30 @@ def test_cli_full_disk_in_a_streamed_run_exits_74_and_saves_the_kept_end(
     rescued = SimulationResult.load(re.search(r"saved instead to (\S+\.npz)", err).group(1))
     assert rescued.t[0] == pytest.approx(14.999) and rescued.t_end == pytest.approx(19.999)
     assert check_run_directory(out)["status"] == "partial"
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_a_window_of_a_streamed_run_loads_without_the_rest(tmp_path, fmt):
+    """SimulationResult.load(DIR, t_range=...) of a streamed run (Parquet: one row group per
+    10 s piece, only those the window touches are read) equals the window of the run."""
+    whole = simulate(duration=35.0, record_steps=True)
+    simulate(duration=35.0, record_steps=True, stream_to=tmp_path / "s", table_format=fmt)
+    win = SimulationResult.load(tmp_path / "s", t_range=(12.25, 13.5))
+    ref = whole.window(12.25, 13.5)
+    assert win.t[0] == pytest.approx(12.25) and win.t[-1] == pytest.approx(13.5)
+    for name in ("t", "state", "aux", "modes", "steps"):
+        assert np.array_equal(getattr(win, name), getattr(ref, name)), name
+    np.testing.assert_array_equal(win.events, ref.events)
+    np.testing.assert_array_equal(win.event_states, ref.event_states)
+    assert len(ref.events) > 0 and win.t_end == whole.t_end
+
+
+def test_plot_of_a_streamed_run_draws_its_kept_end_unless_told(tmp_path, capsys):
+    from scoutsim.cli import main
+    simulate(duration=30.0, stream_to=tmp_path / "s", keep_seconds=4.0)
+    assert main(["plot", str(tmp_path / "s"), "--out", str(tmp_path / "end.png")]) == 0
+    assert "streamed run: plotting its last 4 s (t = 26 - 30 s" in capsys.readouterr().out
+    assert main(["plot", str(tmp_path / "s"), "--t0", "3", "--t1", "5", "--out",
+                 str(tmp_path / "early.png")]) == 0
+    assert (tmp_path / "end.png").stat().st_size > 0 and (tmp_path / "early.png").exists()
+    assert main(["plot", str(tmp_path / "s"), "--t0", "40", "--t1", "50"]) == 2

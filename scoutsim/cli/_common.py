@@ -316,16 +316,16 @@ def is_saved_run(p: Path) -> bool:
         return False
 
 
-def load_result(p: Path):
+def load_result(p: Path, t_range: tuple[float, float] | None = None):
     """A run saved by ``scoutsim run``: its output directory (or timeseries table) or a
-    result.npz."""
+    result.npz (``t_range``: only that window [s], SimulationResult.load)."""
     from ..result import SimulationResult
     from ..tables import TableError
     if not is_saved_run(p):
         raise UsageError(f"input '{p}' is not a saved run: expected the output directory of "
                          "`scoutsim run`, its timeseries table or a result.npz")
     try:
-        return SimulationResult.load(p)
+        return SimulationResult.load(p, t_range=t_range)
     except (OSError, ValueError, KeyError, TableError) as exc:
         raise UsageError(f"cannot read result '{p}': {exc}") from None
 

@@ -34,6 +34,32 @@ def register(sub, common) -> None:
     plot.set_defaults(func=execute)
 
 
+def _run_extent(p: Path):
+    """(first sample time, last sample time [s], kept seconds if the run was streamed to disk
+    else None, the run if it had to be loaded whole for this) of a saved run, from its
+    metadata where it has some (the tables of a long streamed run are not read whole)."""
+    from ..run_directory import IncompleteRunError, check_run_directory
+    from ..tables import SUFFIXES, TableError, read_metadata
+    table = None
+    if p.is_dir():
+        table = next((p / f"timeseries{x}" for x in SUFFIXES.values()
+                      if (p / f"timeseries{x}").exists()), None)
+    elif not p.name.lower().endswith(".npz"):
+        table = p
+    if table is not None:
+        try:
+            check_run_directory(table.parent)
+            meta = read_metadata(table)["metadata"]
+        except (IncompleteRunError, TableError, OSError, ValueError, KeyError) as exc:
+            raise UsageError(f"cannot read result '{p}': {exc}") from None
+        stream = (meta.get("provenance") or {}).get("stream")
+        # (t_end: where the run got to; a run starts at t = 0)
+        return (0.0, float(meta["t_end"]), None if stream is None else stream["keep_seconds"],
+                None)
+    r = load_result(p)
+    return (float(r.t[0]), float(r.t[-1]), None, r) if len(r.t) else (0.0, 0.0, None, r)
+
+
 def execute(args) -> int:
     from ..validation.logs import LOG_SUFFIXES, LogError, load_log
     p = input_file(args.input, directory_ok=True)
@@ -60,16 +86,22 @@ def execute(args) -> int:
     if is_log:
         with usage_errors(LogError):
             obj = load_log(p)
+        t_start, t_stop = (float(obj.t[0]), float(obj.t[-1])) if len(obj.t) else (0.0, 0.0)
     else:
-        obj = load_result(p)
-    t = obj.t
-    t0 = float(t[0]) if args.t0 is None else args.t0
-    t1 = float(t[-1]) if args.t1 is None else args.t1
+        t_start, t_stop, streamed, obj = _run_extent(p)
+        if args.t0 is None and args.t1 is None and streamed is not None:
+            # a run streamed to disk may not fit in memory: its kept end by default
+            args.t0 = max(t_start, t_stop - streamed)
+            print(f"streamed run: plotting its last {t_stop - args.t0:g} s (t = {args.t0:g} - "
+                  f"{t_stop:g} s; --t0 / --t1 choose another window)")
+    t0 = t_start if args.t0 is None else args.t0
+    t1 = t_stop if args.t1 is None else args.t1
     t_range = None if (args.t0 is None and args.t1 is None) else (t0, t1)
-    if t_range is not None and len(t) and not (t0 < float(t[-1]) and t1 > float(t[0])):
+    if t_range is not None and t_stop > t_start and not (t0 < t_stop and t1 > t_start):
         raise UsageError(f"--t0 {t0:g} --t1 {t1:g} is not allowed: the window must overlap "
-                         f"the {'log' if is_log else 'run'} ({float(t[0]):g} .. "
-                         f"{float(t[-1]):g} s)")
+                         f"the {'log' if is_log else 'run'} ({t_start:g} .. {t_stop:g} s)")
+    if not is_log and obj is None:   # (a saved run's tables: only the window is read)
+        obj = load_result(p, t_range)
     with usage_errors():
         if is_log:
             from ..presentation.paper_figures import plot_log
