@@ -107,6 +107,19 @@ def _wait_for_points(out, n: int, proc, timeout=120.0):
     raise AssertionError(f"the sweep did not finish {n} points in {timeout} s")
 
 
+def _wait_for_workers_starting(out, proc, timeout=120.0):
+    """Wait until the parent has started and spawned its workers, which are still
+    importing: the sweep's manifest is written just before the pool starts (a fixed delay
+    would land in the parent's own start-up on a slow machine), then 0.2 s."""
+    deadline = time.monotonic() + timeout
+    while not (out / "manifest.json").exists():
+        assert proc.poll() is None, proc.stderr.read().decode()
+        assert time.monotonic() < deadline, "the sweep never started"
+        time.sleep(0.005)
+    time.sleep(0.2)
+    assert not _checkpoint_rows(out)       # (no point finished yet: the workers start)
+
+
 def _assert_stopped_consistently(out):
     """After a stop: every recorded point finished (none "interrupted"), fewer than all;
     no table that could be taken for the sweep's result."""
@@ -142,7 +155,7 @@ def test_ctrl_c_stops_promptly_keeps_finished_points_and_resumes(tmp_path, refer
     out = tmp_path / "out"
     proc = _start(out, workers)
     if moment == "workers starting":
-        time.sleep(0.8)                   # the parent has started, the workers are importing
+        _wait_for_workers_starting(out, proc)
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
@@ -168,7 +181,7 @@ def test_sigkill_of_the_parent_leaves_no_orphans_and_the_sweep_resumes(tmp_path,
     out = tmp_path / "out"
     proc = _start(out, 2)
     if moment == "workers starting":
-        time.sleep(1.0)
+        _wait_for_workers_starting(out, proc)
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
