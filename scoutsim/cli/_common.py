@@ -209,6 +209,22 @@ def check_expected_time(args, simulated_s: dict, *, workers: int = 1,
 # -----------------------------------------------------------------------------------------
 # checks and inputs
 # -----------------------------------------------------------------------------------------
+def add_repair_spikes_option(parser) -> None:
+    parser.add_argument("--repair-spikes", action="store_true",
+                        help="replace each isolated spike of a log (one to three samples far "
+                             "from their neighbours, which the log check refuses) by the "
+                             "median of its neighbours, and report each on stderr")
+
+
+def report_repairs(logs, command: str) -> None:
+    """Say on stderr which spikes were replaced when the logs were loaded."""
+    for log in logs:
+        for column, row, value, median in log.repairs:
+            print(f"scoutsim {command}: {log.path}: column '{column}', row {row}: spike "
+                  f"{value:.6g} replaced by its neighbours' median {median:.6g}",
+                  file=sys.stderr)
+
+
 def check_logs_or_example(args, missing: str):
     """Exactly one of LOG arguments and --example; ``missing`` is the message for neither."""
     if args.example and args.logs:

@@ -17,8 +17,9 @@ import time
 
 from ._common import (SCOUT_FLOOR_FRICTION, UsageError, add_friction_option,
                       add_models_option, add_no_progress_option, add_out_option,
-                      check_logs_or_example, finite_float, load_parameters, out_dir,
-                      positive_float, show_progress, usage_errors)
+                      add_repair_spikes_option, check_logs_or_example, finite_float,
+                      load_parameters, out_dir, positive_float, report_repairs, show_progress,
+                      usage_errors)
 
 NAME = "compare"
 
@@ -54,6 +55,7 @@ def register(sub, common) -> None:
                          help="strides starting earlier than this after the start of a record "
                               "are transient [s] (default: 2)")
     add_no_progress_option(compare)
+    add_repair_spikes_option(compare)
     compare.add_argument("--no-plots", action="store_true",
                          help="do not write the figures (fig5, fig8-fig12, phase .png) and "
                               "phase_rms.csv")
@@ -73,7 +75,8 @@ def execute(args) -> int:
     else:
         paths = args.logs
     with usage_errors(LogError):
-        logs = load_dataset(paths)
+        logs = load_dataset(paths, repair_spikes=args.repair_spikes)
+    report_repairs(logs, NAME)
     robot, controller = load_parameters(args.robot)
     out = out_dir(args.out)
     progress = show_progress(args)

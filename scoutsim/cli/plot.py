@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import (UsageError, add_time_window_options, check_time_window, input_file,
-                      is_saved_run, load_result, usage_errors)
+from ._common import (UsageError, add_repair_spikes_option, add_time_window_options,
+                      check_time_window, input_file, is_saved_run, load_result,
+                      report_repairs, usage_errors)
 
 NAME = "plot"
 
@@ -31,6 +32,7 @@ def register(sub, common) -> None:
                       help="output figure, .png, .pdf or .svg (default: INPUT's name with "
                            ".png, in the current directory)")
     add_time_window_options(plot, "start of the time window [s]", "end of the time window [s]")
+    add_repair_spikes_option(plot)
     plot.set_defaults(func=execute)
 
 
@@ -85,7 +87,8 @@ def execute(args) -> int:
                          ".svg")
     if is_log:
         with usage_errors(LogError):
-            obj = load_log(p)
+            obj = load_log(p, repair_spikes=args.repair_spikes)
+        report_repairs([obj], NAME)
         t_start, t_stop = (float(obj.t[0]), float(obj.t[-1])) if len(obj.t) else (0.0, 0.0)
     else:
         t_start, t_stop, streamed, obj = _run_extent(p)

@@ -235,11 +235,15 @@ class ExperimentLog:
     columns : dict of str -> (n,) float arrays, as in the file.
     meta : dict, :data:`DEFAULT_META` completed by the file's metadata.
     path : the file it was read from (None if built in memory).
+    repairs : the isolated spikes replaced by their neighbours' median when the log was
+        loaded with ``repair_spikes=True``: (column, row (1-based), value, median), in the
+        column's unit.
     """
 
     columns: dict
     meta: dict = field(default_factory=dict)
     path: str | None = None
+    repairs: tuple = ()
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self):
@@ -530,8 +534,11 @@ def isolated_spikes(x, floor: float, half_window: int = SPIKE_HALF_WINDOW,
     return np.abs(x - median) > allowed, median, allowed
 
 
-def _check_spikes(path, cols: dict, header_line: int | None):
-    """LogError at the first isolated spike of a :data:`SPIKE_FLOOR` column."""
+def _check_spikes(path, cols: dict, header_line: int | None,
+                  repairs: list | None = None):
+    """LogError at the first isolated spike of a :data:`SPIKE_FLOOR` column; with a list
+    ``repairs`` instead, every spike is replaced by its neighbours' median and listed there
+    (column, row, value, median)."""
     h = SPIKE_HALF_WINDOW
     for c, (floor, what) in SPIKE_FLOOR.items():
         if c not in cols:
@@ -539,6 +546,11 @@ def _check_spikes(path, cols: dict, header_line: int | None):
         v = cols[c]
         flagged, median, allowed = isolated_spikes(v, floor)
         if not flagged.any():
+            continue
+        if repairs is not None:
+            rows = np.flatnonzero(flagged)
+            repairs.extend((c, int(k) + 1, float(v[k]), float(median[k])) for k in rows)
+            cols[c] = np.where(flagged, median, v)
             continue
         k = int(np.argmax(flagged))
         u = COLUMN_UNITS[c]
@@ -551,12 +563,15 @@ def _check_spikes(path, cols: dict, header_line: int | None):
             f"larger of {SPIKE_K:g} scaled MADs of the neighbours and {floor:g} {u}) "
             f"({count} such sample(s) in the column). A {what} cannot jump away and back "
             "within a few samples: fix the sample (e.g. replace it by the neighbours' median "
-            f"{median[k]:.6g} {u}; deleting the row would break the uniform time grid) or cut "
-            "the log before or after it", path, c, k + 1)
+            f"{median[k]:.6g} {u}; deleting the row would break the uniform time grid), cut "
+            "the log before or after it, or load it with repair_spikes=True (scoutsim "
+            "compare / plot --repair-spikes), which does that replacement and reports it",
+            path, c, k + 1)
 
 
-def _validate(path, cols: dict, header_line: int | None):
-    """Check values; raise LogError at the first problem."""
+def _validate(path, cols: dict, header_line: int | None, repairs: list | None = None):
+    """Check values; raise LogError at the first problem (isolated spikes: repaired into
+    ``repairs`` if it is a list, :func:`_check_spikes`)."""
     n = len(cols["t"])
     if n < 2:
         raise LogError(f"{path}: only {n} data row(s); a log needs at least 2", path, "t")
@@ -614,11 +629,15 @@ def _validate(path, cols: dict, header_line: int | None):
                 k = int(np.argmax(neg))
                 raise LogError(f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
                                f"negative length {v[k]:.6g} m", path, c, k + 1)
-    _check_spikes(path, cols, header_line)
+    _check_spikes(path, cols, header_line, repairs)
 
 
-def load_log(path) -> ExperimentLog:
+def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
     """Read and validate one log (CSV, CSV.gz or Parquet; see the module docstring).
+
+    ``repair_spikes``: replace each isolated spike (:func:`isolated_spikes`) by the median
+    of its neighbours instead of refusing the log; the replacements are listed in
+    ``log.repairs``.
 
     Raises
     ------
@@ -673,8 +692,9 @@ def load_log(path) -> ExperimentLog:
     else:
         raise LogError(f"{path}: unknown log format '{suffix or path.name}'; use "
                        f"{', '.join(LOG_SUFFIXES)}", path)
-    _validate(path, cols, header_line)
-    return ExperimentLog(columns=cols, meta=meta, path=str(path))
+    repairs = [] if repair_spikes else None
+    _validate(path, cols, header_line, repairs)
+    return ExperimentLog(columns=cols, meta=meta, path=str(path), repairs=tuple(repairs or ()))
 
 
 def _expand(paths) -> list[Path]:
@@ -694,13 +714,14 @@ def _expand(paths) -> list[Path]:
     return out
 
 
-def load_dataset(paths) -> list[ExperimentLog]:
+def load_dataset(paths, *, repair_spikes: bool = False) -> list[ExperimentLog]:
     """Load several runs (files, or directories of log files). Every file is checked; if any
-    is bad, one LogError lists all the problems, one per line."""
+    is bad, one LogError lists all the problems, one per line (``repair_spikes``: as
+    :func:`load_log`)."""
     logs, problems = [], []
     for p in _expand(paths):
         try:
-            logs.append(load_log(p))
+            logs.append(load_log(p, repair_spikes=repair_spikes))
         except LogError as exc:
             problems.append(exc)
     if problems:

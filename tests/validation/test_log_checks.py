@@ -293,3 +293,34 @@ def test_cli_compare_refuses_with_a_message_and_exit_2(example, tmp_path, capsys
     assert words in cap.err and "Traceback" not in cap.err, cap.err
     assert cap.out == ""                               # no (empty) table
     assert not (tmp_path / "out" / "errors.csv").exists()
+
+
+def test_repair_spikes_replaces_them_by_the_neighbours_median_and_lists_them(example,
+                                                                             tmp_path):
+    """load_log(repair_spikes=True): what the refusal suggests, done and reported; the
+    repaired log is the clean one but for that sample (its neighbours' median)."""
+    p = save_log(_with(example, laser_front_m=(ROW, 4.9), phi_back_rad=(ROW + 2000, 1.5)),
+                 tmp_path / "spikes.csv.gz")
+    log = load_log(p, repair_spikes=True)
+    clean = load_log(save_log(example, tmp_path / "clean.csv.gz"))
+    v = clean.columns["laser_front_m"]
+    median = np.median(np.r_[v[ROW - 4:ROW - 1], v[ROW:ROW + 3]])
+    assert [(c, r) for c, r, _, _ in log.repairs] == [("laser_front_m", ROW),
+                                                      ("phi_back_rad", ROW + 2000)]
+    assert log.repairs[0][2] == 4.9 and log.repairs[0][3] == pytest.approx(median)
+    fixed = log.columns["laser_front_m"]
+    assert fixed[ROW - 1] == pytest.approx(median)
+    assert np.array_equal(np.delete(fixed, ROW - 1), np.delete(v, ROW - 1))
+    assert load_log(save_log(example, tmp_path / "again.csv.gz"),
+                    repair_spikes=True).repairs == ()
+
+
+def test_cli_repair_spikes_reports_each_on_stderr(example, tmp_path, capsys):
+    from scoutsim.cli import main
+    p = save_log(_with(example, laser_front_m=(ROW, 4.9)), tmp_path / "spike.csv.gz")
+    assert main(["plot", str(p), "--out", str(tmp_path / "x.png")]) == 2
+    assert "--repair-spikes" in capsys.readouterr().err
+    assert main(["plot", str(p), "--repair-spikes", "--out", str(tmp_path / "x.png")]) == 0
+    err = capsys.readouterr().err
+    assert f"column 'laser_front_m', row {ROW}: spike 4.9 replaced by its neighbours' median" \
+        in err
