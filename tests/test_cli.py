@@ -392,3 +392,32 @@ def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_within_seconds(
     err = capsys.readouterr().err
     assert "no Dask scheduler answered there within 2 s" in err and "Traceback" not in err
     assert time.perf_counter() - t0 < 10
+
+
+def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, monkeypatch, capsys):
+    """Ctrl-C at the third start (simulate() returns it as interrupted): the two finished
+    starts are written to basin.csv, marked partial, exit 130; the cut start is not a row."""
+    import scoutsim.simulation
+    from scoutsim.run_directory import check_run_directory
+    real = scoutsim.simulation.simulate
+    calls = []
+
+    def interrupted_third(*args, **kwargs):
+        r = real(*args, **kwargs)
+        calls.append(1)
+        if len(calls) == 3:
+            r.outcome = "interrupted"
+        return r
+
+    monkeypatch.setattr(scoutsim.simulation, "simulate", interrupted_third)
+    out = tmp_path / "basin"
+    code = main(["basin", "--model", "I", "--speeds", "1.1,1.2", "--pitch-rates", "100,150",
+                 "--heights", "0.33", "--duration", "0.3", "--floors", "1.0", "--out",
+                 str(out), "--workers", "1", "--no-progress"])
+    assert code == 130
+    with open(out / "basin.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 2 and all(r["outcome"] != "interrupted" for r in rows)
+    manifest = check_run_directory(out)
+    assert manifest["status"] == "partial" and list(manifest["files"]) == ["basin.csv"]
+    assert "2 of 4 starts are done" in capsys.readouterr().err

@@ -51,6 +51,10 @@ def basin_task(task: dict) -> dict:
         result = simulate(task["robot"], task["controller"], init, task["duration"],
                           model=task["model"], integrator=task["integrator"],
                           friction_coefficient=task["friction"])
+        if result.outcome == "interrupted":
+            # Ctrl-C reached the run (simulate() returns the data so far): this start is
+            # not done and must not be counted as if it were; the map stops
+            raise KeyboardInterrupt
     except ValueError as exc:
         row.update(outcome="invalid_start", steady_bounding=False, mean_speed_m_s=None,
                    n_steady_strides=0, error=str(exc))
@@ -75,10 +79,13 @@ def _basin_error_row(task: dict, exc: Exception) -> dict:
     return row
 
 
-def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=None) -> list[dict]:
-    """Run the starts (locally in parallel, or on a Dask cluster); rows in task order."""
+def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=None,
+                    on_result=None) -> list[dict]:
+    """Run the starts (locally in parallel, or on a Dask cluster); rows in task order
+    (``on_result(index, row)`` as each arrives: what an interrupted map keeps)."""
     return map_tasks(basin_task, tasks, workers=workers, scheduler=scheduler,
-                     progress=progress, desc="basin", error_row=_basin_error_row)
+                     progress=progress, desc="basin", error_row=_basin_error_row,
+                     on_result=on_result)
 
 
 def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:

@@ -1,7 +1,8 @@
 """``scoutsim basin``: the basin map. Run a grid of initial states (forward speed x pitch
 rate x height) for each model and floor in parallel, report the fraction of valid starts
 that reach steady bounding and the cycle's speed, and write basin.csv, basin.json and the
-map basin.png.
+map basin.png (listed in manifest.json once written whole). Ctrl-C keeps the finished
+starts: basin.csv with those rows, marked partial, exit 130.
 
     scoutsim basin [--model LIST] [--floors LIST] [--speeds LIST] [--pitch-rates LIST]
                    [--heights LIST] [--duration S] [--robot FILE] [--out DIR] [--workers N]
@@ -22,6 +23,7 @@ from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_stats, basin_tasks,
                               run_basin_tasks)
 from ..parameters import floor_label
+from ..run_directory import RunDirectory
 from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, check_expected_time, float_list,
                       friction_list, integrator, load_parameters, out_dir, positive_int,
                       show_progress, write_json)
@@ -87,6 +89,14 @@ def format_basin(per: dict, n_grid: int, duration: float) -> str:
     return "\n".join(lines)
 
 
+def _write_rows(path, rows) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=BASIN_COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
+
+
 def execute(args) -> int:
     robot, controller = load_parameters(args.robot)
     integ = integrator(args)
@@ -107,15 +117,27 @@ def execute(args) -> int:
               file=sys.stderr)
 
     wall0 = time.perf_counter()
-    rows = run_basin_tasks(tasks, workers, progress)
+    finished: dict = {}
+    rd = RunDirectory(out, command=" ".join(["scoutsim"] + sys.argv[1:]),
+                      info={"kind": "basin", "n_starts": len(tasks)})
+    try:
+        rows = run_basin_tasks(tasks, workers, progress,
+                               on_result=lambda i, row: finished.__setitem__(i, row))
+    except KeyboardInterrupt:
+        # what was computed is kept: the finished starts, marked partial (no statistics
+        # or map of a grid with holes)
+        rows = [finished[i] for i in sorted(finished)]
+        with rd:
+            rd.write("basin.csv", lambda p: _write_rows(p, rows))
+            rd.finish(outcome="interrupted", partial=True)
+        print(f"scoutsim basin: interrupted; {len(rows)} of {len(tasks)} starts are done, "
+              f"written to {out}/basin.csv (marked partial in manifest.json)",
+              file=sys.stderr)
+        return 130
     wall = time.perf_counter() - wall0
 
-    csv_path = out / "basin.csv"
-    with open(csv_path, "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=BASIN_COLUMNS, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
+    rd.__enter__()
+    rd.write("basin.csv", lambda p: _write_rows(p, rows))
     per = basin_stats(rows, models, floors if len(floors) > 1 else None)
     summary = {
         "fraction_steady_bounding": {m: s["fraction_steady_bounding"] for m, s in per.items()},
@@ -130,14 +152,16 @@ def execute(args) -> int:
         "wall_time_s": wall,
         "workers": workers,
     }
-    write_json(out / "basin.json", summary)
+    rd.write("basin.json", lambda p: write_json(p, summary))
     written = "basin.csv, basin.json"
     if not args.no_plots:
         from ..presentation.plots import plot_basin_map
         from ..simulation import InitialState
         d = InitialState()
-        plot_basin_map(rows, out / "basin.png", default_start=(d.dx, math.degrees(d.dtheta)))
+        rd.write("basin.png", lambda p: plot_basin_map(
+            rows, p, default_start=(d.dx, math.degrees(d.dtheta))))
         written += ", basin.png"
+    rd.finish(outcome="completed", partial=False)
 
     print(format_basin(per, len(grid), args.duration))
     n_invalid = sum(s["n_invalid_start"] for s in per.values())
