@@ -211,15 +211,17 @@ def _map_executor(pool, func, tasks, indices, done, failed):
 
 
 def _new_pool(workers: int, started=None):
+    """A spawn pool whose workers run :func:`_worker_init` (``started``: the shared array
+    where they note which batch they run, see :data:`_STARTED`)."""
     ctx = multiprocessing.get_context("spawn")
     if started is None:
         started = ctx.Array("q", 1, lock=False)
     return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                  initializer=_worker_init, initargs=(started,)), started
+                                  initializer=_worker_init, initargs=(started,))
 
 
 @contextlib.contextmanager
-def _workers_ignore_sigint():
+def _sigint_held_while_spawning():
     """Block SIGINT in this thread while the pool spawns its workers (in ``submit``): a
     spawned process keeps the signal mask through ``exec``, so a Ctrl-C can never reach a
     worker still importing, before its initialiser ignores SIGINT; the threads the pool
@@ -257,11 +259,11 @@ def _map_local(func, tasks, workers, done, failed):
     while todo:
         batches = _batches(todo, workers)
         started = ctx.Array("q", len(batches), lock=False)
-        pool, _ = _new_pool(min(workers, len(batches)), started)
+        pool = _new_pool(min(workers, len(batches)), started)
         futures: dict = {}
         finished: set[int] = set()
         try:
-            with _workers_ignore_sigint():
+            with _sigint_held_while_spawning():
                 for b, batch in enumerate(batches):
                     futures[pool.submit(_run_batch, func, b, [tasks[i] for i in batch])] = b
             for fut in cf.as_completed(futures):
@@ -290,10 +292,10 @@ def _map_local(func, tasks, workers, done, failed):
 def _retry_alone(func, tasks, indices, done, failed):
     """Run each task whose batch was in a worker when it died once more, alone in a one-
     worker pool (so a second death is that task's own); a second death fails it."""
-    pool, _ = _new_pool(1)
+    pool = _new_pool(1)
     try:
         for i in indices:
-            with _workers_ignore_sigint():
+            with _sigint_held_while_spawning():
                 fut = pool.submit(_run_batch, func, None, [tasks[i]])
             try:
                 fut.result()
@@ -302,7 +304,7 @@ def _retry_alone(func, tasks, indices, done, failed):
                 failed(i, WorkerDiedError(
                     "the worker process running this task died twice (killed by a signal, "
                     "out of memory or crashed); it was retried once, alone"))
-                pool, _ = _new_pool(1)
+                pool = _new_pool(1)
                 continue
             except Exception:  # noqa: BLE001 - reported by _collect
                 pass
