@@ -276,17 +276,17 @@ class SimulationResult:
         return self._cache[key]
 
     def window(self, t0: float, t1: float) -> "SimulationResult":
-        """The samples, events and steps with t0 <= t <= t1 [s] (outcome, end time,
-        statistics and provenance stay the whole run's)."""
-        def cut(a, t):
-            return a[(t >= t0) & (t <= t1)]
+        """The samples, events and steps with t0 <= t <= t1 [s], as views (all three are
+        in time order); outcome, end time, statistics and provenance stay the whole run's."""
+        def rows(t):
+            return slice(int(np.searchsorted(t, t0, side="left")),
+                         int(np.searchsorted(t, t1, side="right")))
+        k, j = rows(self.t), rows(self.events[:, L.EVR_T])
         return dataclasses.replace(
-            self, t=cut(self.t, self.t), state=cut(self.state, self.t),
-            aux=cut(self.aux, self.t), modes=cut(self.modes, self.t),
-            events=cut(self.events, self.events[:, L.EVR_T]),
-            event_states=(None if self.event_states is None else
-                          cut(self.event_states, self.events[:, L.EVR_T])),
-            steps=None if self.steps is None else cut(self.steps, self.steps[:, L.STP_T]),
+            self, t=self.t[k], state=self.state[k], aux=self.aux[k], modes=self.modes[k],
+            events=self.events[j],
+            event_states=None if self.event_states is None else self.event_states[j],
+            steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
             _cache={})
 
     @property

@@ -14,9 +14,9 @@ import math
 import os
 import time
 import warnings
-from pathlib import Path
 from collections import namedtuple
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -659,17 +659,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                     ls[:] = states
             k_prev = eng.k
             eng.advance(eng.k + chunk, user_ctrl is None)
-            if stream is not None:
-                stream.take(eng)
+            if stream is not None and not stream.take(eng):
+                break       # the disk refused a piece (full): outcome "write_failed", below
             if bar is not None:
                 bar.update(round((eng.k - k_prev) * dt, 6))
     except KeyboardInterrupt:
         interrupted = True
-    except OSError as exc:
-        if stream is None or exc is not stream.write_error:
-            raise
-        # the disk refused a piece of a streamed run (full): the run stops there and
-        # returns what it has (outcome "write_failed", below)
     except BaseException:
         if stream is not None:
             stream.abort()
@@ -696,16 +691,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     }
     if stream is None:
         return eng.result(provenance, interrupted, {"wall_time_s": wall})
-    if stream.write_error is None:
-        try:
+    try:
+        if stream.write_error is None:
             stream.take(eng)   # a Ctrl-C between the compiled call and take(): its rows
-        except OSError as exc:
-            if exc is not stream.write_error:
-                stream.abort()
-                raise
-        except BaseException:
-            stream.abort()
-            raise
+    except BaseException:
+        stream.abort()
+        raise
     whole = eng.result(provenance, interrupted, {"wall_time_s": wall},
                        last_sample_t=stream.last_sample_t)
     if stream.write_error is not None:

@@ -82,14 +82,15 @@ class RunStream:
         self._rd.__enter__()
         self._opened = True
 
-    def take(self, eng) -> None:
-        """Write what the engine computed since the last call and empty its buffers."""
+    def take(self, eng) -> bool:
+        """Write what the engine computed since the last call and empty its buffers; False
+        if the disk refused it (a full disk: :attr:`write_error`, the run should stop)."""
         if not self._opened:
             self._open()
         n, m = eng.n_out, min(eng.nev, eng.ev.shape[0])
         nst = int(eng.stepc[0]) if eng.stepc[1] else 0
         if n == 0 and m == 0 and nst == 0:
-            return
+            return True
         chunk = SimulationResult(
             t=eng.out_t[:n].copy(), state=eng.out_s[:n].copy(), aux=eng.out_aux[:n].copy(),
             modes=eng.out_ls[:n].copy(), events=eng.ev[:m, :L.NEVREC].copy(),
@@ -117,9 +118,10 @@ class RunStream:
                 w.append(cols)
             except OSError as exc:
                 self.write_error = exc
-                raise
+                return False
         self.n_samples += n
         self.written_until_s = self.last_sample_t
+        return True
 
     def _keep(self, chunk: SimulationResult) -> None:
         self._kept.append(chunk)
@@ -189,24 +191,21 @@ class RunStream:
             w.abort()
 
     def _kept_result(self, whole: SimulationResult) -> SimulationResult:
+        """The last ``keep_seconds`` of the kept pieces (from their first sample in the
+        window on), with the whole run's outcome, end, statistics and provenance."""
+        info = whole.provenance["stream"]
         ch = self._kept
-        if not ch:                # nothing computed (stopped before the first sample)
-            whole.provenance["stream"]["kept_from_s"] = None
+        if not any(len(c.t) for c in ch):   # nothing computed (stopped before a sample)
+            info["kept_from_s"] = None
             return whole
-        t = np.concatenate([c.t for c in ch]) if ch else np.zeros(0)
-        start = (t[-1] - self.keep_seconds) if len(t) else 0.0
-        i0 = int(np.searchsorted(t, start, side="left"))
-        ev = np.concatenate([c.events for c in ch]) if ch else np.zeros((0, L.NEVREC))
-        es = np.concatenate([c.event_states for c in ch]) if ch else np.zeros((0, 2, L.NS))
-        j0 = int(np.searchsorted(ev[:, L.EVR_T], t[i0] if len(t) else 0.0, side="left"))
-        steps = None
-        if whole.steps is not None or (ch and ch[0].steps is not None):
-            st = np.concatenate([c.steps for c in ch])
-            steps = st[int(np.searchsorted(st[:, L.STP_T], t[i0] if len(t) else 0.0)):]
-        whole.provenance["stream"]["kept_from_s"] = float(t[i0]) if len(t) else None
-        return SimulationResult(
-            t=t[i0:], state=np.concatenate([c.state for c in ch])[i0:],
-            aux=np.concatenate([c.aux for c in ch])[i0:],
-            modes=np.concatenate([c.modes for c in ch])[i0:],
-            events=ev[j0:], event_states=es[j0:], steps=steps, outcome=whole.outcome,
-            t_end=whole.t_end, stats=whole.stats, provenance=whole.provenance)
+        joined = SimulationResult(
+            t=np.concatenate([c.t for c in ch]), state=np.concatenate([c.state for c in ch]),
+            aux=np.concatenate([c.aux for c in ch]), modes=np.concatenate([c.modes for c in ch]),
+            events=np.concatenate([c.events for c in ch]),
+            event_states=np.concatenate([c.event_states for c in ch]),
+            steps=None if ch[0].steps is None else np.concatenate([c.steps for c in ch]),
+            outcome=whole.outcome, t_end=whole.t_end, stats=whole.stats,
+            provenance=whole.provenance)
+        t0 = float(joined.t[np.searchsorted(joined.t, joined.t[-1] - self.keep_seconds)])
+        info["kept_from_s"] = t0
+        return joined.window(t0, np.inf)
