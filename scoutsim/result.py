@@ -425,18 +425,37 @@ class SimulationResult:
                 "event_states": self.event_states is not None}
 
     @classmethod
-    def _load_tables(cls, path: Path, t_range=None) -> "SimulationResult":
+    def _timeseries_table(cls, path: Path) -> Path:
+        """The ``timeseries`` table of a saved run (its directory, or the table itself),
+        after checking that the run's directory was written completely."""
         from .run_directory import check_run_directory
-        from .tables import SUFFIXES, TableError, read_table
-        # a run directory with a manifest must have been written completely
+        from .tables import SUFFIXES, TableError
         check_run_directory(path if path.is_dir() else path.parent)
-        if path.is_dir():
-            found = [path / f"timeseries{x}" for x in SUFFIXES.values()
-                     if (path / f"timeseries{x}").exists()]
-            if not found:
-                raise TableError(f"{path}: no timeseries table "
-                                 f"({', '.join('timeseries' + x for x in SUFFIXES.values())})")
-            path = found[0]
+        if not path.is_dir():
+            return path
+        found = [path / f"timeseries{x}" for x in SUFFIXES.values()
+                 if (path / f"timeseries{x}").exists()]
+        if not found:
+            raise TableError(f"{path}: no timeseries table "
+                             f"({', '.join('timeseries' + x for x in SUFFIXES.values())})")
+        return found[0]
+
+    @classmethod
+    def load_metadata(cls, path) -> dict:
+        """The metadata of a run saved as tables (its directory or its ``timeseries``
+        table) without reading its rows: outcome, end time ``t_end`` [s], statistics,
+        provenance (a streamed run's: ``provenance["stream"]``)."""
+        from .tables import TableError, read_metadata
+        table = cls._timeseries_table(Path(path))
+        meta = read_metadata(table)["metadata"]
+        if meta.get("format") != TABLES_FORMAT:
+            raise TableError(f"{table}: not the time series of a scoutsim run")
+        return meta
+
+    @classmethod
+    def _load_tables(cls, path: Path, t_range=None) -> "SimulationResult":
+        from .tables import SUFFIXES, TableError, read_table
+        path = cls._timeseries_table(path)
         series, meta = read_table(path, t_range=t_range)
         if meta.get("format") != TABLES_FORMAT:
             raise TableError(f"{path}: not the time series of a scoutsim run")

@@ -111,6 +111,12 @@ class RunDirectory:
         self.files: list[str] = []
 
     def __enter__(self) -> "RunDirectory":
+        return self.open()
+
+    def open(self) -> "RunDirectory":
+        """Start writing the run (what entering the ``with`` block does, for writers whose
+        run spans more than one block): the old run's files go, the manifest says
+        "writing"."""
         self.dir.mkdir(parents=True, exist_ok=True)
         try:
             old = read_manifest(self.dir)

@@ -79,7 +79,7 @@ class RunStream:
         if self._own:
             self._rd = RunDirectory(self.dir, command=self.command,
                                     info={"kind": "run", "streamed": True})
-        self._rd.__enter__()
+        self._rd.open()
         self._opened = True
 
     def take(self, eng) -> bool:

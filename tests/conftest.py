@@ -18,3 +18,22 @@ def force_outcome(monkeypatch):
             return r
         monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
     return force
+
+
+@pytest.fixture
+def interrupt_run(monkeypatch):
+    """``interrupt_run(n)``: the n-th ``scoutsim.simulation.simulate`` call of the test
+    returns as if Ctrl-C had reached it (outcome "interrupted", the data so far); the
+    others run as usual."""
+    real = scoutsim.simulation.simulate
+    calls = []
+
+    def interrupt(n: int) -> None:
+        def simulate(*args, **kwargs):
+            r = real(*args, **kwargs)
+            calls.append(1)
+            if len(calls) == n:
+                r.outcome = "interrupted"
+            return r
+        monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
+    return interrupt

@@ -394,22 +394,11 @@ def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_within_seconds(
     assert time.perf_counter() - t0 < 10
 
 
-def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, monkeypatch, capsys):
+def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, interrupt_run, capsys):
     """Ctrl-C at the third start (simulate() returns it as interrupted): the two finished
     starts are written to basin.csv, marked partial, exit 130; the cut start is not a row."""
-    import scoutsim.simulation
     from scoutsim.run_directory import check_run_directory
-    real = scoutsim.simulation.simulate
-    calls = []
-
-    def interrupted_third(*args, **kwargs):
-        r = real(*args, **kwargs)
-        calls.append(1)
-        if len(calls) == 3:
-            r.outcome = "interrupted"
-        return r
-
-    monkeypatch.setattr(scoutsim.simulation, "simulate", interrupted_third)
+    interrupt_run(3)
     out = tmp_path / "basin"
     code = main(["basin", "--model", "I", "--speeds", "1.1,1.2", "--pitch-rates", "100,150",
                  "--heights", "0.33", "--duration", "0.3", "--floors", "1.0", "--out",

@@ -12,7 +12,8 @@ once to a checkpoint file in the output directory, so an interrupted sweep resum
 without recomputing what it finished (a point cut by Ctrl-C is never recorded; a last
 line cut by a kill is skipped), and a failing point is recorded with its error without
 stopping the sweep (a point whose worker process dies is retried once, then recorded as
-an error with the reason; see :mod:`scoutsim.analysis.parallel`). The table is written as Parquet (``pyarrow``) and CSV.
+an error with the reason; see :mod:`scoutsim.analysis.parallel`). The table is written as
+Parquet (``pyarrow``) and CSV.
 """
 
 from __future__ import annotations
@@ -238,7 +239,7 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
         # the directory's manifest lists the tables once they are written whole; entering
         # removes an earlier sweep's tables (never the checkpoint) so none looks current
         rd = RunDirectory(out, command=command, info={"kind": "sweep", "checkpoint": CHECKPOINT,
-                                                      "n_points": len(points)}).__enter__()
+                                                      "n_points": len(points)}).open()
         ck = out / CHECKPOINT
         if resume:
             done = read_checkpoint(ck)
@@ -260,11 +261,9 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
                              progress=progress, desc="sweep", on_result=on_result,
                              error_row=_error_row)
     except KeyboardInterrupt:
-        if fh is not None:
-            fh.close()
-            fh = None
-            rd.finish(outcome="interrupted", partial=True)   # no table: the sweep goes on
-        raise                                                # when it is run again
+        if rd is not None:      # no table: the same call again goes on from the checkpoint
+            rd.finish(outcome="interrupted", partial=True)
+        raise
     finally:
         if fh is not None:
             fh.close()

@@ -127,16 +127,16 @@ def execute(args) -> int:
         # what was computed is kept: the finished starts, marked partial (no statistics
         # or map of a grid with holes)
         rows = [finished[i] for i in sorted(finished)]
-        with rd:
-            rd.write("basin.csv", lambda p: _write_rows(p, rows))
-            rd.finish(outcome="interrupted", partial=True)
+        rd.open()
+        rd.write("basin.csv", lambda p: _write_rows(p, rows))
+        rd.finish(outcome="interrupted", partial=True)
         print(f"scoutsim basin: interrupted; {len(rows)} of {len(tasks)} starts are done, "
               f"written to {out}/basin.csv (marked partial in manifest.json)",
               file=sys.stderr)
         return 130
     wall = time.perf_counter() - wall0
 
-    rd.__enter__()
+    rd.open()
     rd.write("basin.csv", lambda p: _write_rows(p, rows))
     per = basin_stats(rows, models, floors if len(floors) > 1 else None)
     summary = {

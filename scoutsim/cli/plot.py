@@ -40,18 +40,12 @@ def _run_extent(p: Path):
     """(first sample time, last sample time [s], kept seconds if the run was streamed to disk
     else None, the run if it had to be loaded whole for this) of a saved run, from its
     metadata where it has some (the tables of a long streamed run are not read whole)."""
-    from ..run_directory import IncompleteRunError, check_run_directory
-    from ..tables import SUFFIXES, TableError, read_metadata
-    table = None
-    if p.is_dir():
-        table = next((p / f"timeseries{x}" for x in SUFFIXES.values()
-                      if (p / f"timeseries{x}").exists()), None)
-    elif not p.name.lower().endswith(".npz"):
-        table = p
-    if table is not None:
+    from ..result import SimulationResult
+    from ..run_directory import IncompleteRunError
+    from ..tables import TableError
+    if not p.name.lower().endswith(".npz"):
         try:
-            check_run_directory(table.parent)
-            meta = read_metadata(table)["metadata"]
+            meta = SimulationResult.load_metadata(p)
         except (IncompleteRunError, TableError, OSError, ValueError, KeyError) as exc:
             raise UsageError(f"cannot read result '{p}': {exc}") from None
         stream = (meta.get("provenance") or {}).get("stream")

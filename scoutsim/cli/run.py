@@ -28,6 +28,7 @@ import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
+from types import SimpleNamespace
 
 from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
@@ -106,7 +107,7 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
     """Write the run's files into ``out`` (``rd``: the streamed run's directory, whose
     tables are written already, or None); the finished RunDirectory."""
     if rd is None:
-        rd = RunDirectory(out, command=command, info=info).__enter__()
+        rd = RunDirectory(out, command=command, info=info).open()
         for path in result.save_tables(out, fmt=args.format):
             rd.add(path.name)
     else:
@@ -124,16 +125,12 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
     return rd
 
 
-class _Deferred:
-    asked = False
-
-
 @contextmanager
 def _ctrl_c_deferred():
     """While the outputs are written, a first Ctrl-C is held until they are whole (the
     command then exits 130); a second one abandons them (KeyboardInterrupt: the directory
     keeps saying "writing"). Writing a run takes a fraction of its computing."""
-    state = _Deferred()
+    state = SimpleNamespace(asked=False)
     if threading.current_thread() is not threading.main_thread():
         yield state
         return

@@ -114,30 +114,18 @@ def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
 
 
 def test_an_interrupted_point_is_not_recorded_and_the_resumed_table_is_the_same(
-        tmp_path, monkeypatch):
+        tmp_path, interrupt_run):
     """Ctrl-C during a point: simulate() returns the data so far with outcome
     "interrupted"; the sweep stops there without recording that point, and a resumed
     sweep gives the table of an uninterrupted one."""
-    import scoutsim.simulation
     pts = grid_points(GRID)
     full = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "full")
-    real = scoutsim.simulation.simulate
-    calls = []
-
-    def interrupted_third(*args, **kwargs):
-        r = real(*args, **kwargs)
-        calls.append(1)
-        if len(calls) == 3:
-            r.outcome = "interrupted"
-        return r
-
-    monkeypatch.setattr(scoutsim.simulation, "simulate", interrupted_third)
+    interrupt_run(3)                    # (the calls after the third run as usual)
     with pytest.raises(KeyboardInterrupt):
         sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "cut")
     lines = (tmp_path / "cut" / "points.jsonl").read_text().splitlines()
     assert len(lines) == 2
     assert all(json.loads(x)["row"]["outcome"] != "interrupted" for x in lines)
-    monkeypatch.setattr(scoutsim.simulation, "simulate", real)
     resumed = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "cut")
     assert resumed.settings["n_resumed"] == 2
     assert resumed.rows == full.rows
