@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .run_directory import atomic_write
+from .run_directory import PARTIAL_SUFFIX, atomic_write
 
 __all__ = ["FORMATS", "SUFFIXES", "default_format", "write_table", "read_table",
            "read_metadata", "table_path", "TableWriter", "TableError"]
@@ -165,9 +165,10 @@ class TableWriter:
         self.path = table_path(stem, self.fmt)
         self.units = dict(units or {})
         suffix = SUFFIXES[self.fmt]
-        self._tmp = self.path.with_name(self.path.name[:-len(suffix)] + ".partial" + suffix)
-        self._body = self.path.with_name(self.path.name[:-len(suffix)] + ".partial.rows"
-                                         + suffix)
+        stem_name = self.path.name[:-len(suffix)]
+        # temporary names that a run directory sweeps away as stale (run_directory)
+        self._tmp = self.path.with_name(stem_name + PARTIAL_SUFFIX + suffix)
+        self._body = self.path.with_name(stem_name + PARTIAL_SUFFIX + ".rows" + suffix)
         self._columns: dict | None = None        # name -> {"dtype", "unit"}
         self._pending: list[dict] = []
         self._n_pending = 0
