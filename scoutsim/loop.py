@@ -22,6 +22,7 @@ from .model.layout import (
     RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
+from .numerics.dopri5 import eval_workspace
 from .numerics.events import log_event, mode_violations, stamp_states, stamp_transition
 from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO,
                               METHOD_DOPRI5, STEP_HEADROOM, AdvanceScratch, advance)
@@ -49,7 +50,7 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 @allocating
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
-        stepc, method):
+        stepc, energy, method):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
@@ -67,7 +68,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ``steps`` / ``stepc`` every integrator step if ``stepc[1]`` (see
     :func:`~scoutsim.numerics.events.record_step`): the call returns at a sample before
     ``steps`` has fewer than ``STEP_HEADROOM`` free rows (as before ``ev`` fills up).
-    Returns (k, n_out, nev, status, t)."""
+    ``energy`` (layout ``EN_*``) accumulates the energy of every power flow over the
+    integrator's steps (:func:`~scoutsim.numerics.hybrid.accumulate_energy`); an empty
+    array switches the accounting off. Returns (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
     tmp = np.zeros(NS)
@@ -84,9 +87,14 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     SF0 = sfwork   # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
+    if energy.shape[0] > 0:
+        ew_e = eval_workspace()
+    else:   # (no accounting: placeholders of the same types)
+        ew_e = (np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros((1, 1)))
     sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
                         np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX),
-                        np.empty(NS), steps, stepc)
+                        np.empty(NS), steps, stepc, energy, ew_e, np.zeros(NS), np.zeros(NS),
+                        np.zeros(NAUX), np.zeros(energy.shape[0]))
     sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
     t = k_start * dt
     k = k_start

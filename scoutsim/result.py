@@ -87,6 +87,12 @@ class SimulationResult:
         None for results saved before it was recorded.
     steps : (k, NSTEPREC) every integrator step (time, state, plant modes; ``layout.STP_*``)
         if the run recorded them (``simulate(record_steps=True)``), else None.
+    energy_flows : the whole run's energies [J] by name if it accounted for them
+        (``simulate(energy=True)``), else None: per leg (``_back``, ``_front``) every power
+        flow of ``layout.EN_LEG_NAMES`` integrated over the run, ``battery_loss``, the
+        touchdown ``impacts``' losses and the mechanical energy at the first sample and at
+        the end (``mechanical_start``, ``mechanical_end``); :meth:`energy_balance` reads
+        them.
     """
 
     t: np.ndarray
@@ -100,6 +106,7 @@ class SimulationResult:
     provenance: dict
     event_states: np.ndarray | None = None
     steps: np.ndarray | None = None
+    energy_flows: dict | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- torso -----------------------------------------------------------------------
@@ -289,6 +296,13 @@ class SimulationResult:
             steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
             _cache={})
 
+    def energy_balance(self):
+        """The run's work-energy balance (:class:`~scoutsim.analysis.energy.EnergyBalance`:
+        every term [J], the input, the residual); needs a run made with
+        ``simulate(energy=True)``."""
+        from .analysis.energy import energy_balance
+        return energy_balance(self)
+
     @property
     def fell(self) -> bool:
         return self.outcome == "fell"
@@ -298,7 +312,8 @@ class SimulationResult:
         """Save losslessly to ``path`` (.npz)."""
         path = Path(path)
         meta = {"outcome": self.outcome, "t_end": self.t_end, "stats": self.stats,
-                "provenance": self.provenance, "format": "scoutsim.result/1"}
+                "provenance": self.provenance, "format": "scoutsim.result/1",
+                "energy_flows": self.energy_flows}
         extra = {name: a for name, a in (("event_states", self.event_states),
                                          ("steps", self.steps)) if a is not None}
         np.savez_compressed(path, t=self.t, state=self.state, aux=self.aux, modes=self.modes,
@@ -342,7 +357,8 @@ class SimulationResult:
                        events=events, outcome=meta["outcome"], t_end=meta["t_end"],
                        stats=meta["stats"], provenance=meta["provenance"],
                        event_states=z["event_states"] if "event_states" in z.files else None,
-                       steps=z["steps"] if "steps" in z.files else None)
+                       steps=z["steps"] if "steps" in z.files else None,
+                       energy_flows=meta.get("energy_flows"))
 
     # -- tables (Parquet / compressed CSV: scoutsim.tables) ---------------------------
     def event_columns(self) -> dict:
@@ -422,7 +438,8 @@ class SimulationResult:
         provenance."""
         return {"format": TABLES_FORMAT, "outcome": self.outcome, "t_end": self.t_end,
                 "stats": self.stats, "provenance": self.provenance,
-                "event_states": self.event_states is not None}
+                "event_states": self.event_states is not None,
+                "energy_flows": self.energy_flows}
 
     @classmethod
     def _timeseries_table(cls, path: Path) -> Path:
@@ -502,7 +519,8 @@ class SimulationResult:
                 steps[:, L.STP_MOTOR_B + leg] = st[f"motor_joint_mode_{name}"]
         return cls(t=series["t"], state=state, aux=aux, modes=modes, events=events,
                    outcome=meta["outcome"], t_end=meta["t_end"], stats=meta["stats"],
-                   provenance=meta["provenance"], event_states=event_states, steps=steps)
+                   provenance=meta["provenance"], event_states=event_states, steps=steps,
+                   energy_flows=meta.get("energy_flows"))
 
     def to_dataframe(self):
         """All time series as a :class:`pandas.DataFrame` indexed by time ``t`` [s], one

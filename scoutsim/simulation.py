@@ -26,6 +26,7 @@ from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.transmission import motor_mode_from_rate
 from .model.packing import robot_array
+from .model.rigid_body import state_energy
 from .model.sensors import read_sensors
 from .numerics.dopri5 import eval_workspace
 from .loop import effective_method, run_entry
@@ -217,7 +218,7 @@ class HybridEngine:
 
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
                  integrator: IntegratorSettings, record_steps: bool = False,
-                 rows: int | None = None):
+                 rows: int | None = None, energy: bool = False):
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
         self.dt = dt
         self.integ = integrator
@@ -245,6 +246,11 @@ class HybridEngine:
         self.steps = np.zeros((STEP_HEADROOM + self.STEP_ROWS if record_steps else 0,
                                L.NSTEPREC))
         self.stepc = np.array([0, 1 if record_steps else 0], dtype=np.int64)
+        # the work-energy accounting (layout EN_*; empty: off), the touchdown impacts'
+        # losses [J] and the mechanical energy [J] at the first sample
+        self.energy = np.zeros(L.NEN if energy else 0)
+        self.impact_loss = 0.0
+        self.energy_start = None
         self.stats = np.zeros(NSTAT)
         self.stats[S_HMIN] = np.inf
         self.armed = np.zeros(L.NEV, dtype=np.bool_)
@@ -265,13 +271,20 @@ class HybridEngine:
                 min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
                 self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
                 self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
-                self.sfwork, self.ew, self.steps, self.stepc)
+                self.sfwork, self.ew, self.steps, self.stepc, self.energy)
         if self._entry is None:   # the argument types stay those of the first call
             self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
                                             int(self.P[L.P_MODEL]))
             self._entry = run_entry(self._method, args)
+        nev_before = self.nev
         self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,
                                                                             self._method)
+        if self.energy.size:
+            if self.energy_start is None and self.n_out:
+                self.energy_start = float(self.out_aux[0, L.A_ENERGY])
+            new = self.ev[nev_before:min(self.nev, self.ev.shape[0])]
+            self.impact_loss += float(new[new[:, L.EVR_KIND] == L.EK_TOUCHDOWN,
+                                          L.EVR_V3].sum())
         if self.nev > self.ev.shape[0]:
             # one control period logged more records than the buffer had left (the loop
             # makes room between periods, 64 rows at least): log_event dropped them but
@@ -283,6 +296,20 @@ class HybridEngine:
             self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
         if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:
             self.steps = np.concatenate([self.steps, np.zeros_like(self.steps)])
+
+    def energy_flows(self) -> dict | None:
+        """The run's accumulated energies [J] by name (``SimulationResult.energy_flows``),
+        or None if the run did not account for them."""
+        if not self.energy.size:
+            return None
+        out = {f"{name}_{leg}": float(self.energy[i * L.NEN_LEG + j])
+               for i, leg in enumerate(L.LEG_NAMES) for j, name in enumerate(L.EN_LEG_NAMES)}
+        out["battery_loss"] = float(self.energy[L.EN_BATTERY_LOSS])
+        out["impacts"] = self.impact_loss
+        out["mechanical_start"] = (self.energy_start if self.energy_start is not None else
+                                   float(state_energy(self.s, self.P)))
+        out["mechanical_end"] = float(state_energy(self.s, self.P))
+        return out
 
     def outcome(self, interrupted: bool = False) -> str:
         if interrupted:
@@ -311,7 +338,7 @@ class HybridEngine:
             | ({"event_records_lost": float(self.event_records_lost)}
                if self.event_records_lost else {})
             | (extra_stats or {}),
-            provenance=provenance)
+            provenance=provenance, energy_flows=self.energy_flows())
 
 
 def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
@@ -482,7 +509,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              progress: bool = False, chunk_seconds: float = 1.0,
              record_steps: bool = False, check_memory: bool = True,
              stream_to=None, keep_seconds: float | None = None,
-             table_format: str | None = None) -> SimulationResult:
+             table_format: str | None = None, energy: bool = False) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -543,6 +570,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         (default :data:`scoutsim.streaming.DEFAULT_KEEP_SECONDS`, 60 s).
     table_format : {"parquet", "csv"}, optional
         With ``stream_to``: the tables' format (default Parquet if pyarrow is installed).
+    energy : bool
+        Account for every power flow of the model over the whole run (electrical energy,
+        copper and transmission losses, hip work, joint, belt, leg and toe friction and
+        damping, constraint work; docs/model.md "Work-energy balance"), integrated on every
+        integrator step: ``result.energy_flows``, ``result.energy_balance()``. The motion is
+        the same bit for bit; the run takes longer (three more evaluations per step).
 
     Returns
     -------
@@ -636,7 +669,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         if user_ctrl is None:      # fewer, larger pieces: each costs ~5 ms of table writing
             chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
     eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ, record_steps,
-                       rows=None if stream is None else chunk + 2)
+                       rows=None if stream is None else chunk + 2, energy=energy)
     wall0 = time.perf_counter()
     bar = None
     if progress:

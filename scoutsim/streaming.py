@@ -205,7 +205,7 @@ class RunStream:
             event_states=np.concatenate([c.event_states for c in ch]),
             steps=None if ch[0].steps is None else np.concatenate([c.steps for c in ch]),
             outcome=whole.outcome, t_end=whole.t_end, stats=whole.stats,
-            provenance=whole.provenance)
+            provenance=whole.provenance, energy_flows=whole.energy_flows)
         t0 = float(joined.t[np.searchsorted(joined.t, joined.t[-1] - self.keep_seconds)])
         info["kept_from_s"] = t0
         return joined.window(t0, np.inf)

@@ -132,6 +132,30 @@ AUX_LEG_NAMES = ("ground_force_tangential", "ground_force_normal", "leg_axial_fo
                  "motor_speed", "belt_deflection", "stiction_holding_torque", "toe_x",
                  "toe_y", "toe_velocity_x", "strut_force", "belt_torque")
 
+# --- work-energy balance (simulate(energy=True); SimulationResult.energy_balance) -------
+# Energies [J] accumulated over a run by integrating each power flow on every integrator
+# step (model/energy.py). Per virtual leg (offset leg * NEN_LEG; both motors of the leg):
+EN_ELECTRICAL = 0      # electrical energy into the motor terminals, i (R_A i + K_w w_m)
+EN_COPPER = 1          # armature copper losses R_A i^2
+EN_CONVERSION = 2      # the paper's constant-efficiency loss (K_w - eta K_T) i w_m (signed:
+                       # negative while a leg back-drives its motor)
+EN_GEAR_LOSS = 3       # the optional load-dependent transmission loss (tau_0 - tau_out) w_m / N
+EN_HIP_WORK = 4        # work of the delivered hip torque on the leg (Model II: driven gear)
+EN_JOINT_VISCOUS = 5   # motor-joint viscous friction b_J w_m^2 (Model II)
+EN_JOINT_COULOMB = 6   # motor-joint Coulomb (stiction level) friction while slipping (Model II)
+EN_BELT_DAMPER = 7     # belt damper c_b (alpha' - phi')^2 (Model II)
+EN_LEG_DAMPER = 8      # telescopic leg damper c (1 + a phi^2) l'^2
+EN_LEG_FRICTION = 9    # telescopic leg sliding-joint friction
+EN_TOE_SLIDE = 10      # friction of a sliding toe on the floor, -F_t v_toe
+EN_CONSTRAINT = 11     # work of the constraint forces (zero up to the drift the Baumgarte
+                       # terms of a rigid strut correct; kept as a term, not hidden)
+NEN_LEG = 12
+EN_BATTERY_LOSS = 2 * NEN_LEG   # the battery's internal resistance R_b I_b^2
+NEN = EN_BATTERY_LOSS + 1
+EN_LEG_NAMES = ("electrical", "copper", "conversion", "gear_loss", "hip_work",
+                "joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
+                "leg_friction", "toe_slide", "constraint")
+
 # --- events ---------------------------------------------------------------------------
 # slots: per leg 3 contact slots, per leg 1 motor slot, 2 fall slots
 NEV_CONTACT = 3

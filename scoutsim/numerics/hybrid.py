@@ -24,6 +24,7 @@ import numpy as np
 from numba.extending import overload
 
 from ..jit import kernel
+from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
 from ..model.layout import (
@@ -245,10 +246,38 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
 
 
 #: advance()'s scratch arrays, and the step recording (``steps``, ``stepc``:
-#: :func:`~scoutsim.numerics.events.record_step`) and the state before a transition
-#: (``s_before``, for the event records)
+#: :func:`~scoutsim.numerics.events.record_step`), the state before a transition
+#: (``s_before``, for the event records) and the work-energy accounting (``energy``: the
+#: accumulated energies, layout ``EN_*``, empty when the run does not account; ``ew_e``
+#: an evaluation workspace of its own and ``y_e, ds_e, aux_e, p_e`` its scratch:
+#: :func:`accumulate_energy`)
 AdvanceScratch = namedtuple("AdvanceScratch",
-                            "e_end pending mi_before e_tmp aux_tmp s_before steps stepc")
+                            "e_end pending mi_before e_tmp aux_tmp s_before steps stepc "
+                            "energy ew_e y_e ds_e aux_e p_e")
+
+#: Gauss-Legendre nodes and weights on [0, 1] (3 points, exact for polynomials of degree 5)
+GAUSS_NODES = (0.5 - 0.15 ** 0.5, 0.5, 0.5 + 0.15 ** 0.5)
+GAUSS_WEIGHTS = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
+
+
+@kernel
+def accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc):
+    """Add the energy of every power flow (model/energy.py) over the step of size ``h``
+    from ``s`` to ``y_new`` to ``sc.energy``: 3-point Gauss-Legendre quadrature on the
+    method's continuous extension, with the step's modes and held commands. Uses its own
+    evaluation workspace, so the integration is unchanged, bit for bit."""
+    ew = sc.ew_e
+    y = sc.y_e
+    p = sc.p_e
+    for g in range(3):
+        method_dense(method, s, y_new, h, K, GAUSS_NODES[g], y)
+        project_state(y, P, mi, mf)
+        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew[0], ew[1], ew[2], False, ew[3],
+                    True)
+        power_flows(y, sc.ds_e, sc.aux_e, P, mi, ew[0], ew[1], p)
+        w = GAUSS_WEIGHTS[g] * h
+        for i in range(p.shape[0]):
+            sc.energy[i] += w * p[i]
 
 
 @kernel
@@ -392,6 +421,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                                             P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
                                             ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp)
                 stats[S_NFEV] += nf
+                if sc.energy.shape[0] > 0:
+                    accumulate_energy(method, s, y_new, he, K, P, mi, mf, cmd, sc)
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -484,6 +515,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             stats[S_HMIN] = h
         if h > stats[S_HMAX]:
             stats[S_HMAX] = h
+        if sc.energy.shape[0] > 0:
+            accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc)
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]
