@@ -406,6 +406,7 @@ class SimulationResult:
         from .tables import default_format, write_table
         fmt = fmt or default_format()
         d = Path(directory)
+        d.mkdir(parents=True, exist_ok=True)
         paths = []
         for name, (cols, units) in self.tables().items():
             meta = self.series_metadata() if name == "timeseries" else {"format": TABLES_FORMAT}
