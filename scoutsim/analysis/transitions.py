@@ -31,6 +31,10 @@ from ..model import layout as L
 #: default tolerance of the energy balance of one transition, relative to the larger of the
 #: energies before and after it and 1 J (Scout II holds about 80 J of mechanical energy)
 ENERGY_REL_TOL = 1e-9
+#: tolerance of the whole run's work-energy balance (runs made with ``energy=True``),
+#: relative to its input, in units of the integrator's rtol: the residual is integration
+#: error (measured over 10 s of bounding: 20-35 rtol for DOPRI5 at 1e-8 and ARK3 at 1e-5)
+BALANCE_RTOL_FACTOR = 100.0
 
 
 @dataclass(frozen=True)
@@ -58,6 +62,11 @@ class Transition:
 class TransitionAudit:
     transitions: tuple
     rel_tol: float = ENERGY_REL_TOL
+    #: the run's work-energy balance (:class:`~scoutsim.analysis.energy.EnergyBalance`) if
+    #: it accounted for its energy (``simulate(energy=True)``), else None
+    balance: object = None
+    #: tolerance of the balance's relative residual
+    balance_tol: float = 1e-6
 
     @property
     def n_transitions(self) -> int:
@@ -90,6 +99,11 @@ class TransitionAudit:
                            f"({-tr.logged_loss_J:.3e} J)")
             if tr.violations:
                 out.append(f"t = {tr.t:.9f} s {what}: " + ", ".join(tr.violation_names()))
+        b = self.balance
+        if b is not None and not abs(b.relative_residual) <= self.balance_tol:
+            out.append(f"work-energy balance: residual {b.residual_J:+.3e} J = "
+                       f"{b.relative_residual:+.1e} of the input ({b.input_J:.3f} J), beyond "
+                       f"{self.balance_tol:.0e}")
         return out
 
     @property
@@ -101,7 +115,10 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
     """The transition audit of a :class:`~scoutsim.result.SimulationResult`.
 
     ``rel_tol``: energy balance tolerance of one transition, relative to its energy scale.
-    Results saved before the audit existed carry no audit columns: ValueError."""
+    A run made with ``simulate(energy=True)`` is also audited as a whole: its work-energy
+    balance (``audit.balance``) must close to ``BALANCE_RTOL_FACTOR`` times the integrator's
+    rtol of the input (at least 1e-6). Results saved before the audit existed carry no
+    audit columns: ValueError."""
     ev = np.asarray(result.events)
     if ev.ndim != 2 or ev.shape[1] < L.NEVREC:
         raise ValueError("these events carry no transition audit (a result saved by an "
@@ -133,4 +150,11 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
             energy_before_J=float(rows[0][L.EVR_E_BEFORE]),
             energy_after_J=float(rows[0][L.EVR_E_AFTER]),
             logged_loss_J=float(loss), violations=bits))
-    return TransitionAudit(tuple(trs), rel_tol)
+    balance = None
+    balance_tol = 1e-6
+    if getattr(result, "energy_flows", None) is not None:
+        from .energy import energy_balance
+        balance = energy_balance(result)
+        rtol = (result.provenance.get("integrator") or {}).get("rtol") or 1e-8
+        balance_tol = max(1e-6, BALANCE_RTOL_FACTOR * rtol)
+    return TransitionAudit(tuple(trs), rel_tol, balance, balance_tol)

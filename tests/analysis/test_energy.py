@@ -170,3 +170,21 @@ def test_energy_flows_saved_and_loaded(tmp_path):
         back = scoutsim.SimulationResult.load(path)
         assert back.energy_flows == r.energy_flows
         assert back.energy_balance().residual_J == r.energy_balance().residual_J
+
+
+def test_transition_audit_reports_the_balance():
+    """The transition audit of a run that accounted for its energy includes the whole
+    run's balance, and reports a balance that does not close."""
+    import dataclasses
+
+    from scoutsim.analysis.transitions import audit_transitions
+    r = scoutsim.simulate(duration=2.0, energy=True)
+    audit = audit_transitions(r)
+    assert audit.balance is not None and audit.ok, audit.problems()
+    assert audit.balance_tol == pytest.approx(100 * r.provenance["integrator"]["rtol"])
+    # ten joules (1 % of the input) too many in the leg damper: the balance no longer closes
+    flows = dict(r.energy_flows, leg_damper_back=r.energy_flows["leg_damper_back"] + 10.0)
+    bad = audit_transitions(dataclasses.replace(r, energy_flows=flows, _cache={}))
+    assert not bad.ok
+    assert any("work-energy balance" in p for p in bad.problems())
+    assert audit_transitions(scoutsim.simulate(duration=0.1)).balance is None
