@@ -69,6 +69,23 @@ class EnergyBalance:
     hip_work_J: float
     duration_s: float
     by_leg: dict
+    #: distance the torso travelled forward over the run [m] (None for a streamed run,
+    #: whose result holds only its end) and the robot's total mass [kg]
+    distance_m: float | None = None
+    total_mass_kg: float | None = None
+    gravity: float = 9.81
+
+    @property
+    def mean_input_power_W(self) -> float:
+        """The input averaged over the run [W]."""
+        return self.input_J / self.duration_s if self.duration_s > 0 else float("nan")
+
+    @property
+    def cost_of_transport(self) -> float | None:
+        """Input per weight and distance, E / (m g d) [-] (None without a distance)."""
+        if not self.distance_m or not self.total_mass_kg or self.distance_m <= 0:
+            return None
+        return self.input_J / (self.total_mass_kg * self.gravity * self.distance_m)
 
     @property
     def residual_J(self) -> float:
@@ -99,7 +116,9 @@ class EnergyBalance:
                 | {f"{n}_J": e for n, e, _ in self.terms}
                 | {"battery_J": self.battery_J, "battery_loss_J": self.battery_loss_J,
                    "residual_J": self.residual_J,
-                   "relative_residual": self.relative_residual})
+                   "relative_residual": self.relative_residual,
+                   "mean_input_power_W": self.mean_input_power_W,
+                   "cost_of_transport": self.cost_of_transport})
 
     def table(self) -> str:
         """The balance as a Markdown table (term, energy [J], share of the input)."""
@@ -138,8 +157,18 @@ def energy_balance(result) -> EnergyBalance:
     terms.append(("impacts", flows["impacts"], "touchdown impacts"))
     terms.append(("mechanical_change", flows["mechanical_end"] - flows["mechanical_start"],
                   "change of mechanical energy (kinetic, gravity, leg and belt springs)"))
+    distance = None
+    if "stream" not in result.provenance and len(result.t):
+        distance = float(result.state[-1, L.IX] - result.state[0, L.IX])
+    robot = result.provenance.get("robot") or {}
+    mass = gravity = None
+    if robot:
+        from ..parameters import RobotParameters
+        params = RobotParameters(**robot)
+        mass, gravity = params.total_mass, params.gravity
     return EnergyBalance(
         model=model, input_name=input_name, input_J=input_J, terms=tuple(terms),
         battery_J=(electrical + flows["battery_loss"]) if model in ("I", "II") else 0.0,
         battery_loss_J=flows["battery_loss"], hip_work_J=hip,
-        duration_s=float(result.t_end), by_leg=dict(flows))
+        duration_s=float(result.t_end), by_leg=dict(flows), distance_m=distance,
+        total_mass_kg=mass, gravity=gravity or 9.81)

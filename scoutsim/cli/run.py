@@ -94,6 +94,11 @@ def register(sub, common) -> None:
     run.add_argument("--no-size-check", action="store_true",
                      help="skip the checks of the memory and disk space the run needs (and "
                           "do not stream because of them)")
+    run.add_argument("--energy", action="store_true",
+                     help="account for every power flow (electrical energy, copper and "
+                          "transmission losses, friction, dampers, impacts): print the "
+                          "work-energy balance and add it to summary.json (the motion is "
+                          "unchanged; the run takes longer)")
     run.add_argument("--json", action="store_true",
                      help="print the summary as JSON on stdout instead of the table")
     run.set_defaults(func=execute)
@@ -309,7 +314,7 @@ def execute(args) -> int:
         result = simulate(robot, controller, init, args.duration, model=args.model,
                           integrator=integ, friction_coefficient=args.friction,
                           progress=progress, record_steps=args.steps, stream_to=rd,
-                          check_memory=not args.no_size_check,
+                          check_memory=not args.no_size_check, energy=args.energy,
                           **({"keep_seconds": args.keep, "table_format": args.format}
                              if stream else {}))
     wall = time.perf_counter() - wall0
@@ -317,6 +322,9 @@ def execute(args) -> int:
         return _streamed_write_failed(result, out, rd)
 
     summary = result.summary()
+    balance = result.energy_balance() if args.energy else None
+    if balance is not None:
+        summary["energy_balance"] = balance.as_dict()
     interrupted = result.outcome == "interrupted"
     info |= {"scoutsim_version": result.provenance.get("scoutsim_version"),
              "t_end": result.t_end}
@@ -343,6 +351,13 @@ def execute(args) -> int:
             print("  (passive model: no actuators, so legs with mass swing freely at the hips "
                   "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
                   "passively: see scoutsim orbit --passive)")
+        if balance is not None:
+            cot = balance.cost_of_transport
+            print(f"\nwork-energy balance over {balance.duration_s:g} s "
+                  f"(mean input {balance.mean_input_power_W:.1f} W, hip work "
+                  f"{balance.hip_work_J:.1f} J"
+                  + (f", cost of transport {cot:.2f}" if cot is not None else "") + "):")
+            print(balance.table())
         if stream and result.provenance["stream"]["kept_from_s"] is not None:
             kept = result.provenance["stream"]["kept_from_s"]
             print(f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "

@@ -188,3 +188,31 @@ def test_transition_audit_reports_the_balance():
     assert not bad.ok
     assert any("work-energy balance" in p for p in bad.problems())
     assert audit_transitions(scoutsim.simulate(duration=0.1)).balance is None
+
+
+def test_cost_of_transport_from_its_definition():
+    """Cost of transport E_in / (m g d) from the run's distance and the robot's mass."""
+    r = _run("I", duration=2.0)
+    b = r.energy_balance()
+    robot = scoutsim.RobotParameters()
+    d = r.x[-1] - r.x[0]
+    assert d > 1.0
+    assert b.cost_of_transport == pytest.approx(
+        b.input_J / (robot.total_mass * robot.gravity * d), rel=1e-12)
+    assert b.mean_input_power_W == pytest.approx(b.input_J / 2.0, rel=1e-12)
+
+
+def test_cli_run_energy_prints_and_saves_the_balance(tmp_path, capsys):
+    """``scoutsim run --energy`` prints the balance table and writes it to summary.json,
+    with the same numbers as the library."""
+    import json
+
+    from scoutsim.cli import main
+    assert main(["run", "--duration", "0.5", "--model", "I", "--energy", "--out",
+                 str(tmp_path), "--no-progress"]) == 0
+    printed = capsys.readouterr().out
+    assert "work-energy balance" in printed and "| residual |" in printed
+    saved = json.loads((tmp_path / "summary.json").read_text())["energy_balance"]
+    b = _run("I", duration=0.5, integrator=IntegratorSettings()).energy_balance()
+    assert saved["input_J"] == b.input_J
+    assert saved["residual_J"] == b.residual_J
