@@ -1,4 +1,4 @@
-"""End-to-end benchmark of the command line (issue 14): what a user waits for.
+"""End-to-end benchmark of the command line: what a user waits for.
 
     python benchmarks/bench_cli.py [--venv DIR] [--repeat 3]
 
@@ -17,8 +17,8 @@ Measures in one run, each command in a new process, as a user types it:
   (``python -c "import numba, scipy.linalg"``) and the simulator's own speed, 10 s of
   Model II repeated in one process (best of ``--repeat``).
 
-The issue's targets are printed next to the measurements (first run <= 60 s, warm 1 s run
-<= 1.0 s, warm 10 s run <= 1.5 s, end-to-end real-time factor >= 100); nothing asserts.
+The targets (README, Performance) are printed next to the measurements (first run <= 60 s,
+warm 1 s run <= 1.0 s, warm 10 s run <= 1.5 s, end-to-end real-time factor >= 100); nothing asserts.
 """
 
 from __future__ import annotations

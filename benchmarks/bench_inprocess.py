@@ -5,9 +5,9 @@
 
 The job: 10 s of Model II from the default start on the default floor with the default
 integrator, in one process after its compiled code is loaded (``scoutsim.simulate``), the
-number issue 14 asks not to drop. The base is checked out in a temporary git worktree and
-its compiled core built there first (a few minutes). Then ``--processes`` processes per
-side run alternately (base, this, base, ...), pinned to one core, each timing ``--runs``
+number the compile-time cuts (docs/model.md, "Compile time") must not make worse. The
+base is checked out in a temporary git worktree and its compiled core built there first (a
+few minutes). Then ``--processes`` processes per side run alternately (base, this, base, ...), pinned to one core, each timing ``--runs``
 runs; a process's median is its figure. Between processes of the same code the median
 moves by about 2 % (where the compiled code and data land in memory), more than between
 most commits, so the verdict is the median over processes with their spread, and the

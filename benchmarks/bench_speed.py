@@ -1,4 +1,4 @@
-"""Speed benchmark (issue: 10 s of Model II bounding; real-time factor; SciPy baseline).
+"""Speed benchmark: 10 s of Model II bounding; real-time factor; SciPy baseline.
 
     python benchmarks/bench_speed.py [--baseline-seconds 0.3]
 
@@ -11,7 +11,8 @@ Measures in one run, on one core:
 * the same model in plain Python integrated by SciPy solve_ivp (benchmarks/scipy_baseline.py,
   NUMBA_DISABLE_JIT=1), over the first ``--baseline-seconds`` of the same run, and scoutsim
   over the same span -> speed ratio per simulated second.
-Targets of issue 2 are printed next to the measurements; nothing here asserts.
+The targets (README, Performance) are printed next to the measurements; nothing here
+asserts.
 """
 
 import argparse

@@ -1,4 +1,4 @@
-"""Sweep benchmark (issue 4): a 400-point touchdown-angle sweep of Model II, 2 s each.
+"""Sweep benchmark: a 400-point touchdown-angle sweep of Model II, 2 s each.
 
     python benchmarks/bench_sweep.py [--points-per-axis 20] [--duration 2]
 

@@ -1,5 +1,5 @@
 """Peer comparison: the planar Scout II model built in MuJoCo, driven by the same Table I
-bounding controller at 1 kHz, against scoutsim in one run (issue 4, part 3).
+bounding controller at 1 kHz, against scoutsim in one run (benchmarks/README.md).
 
 Usage:  python benchmarks/mujoco_peer.py [--quick] [--duration 10] [--start cycle|default]
             [--integrators RK4,implicitfast] [--timesteps 2e-4,1e-4,5e-5,2.5e-5]

@@ -1,4 +1,4 @@
-"""Fig. 10 with a torque-dependent gearbox efficiency (issue 5, item 3; docs/identification.md).
+"""Fig. 10 with a torque-dependent gearbox efficiency (docs/identification.md, section 4).
 
 The paper (Sec. IV.B) estimates hip torques from motor current with the constant maximum
 efficiency, ``N eta K_T i``, and suspects that the gearbox's efficiency drop at low torque

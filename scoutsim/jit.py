@@ -27,15 +27,25 @@ only the timestamp of a function's own file, so a cached function that inlines a
 from another module would keep the old callee after that module is edited (a stale
 result, silently). With the digest, any edit of the core compiles it afresh; directories
 of other digests are removed. The directory is ``scoutsim/__pycache__/numba-<digest>``,
-or, where the package is not writable, ``~/.cache/scoutsim/numba-<digest>``; a
-``NUMBA_CACHE_DIR`` set by the user is respected as is.
+or, where the package is not writable, ``~/.cache/scoutsim/numba-<digest>``.
+
+A ``NUMBA_CACHE_DIR`` set by the user is where the cache goes, keyed by the digest all the
+same: ``$NUMBA_CACHE_DIR/scoutsim-numba-<digest>`` (:func:`user_cache_dir`). Such a
+directory may be shared (by other programs, or by checkouts of other scoutsim versions
+running at the same time), so only directories of ours (``scoutsim-numba-`` and a digest)
+are ever removed there, and only those of other digests that nothing has written to for a
+day (:data:`STALE_USER_CACHE_S`); everything else in it is left alone. The environment
+variable itself is not changed, so processes started from this one key their cache the
+same way.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
+import time
 from pathlib import Path
 
 from numba import config, njit
@@ -55,6 +65,56 @@ def core_digest(package: Path = _PACKAGE) -> str:
     return h.hexdigest()[:16]
 
 
+#: name of this package's cache directory inside a ``NUMBA_CACHE_DIR`` set by the user,
+#: followed by the digest
+USER_CACHE_PREFIX = "scoutsim-numba-"
+_USER_CACHE_NAME = re.compile(re.escape(USER_CACHE_PREFIX) + r"[0-9a-f]{16}")
+#: another digest's directory in the user's ``NUMBA_CACHE_DIR`` is removed once nothing in
+#: it has been written for this long [s] (a process of another version may be using it)
+STALE_USER_CACHE_S = 86400.0
+
+
+def user_cache_dir(base, digest: str) -> Path:
+    """This package's cache directory for the compiled core of ``digest`` inside ``base``,
+    a ``NUMBA_CACHE_DIR`` set by the user."""
+    return Path(base) / f"{USER_CACHE_PREFIX}{digest}"
+
+
+def _last_written(directory: Path) -> float:
+    """Newest modification time [s since the epoch] of ``directory`` and everything in it."""
+    newest = directory.stat().st_mtime
+    for root, dirs, files in os.walk(directory):
+        for name in dirs + files:
+            try:
+                newest = max(newest, os.lstat(os.path.join(root, name)).st_mtime)
+            except OSError:
+                pass
+    return newest
+
+
+def _user_cache_dir(base: Path) -> Path:
+    """The cache directory inside the user's ``NUMBA_CACHE_DIR`` ``base``; removes the
+    directories of ours of other digests there that nothing has written to for
+    :data:`STALE_USER_CACHE_S`, and nothing else."""
+    own = user_cache_dir(base, core_digest())
+    try:
+        entries = list(base.iterdir())
+    except OSError:
+        entries = []
+    now = time.time()
+    for old in entries:
+        if old.name == own.name or not _USER_CACHE_NAME.fullmatch(old.name):
+            continue
+        try:
+            if old.is_symlink() or not old.is_dir() or \
+                    now - _last_written(old) < STALE_USER_CACHE_S:
+                continue
+        except OSError:
+            continue
+        shutil.rmtree(old, ignore_errors=True)
+    return own
+
+
 def _cache_dir() -> Path:
     digest = core_digest()
     for base in (_PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
@@ -72,7 +132,9 @@ def _cache_dir() -> Path:
     return _PACKAGE / "__pycache__" / f"numba-{digest}"
 
 
-if not os.environ.get("NUMBA_CACHE_DIR"):
+if os.environ.get("NUMBA_CACHE_DIR"):
+    config.CACHE_DIR = str(_user_cache_dir(Path(os.environ["NUMBA_CACHE_DIR"])))
+else:
     config.CACHE_DIR = str(_cache_dir())
 
 _COMMON = dict(cache=True, error_model="numpy")

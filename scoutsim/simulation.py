@@ -456,7 +456,8 @@ STREAM_CHUNK_SECONDS = 10.0
 
 
 #: wall seconds per simulated second of each model with the default integrator: an upper
-#: estimate for refusing absurd requests (development machine, 2 cores, one of them busy:
+#: estimate for refusing absurd requests (measured on a 2-vCPU Intel Xeon virtual machine, one
+#: core busy:
 #: Model II 4.0-6.6 ms, Model I 2-3.6 ms, ideal 2-2.9 ms, passive 4.3 ms; the slower
 #: figure doubled for a slower machine; benchmarks/bench_speed.py measures the speed)
 WALL_S_PER_SIMULATED_S = {"II": 13e-3, "I": 7e-3, "ideal": 6e-3, "passive": 9e-3}

@@ -99,5 +99,58 @@ def test_the_compiled_cache_is_keyed_by_every_core_source(tmp_path):
     with open(copy / "model" / "layout.py", "a") as f:
         f.write("\n# an edit of a module that compiled functions import\n")
     assert jit.core_digest(copy) != d0
-    assert pathlib.Path(jit.config.CACHE_DIR).name == f"numba-{d0}" or \
-        "NUMBA_CACHE_DIR" in __import__("os").environ
+    used = pathlib.Path(jit.config.CACHE_DIR).name
+    assert used in (f"numba-{d0}", f"{jit.USER_CACHE_PREFIX}{d0}")
+
+
+#: run in a new process with NUMBA_CACHE_DIR set: import the package's jit module only (no
+#: compilation) and report where Numba will cache and the digest of the core's sources
+_REPORT_CACHE_DIR = """
+import json, numba, scoutsim.jit as jit
+print(json.dumps({"cache_dir": numba.config.CACHE_DIR, "digest": jit.core_digest()}))
+"""
+
+
+def test_a_user_numba_cache_dir_is_keyed_by_the_core_digest_too(tmp_path):
+    """With NUMBA_CACHE_DIR set, the compiled core is cached in a directory of it named by
+    the digest of every core source (an edit of an inlined callee in another file must not
+    be served from a stale caller), a different digest names a different directory, and
+    only this package's directories of other digests that nothing wrote to for a day are
+    removed there: a recent one of ours and everything not ours stay."""
+    import json
+    import os
+    import pathlib
+    import subprocess
+    import sys
+    import time
+    user = tmp_path / "user-cache"
+    ours_stale = user / f"{jit.USER_CACHE_PREFIX}{'0' * 16}"
+    ours_recent = user / f"{jit.USER_CACHE_PREFIX}{'1' * 16}"
+    not_ours = [user / "numba-0000000000000000", user / "scoutsim-numba-notadigest",
+                user / "another_program_abc123"]
+    for d in (ours_stale, ours_recent, *not_ours):
+        (d / "sub").mkdir(parents=True)
+        (d / "sub" / "f.nbi").write_bytes(b"x")
+    (user / "a-file.txt").write_text("the user's\n")
+    old = time.time() - 2 * jit.STALE_USER_CACHE_S
+    for d in (ours_stale, *not_ours):
+        for path in (d / "sub" / "f.nbi", d / "sub", d):
+            os.utime(path, (old, old))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(user),
+               PYTHONPATH=os.pathsep.join([str(pathlib.Path(jit.__file__).parents[1]),
+                                           os.environ.get("PYTHONPATH", "")]))
+    out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR], env=env, cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300, check=True)
+    report = json.loads(out.stdout.strip().splitlines()[-1])
+    digest = report["digest"]
+    assert digest == jit.core_digest()
+    cache_dir = pathlib.Path(report["cache_dir"])
+    assert cache_dir.parent == user and digest in cache_dir.name
+    assert cache_dir == jit.user_cache_dir(user, digest)
+    other = "f" * 16 if digest != "f" * 16 else "e" * 16
+    assert jit.user_cache_dir(user, other) != jit.user_cache_dir(user, digest)
+    assert jit.user_cache_dir(user, other).parent == user
+    assert not ours_stale.exists()
+    assert (ours_recent / "sub" / "f.nbi").exists()
+    assert all((d / "sub" / "f.nbi").exists() for d in not_ours)
+    assert (user / "a-file.txt").read_text() == "the user's\n"

@@ -3,7 +3,8 @@
 numerics / control -> model -> parameters.
 
 The graph is read from the source (module-level and deferred imports alike, by AST), so
-the test needs no import of the package. The only imports against the layers are the
+the test needs no import of the package. An import of the package that names no module of
+it fails the test (file, line and import named) rather than being left out of the graph. The only imports against the layers are the
 convenience accessors of ``CONVENIENCE_ACCESSORS`` (a method of a result that hands it to
 the layer above, e.g. ``result.plot()``); they must be deferred (inside the method, so
 importing the lower module never loads the upper one) and the list must match exactly, so
@@ -49,28 +50,55 @@ def _modules():
 
 def _graph(module_level_only=False):
     """importer -> set of imported package modules (only the imports at module level, i.e.
-    run when the importer is imported, if ``module_level_only``)."""
+    run when the importer is imported, if ``module_level_only``). An import of the package
+    (relative, or absolute under ``scoutsim``) that names no module of it fails here, naming
+    the file, line and import: such an import raises when it runs, and a graph that dropped
+    it would hide the edge."""
     mods = _modules()
     edges = {m: set() for m in mods}
+    unresolved = []
     for name, path in mods.items():
         pkg = name if path.name == "__init__.py" else name.rpartition(".")[0]
         tree = ast.parse(path.read_text())
         nodes = _module_level(tree) if module_level_only else ast.walk(tree)
         for node in nodes:
-            targets = []
-            if isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = pkg.split(".")[:len(pkg.split(".")) - node.level + 1]
-                    mod = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    mod = node.module or ""
-                targets = [f"{mod}.{a.name}" for a in node.names if f"{mod}.{a.name}" in mods]
-                if not targets and mod in mods:
-                    targets = [mod]
-            elif isinstance(node, ast.Import):
-                targets = [a.name for a in node.names if a.name in mods]
+            targets, missing = _resolve(node, pkg, mods)
             edges[name].update(t for t in targets if t != name)
+            unresolved += [f"{path.relative_to(ROOT.parent)}:{node.lineno}: "
+                           f"`{ast.unparse(node)}` ({m} is not a module of the package)"
+                           for m in sorted(set(missing))]
+    assert not unresolved, "imports that resolve to no module of the package:\n" + \
+        "\n".join(unresolved)
     return edges
+
+
+def _resolve(node, pkg, mods):
+    """(package modules the import statement ``node`` loads, the names it asks for that
+    are neither a module of the package nor a name taken from one). Imports from outside
+    the package give ([], [])."""
+    if isinstance(node, ast.Import):
+        names = [a.name for a in node.names if a.name.split(".")[0] == ROOT.name]
+        return [n for n in names if n in mods], [n for n in names if n not in mods]
+    if not isinstance(node, ast.ImportFrom):
+        return [], []
+    if node.level:
+        parts = pkg.split(".")
+        if node.level > len(parts):  # above the package root
+            return [], ["." * node.level + (node.module or "")]
+        mod = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+    else:
+        mod = node.module or ""
+        if mod.split(".")[0] != ROOT.name:
+            return [], []
+    targets, missing = [], []
+    for a in node.names:
+        if f"{mod}.{a.name}" in mods:  # a submodule
+            targets.append(f"{mod}.{a.name}")
+        elif mod in mods:  # a name defined in the module (or a star import)
+            targets.append(mod)
+        else:
+            missing.append(mod)
+    return targets, missing
 
 
 def _module_level(tree):
@@ -91,6 +119,24 @@ def _layer(module):
 def test_every_module_has_a_layer():
     for m in _modules():
         assert any(m == p or m.startswith(p + ".") for p in LAYERS), m
+
+
+def test_every_package_import_resolves_to_a_module():
+    """Every import of the package's own modules names one that exists (``_graph`` fails
+    otherwise, naming file, line and import), so no edge of the graph is dropped."""
+    assert _graph()
+
+
+def test_an_import_of_a_missing_module_is_reported():
+    """The resolver itself: a relative import one level too shallow (the module is a
+    sibling of the package, not inside it) names no module; the right one does."""
+    mods = _modules()
+    wrong = ast.parse("from .parameters import RobotParameters").body[0]
+    right = ast.parse("from ..parameters import RobotParameters").body[0]
+    absolute = ast.parse("import scoutsim.no_such_module").body[0]
+    assert _resolve(wrong, "scoutsim.presentation", mods) == ([], ["scoutsim.presentation.parameters"])
+    assert _resolve(right, "scoutsim.presentation", mods) == (["scoutsim.parameters"], [])
+    assert _resolve(absolute, "scoutsim.presentation", mods) == ([], ["scoutsim.no_such_module"])
 
 
 def test_no_import_cycles():

@@ -6,7 +6,7 @@ started for the call; ``scheduler`` sends the tasks to a Dask distributed cluste
 (``dask[distributed]`` must be installed), or to a ``concurrent.futures.Executor`` the
 caller keeps open across calls. A fresh spawn worker pays about a second to import
 scoutsim and load its compiled code before its first run; once a 2 s Model II run takes
-~7 ms that is most of a 400-point sweep, so repeated sweeps in one session should share
+~7 ms that is most of a 400-point sweep, so repeated sweeps in one program should share
 a pool (``benchmarks/bench_sweep.py`` measures both). Tasks travel to the workers in small
 batches (:data:`MAX_BATCH`). Results come back in task order whatever the completion
 order, and ``on_result`` sees each one as soon as its batch returns (checkpointing), so an

@@ -1,4 +1,4 @@
-"""Hip-unit identification (issue 5; docs/identification.md): virtual bench rigs that are
+"""Hip-unit identification (docs/identification.md): virtual bench rigs that are
 configurations of the simulator, and a nonlinear least-squares fit of the Model II hip
 parameters with confidence intervals and an identifiability report.
 

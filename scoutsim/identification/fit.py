@@ -1,5 +1,5 @@
-"""Identification of the Model II hip-unit parameters from rig logs (issue 5;
-docs/identification.md).
+"""Identification of the Model II hip-unit parameters from rig logs
+(docs/identification.md).
 
     result = identify([log1, log2], params=["drive_gear_inertia", "joint_stiction", ...])
     print(result.report())

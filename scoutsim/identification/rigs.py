@@ -1,5 +1,5 @@
 """Virtual bench rigs: the paper's hip-unit identification experiments (Sec. III), as
-configurations of the same simulator (issue 5; docs/identification.md).
+configurations of the same simulator (docs/identification.md).
 
 Each rig runs the compiled hybrid model of :func:`scoutsim.simulate` (same equations,
 integrator, events, stiction, actuator and 1 kHz controller) with the torso held by a

@@ -36,8 +36,8 @@ def new_row(R, r, rkind, rleg, nr, rhs, kind, leg):
 
 @kernel
 def add_clamp_rows(P, R, r, rkind, rleg, nr):
-    """Bench-rig clamps as constraint rows (issue 5, docs/identification.md): with
-    P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (``ROW_CLAMP_TORSO``); with P_CLAMP_LEGS also ddphi = 0 for
+    """Bench-rig clamps as constraint rows (scoutsim.identification.rigs;
+    docs/identification.md): with P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (``ROW_CLAMP_TORSO``); with P_CLAMP_LEGS also ddphi = 0 for
     both legs (``ROW_CLAMP_LEG``). The multipliers are the clamp's force and torques. Returns the new
     row count."""
     if P[P_CLAMP_TORSO] > 0.5:

@@ -88,7 +88,7 @@ NMF = 2
  P_N, P_ETA, P_J1, P_J2, P_TAU_S, P_B_J, P_KB, P_CB, P_KT, P_KW, P_RA, P_IMAX, P_VB, P_RB,
  P_MODEL, P_MU, P_MASSLESS, P_TD_WORLD, P_TD_B, P_TD_F, P_THETA_LIM, P_STRUT_OMEGA,
  P_SENSE_ALPHA, P_TAU_IDLE, P_C_LOAD) = range(38)
-# bench rigs (issue 5, scoutsim.identification.rigs): clamps are extra constraint rows of
+# bench rigs (scoutsim.identification.rigs): clamps are extra constraint rows of
 # the same KKT system; the motor circuit replaces the amplifier in an unpowered rig
 P_CLAMP_TORSO = 38   # 1: torso x, y, theta held fixed (free swing, flight steps, stall)
 P_CLAMP_LEGS = 39    # 1: leg angles phi held fixed relative to the torso (stall)

@@ -37,8 +37,8 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
         relative to the torso (False).
     pitch_limit : |theta| [rad] beyond which the run counts as a fall (default 60 deg).
     strut_omega : Baumgarte rate [rad/s] of the rigid-strut length constraint (docs/specification.md section 3).
-    clamp_torso : bench rigs only (issue 5): hold the torso's x, y, theta fixed by three
-        extra constraint rows of the KKT system (docs/identification.md).
+    clamp_torso : bench rigs only (scoutsim.identification.rigs): hold the torso's x, y,
+        theta fixed by three extra constraint rows of the KKT system (docs/identification.md).
     clamp_legs : bench rigs only: also hold both leg angles phi fixed relative to the torso
         (the stall rig); needs ``clamp_torso``.
     motor_circuit : "amplifier" (normal operation, docs/specification.md section 4), "open" (motor leads open:

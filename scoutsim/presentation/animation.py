@@ -80,7 +80,7 @@ def frame_times(result, fps: float = 25.0, t0: float | None = None,
 def _geometry(result) -> tuple[float, float, float]:
     robot = (result.provenance or {}).get("robot") or {}
     if not robot:
-        from .parameters import RobotParameters
+        from ..parameters import RobotParameters
         import dataclasses
         robot = dataclasses.asdict(RobotParameters())
     return (0.5 * float(robot["hip_spacing"]), float(robot["torso_length"]),

@@ -103,3 +103,26 @@ def test_cli_bad_inputs_exit_2(argv, message, saved, tmp_path, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err
+
+
+def test_result_without_robot_in_provenance_is_drawn_with_the_default_robot(result):
+    """A result whose provenance does not name the robot (e.g. one assembled by hand or
+    saved without it) is drawn with the default Scout II (RobotParameters()): the torso is
+    a rectangle of the default torso length x height, and every frame matches the frame of
+    the same run whose provenance names the (default) robot it simulated."""
+    import dataclasses
+    from scoutsim.parameters import RobotParameters
+    provenance = {k: v for k, v in result.provenance.items() if k != "robot"}
+    bare = dataclasses.replace(result, provenance=provenance, _cache={})
+    assert "robot" not in bare.provenance and "robot" in result.provenance
+    robot = RobotParameters()
+    with_robot = animate(result, fps=10, t0=0.2, t1=0.4)
+    without = animate(bare, fps=10, t0=0.2, t1=0.4)
+    for i in range(len(without.frame_times)):
+        corners = without._func(i)[0].get_xy()[:4]
+        sides = np.hypot(*np.diff(np.vstack([corners, corners[:1]]), axis=0).T)
+        np.testing.assert_allclose(sides, [robot.torso_length, robot.torso_height] * 2,
+                                   rtol=1e-12)
+        np.testing.assert_array_equal(corners, with_robot._func(i)[0].get_xy()[:4])
+    for anim in (with_robot, without):
+        anim._draw_was_started = True  # drawn by hand: no "deleted without rendering" warning
