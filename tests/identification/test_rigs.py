@@ -1,4 +1,4 @@
-"""Virtual bench rigs (issue 5): each is the simulator with the torso clamped; the physics
+"""Virtual bench rigs: each is the simulator with the torso clamped; the physics
 of each rig is checked against hand-derived laws (pendulum period, back-EMF torque
 balance, static belt balance), never against numbers taken from the code."""
 
@@ -94,21 +94,81 @@ def test_shorted_motor_creeps_at_the_back_emf_torque_balance():
                                rtol=1e-12)
 
 
-def test_stall_belt_deflection_is_the_static_balance_and_below_the_paper_8_deg():
-    robot = RobotParameters()
-    d = stall_deflection(robot)
-    tau = (robot.gear_ratio * robot.efficiency * robot.torque_constant
-           * robot.current_limit)                    # amplifier limit at stall
+def _hand_stall(robot, command):
+    """The held hip unit by hand (specification.md sections 4-5), per physical leg.
+
+    Delivered torque: the command, capped by the amplifier's current limit through the
+    transmission, N eta K_T i_max, with N = planetary x sprocket ratio and eta = gearbox x
+    sprocket efficiency (Table III); at zero speed the torque-speed line, N eta K_T V / R_A,
+    lies above that cap for the Scout II constants. The gear, at rest on the unloaded belt,
+    slips while the belt spring carries less than tau - N tau_s (the stiction and viscous
+    damping sit at the motor joint, reflected by N and N^2). The leg is held, so the gear
+    obeys J (d2 delta) + (c_b + N^2 b_J) (d delta) + k_b delta = tau - N tau_s with
+    J = J_2 + N^2 J_1; heavily overdamped (fast pole J / (c_b + N^2 b_J) = 0.16 ms), its
+    slow pole gives delta(t) = delta_s (1 - exp(-t / T)), delta_s = (tau - N tau_s) / k_b,
+    T = (c_b + N^2 b_J) / k_b: the gear creeps up to the lower edge of the static band
+    (tau -+ N tau_s) / k_b and sticks there.
+
+    Returns (tau [N m], delta_s [rad], T [s])."""
+    n = robot.planetary_ratio * robot.sprocket_ratio
+    eta = robot.gearbox_efficiency * robot.sprocket_efficiency
+    cap = n * eta * robot.torque_constant * robot.current_limit
+    tau = cap if command is None else min(command, cap)
+    delta_s = (tau - n * robot.joint_stiction) / robot.belt_stiffness
+    t_creep = (robot.belt_damping + n * n * robot.joint_damping) / robot.belt_stiffness
+    return tau, delta_s, t_creep
+
+
+@pytest.mark.parametrize("command, stiffness_factor", [
+    (None, 1.0),        # the rig's default: maximum hip torque
+    (15.0, 1.0),        # a torque below the current limit
+    (80.0, 1.0),        # above the current limit: the amplifier caps it
+    (None, 2.0),        # a belt twice as stiff: half the deflection
+])
+def test_stall_deflection_is_the_torque_over_the_belt_stiffness(command, stiffness_factor):
+    """Static balance of the held hip unit, k_b (alpha - phi) = tau - N tau_s, and its
+    overdamped creep delta(t) = delta_s (1 - exp(-t / T)), against the hand computation of
+    ``_hand_stall``; the delivered torque is the command capped at N eta K_T i_max."""
+    base = RobotParameters()
+    robot = base.replace(belt_stiffness=stiffness_factor * base.belt_stiffness)
+    tau, delta_s, t_creep = _hand_stall(robot, command)
+    d = stall_deflection(robot, Stall(torque=command))
     assert d["torque_nm"] == pytest.approx(tau, rel=1e-12)
-    # at rest the motor-joint stiction holds the gear anywhere with
-    # |k_b (alpha - phi) - tau| <= N tau_s; the gear creeps in from zero deflection
-    lo = (tau - robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness
-    hi = (tau + robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness
-    assert lo * (1 - 1e-4) <= d["deflection_final_rad"] <= hi
-    assert math.degrees(d["deflection_final_rad"]) < 8.0       # paper Sec. III: ~8 deg
-    # the leg and torso did not move
     res = d["result"]
+    b = res.belt_deflection("back")
+    for t in (0.2, 0.5, 1.0, 2.0, 6.0):
+        k = int(round(t / 1e-3))
+        assert res.t[k] == pytest.approx(t)
+        # the neglected fast pole changes delta(t) by < 1e-3 relative for t >= 0.2 s
+        assert b[k] == pytest.approx(delta_s * (1.0 - math.exp(-t / t_creep)), rel=1e-3)
+    # after 6 s (> 5 T) the gear sits in the static band, at its lower edge
+    assert d["deflection_final_rad"] == pytest.approx(delta_s, rel=1e-3)
+    assert np.array_equal(res.belt_deflection("front"), b)      # both legs alike
+    # the leg and torso did not move
     assert np.all(res.state[:, 3:5] == 0.0)
+
+
+def test_stall_rig_falls_short_of_the_paper_measured_8_deg():
+    """Documented difference, not agreement (docs/identification.md, "The stall rig shows
+    4.4 deg, not the robot's ~8 deg"). The paper (Sec. III) quotes about 8 deg as the
+    deflection "measured by the robot applying maximum hip torque with the torso and legs
+    constrained on a horizontal plane". Through Table II's 7 N m/deg belt spring, 8 deg takes
+    7 x 8 = 56 N m; the assumed motor constants (K_T = 0.0389 N m/A, i_max = 12 A) give the
+    amplifier's N eta K_T i_max = 31.1 N m, so the rig stops 3.5 deg short. If a change of
+    the motor or belt constants closes this gap, update that section and this test."""
+    robot = RobotParameters()
+    needed = robot.belt_stiffness * math.radians(8.0)              # 56 N m
+    tau, delta_s, _ = _hand_stall(robot, None)
+    n_tau_s = robot.gear_ratio * robot.joint_stiction
+    # the amplifier cannot hold the measured 8 deg, even at the band's upper edge
+    assert tau + n_tau_s < needed
+    d = stall_deflection(robot)
+    assert math.degrees(d["deflection_final_rad"]) < 8.0 - 3.0      # short by 3.6 deg
+    # the motor itself could: at zero speed its torque-speed line (eq. 3 at 36 V, through
+    # the transmission) lies above the 56 N m; the amplifier's current limit binds first
+    n = robot.planetary_ratio * robot.sprocket_ratio
+    eta = robot.gearbox_efficiency * robot.sprocket_efficiency
+    assert n * eta * robot.torque_constant * 36.0 / robot.armature_resistance > needed
 
 
 def test_flight_steps_servo_reaches_each_commanded_angle():
