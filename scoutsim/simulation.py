@@ -456,7 +456,7 @@ STREAM_CHUNK_SECONDS = 10.0
 
 
 #: wall seconds per simulated second of each model with the default integrator: an upper
-#: estimate for refusing absurd requests (measured on a 2-vCPU Intel Xeon virtual machine, one
+#: estimate for refusing absurd requests (measured on a 2-core virtual machine, one
 #: core busy:
 #: Model II 4.0-6.6 ms, Model I 2-3.6 ms, ideal 2-2.9 ms, passive 4.3 ms; the slower
 #: figure doubled for a slower machine; benchmarks/bench_speed.py measures the speed)
