@@ -285,7 +285,7 @@ def test_model_i_back_leg_is_not_held_at_the_sweep_limit_model_ii_holds_it_bette
     all it has and the leg still goes on. Model I: 9.7 deg. Model II passes it by less
     (8.4 deg), but also by more than 5.9 deg: in scoutsim neither model holds the back leg
     at the sweep limit, and Model II's improvement is small, not the paper's "significant".
-    (Front legs: Model I 3.4 deg, Model II 4.0 deg, both within the servo's range.)
+    (Front legs: Model I 3.4 deg, Model II 4.1 deg, both within the servo's range.)
     """
     controller = ControllerParameters()
     saturating_deg = math.degrees(ROBOT.max_leg_torque / controller.brake_kp_back)
