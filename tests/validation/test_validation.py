@@ -365,10 +365,11 @@ def test_cli_compare_bad_log_exits_2(tmp_path, capsys):
 
 
 def test_cli_compare_example(tmp_path, capsys):
-    """The paper's Fig. 12 comparison on the shipped virtual Scout II: Model I and Model II
-    both reach a steady stride and have finite mean and max errors in all seven metrics,
-    over every experimental stride; the virtual robot has effects neither model has, so
-    neither matches it exactly."""
+    """`scoutsim compare --example` (the Fig. 12 table on the shipped virtual Scout II):
+    Model I and Model II both reach a steady stride and have finite mean and max errors in
+    all seven metrics, over every experimental stride; the virtual robot has effects
+    neither model has, so neither matches it exactly. The paper's claims on these errors
+    are tested in tests/test_paper_claims.py."""
     from scoutsim.cli import main
     code = main(["compare", "--example", "--models", "II,I", "--out", str(tmp_path),
                  "--no-progress"])
