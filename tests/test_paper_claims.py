@@ -61,12 +61,31 @@ def test_model_ii_speed_near_paper_1_3_m_s(runs):
     assert 1.1 <= runs["II"].gait().mean_speed_m_s <= 1.5
 
 
-def test_model_ii_belt_deflection_below_8_deg(runs):
+def test_model_ii_belt_deflection_below_the_stall_deflection(runs):
     """The belt spring was chosen so that "the maximum spring deflection during bounding in
-    simulation does not exceed ... approximately 8 deg"."""
+    simulation does not exceed that which is measured by the robot applying maximum hip
+    torque with the torso and legs constrained on a horizontal plane (approximately 8°)".
+
+    The robot measured about 8 deg; the model's own version of that measurement is the
+    static deflection at the largest torque the hip unit can hold, (N eta K_T i_max +
+    N tau_s) / k_b = 4.53 deg by hand (docs/identification.md: the model reaches 55 % of
+    the robot's 8 deg). During bounding the peak must stay below that (measured 0.46 and
+    1.02 deg). And the belt spring carries the hip torque on average: over whole steady
+    strides the damper's and the gear inertia's parts average out, so the mean applied
+    torque equals k_b times the mean deflection up to the motor joint's friction
+    (|.| <= N tau_s = 0.56 N m; measured 0.006 and 0.039 N m)."""
+    robot = scoutsim.RobotParameters()
+    N = robot.planetary_ratio * robot.sprocket_ratio
+    eta = robot.gearbox_efficiency * robot.sprocket_efficiency
+    stall = (N * eta * robot.torque_constant * robot.current_limit
+             + N * robot.joint_stiction) / robot.belt_stiffness
     r = runs["II"]
+    m = _steady(r)
     for leg in ("back", "front"):
-        assert np.max(np.abs(np.degrees(r.belt_deflection(leg)))) < 8.0
+        d = np.asarray(r.belt_deflection(leg))
+        assert np.max(np.abs(d)) < stall
+        tau = np.asarray(r.hip_torque_applied(leg))[m]
+        assert abs(tau.mean() - robot.belt_stiffness * d[m].mean()) <= N * robot.joint_stiction
 
 
 @pytest.mark.parametrize("model", ["I", "II"])
