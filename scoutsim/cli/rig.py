@@ -1,6 +1,6 @@
 """``scoutsim rig``: run a virtual bench rig (free swing, flight steps or stall: the
 simulator with the torso clamped) and write its log with sensor noise; the stall rig also
-prints the belt deflection at maximum hip torque (the paper's ~8 deg check).
+prints the belt deflection at maximum hip torque (the robot measured about 8 deg).
 
     scoutsim rig {free-swing,flight-steps,stall} [--motor {open,short}] [--toe-mass KG]
                  [--release BACK,FRONT] [--duration S] [--robot FILE] [--out DIR]
@@ -22,8 +22,8 @@ def register(sub, common) -> None:
         NAME, help="run a virtual bench rig and write its log",
         description="Run a virtual bench rig (the same simulator with the torso clamped) and "
                     "write its log (DIR/<rig>.csv.gz) with sensor noise; the stall rig also "
-                    "prints the belt deflection at maximum hip torque (the paper's ~8 deg "
-                    "check).")
+                    "prints the belt deflection at maximum hip torque (the robot measured about "
+                    "8 deg).")
     rg.add_argument("rig", choices=("free-swing", "flight-steps", "stall"))
     rg.add_argument("--motor", choices=("open", "short"), default="open",
                     help="free swing: motor leads open or shorted (default: open)")
@@ -78,7 +78,8 @@ def execute(args) -> int:
               f"i_max); belt deflection after {rig.duration:g} s: "
               f"{d['deflection_final_deg']:.3f} deg (static band of the motor stiction "
               f"{lo:.3f} .. {hi:.3f} deg; creep time constant c_b/k_b = "
-              f"{d['creep_time_constant_s']:.3f} s); the paper's bound: about 8 deg")
+              f"{d['creep_time_constant_s']:.3f} s); the robot measured about 8 deg "
+              "(docs/identification.md)")
     else:
         res = run_rig(rig, robot)
     log = rig_log(res, noise=None if args.no_noise else RigNoise(), seed=args.seed)

@@ -22,7 +22,7 @@ ground. Nothing else is special-cased:
   the touchdown-angle command stepped at given times.
 * :class:`Stall` - the torso and both legs held (two more rows, ``ddphi = 0``) and the
   maximum hip torque ``N eta K_T i_max`` commanded: the belt deflection ``alpha - phi``
-  is what the motor encoder shows (the paper's ~8 deg check).
+  is what the motor encoder shows (the robot measured about 8 deg).
 
 :func:`rig_log` turns a rig run into a log in the project's log format
 (:mod:`scoutsim.validation.logs`) with the sensor chain of :class:`RigNoise` (motor
@@ -390,7 +390,7 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
 
 def stall_deflection(robot: RobotParameters | None = None, rig: Stall | None = None,
                      integrator: IntegratorSettings | None = None) -> dict:
-    """Run the stall rig and report the belt deflection (paper Sec. III's ~8 deg check).
+    """Run the stall rig and report the belt deflection (the robot measured about 8 deg, paper Sec. III).
 
     Returns a dict (SI, plus ``*_deg``): ``torque_nm`` (delivered hip torque per physical
     leg at stall), ``deflection_final_rad`` / ``_deg`` (at the end of the run),
