@@ -127,26 +127,63 @@ def delivered_torque(cur, omega_m, P):
 
 
 @kernel(inline="always")
+def _battery_fixed_point(v, voc, rb, dq, cmd, P):
+    """The terminal voltage [V] the battery gives when the motors draw what they draw at
+    terminal voltage ``v``: (V_oc + sqrt(V_oc^2 - 4 R_b P(v))) / 2 (the high root of
+    V = V_oc - R_b P / V), P(v) the power of all motors at their currents for ``v``."""
+    pw = 0.0
+    for leg in range(2):
+        om = motor_speed(dq, leg, P)
+        i = motor_current(cmd[leg], om, v, P)
+        pw += P[P_NP] * i * (P[P_RA] * i + P[P_KW] * om)
+    disc = voc * voc - 4.0 * rb * pw
+    if disc < 0.0:
+        disc = 0.0
+    return 0.5 * (voc + math.sqrt(disc))
+
+
+#: relative tolerance [-] of the battery voltage solve
+BATTERY_VOLTAGE_RTOL = 1e-13
+
+
+@kernel(inline="always")
 def battery_voltage(dq, cmd, P):
     """Battery terminal voltage V_b [V] (docs/specification.md section 4).
 
     Ideal source (R_b = 0): V_b = V_oc. Otherwise the amplifiers are taken as lossless
-    converters, so the battery supplies P = sum_motors V_term i and
-    V_b = (V_oc + sqrt(V_oc^2 - 4 R_b P)) / 2; the coupling through the voltage limits is
-    resolved by fixed-point iteration."""
+    converters, so the battery supplies P = sum_motors V_term i and V_b = V_oc - R_b P / V_b,
+    i.e. V_b = F(V_b) = (V_oc + sqrt(V_oc^2 - 4 R_b P(V_b))) / 2, where P depends on V_b
+    through the motors' torque-speed lines. The power a motor on its line draws grows with
+    the voltage, so F falls and V - F(V) has one root, bracketed by [V_oc / 2, F(V_oc / 2)]
+    and found by the Illinois method to BATTERY_VOLTAGE_RTOL (a plain fixed-point iteration
+    oscillates when a motor's current is on its line)."""
     voc = P[P_VB]
     rb = P[P_RB]
     if rb <= 0.0 or int(P[P_MODEL]) == MODEL_IDEAL or int(P[P_MODEL]) == MODEL_PASSIVE:
         return voc
-    vb = voc
-    for _ in range(4):
-        pw = 0.0
-        for leg in range(2):
-            om = motor_speed(dq, leg, P)
-            i = motor_current(cmd[leg], om, vb, P)
-            pw += P[P_NP] * i * (P[P_RA] * i + P[P_KW] * om)
-        disc = voc * voc - 4.0 * rb * pw
-        if disc < 0.0:
-            disc = 0.0
-        vb = 0.5 * (voc + math.sqrt(disc))
-    return vb
+    a = 0.5 * voc
+    fa = a - _battery_fixed_point(a, voc, rb, dq, cmd, P)
+    if fa >= 0.0:
+        return a
+    b = -fa + a
+    fb = b - _battery_fixed_point(b, voc, rb, dq, cmd, P)
+    if fb <= 0.0:
+        return b
+    side = 0
+    c = b
+    for _ in range(100):
+        c = (a * fb - b * fa) / (fb - fa)
+        fc = c - _battery_fixed_point(c, voc, rb, dq, cmd, P)
+        if fc == 0.0 or b - a < BATTERY_VOLTAGE_RTOL * voc:
+            break
+        if fc > 0.0:
+            b, fb = c, fc
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            a, fa = c, fc
+            if side == 1:
+                fb *= 0.5
+            side = 1
+    return c
