@@ -37,3 +37,18 @@ def interrupt_run(monkeypatch):
             return r
         monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
     return interrupt
+
+
+@pytest.fixture
+def dask_client_timeouts(monkeypatch):
+    """The ``timeout`` given to every ``distributed.Client`` the test makes (each still the
+    real Client); skips the test without dask.distributed."""
+    distributed = pytest.importorskip("distributed")
+    timeouts = []
+
+    class Client(distributed.Client):
+        def __init__(self, *args, **kwargs):
+            timeouts.append(kwargs.get("timeout"))
+            super().__init__(*args, **kwargs)
+    monkeypatch.setattr(distributed, "Client", Client)
+    return timeouts

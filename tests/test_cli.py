@@ -6,7 +6,6 @@ import json
 import math
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -381,17 +380,18 @@ def test_jobs_expected_to_take_too_long_are_refused_before_starting(argv, messag
     assert not list(tmp_path.iterdir())            # refused before anything was written
 
 
-def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_within_seconds(
-        tmp_path, monkeypatch, capsys):
+def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_naming_the_timeout(
+        tmp_path, monkeypatch, capsys, dask_client_timeouts):
+    """The connection to the scheduler is given SCHEDULER_TIMEOUT_S (not Dask's 30 s) and
+    its failure is a usage error naming it, without a traceback."""
     import scoutsim.analysis.parallel as parallel
     monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
-    t0 = time.perf_counter()
     assert main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
                  "--duration", "0.2", "--scheduler", "tcp://127.0.0.1:9",
                  "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "no Dask scheduler answered there within 2 s" in err and "Traceback" not in err
-    assert time.perf_counter() - t0 < 10
+    assert dask_client_timeouts == [2.0]
 
 
 def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, interrupt_run, capsys):
