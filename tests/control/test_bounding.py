@@ -3,7 +3,6 @@ its leg-state machine and its control actions, through the controller interface 
 controller has (``reset`` / ``command(t, sensors)``). Expected values are computed here
 from the paper's formulas and the robot's parameters, not from the controller's code."""
 
-
 import numpy as np
 import pytest
 
