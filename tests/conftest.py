@@ -1,5 +1,8 @@
 """Fixtures shared by the test modules."""
 
+import importlib.util
+from pathlib import Path
+
 import pytest
 
 import scoutsim
@@ -52,3 +55,15 @@ def dask_client_timeouts(monkeypatch):
             super().__init__(*args, **kwargs)
     monkeypatch.setattr(distributed, "Client", Client)
     return timeouts
+
+
+@pytest.fixture(scope="session")
+def symbolic_model():
+    """``tools/derive_eom.py``: the equations of motion derived with SymPy from the kinetic
+    and potential energies, independently of ``scoutsim.model`` (``mass_matrix(q,
+    params)``, ``params_from_robot(robot)``, energies, toe kinematics)."""
+    path = Path(__file__).resolve().parents[1] / "tools" / "derive_eom.py"
+    spec = importlib.util.spec_from_file_location("derive_eom_for_tests", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
