@@ -277,7 +277,16 @@ def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch,
     assert "RuntimeError: boom" in capsys.readouterr().err
 
 
-def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys):
+def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys, monkeypatch,
+                                                        png_draws_each_axes_data):
+    import scoutsim.presentation.plots as plots
+    maps = []
+
+    def plot_sweep_map(*args, **kwargs):
+        maps.append(real(*args, **kwargs))
+        return maps[-1]
+    real = plots.plot_sweep_map
+    monkeypatch.setattr(plots, "plot_sweep_map", plot_sweep_map)
     out = tmp_path / "sw"
     code = main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
                  "--grid", "controller.touchdown_angle_back_deg=17:19:2", "--model", "I",
@@ -289,8 +298,9 @@ def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys):
     assert header[0] == "controller.touchdown_angle_front"
     first = dict(zip(header, lines[1].split(",")))
     assert float(first["controller.touchdown_angle_front"]) == pytest.approx(math.radians(19))
-    assert (out / "map.png").stat().st_size > 1000
     assert "4 points" in capsys.readouterr().out
+    assert len(maps) == 1
+    png_draws_each_axes_data(out / "map.png", maps[0])
 
 
 def test_sweep_cli_bad_axis_is_a_usage_error(tmp_path, capsys):
