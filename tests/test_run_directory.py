@@ -198,7 +198,7 @@ def _assert_consistent(out):
 @pytest.mark.parametrize("moment, expected", [
     ("starting", "nothing"),           # at once: the interpreter starts, nothing written
     ("simulating", "nothing"),         # the run is computed in memory, nothing written yet
-    ("writing", "incomplete"),         # tables and summary written, the CSV half-way
+    ("writing", "incomplete"),         # tables and summary written, the CSV not yet renamed
 ])
 def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, moment, expected):
     """SIGKILL cannot be caught: at each moment of a run the directory it leaves is either
@@ -209,7 +209,7 @@ def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, moment, e
     if moment != "starting":
         run.wait_for(f"held: {moment}")
     if moment == "writing":
-        assert (out / "timeseries.csv.partial.csv").exists()   # stopped mid-file
+        assert (out / "timeseries.csv.partial.csv").exists()   # under its temporary name
     run.signal(signal.SIGKILL)
     assert run.wait() == -signal.SIGKILL
     assert _assert_consistent(out) == expected
