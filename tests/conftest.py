@@ -1,5 +1,8 @@
 """Fixtures shared by the test modules."""
 
+import importlib.util
+from pathlib import Path
+
 import pytest
 
 import scoutsim
@@ -37,3 +40,79 @@ def interrupt_run(monkeypatch):
             return r
         monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
     return interrupt
+
+
+@pytest.fixture
+def dask_client_timeouts(monkeypatch):
+    """The ``timeout`` given to every ``distributed.Client`` the test makes (each still the
+    real Client); skips the test without dask.distributed."""
+    distributed = pytest.importorskip("distributed")
+    timeouts = []
+
+    class Client(distributed.Client):
+        def __init__(self, *args, **kwargs):
+            timeouts.append(kwargs.get("timeout"))
+            super().__init__(*args, **kwargs)
+    monkeypatch.setattr(distributed, "Client", Client)
+    return timeouts
+
+
+@pytest.fixture(scope="session")
+def symbolic_model():
+    """``tools/derive_eom.py``: the equations of motion derived with SymPy from the kinetic
+    and potential energies, independently of ``scoutsim.model`` (``mass_matrix(q,
+    params)``, ``params_from_robot(robot)``, energies, toe kinematics)."""
+    path = Path(__file__).resolve().parents[1] / "tools" / "derive_eom.py"
+    spec = importlib.util.spec_from_file_location("derive_eom_for_tests", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _png_draws_each_axes_data(path, fig, dpi=None):
+    """Assert that the PNG at ``path``, written from ``fig``, shows the figure's data in
+    every axes that has some: the figure is drawn again with its data artists (lines,
+    collections, patches of the axes) hidden, and inside each such axes the two images
+    differ in at least half as many pixels as the axes is wide (a curve across it), not
+    only in a legend or a tick. The saved image is the size of the figure at its dpi."""
+    import io
+
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    from scoutsim.presentation.style import PNG_DPI
+    dpi = dpi or PNG_DPI
+    shown = mpimg.imread(path)[..., :3]
+    w_in, h_in = fig.get_size_inches()
+    assert shown.shape[:2] == (round(h_in * dpi), round(w_in * dpi))
+    data_axes = [ax for ax in fig.get_axes()
+                 if ax.get_visible() and (ax.lines or ax.collections or ax.patches)]
+    assert data_axes
+    hidden = [a for ax in data_axes for a in (*ax.lines, *ax.collections, *ax.patches)
+              if a.get_visible()]
+    for a in hidden:
+        a.set_visible(False)
+    try:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi)
+    finally:
+        for a in hidden:
+            a.set_visible(True)
+    buf.seek(0)
+    bare = mpimg.imread(buf, format="png")[..., :3]
+    assert bare.shape == shown.shape
+    differs = np.max(np.abs(shown - bare), axis=2) > 0.1
+    height, width = shown.shape[:2]
+    for ax in data_axes:
+        x0, y0, x1, y1 = ax.get_position().extents
+        rows = slice(round((1 - y1) * height) + 2, round((1 - y0) * height) - 2)
+        cols = slice(round(x0 * width) + 2, round(x1 * width) - 2)
+        inside = int(np.count_nonzero(differs[rows, cols]))
+        assert inside >= 0.5 * (cols.stop - cols.start), \
+            f"{path}: the axes {ax.get_ylabel()!r} shows no data ({inside} pixels)"
+
+
+@pytest.fixture
+def png_draws_each_axes_data():
+    """``png_draws_each_axes_data(path, fig)``: see :func:`_png_draws_each_axes_data`."""
+    return _png_draws_each_axes_data

@@ -6,7 +6,6 @@ import json
 import math
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -278,7 +277,16 @@ def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch,
     assert "RuntimeError: boom" in capsys.readouterr().err
 
 
-def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys):
+def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys, monkeypatch,
+                                                        png_draws_each_axes_data):
+    import scoutsim.presentation.plots as plots
+    maps = []
+
+    def plot_sweep_map(*args, **kwargs):
+        maps.append(real(*args, **kwargs))
+        return maps[-1]
+    real = plots.plot_sweep_map
+    monkeypatch.setattr(plots, "plot_sweep_map", plot_sweep_map)
     out = tmp_path / "sw"
     code = main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
                  "--grid", "controller.touchdown_angle_back_deg=17:19:2", "--model", "I",
@@ -290,8 +298,9 @@ def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys):
     assert header[0] == "controller.touchdown_angle_front"
     first = dict(zip(header, lines[1].split(",")))
     assert float(first["controller.touchdown_angle_front"]) == pytest.approx(math.radians(19))
-    assert (out / "map.png").stat().st_size > 1000
     assert "4 points" in capsys.readouterr().out
+    assert len(maps) == 1
+    png_draws_each_axes_data(out / "map.png", maps[0])
 
 
 def test_sweep_cli_bad_axis_is_a_usage_error(tmp_path, capsys):
@@ -381,17 +390,18 @@ def test_jobs_expected_to_take_too_long_are_refused_before_starting(argv, messag
     assert not list(tmp_path.iterdir())            # refused before anything was written
 
 
-def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_within_seconds(
-        tmp_path, monkeypatch, capsys):
+def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_naming_the_timeout(
+        tmp_path, monkeypatch, capsys, dask_client_timeouts):
+    """The connection to the scheduler is given SCHEDULER_TIMEOUT_S (not Dask's 30 s) and
+    its failure is a usage error naming it, without a traceback."""
     import scoutsim.analysis.parallel as parallel
     monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
-    t0 = time.perf_counter()
     assert main(["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:2",
                  "--duration", "0.2", "--scheduler", "tcp://127.0.0.1:9",
                  "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "no Dask scheduler answered there within 2 s" in err and "Traceback" not in err
-    assert time.perf_counter() - t0 < 10
+    assert dask_client_timeouts == [2.0]
 
 
 def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, interrupt_run, capsys):

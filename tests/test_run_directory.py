@@ -5,7 +5,7 @@ import json
 import signal
 import subprocess
 import sys
-import time
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -81,10 +81,101 @@ def test_an_interrupted_simulation_is_written_as_partial_with_exit_130(tmp_path,
     assert json.loads((tmp_path / "summary.json").read_text())["outcome"] == "interrupted"
 
 
-def _start_run(out, duration, *options):
-    return subprocess.Popen([sys.executable, "-m", "scoutsim", "run", "--duration",
-                             str(duration), "--out", str(out), "--no-progress", *options],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+#: generous bound on any wait for a child process (a hang guard, not a claim about speed)
+HANG_GUARD_S = 300.0
+
+#: ``python -c _HELD_RUN MOMENT RELEASE run ...``: ``scoutsim run`` held once at MOMENT
+#: until the file RELEASE exists, after saying so on stderr ("held: MOMENT"), so that a test
+#: signals the process at a moment it knows instead of after a guessed delay:
+#: "simulating": after the first piece of the run, more to come (not in the 1 ms warm-up
+#: run, which ends in its first piece); "writing": in the write of timeseries.csv (--csv),
+#: its temporary file whole, the manifest saying "writing".
+_HELD_RUN = r"""
+import sys, time
+from pathlib import Path
+moment, release = sys.argv[1], Path(sys.argv[2])
+del sys.argv[1:3]
+
+
+def hold():
+    print(f"held: {moment}", file=sys.stderr, flush=True)
+    while not release.exists():
+        time.sleep(0.01)
+
+
+if moment == "simulating":
+    from scoutsim.simulation import HybridEngine
+    advance = HybridEngine.advance
+
+    def advance_then_hold(self, *args, **kwargs):
+        out = advance(self, *args, **kwargs)
+        if self.running and not release.exists():
+            hold()
+        return out
+    HybridEngine.advance = advance_then_hold
+elif moment == "writing":
+    import scoutsim.cli.run as run
+    write = run.write_timeseries_csv
+
+    def write_then_hold(result, path):
+        out = write(result, path)
+        hold()
+        return out
+    run.write_timeseries_csv = write_then_hold
+else:
+    raise SystemExit(f"unknown moment {moment!r}")
+
+from scoutsim.cli import console_main
+console_main()
+"""
+
+
+class _Run:
+    """A ``scoutsim run`` process writing to ``out`` (held at ``hold``, see
+    :data:`_HELD_RUN`), its stderr read as it comes."""
+
+    def __init__(self, out, duration, *options, hold=None):
+        self.release = Path(out).parent / "release"
+        start = ([sys.executable, "-c", _HELD_RUN, hold, str(self.release)] if hold else
+                 [sys.executable, "-m", "scoutsim"])
+        self.proc = subprocess.Popen(start + ["run", "--duration", str(duration), "--out",
+                                              str(out), "--no-progress", *options],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                     text=True)
+        self._lines: list[str] = []
+        self._ended = False
+        self._cond = threading.Condition()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        for line in self.proc.stderr:
+            with self._cond:
+                self._lines.append(line)
+                self._cond.notify_all()
+        with self._cond:
+            self._ended = True
+            self._cond.notify_all()
+
+    @property
+    def stderr(self) -> str:
+        with self._cond:
+            return "".join(self._lines)
+
+    def wait_for(self, text: str) -> None:
+        """Wait until the process has said ``text`` on stderr."""
+        with self._cond:
+            self._cond.wait_for(lambda: self._ended or text in "".join(self._lines),
+                                HANG_GUARD_S)
+        assert text in self.stderr, f"the run never said {text!r}; stderr:\n{self.stderr}"
+
+    def signal(self, signum) -> None:
+        self.proc.send_signal(signum)
+
+    def wait(self) -> int:
+        code = self.proc.wait(timeout=HANG_GUARD_S)
+        self._reader.join(timeout=HANG_GUARD_S)
+        return code
 
 
 def _assert_consistent(out):
@@ -104,30 +195,36 @@ def _assert_consistent(out):
     return manifest["status"]
 
 
-@pytest.mark.parametrize("delay_s", [0.3, 1.0, 1.6, 2.4])
-def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, delay_s):
-    scoutsim.simulate(duration=0.01)      # the core is compiled before the clock starts
+@pytest.mark.parametrize("moment, expected", [
+    ("starting", "nothing"),           # at once: the interpreter starts, nothing written
+    ("simulating", "nothing"),         # the run is computed in memory, nothing written yet
+    ("writing", "incomplete"),         # tables and summary written, the CSV not yet renamed
+])
+def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, moment, expected):
+    """SIGKILL cannot be caught: at each moment of a run the directory it leaves is either
+    refused as incomplete or holds nothing that could pass for a run."""
+    scoutsim.simulate(duration=0.01)      # the core is compiled before the child starts
     out = tmp_path / "out"
-    proc = _start_run(out, 150)
-    time.sleep(delay_s)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait(timeout=60)
-    _assert_consistent(out)
+    run = _Run(out, 3, "--csv", hold=None if moment == "starting" else moment)
+    if moment != "starting":
+        run.wait_for(f"held: {moment}")
+    if moment == "writing":
+        assert (out / "timeseries.csv.partial.csv").exists()   # under its temporary name
+    run.signal(signal.SIGKILL)
+    assert run.wait() == -signal.SIGKILL
+    assert _assert_consistent(out) == expected
 
 
 def test_sigint_while_simulating_writes_the_data_so_far_as_partial(tmp_path):
     scoutsim.simulate(duration=0.01)
     out = tmp_path / "out"
-    # about 12 s of simulation on the development machine, start-up 0.7 s: a signal after
-    # 4 s lands in the simulation on machines twice as fast or twice as slow
-    proc = _start_run(out, 3000)
-    time.sleep(4.0)
-    proc.send_signal(signal.SIGINT)
-    assert proc.wait(timeout=120) == 130, proc.stderr.read().decode()
-    status = _assert_consistent(out)
-    assert status == "partial"
+    run = _Run(out, 5, hold="simulating")
+    run.wait_for("held: simulating")
+    run.signal(signal.SIGINT)
+    assert run.wait() == 130, run.stderr
+    assert _assert_consistent(out) == "partial"
     r = SimulationResult.load(out)
-    assert r.outcome == "interrupted" and 0 < r.t_end < 3000
+    assert r.outcome == "interrupted" and 0 < r.t_end < 5
 
 
 @pytest.mark.parametrize("fault", ["directory in the way", "disk full"])
@@ -172,40 +269,29 @@ def test_plot_of_an_empty_or_truncated_npz_is_a_clear_error(tmp_path, capsys, co
     assert ("empty" if not content else "cut off or damaged") in err
 
 
-def _wait_for_writing(out, proc, timeout=120.0):
-    """Wait until the run writes its files (a temporary NAME.partial.* file exists)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if any(".partial" in p.name for p in out.glob("*")):
-            return
-        assert proc.poll() is None, proc.stderr.read().decode()
-        time.sleep(0.002)
-    raise AssertionError("the run never started writing")
-
-
 def test_ctrl_c_while_writing_completes_the_outputs_then_exits_130(tmp_path):
     """A real process: SIGINT while the outputs are written holds until they are whole."""
     scoutsim.simulate(duration=0.01)
     out = tmp_path / "out"
-    proc = _start_run(out, 200, "--csv")        # (--csv: writing takes about a second)
-    _wait_for_writing(out, proc)
-    proc.send_signal(signal.SIGINT)
-    assert proc.wait(timeout=120) == 130
-    assert "they will be complete in a moment" in proc.stderr.read().decode()
+    run = _Run(out, 3, "--csv", hold="writing")
+    run.wait_for("held: writing")
+    run.signal(signal.SIGINT)
+    run.wait_for("they will be complete in a moment")
+    run.release.touch()
+    assert run.wait() == 130, run.stderr
     assert _assert_consistent(out) == "complete"
-    assert SimulationResult.load(out).t_end == pytest.approx(200.0)
+    assert SimulationResult.load(out).t_end == pytest.approx(3.0)
     assert (out / "timeseries.csv").exists()
 
 
 def test_a_second_ctrl_c_while_writing_abandons_the_outputs_cleanly(tmp_path):
     scoutsim.simulate(duration=0.01)
     out = tmp_path / "out"
-    proc = _start_run(out, 200, "--csv")        # (--csv: writing takes about a second)
-    _wait_for_writing(out, proc)
-    proc.send_signal(signal.SIGINT)
-    time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    assert proc.wait(timeout=120) == 130
-    # abandoned (refused as incomplete), or finished just before the second signal
-    assert _assert_consistent(out) in ("incomplete", "complete")
+    run = _Run(out, 3, "--csv", hold="writing")
+    run.wait_for("held: writing")
+    run.signal(signal.SIGINT)
+    run.wait_for("they will be complete in a moment")
+    run.signal(signal.SIGINT)
+    assert run.wait() == 130, run.stderr
+    assert _assert_consistent(out) == "incomplete"
     assert not [p for p in out.glob("*") if ".partial" in p.name]

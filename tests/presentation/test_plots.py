@@ -86,13 +86,17 @@ def test_plot_run_leg_state_bands_cover_the_states_the_controller_visited(result
     assert {"flight", "stance-retraction", "stance-brake"} <= legend_texts
 
 
-def test_plot_run_saves_png_pdf_svg_headless(result_II, tmp_path):
+def test_plot_run_saves_png_pdf_svg_headless(result_II, tmp_path, png_draws_each_axes_data):
     before = _pyplot_fignums()
     for suffix, magic in ((".png", PNG_MAGIC), (".pdf", b"%PDF"), (".svg", b"<?xml")):
         path = tmp_path / "sub" / f"run{suffix}"
-        plot_run(result_II, path)
+        fig = plot_run(result_II, path)
         data = path.read_bytes()
-        assert len(data) > 1000 and data.startswith(magic)
+        assert data.startswith(magic)
+        if suffix == ".png":
+            png_draws_each_axes_data(path, fig)
+        else:                        # the file is whole
+            assert data.rstrip().endswith(b"%%EOF" if suffix == ".pdf" else b"</svg>")
     assert _pyplot_fignums() == before, "no figures registered with pyplot"
 
 
