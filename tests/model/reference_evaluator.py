@@ -18,14 +18,13 @@ package's law kernels:
 * the belt spring's dead zone, the gravity of the torso and leg bodies, the potential
   energy, and the mass matrix and velocity terms (assembled from explicit body Jacobians;
   tools/derive_eom.py and tests/model/test_eom_independent.py check the package's against
-  a SymPy derivation as well).
+  a SymPy derivation as well);
+* the projection of the dependent coordinates onto the active constraints (the contact
+  modes' geometry, the bench rig's clamps, the gear angles).
 
 What it still takes from the package: the index layout (model/layout.py: names of slots,
-modes and row kinds, not laws), the projection of the dependent coordinates onto the active
-constraints (:func:`scoutsim.model.kinematics.project`: kinematics of the contact modes),
-the bench rig's clamp rows and the dense pivoted-LU solve of the KKT system
-(model/kkt.py). It is plain Python (not compiled), so it is slow but has no part in the
-compiled core's cache.
+modes and row kinds, not laws), the bench rig's clamp rows and the dense pivoted-LU solve
+of the KKT system (model/kkt.py). It is plain Python, not compiled.
 
 Two regularisation widths are numbers the documentation states and are written here from
 it: the leg friction's linear band (1 mm/s, docs/model.md "Effects beyond the paper's
@@ -40,17 +39,17 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from scoutsim.model.kinematics import project
 from scoutsim.model.kkt import MAX_ROWS, add_clamp_rows, solve_dense
 from scoutsim.model.layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, CIRCUIT_OPEN,
     CIRCUIT_SHORT, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_IDEAL,
     MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, P_B_J, P_BACKLASH, P_C, P_C_LOAD, P_CB, P_CIRCUIT,
-    P_D, P_ETA, P_G, P_IL, P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB, P_KT, P_KW, P_L, P_L0,
-    P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N,
-    P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_WORLD, P_VB, ROW_GEAR,
-    ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT, STUCK,
+    P_CLAMP_LEGS, P_CLAMP_TORSO, P_D, P_ETA, P_G, P_IL, P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB,
+    P_KT, P_KW, P_L, P_L0, P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML,
+    P_MODEL, P_MT, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B,
+    P_TD_WORLD, P_VB, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK,
+    STRUT, STUCK,
 )
 
 #: Leg-length rate [m/s] below which the sliding joint's Coulomb friction is linear in the
@@ -59,6 +58,61 @@ LEG_FRICTION_BAND = 1e-3
 #: Motor speed [rad/s] over which the direction of the transmission losses is blended
 #: linearly (docs/model.md, "Transmission losses": 1 rad/s at the motor).
 LOSS_BLEND_BAND = 1.0
+
+
+# --- constraints (docs/specification.md sections 1-3, docs/model.md "Constraints") ---
+
+def project(q, dq, l, P, mi, mf):
+    """Make the dependent coordinates consistent with the active constraints, in place
+    (docs/model.md, "Constraints": they are projected before every evaluation): a pinned
+    toe fixes the leg's angle, its rate and its length by the geometry of hip and anchor;
+    a sliding toe on the ground fixes the length; a massless flight leg is placed at its
+    touchdown angle at rest length; a massive flight leg is at most at its stop (at it
+    when undamped); a clamped rig is at rest; outside Model II the gear angle is the leg
+    angle, and a stuck Model II motor joint does not turn."""
+    if P[P_CLAMP_TORSO] > 0.5:
+        dq[0:3] = 0.0
+        if P[P_CLAMP_LEGS] > 0.5:
+            dq[3:5] = 0.0
+    th = q[2]
+    dth = dq[2]
+    l0 = P[P_L0]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        hx = q[0] + sL * math.cos(th)
+        hy = q[1] + sL * math.sin(th)
+        hvx = dq[0] - sL * math.sin(th) * dth
+        hvy = dq[1] + sL * math.cos(th) * dth
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            # hip -> toe vector (a, -b) to the anchor on the ground; u = (sin g, -cos g)
+            a = mf[MF_ANCHOR_B + leg] - hx
+            b = hy
+            g = math.atan2(a, b)
+            # the anchor is fixed: da/dt = -hvx, db/dt = hvy
+            dg = (b * -hvx - a * hvy) / (a * a + b * b)
+            q[3 + leg] = g - th
+            dq[3 + leg] = dg - dth
+            l[leg] = math.hypot(a, b)
+        elif mode == SLIDE:
+            # toe height hy - l cos g = 0
+            l[leg] = hy / math.cos(th + q[3 + leg])
+        elif P[P_MASSLESS] > 0.5:
+            td = P[P_TD_B + leg]
+            if P[P_TD_WORLD] > 0.5:     # g = td fixed in the world
+                q[3 + leg] = td - th
+                dq[3 + leg] = -dth
+            else:                       # phi = td fixed on the torso
+                q[3 + leg] = td
+                dq[3 + leg] = 0.0
+            l[leg] = l0
+        elif P[P_C] <= 0.0 or l[leg] > l0:
+            l[leg] = l0
+        if int(P[P_MODEL]) != MODEL_II:
+            q[5 + leg] = q[3 + leg]
+            dq[5 + leg] = dq[3 + leg]
+        elif mi[MI_MOTOR_B + leg] == STUCK:
+            dq[5 + leg] = 0.0
 
 
 # --- actuator (docs/specification.md section 4) ------------------------------------------

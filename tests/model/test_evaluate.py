@@ -14,8 +14,6 @@ from scoutsim.model import workspace as W
 from scoutsim.model import layout as L
 from scoutsim.model.packing import robot_array
 
-from scoutsim.model.kinematics import project
-
 from . import reference_evaluator as ref
 from .reference_evaluator import evaluate_reference
 
@@ -38,11 +36,14 @@ BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
 SLOW = 1e-3
 
 
-def _cases(robot, model, mu, motor_circuit="amplifier", **kw):
+def _cases(robot, model, mu, rig=None, **kw):
+    """Parameters and (state, modes, anchors, command) samples of a short run; ``rig``:
+    bench-rig options of robot_array (clamps, motor circuit) for the evaluations (the
+    run itself is free)."""
     r = scoutsim.simulate(robot, duration=0.4, model=model, friction_coefficient=mu, **kw)
     P = robot_array(robot, model, friction_coefficient=mu,
                     passive_touchdown_angles=kw.get("passive_touchdown_angles", (0.0, 0.0)),
-                    passive_touchdown_world=True, pitch_limit=1.0, motor_circuit=motor_circuit)
+                    passive_touchdown_world=True, pitch_limit=1.0, **(rig or {}))
     out = []
     for n in range(0, len(r.t), 5):
         s = r.state[n].copy()
@@ -65,11 +66,15 @@ def _slow(s):
     return s
 
 
-def _mode_variants(mi):
+def _mode_variants(mi, P):
     """The recorded modes and the motor-joint and contact modes substituted (every mode of
-    the model is evaluated at every sampled state)."""
+    the model is evaluated at every sampled state); on a rig with the torso clamped the
+    legs are in flight (a pinned toe would make the clamp's rows redundant)."""
+    contacts = (None, [L.STRUT, L.STICK], [L.SLIDE, L.FLIGHT])
+    if P[L.P_CLAMP_TORSO] > 0.5:
+        contacts = ([L.FLIGHT, L.FLIGHT],)
     for motor in ([0, 0], [1, -1], [0, 1]):
-        for contact in (None, [L.STRUT, L.STICK], [L.SLIDE, L.FLIGHT]):
+        for contact in contacts:
             mi2 = mi.copy()
             mi2[2:4] = motor
             if contact is not None:
@@ -146,7 +151,7 @@ def _parity(P, cases, keep=None):
     count = 0
     for s0, mi, mf, cmd in cases:
         for s in (s0, _slow(s0)):
-            for mi2 in _mode_variants(mi):
+            for mi2 in _mode_variants(mi, P):
                 if keep is not None and not keep(s, P, mi2, mf, cmd):
                     continue
                 d1 = np.zeros(L.NS)
@@ -172,8 +177,10 @@ CONFIGS = [
     (EFFECTS_ROBOT, "II", 0.8, {}),
     (EFFECTS_ROBOT, "I", 0.8, {}),
     (EFFECTS_ROBOT, "ideal", 0.8, {}),
-    (EFFECTS_ROBOT, "II", 0.8, dict(motor_circuit="short")),
-    (EFFECTS_ROBOT, "II", 0.8, dict(motor_circuit="open")),
+    (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="short"))),
+    (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="open", clamp_torso=True))),
+    (EFFECTS_ROBOT, "I", 0.8, dict(rig=dict(motor_circuit="short", clamp_torso=True,
+                                            clamp_legs=True))),
 ]
 
 
@@ -184,18 +191,17 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
     short run and at slow copies of them; with the effects beyond the paper switched on,
     the states exercise each regime of their laws (both sides of the belt's play, leg
     rates of both signs and inside the friction's linear band, motor speeds inside and
-    beyond the loss blending band, motoring and back-driven, current at its limit)."""
+    beyond the loss blending band, motoring and back-driven, current at its limit); the
+    bench rig's motor circuits and clamps are evaluated at the same states."""
     P, cases = _cases(robot, model, mu, **kw)
     worst, regimes, _ = _parity(P, cases)
     assert worst < 1.0
-    if robot is EFFECTS_ROBOT:
-        assert LEG_REGIMES <= regimes
-        if kw.get("motor_circuit", "amplifier") == "amplifier":
-            assert MOTOR_REGIMES <= regimes
-            if model != "ideal":
-                assert "current on the speed line" in regimes
-            if model == "II":
-                assert {"belt slack", "belt stretched"} <= regimes
+    if robot is EFFECTS_ROBOT and "rig" not in kw:
+        assert LEG_REGIMES | MOTOR_REGIMES <= regimes
+        if model != "ideal":
+            assert "current on the speed line" in regimes
+        if model == "II":
+            assert {"belt slack", "belt stretched"} <= regimes
 
 
 def _power_fixed(s, P, mi, mf, cmd):
@@ -205,7 +211,7 @@ def _power_fixed(s, P, mi, mf, cmd):
     q = s[0:L.NQ].copy()
     dq = s[L.NQ:2 * L.NQ].copy()
     l = s[L.IL_B:L.IL_B + 2].copy()
-    project(q, dq, l, P, mi, mf)
+    ref.project(q, dq, l, P, mi, mf)
     vb = ref.battery_voltage(dq, cmd, P)
     for leg in range(2):
         om = ref.motor_speed(dq, leg, P)
@@ -241,6 +247,44 @@ def test_battery_voltage_matches_reference(model):
     worst, regimes, _ = _parity(P, cases)
     assert {"battery sags", "current on the speed line"} <= regimes
     assert worst < 1.0
+
+
+def _flight_currents(evaluator, P, w, tau):
+    """Motor currents (back, front) that ``evaluator`` gives with both legs in flight, the
+    back motor at speed w [rad/s] and command tau [N m], the front one at -w and -tau."""
+    s = np.zeros(L.NS)
+    s[L.IY] = 0.6
+    s[L.IL_B:] = P[L.P_L0]
+    s[L.NQ + L.IPHB] = w / P[L.P_N]
+    s[L.NQ + L.IPHF] = -w / P[L.P_N]
+    mi = np.zeros(L.NMI, dtype=np.int64)
+    ds = np.zeros(L.NS)
+    aux = np.zeros(L.NAUX)
+    evaluator(s, P, mi, np.zeros(L.NMF), np.array([tau, -tau]), ds, aux)
+    return np.array([aux[L.A_CURRENT], aux[L.NAUX_LEG + L.A_CURRENT]])
+
+
+@pytest.mark.parametrize("evaluator", [
+    evaluate_reference,
+    pytest.param(D.evaluate, marks=pytest.mark.xfail(strict=True, reason=(
+        "beyond both limits (|w_m| > (V_b + R_A i_max) / K_w, where no current within "
+        "i_max is reachable) scoutsim.model.actuator.motor_current gives +i_max when the "
+        "motor is spun backwards but the torque-speed line's current when it is spun "
+        "forwards"))),
+])
+def test_motor_current_is_odd_in_command_and_speed(evaluator):
+    """The amplifier, the motor and the battery are symmetric under reversing the current,
+    the voltage and the speed (specification.md section 4): reversing the command and the
+    motor speed reverses the current, at speeds up to twice (V_b + R_A i_max) / K_w
+    (beyond it neither limit lets the other hold) and commands up to beyond the
+    current limit (Model I)."""
+    P = robot_array(RobotParameters(), "I", friction_coefficient=0.8)
+    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]
+    for w in np.linspace(-2.0, 2.0, 41) * w_both:
+        for tau in (-40.0, -5.0, 0.0, 5.0, 40.0):
+            i_plus = _flight_currents(evaluator, P, w, tau)
+            i_minus = _flight_currents(evaluator, P, -w, -tau)
+            assert np.allclose(i_plus, -i_minus, rtol=1e-12, atol=1e-12)
 
 
 def test_inner_stage_evaluation_skips_only_the_outputs():
