@@ -1,5 +1,8 @@
 """The allocation-free evaluation (model.evaluate.evaluate_ws) reproduces the reference
-implementation (tests/model/reference_evaluator.py), and its stiff-Jacobian factors capture the
+implementation (tests/model/reference_evaluator.py, which states every force law itself), with
+and without the effects beyond the paper's models, on the bench rigs, and with a battery
+internal resistance; a command update on the kept factors equals a fresh evaluation; the
+motor current is odd in command and speed; and the stiff-Jacobian factors capture the
 belt-damper eigenvalues of Model II."""
 
 import math
@@ -102,7 +105,7 @@ def _regimes(P, mi, cmd, ds, aux):
         o = leg * L.NAUX_LEG
         contact = mi[L.MI_CONTACT_B + leg]
         ld = ds[L.IL_B + leg]
-        band = 1e-3
+        band = ref.LEG_FRICTION_BAND
         if contact in (L.STICK, L.SLIDE):
             out.add("leg rate > band" if ld > band else "leg rate < -band" if ld < -band
                     else "leg rate in band" if ld != 0.0 else "leg rate 0")
@@ -112,11 +115,12 @@ def _regimes(P, mi, cmd, ds, aux):
         if model == L.MODEL_PASSIVE or int(P[L.P_CIRCUIT]) != L.CIRCUIT_AMPLIFIER:
             continue
         om = aux[o + L.A_OMEGA_M]
-        out.add("motor speed > 1" if om >= 1.0 else "motor speed < -1" if om <= -1.0
+        blend = ref.LOSS_BLEND_BAND
+        out.add("motor speed > 1" if om >= blend else "motor speed < -1" if om <= -blend
                 else "motor speed in blend band")
         i = aux[o + L.A_CURRENT]
         i_cmd = cmd[leg] / (P[L.P_N] * P[L.P_ETA] * P[L.P_KT])
-        if abs(om) >= 1.0 and i != 0.0:
+        if abs(om) >= blend and i != 0.0:
             out.add("motoring" if i * om > 0.0 else "back-driven")
         line = [(sgn * vb - P[L.P_KW] * om) / P[L.P_RA] for sgn in (1.0, -1.0)]
         if abs(i) == P[L.P_IMAX]:
