@@ -10,8 +10,8 @@ package's law kernels:
 
 * the amplifier's motor current (current limit, torque-speed line, the bench rig's open and
   shorted motor leads), the delivered torque with the optional transmission losses, and the
-  battery voltage with an internal resistance (solved here by scalar root finding of
-  V_b = V_oc - R_b P(V_b) / V_b to round-off, where the package iterates);
+  battery voltage with an internal resistance (solved here by bracketed root finding of
+  V_b = V_oc - R_b P(V_b) / V_b with SciPy's brentq, to round-off);
 * the telescopic leg: damper c (1 + a phi^2), sliding-joint friction level
   F_c + mu_s |tau_hip| / l, axial force, and the flight rate of the massless toe (solved
   here by root finding of the toe's force balance);
