@@ -232,14 +232,7 @@ def _flight_currents(evaluator, P, w, tau):
     return np.array([aux[L.A_CURRENT], aux[L.NAUX_LEG + L.A_CURRENT]])
 
 
-@pytest.mark.parametrize("evaluator", [
-    evaluate_reference,
-    pytest.param(D.evaluate, marks=pytest.mark.xfail(strict=True, reason=(
-        "beyond both limits (|w_m| > (V_b + R_A i_max) / K_w, where no current within "
-        "i_max is reachable) scoutsim.model.actuator.motor_current gives +i_max when the "
-        "motor is spun backwards but the torque-speed line's current when it is spun "
-        "forwards"))),
-])
+@pytest.mark.parametrize("evaluator", [evaluate_reference, D.evaluate])
 def test_motor_current_is_odd_in_command_and_speed(evaluator):
     """The amplifier, the motor and the battery are symmetric under reversing the current,
     the voltage and the speed (specification.md section 4): reversing the command and the
