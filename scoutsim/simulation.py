@@ -616,7 +616,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         copper and transmission losses, hip work, joint, belt, leg and toe friction and
         damping, constraint work; docs/model.md "Work-energy balance"), integrated on every
         integrator step: ``result.energy_flows``, ``result.energy_balance()``. The motion is
-        the same bit for bit; the run takes longer (three more evaluations per step).
+        the same bit for bit; the run takes longer (three more evaluations per step:
+        10 s of Model II 1.65x, of Model I 1.28x).
 
     Returns
     -------
