@@ -39,6 +39,62 @@ TEST_FILES = ("tests/model", "tests/numerics", "tests/control", "tests/analysis/
 #: a mutant whose tests have not finished after this long [s] is stopped and reported as
 #: "timeout" (a law broken so that a run never ends counts as killed)
 TIMEOUT_S = 3600.0
+#: a single test (its setup or its call) still running after this long [s] fails with
+#: ``TestTimeout``: a broken law can make a run (or the SciPy reference integration of
+#: tests/numerics/test_against_scipy.py) stiff enough to take hours; the unmutated
+#: tests take at most about 30 s each once the core is compiled
+TEST_TIMEOUT_S = 180.0
+#: the pytest plugin that enforces TEST_TIMEOUT_S, written into each copy
+_PLUGIN = """\
+import os
+import signal
+
+import pytest
+
+LIMIT = float(os.environ["MUTATION_TEST_TIMEOUT"])
+
+
+class TestTimeout(Exception):
+    pass
+
+
+def _expire(signum, frame):
+    raise TestTimeout(f"still running after {LIMIT:.0f} s")
+
+
+def _timed():
+    old = signal.signal(signal.SIGALRM, _expire)
+    signal.setitimer(signal.ITIMER_REAL, LIMIT)
+    return old
+
+
+def _untimed(old):
+    signal.setitimer(signal.ITIMER_REAL, 0.0)
+    signal.signal(signal.SIGALRM, old)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_setup(item):
+    old = _timed()
+    try:
+        yield
+    finally:
+        _untimed(old)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_call(item):
+    old = _timed()
+    try:
+        yield
+    finally:
+        _untimed(old)
+"""
+#: compiles the core of a copy before its tests run (so that no test's time limit
+#: includes the compilation)
+_WARM_UP = ("import scoutsim\n"
+            "for m in ('ideal', 'I', 'II', 'passive'):\n"
+            "    scoutsim.simulate(duration=0.05, model=m, energy=True)\n")
 
 LAWS = "tests/model/test_laws.py::"
 MORE = "tests/model/test_laws_more.py::"
@@ -271,6 +327,7 @@ MUTANTS = [
 class Outcome:
     mutant: Mutant
     failed: list[str] = field(default_factory=list)
+    timed_out: list[str] = field(default_factory=list)
     passed: int = 0
     timeout: bool = False
     seconds: float = 0.0
@@ -307,7 +364,8 @@ _NODE = re.compile(r"^(FAILED|ERROR) (\S+)")
 _COUNT = re.compile(r"(\d+) passed")
 
 
-def run_mutant(m: Mutant | None, timeout: float = TIMEOUT_S) -> Outcome:
+def run_mutant(m: Mutant | None, timeout: float = TIMEOUT_S,
+               test_timeout: float = TEST_TIMEOUT_S) -> Outcome:
     """Copy, mutate (``m`` None: the unmutated tree), run the physics tests; which failed."""
     t0 = time.monotonic()
     with tempfile.TemporaryDirectory(prefix="scoutsim-mutant-") as tmp:
@@ -318,8 +376,15 @@ def run_mutant(m: Mutant | None, timeout: float = TIMEOUT_S) -> Outcome:
         env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
         env["PYTHONPATH"] = str(tree)
         env["PYTHONDONTWRITEBYTECODE"] = "1"
-        cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--tb=no",
-               "-rfE", *TEST_FILES]
+        env["MUTATION_TEST_TIMEOUT"] = str(test_timeout)
+        (tree / "_mutation_timeout.py").write_text(_PLUGIN)
+        try:    # a mutant that breaks even a short run fails in its tests, not here
+            subprocess.run([sys.executable, "-c", _WARM_UP], cwd=tree, env=env,
+                           capture_output=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            pass
+        cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+               "-p", "_mutation_timeout", "--tb=no", "-rfE", *TEST_FILES]
         proc = subprocess.Popen(cmd, cwd=tree, env=env, stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True, start_new_session=True)
         out = Outcome(m if m is not None else Mutant("none", "", "", "", "", ()))
@@ -333,11 +398,21 @@ def run_mutant(m: Mutant | None, timeout: float = TIMEOUT_S) -> Outcome:
             hit = _NODE.match(line)
             if hit:
                 out.failed.append(hit.group(2))
+                if "TestTimeout" in line:
+                    out.timed_out.append(hit.group(2))
         counts = _COUNT.search(text.splitlines()[-1] if text.strip() else "")
         out.passed = int(counts.group(1)) if counts else 0
         out.tail = "\n".join(text.splitlines()[-3:])
     out.seconds = time.monotonic() - t0
     return out
+
+
+def save(path: Path, outcomes: list[Outcome]) -> None:
+    path.write_text(json.dumps([
+        {"name": o.mutant.name, "law": o.mutant.law, "file": o.mutant.file,
+         "killed": o.killed, "by_aimed": o.by_aimed, "timeout": o.timeout,
+         "failed": o.failed, "timed_out": o.timed_out, "passed": o.passed,
+         "seconds": round(o.seconds, 1)} for o in outcomes], indent=1))
 
 
 def _short(nodeid: str) -> str:
@@ -354,8 +429,10 @@ def table(outcomes: list[Outcome], most: int = 3) -> str:
         else:
             killed = f"yes ({len(o.failed)})" if o.failed else "**no**"
         aimed = "yes" if o.by_aimed else ("equivalent" if m.equivalent else "**no**")
-        names = [_short(f) for f in o.failed if any(f.startswith(a) for a in m.aimed)]
-        names += [_short(f) for f in o.failed if _short(f) not in names]
+        def label(f):
+            return _short(f) + (" (timeout)" if f in o.timed_out else "")
+        names = [label(f) for f in o.failed if any(f.startswith(a) for a in m.aimed)]
+        names += [label(f) for f in o.failed if label(f) not in names]
         shown = ", ".join(f"`{n}`" for n in names[:most])
         if len(names) > most:
             shown += f", ... ({len(names) - most} more)"
@@ -376,6 +453,8 @@ def main(argv=None) -> int:
                     help="print the table of outcomes saved with --json, nothing run")
     ap.add_argument("--timeout", type=float, default=TIMEOUT_S,
                     help="seconds after which a mutant's tests are stopped")
+    ap.add_argument("--test-timeout", type=float, default=TEST_TIMEOUT_S,
+                    help="seconds after which one test fails as TestTimeout")
     args = ap.parse_args(argv)
     names = {m.name for m in MUTANTS}
     assert len(names) == len(MUTANTS), "duplicate mutant names"
@@ -389,7 +468,8 @@ def main(argv=None) -> int:
         by_name = {m.name: m for m in MUTANTS}
         saved = {d["name"]: d for f in args.table for d in json.loads(f.read_text())}
         outcomes = [Outcome(by_name[n], failed=d["failed"], passed=d["passed"],
-                            timeout=d["timeout"], seconds=d["seconds"])
+                            timed_out=d.get("timed_out", []), timeout=d["timeout"],
+                            seconds=d["seconds"])
                     for n, d in saved.items() if n in by_name]
         order = [m.name for m in MUTANTS]
         outcomes.sort(key=lambda o: order.index(o.mutant.name))
@@ -416,11 +496,17 @@ def main(argv=None) -> int:
             print("\n".join(base.failed) or base.tail)
             return 2
 
+    done = []
+
     def one(m):
-        o = run_mutant(m, args.timeout)
+        o = run_mutant(m, args.timeout, args.test_timeout)
         print(f"{m.name}: {'killed' if o.killed else 'SURVIVED'}"
-              f"{' by its aimed test' if o.by_aimed else ''}, {len(o.failed)} failed, "
-              f"{o.passed} passed, {o.seconds:.0f} s", flush=True)
+              f"{' by its aimed test' if o.by_aimed else ''}, {len(o.failed)} failed "
+              f"({len(o.timed_out)} timed out), {o.passed} passed, {o.seconds:.0f} s",
+              flush=True)
+        done.append(o)
+        if args.json:      # after every mutant, so an interrupted study keeps its results
+            save(args.json, done)
         return o
 
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
@@ -430,12 +516,6 @@ def main(argv=None) -> int:
     print(table(outcomes))
     print(f"\n{sum(o.killed for o in outcomes)} of {len(outcomes)} mutants killed, "
           f"{sum(o.by_aimed for o in outcomes)} by their aimed tests; {total / 60:.1f} min")
-    if args.json:
-        args.json.write_text(json.dumps([
-            {"name": o.mutant.name, "law": o.mutant.law, "file": o.mutant.file,
-             "killed": o.killed, "by_aimed": o.by_aimed, "timeout": o.timeout,
-             "failed": o.failed, "passed": o.passed, "seconds": round(o.seconds, 1)}
-            for o in outcomes], indent=1))
     return 0 if all(o.by_aimed or o.mutant.equivalent for o in outcomes) else 1
 
 
