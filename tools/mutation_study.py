@@ -174,8 +174,10 @@ MUTANTS = [
                           "to a zero magnitude): no input gives a different output"),
     Mutant("speed_line_test_back_emf_sign", "back-EMF in the stiff-factor test of the "
            "torque-speed line", "scoutsim/model/actuator.py",
-           "    v_lo = (-vb - P[P_KW] * omega_m) / r_a\n    v_hi = (vb - P[P_KW] * omega_m) / r_a\n",
-           "    v_lo = (-vb + P[P_KW] * omega_m) / r_a\n    v_hi = (vb + P[P_KW] * omega_m) / r_a\n",
+           "    v_lo = (-vb - P[P_KW] * omega_m) / r_a\n"
+           "    v_hi = (vb - P[P_KW] * omega_m) / r_a\n",
+           "    v_lo = (-vb + P[P_KW] * omega_m) / r_a\n"
+           "    v_hi = (vb + P[P_KW] * omega_m) / r_a\n",
            (), equivalent="on_speed_line only decides whether the back-EMF damping joins the "
                           "implicit (stiff) part of the ARK step; for Scout II the motor-side "
                           "damping rate is about 400 /s with or without it, below "
@@ -187,12 +189,14 @@ MUTANTS = [
            "scoutsim/model/leg.py",
            "    return k * (l0 - ll) - c * ld - fc * sat\n",
            "    return k * (l0 - ll) + c * ld - fc * sat\n",
-           (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
+           (MORE + "test_axial_leg_force_is_spring_damper_and_friction",
+            EOM + "test_stance_constrained_dynamics")),
     Mutant("leg_damper_doubled", "leg damper c l' in the axial leg force",
            "scoutsim/model/leg.py",
            "    return k * (l0 - ll) - c * ld - fc * sat\n",
            "    return k * (l0 - ll) - 2.0 * c * ld - fc * sat\n",
-           (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
+           (MORE + "test_axial_leg_force_is_spring_damper_and_friction",
+            EOM + "test_stance_constrained_dynamics")),
     Mutant("leg_damper_angle_doubled", "angle-dependent leg damper c (1 + a phi^2)",
            "scoutsim/model/leg.py",
            "    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi * phi)\n",
@@ -218,12 +222,14 @@ MUTANTS = [
            "scoutsim/model/transmission.py",
            "            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
            "            - P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
-           (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",)),
+           (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
+            EOM + "test_stance_constrained_dynamics")),
     Mutant("belt_damper_doubled", "belt damper c_b (alpha' - phi')",
            "scoutsim/model/transmission.py",
            "            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
            "            + 2.0 * P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
-           (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",)),
+           (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
+            EOM + "test_stance_constrained_dynamics")),
     Mutant("belt_backlash_dropped", "belt spring dead zone (backlash)",
            "scoutsim/model/transmission.py",
            "    h = 0.5 * P[P_BACKLASH]\n",
@@ -233,12 +239,14 @@ MUTANTS = [
            "scoutsim/model/transmission.py",
            "    tf = P[P_B_J] * om\n",
            "    tf = -P[P_B_J] * om\n",
-           (LAWS + "test_slipping_motor_joint_friction",)),
+           (LAWS + "test_slipping_motor_joint_friction",
+            EOM + "test_stance_constrained_dynamics")),
     Mutant("joint_coulomb_doubled", "motor-joint Coulomb friction tau_s while slipping",
            "scoutsim/model/transmission.py",
            "        tf += P[P_TAU_S] * mode\n",
            "        tf += 2.0 * P[P_TAU_S] * mode\n",
-           (LAWS + "test_slipping_motor_joint_friction",)),
+           (LAWS + "test_slipping_motor_joint_friction",
+            EOM + "test_stance_constrained_dynamics")),
     # --- events: stiction breakaway (numerics/events.py) ------------------------------
     Mutant("stiction_breakaway_doubled", "stiction breakaway |holding torque| = tau_s",
            "scoutsim/numerics/events.py",
@@ -419,24 +427,38 @@ def _short(nodeid: str) -> str:
     return nodeid.split("/")[-1]
 
 
+def _grouped(o: Outcome) -> list[tuple[str, int, bool]]:
+    """The failing tests of ``o`` by test function (parametrizations together): (name,
+    number failed, any timed out, aimed), the aimed tests first."""
+    groups: dict[str, list[str]] = {}
+    for f in o.failed:
+        groups.setdefault(_short(f).split("[")[0], []).append(f)
+    aimed = [g for g, fs in groups.items()
+             if any(f.startswith(a) for f in fs for a in o.mutant.aimed)]
+    order = aimed + [g for g in groups if g not in aimed]
+    return [(g, len(groups[g]), any(f in o.timed_out for f in groups[g]), g in aimed)
+            for g in order]
+
+
 def table(outcomes: list[Outcome], most: int = 3) -> str:
-    rows = ["| mutant | law | killed | by its aimed test | failing tests (of the first few) |",
-            "|---|---|---|---|---|"]
+    """The Markdown table of the outcomes."""
+    rows = ["| mutant | law | killed (tests failed) | by its aimed test | failing tests "
+            "(**aimed**) |", "|---|---|---|---|---|"]
     for o in outcomes:
         m = o.mutant
         if o.timeout:
-            killed = "yes (timeout)"
+            killed = "yes (stopped)"
         else:
             killed = f"yes ({len(o.failed)})" if o.failed else "**no**"
         aimed = "yes" if o.by_aimed else ("equivalent" if m.equivalent else "**no**")
-        def label(f):
-            return _short(f) + (" (timeout)" if f in o.timed_out else "")
-        names = [label(f) for f in o.failed if any(f.startswith(a) for a in m.aimed)]
-        names += [label(f) for f in o.failed if label(f) not in names]
-        shown = ", ".join(f"`{n}`" for n in names[:most])
-        if len(names) > most:
-            shown += f", ... ({len(names) - most} more)"
-        rows.append(f"| `{m.name}` | {m.law} | {killed} | {aimed} | {shown} |")
+        groups = _grouped(o)
+        shown = ", ".join(("**`{}`**" if a else "`{}`").format(g)
+                          + (f" x{n}" if n > 1 else "") + (" (timeout)" if t else "")
+                          for g, n, t, a in groups[:most])
+        if len(groups) > most:
+            shown += f", {len(groups) - most} more"
+        law = m.law.replace("|", "\\|")
+        rows.append(f"| `{m.name}` | {law} | {killed} | {aimed} | {shown} |")
     return "\n".join(rows)
 
 

@@ -5,9 +5,11 @@ angle-dependent leg damper, the leg's sliding-joint friction with its side-load 
 belt's backlash): a wrong sign or factor in the leg damper, its angle dependence, the leg
 friction, the belt damper or the belt's dead zone fails the test aimed at it.
 
-The work-energy balance (tests/analysis/test_energy.py) does not catch these: it books
-each dissipation from the force as it acted, so a wrong damper or friction law moves
-energy between its terms but still closes.
+The work-energy balance (tests/analysis/test_energy.py) cannot stand in for these: it
+books each dissipation from the force as it acted, so a wrong damper or friction law can
+move energy between its terms and still close (a doubled angle dependence of the leg
+damper, or a belt without its dead zone, passes every other physics test; docs/testing.md,
+"Mutation study").
 
 The leg length rate is not recorded; it is computed here from the recorded state by the
 kinematics of a toe on the ground (section 1): the hip at (x, y) + s_L (cos theta,
