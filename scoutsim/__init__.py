@@ -11,13 +11,14 @@ from .parameters import (  # noqa: E402
 )
 from .result import SimulationResult  # noqa: E402
 from .simulation import (  # noqa: E402
-    HybridState, InitialState, IntegratorSettings, Sensors, default_initial_state, simulate,
+    ControllerError, HybridState, InitialState, IntegratorSettings, Sensors,
+    default_initial_state, simulate,
 )
 from .control.bounding import BoundingController  # noqa: E402
 
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
-    "ParameterError",
+    "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
 ]

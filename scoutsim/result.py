@@ -75,9 +75,10 @@ class SimulationResult:
         front), motor-joint stiction modes (back, front); columns ``layout.RM_*``.
     events : (m, NEVREC) [t, kind, leg, v1, v2, v3, energy before / after, violations]
         (``layout.EVR_*``, kinds ``layout.EK_*``).
-    outcome : "completed", "fell", "numerical_failure", "interrupted" or, for a run streamed
-        to a disk that refused its tables, "write_failed" (:attr:`failure` says why a run
-        failed numerically).
+    outcome : "completed", "fell", "numerical_failure", "interrupted", "controller_error"
+        (a user controller raised or returned bad torques: ``scoutsim.ControllerError``) or,
+        for a run streamed to a disk that refused its tables, "write_failed" (:attr:`failure`
+        says why a run failed numerically).
     t_end : time the run reached [s].
     stats : integrator statistics and contact diagnostics.
     provenance : parameters, model variant, tolerances, initial state, package version.

@@ -119,7 +119,7 @@ def test_plot_command_reads_a_run_directory(run_out, tmp_path, capsys):
     assert main(["plot", str(out / "timeseries.parquet"), "--out", str(fig)]) == 0
 
 
-def test_console_script_ends_fast_and_keeps_its_output(tmp_path):
+def test_console_script_exits_with_its_output_complete(tmp_path):
     """`python -m scoutsim run` ends with os._exit after flushing: every line printed and
     every file written are there."""
     proc = subprocess.run([sys.executable, "-m", "scoutsim", "run", "--duration", "0.05",

@@ -1,4 +1,4 @@
-"""Failure reasons that point at the cause (issue 15, "nothing silently wrong").
+"""Failure reasons that point at the cause ("nothing silently wrong": scoutsim/failure.py).
 
 * Parameter values no legged robot has (1e308 kg, lengths in kilometres, ...) are refused
   before a run, naming the field and its allowed range.

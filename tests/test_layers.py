@@ -32,6 +32,7 @@ LAYERS = {
 #: (importer, imported) pairs against the layers: convenience accessors, deferred imports
 CONVENIENCE_ACCESSORS = {
     ("scoutsim.result", "scoutsim.analysis.gait"),                     # result.gait()
+    ("scoutsim.result", "scoutsim.analysis.energy"),          # result.energy_balance()
     ("scoutsim.result", "scoutsim.presentation.plots"),                # result.plot()
     ("scoutsim.analysis.sweep", "scoutsim.presentation.plots"),        # sweep.plot_map()
     ("scoutsim.identification.fit",

@@ -1,5 +1,5 @@
 """A run's output directory: one run per directory, files written whole or not at all, a
-manifest that says whether the run's files are all there (issue 15, item 1)."""
+manifest that says whether the run's files are all there (scoutsim/run_directory.py)."""
 
 import json
 import signal

@@ -114,8 +114,8 @@ def test_memory_of_a_streamed_run_does_not_grow_with_its_duration(tmp_path):
     streamed = {d: peak(d, stream_to=tmp_path / f"s{d:g}", keep_seconds=2.0)
                 for d in (40.0, 160.0)}
     in_memory = {d: peak(d) for d in (40.0, 160.0)}
-    # streamed, the peak is that of one 10 s piece and its tables (about 20 MB on the
-    # development machine) whatever the duration; held in memory it grows with the
+    # streamed, the peak is that of one 10 s piece and its tables (about 20 MB on
+    # the machine it was measured on) whatever the duration; held in memory it grows with the
     # duration (about 20 MB for 40 s, 80 MB for 160 s)
     assert streamed[160.0] - streamed[40.0] < 0.1 * (in_memory[160.0] - in_memory[40.0])
     assert streamed[160.0] < 1.2 * streamed[40.0]

@@ -439,7 +439,8 @@ class GaitMetrics:
     def motor_saturation_fraction(result, leg):
         """Fraction of stance-retraction samples at which the motor works on its limits.
 
-        Paper Fig. 11: "the motors are saturated most of the time". A sample with
+        Not the paper's Fig. 11 statement ("the motors are saturated most of the time"),
+        which covers the whole step (tests/test_paper_claims.py measures that). A sample with
         controller leg state stance-retraction (``leg_state == 1``) counts as saturated
         when the motor's operating point lies on the boundary of what the amplifier and
         motor can deliver (docs/specification.md section 4): on the current limit, |i| >= (1 - 1e-3) i_max, or

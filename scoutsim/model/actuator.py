@@ -45,10 +45,10 @@ def on_speed_line(cmd_torque, omega_m, vb, P):
         return False
     r_a = P[P_RA]
     imax = P[P_IMAX]
-    ic = cmd_torque / torque_per_amp(P)
+    ic = min(max(cmd_torque / torque_per_amp(P), -imax), imax)
     v_lo = (-vb - P[P_KW] * omega_m) / r_a
     v_hi = (vb - P[P_KW] * omega_m) / r_a
-    return (v_hi < imax and ic > v_hi) or (v_lo > -imax and ic < v_lo)
+    return ic > v_hi or ic < v_lo
 
 
 @kernel(inline="always")
@@ -56,7 +56,11 @@ def motor_current(cmd_torque, omega_m, vb, P):
     """Motor current [A] delivered for a commanded leg torque (per physical leg) [N m].
 
     Section 4: i_cmd = tau / (N eta K_T), limited by |i| <= i_max and, except in the ideal
-    variant, by the torque-speed line (-V_b - K_w w)/R_A <= i <= (V_b - K_w w)/R_A."""
+    variant, by the torque-speed line (-V_b - K_w w)/R_A <= i <= (V_b - K_w w)/R_A.
+
+    The line binds last: a motor back-driven so fast that its back-EMF exceeds the battery
+    voltage plus R_A i_max carries the line's current even beyond i_max (the amplifier can
+    at most apply the full battery voltage against it), the same in either direction."""
     model = int(P[P_MODEL])
     if model == MODEL_PASSIVE:
         return 0.0
@@ -67,20 +71,18 @@ def motor_current(cmd_torque, omega_m, vb, P):
         return -P[P_KW] * omega_m / P[P_RA]   # bench rig, leads shorted: 0 = R_A i + K_w w_m
     imax = P[P_IMAX]
     ic = cmd_torque / torque_per_amp(P)
-    lo = -imax
-    hi = imax
+    if ic < -imax:
+        ic = -imax
+    if ic > imax:
+        ic = imax
     if model != MODEL_IDEAL:
         r = P[P_RA]
         v_lo = (-vb - P[P_KW] * omega_m) / r
         v_hi = (vb - P[P_KW] * omega_m) / r
-        if v_lo > lo:
-            lo = v_lo
-        if v_hi < hi:
-            hi = v_hi
-    if ic < lo:
-        ic = lo
-    if ic > hi:
-        ic = hi
+        if ic < v_lo:
+            ic = v_lo
+        if ic > v_hi:
+            ic = v_hi
     return ic
 
 

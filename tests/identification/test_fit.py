@@ -1,4 +1,4 @@
-"""Identification of the hip-unit parameters from virtual rig logs (issue 5): recovery
+"""Identification of the hip-unit parameters from virtual rig logs: recovery
 within the stated intervals, honest interval coverage over repeated noise draws,
 non-identifiable parameters flagged, bad logs rejected with a clear error."""
 

@@ -1,32 +1,342 @@
 """The reference evaluator: a second, allocating implementation of the model's right-hand
 side (dense KKT solve, its own assembly of the forces and rows), the test oracle of the
 optimized :func:`scoutsim.model.evaluate.evaluate_ws` (tests/model/test_evaluate.py).
-Not part of the package: it exists only to be compared against."""
+Not part of the package: it exists only to be compared against.
+
+To be an oracle of the model's laws and not a copy of them, it writes every law itself, from
+the text of docs/specification.md (sections 1-5) and docs/model.md ("Generalized forces",
+"Transmission losses", "Effects beyond the paper's models"), and imports none of the
+package's law kernels:
+
+* the amplifier's motor current (current limit, torque-speed line, the bench rig's open and
+  shorted motor leads), the delivered torque with the optional transmission losses, and the
+  battery voltage with an internal resistance (solved here by bracketed root finding of
+  V_b = V_oc - R_b P(V_b) / V_b with SciPy's brentq, to round-off);
+* the telescopic leg: damper c (1 + a phi^2), sliding-joint friction level
+  F_c + mu_s |tau_hip| / l, axial force, and the flight rate of the massless toe (solved
+  here by root finding of the toe's force balance);
+* the belt spring's dead zone, the gravity of the torso and leg bodies, the potential
+  energy, and the mass matrix and velocity terms (assembled from explicit body Jacobians;
+  tools/derive_eom.py and tests/model/test_eom_independent.py check the package's against
+  a SymPy derivation as well);
+* the projection of the dependent coordinates onto the active constraints (the contact
+  modes' geometry, the bench rig's clamps, the gear angles).
+
+What it still takes from the package: the index layout (model/layout.py: names of slots,
+modes and row kinds, not laws), the bench rig's clamp rows and the dense pivoted-LU solve
+of the KKT system (model/kkt.py). It is plain Python, not compiled.
+
+Two regularisation widths are numbers the documentation states and are written here from
+it: the leg friction's linear band (1 mm/s, docs/model.md "Effects beyond the paper's
+models") and the loss-direction blending band (1 rad/s at the motor, "Transmission
+losses").
+"""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
-from scoutsim.jit import allocating
-from scoutsim.model.actuator import battery_voltage, delivered_torque, motor_current
-from scoutsim.model.kinematics import hip_position, hip_velocity, project
 from scoutsim.model.kkt import MAX_ROWS, add_clamp_rows, solve_dense
 from scoutsim.model.layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
-    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, IL_B, MF_ANCHOR_B,
-    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, P_B_J,
-    P_CB, P_D, P_G, P_K, P_KB, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP,
-    P_STRUT_OMEGA, P_TAU_S, P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS,
-    ROW_TOE_ALONG, SLIDE, STICK, STRUT, STUCK,
+    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, CIRCUIT_OPEN,
+    CIRCUIT_SHORT, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_IDEAL,
+    MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, P_B_J, P_BACKLASH, P_C, P_C_LOAD, P_CB, P_CIRCUIT,
+    P_CLAMP_LEGS, P_CLAMP_TORSO, P_D, P_ETA, P_G, P_IL, P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB,
+    P_KT, P_KW, P_L, P_L0, P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML,
+    P_MODEL, P_MT, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B,
+    P_TD_WORLD, P_VB, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK,
+    STRUT, STUCK,
 )
-from scoutsim.model.leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
-from scoutsim.model.rigid_body import coriolis, mass_matrix, potential_energy
-from scoutsim.model.transmission import belt_spring_deflection
+
+#: Leg-length rate [m/s] below which the sliding joint's Coulomb friction is linear in the
+#: rate (docs/model.md, "Effects beyond the paper's models": 1 mm/s).
+LEG_FRICTION_BAND = 1e-3
+#: Motor speed [rad/s] over which the direction of the transmission losses is blended
+#: linearly (docs/model.md, "Transmission losses": 1 rad/s at the motor).
+LOSS_BLEND_BAND = 1.0
 
 
-@allocating
+# --- constraints (docs/specification.md sections 1-3, docs/model.md "Constraints") ---
+
+def project(q, dq, l, P, mi, mf):
+    """Make the dependent coordinates consistent with the active constraints, in place
+    (docs/model.md, "Constraints": they are projected before every evaluation): a pinned
+    toe fixes the leg's angle, its rate and its length by the geometry of hip and anchor;
+    a sliding toe on the ground fixes the length; a massless flight leg is placed at its
+    touchdown angle at rest length; a massive flight leg is at most at its stop (at it
+    when undamped); a clamped rig is at rest; outside Model II the gear angle is the leg
+    angle, and a stuck Model II motor joint does not turn."""
+    if P[P_CLAMP_TORSO] > 0.5:
+        dq[0:3] = 0.0
+        if P[P_CLAMP_LEGS] > 0.5:
+            dq[3:5] = 0.0
+    th = q[2]
+    dth = dq[2]
+    l0 = P[P_L0]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        hx = q[0] + sL * math.cos(th)
+        hy = q[1] + sL * math.sin(th)
+        hvx = dq[0] - sL * math.sin(th) * dth
+        hvy = dq[1] + sL * math.cos(th) * dth
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT:
+            # hip -> toe vector (a, -b) to the anchor on the ground; u = (sin g, -cos g)
+            a = mf[MF_ANCHOR_B + leg] - hx
+            b = hy
+            g = math.atan2(a, b)
+            # the anchor is fixed: da/dt = -hvx, db/dt = hvy
+            dg = (b * -hvx - a * hvy) / (a * a + b * b)
+            q[3 + leg] = g - th
+            dq[3 + leg] = dg - dth
+            l[leg] = math.hypot(a, b)
+        elif mode == SLIDE:
+            # toe height hy - l cos g = 0
+            l[leg] = hy / math.cos(th + q[3 + leg])
+        elif P[P_MASSLESS] > 0.5:
+            td = P[P_TD_B + leg]
+            if P[P_TD_WORLD] > 0.5:     # g = td fixed in the world
+                q[3 + leg] = td - th
+                dq[3 + leg] = -dth
+            else:                       # phi = td fixed on the torso
+                q[3 + leg] = td
+                dq[3 + leg] = 0.0
+            l[leg] = l0
+        elif P[P_C] <= 0.0 or l[leg] > l0:
+            l[leg] = l0
+        if int(P[P_MODEL]) != MODEL_II:
+            q[5 + leg] = q[3 + leg]
+            dq[5 + leg] = dq[3 + leg]
+        elif mi[MI_MOTOR_B + leg] == STUCK:
+            dq[5 + leg] = 0.0
+
+
+# --- actuator (docs/specification.md section 4) ------------------------------------------
+
+def torque_per_amp(P):
+    """Torque at the gear output per ampere, N eta K_T [N m / A]."""
+    return P[P_N] * P[P_ETA] * P[P_KT]
+
+
+def motor_speed(dq, leg, P):
+    """w_m [rad/s]: N times the rate relative to the torso of the leg (ideal, Model I) or of
+    the driven gear (Model II)."""
+    rate = dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg]
+    return P[P_N] * rate
+
+
+def motor_current(cmd, om, vb, P):
+    """Motor current [A] for a commanded leg torque ``cmd`` [N m per physical leg] at motor
+    speed ``om`` and battery voltage ``vb``.
+
+    The amplifier asks for i = tau / (N eta K_T), at most i_max in magnitude. Its output
+    voltage V lies between -V_b and V_b, and the motor circuit R_A i + K_w w_m = V then
+    reaches only the currents between (-V_b - K_w w_m) / R_A and (V_b - K_w w_m) / R_A
+    (the torque-speed line; not in the ideal variant). Bench rig: open leads carry no
+    current, shorted leads 0 = R_A i + K_w w_m."""
+    model = int(P[P_MODEL])
+    if model == MODEL_PASSIVE:
+        return 0.0
+    circuit = int(P[P_CIRCUIT])
+    if circuit == CIRCUIT_OPEN:
+        return 0.0
+    if circuit == CIRCUIT_SHORT:
+        return -P[P_KW] * om / P[P_RA]
+    i_max = P[P_IMAX]
+    wanted = min(max(cmd / torque_per_amp(P), -i_max), i_max)
+    if model == MODEL_IDEAL:
+        return wanted
+    reach_lo = (-vb - P[P_KW] * om) / P[P_RA]
+    reach_hi = (vb - P[P_KW] * om) / P[P_RA]
+    return min(max(wanted, reach_lo), reach_hi)
+
+
+def delivered_torque(cur, om, P):
+    """Torque at the leg / driven gear [N m per physical leg] for current ``cur`` at motor
+    speed ``om`` (docs/model.md, "Transmission losses").
+
+    Constant efficiency tau_0 = N eta K_T i, less a loss tau_idle + c_load |tau_out| that
+    opposes the power flow: when the motor drives the output (tau_0 along the motion) the
+    loss comes off the transmitted torque (never reversing it); when the output drives the
+    motor, the output must supply tau_0 and the loss, and its torque opposes the motion.
+    The direction of motion is blended linearly over |w_m| < LOSS_BLEND_BAND."""
+    tau0 = torque_per_amp(P) * cur
+    idle = P[P_TAU_IDLE]
+    c_load = P[P_C_LOAD]
+
+    def moving(direction):
+        # the output turning in `direction` (+1 / -1) relative to the torso
+        if tau0 * direction > 0.0:
+            # motoring: |tau_out| = |tau_0| - idle - c_load |tau_out|, at least 0
+            return math.copysign(max(abs(tau0) - idle, 0.0) / (1.0 + c_load), tau0)
+        # back-driven: |tau_out| = |tau_0| + idle + c_load |tau_out|, against the motion
+        return -direction * (abs(tau0) + idle) / (1.0 - c_load)
+
+    s = om / LOSS_BLEND_BAND
+    if s >= 1.0:
+        return moving(1.0)
+    if s <= -1.0:
+        return moving(-1.0)
+    forward = 0.5 * (1.0 + s)      # share of the forward direction in the blend
+    return forward * moving(1.0) + (1.0 - forward) * moving(-1.0)
+
+
+def battery_voltage(dq, cmd, P):
+    """Battery terminal voltage V_b [V]: V_oc for an ideal source (and in the ideal and
+    passive variants, which have no battery model); with internal resistance R_b,
+    V_b = V_oc - R_b I_b with the battery current I_b = P / V_b of lossless amplifiers,
+    P = sum over all motors of V_term i, V_term = R_A i + K_w w_m, where the currents
+    themselves depend on V_b through the torque-speed line. Solved by bracketed root
+    finding on the branch near V_oc."""
+    voc = P[P_VB]
+    rb = P[P_RB]
+    model = int(P[P_MODEL])
+    if rb <= 0.0 or model == MODEL_IDEAL or model == MODEL_PASSIVE:
+        return voc
+
+    def power(v):
+        total = 0.0
+        for leg in range(2):
+            om = motor_speed(dq, leg, P)
+            i = motor_current(cmd[leg], om, v, P)
+            total += P[P_NP] * (P[P_RA] * i + P[P_KW] * om) * i
+        return total
+
+    def residual(v):
+        return v - voc + rb * power(v) / v
+
+    return brentq(residual, 0.5 * voc, 2.0 * voc, xtol=1e-13, rtol=4 * np.finfo(float).eps,
+                  maxiter=500)
+
+
+# --- telescopic leg (docs/specification.md section 2, docs/model.md) ----------------------
+
+def leg_damper(phi, P):
+    """Leg damper [N s/m per physical leg] at leg angle phi: c (1 + a phi^2)."""
+    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi ** 2)
+
+
+def leg_friction_level(tau_hip, ll, P):
+    """Sliding-joint Coulomb level [N per physical leg]: F_c + mu_s |tau_hip| / l."""
+    return P[P_LEG_FRIC] + P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll
+
+
+def leg_force(k, c, l0, ll, ld, fc):
+    """Axial leg force [N per physical leg], compression positive: spring, damper, and the
+    friction level fc opposing the length rate ld (linear within LEG_FRICTION_BAND)."""
+    friction = fc * min(max(ld / LEG_FRICTION_BAND, -1.0), 1.0)
+    return k * (l0 - ll) - c * ld - friction
+
+
+def flight_rate(k, c, l0, ll, fc):
+    """dl/dt [m/s] of a massive leg's massless toe in flight: the leg force vanishes
+    (the force falls strictly with the rate, so the root is unique); 0 at the stop and for
+    an undamped leg (it snaps to l0)."""
+    if c <= 0.0 or ll >= l0:
+        return 0.0
+    upper = k * (l0 - ll) / c      # the rate without friction: the force is <= 0 there
+    if upper == 0.0:
+        return 0.0
+    return brentq(lambda v: leg_force(k, c, l0, ll, v, fc), 0.0, upper, xtol=1e-300,
+                  rtol=4 * np.finfo(float).eps, maxiter=500)
+
+
+# --- hip unit (docs/specification.md section 5) ------------------------------------------
+
+def belt_spring_deflection(delta, P):
+    """What the belt spring is stretched by at gear-leg angle difference delta [rad]: the
+    hip unit's total play b is a dead zone |delta| <= b / 2 around zero."""
+    half_play = 0.5 * P[P_BACKLASH]
+    return math.copysign(max(abs(delta) - half_play, 0.0), delta)
+
+
+# --- rigid bodies (docs/specification.md sections 1, 2, 5; docs/model.md) ---------------
+
+def _leg_com(q, P, leg):
+    """Leg-body COM position, its Jacobian (2 x NQ) and the angle g = theta + phi."""
+    sL = (2.0 * leg - 1.0) * P[P_L]
+    th = q[2]
+    g = th + q[3 + leg]
+    d = P[P_D]
+    pos = np.array([q[0] + sL * math.cos(th) + d * math.sin(g),
+                    q[1] + sL * math.sin(th) - d * math.cos(g)])
+    J = np.zeros((2, NQ))
+    J[0, 0] = 1.0
+    J[1, 1] = 1.0
+    J[0, 2] = -sL * math.sin(th) + d * math.cos(g)
+    J[1, 2] = sL * math.cos(th) + d * math.sin(g)
+    J[0, 3 + leg] = d * math.cos(g)
+    J[1, 3 + leg] = d * math.sin(g)
+    return pos, J, g
+
+
+def mass_matrix(q, P):
+    """M = sum over bodies of m J^T J + I J_w^T J_w: torso, the leg bodies (n_p m_l, n_p I_l
+    per virtual leg, turning at theta + phi), in Model II the driven gears (n_p J_2 at
+    theta + alpha) and the drive gears (n_p J_1 at theta + N alpha)."""
+    npl = P[P_NP]
+    M = np.zeros((NQ, NQ))
+    Jt = np.zeros((2, NQ))
+    Jt[0, 0] = 1.0
+    Jt[1, 1] = 1.0
+    M += P[P_MT] * Jt.T @ Jt
+    M[2, 2] += P[P_IT]
+    for leg in range(2):
+        _, J, _ = _leg_com(q, P, leg)
+        M += npl * P[P_ML] * J.T @ J
+        w = np.zeros(NQ)
+        w[2] = 1.0
+        w[3 + leg] = 1.0
+        M += npl * P[P_IL] * np.outer(w, w)
+        if int(P[P_MODEL]) == MODEL_II:
+            driven = np.zeros(NQ)
+            driven[2] = 1.0
+            driven[5 + leg] = 1.0
+            drive = np.zeros(NQ)
+            drive[2] = 1.0
+            drive[5 + leg] = P[P_N]
+            M += npl * P[P_J2] * np.outer(driven, driven)
+            M += npl * P[P_J1] * np.outer(drive, drive)
+    return M
+
+
+def velocity_terms(q, dq, P):
+    """h of M ddq + h = Q: sum over the leg bodies of m J^T a_0, a_0 the COM acceleration
+    at ddq = 0 (the torso and the gears turn about fixed points of their own coordinates,
+    so they add none)."""
+    h = np.zeros(NQ)
+    th = q[2]
+    dth = dq[2]
+    for leg in range(2):
+        sL = (2.0 * leg - 1.0) * P[P_L]
+        _, J, g = _leg_com(q, P, leg)
+        dg = dth + dq[3 + leg]
+        # hip: sL (cos th, sin th) turning at dth; COM: d (sin g, -cos g) turning at dg
+        a0 = (sL * dth ** 2 * np.array([-math.cos(th), -math.sin(th)])
+              + P[P_D] * dg ** 2 * np.array([-math.sin(g), math.cos(g)]))
+        h += P[P_NP] * P[P_ML] * J.T @ a0
+    return h
+
+
+def potential_energy(q, l, P):
+    """Gravity of the torso and leg bodies, the leg springs (1/2 n_p k (l0 - l)^2 per
+    virtual leg) and the Model II belt springs beyond the play [J]."""
+    npl = P[P_NP]
+    grav = P[P_G]
+    e = P[P_MT] * grav * q[1]
+    for leg in range(2):
+        pos, _, _ = _leg_com(q, P, leg)
+        e += npl * P[P_ML] * grav * pos[1]
+        e += 0.5 * npl * P[P_K] * (P[P_L0] - l[leg]) ** 2
+        if int(P[P_MODEL]) == MODEL_II:
+            e += 0.5 * npl * P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P) ** 2
+    return e
+
+
 def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
     for cross-checks of the optimized ``evaluate_ws``.
@@ -42,10 +352,8 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     l = s[IL_B:IL_B + 2].copy()
     project(q, dq, l, P, mi, mf)
 
-    M = np.empty((NQ, NQ))
-    h = np.empty(NQ)
-    mass_matrix(q, P, M)
-    coriolis(q, dq, P, h)
+    M = mass_matrix(q, P)
+    h = velocity_terms(q, dq, P)
 
     npl = P[P_NP]
     grav = P[P_G]
@@ -76,10 +384,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     tau_belt = np.zeros(2)
     tau_fric = np.zeros(2)
     for leg in range(2):
-        if model == MODEL_II:
-            om[leg] = N * dq[5 + leg]
-        else:
-            om[leg] = N * dq[3 + leg]
+        om[leg] = motor_speed(dq, leg, P)
         cur[leg] = motor_current(cmd[leg], om[leg], vb, P)
         tau_app[leg] = delivered_torque(cur[leg], om[leg], P)
         if model == MODEL_II:
@@ -118,8 +423,11 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         dg = dth + dq[3 + leg]
         sg = math.sin(g)
         cg = math.cos(g)
-        hx, hy = hip_position(q, P, leg)
-        hvx, hvy = hip_velocity(q, dq, P, leg)
+        # hip at (x, y) + sL (cos th, sin th) on the torso axis, and its velocity
+        hx = q[0] + sL * math.cos(th)
+        hy = q[1] + sL * math.sin(th)
+        hvx = dq[0] - sL * math.sin(th) * dth
+        hvy = dq[1] + sL * math.cos(th) * dth
         ll = l[leg]
         # toe Jacobian (material point at distance ll on the leg axis), columns x, y, th, phi
         jt_th_x = -sL * math.sin(th) + ll * cg
@@ -132,14 +440,14 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         kk = 3 + leg
         # leg damper and sliding-joint friction (both as Table III unless the effects
         # beyond the paper are switched on)
-        c_l = leg_damping(q[kk], P)
+        c_l = leg_damper(q[kk], P)
         tau_hip = (tau_belt[leg] if model == MODEL_II else
                    (tau_app[leg] if model != MODEL_PASSIVE else 0.0))
         fc_l = leg_friction_level(tau_hip, ll, P)
         if mode == STICK or mode == STRUT:
             ld = -(hvx * sg - hvy * cg)           # dl/dt = -dhip . u
             ldot[leg] = ld
-            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
+            F = npl * leg_force(k, c_l, l0, ll, ld, fc_l)
             if mode == STRUT:
                 F = npl * k * (l0 - ll)
             Fax[leg] = F
@@ -175,7 +483,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             # toe on the ground (height 0), l = hy / cos(g)
             ld = hvy / cg + hy * sg * dg / (cg * cg)
             ldot[leg] = ld
-            F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
+            F = npl * leg_force(k, c_l, l0, ll, ld, fc_l)
             Fax[leg] = F
             mu = P[P_MU]
             sig = 0.0
@@ -203,7 +511,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
                 nr += 1
                 ld = 0.0
             else:
-                ld = flight_leg_rate(k, c_l, l0, ll, fc_l)
+                ld = flight_rate(k, c_l, l0, ll, fc_l)
             ldot[leg] = ld
             toe_x[leg] = hx + ll * sg
             toe_y[leg] = hy - ll * cg

@@ -1,4 +1,4 @@
-"""Torque-dependent transmission efficiency (issue 5; docs/model.md "Transmission losses").
+"""Torque-dependent transmission efficiency (docs/model.md "Transmission losses").
 
 The gearbox loses tau_loss = tau_idle + c_load |tau_out| (leg side, per physical leg),
 opposing the power flow. With both zero the constant efficiency N eta K_T i is recovered

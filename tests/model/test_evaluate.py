@@ -1,5 +1,8 @@
 """The allocation-free evaluation (model.evaluate.evaluate_ws) reproduces the reference
-implementation (tests/model/reference_evaluator.py), and its stiff-Jacobian factors capture the
+implementation (tests/model/reference_evaluator.py, which states every force law itself), with
+and without the effects beyond the paper's models, on the bench rigs, and with a battery
+internal resistance; a command update on the kept factors equals a fresh evaluation; the
+motor current is odd in command and speed; and the stiff-Jacobian factors capture the
 belt-damper eigenvalues of Model II."""
 
 import math
@@ -14,16 +17,36 @@ from scoutsim.model import workspace as W
 from scoutsim.model import layout as L
 from scoutsim.model.packing import robot_array
 
+from . import reference_evaluator as ref
 from .reference_evaluator import evaluate_reference
 
 MASSLESS = RobotParameters(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
 
+#: Every effect beyond the paper's models switched on (docs/model.md, "Effects beyond the
+#: paper's models"; values of the order of the virtual Scout II's, with a play small enough
+#: that the belt is both slack and stretched within a short run).
+EFFECTS = dict(belt_backlash=math.radians(0.5), leg_friction_force=6.0,
+               leg_friction_side_load_coefficient=0.05,
+               leg_damping_angle_coefficient=0.5 / math.radians(30.0) ** 2,
+               gearbox_idle_loss_torque=0.3, gearbox_load_loss_coefficient=0.05)
+EFFECTS_ROBOT = RobotParameters(**EFFECTS)
+#: ... and a battery with internal resistance (specification.md section 4)
+BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
 
-def _cases(robot, model, mu, **kw):
+#: Factor on the velocities of the slow copy of each sampled state: it puts the motor
+#: speeds into the blending band of the transmission losses (|w_m| < 1 rad/s) and the
+#: stance legs' length rates into the friction's linear band (|dl/dt| < 1 mm/s).
+SLOW = 1e-3
+
+
+def _cases(robot, model, mu, rig=None, **kw):
+    """Parameters and (state, modes, anchors, command) samples of a short run; ``rig``:
+    bench-rig options of robot_array (clamps, motor circuit) for the evaluations (the
+    run itself is free)."""
     r = scoutsim.simulate(robot, duration=0.4, model=model, friction_coefficient=mu, **kw)
     P = robot_array(robot, model, friction_coefficient=mu,
                     passive_touchdown_angles=kw.get("passive_touchdown_angles", (0.0, 0.0)),
-                    passive_touchdown_world=True, pitch_limit=1.0)
+                    passive_touchdown_world=True, pitch_limit=1.0, **(rig or {}))
     out = []
     for n in range(0, len(r.t), 5):
         s = r.state[n].copy()
@@ -39,29 +62,99 @@ def _cases(robot, model, mu, **kw):
     return P, out
 
 
-CONFIGS = [
-    (RobotParameters(), "II", 0.8, {}),
-    (RobotParameters(), "I", 0.8, {}),
-    (RobotParameters(), "ideal", math.inf, {}),
-    (MASSLESS, "passive", math.inf,
-     dict(initial_state=InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.3),
-          passive_touchdown_angles=(0.05, 0.05))),
-]
+def _slow(s):
+    """The state s with its velocities scaled by SLOW (positions and leg lengths kept)."""
+    s = s.copy()
+    s[L.NQ:2 * L.NQ] *= SLOW
+    return s
 
 
-@pytest.mark.parametrize("robot,model,mu,kw", CONFIGS)
-def test_evaluate_ws_matches_reference(robot, model, mu, kw):
-    P, cases = _cases(robot, model, mu, **kw)
+def _mode_variants(mi, P):
+    """The recorded modes and the motor-joint and contact modes substituted (every mode of
+    the model is evaluated at every sampled state); on a rig with the torso clamped the
+    legs are in flight (a pinned toe would make the clamp's rows redundant)."""
+    contacts = (None, [L.STRUT, L.STICK], [L.SLIDE, L.FLIGHT])
+    if P[L.P_CLAMP_TORSO] > 0.5:
+        contacts = ([L.FLIGHT, L.FLIGHT],)
+    for motor in ([0, 0], [1, -1], [0, 1]):
+        for contact in contacts:
+            mi2 = mi.copy()
+            mi2[2:4] = motor
+            if contact is not None:
+                mi2[0:2] = contact
+            yield mi2
+
+
+def _mismatch(x, y):
+    """Largest difference of y from x in units of the allowed round-off: evaluate_ws solves
+    the KKT system differently (gear coordinates eliminated first, then Schur complements
+    on the structured mass matrix instead of a pivoted LU of the whole system): equally
+    exact, so the two differ by round-off only: 1e-10 relative, and a few ulps (64 eps) of
+    the vector's scale absolute, for entries that are zero up to round-off."""
+    fl = 64 * np.finfo(float).eps * max(np.max(np.abs(x)), 1.0)
+    return np.max(np.abs(x - y) / (1e-10 * np.abs(x) + fl))
+
+
+def _regimes(P, mi, cmd, ds, aux):
+    """The regimes of the actuator, transmission and leg laws that one evaluation (the
+    reference's outputs ds, aux in modes mi) exercises, as a set of labels."""
+    out = set()
+    model = int(P[L.P_MODEL])
+    vb = aux[L.A_VBATT]
+    for leg in range(2):
+        o = leg * L.NAUX_LEG
+        contact = mi[L.MI_CONTACT_B + leg]
+        ld = ds[L.IL_B + leg]
+        band = ref.LEG_FRICTION_BAND
+        if contact in (L.STICK, L.SLIDE):
+            out.add("leg rate > band" if ld > band else "leg rate < -band" if ld < -band
+                    else "leg rate in band" if ld != 0.0 else "leg rate 0")
+        elif contact == L.FLIGHT and P[L.P_MASSLESS] < 0.5:
+            out.add("flight rate > band" if ld > band else "flight rate in band" if ld > 0.0
+                    else "flight rate 0")
+        if model == L.MODEL_PASSIVE or int(P[L.P_CIRCUIT]) != L.CIRCUIT_AMPLIFIER:
+            continue
+        om = aux[o + L.A_OMEGA_M]
+        blend = ref.LOSS_BLEND_BAND
+        out.add("motor speed > 1" if om >= blend else "motor speed < -1" if om <= -blend
+                else "motor speed in blend band")
+        i = aux[o + L.A_CURRENT]
+        i_cmd = cmd[leg] / (P[L.P_N] * P[L.P_ETA] * P[L.P_KT])
+        if abs(om) >= blend and i != 0.0:
+            out.add("motoring" if i * om > 0.0 else "back-driven")
+        line = [(sgn * vb - P[L.P_KW] * om) / P[L.P_RA] for sgn in (1.0, -1.0)]
+        if abs(i) == P[L.P_IMAX]:
+            out.add("current at i_max")
+        elif model != L.MODEL_IDEAL and any(abs(i - v) <= 1e-12 * abs(v) for v in line):
+            out.add("current on the speed line")
+        elif i == i_cmd:
+            out.add("current as commanded")
+        if model == L.MODEL_II:
+            half_play = 0.5 * P[L.P_BACKLASH]
+            out.add("belt stretched" if abs(aux[o + L.A_BELT]) > half_play else "belt slack")
+    if vb < P[L.P_VB] - 0.5:
+        out.add("battery sags")
+    return out
+
+
+#: regimes every parity run with the effects beyond the paper switched on must exercise
+LEG_REGIMES = {"leg rate > band", "leg rate < -band", "leg rate in band", "flight rate > band",
+               "flight rate in band"}
+MOTOR_REGIMES = {"motor speed > 1", "motor speed < -1", "motor speed in blend band",
+                 "motoring", "back-driven", "current at i_max", "current as commanded"}
+
+
+def _parity(P, cases):
+    """Worst mismatch (in units of the allowed round-off, _mismatch) of evaluate_ws against
+    the reference over the sampled states, their slow copies and every mode variant, and
+    the regimes exercised."""
     wk, wA, piv = W.new_eval_workspace()
     st = np.zeros((L.NS, 2 * D.NSTIFF))
     worst = 0.0
-    for s, mi, mf, cmd in cases:
-        for motor in ([0, 0], [1, -1], [0, 1]):
-            for contact in (None, [L.STRUT, L.STICK], [L.SLIDE, L.FLIGHT]):
-                mi2 = mi.copy()
-                mi2[2:4] = motor
-                if contact is not None:
-                    mi2[0:2] = contact
+    regimes = set()
+    for s0, mi, mf, cmd in cases:
+        for s in (s0, _slow(s0)):
+            for mi2 in _mode_variants(mi, P):
                 d1 = np.zeros(L.NS)
                 a1 = np.zeros(L.NAUX)
                 d2 = np.zeros(L.NS)
@@ -69,16 +162,90 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
                 ok1 = evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
                 ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st, True)
                 assert ok1 == ok2
-                for x, y in ((d1, d2), (a1, a2)):
-                    # evaluate_ws solves the KKT system differently (gear coordinates
-                    # eliminated first, then Schur complements on the structured mass
-                    # matrix instead of a pivoted LU of the whole system): equally exact,
-                    # so the two differ by round-off only: 1e-10 relative, and a few ulps
-                    # (64 eps) of the vector's scale absolute, for entries that are zero
-                    # up to round-off
-                    fl = 64 * np.finfo(float).eps * max(np.max(np.abs(x)), 1.0)
-                    worst = max(worst, np.max(np.abs(x - y) / (1e-10 * np.abs(x) + fl)))
+                worst = max(worst, _mismatch(d1, d2), _mismatch(a1, a2))
+                regimes |= _regimes(P, mi2, cmd, d1, a1)
+    return worst, regimes
+
+
+CONFIGS = [
+    (RobotParameters(), "II", 0.8, {}),
+    (RobotParameters(), "I", 0.8, {}),
+    (RobotParameters(), "ideal", math.inf, {}),
+    (MASSLESS, "passive", math.inf,
+     dict(initial_state=InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.3),
+          passive_touchdown_angles=(0.05, 0.05))),
+    (EFFECTS_ROBOT, "II", 0.8, {}),
+    (EFFECTS_ROBOT, "I", 0.8, {}),
+    (EFFECTS_ROBOT, "ideal", 0.8, {}),
+    (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="short"))),
+    (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="open", clamp_torso=True))),
+    (EFFECTS_ROBOT, "I", 0.8, dict(rig=dict(motor_circuit="short", clamp_torso=True,
+                                            clamp_legs=True))),
+]
+
+
+@pytest.mark.parametrize("robot,model,mu,kw", CONFIGS)
+def test_evaluate_ws_matches_reference(robot, model, mu, kw):
+    """The optimized right-hand side equals the reference evaluator (its own statement of
+    every force law and of the KKT system) to round-off, in every mode, at states of a
+    short run and at slow copies of them; with the effects beyond the paper switched on,
+    the states exercise each regime of their laws (both sides of the belt's play, leg
+    rates of both signs and inside the friction's linear band, motor speeds inside and
+    beyond the loss blending band, motoring and back-driven, current at its limit); the
+    bench rig's motor circuits and clamps are evaluated at the same states."""
+    P, cases = _cases(robot, model, mu, **kw)
+    worst, regimes = _parity(P, cases)
     assert worst < 1.0
+    if robot is EFFECTS_ROBOT and "rig" not in kw:
+        assert LEG_REGIMES | MOTOR_REGIMES <= regimes
+        if model != "ideal":
+            assert "current on the speed line" in regimes
+        if model == "II":
+            assert {"belt slack", "belt stretched"} <= regimes
+
+
+@pytest.mark.parametrize("model", ["II", "I"])
+def test_battery_voltage_matches_reference(model):
+    """With a battery internal resistance shared by all motors (V_b = V_oc - R_b I_b,
+    I_b = P / V_b; specification.md section 4) and every other effect on, evaluate_ws
+    equals the reference (which solves for V_b by its own root finding), also where a
+    motor's current is on its torque-speed line, so that the power drawn depends on V_b
+    itself; the battery sags by more than 0.5 V."""
+    P, cases = _cases(BATTERY_ROBOT, model, 0.8)
+    worst, regimes = _parity(P, cases)
+    assert {"battery sags", "current on the speed line"} <= regimes
+    assert worst < 1.0
+
+
+def _flight_currents(evaluator, P, w, tau):
+    """Motor currents (back, front) that ``evaluator`` gives with both legs in flight, the
+    back motor at speed w [rad/s] and command tau [N m], the front one at -w and -tau."""
+    s = np.zeros(L.NS)
+    s[L.IY] = 0.6
+    s[L.IL_B:] = P[L.P_L0]
+    s[L.NQ + L.IPHB] = w / P[L.P_N]
+    s[L.NQ + L.IPHF] = -w / P[L.P_N]
+    mi = np.zeros(L.NMI, dtype=np.int64)
+    ds = np.zeros(L.NS)
+    aux = np.zeros(L.NAUX)
+    evaluator(s, P, mi, np.zeros(L.NMF), np.array([tau, -tau]), ds, aux)
+    return np.array([aux[L.A_CURRENT], aux[L.NAUX_LEG + L.A_CURRENT]])
+
+
+@pytest.mark.parametrize("evaluator", [evaluate_reference, D.evaluate])
+def test_motor_current_is_odd_in_command_and_speed(evaluator):
+    """The amplifier, the motor and the battery are symmetric under reversing the current,
+    the voltage and the speed (specification.md section 4): reversing the command and the
+    motor speed reverses the current, at speeds up to twice (V_b + R_A i_max) / K_w
+    (beyond it neither limit lets the other hold) and commands up to beyond the
+    current limit (Model I)."""
+    P = robot_array(RobotParameters(), "I", friction_coefficient=0.8)
+    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]
+    for w in np.linspace(-2.0, 2.0, 41) * w_both:
+        for tau in (-40.0, -5.0, 0.0, 5.0, 40.0):
+            i_plus = _flight_currents(evaluator, P, w, tau)
+            i_minus = _flight_currents(evaluator, P, -w, -tau)
+            assert np.allclose(i_plus, -i_minus, rtol=1e-12, atol=1e-12)
 
 
 def test_inner_stage_evaluation_skips_only_the_outputs():
@@ -145,10 +312,27 @@ def test_ark_method_matches_reference_model_ii():
         assert np.max(np.abs(fa - fb)) <= 1e-5 * np.max(np.abs(fa))
 
 
-@pytest.mark.parametrize("robot,model,mu,kw", CONFIGS[:3])
+#: In Model I and the ideal variant the hip torque loads the leg's sliding joint sideways,
+#: so with the side-load friction on a new command changes the leg force too, and the
+#: integrators take a fresh evaluation instead of the command update (docs/model.md):
+#: those runs keep every effect but that one. In Model II the belt, not the command,
+#: loads the leg.
+NO_SIDE_LOAD_ROBOT = RobotParameters(
+    battery_resistance=0.1, **{**EFFECTS, "leg_friction_side_load_coefficient": 0.0})
+COMMAND_CONFIGS = CONFIGS[:3] + [
+    (EFFECTS_ROBOT, "II", 0.8, {}),
+    (BATTERY_ROBOT, "II", 0.8, {}),
+    (NO_SIDE_LOAD_ROBOT, "I", 0.8, {}),
+    (NO_SIDE_LOAD_ROBOT, "ideal", 0.8, {}),
+]
+
+
+@pytest.mark.parametrize("robot,model,mu,kw", COMMAND_CONFIGS)
 def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
     """A new command applied to the kept KKT factors (evaluate_command_change, used at every
-    control sample) gives the derivative and outputs of a fresh evaluation, to round-off."""
+    control sample) gives the derivative and outputs of a fresh evaluation, to round-off,
+    also with the battery resistance and the transmission losses (the delivered torque is
+    then not linear in the command)."""
     P, cases = _cases(robot, model, mu, **kw)
     wk, wA, piv = W.new_eval_workspace()
     st = np.zeros((L.NS, 2 * D.NSTIFF))
@@ -168,9 +352,7 @@ def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
             ok1 = D.evaluate_ws(s, P, mi2, mf, new, d1, a1, wk, wA, piv, False, st, True)
             assert ok1 == ok2
             changed += not np.allclose(d0, d1)   # the new command does act
-            for x, y in ((d1, d2), (a1, a2)):
-                fl = 64 * np.finfo(float).eps * max(np.max(np.abs(x)), 1.0)
-                worst = max(worst, np.max(np.abs(x - y) / (1e-10 * np.abs(x) + fl)))
+            worst = max(worst, _mismatch(d1, d2), _mismatch(a1, a2))
     # (a stuck motor or a saturated current can leave the derivative as it was)
     assert changed > len(cases) // 2
     assert worst < 1.0

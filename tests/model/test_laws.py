@@ -133,3 +133,23 @@ def test_stiction_breaks_away_at_its_level():
     assert (~on_sample).sum() >= 5
     assert np.allclose(hold[~on_sample], tau_s, rtol=1e-6)
     assert np.all(hold[on_sample] >= tau_s)
+
+
+def test_motor_current_is_odd_beyond_both_limits():
+    """A motor back-driven beyond the speed at which its back-EMF exceeds V_b + R_A i_max
+    carries the torque-speed line's current even beyond i_max (the amplifier applies at
+    most the battery voltage against it), in either direction: the law is odd in
+    (command, speed), i(-tau, -w) = -i(tau, w), at every command and speed."""
+    from scoutsim.model.actuator import motor_current
+    from scoutsim.model.packing import robot_array
+    P = robot_array(ROBOT, "I")
+    vb = ROBOT.battery_voltage
+    w_edge = (vb + ROBOT.armature_resistance * ROBOT.current_limit) / ROBOT.speed_constant
+    for w in (0.0, 300.0, 0.9 * w_edge, 1.1 * w_edge, 3.0 * w_edge):
+        for tau in (-80.0, -31.0, -5.0, 0.0, 5.0, 31.0, 80.0):
+            i = motor_current(tau, w, vb, P)
+            assert motor_current(-tau, -w, vb, P) == -i
+            if w > w_edge:     # the line's current, beyond the limit, whatever the command
+                assert i == pytest.approx((vb - ROBOT.speed_constant * w)
+                                          / ROBOT.armature_resistance, rel=1e-12)
+                assert i < -ROBOT.current_limit

@@ -28,7 +28,7 @@ from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.simulation import HybridState, InitialState
 
-#: the nose-up start of issue 12 (item 1): a back-leg push-off's flight, nose rising
+#: the nose-up start of the stiction-bug study (docs/model.md "Transition audit"): a back-leg push-off's flight, nose rising
 NOSE_UP = InitialState(x=0.0, y=0.33, theta=0.0, dx=0.8, dy=0.0, dtheta=1.5)
 
 
@@ -91,7 +91,7 @@ def test_touchdown_impact_rigid_belt_and_slip_mode_follows_new_gear_rate(mode_be
 
 
 def test_touchdown_that_reverses_a_slipping_gear_train_leaves_it_slipping_backwards():
-    """The case of issue 12: the back gear train slips forward at +1.1 rad/s and the
+    """The stiction bug of docs/model.md "Transition audit": the back gear train slips forward at +1.1 rad/s and the
     touchdown impact reverses it; it must then slip backwards, not be held by stiction."""
     P = robot_array(RobotParameters(), "II")
     s = _touchdown_state(P, 0, 1.1, 1.1, dx=0.8, dy=-0.8, dtheta=1.0)
@@ -202,7 +202,7 @@ def test_no_toe_in_flight_is_ever_below_the_ground(floor):
 
 
 def test_a_toe_stub_becomes_a_slide_that_loads_the_leg():
-    """The stub of issue 12's audit: from this start the back leg, swung forward at its stop
+    """The toe stub the transition audit found (docs/model.md "Toe stubs"): from this start the back leg, swung forward at its stop
     behind the hip, meets the ground at 1.50 s. The toe slides (cause: stub), its leg is
     compressed as it is swept through (the leg force is never negative beyond rounding), and
     it lifts off again; no toe goes below the ground."""
@@ -262,7 +262,7 @@ def test_stale_slip_direction_is_reconciled_without_an_impulse():
 def test_simultaneous_touchdowns_are_decided_alike_whatever_rounding_does(eps):
     """A pronk's two touchdowns and lift-offs are simultaneous; perturbing the start at
     rounding level (either sign) decides which one is found first, and must change nothing
-    beyond rounding (issue 12, item 7: CI on another CPU failed here)."""
+    beyond rounding (on another CPU a tie once decided it differently)."""
     from scoutsim.analysis.orbits import passive_apex_map, passive_bounding_orbit, passive_robot
     pronk = passive_bounding_orbit(1.3, 0.35, 0.0)
     z = np.array(pronk.z) + np.array([0.0, eps, 0.0, eps])

@@ -1,5 +1,5 @@
 """Tests of the experiment-log input checks that keep `scoutsim compare` from being silently
-wrong (issue 15): isolated spikes in the position-like signals (a Hampel test in
+wrong: isolated spikes in the position-like signals (a Hampel test in
 scoutsim.validation.logs) and logs that hold no stride (scoutsim.validation.strides /
 errors.compare and the CLI)."""
 
