@@ -132,7 +132,8 @@ def test_stiction_breaks_away_at_its_level():
     tau_s = robot.joint_stiction
     assert (~on_sample).sum() >= 5
     assert np.allclose(hold[~on_sample], tau_s, rtol=1e-6)
-    assert np.all(hold[on_sample] >= tau_s)
+    # (a located breakaway that happened to fall on a sample holds tau_s to 1e-6 as well)
+    assert np.all(hold[on_sample] >= tau_s * (1.0 - 1e-6))
 
 
 def test_motor_current_is_odd_beyond_both_limits():

@@ -56,8 +56,10 @@ def test_leg_friction_shifts_the_flight_leg_rest_to_fc_over_k():
         creep.append((comp[c] - comp[c + 1]) / dt)
     fast, creep = np.concatenate(fast), np.concatenate(creep)
     assert len(fast) > 100 and len(creep) > 50
-    assert np.allclose(fast, ROBOT.leg_stiffness / ROBOT.leg_damping, rtol=1e-3)
-    assert np.all(creep >= 0.0) and np.all(creep < v_r)
+    # measured: within 3.6e-10 of k / c
+    assert np.allclose(fast, ROBOT.leg_stiffness / ROBOT.leg_damping, rtol=1e-8)
+    # the creep rate is at most v_r by construction (measured up to 0.99982 v_r)
+    assert np.all(creep >= 0.0) and np.all(creep <= v_r * (1.0 + 1e-9))
 
 
 def test_angle_dependent_damping_sets_the_flight_relaxation_rate():
@@ -82,7 +84,8 @@ def test_angle_dependent_damping_sets_the_flight_relaxation_rate():
     assert len(rates) > 50
     # the angle matters here: the damping factor varies by more than 5 % over the samples
     assert expected.max() / expected.min() > 1.05
-    assert np.allclose(rates, expected, rtol=2e-3)
+    # measured: within 2.9e-5 (the mid-sample angle stands for the angle over the sample)
+    assert np.allclose(rates, expected, rtol=3e-4)
 
 
 def test_gearbox_losses_oppose_the_power_flow():
