@@ -68,7 +68,7 @@ class EnergyBalance:
     battery_loss_J: float
     hip_work_J: float
     duration_s: float
-    by_leg: dict
+    flows: dict              #: result.energy_flows: every flow per leg [J]
     #: distance the torso travelled forward over the run [m] (None for a streamed run,
     #: whose result holds only its end) and the robot's total mass [kg]
     distance_m: float | None = None
@@ -93,10 +93,11 @@ class EnergyBalance:
 
     @property
     def reference_J(self) -> float:
+        """What the residual is relative to [J]: the input, or for the passive model the
+        mechanical energy at the start (at least 1 J)."""
         if self.input_J != 0.0:
             return abs(self.input_J)
-        start = dict((n, e) for n, e, _ in self.terms)
-        return max(abs(self.by_leg.get("mechanical_start", 0.0)), 1.0) if start else 1.0
+        return max(abs(self.flows["mechanical_start"]), 1.0)
 
     @property
     def relative_residual(self) -> float:
@@ -170,5 +171,5 @@ def energy_balance(result) -> EnergyBalance:
         model=model, input_name=input_name, input_J=input_J, terms=tuple(terms),
         battery_J=(electrical + flows["battery_loss"]) if model in ("I", "II") else 0.0,
         battery_loss_J=flows["battery_loss"], hip_work_J=hip,
-        duration_s=float(result.t_end), by_leg=dict(flows), distance_m=distance,
+        duration_s=float(result.t_end), flows=dict(flows), distance_m=distance,
         total_mass_kg=mass, gravity=gravity or 9.81)
