@@ -19,6 +19,7 @@ from .layout import (
     CIRCUIT_OPEN, CIRCUIT_SHORT, MODEL_IDEAL, MODEL_PASSIVE, P_C_LOAD, P_CIRCUIT, P_ETA,
     P_IMAX, P_KT, P_KW, P_MODEL, P_N, P_NP, P_RA, P_RB, P_TAU_IDLE, P_VB,
 )
+from .roots import illinois_update
 from .transmission import motor_speed
 
 
@@ -163,29 +164,22 @@ def battery_voltage(dq, cmd, P):
     rb = P[P_RB]
     if rb <= 0.0 or int(P[P_MODEL]) == MODEL_IDEAL or int(P[P_MODEL]) == MODEL_PASSIVE:
         return voc
+    # V - F(V): negative at a = V_oc / 2, positive at b = F(a); Illinois on its negative
+    # (the bracket convention of illinois_update: positive at a)
     a = 0.5 * voc
-    fa = a - _battery_fixed_point(a, voc, rb, dq, cmd, P)
-    if fa >= 0.0:
+    ga = _battery_fixed_point(a, voc, rb, dq, cmd, P) - a
+    if ga <= 0.0:
         return a
-    b = -fa + a
-    fb = b - _battery_fixed_point(b, voc, rb, dq, cmd, P)
-    if fb <= 0.0:
+    b = a + ga
+    gb = _battery_fixed_point(b, voc, rb, dq, cmd, P) - b
+    if gb >= 0.0:
         return b
     side = 0
     c = b
     for _ in range(100):
-        c = (a * fb - b * fa) / (fb - fa)
-        fc = c - _battery_fixed_point(c, voc, rb, dq, cmd, P)
-        if fc == 0.0 or b - a < BATTERY_VOLTAGE_RTOL * voc:
+        c = (a * gb - b * ga) / (gb - ga)
+        gc = _battery_fixed_point(c, voc, rb, dq, cmd, P) - c
+        if gc == 0.0 or b - a < BATTERY_VOLTAGE_RTOL * voc:
             break
-        if fc > 0.0:
-            b, fb = c, fc
-            if side == -1:
-                fa *= 0.5
-            side = -1
-        else:
-            a, fa = c, fc
-            if side == 1:
-                fb *= 0.5
-            side = 1
+        a, ga, b, gb, side = illinois_update(c, gc, a, ga, b, gb, side)
     return c

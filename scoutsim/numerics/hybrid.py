@@ -27,6 +27,7 @@ from ..jit import kernel
 from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
+from ..model.roots import illinois_update
 from ..model.layout import (
     A_ENERGY, A_KKT_OK, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, MI_CONTACT_B,
     MI_MOTOR_B, NAUX, NEV, NEV_CONTACT, NMI, NS, P_MASSLESS, STICK, ST_FELL,
@@ -160,20 +161,6 @@ def dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf, tmp, au
     evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
     project_state(ybuf, P, mi, mf)
     event_values(ybuf, aux_tmp, P, mi, e_tmp)
-
-
-@kernel(inline="always")
-def illinois_update(th, fc, a, fa, b, fb, side):
-    """One bracket update of the Illinois method (regula falsi with the stale end's value
-    halved): the new point ``th`` with value ``fc`` replaces the end of its sign. Returns
-    (a, fa, b, fb, side)."""
-    if fc > 0.0:
-        if side == -1:
-            fb *= 0.5
-        return th, fc, b, fb, -1
-    if side == 1:
-        fa *= 0.5
-    return a, fa, th, fc, 1
 
 
 @kernel(inline="always")
