@@ -14,11 +14,15 @@ from .simulation import (  # noqa: E402
     ControllerError, HybridState, InitialState, IntegratorSettings, Sensors,
     default_initial_state, simulate,
 )
-from .control.bounding import BoundingController  # noqa: E402
+from .control import (  # noqa: E402
+    BoundingController, CompiledController, Controller, SensorChannel, SensorParameters,
+    load_sensors,
+)
 
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
+    "Controller", "CompiledController", "SensorParameters", "SensorChannel", "load_sensors",
 ]

@@ -1,9 +1,10 @@
 """The compiled run loop: the controller's samples and the plant's integration between them.
 
-A run is a sequence of control periods (sample k at t = k dt). At each sample the
-controller (the compiled Table I law of :mod:`scoutsim.control.bounding`, or commands set
-by a Python controller) updates the held commands, the plant's modes are settled and the
-sample is recorded; then :func:`scoutsim.numerics.hybrid.advance` integrates the plant with
+A run is a sequence of control periods (sample k at t = k dt). At each sample the sensors
+are read (:func:`sense`, :mod:`scoutsim.model.sensors`), the controller (the compiled
+Table I law of :mod:`scoutsim.control.bounding`, or a controller function called through
+its address, :mod:`scoutsim.control.compiled`) updates the held commands, the plant's
+modes are settled and the sample is recorded; then :func:`scoutsim.numerics.hybrid.advance` integrates the plant with
 located events to the next sample. This module composes the controller and the plant;
 the integrator (:mod:`scoutsim.numerics`) knows neither the controller nor the run.
 """
@@ -12,14 +13,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from .control.bounding import bounding_step, sense
+from .control.bounding import bounding_step
+from .control.compiled import call_controller
 from .jit import allocating, kernel
 from .model.evaluate import evaluate_ws
+from .model.kinematics import project_state
+from .model.sensors import measure, true_readings
 from .model.rigid_body import state_energy
 from .model.layout import (
-    A_ENERGY, A_KKT_OK, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
-    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, NSN, RM_CONTACT_B, RM_LEG_STATE_B,
-    RM_MOTOR_B, ST_NUMERICAL_FAILURE, ST_RUNNING,
+    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CTRL_BUILTIN, CTRL_HELD, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
+    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B,
+    RM_MOTOR_B, SG_MEASURED, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
@@ -29,7 +33,33 @@ from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_
 from .numerics.stats import S_NFEV
 from .numerics.transitions import settle_ws
 
-__all__ = ["run", "run_entry", "effective_method", "record_sample"]
+__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense",
+           "first_readings"]
+
+
+@kernel
+def sense(k, s, P, mi, mf, cmd, kept, cb, ew, s_tmp):
+    """Read the sensors at control sample ``k`` into ``cb.y`` (control block,
+    :mod:`scoutsim.control.block`): the true readings at the state ``s`` and, if ``kept``,
+    the evaluation that ended the last period (``cb.last``), else a fresh one under the
+    held command ``cmd`` (the run's first sample; workspace ``ew``, a projected copy of the
+    state in ``s_tmp``); then the measurement model if any channel has one."""
+    if not kept:
+        for i in range(NS):
+            s_tmp[i] = s[i]
+        project_state(s_tmp, P, mi, mf)
+        evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew[0], ew[1], ew[2],
+                    False, ew[3], True)
+    true_readings(s, cb.last[:NS], cb.last[NS:], P[P_G], cb.geom, cb.y)
+    if cb.geom[SG_MEASURED] > 0.5:
+        measure(k, cb.spec, cb.ints[CB_SEED], cb.hist, cb.y)
+
+
+@allocating
+def first_readings(s, P, mi, mf, cmd, cb):
+    """The sensor readings of a run's first sample (into ``cb.y``), before the run: what a
+    controller's ``reset`` sees (the loop reads the same again at that sample)."""
+    sense(0, s, P, mi, mf, cmd, False, cb, eval_workspace(), np.zeros(NS))
 
 
 @kernel
@@ -48,13 +78,15 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 
 
 @allocating
-def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, builtin, hwork,
+def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
         stepc, energy, method):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
-    At each sample: the controller (compiled Table I law if ``builtin``; otherwise ``cmd``
-    is the caller's) updates the held commands, the modes are settled, the sample is
+    At each sample: the sensors are read into ``cb.y`` (:func:`sense`) and the controller
+    of the control block ``cb`` (:mod:`scoutsim.control.block`: the compiled Table I law
+    with parameters ``C``, a controller function called through its address, or none:
+    ``cmd`` held as the caller set it) updates the held commands, the modes are settled, the sample is
     recorded, then the plant is integrated to the next sample. ``method``: METHOD_DOPRI5 or
     METHOD_ARK3 / METHOD_ARK4 (Model II only), a compile-time constant: call the
     specialization :func:`run_entry` returns. ``hwork``:
@@ -83,7 +115,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     ds = np.zeros(NS)
     s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
-    y = np.zeros(NSN)
+    ew_s = eval_workspace()
+    s_tmp = np.zeros(NS)
+    kind = cb.ints[CB_KIND]
     SF0 = sfwork   # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
@@ -100,9 +134,10 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
     k = k_start
     while k < k_stop:
         t = k * dt
-        if builtin:
-            sense(s, C, y)
-            bounding_step(y, C, ls, cmd, tr)
+        if kind != CTRL_HELD:
+            sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
+        if kind == CTRL_BUILTIN:
+            bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev
             for leg in range(2):
                 if tr[leg] & 1:
@@ -113,6 +148,11 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
             if nev > nevc:
                 stamp_states(ev, nevc, nev, s, s)
+        elif kind != CTRL_HELD:
+            rc = call_controller(cb.ints[CB_ADDRESS], t, cb.y, cb.params, cb.state, cmd, ls)
+            if rc != 0 or not (np.isfinite(cmd[0]) and np.isfinite(cmd[1])):
+                # the sample is not recorded: the run's data end at the sample before
+                return k, n_out, nev, ST_CONTROLLER_ERROR, t
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
@@ -142,6 +182,11 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
         # state after an event), with the command of the period just ended
         hwork[HW_EVAL_KEPT] = 1.0 if status == ST_RUNNING else 0.0
+        if status == ST_RUNNING:    # what the sensors of the next sample read
+            for i in range(NS):
+                cb.last[i] = K[0, i]
+            for i in range(NAUX):
+                cb.last[NS + i] = aux[i]
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)

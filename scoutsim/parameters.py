@@ -44,6 +44,7 @@ UNITS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "cm": 1.0e-2, "mm": 1.0e-3},
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
     "time": {"s": 1.0, "ms": 1.0e-3},
+    "angular rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
     "mass": {"kg": 1.0, "g": 1.0e-3},
     "inertia": {"kg m^2": 1.0, "kg cm^2": 1.0e-4, "kg mm^2": 1.0e-6, "g cm^2": 1.0e-7},
     "acceleration": {"m/s^2": 1.0},
@@ -388,7 +389,32 @@ SECTIONS: dict[str, type] = {
     "controller": ControllerParameters,
 }
 
+#: sections of a robot file read by other loaders: name -> the function that reads them
+SEPARATE_SECTIONS: dict[str, str] = {"sensors": "scoutsim.control.sensors.load_sensors"}
+
 _HALF_PI = 0.5 * math.pi
+
+
+def quantity_to_si(entry: object, dimension: str, unit: str, label: str) -> float:
+    """One quantity of a file to SI: a plain number in ``unit``, or ``{ value = ..., unit =
+    "..." }`` in any unit of :data:`UNITS` of ``dimension``; ParameterError naming
+    ``label`` otherwise."""
+    if isinstance(entry, dict):
+        if extra := sorted(set(entry) - {"value", "unit", "source"}):
+            raise ParameterError(f"{label}: unknown key(s) {extra}; allowed keys are value, "
+                                 "unit, source", label)
+        if "value" not in entry:
+            raise ParameterError(f"{label}: entry has no 'value'", label)
+        unit = entry.get("unit", unit)
+        entry = entry["value"]
+    if not isinstance(unit, str) or unit.strip() not in UNITS[dimension]:
+        raise ParameterError(f"{label}: unit {unit!r} is not allowed; allowed units: "
+                             f"{', '.join(UNITS[dimension])}", label)
+    if isinstance(entry, bool) or not isinstance(entry, numbers.Real) or \
+            not math.isfinite(float(entry)):
+        raise ParameterError(f"{label} = {entry!r} is not allowed: must be a finite number",
+                             label)
+    return float(entry) * UNITS[dimension][unit.strip()]
 
 
 class ParameterError(ValueError):
@@ -702,6 +728,8 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
     values: dict[str, object] = {}
     origins: dict[str, tuple[str, str | None]] = {}
     for section, entries in data.items():
+        if section in SEPARATE_SECTIONS:
+            continue
         if section not in SECTIONS:
             raise _unknown(section, f"in parameter file '{path}'", SECTIONS, kind="section")
         if not isinstance(entries, dict):

@@ -12,25 +12,26 @@ from __future__ import annotations
 
 import math
 import os
-import reprlib
 import time
 import warnings
-from collections import namedtuple
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ._version import __version__
-from .control.bounding import SCHEDULABLE, BoundingController, controller_array
+from .control.block import control_block
+from .control.bounding import SCHEDULABLE, controller_array
+from .control.dispatch import PythonBridge, plan_controller
+from .control.protocol import ControllerError, failure_message
+from .control.sensors import SensorParameters, Sensors
 from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.transmission import motor_mode_from_rate
 from .model.packing import robot_array
 from .model.rigid_body import state_energy
-from .model.sensors import read_sensors
 from .numerics.dopri5 import eval_workspace
-from .loop import effective_method, run_entry
+from .loop import effective_method, first_readings, run_entry
 from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5,
                               NHW, STEP_HEADROOM)
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
@@ -39,45 +40,10 @@ from .parameters import (ControllerParameters, Environment, RobotParameters,
 from .result import SimulationResult
 from .state import HybridState, InitialState
 
-Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
 _METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
 
-
-class ControllerError(RuntimeError):
-    """A Python controller's ``command(t, sensors)`` raised an exception, or returned
-    something other than finite hip torques: :func:`simulate` stops the run at that control
-    sample and raises this error (the controller's own exception is its ``__cause__``).
-
-    Attributes
-    ----------
-    controller : the controller object.
-    t : time of the control sample [s] (``sample * dt``).
-    sample : index of the control sample.
-    returned : what ``command`` returned (None if it raised).
-    result : the run up to the sample before (a :class:`~scoutsim.result.SimulationResult`
-        with ``outcome = "controller_error"`` and the message in
-        ``provenance["controller_error"]``; a streamed run: its kept end, the tables hold
-        all of it).
-    """
-
-    def __init__(self, message: str, *, controller, t: float, sample: int, returned=None,
-                 result: SimulationResult | None = None):
-        super().__init__(message)
-        self.controller, self.t, self.sample = controller, t, sample
-        self.returned, self.result = returned, result
-
-
-def _controller_failure_message(controller, sample: int, dt: float, returned,
-                                exc: BaseException | None) -> str:
-    """What :class:`ControllerError` says: the controller, the sample time, what it raised
-    or returned, and up to where the run's data go."""
-    what = (f"raised {type(exc).__name__}: {exc}" if exc is not None else
-            f"returned {reprlib.repr(returned)}, not two finite hip torques [N m] "
-            "(back, front)")
-    kept = (f"its samples up to t = {(sample - 1) * dt:.10g} s are in the error's .result"
-            if sample > 0 else "before its first sample")
-    return (f"controller {type(controller).__name__}.command(t = {sample * dt:.10g} s, "
-            f"sensors) {what}; the run stopped at that sample ({kept})")
+__all__ = ["simulate", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
+           "default_initial_state", "run_bench", "warm_up"]
 
 
 #: default (rtol, atol) of each method when the settings leave them open
@@ -256,8 +222,11 @@ class HybridEngine:
 
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
                  integrator: IntegratorSettings, record_steps: bool = False,
-                 rows: int | None = None, energy: bool = False):
+                 rows: int | None = None, energy: bool = False, block=None):
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
+        # the controller and the sensors (control/block.py); default: the built-in law
+        # with ideal sensors
+        self.block = block if block is not None else control_block(L.CTRL_BUILTIN)
         self.dt = dt
         self.integ = integrator
         n_total = int(round(duration / dt)) + 1
@@ -302,12 +271,16 @@ class HybridEngine:
     def running(self) -> bool:
         return self.k <= self.k_last and self.status == L.ST_RUNNING
 
-    def advance(self, k_stop: int, builtin: bool):
-        """Run control samples k .. k_stop - 1 (the compiled controller if ``builtin``,
-        else the held ``self.cmd``)."""
+    def read_first_sensors(self) -> Sensors:
+        """The readings of the run's first sample (what a controller's ``reset`` sees)."""
+        first_readings(self.s, self.P, self.mi, self.mf, self.cmd, self.block)
+        return Sensors.from_vector(self.block.y)
+
+    def advance(self, k_stop: int):
+        """Run control samples k .. k_stop - 1 under the control block's controller."""
         args = (self.s, self.P, self.mi, self.mf, self.C, self.ls, self.cmd, self.k,
                 min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
-                self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
+                self.integ.atol, self.block, self.hwork, self.out_t, self.out_s, self.out_aux,
                 self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
                 self.sfwork, self.ew, self.steps, self.stepc, self.energy)
         if self._entry is None:   # the argument types stay those of the first call
@@ -369,7 +342,8 @@ class HybridEngine:
             steps=(_kept(self.steps, int(self.stepc[0])) if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
             # (a run stopped before its first sample, e.g. by Ctrl-C: where it started)
-            t_end=float(self.t_now if self.status != L.ST_RUNNING else
+            t_end=float(self.t_now if self.status not in (L.ST_RUNNING,
+                                                          L.ST_CONTROLLER_ERROR) else
                         self.out_t[n - 1] if n else
                         last_sample_t if last_sample_t is not None else self.t_now),
             stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
@@ -421,7 +395,8 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     mi, mf = fresh_modes(s, P)
     integrator = (integrator or IntegratorSettings(method="dopri5")).resolve(model)
     eng = HybridEngine(P, C, s, mi, mf, np.zeros(2, dtype=np.int64), duration, dt,
-                       integrator)
+                       integrator, block=control_block(
+                           L.CTRL_BUILTIN if controller is not None else L.CTRL_HELD))
     if held_torques is not None:
         eng.cmd[:] = held_torques
     chunk = max(1, int(round(1.0 / dt)))
@@ -440,7 +415,7 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
         k_stop = eng.k + chunk
         if si < len(sched):
             k_stop = min(k_stop, int(sched[si][0]))
-        eng.advance(k_stop, controller is not None)
+        eng.advance(k_stop)
     return eng.result(dict(provenance or {}, model=model, robot=asdict(robot),
                            control_period_s=dt, integrator=asdict(integrator),
                            scoutsim_version=__version__, duration_s=duration))
@@ -548,19 +523,22 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              progress: bool = False, chunk_seconds: float = 1.0,
              record_steps: bool = False, check_memory: bool = True,
              stream_to=None, keep_seconds: float | None = None,
-             table_format: str | None = None, energy: bool = False) -> SimulationResult:
+             table_format: str | None = None, energy: bool = False,
+             sensors: SensorParameters | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
     ----------
     robot : RobotParameters, optional
         Physical parameters (default: Scout II, ``scoutsim/data/scout2.toml``).
-    controller : ControllerParameters, BoundingController, user object or None
-        ControllerParameters or a plain BoundingController run the compiled Table I
-        bounding law; any other object with ``command(t, sensors)`` runs through Python
-        (see :class:`~scoutsim.control.bounding.BoundingController` for the interface).
-        If its ``command`` raises, or returns anything but two finite hip torques, the run
-        stops at that sample with a :class:`ControllerError`.
+    controller : ControllerParameters, BoundingController, CompiledController, user object or None
+        Anything that follows the controller protocol (:mod:`scoutsim.control.protocol`:
+        ``control_period``, ``reset(robot, sensors)``, ``command(t, sensors)``).
+        ControllerParameters or a BoundingController run the compiled Table I bounding
+        law; a :class:`~scoutsim.control.compiled.CompiledController` runs compiled in the
+        loop; any other object's ``command`` is called from the loop at every sample
+        (:mod:`scoutsim.control.dispatch`). If it raises, or returns anything but two
+        finite hip torques, the run stops at that sample with a :class:`ControllerError`.
         ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
     initial_state : InitialState or HybridState, optional
         Start state (default: :func:`default_initial_state`); a :class:`HybridState`
@@ -618,6 +596,11 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         integrator step: ``result.energy_flows``, ``result.energy_balance()``. The motion is
         the same bit for bit; the run takes longer (three more evaluations per step:
         10 s of Model II 1.65x, of Model I 1.28x).
+    sensors : SensorParameters, optional
+        How the robot's sensors measure (:class:`~scoutsim.control.sensors.SensorParameters`:
+        noise, bias, resolution and delay per channel, seeded; a robot file's
+        ``[sensors]``: :func:`~scoutsim.control.sensors.load_sensors`); default: ideal
+        sensors. Every controller, the built-in one too, sees the sensors' readings.
 
     Returns
     -------
@@ -657,41 +640,23 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     if check_memory and stream_to is None:
         check_run_memory(duration, record_steps=record_steps)
 
-    user_ctrl = None
-    if model == "passive":
-        cparams = None
-        if controller is not None and not isinstance(controller, ControllerParameters):
-            user_ctrl = controller
-    elif controller is None:
-        cparams = ControllerParameters()
-    elif isinstance(controller, ControllerParameters):
-        cparams = controller
-    elif type(controller) is BoundingController:
-        cparams = controller.params
-    elif hasattr(controller, "command"):
-        cparams = getattr(controller, "params", None)
-        if not isinstance(cparams, ControllerParameters):
-            cparams = ControllerParameters()
-        user_ctrl = controller
-    else:
-        raise TypeError("controller must be ControllerParameters, a BoundingController or "
-                        "an object with a command(t, sensors) method")
-    if user_ctrl is None and cparams is not None:
+    plan = plan_controller(controller, model, robot, sensors)
+    cparams = plan.parameters
+    if plan.kind == "builtin":
         validate_parameters(robot, cparams)
 
     P = robot_array(robot, model, friction_coefficient=friction_coefficient,
                     passive_touchdown_angles=passive_touchdown_angles,
                     passive_touchdown_world=passive_touchdown_world,
                     pitch_limit=math.radians(pitch_limit_deg))
-    # the compiled controller runs unless the model is passive or the user brings their own
-    C = controller_array(cparams if user_ctrl is None else None, robot)
-    dt = cparams.control_period if cparams is not None else 1e-3
+    dt = plan.control_period
     init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
     if resume:
         s = np.array(init.state)
     elif isinstance(init, InitialState):
-        s = _state_vector(init, robot, cparams if model != "passive" else None,
+        s = _state_vector(init, robot, None if model == "passive" else
+                          (cparams or ControllerParameters()),
                           passive_touchdown_angles, passive_touchdown_world)
     else:
         raise TypeError("initial_state must be an InitialState or a HybridState, not "
@@ -709,7 +674,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             ls[leg] = init.leg_states[leg]
     else:
         mi, mf = fresh_modes(s, P)
-    chunk = max(1, int(round(chunk_seconds / dt))) if user_ctrl is None else 1
+    chunk = max(1, int(round(chunk_seconds / dt)))
     stream = None
     if stream_to is not None:
         from .streaming import DEFAULT_KEEP_SECONDS, RunStream
@@ -717,42 +682,32 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             DEFAULT_KEEP_SECONDS if keep_seconds is None else keep_seconds))
         if check_memory:
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
-        if user_ctrl is None:      # fewer, larger pieces: each costs ~5 ms of table writing
-            chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
-    eng = HybridEngine(P, C, s, mi, mf, ls, duration, dt, integ, record_steps,
-                       rows=None if stream is None else chunk + 2, energy=energy)
+        # fewer, larger pieces: each costs ~5 ms of table writing
+        chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
+    eng = HybridEngine(P, plan.C, s, mi, mf, ls, duration, dt, integ, record_steps,
+                       rows=None if stream is None else chunk + 2, energy=energy,
+                       block=plan.block)
+    user_ctrl = plan.controller
+    bridge = None
+    if plan.kind == "python":
+        bridge = PythonBridge(user_ctrl, plan.block, eng.cmd, ls, dt)
+    if user_ctrl is not None and callable(getattr(user_ctrl, "reset", None)):
+        user_ctrl.reset(robot, eng.read_first_sensors())
+        if plan.kind == "compiled":    # a reset may set the controller's initial state
+            plan.block.state[:user_ctrl.initial_state.size] = user_ctrl.initial_state
     wall0 = time.perf_counter()
     bar = None
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=round(duration, 3), unit="s", unit_scale=False, desc=f"Model {model}",
                    leave=False, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
-    if user_ctrl is not None and hasattr(user_ctrl, "reset"):
-        user_ctrl.reset(robot, _sensors(s, cparams, model))
     interrupted = False
-    failure = None       # (sample, what command returned, what it raised): ControllerError
     try:
         while eng.running:
-            if user_ctrl is not None:
-                sens = _sensors(s, cparams, model)
-                try:
-                    returned = user_ctrl.command(eng.k * dt, sens)
-                except Exception as exc:  # noqa: BLE001 - raised below as ControllerError
-                    failure = (eng.k, None, exc)
-                    break
-                try:
-                    eng.cmd[:] = returned
-                    finite = bool(np.all(np.isfinite(eng.cmd)))
-                except (TypeError, ValueError):
-                    finite = False
-                if not finite:
-                    failure = (eng.k, returned, None)
-                    break
-                states = getattr(user_ctrl, "leg_states", None)
-                if states is not None:
-                    ls[:] = states
             k_prev = eng.k
-            eng.advance(eng.k + chunk, user_ctrl is None)
+            eng.advance(eng.k + chunk)
+            if bridge is not None and bridge.interrupted:
+                raise KeyboardInterrupt
             if stream is not None and not stream.take(eng):
                 break       # the disk refused a piece (full): outcome "write_failed", below
             if bar is not None:
@@ -772,8 +727,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "model": model,
         "robot": asdict(robot),
         "controller": (asdict(cparams) if cparams is not None else None),
-        "controller_kind": ("builtin" if user_ctrl is None and model != "passive" else
-                            (type(user_ctrl).__name__ if user_ctrl is not None else "none")),
+        "controller_kind": plan.label,
         "initial_state": asdict(init) | ({"kind": "hybrid_state"} if resume else {}),
         "integrator": asdict(integ),
         "duration_s": duration,
@@ -783,17 +737,22 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "passive_touchdown_world": passive_touchdown_world,
         "control_period_s": dt,
     }
-    error = None
-    if failure is not None:
+    if sensors is not None and not sensors.is_ideal():
+        provenance["sensors"] = sensors.as_dict()
+    error = failure = None
+    if eng.status == L.ST_CONTROLLER_ERROR and not interrupted:
+        if bridge is not None and bridge.failure is not None:
+            failure = bridge.failure
+        else:      # a compiled controller: its status, or the torques it wrote
+            failure = (eng.k, tuple(float(v) for v in eng.cmd), None)
         k_fail, returned, exc = failure
-        message = _controller_failure_message(user_ctrl, k_fail, dt, returned, exc)
+        message = failure_message(user_ctrl, k_fail, dt, returned, exc)
         provenance["controller_error"] = message
         error = ControllerError(message, controller=user_ctrl, t=k_fail * dt, sample=k_fail,
                                 returned=returned)
     if stream is None:
         result = eng.result(provenance, interrupted, {"wall_time_s": wall})
         if error is not None:
-            result.outcome = "controller_error"
             error.result = result
             raise error from failure[2]
         return result
@@ -805,8 +764,6 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         raise
     whole = eng.result(provenance, interrupted, {"wall_time_s": wall},
                        last_sample_t=stream.last_sample_t)
-    if error is not None:
-        whole.outcome = "controller_error"
     if stream.write_error is not None:
         whole.outcome = "write_failed"
         warnings.warn(f"simulate: the streamed run's tables could not be written to "
@@ -820,12 +777,3 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         error.result = kept
         raise error from failure[2]
     return kept
-
-
-def _sensors(s, cparams, model):
-    """The readings a Python controller gets (as the compiled one, model/sensors.py)."""
-    y = np.zeros(L.NSN)
-    read_sensors(s, cparams is not None and cparams.sense_motor_angle and model == "II", y)
-    return Sensors(hip_angle=y[L.SN_ANGLE_B:L.SN_ANGLE_B + 2].copy(),
-                   hip_rate=y[L.SN_RATE_B:L.SN_RATE_B + 2].copy(),
-                   leg_length=y[L.SN_LENGTH_B:L.SN_LENGTH_B + 2].copy())

@@ -1,0 +1,20 @@
+"""Controllers and the controller boundary.
+
+* :mod:`~scoutsim.control.protocol`: what a controller is (``control_period``, ``reset``,
+  ``command(t, sensors)``), :class:`Controller`, :class:`ControllerError`;
+* :mod:`~scoutsim.control.sensors`: what it sees (:class:`Sensors`) and how the sensors
+  measure (:class:`SensorParameters`, a robot file's ``[sensors]``);
+* :mod:`~scoutsim.control.bounding`: the paper's Table I controller;
+* :mod:`~scoutsim.control.compiled`: controllers compiled into the simulator's loop
+  (:class:`CompiledController`);
+* :mod:`~scoutsim.control.dispatch`: which controller runs how.
+"""
+
+from .protocol import DEFAULT_CONTROL_PERIOD, Controller, ControllerError
+from .sensors import SensorChannel, SensorParameters, Sensors, load_sensors
+from .bounding import BoundingController
+from .compiled import CompiledController
+
+__all__ = ["Controller", "ControllerError", "DEFAULT_CONTROL_PERIOD", "Sensors",
+           "SensorChannel", "SensorParameters", "load_sensors", "BoundingController",
+           "CompiledController"]

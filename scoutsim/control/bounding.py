@@ -23,8 +23,8 @@ Control actions, torque per physical leg at the leg:
 * stance-brake: tau = kp_b (phi_sweep - phi) - kd_b dphi.
 
 The compiled version (:func:`bounding_step`) runs inside the integrator loop; the Python
-class :class:`BoundingController` is the same law for users who want to subclass it, and
-documents the interface a user-supplied controller must have.
+class :class:`BoundingController` is the same law behind the controller protocol
+(:mod:`scoutsim.control.protocol`), for users who want to subclass it.
 """
 
 from __future__ import annotations
@@ -32,11 +32,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import kernel
-from ..model.layout import (
-    LS_BRAKE, LS_FLIGHT, LS_RETRACTION, NSN, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B,
-)
-from ..model.sensors import read_sensors
+from ..model.layout import LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B
 from ..parameters import ControllerParameters, RobotParameters
+from .protocol import Controller
 
 # controller parameter array layout
 (C_TD_B, C_TD_F, C_SW_B, C_SW_F, C_KPF_B, C_KDF_B, C_KPF_F, C_KDF_F, C_KPB_B, C_KDB_B,
@@ -155,21 +153,18 @@ def bounding_step(y, C, ls, cmd, transitions):
             cmd[leg] = C[C_KPB_B + 2 * leg] * (sweep - ang) - C[C_KDB_B + 2 * leg] * rate
 
 
-class BoundingController:
-    """Python form of the Table I bounding controller, and the controller interface.
+class BoundingController(Controller):
+    """The Table I bounding controller behind the controller protocol
+    (:mod:`scoutsim.control.protocol`).
 
-    A user controller is any object with
+    Passed to :func:`scoutsim.simulate`, it runs compiled (:func:`bounding_step` inside the
+    loop), and so does a subclass that does not override :meth:`command`; a subclass that
+    overrides it runs through Python (the same law if it calls ``super().command``).
 
-    * ``reset(robot, initial_sensors)`` (optional), called once before the run, and
-    * ``command(t, sensors) -> (tau_back, tau_front)``: hip torque per physical leg at the
-      leg [N m], held for one control period. ``sensors`` is a :class:`Sensors` tuple with
-      ``hip_angle``, ``hip_rate``, ``leg_length`` (each a length-2 array, back then front,
-      SI units) - the same readings the built-in controller uses.
-    * optionally ``leg_states``: length-2 sequence of leg-state codes (0 flight,
-      1 stance-retraction, 2 stance-brake) to be logged.
-
-    Passing an instance of *this* class (not a subclass) to :func:`scoutsim.simulate` runs
-    the compiled version of the same law; subclasses run through Python.
+    params : ControllerParameters (default: Table I).
+    control_period : the parameters' sample-and-hold period [s] (Table I: 1 ms).
+    leg_states : (2,) the leg states (0 flight, 1 stance-retraction, 2 stance-brake),
+        back then front, as of the last command.
     """
 
     def __init__(self, params: ControllerParameters | None = None):
@@ -177,32 +172,28 @@ class BoundingController:
         self.leg_states = np.zeros(2, dtype=np.int64)
         self._C = None
 
-    def reset(self, robot, initial_sensors=None):
+    @property
+    def control_period(self) -> float:
+        return self.params.control_period
+
+    def reset(self, robot, sensors=None):
+        """Pack the parameters with ``robot``'s motor constants; a leg whose first reading
+        is compressed beyond the touchdown threshold starts in stance-retraction."""
         self._C = controller_array(self.params, robot)
         self.leg_states[:] = LS_FLIGHT
-        if initial_sensors is not None:
+        if sensors is not None:
             for leg in range(2):
-                comp = robot.leg_rest_length - initial_sensors.leg_length[leg]
+                comp = robot.leg_rest_length - sensors.leg_length[leg]
                 if comp > self.params.touchdown_compression:
                     self.leg_states[leg] = LS_RETRACTION
 
     def command(self, t, sensors):
+        """Hip torques (back, front) [N m] of one sample (updates ``leg_states``)."""
         if self._C is None:
             raise RuntimeError("BoundingController.command before reset(robot): the "
                                "controller needs the robot's motor constants")
-        y = np.zeros(NSN)
-        y[SN_ANGLE_B:SN_ANGLE_B + 2] = sensors.hip_angle
-        y[SN_RATE_B:SN_RATE_B + 2] = sensors.hip_rate
-        y[SN_LENGTH_B:SN_LENGTH_B + 2] = sensors.leg_length
+        y = np.array(sensors.vector, dtype=float)
         cmd = np.zeros(2)
         tr = np.zeros(2, dtype=np.int64)
         bounding_step(y, self._C, self.leg_states, cmd, tr)
         return float(cmd[0]), float(cmd[1])
-
-
-@kernel
-def sense(s, C, y):
-    """Read the sensors this controller uses (motor side if ``sense_motor_angle``) from the
-    plant state s into y: the one place where the run loop crosses the boundary."""
-    read_sensors(s, C[C_SENSE_ALPHA] > 0.5, y)
-

@@ -251,13 +251,58 @@ VIOLATION_NAMES = {
 }
 
 # --- sensor readings (model/sensors.py -> the controller) -------------------------------
-SN_ANGLE_B = 0    # hip angle relative to the torso [rad], back, front
-SN_ANGLE_F = 1
-SN_RATE_B = 2     # hip rate [rad/s]
+# The robot's sensors at a control sample, one slot per reading (SI units); the leg
+# channels in back, front order. ``scoutsim.control.sensors.Sensors`` names them for
+# Python controllers; compiled controllers read these slots.
+SN_ANGLE_B = 0    # hip encoder: hip angle relative to the torso [rad] (motor side in
+SN_ANGLE_F = 1    #   Model II when the controller senses the motor angle), back, front
+SN_RATE_B = 2     # hip rate [rad/s], back, front
 SN_RATE_F = 3
-SN_LENGTH_B = 4   # leg length [m]
+SN_LENGTH_B = 4   # leg length (linear potentiometer) [m], back, front
 SN_LENGTH_F = 5
-NSN = 6
+SN_PITCH = 6      # IMU: torso pitch [rad], nose up positive
+SN_PITCH_RATE = 7 # IMU: torso pitch rate [rad/s]
+SN_ACCEL_X = 8    # IMU accelerometer at the torso COM, specific force along the torso axis
+SN_ACCEL_Z = 9    #   (forward) and along its normal (up) [m/s^2]: reads +g at rest
+SN_RANGE_B = 10   # torso laser range finders at the torso's back / front end [m]
+SN_RANGE_F = 11
+SN_CURRENT_B = 12 # motor current [A], per motor, back / front
+SN_CURRENT_F = 13
+SN_BATTERY = 14   # battery (motor supply) voltage [V]
+NSN = 15
+#: the sensor channels: (name, first slot, number of slots, SI unit)
+SENSOR_CHANNELS = (
+    ("hip_angle", SN_ANGLE_B, 2, "rad"), ("hip_rate", SN_RATE_B, 2, "rad/s"),
+    ("leg_length", SN_LENGTH_B, 2, "m"), ("pitch", SN_PITCH, 1, "rad"),
+    ("pitch_rate", SN_PITCH_RATE, 1, "rad/s"), ("acceleration", SN_ACCEL_X, 2, "m/s^2"),
+    ("laser_range", SN_RANGE_B, 2, "m"), ("motor_current", SN_CURRENT_B, 2, "A"),
+    ("battery_voltage", SN_BATTERY, 1, "V"),
+)
+# measurement model of each slot (rows of the sensor specification array, NSPEC x NSN)
+SPEC_NOISE = 0        # standard deviation of white Gaussian noise [slot unit]
+SPEC_BIAS = 1         # constant offset [slot unit]
+SPEC_RESOLUTION = 2   # quantization step [slot unit] (0 = continuous)
+SPEC_DELAY = 3        # delay [control periods] (whole number)
+NSPEC = 4
+#: longest delay a sensor may have [control periods]
+MAX_SENSOR_DELAY = 100
+# geometry and flags of the sensors (the sensor geometry array)
+SG_LASER_HALF_SPACING = 0   # laser range finders' distance from the torso COM [m]
+SG_LASER_MOUNT_OFFSET = 1   # their aperture below the torso axis [m]
+SG_MOTOR_SIDE = 2           # 1: hip encoders read the motor side (Model II alpha)
+SG_MEASURED = 3             # 1: some channel has noise, bias, resolution or delay
+NSG = 4
+
+# --- controllers run by the compiled loop (control/dispatch.py) -------------------------
+CTRL_BUILTIN = 0    # the Table I law (control/bounding.py), compiled in
+CTRL_POINTER = 1    # a compiled function called through its address (a CompiledController,
+                    # or the bridge that calls a Python controller)
+CTRL_HELD = 2       # no controller: the commands are held as set (bench rigs)
+# the control block's integers
+CB_KIND = 0         # CTRL_*
+CB_ADDRESS = 1      # address of the controller function (CTRL_POINTER)
+CB_SEED = 2         # seed of the sensor noise
+NCB = 3
 
 # --- controller leg states ------------------------------------------------------------
 LS_FLIGHT = 0
@@ -270,5 +315,7 @@ ST_RUNNING = 0
 ST_COMPLETED = 1
 ST_FELL = 2
 ST_NUMERICAL_FAILURE = 3
+ST_CONTROLLER_ERROR = 4   # the controller raised or returned no finite torques
 STATUS_NAMES = {ST_RUNNING: "running", ST_COMPLETED: "completed", ST_FELL: "fell",
-                ST_NUMERICAL_FAILURE: "numerical_failure"}
+                ST_NUMERICAL_FAILURE: "numerical_failure",
+                ST_CONTROLLER_ERROR: "controller_error"}

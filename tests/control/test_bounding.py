@@ -124,14 +124,19 @@ def test_a_leg_already_compressed_at_the_start_starts_in_stance():
 
 @pytest.mark.parametrize("sense_motor_angle", [True, False])
 def test_the_controller_has_no_torso_feedback(sense_motor_angle):
-    """Paper Sec. II: "no torso feedback". The compiled controller (``sense`` then
+    """Paper Sec. II: "no torso feedback". The compiled controller (every sensor read, then
     ``bounding_step``, as the run loop calls them) gives the same commands, leg states and
     transitions for plant states that differ only in the torso's position, pitch and their
-    rates, at every 7th sample of a bounding run (every leg state); a change of a hip angle
-    does change them (the comparison can fail)."""
+    rates (so in the IMU's and the lasers' readings), at every 7th sample of a bounding run
+    (every leg state); a change of a hip angle does change them (the comparison can
+    fail)."""
     import scoutsim
-    from scoutsim.control.bounding import bounding_step, controller_array, sense
+    from scoutsim.control.bounding import bounding_step, controller_array
+    from scoutsim.control.sensors import SensorParameters
+    from scoutsim.model.sensors import true_readings
     r = scoutsim.simulate(duration=1.0, model="II")
+    geom = SensorParameters().geometry_array(ROBOT, sense_motor_angle)
+    ds, aux = np.zeros(L.NS), np.zeros(L.NAUX)
     C = controller_array(TABLE_I.replace(sense_motor_angle=sense_motor_angle), ROBOT)
     torso = [L.IX, L.IY, L.ITH, L.NQ + L.IX, L.NQ + L.IY, L.NQ + L.ITH]
     hip = L.IALB if sense_motor_angle else L.IPHB
@@ -140,11 +145,12 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
     def step(state, leg_states):
         y, ls = np.zeros(L.NSN), np.array(leg_states, dtype=np.int64)
         cmd, tr = np.zeros(2), np.zeros(2, dtype=np.int64)
-        sense(state, C, y)
+        true_readings(state, ds, aux, ROBOT.gravity, geom, y)
+        seen.append(y[[L.SN_PITCH, L.SN_PITCH_RATE, L.SN_RANGE_B, L.SN_RANGE_F]])
         bounding_step(y, C, ls, cmd, tr)
         return cmd, ls, tr
 
-    visited, hip_matters = set(), 0
+    visited, hip_matters, seen = set(), 0, []
     for k in range(1, len(r.t), 7):
         before = [r.leg_state(L.BACK)[k - 1], r.leg_state(L.FRONT)[k - 1]]
         s = r.state[k].copy()
@@ -152,6 +158,7 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
         other[torso] = s[torso] + rng.uniform(-1.0, 1.0, size=6)     # [m, rad, m/s, rad/s]
         cmd, ls, tr = step(s, before)
         cmd2, ls2, tr2 = step(other, before)
+        assert np.all(seen[-1] != seen[-2])     # the controller was shown the torso moved
         assert np.array_equal(cmd, cmd2) and np.array_equal(ls, ls2) \
             and np.array_equal(tr, tr2), k
         visited.update(ls)
@@ -181,10 +188,10 @@ def test_a_command_before_reset_is_refused():
 
 @pytest.mark.parametrize("motor_side", [True, False])
 def test_the_sensors_read_the_motor_or_the_leg_side(motor_side):
-    from scoutsim.model.sensors import read_sensors
+    from scoutsim.model.sensors import read_encoders
     s = np.arange(L.NS, dtype=float) + 1.0
     y = np.zeros(L.NSN)
-    read_sensors(s, motor_side, y)
+    read_encoders(s, motor_side, y)
     q0 = L.IALB if motor_side else L.IPHB
     for leg in (L.BACK, L.FRONT):
         assert y[L.SN_ANGLE_B + leg] == s[q0 + leg]

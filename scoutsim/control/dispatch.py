@@ -1,0 +1,210 @@
+"""Which controller runs, and how: from what :func:`scoutsim.simulate` is given to what the
+compiled loop calls (:class:`ControllerPlan`).
+
+* ``None`` (the Table I defaults), :class:`~scoutsim.parameters.ControllerParameters`, or a
+  :class:`~scoutsim.control.bounding.BoundingController` whose ``command`` is not
+  overridden: the built-in Table I law, compiled into the loop (``layout.CTRL_BUILTIN``);
+* a :class:`~scoutsim.control.compiled.CompiledController`: its compiled function, called
+  by the loop through its address (``layout.CTRL_POINTER``);
+* any other object with ``command(t, sensors)`` (the protocol of
+  :mod:`scoutsim.control.protocol`): called by the loop through a ``ctypes`` callback
+  (:class:`PythonBridge`), which hands it a :class:`~scoutsim.control.sensors.Sensors` at
+  every sample and checks what it returns;
+* the passive model: no controller (the built-in law disabled: zero torques).
+
+The sensors' measurement model (:class:`~scoutsim.control.sensors.SensorParameters`) is the
+same for every kind.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import layout as L
+from ..parameters import ControllerParameters, RobotParameters
+from .block import ControlBlock, control_block
+from .bounding import BoundingController, controller_array
+from .compiled import CompiledController
+from .protocol import DEFAULT_CONTROL_PERIOD, controller_name
+from .sensors import SensorParameters, Sensors
+
+__all__ = ["ControllerPlan", "PythonBridge", "plan_controller"]
+
+
+@dataclass
+class ControllerPlan:
+    """How a run is controlled.
+
+    kind : "builtin", "compiled", "python" or "none".
+    controller : the user's controller object (None for the built-in law).
+    parameters : the Table I parameters the built-in law runs with (None otherwise).
+    control_period : [s].
+    C : the built-in law's parameter array (:func:`~scoutsim.control.bounding.controller_array`;
+        disabled unless ``kind`` is "builtin").
+    block : the loop's :class:`~scoutsim.control.block.ControlBlock`.
+    bridge : the :class:`PythonBridge` of a Python controller.
+    label : what the provenance calls it ("builtin", "none" or the controller's name).
+    """
+
+    kind: str
+    controller: object
+    parameters: ControllerParameters | None
+    control_period: float
+    C: np.ndarray
+    block: ControlBlock
+    bridge: "PythonBridge | None" = None
+    label: str = "builtin"
+
+
+def _runs_builtin(controller) -> bool:
+    """A BoundingController (or a subclass) that does not override ``command``."""
+    return (isinstance(controller, BoundingController)
+            and type(controller).command is BoundingController.command)
+
+
+def _period(controller) -> float:
+    """The controller's control period [s]: its ``control_period``; else, for an object with
+    Table I ``params``, theirs; else the paper's 1 ms."""
+    dt = getattr(controller, "control_period", None)
+    if dt is None:
+        params = getattr(controller, "params", None)
+        dt = (params.control_period if isinstance(params, ControllerParameters)
+              else DEFAULT_CONTROL_PERIOD)
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or \
+            not (math.isfinite(dt) and 1e-6 <= dt <= 1.0):
+        raise ValueError(f"controller.control_period = {dt!r} s is not allowed: must be in "
+                         f"[1e-6, 1] s ({controller_name(controller)})")
+    return float(dt)
+
+
+def plan_controller(controller, model: str, robot: RobotParameters,
+                    sensors: SensorParameters | None = None) -> ControllerPlan:
+    """The plan of a run of ``model`` on ``robot`` controlled by ``controller`` (see the
+    module docstring) with the sensors ``sensors`` (default: ideal)."""
+    sensors = sensors if sensors is not None else SensorParameters()
+    if not isinstance(sensors, SensorParameters):
+        raise TypeError(f"sensors must be SensorParameters, not {type(sensors).__name__}")
+    user = None
+    if model == "passive":
+        cparams = None
+        if controller is not None and not isinstance(controller, ControllerParameters):
+            user = controller
+    elif controller is None:
+        cparams = ControllerParameters()
+    elif isinstance(controller, ControllerParameters):
+        cparams = controller
+    elif _runs_builtin(controller):
+        cparams = controller.params
+    elif callable(getattr(controller, "command", None)):
+        user = controller
+        cparams = getattr(controller, "params", None)
+        if not isinstance(cparams, ControllerParameters):
+            cparams = None
+    else:
+        raise TypeError("controller must be ControllerParameters, a BoundingController, a "
+                        "CompiledController or an object with a command(t, sensors) method "
+                        "(scoutsim.control.protocol)")
+    if user is not None and not callable(getattr(user, "command", None)):
+        raise TypeError(f"controller {controller_name(user)} has no command(t, sensors) method")
+    # the hip encoders read the motor side (Model II: alpha) as the Table I controller is
+    # set to (sense_motor_angle); a controller without Table I parameters: the default
+    motor_side = (cparams if cparams is not None else ControllerParameters()).sense_motor_angle
+    if model == "passive" and user is None:
+        motor_side = False
+    geom = sensors.geometry_array(robot, motor_side)
+    spec = sensors.spec_array()
+    if user is None:
+        dt = cparams.control_period if cparams is not None else DEFAULT_CONTROL_PERIOD
+        block = control_block(L.CTRL_BUILTIN, spec=spec, geom=geom, seed=sensors.seed)
+        return ControllerPlan(kind="builtin" if cparams is not None else "none",
+                              controller=None, parameters=cparams, control_period=dt,
+                              C=controller_array(cparams, robot), block=block,
+                              label="builtin" if cparams is not None else "none")
+    dt = _period(user)
+    if isinstance(user, CompiledController):
+        block = control_block(L.CTRL_POINTER, address=user.address, spec=spec, geom=geom,
+                              seed=sensors.seed, params=user.params.copy(),
+                              state=user.initial_state.copy())
+        return ControllerPlan(kind="compiled", controller=user, parameters=None,
+                              control_period=dt, C=controller_array(None), block=block,
+                              label=controller_name(user))
+    block = control_block(L.CTRL_POINTER, spec=spec, geom=geom, seed=sensors.seed)
+    return ControllerPlan(kind="python", controller=user, parameters=None, control_period=dt,
+                          C=controller_array(None), block=block, label=controller_name(user))
+
+
+def _torque(v) -> float | None:
+    """``v`` as a hip torque [N m] if it is a finite real number (not a bool or a string)."""
+    if type(v) is float:
+        return v if math.isfinite(v) else None
+    if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        return None
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def torques(returned) -> tuple[float, float] | None:
+    """The two hip torques (back, front) [N m] a controller returned, or None if it
+    returned anything but two finite numbers."""
+    if isinstance(returned, np.ndarray):
+        if returned.shape != (2,):
+            return None
+    elif not isinstance(returned, (tuple, list)) or len(returned) != 2:
+        return None
+    a, b = returned
+    a, b = _torque(a), _torque(b)
+    return None if a is None or b is None else (a, b)
+
+
+#: the ctypes form of :data:`scoutsim.control.compiled.CONTROLLER_SIGNATURE`
+_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
+                             ctypes.c_int64, ctypes.c_void_p, ctypes.c_int64, ctypes.c_void_p,
+                             ctypes.c_void_p)
+
+
+class PythonBridge:
+    """A Python controller as a controller function the compiled loop can call.
+
+    At each sample the loop writes the readings into ``block.y`` and calls the bridge's
+    ``ctypes`` callback (:attr:`address`); the bridge gives the controller a copy as
+    :class:`~scoutsim.control.sensors.Sensors`, checks what ``command`` returns, writes the
+    torques into the loop's command array ``cmd`` and the controller's ``leg_states`` (if
+    any) into ``ls``. If ``command`` raises or returns anything but two finite numbers, the
+    bridge keeps ``failure`` = (sample, returned, exception) and tells the loop to stop; a
+    KeyboardInterrupt sets ``interrupted``.
+    """
+
+    def __init__(self, controller, block: ControlBlock, cmd: np.ndarray, ls: np.ndarray,
+                 dt: float):
+        self.controller = controller
+        self._command = controller.command
+        self._y, self._cmd, self._ls, self._dt = block.y, cmd, ls, dt
+        self.failure = None
+        self.interrupted = False
+        self._cb = _CALLBACK(self._call)
+        self.address = ctypes.cast(self._cb, ctypes.c_void_p).value
+        block.ints[L.CB_ADDRESS] = self.address
+
+    def _call(self, t, y, params, n_params, state, n_state, torque, leg_states):
+        try:
+            returned = self._command(t, Sensors.from_vector(self._y))
+            tau = torques(returned)
+            if tau is None:
+                self.failure = (int(round(t / self._dt)), returned, None)
+                return 1
+            self._cmd[0], self._cmd[1] = tau
+            states = getattr(self.controller, "leg_states", None)
+            if states is not None:
+                self._ls[:] = states
+            return 0
+        except KeyboardInterrupt:
+            self.interrupted = True
+            return 2
+        except BaseException as exc:  # noqa: BLE001 - raised by simulate as ControllerError
+            self.failure = (int(round(t / self._dt)), None, exc)
+            return 1
