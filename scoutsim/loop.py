@@ -21,7 +21,7 @@ from .model.kinematics import project_state
 from .model.sensors import measure, true_readings
 from .model.rigid_body import state_energy
 from .model.layout import (
-    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CTRL_BUILTIN, CTRL_HELD, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
+    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
     MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B,
     RM_MOTOR_B, SG_MEASURED, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
@@ -152,6 +152,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
             rc = call_controller(cb.ints[CB_ADDRESS], t, cb.y, cb.params, cb.state, cmd, ls)
             if rc != 0 or not (np.isfinite(cmd[0]) and np.isfinite(cmd[1])):
                 # the sample is not recorded: the run's data end at the sample before
+                cb.ints[CB_STATUS] = rc
                 return k, n_out, nev, ST_CONTROLLER_ERROR, t
         nev0 = nev
         for i in range(NS):

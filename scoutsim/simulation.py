@@ -222,11 +222,10 @@ class HybridEngine:
 
     def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
                  integrator: IntegratorSettings, record_steps: bool = False,
-                 rows: int | None = None, energy: bool = False, block=None):
+                 rows: int | None = None, energy: bool = False, *, block):
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
-        # the controller and the sensors (control/block.py); default: the built-in law
-        # with ideal sensors
-        self.block = block if block is not None else control_block(L.CTRL_BUILTIN)
+        # the controller and the sensors (control/block.py, control/dispatch.py)
+        self.block = block
         self.dt = dt
         self.integ = integrator
         n_total = int(round(duration / dt)) + 1
@@ -396,7 +395,9 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     integrator = (integrator or IntegratorSettings(method="dopri5")).resolve(model)
     eng = HybridEngine(P, C, s, mi, mf, np.zeros(2, dtype=np.int64), duration, dt,
                        integrator, block=control_block(
-                           L.CTRL_BUILTIN if controller is not None else L.CTRL_HELD))
+                           L.CTRL_BUILTIN if controller is not None else L.CTRL_HELD,
+                           geom=SensorParameters().geometry_array(
+                               robot, controller is not None and controller.sense_motor_angle)))
     if held_torques is not None:
         eng.cmd[:] = held_torques
     chunk = max(1, int(round(1.0 / dt)))
@@ -741,12 +742,14 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         provenance["sensors"] = sensors.as_dict()
     error = failure = None
     if eng.status == L.ST_CONTROLLER_ERROR and not interrupted:
+        status = 0
         if bridge is not None and bridge.failure is not None:
             failure = bridge.failure
         else:      # a compiled controller: its status, or the torques it wrote
             failure = (eng.k, tuple(float(v) for v in eng.cmd), None)
+            status = int(plan.block.ints[L.CB_STATUS])
         k_fail, returned, exc = failure
-        message = failure_message(user_ctrl, k_fail, dt, returned, exc)
+        message = failure_message(user_ctrl, k_fail, dt, returned, exc, status)
         provenance["controller_error"] = message
         error = ControllerError(message, controller=user_ctrl, t=k_fail * dt, sample=k_fail,
                                 returned=returned)

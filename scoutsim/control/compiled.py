@@ -141,7 +141,12 @@ class CompiledController(Controller):
         self.control_period = float(control_period)
         self.name = name or getattr(command, "__name__", type(self).__name__)
         t0 = time.perf_counter()
-        self._cfunc = _wrap(command)
+        try:
+            self._cfunc = _wrap(command)
+        except Exception as exc:
+            raise TypeError(f"CompiledController({self.name}): the command function does not "
+                            f"compile with Numba (nopython mode) for command(t, y, params, "
+                            f"state, torque, leg_states): {exc}") from exc
         self.compile_time_s = time.perf_counter() - t0
         self.address = int(self._cfunc.address)
         self.leg_states = np.zeros(2, dtype=np.int64)

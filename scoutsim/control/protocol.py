@@ -89,12 +89,17 @@ def controller_name(controller) -> str:
 
 
 def failure_message(controller, sample: int, dt: float, returned,
-                    exc: BaseException | None) -> str:
+                    exc: BaseException | None, status: int = 0) -> str:
     """What :class:`ControllerError` says: the controller, the sample time, what it raised
-    or returned, and up to where the run's data go."""
-    what = (f"raised {type(exc).__name__}: {exc}" if exc is not None else
-            f"returned {reprlib.repr(returned)}, not two finite hip torques [N m] "
-            "(back, front)")
+    or returned (a compiled controller's nonzero ``status``), and up to where the run's
+    data go."""
+    if exc is not None:
+        what = f"raised {type(exc).__name__}: {exc}"
+    elif status != 0:
+        what = f"returned status {status} (0 goes on), torques {reprlib.repr(returned)}"
+    else:
+        what = (f"returned {reprlib.repr(returned)}, not two finite hip torques [N m] "
+                "(back, front)")
     kept = (f"its samples up to t = {(sample - 1) * dt:.10g} s are in the error's .result"
             if sample > 0 else "before its first sample")
     return (f"controller {controller_name(controller)}.command(t = {sample * dt:.10g} s, "

@@ -302,7 +302,8 @@ CTRL_HELD = 2       # no controller: the commands are held as set (bench rigs)
 CB_KIND = 0         # CTRL_*
 CB_ADDRESS = 1      # address of the controller function (CTRL_POINTER)
 CB_SEED = 2         # seed of the sensor noise
-NCB = 3
+CB_STATUS = 3       # what a controller function returned when it stopped the run
+NCB = 4
 
 # --- controller leg states ------------------------------------------------------------
 LS_FLIGHT = 0
