@@ -288,6 +288,16 @@ def load_parameters(path):
         raise UsageError(str(exc)) from None
 
 
+def load_sensors(path, robot):
+    """The sensors of the user's TOML file's ``[sensors]`` (ideal without one); UsageError
+    if bad."""
+    from ..control.sensors import load_sensors as load
+    try:
+        return load(path, robot)
+    except ValueError as exc:  # ParameterError names the field
+        raise UsageError(str(exc)) from None
+
+
 def load_robot(path):
     """The robot of the user's TOML file, or None (the callee's default) without one."""
     if not path:

@@ -35,8 +35,8 @@ from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
 from ._common import (MODELS, UsageError, check_expected_time, command_wall_time, dumps,
-                      finite_float, integrator, load_parameters, out_dir, positive_float,
-                      show_progress, usage_errors, write_json)
+                      finite_float, integrator, load_parameters, load_sensors, out_dir,
+                      positive_float, show_progress, usage_errors, write_json)
 
 NAME = "run"
 
@@ -288,6 +288,7 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
 def execute(args) -> int:
     from ..simulation import default_initial_state, simulate, warm_up
     robot, controller = load_parameters(args.robot)
+    sensors = load_sensors(args.robot, robot)
     integ = integrator(args)
     changes = {}
     if args.speed is not None:
@@ -315,6 +316,7 @@ def execute(args) -> int:
                           integrator=integ, friction_coefficient=args.friction,
                           progress=progress, record_steps=args.steps, stream_to=rd,
                           check_memory=not args.no_size_check, energy=args.energy,
+                          sensors=sensors,
                           **({"keep_seconds": args.keep, "table_format": args.format}
                              if stream else {}))
     wall = time.perf_counter() - wall0

@@ -140,8 +140,8 @@ def plan_controller(controller, model: str, robot: RobotParameters,
 
 def _torque(v) -> float | None:
     """``v`` as a hip torque [N m] if it is a finite real number (not a bool or a string)."""
-    if type(v) is float:
-        return v if math.isfinite(v) else None
+    if type(v) is float or type(v) is np.float64:
+        return float(v) if math.isfinite(v) else None
     if isinstance(v, bool) or not isinstance(v, numbers.Real):
         return None
     v = float(v)

@@ -106,26 +106,26 @@ class Sensors:
                 continue
             slot, n, _ = CHANNELS[name]
             v[slot:slot + n] = np.broadcast_to(np.asarray(value, dtype=float), (n,))
+        v.flags.writeable = False
         self._v = v
 
     @classmethod
     def from_vector(cls, y) -> "Sensors":
         """Readings from a readings array (``layout.NSN`` slots); copies it."""
         obj = cls.__new__(cls)
-        obj._v = np.array(y, dtype=float)
+        v = y.copy() if type(y) is np.ndarray and y.dtype == np.float64 else \
+            np.array(y, dtype=float)
+        v.flags.writeable = False       # (its slices, the channels, are read-only too)
+        obj._v = v
         return obj
 
     @property
     def vector(self) -> np.ndarray:
-        """Every reading by slot (``layout.SN_*``), a read-only view."""
-        v = self._v.view()
-        v.flags.writeable = False
-        return v
+        """Every reading by slot (``layout.SN_*``), read-only."""
+        return self._v
 
     def _pair(self, slot):
-        v = self._v[slot:slot + 2]
-        v.flags.writeable = False
-        return v
+        return self._v[slot:slot + 2]
 
     hip_angle = property(lambda self: self._pair(L.SN_ANGLE_B),
                          doc="hip angles relative to the torso [rad] (back, front)")
