@@ -618,8 +618,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     Raises
     ------
     ControllerError
-        A Python controller's ``command(t, sensors)`` raised, or returned something other
-        than two finite hip torques. The message names the controller, the sample time and
+        A controller's ``command(t, sensors)`` raised, or returned something other than two
+        finite hip torques (a compiled controller: a nonzero status). The message names the controller, the sample time and
         what it raised or returned; the error's ``result`` holds the run up to the sample
         before, with ``outcome = "controller_error"`` (a streamed run's tables hold it
         too, marked partial).
