@@ -19,11 +19,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from scoutsim import ControllerParameters, RobotParameters, default_initial_state
-from scoutsim.control.bounding import bounding_step, controller_array, sense
+from scoutsim.control.bounding import C_SENSE_ALPHA, bounding_step, controller_array
 from scoutsim.model import layout as L
 from scoutsim.model.evaluate import evaluate
 from scoutsim.model.kinematics import project_state
 from scoutsim.model.packing import robot_array
+from scoutsim.model.sensors import read_encoders
 from scoutsim.numerics.events import event_values
 from scoutsim.numerics.stats import NSTAT
 from scoutsim.numerics.transitions import apply_event, settle
@@ -76,7 +77,7 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
     events = [make_event(k) for k in range(L.NEV)]
     for k in range(n):
         t = k * dt
-        sense(s, C, y)
+        read_encoders(s, C[C_SENSE_ALPHA] > 0.5, y)
         bounding_step(y, C, ls, cmd, tr)
         nev = settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats)
         t_end = (k + 1) * dt

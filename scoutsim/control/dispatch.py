@@ -42,7 +42,9 @@ class ControllerPlan:
 
     kind : "builtin", "compiled", "python" or "none".
     controller : the user's controller object (None for the built-in law).
-    parameters : the Table I parameters the built-in law runs with (None otherwise).
+    parameters : the Table I parameters the built-in law runs with, or those a user's
+        controller carries as ``params`` (they set the legs' angles at a start in flight);
+        None otherwise.
     control_period : [s].
     C : the built-in law's parameter array (:func:`~scoutsim.control.bounding.controller_array`;
         disabled unless ``kind`` is "builtin").
@@ -134,7 +136,7 @@ def plan_controller(controller, model: str, robot: RobotParameters,
                               control_period=dt, C=controller_array(None), block=block,
                               label=controller_name(user))
     block = control_block(L.CTRL_POINTER, spec=spec, geom=geom, seed=sensors.seed)
-    return ControllerPlan(kind="python", controller=user, parameters=None, control_period=dt,
+    return ControllerPlan(kind="python", controller=user, parameters=cparams, control_period=dt,
                           C=controller_array(None), block=block, label=controller_name(user))
 
 
