@@ -287,6 +287,8 @@ class HybridEngine:
         # the work-energy accounting (layout EN_*; empty: off), the touchdown impacts'
         # losses [J] and the mechanical energy [J] at the first sample
         self.energy = np.zeros(L.NEN if energy else 0)
+        # the accumulator at every recorded sample (rows as out_t; (0, NEN): off)
+        self.out_energy = np.zeros((n_total + 1 if energy else 0, L.NEN))
         self.impact_loss = 0.0
         self.energy_start = None
         self.stats = np.zeros(NSTAT)
@@ -309,7 +311,8 @@ class HybridEngine:
                 min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
                 self.integ.atol, builtin, self.hwork, self.out_t, self.out_s, self.out_aux,
                 self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
-                self.sfwork, self.ew, self.steps, self.stepc, self.energy)
+                self.sfwork, self.ew, self.steps, self.stepc, self.energy,
+                self.out_energy)
         if self._entry is None:   # the argument types stay those of the first call
             self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
                                             int(self.P[L.P_MODEL]))
@@ -376,7 +379,8 @@ class HybridEngine:
             | ({"event_records_lost": float(self.event_records_lost)}
                if self.event_records_lost else {})
             | (extra_stats or {}),
-            provenance=provenance, energy_flows=self.energy_flows())
+            provenance=provenance, energy_flows=self.energy_flows(),
+            energy_series=(_kept(self.out_energy, n) if self.energy.size else None))
 
 
 def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
