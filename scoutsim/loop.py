@@ -155,7 +155,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, built
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
             n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
-                              energy, out_energy)
+                                  energy, out_energy)
             return k + 1, n_out, nev, status, t
         k += 1
         if nev > ev.shape[0] - 64:
