@@ -370,7 +370,10 @@ class SimulationResult:
         return self.gait().strides
 
     def summary(self) -> dict:
-        """The run summary (outcome and steady-state gait metrics), JSON-safe; a run that
+        """The run summary (outcome, steady-state gait metrics and what the gait costs:
+        ``electrical_energy_j`` [J] over the run, ``cost_of_transport`` [-] over the steady
+        strides, ...; None without the energy accounting,
+        :meth:`~scoutsim.analysis.gait.GaitMetrics.energy_summary`), JSON-safe; a run that
         failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
         what happened, parameters far from the Scout II defaults, advice)."""
         out = self.gait().summary(self)

@@ -88,6 +88,16 @@ def test_stride_energies_add_up_to_the_run_totals(run_II, run_I_noslip):
     assert all(s.impact_loss_j > 0 for s in run_I_noslip.strides)
 
 
+def test_stride_table_has_the_stride_energies(run_II):
+    from scoutsim.analysis.gait import stride_table
+    cols = stride_table(run_II)
+    strides = run_II.strides
+    assert len(cols["electrical_energy_j"]) == len(strides)
+    assert cols["cost_of_transport"][-1] == strides[-1].cost_of_transport
+    assert "electrical_energy_j" not in stride_table(
+        scoutsim.simulate(duration=1.0, model="II"))
+
+
 def test_stride_energy_balance_closes(run_II, run_I_noslip):
     """Per stride: electrical = copper + transmission + hip work (term by term), and
     hip work = friction and dampers + constraint work + impacts + change of mechanical
