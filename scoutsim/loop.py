@@ -63,9 +63,15 @@ def first_readings(s, P, mi, mf, cmd, cb):
 
 
 @kernel
-def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
-    """Append one row (time, state, outputs, leg states and modes) to the time series."""
+def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energy,
+                  out_energy):
+    """Append one row (time, state, outputs, leg states and modes) to the time series, and
+    the energy accumulator ``energy`` (layout ``EN_*``, [J] since the run's start) to
+    ``out_energy`` unless that is empty (no accounting)."""
     out_t[n_out] = t
+    if out_energy.shape[0] > 0:
+        for i in range(energy.shape[0]):
+            out_energy[n_out, i] = energy[i]
     for i in range(NS):
         out_s[n_out, i] = s[i]
     for i in range(NAUX):
@@ -80,7 +86,7 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out):
 @allocating
 def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, hwork,
         out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
-        stepc, energy, method):
+        stepc, energy, out_energy, method):
     """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
 
     At each sample: the sensors are read into ``cb.y`` (:func:`sense`) and the controller
@@ -102,7 +108,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
     ``steps`` has fewer than ``STEP_HEADROOM`` free rows (as before ``ev`` fills up).
     ``energy`` (layout ``EN_*``) accumulates the energy of every power flow over the
     integrator's steps (:func:`~scoutsim.numerics.hybrid.accumulate_energy`); an empty
-    array switches the accounting off. Returns (k, n_out, nev, status, t)."""
+    array switches the accounting off. ``out_energy`` (rows as ``out_t``, ``NEN`` columns;
+    empty (0, NEN) without the accounting) receives ``energy`` at every recorded sample:
+    the cumulative energy of every flow [J]. Returns (k, n_out, nev, status, t)."""
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
     tmp = np.zeros(NS)
@@ -167,7 +175,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
             stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
                              mode_violations(s, K[0], aux, P, mi), s_prev, s)
         # record the sample
-        n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
+        n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
+                              energy, out_energy)
         if aux[A_KKT_OK] < 0.5:
             return k, n_out, nev, ST_NUMERICAL_FAILURE, t
         if k >= k_last:
@@ -191,7 +200,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
-            n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out)
+            n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
+                                  energy, out_energy)
             return k + 1, n_out, nev, status, t
         k += 1
         if nev > ev.shape[0] - 64:

@@ -37,7 +37,29 @@ COLUMN_UNITS = (
     ("toe_x_", "m", False), ("toe_y_", "m", False), ("toe_velocity_x_", "m/s", False),
     ("strut_force_", "N", False), ("belt_torque_", "N m", False),
     ("battery_voltage", "V", True), ("energy", "J", True),
+    ("cumulative_energy_", "J", False),
 )
+
+#: destinations of the energy that sum several flows of ``layout.EN_LEG_NAMES`` (per
+#: virtual leg), for :meth:`SimulationResult.cumulative_energy` and
+#: :meth:`SimulationResult.power`: the transmission's losses (the paper's constant
+#: efficiency, signed, and the optional load-dependent losses), the motor-joint friction,
+#: and every friction and damper of the mechanism (motor joint, belt damper, leg damper
+#: and sliding joint, sliding toes)
+ENERGY_GROUPS = {
+    "transmission": ("conversion", "gear_loss"),
+    "joint_friction": ("joint_viscous", "joint_coulomb"),
+    "friction": ("joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
+                 "leg_friction", "toe_slide"),
+}
+#: destinations without a leg: the battery's internal loss, and the battery's whole output
+#: (the electrical energy into both legs' motors plus that loss)
+ENERGY_WHOLE_ROBOT = ("battery_loss", "battery")
+
+
+#: names of the columns of :attr:`SimulationResult.energy_series` in the tables
+ENERGY_COLUMNS = tuple(f"cumulative_energy_{f}_{leg}" for leg in L.LEG_NAMES
+                       for f in L.EN_LEG_NAMES) + ("cumulative_energy_battery_loss",)
 
 
 #: ``format`` of the metadata of a run's tables (:meth:`SimulationResult.save_tables`)
@@ -94,6 +116,11 @@ class SimulationResult:
         touchdown ``impacts``' losses and the mechanical energy at the first sample and at
         the end (``mechanical_start``, ``mechanical_end``); :meth:`energy_balance` reads
         them.
+    energy_series : (n, NEN) the energy of every power flow (layout ``EN_*``: per leg the
+        flows of ``layout.EN_LEG_NAMES``, then the battery's loss) accumulated from the
+        start of the run to each sample [J], if the run accounted for its energy, else
+        None. Read it with :meth:`cumulative_energy` and :meth:`power`. A window of a run
+        (:meth:`window`, a streamed run's kept end) keeps the values since the run's start.
     """
 
     t: np.ndarray
@@ -108,6 +135,7 @@ class SimulationResult:
     event_states: np.ndarray | None = None
     steps: np.ndarray | None = None
     energy_flows: dict | None = None
+    energy_series: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- torso -----------------------------------------------------------------------
@@ -223,6 +251,83 @@ class SimulationResult:
                                    for leg in range(2)),
             toe_anchors=tuple(float(aux[leg * L.NAUX_LEG + L.A_TOE_X]) for leg in range(2)))
 
+    # -- energy ----------------------------------------------------------------------
+    def _energy_columns(self, name: str, leg) -> list[int]:
+        """Columns of :attr:`energy_series` that make up destination ``name`` of ``leg``
+        (None: both legs)."""
+        if self.energy_series is None:
+            raise ValueError("this run did not account for its energy: run it with "
+                             "simulate(..., energy=True) (scoutsim run does by default)")
+        if name in ENERGY_WHOLE_ROBOT:
+            if leg is not None:
+                raise ValueError(f"{name!r} is the whole robot's: leg must be None")
+            if name == "battery_loss":
+                return [L.EN_BATTERY_LOSS]
+            return [L.EN_BATTERY_LOSS] + self._energy_columns("electrical", None)
+        flows = ENERGY_GROUPS.get(name, (name,))
+        for f in flows:
+            if f not in L.EN_LEG_NAMES:
+                raise ValueError(
+                    f"name = {name!r} is not allowed: must be one of "
+                    f"{list(L.EN_LEG_NAMES) + list(ENERGY_GROUPS) + list(ENERGY_WHOLE_ROBOT)}")
+        legs = (0, 1) if leg is None else (_leg(leg),)
+        return [lg * L.NEN_LEG + L.EN_LEG_NAMES.index(f) for lg in legs for f in flows]
+
+    def cumulative_energy(self, name: str, leg=None) -> np.ndarray:
+        """The energy [J] that went to destination ``name`` from the start of the run to
+        each sample (docs/model.md "Work-energy balance"; needs ``simulate(energy=True)``).
+
+        Parameters
+        ----------
+        name : a flow of ``layout.EN_LEG_NAMES`` ("electrical": into the motor terminals,
+            "copper", "conversion", "gear_loss", "hip_work", "joint_viscous",
+            "joint_coulomb", "belt_damper", "leg_damper", "leg_friction", "toe_slide",
+            "constraint"), a group of :data:`ENERGY_GROUPS` ("transmission",
+            "joint_friction", "friction": every friction and damper of the mechanism), or
+            the whole robot's "battery_loss" (R_b I_b^2) or "battery" (the battery's
+            output: electrical energy of both legs plus its loss).
+        leg : "back", "front" or None (both virtual legs, each of its motors counted).
+
+        Returns
+        -------
+        (n,) array [J], aligned with :attr:`t`. The touchdown impacts' losses are not in
+        it (they happen at instants: :meth:`impacts`).
+        """
+        return self.energy_series[:, self._energy_columns(name, leg)].sum(axis=1)
+
+    def power(self, name: str, leg=None) -> np.ndarray:
+        """Mean power [W] into destination ``name`` (as :meth:`cumulative_energy`) over
+        each control period: element k is (E(t[k+1]) - E(t[k])) / (t[k+1] - t[k]), the
+        period that starts at sample k (its command held); the last element is NaN. Its
+        sum times the period is the energy exactly (no quadrature error: the energy is
+        integrated on every integrator step)."""
+        e = self.cumulative_energy(name, leg)
+        out = np.full(len(e), np.nan)
+        if len(e) > 1:
+            out[:-1] = np.diff(e) / np.diff(self.t)
+        return out
+
+    def electrical_power(self, leg=None) -> np.ndarray:
+        """Electrical power into the motor terminals at each sample [W], from the recorded
+        current i and motor speed w_m of every motor: n_p i (R_A i + K_w w_m) per virtual
+        leg (n_p motors; docs/specification.md section 4), summed over both legs if ``leg``
+        is None. Instantaneous (just after the sample's command), and available without
+        the energy accounting; Model I and II only (the ideal actuator and the passive
+        model have no electrical side: ValueError)."""
+        model = (self.provenance or {}).get("model")
+        robot = (self.provenance or {}).get("robot")
+        if model not in ("I", "II") or not robot:
+            raise ValueError(f"electrical_power needs a run of Model I or II with its robot "
+                             f"in the provenance (this one: model {model!r})")
+        legs = (0, 1) if leg is None else (_leg(leg),)
+        p = np.zeros(len(self.t))
+        for lg in legs:
+            i = self.motor_current(lg)
+            w = self.motor_speed(lg)
+            p += robot["legs_per_virtual_leg"] * i * (robot["armature_resistance"] * i
+                                                      + robot["speed_constant"] * w)
+        return p
+
     # -- events ----------------------------------------------------------------------
     def event_times(self, kind: str, leg=None) -> np.ndarray:
         """Times [s] of events of a kind ("touchdown", "liftoff", ...), optionally of one leg."""
@@ -265,7 +370,10 @@ class SimulationResult:
         return self.gait().strides
 
     def summary(self) -> dict:
-        """The run summary (outcome and steady-state gait metrics), JSON-safe; a run that
+        """The run summary (outcome, steady-state gait metrics and what the gait costs:
+        ``electrical_energy_j`` [J] over the run, ``cost_of_transport`` [-] over the steady
+        strides, ...; None without the energy accounting,
+        :meth:`~scoutsim.analysis.gait.GaitMetrics.energy_summary`), JSON-safe; a run that
         failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
         what happened, parameters far from the Scout II defaults, advice)."""
         out = self.gait().summary(self)
@@ -284,8 +392,9 @@ class SimulationResult:
         return self._cache[key]
 
     def window(self, t0: float, t1: float) -> "SimulationResult":
-        """The samples, events and steps with t0 <= t <= t1 [s], as views (all three are
-        in time order); outcome, end time, statistics and provenance stay the whole run's."""
+        """The samples (and their cumulative energies), events and steps with
+        t0 <= t <= t1 [s], as views (all are in time order); outcome, end time, statistics,
+        provenance and the run's energy totals stay the whole run's."""
         def rows(t):
             return slice(int(np.searchsorted(t, t0, side="left")),
                          int(np.searchsorted(t, t1, side="right")))
@@ -295,6 +404,7 @@ class SimulationResult:
             events=self.events[j],
             event_states=None if self.event_states is None else self.event_states[j],
             steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
+            energy_series=None if self.energy_series is None else self.energy_series[k],
             _cache={})
 
     def energy_balance(self):
@@ -316,7 +426,9 @@ class SimulationResult:
                 "provenance": self.provenance, "format": "scoutsim.result/1",
                 "energy_flows": self.energy_flows}
         extra = {name: a for name, a in (("event_states", self.event_states),
-                                         ("steps", self.steps)) if a is not None}
+                                         ("steps", self.steps),
+                                         ("energy_series", self.energy_series))
+                 if a is not None}
         np.savez_compressed(path, t=self.t, state=self.state, aux=self.aux, modes=self.modes,
                             events=self.events, meta=np.array(json.dumps(meta, allow_nan=True)),
                             **extra)
@@ -359,7 +471,9 @@ class SimulationResult:
                        stats=meta["stats"], provenance=meta["provenance"],
                        event_states=z["event_states"] if "event_states" in z.files else None,
                        steps=z["steps"] if "steps" in z.files else None,
-                       energy_flows=meta.get("energy_flows"))
+                       energy_flows=meta.get("energy_flows"),
+                       energy_series=(z["energy_series"] if "energy_series" in z.files
+                                      else None))
 
     # -- tables (Parquet / compressed CSV: scoutsim.tables) ---------------------------
     def event_columns(self) -> dict:
@@ -495,6 +609,10 @@ class SimulationResult:
             for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
                                (L.RM_MOTOR_B, "motor_joint_mode")):
                 modes[:, base + leg] = series[f"{what}_{L.LEG_NAMES[leg]}"]
+        energy_series = None
+        if ENERGY_COLUMNS[0] in series:
+            energy_series = (np.column_stack([series[c] for c in ENERGY_COLUMNS]) if n else
+                             np.zeros((0, L.NEN)))
         ev, _ = read_table(d / f"events{suffix}", t_range=t_range)
         m = len(ev["t"])
         events = np.zeros((m, L.NEVREC))
@@ -522,7 +640,7 @@ class SimulationResult:
         return cls(t=series["t"], state=state, aux=aux, modes=modes, events=events,
                    outcome=meta["outcome"], t_end=meta["t_end"], stats=meta["stats"],
                    provenance=meta["provenance"], event_states=event_states, steps=steps,
-                   energy_flows=meta.get("energy_flows"))
+                   energy_flows=meta.get("energy_flows"), energy_series=energy_series)
 
     def to_dataframe(self):
         """All time series as a :class:`pandas.DataFrame` indexed by time ``t`` [s], one
@@ -550,7 +668,9 @@ class SimulationResult:
         return plot_run(self, path, t_range)
 
     def columns(self) -> dict:
-        """All time series as named 1-D arrays (for CSV export / DataFrames)."""
+        """All time series as named 1-D arrays (for CSV export / DataFrames); with the
+        energy accounting also :attr:`energy_series`, one ``cumulative_energy_<flow>_<leg>``
+        column per flow and ``cumulative_energy_battery_loss`` [J]."""
         cols = {"t": self.t}
         for i, n in enumerate(L.STATE_NAMES):
             cols[n] = self.state[:, i]
@@ -564,4 +684,7 @@ class SimulationResult:
             for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
                                (L.RM_MOTOR_B, "motor_joint_mode")):
                 cols[f"{what}_{L.LEG_NAMES[leg]}"] = self.modes[:, base + leg].astype(float)
+        if self.energy_series is not None:
+            for j, name in enumerate(ENERGY_COLUMNS):
+                cols[name] = self.energy_series[:, j]
         return cols

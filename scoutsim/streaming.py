@@ -96,6 +96,7 @@ class RunStream:
             modes=eng.out_ls[:n].copy(), events=eng.ev[:m, :L.NEVREC].copy(),
             event_states=eng.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
             steps=eng.steps[:nst].copy() if eng.stepc[1] else None,
+            energy_series=eng.out_energy[:n].copy() if eng.energy.size else None,
             outcome="running", t_end=float(eng.t_now), stats={}, provenance={})
         # kept (and the buffers emptied) before writing: a piece the disk refuses is still
         # in the returned result
@@ -204,6 +205,8 @@ class RunStream:
             events=np.concatenate([c.events for c in ch]),
             event_states=np.concatenate([c.event_states for c in ch]),
             steps=None if ch[0].steps is None else np.concatenate([c.steps for c in ch]),
+            energy_series=(None if ch[0].energy_series is None else
+                           np.concatenate([c.energy_series for c in ch])),
             outcome=whole.outcome, t_end=whole.t_end, stats=whole.stats,
             provenance=whole.provenance, energy_flows=whole.energy_flows)
         t0 = float(joined.t[np.searchsorted(joined.t, joined.t[-1] - self.keep_seconds)])

@@ -136,7 +136,7 @@ def energy_balance(result) -> EnergyBalance:
     flows = result.energy_flows
     if flows is None:
         raise ValueError("this run did not account for its energy: run it with "
-                         "simulate(..., energy=True) (or scoutsim run --energy)")
+                         "simulate(..., energy=True) (scoutsim run does by default)")
     model = result.provenance.get("model", "II")
 
     def both(*names):

@@ -34,8 +34,9 @@ import numpy as np
 
 from ..model import layout as L
 
-__all__ = ["gait_metrics", "stance_intervals", "stride_table", "Stride", "GaitMetrics",
-           "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "STRIDE_METRICS"]
+__all__ = ["gait_metrics", "stance_intervals", "stride_table", "stride_energy", "Stride",
+           "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_ENERGY_KEYS",
+           "STRIDE_METRICS", "STRIDE_ENERGY_METRICS"]
 
 #: Keys that :meth:`GaitMetrics.summary` returns first, in this order.
 SUMMARY_KEYS = ("outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
@@ -46,10 +47,23 @@ SUMMARY_EXTRA_KEYS = ("t_end_s", "n_strides", "stride_period_cv", "steady_boundi
                       "motor_saturation_retraction_back", "motor_saturation_retraction_front",
                       "max_belt_deflection_deg", "max_impact_impulse_ratio",
                       "end_of_stance_slides", "model")
+#: Keys that follow :data:`SUMMARY_EXTRA_KEYS` in :meth:`GaitMetrics.summary`: what the
+#: gait costs (all None for a run made without the energy accounting).
+SUMMARY_ENERGY_KEYS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
+                       "hip_work_j", "friction_loss_j", "impact_loss_j",
+                       "mechanical_energy_change_j", "energy_residual_j",
+                       "energy_relative_residual", "mean_electrical_power_w",
+                       "cost_of_transport")
 #: Per-stride numeric metrics that are averaged over the steady strides.
 STRIDE_METRICS = ("period_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
                   "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m",
                   "mean_speed_m_s")
+
+#: Per-stride energy fields of :class:`Stride` (None without the energy accounting).
+STRIDE_ENERGY_METRICS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
+                         "hip_work_j", "friction_loss_j", "impact_loss_j",
+                         "mechanical_energy_change_j", "energy_residual_j", "distance_m",
+                         "mean_electrical_power_w", "cost_of_transport")
 
 #: Current mismatch [A] above which the amplifier/motor limit counts as active.
 SATURATION_TOLERANCE_A = 1e-6
@@ -226,6 +240,38 @@ class Stride:
         interpolation of the sampled position and forward speed.
     steady : bool
         The stride starts at or after the transient and ends before the data end.
+
+    The energy of the stride (None unless the run accounted for its energy,
+    ``simulate(energy=True)``) is taken between the control samples nearest to its two
+    back-leg lift-offs (``energy_t_start``, ``energy_t_end`` [s]; consecutive strides share
+    their boundary sample, so the strides' energies add up to the energy over their
+    samples), both virtual legs and every motor of each together:
+
+    electrical_energy_j : float
+        Electrical energy into the motor terminals [J] (docs/model.md "Work-energy balance").
+    copper_loss_j, transmission_loss_j : float
+        Motor copper losses R_A i^2; transmission losses (the paper's constant efficiency,
+        signed, and the optional load-dependent losses) [J]. With the hip work they make up
+        the electrical energy.
+    hip_work_j : float
+        Work of the delivered hip torques on the legs [J].
+    friction_loss_j : float
+        Every friction and damper of the mechanism: motor joint, belt damper, leg damper
+        and sliding joint, sliding toes [J].
+    impact_loss_j : float
+        Kinetic energy lost in the touchdown impacts in [energy_t_start, energy_t_end) [J].
+    mechanical_energy_change_j : float
+        Change of the mechanical energy (kinetic, gravity, leg and belt springs) [J].
+    energy_residual_j : float
+        hip_work - friction - constraint work - impacts - mechanical change [J]: the
+        integration error of the stride's mechanical balance.
+    distance_m : float
+        x at energy_t_end less x at energy_t_start [m].
+    mean_electrical_power_w : float
+        electrical_energy_j over the time between the two samples [W] (Model I / II).
+    cost_of_transport : float
+        The balance's input (electrical energy for Model I / II, hip work for the ideal
+        actuator) over m g distance_m, m the robot's total mass [-].
     """
 
     index: int
@@ -241,6 +287,19 @@ class Stride:
     height_min_m: float
     mean_speed_m_s: float
     steady: bool
+    energy_t_start: float | None = None
+    energy_t_end: float | None = None
+    electrical_energy_j: float | None = None
+    copper_loss_j: float | None = None
+    transmission_loss_j: float | None = None
+    hip_work_j: float | None = None
+    friction_loss_j: float | None = None
+    impact_loss_j: float | None = None
+    mechanical_energy_change_j: float | None = None
+    energy_residual_j: float | None = None
+    distance_m: float | None = None
+    mean_electrical_power_w: float | None = None
+    cost_of_transport: float | None = None
 
     def to_dict(self) -> dict:
         """JSON-safe dict (plain int / float / bool; NaN or inf become None)."""
@@ -287,6 +346,7 @@ def _strides(result, transient_s, stances):
     dhy = _velocity(result, L.IY)
     t_end_run = float(result.t_end)
     xs = _hermite(t, x, dx, lo)
+    cumulative = {}
     out = []
     for k in range(len(lo) - 1):
         a, b = float(lo[k]), float(lo[k + 1])
@@ -303,7 +363,73 @@ def _strides(result, transient_s, stances):
             pitch_max_deg=math.degrees(pmax), pitch_min_deg=math.degrees(pmin),
             height_max_m=hmax, height_min_m=hmin,
             mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
-            steady=bool(a >= transient_s and b <= t_end_run)))
+            steady=bool(a >= transient_s and b <= t_end_run),
+            **stride_energy(result, a, b, cumulative)))
+    return out
+
+
+def _input_and_weight(result):
+    """(the balance's input flow, m g [N]) of the run: "electrical" for Model I / II,
+    "hip_work" for the ideal actuator; (None, None) for the passive model or without the
+    robot in the provenance."""
+    prov = result.provenance or {}
+    robot = prov.get("robot")
+    model = prov.get("model")
+    if not robot or model not in ("I", "II", "ideal"):
+        return None, None
+    from ..parameters import RobotParameters
+    params = RobotParameters(**robot)
+    return ("electrical" if model in ("I", "II") else "hip_work",
+            params.total_mass * params.gravity)
+
+
+def _nearest_sample(t, te: float) -> int:
+    i = int(np.searchsorted(t, te))
+    if i >= len(t):
+        return len(t) - 1
+    if i > 0 and te - t[i - 1] <= t[i] - te:
+        return i - 1
+    return i
+
+
+def stride_energy(result, a: float, b: float, cumulative: dict | None = None) -> dict:
+    """The energy fields of :class:`Stride` for the stride from ``a`` to ``b`` [s] (the
+    run's samples nearest to them); {} if the run has no ``energy_series``.
+    ``cumulative``: a dict in which the run's cumulative energies by destination
+    (``result.cumulative_energy``) are kept from one stride to the next."""
+    if getattr(result, "energy_series", None) is None or len(result.t) < 2:
+        return {}
+    t = np.asarray(result.t, dtype=float)
+    i, j = _nearest_sample(t, a), _nearest_sample(t, b)
+    if j <= i:
+        return {}
+    cumulative = {} if cumulative is None else cumulative
+
+    def delta(name):
+        if name not in cumulative:
+            cumulative[name] = result.cumulative_energy(name)
+        return float(cumulative[name][j] - cumulative[name][i])
+
+    imp = result.impacts()
+    impacts = float(imp[(imp[:, 0] >= t[i]) & (imp[:, 0] < t[j]), 4].sum())
+    mech = float(result.energy[j] - result.energy[i])
+    hip = delta("hip_work")
+    friction = delta("friction")
+    distance = float(result.x[j] - result.x[i])
+    input_name, weight = _input_and_weight(result)
+    electrical = input_name == "electrical"
+    out = {"energy_t_start": float(t[i]), "energy_t_end": float(t[j]),
+           "electrical_energy_j": delta("electrical") if electrical else None,
+           "copper_loss_j": delta("copper") if electrical else None,
+           "transmission_loss_j": delta("transmission") if electrical else None,
+           "hip_work_j": hip, "friction_loss_j": friction, "impact_loss_j": impacts,
+           "mechanical_energy_change_j": mech,
+           "energy_residual_j": hip - friction - delta("constraint") - impacts - mech,
+           "distance_m": distance}
+    out["mean_electrical_power_w"] = (out["electrical_energy_j"] / float(t[j] - t[i])
+                                      if electrical else None)
+    out["cost_of_transport"] = (delta(input_name) / (weight * distance)
+                                if input_name is not None and distance > 0 else None)
     return out
 
 
@@ -492,7 +618,8 @@ class GaitMetrics:
 
         Keys, in order: :data:`SUMMARY_KEYS` (outcome, steady-state means, the maximum
         ratio |tangential|/normal ground force ``max_friction_ratio`` from
-        ``result.stats``, the number of steady strides), then :data:`SUMMARY_EXTRA_KEYS`.
+        ``result.stats``, the number of steady strides), then :data:`SUMMARY_EXTRA_KEYS`,
+        then what the gait costs, :data:`SUMMARY_ENERGY_KEYS` (:meth:`energy_summary`).
         Missing or non-finite values are None (JSON null), never NaN.
 
         Parameters
@@ -519,7 +646,61 @@ class GaitMetrics:
         out["max_impact_impulse_ratio"] = _json_float(stats.get("max_impact_impulse_ratio"))
         out["end_of_stance_slides"] = _json_number(stats.get("end_of_stance_slides"))
         out["model"] = prov.get("model")
+        out.update(self.energy_summary(result))
         return out
+
+    def energy_summary(self, result) -> dict:
+        """What the run's gait costs (the keys of :data:`SUMMARY_ENERGY_KEYS`), JSON-safe.
+
+        Over the whole run (``result.energy_flows``; a streamed run's too, though its
+        result holds only its end), in J: ``electrical_energy_j`` into the motor
+        terminals, ``copper_loss_j``, ``transmission_loss_j`` (signed; the three make up
+        the electrical energy with ``hip_work_j``), ``hip_work_j``, ``friction_loss_j``
+        (every friction and damper of the mechanism), ``impact_loss_j`` (touchdown
+        impacts), ``mechanical_energy_change_j`` and the balance's ``energy_residual_j``
+        (input less every term; ``energy_relative_residual``: relative to the input), as
+        :meth:`~scoutsim.result.SimulationResult.energy_balance` gives them.
+
+        Over the steady strides (from the first steady stride's start to the last one's
+        end, the samples nearest to the back-leg lift-offs): ``mean_electrical_power_w``
+        [W] and ``cost_of_transport`` = E / (m g d) [-], E the balance's input (electrical
+        energy for Model I / II, hip work for the ideal actuator), m the robot's total
+        mass (``RobotParameters.total_mass``), g gravity, d the distance the torso
+        travelled; None without steady strides.
+
+        Every key is None when the run was made without the energy accounting
+        (``simulate(energy=False)``, ``scoutsim run --no-energy``); the electrical keys
+        are None for the ideal actuator and the passive model (no electrical side), the
+        cost of transport for the passive model (no input)."""
+        out = dict.fromkeys(SUMMARY_ENERGY_KEYS)
+        if getattr(result, "energy_flows", None) is None:
+            return out
+        b = result.energy_balance()
+        electrical = b.model in ("I", "II")
+        friction = sum(b.term(n) for n in ("joint_friction", "belt_damper", "leg_damper",
+                                           "leg_friction", "toe_sliding"))
+        out.update({
+            "electrical_energy_j": b.input_J if electrical else None,
+            "copper_loss_j": b.term("copper") if electrical else None,
+            "transmission_loss_j": b.term("transmission") if electrical else None,
+            "hip_work_j": b.hip_work_J, "friction_loss_j": friction,
+            "impact_loss_j": b.term("impacts"),
+            "mechanical_energy_change_j": b.term("mechanical_change"),
+            "energy_residual_j": b.residual_J,
+            "energy_relative_residual": b.relative_residual})
+        steady = [st for st in self.steady_strides if st.distance_m is not None]
+        if steady:
+            span = sum(st.energy_t_end - st.energy_t_start for st in steady)
+            distance = sum(st.distance_m for st in steady)
+            if electrical:
+                out["mean_electrical_power_w"] = sum(st.electrical_energy_j
+                                                     for st in steady) / span
+            input_name, weight = _input_and_weight(result)
+            if input_name is not None and distance > 0:
+                energy = sum(st.electrical_energy_j if electrical else st.hip_work_j
+                             for st in steady)
+                out["cost_of_transport"] = energy / (weight * distance)
+        return {k: _json_float(v) for k, v in out.items()}
 
     def to_dict(self) -> dict:
         """JSON-safe dict: transient, outcome, counts, means, period CV and all strides."""
@@ -598,8 +779,10 @@ def stride_table(result, transient_s: float = 2.0) -> dict:
     -------
     dict of str -> ndarray
         Columns ``index`` (int), ``t_start``, ``t_end`` [s], the metrics of
-        :data:`STRIDE_METRICS` (units in their names) and ``steady`` (bool); each of
-        length ``n_strides``.
+        :data:`STRIDE_METRICS` (units in their names), for a run with the energy
+        accounting ``energy_t_start``, ``energy_t_end`` [s] and
+        :data:`STRIDE_ENERGY_METRICS` (NaN where a stride's is None), and ``steady``
+        (bool); each of length ``n_strides``.
     """
     strides = gait_metrics(result, transient_s).strides
     cols = {"index": np.array([s.index for s in strides], dtype=int),
@@ -607,5 +790,9 @@ def stride_table(result, transient_s: float = 2.0) -> dict:
             "t_end": np.array([s.t_end for s in strides], dtype=float)}
     for k in STRIDE_METRICS:
         cols[k] = np.array([s[k] for s in strides], dtype=float)
+    if strides and strides[0].energy_t_start is not None:
+        for k in ("energy_t_start", "energy_t_end") + STRIDE_ENERGY_METRICS:
+            cols[k] = np.array([np.nan if s[k] is None else s[k] for s in strides],
+                               dtype=float)
     cols["steady"] = np.array([s.steady for s in strides], dtype=bool)
     return cols

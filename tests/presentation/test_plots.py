@@ -178,3 +178,23 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
         (6 if t[-1] - t[0] > 4.0 else 4)
     with pytest.raises(ValueError, match="overview"):
         plot_run(result_II, overview="yes")
+
+
+def test_plot_stride_power_shows_each_destination_with_its_energy(tmp_path):
+    """Two panels in W over one stride: the battery's output with copper, transmission and
+    hip work (their stride energies in the legend, adding up to the battery's), then the
+    hip work with friction and dampers and the mechanical energy's rate of change."""
+    from scoutsim.presentation.plots import plot_stride_power
+    r = scoutsim.simulate(duration=1.0, model="II", energy=True)
+    fig = plot_stride_power(r, tmp_path / "p.png", stride=1)
+    assert (tmp_path / "p.png").read_bytes()[:8] == PNG_MAGIC
+    ax_in, ax_out = fig.get_axes()
+    assert "[W]" in ax_in.get_ylabel() and "[W]" in ax_out.get_ylabel()
+    labels = [t.get_text() for t in ax_in.get_legend().get_texts()]
+    energy = {lab.split(":")[0]: float(lab.split(":")[1].split()[0]) for lab in labels}
+    assert energy["battery output"] == pytest.approx(
+        energy["copper losses R_A i^2"] + energy["transmission losses (signed)"]
+        + energy["hip work (mechanical)"], abs=0.15)            # legend rounds to 0.1 J
+    assert any("friction" in t.get_text() for t in ax_out.get_legend().get_texts())
+    with pytest.raises(ValueError, match="energy=True"):
+        plot_stride_power(scoutsim.simulate(duration=1.0, model="II"))
