@@ -15,10 +15,13 @@ from .simulation import (  # noqa: E402
     default_initial_state, simulate,
 )
 from .control.bounding import BoundingController  # noqa: E402
+from .control.startup import StartupParameters  # noqa: E402
+from .state import standing_state  # noqa: E402
 
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
+    "StartupParameters", "standing_state",
 ]

@@ -269,6 +269,10 @@ class SimulationResult:
         failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
         what happened, parameters far from the Scout II defaults, advice)."""
         out = self.gait().summary(self)
+        startup = (self.provenance or {}).get("startup")
+        if startup is not None:
+            # a start from standing: t = 0 to the hand-over to the bounding controller
+            out["startup_duration_s"] = startup.get("handover_s")
         if self.failure is not None:
             out["failure"] = self.failure.to_dict()
         return out

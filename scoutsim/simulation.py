@@ -23,6 +23,7 @@ import numpy as np
 
 from ._version import __version__
 from .control.bounding import SCHEDULABLE, BoundingController, controller_array
+from .control.startup import StartupParameters, run_startup
 from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.transmission import motor_mode_from_rate
@@ -37,7 +38,7 @@ from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult
-from .state import HybridState, InitialState
+from .state import HybridState, InitialState, standing_state
 
 Sensors = namedtuple("Sensors", ["hip_angle", "hip_rate", "leg_length"])
 _METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
@@ -548,7 +549,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              progress: bool = False, chunk_seconds: float = 1.0,
              record_steps: bool = False, check_memory: bool = True,
              stream_to=None, keep_seconds: float | None = None,
-             table_format: str | None = None, energy: bool = False) -> SimulationResult:
+             table_format: str | None = None, energy: bool = False,
+             startup: StartupParameters | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -562,10 +564,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         If its ``command`` raises, or returns anything but two finite hip torques, the run
         stops at that sample with a :class:`ControllerError`.
         ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
-    initial_state : InitialState or HybridState, optional
-        Start state (default: :func:`default_initial_state`); a :class:`HybridState`
-        (e.g. ``result.hybrid_state(k)``) resumes a run at one of its samples, to the
-        integration tolerance (see :class:`~scoutsim.state.HybridState`).
+    initial_state : InitialState, HybridState, "flight" or "standing", optional
+        Start state (default: :func:`default_initial_state`, also named "flight"); a
+        :class:`HybridState` (e.g. ``result.hybrid_state(k)``) resumes a run at one of its
+        samples, to the integration tolerance (see :class:`~scoutsim.state.HybridState`).
+        "standing": the robot at rest on its four legs
+        (:func:`~scoutsim.state.standing_state`), set going by the start-up of
+        :mod:`scoutsim.control.startup` (a step of the back legs) and then bounding under
+        the Table I controller, in the same run; the built-in controller only
+        (``result.provenance["startup"]``, the summary's ``startup_duration_s``).
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}
@@ -618,6 +625,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         integrator step: ``result.energy_flows``, ``result.energy_balance()``. The motion is
         the same bit for bit; the run takes longer (three more evaluations per step:
         10 s of Model II 1.65x, of Model I 1.28x).
+    startup : StartupParameters, optional
+        With ``initial_state="standing"`` only: the start-up's parameters (default
+        ``StartupParameters()``).
 
     Returns
     -------
@@ -686,6 +696,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     # the compiled controller runs unless the model is passive or the user brings their own
     C = controller_array(cparams if user_ctrl is None else None, robot)
     dt = cparams.control_period if cparams is not None else 1e-3
+    initial_state, startup = _named_start(initial_state, startup, model, robot, cparams,
+                                          user_ctrl)
     init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
     if resume:
@@ -694,8 +706,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         s = _state_vector(init, robot, cparams if model != "passive" else None,
                           passive_touchdown_angles, passive_touchdown_world)
     else:
-        raise TypeError("initial_state must be an InitialState or a HybridState, not "
-                        f"{type(init).__name__}")
+        raise TypeError("initial_state must be an InitialState, a HybridState, 'flight' "
+                        f"or 'standing', not {type(init).__name__}")
 
     ls = np.zeros(2, dtype=np.int64)
     if resume:
@@ -731,8 +743,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         user_ctrl.reset(robot, _sensors(s, cparams, model))
     interrupted = False
     failure = None       # (sample, what command returned, what it raised): ControllerError
+    started = None       # the start-up from standing: its StartupRecord
+    written = True       # a streamed run's tables took every piece so far
     try:
-        while eng.running:
+        if startup is not None:
+            started = run_startup(eng, startup, cparams)
+            if bar is not None:
+                bar.update(round(eng.k * dt, 6))
+            written = stream is None or stream.take(eng)
+        while written and eng.running:
             if user_ctrl is not None:
                 sens = _sensors(s, cparams, model)
                 try:
@@ -774,7 +793,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "controller": (asdict(cparams) if cparams is not None else None),
         "controller_kind": ("builtin" if user_ctrl is None and model != "passive" else
                             (type(user_ctrl).__name__ if user_ctrl is not None else "none")),
-        "initial_state": asdict(init) | ({"kind": "hybrid_state"} if resume else {}),
+        "initial_state": asdict(init) | ({"kind": "standing"} if startup is not None else
+                                         {"kind": "hybrid_state"} if resume else {}),
         "integrator": asdict(integ),
         "duration_s": duration,
         "friction_coefficient": (None if math.isinf(friction_coefficient) else friction_coefficient),
@@ -783,6 +803,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "passive_touchdown_world": passive_touchdown_world,
         "control_period_s": dt,
     }
+    if startup is not None:
+        provenance["startup"] = (started.to_dict() if started is not None else
+                                 {"parameters": asdict(startup.resolved(cparams))})
     error = None
     if failure is not None:
         k_fail, returned, exc = failure
@@ -820,6 +843,41 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         error.result = kept
         raise error from failure[2]
     return kept
+
+
+#: the starts ``simulate(initial_state=...)`` knows by name
+NAMED_STARTS = ("flight", "standing")
+
+
+def _named_start(initial_state, startup, model, robot, cparams, user_ctrl):
+    """Resolve a start given by name: (initial state or None for the default, start-up
+    parameters or None). "flight": the default start; "standing": the robot at rest
+    (:func:`~scoutsim.state.standing_state`) and the start-up of
+    :mod:`scoutsim.control.startup`, which needs the built-in Table I controller."""
+    if not isinstance(initial_state, str):
+        if startup is not None:
+            raise ValueError("startup is only allowed with initial_state='standing'")
+        return initial_state, None
+    if initial_state not in NAMED_STARTS:
+        raise ValueError(f"initial_state = {initial_state!r} is not allowed: must be an "
+                         f"InitialState, a HybridState or one of {list(NAMED_STARTS)}")
+    if initial_state == "flight":
+        if startup is not None:
+            raise ValueError("startup is only allowed with initial_state='standing'")
+        return None, None
+    if model == "passive" or cparams is None:
+        raise ValueError("initial_state = 'standing' is not allowed with model = "
+                         f"{model!r}: the standing robot is held and set going by the "
+                         "bounding controller (model 'ideal', 'I' or 'II')")
+    if user_ctrl is not None:
+        raise ValueError("initial_state = 'standing' is not allowed with a Python "
+                         f"controller ({type(user_ctrl).__name__}): the start-up runs the "
+                         "built-in Table I controller (pass ControllerParameters or None)")
+    if startup is None:
+        startup = StartupParameters()
+    elif not isinstance(startup, StartupParameters):
+        raise TypeError(f"startup must be StartupParameters, not {type(startup).__name__}")
+    return standing_state(robot, model, cparams), startup
 
 
 def _sensors(s, cparams, model):
