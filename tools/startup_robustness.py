@@ -40,11 +40,15 @@ def variations():
             step_angle_back=ctrl.touchdown_angle_back * f), None
         yield f"step_kp {tag}", robot, base.replace(step_kp=ctrl.brake_kp_back * f), None
         yield f"step_kd {tag}", robot, base.replace(step_kd=ctrl.brake_kd_back * f), None
+        yield f"front_pushoff_angle {tag}", robot, base.replace(
+            front_pushoff_angle=base.front_pushoff_angle * f), None
         # the hip torque the motor gives (Models I, II): its current limit
         yield f"current_limit {tag}", robot.replace(
             current_limit=robot.current_limit * f), base, None
-    yield "front legs step too (21 deg)", robot, base.replace(
-        step_angle_front=ctrl.touchdown_angle_front), None
+    yield "no front push", robot, base.replace(front_pushoff_angle=None), None
+    for f in (0.9, 1.1):
+        yield f"no front push, current_limit {(f - 1) * 100:+.0f} %", robot.replace(
+            current_limit=robot.current_limit * f), base.replace(front_pushoff_angle=None), None
     yield "floor mu = 0.8", robot, base, 0.8
     yield "floor mu = 1.5", robot, base, 1.5
     yield "floor no slip", robot, base, math.inf

@@ -33,28 +33,32 @@ def test_startup_from_standing_reaches_steady_bounding(standing_runs, model):
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_startup_stands_then_steps_the_back_legs_and_hands_over_after_both_lift_off(
+def test_startup_stands_steps_the_back_legs_pushes_and_hands_over_after_both_lift_off(
         standing_runs, model):
     r = standing_runs[model]
     rec = r.provenance["startup"]
     assert rec["completed"]
-    step = rec["step_s"]
+    step, push = rec["step_s"], rec["push_s"]
+    lb, lf = rec["liftoff_s"]
     assert step == pytest.approx(StartupParameters().stand_duration)
     # standing until the step: nothing moves
     before = r.t < step
     assert np.max(np.abs(r.state[before, L.NQ:2 * L.NQ])) < 1e-9
-    # the back legs lift off first (the step), then the front legs (the thrust pitches the
-    # nose up); the hand-over is the sample after the later lift-off
-    lb, lf = rec["liftoff_s"]
-    assert step < lb < lf < step + 0.5
+    # the back legs lift off (the step), land (the push begins), then the front legs lift
+    # off; the hand-over is the sample after the later lift-off
+    assert step < lb < push < lf < step + 0.5
     assert rec["handover_s"] == pytest.approx(lf + 1e-3)
     assert r.summary()["startup_duration_s"] == rec["handover_s"]
-    k = np.searchsorted(r.t, lb)
-    assert r.leg_state("back")[k] == L.LS_FLIGHT
-    assert np.all(r.leg_state("front")[r.t < lf] == L.LS_BRAKE)
+    assert r.leg_state("back")[np.searchsorted(r.t, lb)] == L.LS_FLIGHT
+    assert r.leg_state("back")[np.searchsorted(r.t, push)] == L.LS_RETRACTION
+    assert np.all(r.leg_state("front")[r.t < push] == L.LS_BRAKE)
+    assert r.leg_state("front")[np.searchsorted(r.t, push) + 1] == L.LS_RETRACTION
     # the stepping back legs reach their touchdown angle (Table I: 19 deg) in flight
-    after = (r.t > lb) & (r.t < lf)
-    assert math.degrees(np.max(r.leg_angle("back")[after])) == pytest.approx(19.0, abs=1.5)
+    flight = (r.t > lb) & (r.t < push)
+    assert math.degrees(np.max(r.leg_angle("back")[flight])) == pytest.approx(19.0, abs=1.5)
+    # the push moves the robot forward and pitches its nose up
+    k = np.searchsorted(r.t, lf)
+    assert r.forward_speed[k] > 0.0 and r.pitch_rate[k] > 0.0
 
 
 def test_after_the_handover_the_controller_runs_with_its_own_parameters():
@@ -69,10 +73,13 @@ def test_after_the_handover_the_controller_runs_with_its_own_parameters():
 
 
 def test_a_custom_startup_is_used_and_recorded():
-    su = StartupParameters(stand_duration=0.1, step_angle_back=math.radians(21.0))
+    su = StartupParameters(stand_duration=0.1, step_angle_back=math.radians(21.0),
+                           front_pushoff_angle=None)
     r = scoutsim.simulate(initial_state="standing", duration=0.6, model="I", startup=su)
     rec = r.provenance["startup"]
     assert rec["step_s"] == pytest.approx(0.1)
+    assert rec["push_s"] is None and rec["completed"]     # the front legs did not push
+    assert np.all(r.leg_state("front")[r.t < rec["liftoff_s"][1]] == L.LS_BRAKE)
     assert rec["parameters"]["step_angle_back"] == pytest.approx(math.radians(21.0))
     assert rec["parameters"]["step_kp"] == ControllerParameters().brake_kp_back
 
@@ -94,7 +101,7 @@ def test_bad_starts_are_refused_naming_the_field():
 @pytest.mark.parametrize("field, value", [
     ("stand_duration", -0.1), ("stand_duration", math.nan), ("handover_timeout", 0.0),
     ("handover_timeout", 10.0), ("step_angle_back", math.radians(95.0)),
-    ("step_angle_front", math.inf), ("step_kp", -1.0), ("step_kd", "5"),
+    ("front_pushoff_angle", math.inf), ("step_kp", -1.0), ("step_kd", "5"),
 ])
 def test_bad_startup_parameters_are_refused_naming_the_field(field, value):
     with pytest.raises(ValueError, match=f"startup.{field} = "):
