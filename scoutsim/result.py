@@ -267,7 +267,10 @@ class SimulationResult:
     def summary(self) -> dict:
         """The run summary (outcome and steady-state gait metrics), JSON-safe; a run that
         failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
-        what happened, parameters far from the Scout II defaults, advice)."""
+        what happened, parameters far from the Scout II defaults, advice); a run started
+        standing (``simulate(initial_state="standing")``) also has ``"startup_duration_s"``:
+        the time [s] from t = 0 to the start-up's hand-over to the bounding controller
+        (None if it timed out)."""
         out = self.gait().summary(self)
         startup = (self.provenance or {}).get("startup")
         if startup is not None:

@@ -570,9 +570,10 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         samples, to the integration tolerance (see :class:`~scoutsim.state.HybridState`).
         "standing": the robot at rest on its four legs
         (:func:`~scoutsim.state.standing_state`), set going by the start-up of
-        :mod:`scoutsim.control.startup` (a step of the back legs) and then bounding under
-        the Table I controller, in the same run; the built-in controller only
-        (``result.provenance["startup"]``, the summary's ``startup_duration_s``).
+        :mod:`scoutsim.control.startup` (a step of the back legs, then a push of all
+        four) and then bounding under the Table I controller, in the same run; the
+        built-in controller only (``result.provenance["startup"]``, the summary's
+        ``startup_duration_s``).
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}

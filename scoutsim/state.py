@@ -138,7 +138,8 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
     the leg bodies' weight acts along the legs, so the hips hold no torque: the Model II
     belts are undeflected (gear angle alpha = phi = 0) and the motor joints stuck by their
     stiction. The controller's leg states are stance-brake, whose PD law about the sweep
-    limit holds the legs there (without it the two legs and the torso form a parallelogram
+    limit (Table I: 0 deg, the standing angle; the start-up from standing holds 0 deg
+    whatever the sweep limits) holds the legs there (without it the two legs and the torso form a parallelogram
     that only a hip torque keeps upright).
 
     Parameters

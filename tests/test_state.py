@@ -81,6 +81,8 @@ def test_standing_robot_held_by_the_stance_brake_stays_put_for_two_seconds(model
     assert np.max(np.abs(r.state[-1] - np.array(h.state))) < 1e-9    # drift [m, rad]
     assert np.all(r.leg_state("back") == L.LS_BRAKE)
     assert np.all(r.contact_mode("front") == L.STICK)
+    if model == "II":       # the motor joints stay stuck by their stiction
+        assert np.all(r.modes[:, L.RM_MOTOR_B:L.RM_MOTOR_B + 2] == L.STUCK)
 
 
 def test_standing_robot_pushed_gently_recovers_and_stays_standing():

@@ -61,7 +61,8 @@ def register(sub, common) -> None:
     run.add_argument("--start", choices=("flight", "standing"), default="flight",
                      help="flight (default): released in flight at --speed, --height, "
                           "--pitch-rate; standing: at rest on its four legs, set going by "
-                          "the start-up (a step of the back legs) into the Table I bound "
+                          "the start-up (a step of the back legs, then a push of all four) "
+                          "into the Table I bound "
                           "(summary: startup_duration_s)")
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
