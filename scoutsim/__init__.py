@@ -18,6 +18,8 @@ from .control import (  # noqa: E402
     BoundingController, CompiledController, Controller, SensorChannel, SensorParameters,
     load_sensors,
 )
+from .control.startup import StartupParameters  # noqa: E402
+from .state import standing_state  # noqa: E402
 
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
@@ -25,4 +27,5 @@ __all__ = [
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
     "Controller", "CompiledController", "SensorParameters", "SensorChannel", "load_sensors",
+    "StartupParameters", "standing_state",
 ]

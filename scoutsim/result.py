@@ -375,8 +375,15 @@ class SimulationResult:
         strides, ...; None without the energy accounting,
         :meth:`~scoutsim.analysis.gait.GaitMetrics.energy_summary`), JSON-safe; a run that
         failed numerically also has ``"failure"``: :attr:`failure` as a dict (kind, time,
-        what happened, parameters far from the Scout II defaults, advice)."""
+        what happened, parameters far from the Scout II defaults, advice); a run started
+        standing (``simulate(initial_state="standing")``) also has ``"startup_duration_s"``:
+        the time [s] from t = 0 to the start-up's hand-over to the bounding controller
+        (None if it timed out)."""
         out = self.gait().summary(self)
+        startup = (self.provenance or {}).get("startup")
+        if startup is not None:
+            # a start from standing: t = 0 to the hand-over to the bounding controller
+            out["startup_duration_s"] = startup.get("handover_s")
         if self.failure is not None:
             out["failure"] = self.failure.to_dict()
         return out

@@ -25,6 +25,7 @@ from .control.bounding import SCHEDULABLE, controller_array
 from .control.dispatch import PythonBridge, plan_controller
 from .control.protocol import ControllerError, failure_message
 from .control.sensors import SensorParameters, Sensors
+from .control.startup import StartupParameters, run_startup
 from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.transmission import motor_mode_from_rate
@@ -38,7 +39,7 @@ from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
 from .result import SimulationResult
-from .state import HybridState, InitialState
+from .state import HybridState, InitialState, standing_state
 
 _METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
 
@@ -530,7 +531,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
              record_steps: bool = False, check_memory: bool = True,
              stream_to=None, keep_seconds: float | None = None,
              table_format: str | None = None, energy: bool = False,
-             sensors: SensorParameters | None = None) -> SimulationResult:
+             sensors: SensorParameters | None = None,
+             startup: StartupParameters | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -546,10 +548,16 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         (:mod:`scoutsim.control.dispatch`). If it raises, or returns anything but two
         finite hip torques, the run stops at that sample with a :class:`ControllerError`.
         ``None`` means the Table I defaults, except for ``model="passive"`` (no control).
-    initial_state : InitialState or HybridState, optional
-        Start state (default: :func:`default_initial_state`); a :class:`HybridState`
-        (e.g. ``result.hybrid_state(k)``) resumes a run at one of its samples, to the
-        integration tolerance (see :class:`~scoutsim.state.HybridState`).
+    initial_state : InitialState, HybridState, "flight" or "standing", optional
+        Start state (default: :func:`default_initial_state`, also named "flight"); a
+        :class:`HybridState` (e.g. ``result.hybrid_state(k)``) resumes a run at one of its
+        samples, to the integration tolerance (see :class:`~scoutsim.state.HybridState`).
+        "standing": the robot at rest on its four legs
+        (:func:`~scoutsim.state.standing_state`), set going by the start-up of
+        :mod:`scoutsim.control.startup` (a step of the back legs, then a push of all
+        four) and then bounding under the Table I controller, in the same run; the
+        built-in controller only (``result.provenance["startup"]``, the summary's
+        ``startup_duration_s``).
     duration : float
         Simulated time [s].
     model : {"II", "I", "ideal", "passive"}
@@ -607,6 +615,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         noise, bias, resolution and delay per channel, seeded; a robot file's
         ``[sensors]``: :func:`~scoutsim.control.sensors.load_sensors`); default: ideal
         sensors. Every controller, the built-in one too, sees the sensors' readings.
+    startup : StartupParameters, optional
+        With ``initial_state="standing"`` only: the start-up's parameters (default
+        ``StartupParameters()``).
 
     Returns
     -------
@@ -656,6 +667,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                     passive_touchdown_world=passive_touchdown_world,
                     pitch_limit=math.radians(pitch_limit_deg))
     dt = plan.control_period
+    initial_state, startup = _named_start(initial_state, startup, model, robot, cparams,
+                                          plan.controller)
     init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
     if resume:
@@ -665,8 +678,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
                           (cparams or ControllerParameters()),
                           passive_touchdown_angles, passive_touchdown_world)
     else:
-        raise TypeError("initial_state must be an InitialState or a HybridState, not "
-                        f"{type(init).__name__}")
+        raise TypeError("initial_state must be an InitialState, a HybridState, 'flight' "
+                        f"or 'standing', not {type(init).__name__}")
 
     ls = np.zeros(2, dtype=np.int64)
     if resume:
@@ -708,8 +721,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         bar = tqdm(total=round(duration, 3), unit="s", unit_scale=False, desc=f"Model {model}",
                    leave=False, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
     interrupted = False
+    started = None       # the start-up from standing: its StartupRecord
+    written = True       # a streamed run's tables took every piece so far
     try:
-        while eng.running:
+        if startup is not None:
+            started = run_startup(eng, startup, cparams)
+            if bar is not None:
+                bar.update(round(eng.k * dt, 6))
+            written = stream is None or stream.take(eng)
+        while written and eng.running:
             k_prev = eng.k
             eng.advance(eng.k + chunk)
             if bridge is not None and bridge.interrupted:
@@ -734,7 +754,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "robot": asdict(robot),
         "controller": (asdict(cparams) if cparams is not None else None),
         "controller_kind": plan.label,
-        "initial_state": asdict(init) | ({"kind": "hybrid_state"} if resume else {}),
+        "initial_state": asdict(init) | ({"kind": "standing"} if startup is not None else
+                                         {"kind": "hybrid_state"} if resume else {}),
         "integrator": asdict(integ),
         "duration_s": duration,
         "friction_coefficient": (None if math.isinf(friction_coefficient) else friction_coefficient),
@@ -743,6 +764,9 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         "passive_touchdown_world": passive_touchdown_world,
         "control_period_s": dt,
     }
+    if startup is not None:
+        provenance["startup"] = (started.to_dict() if started is not None else
+                                 {"parameters": asdict(startup.resolved(cparams))})
     if sensors is not None and not sensors.is_ideal():
         provenance["sensors"] = sensors.as_dict()
     error = failure = None
@@ -785,3 +809,39 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         error.result = kept
         raise error from failure[2]
     return kept
+
+
+#: the starts ``simulate(initial_state=...)`` knows by name
+NAMED_STARTS = ("flight", "standing")
+
+
+def _named_start(initial_state, startup, model, robot, cparams, user_ctrl):
+    """Resolve a start given by name: (initial state or None for the default, start-up
+    parameters or None). "flight": the default start; "standing": the robot at rest
+    (:func:`~scoutsim.state.standing_state`) and the start-up of
+    :mod:`scoutsim.control.startup`, which needs the built-in Table I controller."""
+    if not isinstance(initial_state, str):
+        if startup is not None:
+            raise ValueError("startup is only allowed with initial_state='standing'")
+        return initial_state, None
+    if initial_state not in NAMED_STARTS:
+        raise ValueError(f"initial_state = {initial_state!r} is not allowed: must be an "
+                         f"InitialState, a HybridState or one of {list(NAMED_STARTS)}")
+    if initial_state == "flight":
+        if startup is not None:
+            raise ValueError("startup is only allowed with initial_state='standing'")
+        return None, None
+    if user_ctrl is not None:
+        raise ValueError("initial_state = 'standing' is not allowed with a user controller "
+                         f"({type(user_ctrl).__name__}): the start-up runs the built-in "
+                         "Table I controller (pass ControllerParameters or None)")
+    if model == "passive" or cparams is None:
+        raise ValueError("initial_state = 'standing' is not allowed with model = "
+                         f"{model!r}: the standing robot is held and set going by the "
+                         "bounding controller (model 'ideal', 'I' or 'II')")
+    if startup is None:
+        startup = StartupParameters()
+    elif not isinstance(startup, StartupParameters):
+        raise TypeError(f"startup must be StartupParameters, not {type(startup).__name__}")
+    return standing_state(robot, model, cparams), startup
+

@@ -2,6 +2,9 @@
 hybrid state of a control sample (:class:`HybridState`), from which a run resumes (to the
 integration tolerance, not bit for bit: see :class:`HybridState`). Used by
 :func:`scoutsim.simulate` and :meth:`SimulationResult.hybrid_state`.
+
+:func:`standing_state` is the robot at rest on its four legs (the start of
+``simulate(..., initial_state="standing")``).
 """
 
 from __future__ import annotations
@@ -13,8 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import layout as L
+from .parameters import ControllerParameters, RobotParameters
 
-__all__ = ["InitialState", "HybridState"]
+__all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression"]
 
 
 @dataclass(frozen=True)
@@ -106,3 +110,90 @@ class HybridState:
             raise ValueError(f"HybridState.toe_anchors = {self.toe_anchors!r} is not allowed: "
                              "two finite positions [m]")
         object.__setattr__(self, "toe_anchors", a)
+
+
+# -----------------------------------------------------------------------------------------
+# the robot standing at rest
+# -----------------------------------------------------------------------------------------
+def standing_leg_compression(robot: RobotParameters | None = None) -> float:
+    """Compression l0 - l [m] of each virtual leg of the robot standing level on vertical
+    legs: each carries half the weight, m g / (2 k_v), with m the whole robot's mass (torso
+    and every leg: the leg bodies hang on the hips, and the springs below them carry all
+    of it) and k_v = n k the virtual leg's spring (n physical legs of stiffness k; Table
+    III). Scout II: 24.745 kg x 9.81 m/s^2 / (2 x 7040 N/m) = 17.2 mm."""
+    robot = robot if robot is not None else RobotParameters()
+    k_virtual = robot.legs_per_virtual_leg * robot.leg_stiffness
+    return robot.total_mass * robot.gravity / (2.0 * k_virtual)
+
+
+def standing_state(robot: RobotParameters | None = None, model: str = "II",
+                   controller: ControllerParameters | None = None,
+                   x: float = 0.0) -> HybridState:
+    """The robot at rest on its four legs: a static equilibrium.
+
+    The torso is level, both virtual legs vertical (phi = 0, the Table I sweep limit) with
+    their toes pinned on the ground (contact mode stick) below the hips, each leg compressed
+    by :func:`standing_leg_compression` so that the two springs carry the whole weight;
+    every velocity is zero. On vertical legs the spring force passes through the hip and
+    the leg bodies' weight acts along the legs, so the hips hold no torque: the Model II
+    belts are undeflected (gear angle alpha = phi = 0) and the motor joints stuck by their
+    stiction. The controller's leg states are stance-brake, whose PD law about the sweep
+    limit (Table I: 0 deg, the standing angle; the start-up from standing holds 0 deg
+    whatever the sweep limits) holds the legs there (without it the two legs and the torso form a parallelogram
+    that only a hip torque keeps upright).
+
+    Parameters
+    ----------
+    robot : RobotParameters, optional
+        The robot (default: Scout II).
+    model : {"II", "I", "ideal"}
+        The transmission variant the state is for (the state is the same for all three:
+        with no hip torque the belt is undeflected).
+    controller : ControllerParameters, optional
+        The controller that will hold the robot (default: Table I): each leg's compression
+        must exceed its touchdown threshold, so the controller reads the leg as in stance.
+    x : float
+        Horizontal position of the COM [m].
+
+    Returns
+    -------
+    HybridState
+        Pitch 0, COM height l0 - compression [m] (the hips are at the COM's height), toe
+        anchors at x -/+ d/2 (half the hip spacing).
+
+    Raises
+    ------
+    ValueError
+        If the model has no actuators ("passive": nothing holds the legs), or the legs are
+        too soft (compressed to l <= 0) or too stiff (compression below the touchdown
+        threshold) to stand in the controller's stance state; the message names the field.
+    """
+    robot = robot if robot is not None else RobotParameters()
+    ctrl = controller if controller is not None else ControllerParameters()
+    if model not in ("II", "I", "ideal"):
+        raise ValueError(f"model = {model!r} is not allowed for a standing start: must be "
+                         "'ideal', 'I' or 'II' (the passive model has no hip actuator to "
+                         "hold its legs)")
+    if not (isinstance(x, (int, float)) and math.isfinite(x)):
+        raise ValueError(f"x = {x!r} m is not allowed: must be a finite number")
+    l0 = robot.leg_rest_length
+    comp = standing_leg_compression(robot)
+    if not comp < l0:
+        raise ValueError(f"robot.leg_stiffness = {robot.leg_stiffness} N/m is not allowed "
+                         f"for a standing start: the legs would be compressed by {comp:.3g} m, "
+                         f"more than their rest length l0 = {l0} m")
+    if not comp > ctrl.touchdown_compression:
+        raise ValueError(f"controller.touchdown_compression = {ctrl.touchdown_compression} m "
+                         "is not allowed for a standing start: the standing legs are "
+                         f"compressed by {comp:.4g} m only, so the controller would read "
+                         "them as in flight; it must be below that")
+    length = l0 - comp
+    s = np.zeros(L.NS)
+    s[L.IX] = x
+    s[L.IY] = length
+    s[L.IL_B] = length
+    s[L.IL_F] = length
+    half = robot.half_hip_spacing
+    return HybridState(state=tuple(s), leg_states=(L.LS_BRAKE, L.LS_BRAKE),
+                       contact_modes=(L.STICK, L.STICK), motor_modes=(L.STUCK, L.STUCK),
+                       toe_anchors=(x - half, x + half))

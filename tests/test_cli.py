@@ -420,3 +420,27 @@ def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, interrupt_run
     manifest = check_run_directory(out)
     assert manifest["status"] == "partial" and list(manifest["files"]) == ["basin.csv"]
     assert "2 of 4 starts are done" in capsys.readouterr().err
+
+
+def test_run_start_standing_reports_the_startup_duration(tmp_path, capsys):
+    assert main(["run", "--start", "standing", "--duration", "0.6", "--model", "I",
+                 "--out", str(tmp_path), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "start-up (standing to bounding)" in out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    prov = SimulationResult.load(tmp_path).provenance
+    assert summary["startup_duration_s"] == prov["startup"]["handover_s"] > 0.2
+    assert prov["initial_state"]["kind"] == "standing"
+
+
+@pytest.mark.parametrize("extra, text", [
+    (["--speed", "1.0"], "--start flight"),
+    (["--model", "passive"], "--model passive"),
+])
+def test_run_start_standing_refuses_flight_options_and_the_passive_model(tmp_path, capsys,
+                                                                        extra, text):
+    code = main(["run", "--start", "standing", "--duration", "0.1", "--out",
+                 str(tmp_path / "out"), "--no-progress"] + extra)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert text in err and "Traceback" not in err

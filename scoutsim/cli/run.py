@@ -3,6 +3,7 @@ the run's tables and summary (and, on request, figures and the older file format
 output directory.
 
     scoutsim run [--model {ideal,I,II,passive}] [--duration S] [--robot FILE] [--out DIR]
+                 [--start {flight,standing}]
                  [--rtol X] [--atol X] [--friction MU] [--speed V] [--height Y]
                  [--pitch-rate W] [--steps] [--format {parquet,csv}] [--plots] [--csv]
                  [--npz] [--no-progress] [--quiet] [--json] [--energy | --no-energy]
@@ -61,6 +62,12 @@ def register(sub, common) -> None:
                     "figures with --plots. SimulationResult.load(DIR) reads the run back.")
     run.add_argument("--model", choices=MODELS, default="II",
                      help="actuator/transmission model (default: II)")
+    run.add_argument("--start", choices=("flight", "standing"), default="flight",
+                     help="flight (default): released in flight at --speed, --height, "
+                          "--pitch-rate; standing: at rest on its four legs, set going by "
+                          "the start-up (a step of the back legs, then a push of all four) "
+                          "into the Table I bound "
+                          "(summary: startup_duration_s)")
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
                           "passive model: scoutsim.simulation.default_initial_state)")
@@ -279,6 +286,12 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
         ("steady strides", _fmt(summary.get("n_steady_strides"), "d")
          + (f" (of {summary['n_strides']})" if summary.get("n_strides") is not None else "")),
         ("steady bounding", {True: "yes", False: "no"}.get(summary.get("steady_bounding"), "n/a")),
+    ]
+    if "startup_duration_s" in summary:
+        rows.append(("start-up (standing to bounding)",
+                     _fmt(summary["startup_duration_s"], ".3f", "s") + " (t = 0 to the "
+                     "hand-over to the bounding controller)"))
+    rows += [
         ("simulation", (f"{wall_s:.3f} s wall, real-time factor {rtf:.0f}x" if rtf else
                         _fmt(wall_s, ".3f", "s"))),
     ]
@@ -336,6 +349,14 @@ def execute(args) -> int:
     # the model's default start (the passive model's is higher: its legs hang at the
     # passive touchdown angles), with the options given
     init = default_initial_state(args.model, robot).replace(**changes)
+    if args.start == "standing":
+        if changes:
+            raise UsageError("--speed, --height and --pitch-rate are only allowed with "
+                             "--start flight (a standing robot is at rest)")
+        if args.model == "passive":
+            raise UsageError("--start standing is not allowed with --model passive (no "
+                             "actuator holds or sets going the standing robot)")
+        init = "standing"
     out = out_dir(args.out)
     progress = show_progress(args)
 
