@@ -89,7 +89,7 @@ def test_bad_starts_are_refused_naming_the_field():
         scoutsim.simulate(initial_state="sitting", duration=0.01)
     with pytest.raises(ValueError, match="model = 'passive'"):
         scoutsim.simulate(initial_state="standing", duration=0.01, model="passive")
-    with pytest.raises(ValueError, match="Python controller"):
+    with pytest.raises(ValueError, match="user controller"):
         scoutsim.simulate(controller=type("Mine", (), {"command": lambda self, t, s: (0, 0)})(),
                           initial_state="standing", duration=0.01)
     with pytest.raises(ValueError, match="startup is only allowed"):
