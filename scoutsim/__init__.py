@@ -15,8 +15,8 @@ from .simulation import (  # noqa: E402
     default_initial_state, simulate,
 )
 from .control import (  # noqa: E402
-    BoundingController, CompiledController, Controller, SensorChannel, SensorParameters,
-    load_sensors,
+    BoundingController, CompiledController, Controller, PitchFeedbackController,
+    SensorChannel, SensorParameters, load_sensors,
 )
 
 __all__ = [
@@ -24,5 +24,6 @@ __all__ = [
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
-    "Controller", "CompiledController", "SensorParameters", "SensorChannel", "load_sensors",
+    "Controller", "CompiledController", "PitchFeedbackController", "SensorParameters",
+    "SensorChannel", "load_sensors",
 ]

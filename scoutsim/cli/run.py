@@ -34,9 +34,10 @@ from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
-from ._common import (MODELS, UsageError, check_expected_time, command_wall_time, dumps,
-                      finite_float, integrator, load_parameters, out_dir, positive_float,
-                      show_progress, usage_errors, write_json)
+from ._common import (MODELS, UsageError, add_controller_option, check_expected_time,
+                      command_wall_time, dumps, finite_float, integrator, load_parameters,
+                      make_controller, out_dir, positive_float, show_progress, usage_errors,
+                      write_json)
 
 NAME = "run"
 
@@ -57,6 +58,7 @@ def register(sub, common) -> None:
                     "figures with --plots. SimulationResult.load(DIR) reads the run back.")
     run.add_argument("--model", choices=MODELS, default="II",
                      help="actuator/transmission model (default: II)")
+    add_controller_option(run)
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
                           "passive model: scoutsim.simulation.default_initial_state)")
@@ -287,7 +289,11 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
 
 def execute(args) -> int:
     from ..simulation import default_initial_state, simulate, warm_up
-    robot, controller = load_parameters(args.robot)
+    robot, cparams = load_parameters(args.robot)
+    if args.controller != "table-i" and args.model == "passive":
+        raise UsageError(f"--controller {args.controller} is not allowed with --model "
+                         "passive (the passive model has no controller)")
+    controller = make_controller(args.controller, cparams)
     integ = integrator(args)
     changes = {}
     if args.speed is not None:
@@ -306,7 +312,8 @@ def execute(args) -> int:
     stream = _stream_choice(args)
     load_s = warm_up()
     command = " ".join(["scoutsim"] + sys.argv[1:])
-    info = {"model": args.model, "duration_s": args.duration, "streamed": stream}
+    info = {"model": args.model, "controller": args.controller, "duration_s": args.duration,
+            "streamed": stream}
     # a streamed run's directory is entered when its first rows arrive (streaming.RunStream)
     rd = RunDirectory(out, command=command, info=info) if stream else None
     wall0 = time.perf_counter()
