@@ -407,9 +407,10 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
     fig.legend(handles=[Patch(color=cmap(2), label="bounds (every height)"),
                         Patch(color=cmap(1), label="bounds (some heights)"),
                         Patch(color=cmap(0), label="falls / no steady bound")],
-               loc="outside lower center", ncol=3, fontsize=8)
-    fig.suptitle(("" if controller is None else f"{controller}: ")
-                 + "Basin of the bounding cycle (heights " + ", ".join(f"{h:g}" for h in heights)
+               loc="outside lower center", ncol=3 if len(floors) > 1 else 1, fontsize=8)
+    fig.suptitle(("" if controller is None else f"{controller} controller\n")
+                 + "Basin of the bounding cycle" + (" " if len(floors) > 1 else "\n")
+                 + "(heights " + ", ".join(f"{h:g}" for h in heights)
                  + " m; labels: cycle speed m/s)", fontsize=10)
     save_figure(fig, path)
     return fig
