@@ -16,12 +16,12 @@ pitch rate [rad/s] as the IMU reads them (nose up positive; :mod:`.sensors`), k_
 on where the toe lands; stance-retraction and stance-brake are Table I's.
 
 The law is foot placement in the sense of Raibert (Legged Robots That Balance, MIT Press,
-1986, ch. 2-3): a running machine's state is corrected by where the foot is put down for
-the next stance, read at every sample during flight. Raibert's hopper and quadrupeds
-controlled body attitude with the hip torque in stance; Scout II's stance torque is the
-motor's torque-speed line (eqs. 2-5), so here the touchdown angle carries the attitude
-correction as well. How the signs follow from the robot's mechanics and what they do is
-in docs/model.md ("Torso feedback").
+1986): a running machine's state is corrected by where the foot is put down for the next
+stance, from the body's state sampled in flight. Raibert's one-legged machines controlled
+body attitude with the hip torque in stance; Scout II's stance torque is the motor's
+torque-speed line (eqs. 2-5), so here the touchdown angle carries the attitude correction
+as well. The signs and gains are measured, not taken from a publication: how they follow
+from single stances of the robot and what they do is in docs/model.md ("Torso feedback").
 
 Compiled: :class:`PitchFeedbackController` is a
 :class:`~scoutsim.control.compiled.CompiledController` whose parameter array is the Table I
