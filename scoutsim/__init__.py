@@ -15,8 +15,8 @@ from .simulation import (  # noqa: E402
     default_initial_state, simulate,
 )
 from .control import (  # noqa: E402
-    BoundingController, CompiledController, Controller, SensorChannel, SensorParameters,
-    load_sensors,
+    BoundingController, CompiledController, Controller, PitchFeedbackController,
+    SensorChannel, SensorParameters, load_sensors,
 )
 from .control.startup import StartupParameters  # noqa: E402
 from .state import standing_state  # noqa: E402
@@ -26,6 +26,11 @@ __all__ = [
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
+<<<<<<< HEAD
     "Controller", "CompiledController", "SensorParameters", "SensorChannel", "load_sensors",
     "StartupParameters", "standing_state",
+=======
+    "Controller", "CompiledController", "PitchFeedbackController", "SensorParameters",
+    "SensorChannel", "load_sensors",
+>>>>>>> pitch-feedback
 ]

@@ -61,6 +61,8 @@ UNITS: dict[str, dict[str, float]] = {
     "current": {"A": 1.0, "mA": 1.0e-3},
     "voltage": {"V": 1.0},
     "dimensionless": {"1": 1.0},
+    "angle per angle": {"rad/rad": 1.0, "deg/deg": 1.0},
+    "angle per angular rate": {"rad/(rad/s)": 1.0, "deg/(deg/s)": 1.0},
     "boolean": {"bool": 1.0},
 }
 
@@ -352,6 +354,13 @@ class ControllerParameters:
         must be smaller than touchdown_compression (hysteresis).
     sense_motor_angle : bool
         Model II only: sense the motor-side angle alpha (encoder) instead of phi.
+    pitch_gain_front, pitch_gain_back : float
+        Torso feedback of :class:`~scoutsim.control.pitch_feedback.PitchFeedbackController`
+        (not Table I; the Table I controller ignores them): change of the touchdown angle
+        per unit of torso pitch, k_theta [rad/rad] (given in deg/deg).
+    pitch_rate_gain_front, pitch_rate_gain_back : float
+        Its change of the touchdown angle per unit of pitch rate, k_omega [rad/(rad/s)] = [s]
+        (given in deg/(deg/s)).
     """
 
     touchdown_angle_front: float
@@ -370,6 +379,10 @@ class ControllerParameters:
     touchdown_compression: float
     liftoff_compression: float
     sense_motor_angle: bool
+    pitch_gain_front: float
+    pitch_gain_back: float
+    pitch_rate_gain_front: float
+    pitch_rate_gain_back: float
 
     def replace(self, **changes) -> "ControllerParameters":
         """Return a copy with some fields changed."""
@@ -492,6 +505,13 @@ _RULES: dict[str, _Range] = {
        for kind in ("flight", "brake") for gain in ("kp", "kd") for end in ("front", "back")},
     "control_period": _Range(0.0, False, 0.1, True),
     "touchdown_compression": _POSITIVE, "liftoff_compression": _NON_NEGATIVE,
+    # torso feedback (PitchFeedbackController): beyond these, the pitch (+-10 deg) and pitch
+    # rates (+-200 deg/s) of a bound would move a touchdown angle by more than the +-90 deg
+    # touchdown angles may span
+    "pitch_gain_front": _Range(-9.0, True, 9.0, True),
+    "pitch_gain_back": _Range(-9.0, True, 9.0, True),
+    "pitch_rate_gain_front": _Range(-0.45, True, 0.45, True),
+    "pitch_rate_gain_back": _Range(-0.45, True, 0.45, True),
 }
 
 

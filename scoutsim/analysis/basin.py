@@ -10,8 +10,10 @@ fraction that reaches steady bounding
 reached; :func:`scoutsim.presentation.plots.plot_basin_map` draws it as a map.
 
 The default grid spans pitch rates of both signs, -150 to +250 deg/s, wide enough to show
-the basin's edges: the controller has no torso feedback, and the starts that enter bounding
-are those with the nose rising, the motion the robot has after its front legs push off.
+the basin's edges: the Table I controller has no torso feedback, and the starts that enter
+bounding are those with the nose rising, the motion the robot has after its front legs
+push off (with :class:`~scoutsim.control.PitchFeedbackController` almost all do; README,
+"Torso feedback").
 """
 
 from __future__ import annotations
@@ -175,6 +177,11 @@ def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
     pitch_rates_deg_s : initial pitch rates [deg/s] (positive: nose rising).
     heights : initial torso-COM heights [m].
     duration : simulated time per start [s].
+    robot : RobotParameters (default Scout II).
+    controller : what every start runs: ControllerParameters (None: Table I) or a
+        controller object, e.g. :class:`~scoutsim.control.PitchFeedbackController`; with
+        ``workers`` > 1 it travels to the worker processes, so it must pickle (a
+        PitchFeedbackController does: the worker rebuilds it from its parameters).
     friction_coefficient : toe Coulomb coefficient (inf = no slip), when ``floors`` is None.
     floors : several toe Coulomb coefficients (e.g. :data:`DEFAULT_FLOORS`); every start
         is run on each.
@@ -189,4 +196,6 @@ def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
         "models": list(models), "speeds_m_s": list(speeds),
         "pitch_rates_deg_s": list(pitch_rates_deg_s), "heights_m": list(heights),
         "duration_s": duration,
+        "controller": (None if controller is None or not hasattr(controller, "command")
+                       else getattr(controller, "name", type(controller).__name__)),
         "floors": [None if math.isinf(mu) else mu for mu in floors]})

@@ -148,6 +148,32 @@ def add_no_progress_option(parser):
                              "the first run's compilation")
 
 
+#: --controller choices: the paper's Table I law, and Table I with torso feedback at
+#: touchdown (scoutsim.control.PitchFeedbackController)
+CONTROLLERS = ("table-i", "pitch-feedback")
+#: how outputs name them
+CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
+
+
+def add_controller_option(parser):
+    """--controller: which controller runs, with the robot file's [controller] section."""
+    parser.add_argument("--controller", choices=CONTROLLERS, default="table-i",
+                        help="table-i: the paper's Table I controller (no torso feedback); "
+                             "pitch-feedback: Table I with the touchdown angles corrected "
+                             "by torso pitch and pitch rate (PitchFeedbackController, gains "
+                             "pitch_gain_* / pitch_rate_gain_* of the robot file's "
+                             "[controller]) (default: table-i)")
+
+
+def make_controller(name: str, params):
+    """The controller ``--controller name`` runs with the ControllerParameters ``params``:
+    the parameters themselves (Table I) or a PitchFeedbackController."""
+    if name == "pitch-feedback":
+        from ..control.pitch_feedback import PitchFeedbackController
+        return PitchFeedbackController(params)
+    return params
+
+
 def add_models_option(parser, flag: str):
     """A comma-separated list of models, by default the controlled ones."""
     parser.add_argument(flag, type=model_list, default=list(CONTROLLED_MODELS), metavar="LIST",

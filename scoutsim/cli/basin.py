@@ -4,9 +4,9 @@ that reach steady bounding and the cycle's speed, and write basin.csv, basin.jso
 map basin.png (listed in manifest.json once written whole). Ctrl-C keeps the finished
 starts: basin.csv with those rows, marked partial, exit 130.
 
-    scoutsim basin [--model LIST] [--floors LIST] [--speeds LIST] [--pitch-rates LIST]
-                   [--heights LIST] [--duration S] [--robot FILE] [--out DIR] [--workers N]
-                   [--no-progress] [--no-plots]
+    scoutsim basin [--controller {table-i,pitch-feedback}] [--model LIST] [--floors LIST]
+                   [--speeds LIST] [--pitch-rates LIST] [--heights LIST] [--duration S]
+                   [--robot FILE] [--out DIR] [--workers N] [--no-progress] [--no-plots]
 
 Exit code 1 if a start crashed (the table and files are still written).
 """
@@ -24,8 +24,9 @@ from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               run_basin_tasks)
 from ..parameters import floor_label
 from ..run_directory import RunDirectory
-from ._common import (SCOUT_FLOOR_FRICTION, add_models_option, check_expected_time, float_list,
-                      friction_list, integrator, load_parameters, out_dir, positive_int,
+from ._common import (CONTROLLER_LABELS, SCOUT_FLOOR_FRICTION, add_controller_option,
+                      add_models_option, check_expected_time, float_list, friction_list,
+                      integrator, load_parameters, make_controller, out_dir, positive_int,
                       show_progress, write_json)
 
 NAME = "basin"
@@ -48,6 +49,7 @@ def register(sub, common) -> None:
                     "left out of the fraction. Writes basin.csv, basin.json and the map "
                     "basin.png to DIR.")
     add_models_option(basin, "--model")
+    add_controller_option(basin)
     basin.add_argument("--floors", type=friction_list, default=None, metavar="LIST",
                        help="comma-separated toe friction coefficients, 'inf' = no slip "
                             f"(default: {SCOUT_FLOOR_FRICTION:g},inf; --friction MU runs one)")
@@ -67,11 +69,12 @@ def register(sub, common) -> None:
     basin.set_defaults(func=execute)
 
 
-def format_basin(per: dict, n_grid: int, duration: float) -> str:
+def format_basin(per: dict, n_grid: int, duration: float, controller: str = "table-i") -> str:
     """The human-readable basin table (one row per model and floor)."""
     head = ("model", "floor", "starts", "invalid", "valid", "steady", "fraction", "fell",
             "other", "cycle m/s")
-    lines = [f"scoutsim basin: {n_grid} starts per model and floor, {duration:g} s each; "
+    lines = [f"scoutsim basin ({CONTROLLER_LABELS[controller]} controller): {n_grid} starts "
+             f"per model and floor, {duration:g} s each; "
              "fraction = steady bounding / valid starts; cycle m/s = median speed of the "
              "starts that bound",
              "  " + "  ".join(f"{h:>9}" for h in head)]
@@ -98,7 +101,8 @@ def _write_rows(path, rows) -> None:
 
 
 def execute(args) -> int:
-    robot, controller = load_parameters(args.robot)
+    robot, cparams = load_parameters(args.robot)
+    controller = make_controller(args.controller, cparams)
     integ = integrator(args)
     out = out_dir(args.out)
     models = args.model
@@ -119,7 +123,8 @@ def execute(args) -> int:
     wall0 = time.perf_counter()
     finished: dict = {}
     rd = RunDirectory(out, command=" ".join(["scoutsim"] + sys.argv[1:]),
-                      info={"kind": "basin", "n_starts": len(tasks)})
+                      info={"kind": "basin", "n_starts": len(tasks),
+                            "controller": args.controller})
     try:
         rows = run_basin_tasks(tasks, workers, progress,
                                on_result=lambda i, row: finished.__setitem__(i, row))
@@ -140,6 +145,7 @@ def execute(args) -> int:
     rd.write("basin.csv", lambda p: _write_rows(p, rows))
     per = basin_stats(rows, models, floors if len(floors) > 1 else None)
     summary = {
+        "controller": args.controller,
         "fraction_steady_bounding": {m: s["fraction_steady_bounding"] for m, s in per.items()},
         "models": per,
         "grid": {"speeds_m_s": args.speeds, "pitch_rates_deg_s": args.pitch_rates,
@@ -159,11 +165,12 @@ def execute(args) -> int:
         from ..simulation import InitialState
         d = InitialState()
         rd.write("basin.png", lambda p: plot_basin_map(
-            rows, p, default_start=(d.dx, math.degrees(d.dtheta))))
+            rows, p, default_start=(d.dx, math.degrees(d.dtheta)),
+            controller=CONTROLLER_LABELS[args.controller]))
         written += ", basin.png"
     rd.finish(outcome="completed", partial=False)
 
-    print(format_basin(per, len(grid), args.duration))
+    print(format_basin(per, len(grid), args.duration, args.controller))
     n_invalid = sum(s["n_invalid_start"] for s in per.values())
     if n_invalid:
         example = next(r for r in rows if r["outcome"] == "invalid_start")

@@ -39,9 +39,10 @@ from ..result import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
-from ._common import (MODELS, UsageError, check_expected_time, command_wall_time, dumps,
-                      finite_float, integrator, load_parameters, load_sensors, out_dir,
-                      positive_float, show_progress, usage_errors, write_json)
+from ._common import (MODELS, UsageError, add_controller_option, check_expected_time,
+                      command_wall_time, dumps, finite_float, integrator, load_parameters,
+                      load_sensors, make_controller, out_dir, positive_float, show_progress,
+                      usage_errors, write_json)
 
 NAME = "run"
 
@@ -68,6 +69,7 @@ def register(sub, common) -> None:
                           "the start-up (a step of the back legs, then a push of all four) "
                           "into the Table I bound "
                           "(summary: startup_duration_s)")
+    add_controller_option(run)
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
                           "passive model: scoutsim.simulation.default_initial_state)")
@@ -336,8 +338,12 @@ def format_energy(summary: dict) -> str:
 
 def execute(args) -> int:
     from ..simulation import default_initial_state, simulate, warm_up
-    robot, controller = load_parameters(args.robot)
+    robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
+    if args.controller != "table-i" and args.model == "passive":
+        raise UsageError(f"--controller {args.controller} is not allowed with --model "
+                         "passive (the passive model has no controller)")
+    controller = make_controller(args.controller, cparams)
     integ = integrator(args)
     changes = {}
     if args.speed is not None:
@@ -356,6 +362,9 @@ def execute(args) -> int:
         if args.model == "passive":
             raise UsageError("--start standing is not allowed with --model passive (no "
                              "actuator holds or sets going the standing robot)")
+        if args.controller != "table-i":
+            raise UsageError(f"--start standing is not allowed with --controller "
+                             f"{args.controller}: the start-up runs the Table I controller")
         init = "standing"
     out = out_dir(args.out)
     progress = show_progress(args)
@@ -367,7 +376,8 @@ def execute(args) -> int:
     stream = _stream_choice(args)
     load_s = warm_up()
     command = " ".join(["scoutsim"] + sys.argv[1:])
-    info = {"model": args.model, "duration_s": args.duration, "streamed": stream}
+    info = {"model": args.model, "controller": args.controller, "duration_s": args.duration,
+            "streamed": stream}
     # a streamed run's directory is entered when its first rows arrive (streaming.RunStream)
     rd = RunDirectory(out, command=command, info=info) if stream else None
     wall0 = time.perf_counter()

@@ -7,6 +7,8 @@
 * :mod:`~scoutsim.control.bounding`: the paper's Table I controller;
 * :mod:`~scoutsim.control.compiled`: controllers compiled into the simulator's loop
   (:class:`CompiledController`);
+* :mod:`~scoutsim.control.pitch_feedback`: Table I with the touchdown angles corrected by
+  torso pitch and pitch rate (:class:`PitchFeedbackController`);
 * :mod:`~scoutsim.control.dispatch`: which controller runs how.
 """
 
@@ -14,7 +16,8 @@ from .protocol import DEFAULT_CONTROL_PERIOD, Controller, ControllerError
 from .sensors import SensorChannel, SensorParameters, Sensors, load_sensors
 from .bounding import BoundingController
 from .compiled import CompiledController
+from .pitch_feedback import PitchFeedbackController
 
 __all__ = ["Controller", "ControllerError", "DEFAULT_CONTROL_PERIOD", "Sensors",
            "SensorChannel", "SensorParameters", "load_sensors", "BoundingController",
-           "CompiledController"]
+           "CompiledController", "PitchFeedbackController"]

@@ -151,6 +151,18 @@ class CompiledController(Controller):
         self.address = int(self._cfunc.address)
         self.leg_states = np.zeros(2, dtype=np.int64)
 
+    #: the Table I parameters the controller builds on, if any
+    #: (:class:`~scoutsim.parameters.ControllerParameters`): a run then starts its legs at
+    #: their touchdown angles and reads the hip encoders on the side they say, as for the
+    #: Table I controller, and records them in its provenance
+    controller_parameters = None
+
+    def params_for(self, robot):
+        """The parameter array a run of ``robot`` (a
+        :class:`~scoutsim.parameters.RobotParameters`) gives the function (the default:
+        ``params``; a subclass that packs robot constants packs the run's robot's)."""
+        return self.params
+
     def reset(self, robot, sensors):
         """Called before a run (the default does nothing): a subclass may set
         ``self.initial_state`` from the robot and the first readings."""

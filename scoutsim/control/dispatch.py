@@ -42,7 +42,8 @@ class ControllerPlan:
 
     kind : "builtin", "compiled", "python" or "none".
     controller : the user's controller object (None for the built-in law).
-    parameters : the Table I parameters the built-in law runs with, or those a user's
+    parameters : the Table I parameters the built-in law runs with, those a compiled
+        controller builds on (its ``controller_parameters``), or those a Python
         controller carries as ``params`` (they set the legs' angles at a start in flight);
         None otherwise.
     control_period : [s].
@@ -106,6 +107,8 @@ def plan_controller(controller, model: str, robot: RobotParameters,
         user = controller
         cparams = getattr(controller, "params", None)
         if not isinstance(cparams, ControllerParameters):
+            cparams = getattr(controller, "controller_parameters", None)
+        if not isinstance(cparams, ControllerParameters):
             cparams = None
     else:
         raise TypeError("controller must be ControllerParameters, a BoundingController, a "
@@ -129,10 +132,11 @@ def plan_controller(controller, model: str, robot: RobotParameters,
                               label="builtin" if cparams is not None else "none")
     dt = _period(user)
     if isinstance(user, CompiledController):
+        params = np.array(user.params_for(robot), dtype=np.float64).ravel()
         block = control_block(L.CTRL_POINTER, address=user.address, spec=spec, geom=geom,
-                              seed=sensors.seed, params=user.params.copy(),
+                              seed=sensors.seed, params=params,
                               state=user.initial_state.copy())
-        return ControllerPlan(kind="compiled", controller=user, parameters=None,
+        return ControllerPlan(kind="compiled", controller=user, parameters=cparams,
                               control_period=dt, C=controller_array(None), block=block,
                               label=controller_name(user))
     block = control_block(L.CTRL_POINTER, spec=spec, geom=geom, seed=sensors.seed)

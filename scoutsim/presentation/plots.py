@@ -350,13 +350,14 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     return fig
 
 
-def plot_basin_map(rows, path=None, default_start=None) -> Figure:
+def plot_basin_map(rows, path=None, default_start=None, controller: str | None = None) -> Figure:
     """The basin of the bounding cycle as a map: one panel per model (rows) and floor
     (columns) over initial forward speed x pitch rate [deg/s]; a cell's colour is the share
     of the grid's start heights from which the run reaches steady bounding (green: all,
     yellow: some, red: none), its label the mean speed of the cycle reached [m/s].
     ``rows``: :attr:`scoutsim.analysis.basin.BasinResult.rows` (or the CLI's basin.csv rows);
-    ``default_start``: (speed [m/s], pitch rate [deg/s]) marked with a star."""
+    ``default_start``: (speed [m/s], pitch rate [deg/s]) marked with a star;
+    ``controller``: its name, in the title."""
     from matplotlib.colors import ListedColormap
     models = list(dict.fromkeys(r["model"] for r in rows))
     floors = list(dict.fromkeys(float(r["friction"]) for r in rows))
@@ -407,8 +408,10 @@ def plot_basin_map(rows, path=None, default_start=None) -> Figure:
     fig.legend(handles=[Patch(color=cmap(2), label="bounds (every height)"),
                         Patch(color=cmap(1), label="bounds (some heights)"),
                         Patch(color=cmap(0), label="falls / no steady bound")],
-               loc="outside lower center", ncol=3, fontsize=8)
-    fig.suptitle("Basin of the bounding cycle (heights " + ", ".join(f"{h:g}" for h in heights)
+               loc="outside lower center", ncol=3 if len(floors) > 1 else 1, fontsize=8)
+    fig.suptitle(("" if controller is None else f"{controller} controller\n")
+                 + "Basin of the bounding cycle" + (" " if len(floors) > 1 else "\n")
+                 + "(heights " + ", ".join(f"{h:g}" for h in heights)
                  + " m; labels: cycle speed m/s)", fontsize=10)
     save_figure(fig, path)
     return fig
