@@ -26,11 +26,6 @@ __all__ = [
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
-<<<<<<< HEAD
-    "Controller", "CompiledController", "SensorParameters", "SensorChannel", "load_sensors",
-    "StartupParameters", "standing_state",
-=======
     "Controller", "CompiledController", "PitchFeedbackController", "SensorParameters",
-    "SensorChannel", "load_sensors",
->>>>>>> pitch-feedback
+    "SensorChannel", "load_sensors", "StartupParameters", "standing_state",
 ]
