@@ -270,6 +270,23 @@ def test_a_robot_file_describes_its_sensors(tmp_path):
     assert robot.torso_mass == 21.0
 
 
+def test_a_robot_files_sensors_show_in_the_readings(tmp_path, ideal):
+    """From file to readings: a pitch bias of 1 deg and a pitch-rate noise of 2 deg/s set
+    in a robot file show in what a controller reads, and the file's seed reproduces
+    them."""
+    _, _, y0 = ideal
+    f = tmp_path / "robot.toml"
+    f.write_text('[sensors]\nseed = 9\n[sensors.pitch]\nbias = { value = 1, unit = "deg" }\n'
+                 '[sensors.pitch_rate]\nnoise = { value = 2, unit = "deg/s" }\n')
+    _, _, y = _run(sensors=scoutsim.load_sensors(f))
+    np.testing.assert_allclose(y[:, L.SN_PITCH] - y0[:, L.SN_PITCH], math.radians(1.0),
+                               rtol=0, atol=1e-15)
+    e = y[:, L.SN_PITCH_RATE] - y0[:, L.SN_PITCH_RATE]
+    assert abs(e.std() / math.radians(2.0) - 1.0) < 4 / math.sqrt(2 * e.size)
+    _, _, again = _run(sensors=scoutsim.load_sensors(f))
+    assert np.array_equal(again, y)
+
+
 @pytest.mark.parametrize("text, field", [
     ('[sensors.pitch]\nnoise = -1.0\n', "sensors.pitch.noise"),
     ('[sensors.pitch]\ndelay = 1.5\n', "sensors.pitch.delay"),
