@@ -683,14 +683,8 @@ def simulate(robot: RobotParameters | None = None, controller=None,
 
     ls = np.zeros(2, dtype=np.int64)
     if resume:
-        mi = np.zeros(L.NMI, dtype=np.int64)
-        mf = np.zeros(L.NMF)
-        for leg in range(2):
-            mi[L.MI_CONTACT_B + leg] = init.contact_modes[leg]
-            mi[L.MI_MOTOR_B + leg] = init.motor_modes[leg]
-            mi[L.MI_SLIDE_DIR_B + leg] = init.slide_directions[leg]
-            mf[L.MF_ANCHOR_B + leg] = init.toe_anchors[leg]
-            ls[leg] = init.leg_states[leg]
+        mi, mf = init.mode_arrays()
+        ls[:] = init.leg_states
     else:
         mi, mf = fresh_modes(s, P)
     chunk = max(1, int(round(chunk_seconds / dt)))

@@ -111,6 +111,18 @@ class HybridState:
                              "two finite positions [m]")
         object.__setattr__(self, "toe_anchors", a)
 
+    def mode_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The compiled model's mode arrays of this state: (mi, mf), layout ``MI_*`` (toe
+        contact, motor-joint and slide-direction modes) and ``MF_*`` (toe anchors [m])."""
+        mi = np.zeros(L.NMI, dtype=np.int64)
+        mf = np.zeros(L.NMF)
+        for leg in range(2):
+            mi[L.MI_CONTACT_B + leg] = self.contact_modes[leg]
+            mi[L.MI_MOTOR_B + leg] = self.motor_modes[leg]
+            mi[L.MI_SLIDE_DIR_B + leg] = self.slide_directions[leg]
+            mf[L.MF_ANCHOR_B + leg] = self.toe_anchors[leg]
+        return mi, mf
+
 
 # -----------------------------------------------------------------------------------------
 # the robot standing at rest

@@ -20,14 +20,7 @@ G = 9.81
 
 
 def _modes(h):
-    mi = np.zeros(L.NMI, dtype=np.int64)
-    mf = np.zeros(L.NMF)
-    for leg in range(2):
-        mi[L.MI_CONTACT_B + leg] = h.contact_modes[leg]
-        mi[L.MI_MOTOR_B + leg] = h.motor_modes[leg]
-        mi[L.MI_SLIDE_DIR_B + leg] = h.slide_directions[leg]
-        mf[L.MF_ANCHOR_B + leg] = h.toe_anchors[leg]
-    return mi, mf
+    return h.mode_arrays()
 
 
 def test_standing_leg_compression_is_half_the_weight_over_the_virtual_spring():
