@@ -108,7 +108,7 @@ def engine_share(model, steps, repeats):
         env.reset(seed=0)
         eng = env.unwrapped.engine
         n = env.unwrapped.samples_per_step
-        slots = env.unwrapped._slots
+        slots = env.unwrapped.setpoint_slots
         t0 = time.perf_counter()
         for a in actions:
             eng.C[slots] = a

@@ -58,11 +58,11 @@ class BoundEnv(gymnasium.Env):
     lengths [m], pitch [rad], pitch rate [rad/s], accelerometer along the torso axis and
     its normal [m/s^2], laser ranges (back, front) [m], motor currents [A], battery voltage
     [V]; with the measurement model of ``sensors`` (noise, bias, resolution, delay).
-    float64: the readings the compiled controllers see, unrounded (an episode is
-    reproducible bit for bit in them, and the encoders' resolution, 1e-5 rad and below,
-    would drown in float32's 1e-7 relative steps at large angles only); a learner that
-    wants float32 casts (``gymnasium.wrappers.DtypeObservation``). Unbounded: the readings
-    are physical quantities with no hard limit (noise included).
+    float64: the numbers the compiled controllers see, unrounded, so that an observation
+    is bit for bit a controller's reading (tested against :func:`~scoutsim.simulate`) and
+    an episode reproducible in it; float32's rounding (1e-7 relative) would not matter to
+    a learner, which casts if it wants to (``gymnasium.wrappers.DtypeObservation``).
+    Unbounded: the readings are physical quantities with no hard limit (noise included).
 
     **Action** (``action_type``):
 
@@ -237,7 +237,8 @@ class BoundEnv(gymnasium.Env):
             lo, hi = zip(*(allowed_range(name) for name in SETPOINTS))
             self.action_space = spaces.Box(np.array(lo), np.array(hi), (len(SETPOINTS),),
                                            np.float64)
-        self._slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
+        #: the set-points' slots in the engine's controller array ``engine.C``
+        self.setpoint_slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
         self._engine = None
         # an engine from the first start, to check the options now (reset makes the
         # episode's)
@@ -262,6 +263,10 @@ class BoundEnv(gymnasium.Env):
         super().reset(seed=seed)
         noise_seed = int(self.np_random.integers(0, 2 ** 63 - 1))
         self._new_engine(self._start_state(self.np_random), noise_seed)
+        # the readings of sample 0 under zero torques, as simulate()'s controllers see them
+        # before their first command (with torque actions the loop reads sample 0 again
+        # under the first action: the accelerometer, currents and battery of that reading
+        # are what a channel delayed past sample 0 reports at first)
         obs = self._engine.read_sensors().copy()
         return obs, self._info_now()
 
@@ -272,12 +277,15 @@ class BoundEnv(gymnasium.Env):
         if eng is None or not self._running:
             raise RuntimeError("BoundEnv.step: the episode has ended (or not begun): call "
                                "reset()")
-        a = np.clip(np.asarray(action, dtype=np.float64).reshape(self.action_space.shape),
-                    self.action_space.low, self.action_space.high)
+        a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be "
+                             "finite")
+        a = np.clip(a, self.action_space.low, self.action_space.high)
         if self.action_type == "torque":
             eng.cmd[:] = a
         else:
-            eng.C[self._slots] = a
+            eng.C[self.setpoint_slots] = a
         x0, t0, e0 = float(eng.s[0]), eng.t_now, self._electrical()
         eng.advance(eng.k + self.samples_per_step)
         eng.discard_records()

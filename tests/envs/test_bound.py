@@ -255,3 +255,23 @@ def test_scoutsim_alone_does_not_import_gymnasium_and_envs_says_what_to_install(
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert "pip install" in out.stdout and "rl" in out.stdout
+
+
+def test_a_robot_file_sets_robot_controller_and_sensors(tmp_path):
+    f = tmp_path / "robot.toml"
+    f.write_text('[robot]\ntorso_mass = 21.0\n\n[controller]\n'
+                 'touchdown_angle_front = { value = 22.0, unit = "deg" }\n\n'
+                 '[sensors]\nseed = 5\n[sensors.pitch]\n'
+                 'noise = { value = 0.5, unit = "deg" }\n')
+    env = gymnasium.make(ID, robot_file=str(f), action_type="setpoints",
+                         current_limit=11.0).unwrapped
+    assert env.robot.torso_mass == 21.0 and env.robot.current_limit == 11.0
+    assert env.controller.touchdown_angle_front == pytest.approx(math.radians(22.0))
+    assert env.sensors.pitch.noise == pytest.approx(math.radians(0.5))
+    # the flight start's legs are at the file's touchdown angles (hip encoders at rest)
+    obs, _ = env.reset(seed=0)
+    assert obs[L.SN_ANGLE_F] == pytest.approx(math.radians(22.0), abs=1e-9)
+    # pitch noise: the level torso's pitch reading is not exactly 0
+    assert obs[L.SN_PITCH] != 0.0
+    with pytest.raises(ValueError, match="robot_file"):
+        BoundEnv(robot_file=str(f), robot=scoutsim.RobotParameters())
