@@ -33,8 +33,8 @@ from .model.packing import robot_array
 from .model.rigid_body import state_energy
 from .numerics.dopri5 import eval_workspace
 from .loop import effective_method, first_readings, readings_at, run_entry
-from .numerics.hybrid import (HW_EVAL_KEPT, HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5,
-                              NHW, STEP_HEADROOM)
+from .numerics.hybrid import (HW_EVAL_KEPT, HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO,
+                              METHOD_DOPRI5, NHW, STEP_HEADROOM)
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
