@@ -34,7 +34,7 @@ from .numerics.stats import S_NFEV
 from .numerics.transitions import settle_ws
 
 __all__ = ["run", "run_entry", "effective_method", "record_sample", "sense",
-           "first_readings"]
+           "first_readings", "readings_at"]
 
 
 @kernel
@@ -60,6 +60,17 @@ def first_readings(s, P, mi, mf, cmd, cb):
     """The sensor readings of a run's first sample (into ``cb.y``), before the run: what a
     controller's ``reset`` sees (the loop reads the same again at that sample)."""
     sense(0, s, P, mi, mf, cmd, False, cb, eval_workspace(), np.zeros(NS))
+
+
+@allocating
+def readings_at(k, s, P, mi, mf, cmd, kept, cb):
+    """The sensor readings of control sample ``k`` at the state ``s`` (into ``cb.y``),
+    between two calls of :func:`run`: what the loop reads at the start of its next call
+    (the same numbers: the noise is a function of the sample, the delay buffer's row of
+    sample ``k`` is written with the same values). ``kept``: the run's last evaluation
+    (``cb.last``) is at ``s``, as after a call that ended running (``hwork[HW_EVAL_KEPT]``);
+    else a fresh one under ``cmd``."""
+    sense(k, s, P, mi, mf, cmd, kept, cb, eval_workspace(), np.zeros(NS))
 
 
 @kernel
@@ -142,8 +153,9 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
     k = k_start
     while k < k_stop:
         t = k * dt
-        if kind != CTRL_HELD:
-            sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
+        # (read under every kind, the held commands too: a caller that sets them, a
+        # learning environment's policy, sees the readings and their delays sample by sample)
+        sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
         if kind == CTRL_BUILTIN:
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev

@@ -590,6 +590,23 @@ def physical_limit(name: str) -> float | None:
     return None if limit is None else limit.hi
 
 
+def allowed_range(name: str) -> tuple[float, float]:
+    """The closed interval (lo, hi) [SI] of the values the validation accepts for the field
+    ``name`` of :class:`RobotParameters` or :class:`ControllerParameters`: its rule's
+    bounds (an open end replaced by the nearest float inside it), capped by the field's
+    physical bound; -inf / inf where it has none (e.g. a touchdown angle: just inside
+    (-90, 90) deg)."""
+    if name not in _schema():
+        raise KeyError(f"no parameter named {name!r}")
+    rule = _RULES.get(name, _Range())
+    lo = -math.inf if rule.lo is None else (
+        float(rule.lo) if rule.lo_closed else math.nextafter(rule.lo, math.inf))
+    hi = math.inf if rule.hi is None else (
+        float(rule.hi) if rule.hi_closed else math.nextafter(rule.hi, -math.inf))
+    limit = physical_limit(name)
+    return lo, (hi if limit is None else min(hi, limit))
+
+
 @dataclass(frozen=True)
 class _Spec:
     """Schema of one field, taken from the packaged TOML and the dataclass annotation."""

@@ -32,9 +32,9 @@ from .model.transmission import motor_mode_from_rate
 from .model.packing import robot_array
 from .model.rigid_body import state_energy
 from .numerics.dopri5 import eval_workspace
-from .loop import effective_method, first_readings, run_entry
-from .numerics.hybrid import (HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5,
-                              NHW, STEP_HEADROOM)
+from .loop import effective_method, first_readings, readings_at, run_entry
+from .numerics.hybrid import (HW_EVAL_KEPT, HW_STEP, METHOD_ARK3, METHOD_ARK4, METHOD_AUTO,
+                              METHOD_DOPRI5, NHW, STEP_HEADROOM)
 from .numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
@@ -44,7 +44,7 @@ from .state import HybridState, InitialState, standing_state
 _METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
 
 __all__ = ["simulate", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
-           "default_initial_state", "run_bench", "warm_up"]
+           "default_initial_state", "run_bench", "warm_up", "start_engine"]
 
 
 #: default (rtol, atol) of each method when the settings leave them open
@@ -210,6 +210,12 @@ def fresh_modes(s: np.ndarray, P: np.ndarray):
     return mi, mf
 
 
+def _resumed_modes(init: HybridState):
+    """Mode arrays (mi, mf) and controller leg states of a run resumed at ``init``."""
+    mi, mf = init.mode_arrays()
+    return mi, mf, np.array(init.leg_states, dtype=np.int64)
+
+
 class HybridEngine:
     """One run of the compiled hybrid model (:func:`scoutsim.loop.run`): its
     time-series buffers and everything carried from one call to the next (state, modes,
@@ -277,6 +283,25 @@ class HybridEngine:
         """The readings of the run's first sample (what a controller's ``reset`` sees)."""
         first_readings(self.s, self.P, self.mi, self.mf, self.cmd, self.block)
         return Sensors.from_vector(self.block.y)
+
+    def read_sensors(self) -> np.ndarray:
+        """The sensor readings (``layout.SN_*``, SI) of the next control sample ``k`` at the
+        current state, into ``block.y`` and returned (that array): between two calls of
+        :meth:`advance`, what the loop reads at the start of the next one, bit for bit
+        (measurement model included); after a run that ended (a fall), the readings at
+        its final state."""
+        readings_at(self.k, self.s, self.P, self.mi, self.mf, self.cmd,
+                    self.status == L.ST_RUNNING and self.hwork[HW_EVAL_KEPT] > 0.5,
+                    self.block)
+        return self.block.y
+
+    def discard_records(self):
+        """Forget the samples, events and steps recorded so far (the state, modes and
+        energy accumulator stay): for a caller that reads the engine's state itself
+        between calls, so that the buffers of ``rows`` samples suffice however long it
+        runs."""
+        self.n_out = self.nev = 0
+        self.stepc[0] = 0
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
@@ -355,6 +380,64 @@ class HybridEngine:
             | (extra_stats or {}),
             provenance=provenance, energy_flows=self.energy_flows(),
             energy_series=(_kept(self.out_energy, n) if self.energy.size else None))
+
+
+def start_engine(start: InitialState | HybridState | None, duration: float, *,
+                 robot: RobotParameters | None = None, model: str = "II",
+                 controller: ControllerParameters | None = None, hold_commands: bool = False,
+                 sensors: SensorParameters | None = None,
+                 friction_coefficient: float | None = None, pitch_limit_deg: float = 60.0,
+                 integrator: IntegratorSettings | None = None, energy: bool = False,
+                 rows: int | None = None) -> HybridEngine:
+    """An engine at sample 0 of a run from ``start``, put together as :func:`simulate` does
+    it, for a caller that drives it sample by sample itself (``engine.advance(k)``, the
+    commands in ``engine.cmd`` or the Table I set-points in ``engine.C``, the readings from
+    ``engine.read_sensors()``): a learning environment (:mod:`scoutsim.envs`).
+
+    Parameters
+    ----------
+    start : InitialState (in flight), HybridState (e.g. :func:`~scoutsim.state.standing_state`
+        or ``result.hybrid_state(k)``), or None: the model's default start.
+    duration : longest run [s] (the engine stops at it).
+    robot, model, sensors, friction_coefficient, pitch_limit_deg, integrator, energy : as for
+        :func:`simulate` (``model`` "ideal", "I" or "II"; ``energy``: the accumulator
+        ``engine.energy``, layout ``EN_*`` [J]).
+    controller : ControllerParameters of the built-in Table I law (default Table I); with
+        ``hold_commands`` they set only the leg angles of a start in flight and what the
+        hip encoders read (``sense_motor_angle``).
+    hold_commands : no controller runs: the hip torques ``engine.cmd`` [N m per physical
+        leg] are held as the caller sets them (zero at first).
+    rows : samples the time-series buffers hold (None: the whole run); a caller that calls
+        :meth:`HybridEngine.discard_records` after every call of at most ``rows - 1``
+        samples runs for as long as it likes in that memory.
+    """
+    if model not in ("ideal", "I", "II"):
+        raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
+    robot = validate_robot(robot if robot is not None else RobotParameters())
+    cparams = controller if controller is not None else ControllerParameters()
+    validate_parameters(robot, cparams)
+    mu = Environment(friction_coefficient=friction_coefficient).friction_for(robot)
+    if not (0.0 < pitch_limit_deg < 90.0):
+        raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+    plan = plan_controller(cparams, model, robot, sensors)
+    if hold_commands:
+        plan.block.ints[L.CB_KIND] = L.CTRL_HELD
+    P = robot_array(robot, model, friction_coefficient=mu,
+                    pitch_limit=math.radians(pitch_limit_deg))
+    init = start if start is not None else default_initial_state(model, robot)
+    if isinstance(init, HybridState):
+        s = np.array(init.state)
+        mi, mf, ls = _resumed_modes(init)
+    elif isinstance(init, InitialState):
+        s = _state_vector(init, robot, cparams, (0.0, 0.0), True)
+        ls = np.zeros(2, dtype=np.int64)
+        mi, mf = fresh_modes(s, P)
+    else:
+        raise TypeError("start must be an InitialState, a HybridState or None, not "
+                        f"{type(init).__name__}")
+    integ = (integrator or IntegratorSettings()).resolve(model)
+    return HybridEngine(P, plan.C, s, mi, mf, ls, duration, plan.control_period, integ,
+                        rows=rows, energy=energy, block=plan.block)
 
 
 def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
@@ -681,11 +764,10 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         raise TypeError("initial_state must be an InitialState, a HybridState, 'flight' "
                         f"or 'standing', not {type(init).__name__}")
 
-    ls = np.zeros(2, dtype=np.int64)
     if resume:
-        mi, mf = init.mode_arrays()
-        ls[:] = init.leg_states
+        mi, mf, ls = _resumed_modes(init)
     else:
+        ls = np.zeros(2, dtype=np.int64)
         mi, mf = fresh_modes(s, P)
     chunk = max(1, int(round(chunk_seconds / dt)))
     stream = None

@@ -24,6 +24,7 @@ LAYERS = {
     "scoutsim.state": 3, "scoutsim.loop": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
     "scoutsim.failure": 3, "scoutsim.streaming": 3,
     "scoutsim.analysis": 4, "scoutsim.validation": 4, "scoutsim.identification": 4,
+    "scoutsim.envs": 4,
     "scoutsim.presentation": 5, "scoutsim.cli": 5,
     # the package root re-exports the public API: nothing inside imports it
     "scoutsim": 6, "scoutsim.__main__": 6,

@@ -1,0 +1,405 @@
+"""``scoutsim/Bound-v0``: the planar Scout II model as a Gymnasium environment.
+
+One class, :class:`BoundEnv`, configured in one call (the pattern of Gymnasium's MuJoCo
+environments, ``hopper_v5``): every reward weight and termination rule is a constructor
+keyword, the simulator's own options (model, robot file, sensors, floor) pass straight
+through, and ``step`` reports each reward term in ``info``.
+
+A policy step is ``policy_period / control_period`` samples of the compiled run loop
+(:class:`~scoutsim.simulation.HybridEngine`, one engine per episode): the policy's action
+is held over them, as the 1 kHz controller's command is held over a control period.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from ..control.bounding import SCHEDULABLE
+from ..control.sensors import SensorParameters, load_sensors
+from ..model import layout as L
+from ..parameters import (ControllerParameters, RobotParameters, allowed_range,
+                          load_parameters, validate_parameters, validate_robot)
+from ..simulation import IntegratorSettings, start_engine
+from ..state import HybridState, InitialState, standing_state
+
+__all__ = ["BoundEnv", "ACTION_TYPES", "SETPOINTS", "STARTS", "RANDOM_START_HALF_WIDTHS"]
+
+#: what an action is: the hip torques, or the set-points of the Table I controller
+ACTION_TYPES = ("torque", "setpoints")
+#: the set-points a "setpoints" action gives, in its order (fields of
+#: :class:`~scoutsim.parameters.ControllerParameters`, [rad] relative to the torso)
+SETPOINTS = ("touchdown_angle_back", "touchdown_angle_front", "sweep_limit_back",
+             "sweep_limit_front")
+#: the starts known by name
+STARTS = ("flight", "standing", "random")
+#: the "random" start: InitialState field -> half-width [SI] of the uniform interval about
+#: the flight start (``reset_noise_scale`` = 1): height 0.32-0.35 m, forward speed
+#: 1.0-1.4 m/s, pitch rate 100-200 deg/s, the neighbourhood of the flight start from which
+#: ideal, Model I and Model II all bound under the Table I controller (docs/model.md
+#: "Default start and floor"; the height interval is centred on 0.33 m: 0.315-0.345 m)
+RANDOM_START_HALF_WIDTHS = {"y": 0.015, "dx": 0.2, "dtheta": math.radians(50.0)}
+#: the engine's run length [s]: a limit no episode reaches (the time limit is the
+#: registration's ``max_episode_steps``); the buffers hold one policy step, whatever it is
+_ENGINE_DURATION = 1.0e7
+
+
+class BoundEnv(gymnasium.Env):
+    """Planar bounding of Scout II (ideal, Model I or Model II) as a Gymnasium environment.
+
+    **Observation**: the robot's sensor readings at the sample that starts the next policy
+    step, as a controller sees them (:class:`~scoutsim.control.sensors.Sensors`,
+    ``layout.SN_*`` order, SI): hip angles (back, front) [rad], hip rates [rad/s], leg
+    lengths [m], pitch [rad], pitch rate [rad/s], accelerometer along the torso axis and
+    its normal [m/s^2], laser ranges (back, front) [m], motor currents [A], battery voltage
+    [V]; with the measurement model of ``sensors`` (noise, bias, resolution, delay).
+    float64: the numbers the compiled controllers see, unrounded, so that an observation
+    is bit for bit a controller's reading (tested against :func:`~scoutsim.simulate`) and
+    an episode reproducible in it; float32's rounding (1e-7 relative) would not matter to
+    a learner, which casts if it wants to (``gymnasium.wrappers.DtypeObservation``).
+    Unbounded: the readings are physical quantities with no hard limit (noise included).
+
+    **Action** (``action_type``):
+
+    * "torque": the hip torques (back, front) [N m per physical leg, at the leg], held
+      for the policy step; the box is the robot's current-limited torque
+      +-``robot.max_leg_torque`` (Scout II: 31 N m). Model I and II limit what the motor
+      delivers further (torque-speed line), as for any command.
+    * "setpoints": the Table I controller's set-points :data:`SETPOINTS`
+      (touchdown angles and sweep limits, back and front [rad]), which the compiled
+      controller runs with at 1 kHz over the policy step (its gains and thresholds are
+      ``controller``'s); the box is the parameter schema's range (just inside
+      (-90, 90) deg, :func:`~scoutsim.parameters.allowed_range`).
+
+    An action outside the box is clipped to it.
+
+    **Reward** per step, each term in ``info``:
+
+    * ``reward_forward``: ``forward_reward_weight`` x v, v the torso's mean forward speed
+      over the step [m/s]; with a ``target_speed`` v* [m/s]:
+      -``forward_reward_weight`` x |v - v*|;
+    * ``reward_energy``: -``energy_cost_weight`` [1/J] x the electrical energy into the
+      motor terminals over the step [J] (``info["electrical_energy"]``, from the model's
+      energy balance, :meth:`~scoutsim.result.SimulationResult.energy_balance`; negative
+      while the motors regenerate more than they draw). The accounting runs only when
+      ``energy_cost_weight`` is not 0 (it costs time); otherwise the energy is NaN and the
+      term 0;
+    * ``reward_healthy``: ``healthy_reward`` while the robot is up: its COM height in
+      ``healthy_height_range`` [m] and its pitch in ``healthy_pitch_range`` [rad] at the
+      end of the step, and not fallen during it.
+
+    **Episode end**: ``terminated`` when the simulator detects a fall (the torso touches
+    the ground or |pitch| exceeds ``pitch_limit_deg``; the model cannot go on from there)
+    and, with ``terminate_when_fallen``, when the robot is not up; ``truncated`` at a
+    numerical failure of the integrator (``info["outcome"]``) and, through the
+    registration's ``max_episode_steps`` (1000 steps: 10 s at the default policy period),
+    at the time limit.
+
+    **Start** (``start``): "flight" (:class:`~scoutsim.state.InitialState`: released in
+    flight at 0.33 m, 1.2 m/s, nose rising at 150 deg/s), "standing"
+    (:func:`~scoutsim.state.standing_state`: at rest on four legs, the policy acting from
+    t = 0; with set-points the Table I stance-brake law holds the legs at the sweep limits
+    until the policy moves them), "random" (the flight start with its height, speed and
+    pitch rate drawn uniformly within ``reset_noise_scale`` x
+    :data:`RANDOM_START_HALF_WIDTHS` of it), an InitialState or HybridState, or a
+    callable ``start(np_random)`` returning one (a distribution of starts of your own).
+    ``reset(seed=...)`` seeds the start's draws and the sensor noise (a seed drawn from
+    the environment's generator replaces ``sensors.seed``): the same seed gives the same
+    episode bit for bit.
+
+    Parameters
+    ----------
+    model : {"II", "I", "ideal"}
+        Transmission variant (:func:`~scoutsim.simulate`).
+    action_type : {"torque", "setpoints"}
+    policy_period : float
+        Time between the policy's actions [s] (default 0.01 s, 100 Hz); a whole multiple
+        of the control period (``controller.control_period``, 1 ms).
+    forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
+        Reward weights (above); ``target_speed`` None rewards speed itself.
+    terminate_when_fallen : bool
+        End the episode when the robot is not up (above).
+    healthy_height_range : (min, max) [m]
+        COM heights at which the robot is up (default (0.2, inf): the bound's COM stays
+        within 0.28-0.33 m in every model, 0.2 m puts the torso's underside 0.14 m above
+        the ground).
+    healthy_pitch_range : (min, max) [rad]
+        Pitch at which it is up (default +-30 deg: 2.5 times the bound's largest pitch,
+        12 deg).
+    start : str, InitialState, HybridState or callable
+        The start (above).
+    reset_noise_scale : float
+        Width of the "random" start as a fraction of :data:`RANDOM_START_HALF_WIDTHS`.
+    robot, controller : RobotParameters, ControllerParameters, optional
+        The robot and the Table I parameters (default: Scout II, Table I); not together
+        with ``robot_file``.
+    robot_file : path, optional
+        A robot file (TOML: robot, controller and ``[sensors]`` sections, as
+        ``scoutsim run --robot``).
+    sensors : SensorParameters, optional
+        The sensors' measurement model (default: the robot file's, else ideal).
+    friction_coefficient : float, optional
+        Coulomb coefficient of the toe on the floor (default 1.0; ``inf``: no slip).
+    pitch_limit_deg : float
+        |pitch| [deg] the simulator counts as a fall (default 60).
+    integrator : IntegratorSettings, optional
+        The integrator (default: the model's, as :func:`~scoutsim.simulate`).
+    render_mode : None
+        No rendering (``scoutsim.presentation.animation`` draws a run).
+    **parameters
+        Any field of :class:`~scoutsim.parameters.RobotParameters` or
+        :class:`~scoutsim.parameters.ControllerParameters` [SI], applied over ``robot`` /
+        ``controller`` / the robot file (e.g. ``current_limit=10.0``).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, model: str = "II", action_type: str = "torque",
+                 policy_period: float = 0.01, *,
+                 forward_reward_weight: float = 1.0, target_speed: float | None = None,
+                 energy_cost_weight: float = 0.01, healthy_reward: float = 1.0,
+                 terminate_when_fallen: bool = True,
+                 healthy_height_range: tuple = (0.2, math.inf),
+                 healthy_pitch_range: tuple = (-math.radians(30.0), math.radians(30.0)),
+                 start="flight", reset_noise_scale: float = 1.0,
+                 robot: RobotParameters | None = None,
+                 controller: ControllerParameters | None = None,
+                 robot_file=None, sensors: SensorParameters | None = None,
+                 friction_coefficient: float | None = None, pitch_limit_deg: float = 60.0,
+                 integrator: IntegratorSettings | None = None, render_mode=None,
+                 **parameters):
+        if model not in ("ideal", "I", "II"):
+            raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
+        if action_type not in ACTION_TYPES:
+            raise ValueError(f"action_type = {action_type!r} is not allowed: must be one of "
+                             f"{list(ACTION_TYPES)}")
+        if render_mode is not None:
+            raise ValueError(f"render_mode = {render_mode!r} is not allowed: BoundEnv does "
+                             "not render (None)")
+        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters)
+        if sensors is None:
+            sensors = load_sensors(robot_file, self.robot) if robot_file is not None \
+                else SensorParameters()
+        if not isinstance(sensors, SensorParameters):
+            raise TypeError(f"sensors must be SensorParameters, not {type(sensors).__name__}")
+        self.sensors = sensors
+        self.model = model
+        self.action_type = action_type
+        dt = self.controller.control_period
+        n = round(policy_period / dt) if policy_period > 0 else 0
+        if not (math.isfinite(policy_period) and n >= 1
+                and abs(n * dt - policy_period) <= 1e-9 * policy_period):
+            raise ValueError(f"policy_period = {policy_period!r} s is not allowed: must be a "
+                             f"whole multiple (>= 1) of the control period {dt:g} s")
+        self.control_period = dt
+        self.samples_per_step = int(n)
+        self.policy_period = n * dt
+        for name, v in (("forward_reward_weight", forward_reward_weight),
+                        ("energy_cost_weight", energy_cost_weight),
+                        ("healthy_reward", healthy_reward)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise ValueError(f"{name} = {v!r} is not allowed: must be a finite number")
+        if target_speed is not None and not math.isfinite(target_speed):
+            raise ValueError(f"target_speed = {target_speed!r} m/s is not allowed: must be "
+                             "finite or None")
+        self.forward_reward_weight = float(forward_reward_weight)
+        self.target_speed = None if target_speed is None else float(target_speed)
+        self.energy_cost_weight = float(energy_cost_weight)
+        self.healthy_reward = float(healthy_reward)
+        self.terminate_when_fallen = bool(terminate_when_fallen)
+        self.healthy_height_range = _interval(healthy_height_range, "healthy_height_range")
+        self.healthy_pitch_range = _interval(healthy_pitch_range, "healthy_pitch_range")
+        if not (isinstance(start, (InitialState, HybridState)) or callable(start)
+                or start in STARTS):
+            raise ValueError(f"start = {start!r} is not allowed: must be one of "
+                             f"{list(STARTS)}, an InitialState, a HybridState or a callable")
+        if start == "standing":
+            start = standing_state(self.robot, model, self.controller)
+        self.start = start
+        if not (math.isfinite(reset_noise_scale) and reset_noise_scale >= 0.0):
+            raise ValueError(f"reset_noise_scale = {reset_noise_scale!r} is not allowed: "
+                             "must be a finite number >= 0")
+        self.reset_noise_scale = float(reset_noise_scale)
+        self.friction_coefficient = friction_coefficient
+        self.pitch_limit_deg = pitch_limit_deg
+        self.integrator = integrator
+        self.render_mode = None
+        self.observation_space = spaces.Box(-np.inf, np.inf, (L.NSN,), np.float64)
+        if action_type == "torque":
+            tau = self.robot.max_leg_torque
+            self.action_space = spaces.Box(-tau, tau, (2,), np.float64)
+        else:
+            lo, hi = zip(*(allowed_range(name) for name in SETPOINTS))
+            self.action_space = spaces.Box(np.array(lo), np.array(hi), (len(SETPOINTS),),
+                                           np.float64)
+        #: the set-points' slots in the engine's controller array ``engine.C``
+        self.setpoint_slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
+        self._engine = None
+        # an engine from the first start, to check the options now (reset makes the
+        # episode's)
+        self._new_engine(self._start_state(None), 0)
+        self._running = False
+
+    # -- the episode ----------------------------------------------------------------------
+
+    @property
+    def dt(self) -> float:
+        """Time of one environment step [s] (the policy period)."""
+        return self.policy_period
+
+    @property
+    def engine(self):
+        """The episode's :class:`~scoutsim.simulation.HybridEngine` (its state ``s``, modes,
+        energy accumulator), read-only by convention."""
+        return self._engine
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode (see the class docstring); returns (observation, info)."""
+        super().reset(seed=seed)
+        noise_seed = int(self.np_random.integers(0, 2 ** 63 - 1))
+        self._new_engine(self._start_state(self.np_random), noise_seed)
+        # the readings of sample 0 under zero torques, as simulate()'s controllers see them
+        # before their first command (with torque actions the loop reads sample 0 again
+        # under the first action: the accelerometer, currents and battery of that reading
+        # are what a channel delayed past sample 0 reports at first)
+        obs = self._engine.read_sensors().copy()
+        return obs, self._info_now()
+
+    def step(self, action):
+        """Hold ``action`` for one policy period; returns (observation, reward, terminated,
+        truncated, info)."""
+        eng = self._engine
+        if eng is None or not self._running:
+            raise RuntimeError("BoundEnv.step: the episode has ended (or not begun): call "
+                               "reset()")
+        a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be "
+                             "finite")
+        a = np.clip(a, self.action_space.low, self.action_space.high)
+        if self.action_type == "torque":
+            eng.cmd[:] = a
+        else:
+            eng.C[self.setpoint_slots] = a
+        x0, t0, e0 = float(eng.s[0]), eng.t_now, self._electrical()
+        eng.advance(eng.k + self.samples_per_step)
+        eng.discard_records()
+        obs = eng.read_sensors().copy()
+        x1, t1 = float(eng.s[0]), eng.t_now
+        energy = self._electrical() - e0
+        status = eng.status
+        fell = status == L.ST_FELL
+        up = not fell and self._is_up()
+        v = (x1 - x0) / (t1 - t0) if t1 > t0 else 0.0
+        if self.target_speed is None:
+            r_forward = self.forward_reward_weight * v
+        else:
+            r_forward = -self.forward_reward_weight * abs(v - self.target_speed)
+        r_energy = -self.energy_cost_weight * energy if self._accounting else 0.0
+        r_healthy = self.healthy_reward if up else 0.0
+        reward = r_forward + r_energy + r_healthy
+        terminated = fell or (self.terminate_when_fallen and not up)
+        truncated = not terminated and status != L.ST_RUNNING
+        self._running = not (terminated or truncated)
+        info = self._info_now()
+        info.update(reward_forward=r_forward, reward_energy=r_energy,
+                    reward_healthy=r_healthy, x_velocity=v, electrical_energy=energy,
+                    is_healthy=up)
+        return obs, float(reward), bool(terminated), bool(truncated), info
+
+    # -- pieces -----------------------------------------------------------------------------
+
+    def _start_state(self, rng):
+        """The start of an episode: a HybridState or InitialState."""
+        start = self.start
+        if isinstance(start, (InitialState, HybridState)):
+            return start
+        if start == "flight":
+            return InitialState()
+        if start == "random":
+            init = InitialState()
+            if rng is None:
+                return init
+            changes = {name: getattr(init, name) + self.reset_noise_scale * half
+                       * float(rng.uniform(-1.0, 1.0))
+                       for name, half in RANDOM_START_HALF_WIDTHS.items()}
+            return init.replace(**changes)
+        if rng is None:    # (a user's distribution: drawn at reset only)
+            return None
+        state = start(rng)
+        if not isinstance(state, (InitialState, HybridState)):
+            raise TypeError(f"start(np_random) returned {type(state).__name__}: must be an "
+                            "InitialState or a HybridState")
+        return state
+
+    def _new_engine(self, start, noise_seed: int):
+        """A fresh engine for an episode from ``start`` with sensor noise seed
+        ``noise_seed``."""
+        self._accounting = self.energy_cost_weight != 0.0
+        self._engine = start_engine(
+            start, _ENGINE_DURATION, robot=self.robot, model=self.model,
+            controller=self.controller, hold_commands=self.action_type == "torque",
+            sensors=self.sensors.replace(seed=noise_seed),
+            friction_coefficient=self.friction_coefficient,
+            pitch_limit_deg=self.pitch_limit_deg, integrator=self.integrator,
+            energy=self._accounting, rows=self.samples_per_step + 2)
+        self._running = True
+
+    def _electrical(self) -> float:
+        """Electrical energy into both legs' motor terminals since the start [J] (NaN
+        without the accounting)."""
+        e = self._engine.energy
+        if not e.size:
+            return math.nan
+        return float(e[L.EN_ELECTRICAL] + e[L.NEN_LEG + L.EN_ELECTRICAL])
+
+    def _is_up(self) -> bool:
+        s = self._engine.s
+        (h0, h1), (p0, p1) = self.healthy_height_range, self.healthy_pitch_range
+        return bool(h0 <= s[1] <= h1 and p0 <= s[2] <= p1)
+
+    def _info_now(self) -> dict:
+        eng = self._engine
+        return {"t": eng.t_now, "x_position": float(eng.s[0]), "height": float(eng.s[1]),
+                "pitch": float(eng.s[2]), "outcome": L.STATUS_NAMES[eng.status]}
+
+
+def _interval(pair, name: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in pair)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {pair!r} is not allowed: must be (min, max)") from None
+    if math.isnan(lo) or math.isnan(hi) or lo > hi:
+        raise ValueError(f"{name} = {pair!r} is not allowed: must be (min, max), min <= max")
+    return lo, hi
+
+
+def _parameters(robot, controller, robot_file, overrides):
+    """(RobotParameters, ControllerParameters) from the constructor's arguments."""
+    robot_fields = {f.name for f in dataclasses.fields(RobotParameters)}
+    ctrl_fields = {f.name for f in dataclasses.fields(ControllerParameters)}
+    unknown = set(overrides) - robot_fields - ctrl_fields
+    if unknown:
+        import difflib
+        name = sorted(unknown)[0]
+        close = difflib.get_close_matches(name, sorted(robot_fields | ctrl_fields), n=1)
+        raise TypeError(f"BoundEnv got an unexpected keyword {name!r}: not an option nor a "
+                        "field of RobotParameters or ControllerParameters"
+                        + (f"; did you mean {close[0]!r}?" if close else ""))
+    r_over = {k: v for k, v in overrides.items() if k in robot_fields}
+    c_over = {k: v for k, v in overrides.items() if k in ctrl_fields}
+    if robot_file is not None:
+        if robot is not None or controller is not None:
+            raise ValueError("robot_file is not allowed together with robot or controller")
+        return load_parameters(robot_file, r_over, c_over)
+    robot = (robot if robot is not None else RobotParameters()).replace(**r_over)
+    controller = (controller if controller is not None
+                  else ControllerParameters()).replace(**c_over)
+    validate_robot(robot)
+    validate_parameters(robot, controller)
+    return robot, controller
