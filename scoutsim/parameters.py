@@ -403,7 +403,10 @@ SECTIONS: dict[str, type] = {
 }
 
 #: sections of a robot file read by other loaders: name -> the function that reads them
-SEPARATE_SECTIONS: dict[str, str] = {"sensors": "scoutsim.control.sensors.load_sensors"}
+SEPARATE_SECTIONS: dict[str, str] = {
+    "sensors": "scoutsim.control.sensors.load_sensors",
+    "controller_law": "scoutsim.analysis.controller_file.read_controller_file",
+}
 
 _HALF_PI = 0.5 * math.pi
 
@@ -588,6 +591,19 @@ def physical_limit(name: str) -> float | None:
     field (the physical bound of the field), or None if it has none."""
     limit = _LIMITS.get(name)
     return None if limit is None else limit.hi
+
+
+def allowed_range(name: str) -> tuple[float | None, float | None, bool, bool]:
+    """The interval [SI] :func:`validate_robot` / :func:`validate_controller` accept for a
+    field by itself: ``(low, high, low_closed, high_closed)``, None for an unbounded end
+    (its sign rule, then its physical bound, :func:`physical_limit`). Rules that couple
+    fields (liftoff below touchdown compression, ...) are not included."""
+    rule = _RULES.get(name, _Range())
+    hi, hi_closed = rule.hi, rule.hi_closed
+    limit = _LIMITS.get(name)
+    if limit is not None and (hi is None or limit.hi < hi):
+        hi, hi_closed = limit.hi, True
+    return rule.lo, hi, rule.lo_closed, hi_closed
 
 
 @dataclass(frozen=True)
