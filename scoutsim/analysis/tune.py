@@ -633,8 +633,7 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
         cma = CMA(mean=mean0, sigma=sigma, bounds=np.array([[0.0, 1.0]] * dim), seed=seed,
                   population_size=pop)
         gen = 0
-        if state_path is not None:
-            _write_state(state_path, skey, 0, cma)
+        cma = _write_state(state_path, skey, 0, cma)
     n_resumed = len(done)
 
     from tqdm import tqdm
@@ -698,8 +697,7 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
                           progress=False, on_result=on_result, error_row=_error_row)
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
-            if state_path is not None:
-                _write_state(state_path, skey, gen, cma)
+            cma = _write_state(state_path, skey, gen, cma)
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
         if rd is not None and isinstance(exc, KeyboardInterrupt):
@@ -770,19 +768,40 @@ def _write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
 
 
 def _read_state(path: Path):
+    """The optimiser's state saved in ``path`` ({key, generation, cma}), or None."""
     if not path.exists():
         return None
     try:
-        with open(path, "rb") as f:
-            state = pickle.load(f)
-        return state if isinstance(state, dict) and "key" in state else None
-    except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError):
+        state = _thaw(path.read_bytes())
+        return state if "key" in state else None
+    except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError,
+            KeyError, TypeError, ValueError):
         return None
 
 
-def _write_state(path: Path, key: str, generation: int, cma) -> None:
-    blob = pickle.dumps({"key": key, "generation": generation, "cma": cma})
-    atomic_write(path, lambda p: p.write_bytes(blob))
+def _freeze(key: str, generation: int, cma) -> bytes:
+    """The optimiser's state as bytes. ``cmaes.CMA`` leaves its random generator out of its
+    pickle (an unpickled one draws from a fresh, unseeded generator), so the generator's
+    state is saved beside it."""
+    return pickle.dumps({"key": key, "generation": generation, "cma": cma,
+                         "rng": cma._rng.get_state()})
+
+
+def _thaw(blob: bytes) -> dict:
+    """:func:`_freeze` undone: the optimiser with its random generator where it was."""
+    state = pickle.loads(blob)
+    state["cma"]._rng.set_state(state.pop("rng"))
+    return state
+
+
+def _write_state(path: Path | None, key: str, generation: int, cma):
+    """Save the optimiser's state to ``path`` (atomically; None: nowhere) and return the
+    optimiser as read back from it, so that an uninterrupted tuning goes on from exactly
+    what a resumed one reads."""
+    blob = _freeze(key, generation, cma)
+    if path is not None:
+        atomic_write(path, lambda p: p.write_bytes(blob))
+    return _thaw(blob)["cma"]
 
 
 def _json_safe(v):
