@@ -81,10 +81,11 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters,
-                          allowed_range, field_dimension, validate_parameters)
+                          allowed_range, field_dimension, physical_limit,
+                          validate_parameters)
 from ..run_directory import RunDirectory, atomic_write
 from .parallel import map_tasks, pool_is_broken, worker_pool
-from .sweep import _check_name, _orbit_columns, read_checkpoint
+from .sweep import _check_name, _orbit_columns, parameter_names, read_checkpoint
 
 __all__ = ["tune", "TuneParameter", "TuneResult", "parse_parameter", "OBJECTIVES",
            "AGGREGATES", "PENALTY", "EVALUATIONS", "OPTIMIZER_STATE", "tune_task",
@@ -190,26 +191,25 @@ def parse_parameter(text: str, controller=None) -> TuneParameter:
             raise ValueError(f"parameter {name!r} needs a range: {name}=LOW:HIGH")
         return TuneParameter(name, f"params[{i}]", bounds[0], bounds[1])
     scale = 1.0
-    base = name
+    base = name[:-4] if name.endswith("_deg") else name
+    _check_tuned_name(name, base)
     if name.endswith("_deg"):
-        base = name[:-4]
-        _check_name(base)
         if field_dimension(base.partition(".")[2]) != "angle":
             raise ValueError(f"parameter {name!r} is not allowed: the _deg suffix takes "
                              f"degrees for an angle; {base!r} is not an angle (give it in SI "
                              "units, without the suffix)")
         scale = math.pi / 180.0
-    else:
-        _check_name(base)
     fld = base.partition(".")[2]
     if fld in ("legs_per_virtual_leg", "sense_motor_angle"):
         raise ValueError(f"parameter {name!r} is not allowed: tuning varies continuous "
                          "parameters, and this one is a whole number or a switch")
     lo_r, hi_r, lo_closed, hi_closed = allowed_range(fld)
     if bounds is None:
-        if lo_r is None or hi_r is None:
+        # (an upper end that is only the physical bound, far beyond any robot, is no range
+        # to search)
+        if lo_r is None or hi_r is None or hi_r == physical_limit(fld):
             raise ValueError(f"parameter {name!r} needs a range: its allowed values are not "
-                             f"bounded on both sides; give {name}=LOW:HIGH")
+                             f"a range to search; give {name}=LOW:HIGH")
         # an open end is moved inside by one part in 1e9 of the range
         eps = 1e-9 * (hi_r - lo_r)
         lo = lo_r if lo_closed else lo_r + eps
@@ -225,6 +225,23 @@ def parse_parameter(text: str, controller=None) -> TuneParameter:
                              f"the field's allowed values, {'[' if lo_closed else '('}"
                              f"{show(lo_r)}, {show(hi_r)}{']' if hi_closed else ')'}")
     return TuneParameter(name, base, lo, hi, scale)
+
+
+def _check_tuned_name(name: str, base: str) -> None:
+    """ValueError naming ``name`` (``base``: without its _deg suffix) unless it is a field
+    of RobotParameters / ControllerParameters, with the nearest name as a hint."""
+    try:
+        _check_name(base)
+    except ValueError:
+        import difflib
+        names = parameter_names()
+        names += [n + "_deg" for n in names if field_dimension(n.partition(".")[2]) == "angle"]
+        near = difflib.get_close_matches(name, names, n=1)
+        hint = f"; did you mean {near[0]!r}?" if near else ""
+        raise ValueError(f"parameter {name!r} is not allowed: must be robot.<field> or "
+                         "controller.<field> of RobotParameters / ControllerParameters "
+                         "(a _deg suffix on an angle takes degrees), or controller.params[i] "
+                         f"of a CompiledController{hint}") from None
 
 
 def _apply(values: dict, robot, cparams, params):
