@@ -459,7 +459,6 @@ def plot_tune_convergence(tuning, path=None) -> Figure:
     penalty) and the best so far, against the evaluation number; below, each tuned
     parameter of every evaluation and of the best so far, in the unit its name gives.
     Saved by suffix if ``path`` is given."""
-    from ..analysis.tune import PENALTY
     rows = tuning.rows
     n = np.arange(len(rows))
     score = np.array([r["score"] for r in rows], dtype=float)
@@ -471,7 +470,7 @@ def plot_tune_convergence(tuning, path=None) -> Figure:
     ax = axes[0]
     ax.plot(n[feasible], score[feasible], "o", ms=3, color="tab:blue", label="feasible")
     ax.plot(n[~feasible], np.minimum(score[~feasible], 3e4), "o", ms=3, mfc="none",
-            color="tab:red", label=f"penalised (>= {PENALTY:g}: constraint broken)")
+            color="tab:red", label="penalised (a constraint broken)")
     ax.step(n, best, where="post", color="k", lw=1.2, label="best so far")
     if np.all(score > 0):
         ax.set_yscale("log")
