@@ -89,7 +89,7 @@ from .sweep import _check_name, _orbit_columns, parameter_names, read_checkpoint
 
 __all__ = ["tune", "TuneParameter", "TuneResult", "parse_parameter", "OBJECTIVES",
            "AGGREGATES", "PENALTY", "EVALUATIONS", "OPTIMIZER_STATE", "tune_task",
-           "MissingDependencyError"]
+           "MissingDependencyError", "EvaluationNotRunError"]
 
 #: what can be minimised (module docstring)
 OBJECTIVES = ("speed", "max-speed", "cot", "stability")
@@ -390,14 +390,17 @@ def tune_task(task: dict) -> dict:
     return row
 
 
+class EvaluationNotRunError(RuntimeError):
+    """An evaluation could not be run at all: its worker process died twice, or a Dask
+    worker could not load the task (a different environment). The tuning stops, keeping
+    every finished evaluation; the same call again goes on once the cause is fixed."""
+
+
 def _error_row(task: dict, exc: BaseException) -> dict:
-    """The row of an evaluation whose worker process died twice (parallel.map_tasks)."""
-    row = {"evaluation": task["evaluation"], "generation": task["generation"],
-           "values": dict(task["values"])}
-    row.update({k: None for k in COLUMNS[2:]})
-    row.update(score=30.0 * PENALTY, feasible=False, outcome="error", violations="error",
-               error=f"{type(exc).__name__}: {exc}")
-    return row
+    """What map_tasks records for an evaluation that could not be run (not a row: the
+    tuning stops on it, see :class:`EvaluationNotRunError`)."""
+    return {"not_run": True, "evaluation": task["evaluation"], "values": task["values"],
+            "error": f"{type(exc).__name__}: {exc}"}
 
 
 # -----------------------------------------------------------------------------------------
@@ -561,6 +564,8 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
     ValueError : a bad parameter name or range, objective or setting (named).
     MissingDependencyError : the ``cmaes`` library is not installed.
     KeyboardInterrupt : Ctrl-C; every finished evaluation is in ``out/evaluations.jsonl``.
+    EvaluationNotRunError : an evaluation could not be run (its worker died twice, a Dask
+        worker without scoutsim's version); the finished ones are kept likewise.
     """
     CMA = _cma_class()
     if objective not in OBJECTIVES:
@@ -700,6 +705,9 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
                 todo.append(k)
 
             def on_result(j, row, todo=todo):
+                if row.get("not_run"):
+                    not_run.append(row)
+                    return
                 if fh is not None:
                     fh.write(json.dumps({"key": todo[j], "row": row}, default=_json) + "\n")
                     fh.flush()
@@ -710,15 +718,25 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
                     # one pool for every generation (a broken one is replaced)
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
+                not_run: list = []
                 map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
                           progress=False, on_result=on_result, error_row=_error_row)
+                if not_run:
+                    r = not_run[0]
+                    shown = {p.name: p.shown(r["values"][p.key]) for p in params}
+                    raise EvaluationNotRunError(
+                        f"{len(not_run)} evaluation(s) of generation {gen} could not be run; "
+                        f"evaluation {r['evaluation']} at {shown}: {r['error']}"
+                        + (f"; the finished evaluations are kept in {ck}: the same call "
+                           "again goes on from them" if ck is not None else ""))
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
             cma = _write_state(state_path, skey, gen, cma)
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
-        if rd is not None and isinstance(exc, KeyboardInterrupt):
-            rd.finish(outcome="interrupted", partial=True)
+        if rd is not None and isinstance(exc, (KeyboardInterrupt, EvaluationNotRunError)):
+            rd.finish(outcome="interrupted" if isinstance(exc, KeyboardInterrupt)
+                      else "evaluation not run", partial=True)
         raise
     else:
         pools.close()

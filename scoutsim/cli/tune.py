@@ -115,7 +115,9 @@ def _starts(args, robot, model):
 def execute(args) -> int:
     from ..analysis.parallel import SchedulerUnreachableError
     from ..analysis.sweep import read_checkpoint
-    from ..analysis.tune import EVALUATIONS, MissingDependencyError, parse_parameter, tune
+    from ..analysis.tune import (EVALUATIONS, EvaluationNotRunError, MissingDependencyError,
+                                 parse_parameter, tune)
+    from ..simulation import warm_up
     if not args.param:
         raise UsageError("give at least one --param NAME[=LOW:HIGH] to tune")
     if args.objective == "speed" and args.target is None:
@@ -147,6 +149,8 @@ def execute(args) -> int:
                         what=f"the tuning of {args.budget} evaluations")
     out = out_dir(args.out)
     controller = make_controller(law, cparams)
+    if args.scheduler is None:
+        warm_up()        # compiled (or loaded) once here; the workers then load the cache
     wall0 = time.perf_counter()
     try:
         with usage_errors(SchedulerUnreachableError, MissingDependencyError):
@@ -161,6 +165,9 @@ def execute(args) -> int:
                        out=out, workers=args.workers, scheduler=args.scheduler,
                        progress=show_progress(args), resume=not args.no_resume,
                        command=" ".join(["scoutsim"] + sys.argv[1:]))
+    except EvaluationNotRunError as exc:
+        print(f"scoutsim tune: error: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         n_done = len(read_checkpoint(out / EVALUATIONS))
         print(f"scoutsim tune: interrupted; {n_done} evaluations are done and kept in "

@@ -205,3 +205,29 @@ def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
     assert not short["feasible"] and "not steady" in short["violations"]
     assert steady["score"] < short["score"] < fell["score"]
     assert fell["outcome"] == "fell" and fell["score"] > 10 * T.PENALTY
+
+
+def test_an_evaluation_that_cannot_be_run_stops_the_tuning_and_keeps_the_rest(tmp_path,
+                                                                              monkeypatch):
+    """A task its worker cannot run (here: raises outside tune_task's own handling, as a
+    Dask worker without the package would) is never scored: the tuning stops naming it,
+    the finished evaluations stay, and the same call goes on once it can run."""
+    import concurrent.futures as cf
+    kw = dict(target=1.3, duration=2.0, population=4, budget=8)
+    whole = T.tune(ANGLES, workers=1, **kw)
+    real = T.tune_task
+
+    def broken(task):
+        if task["evaluation"] == 5:
+            raise RuntimeError("cannot load the task")
+        return real(task)
+
+    monkeypatch.setattr(T, "tune_task", broken)
+    with cf.ThreadPoolExecutor(1) as pool, \
+            pytest.raises(T.EvaluationNotRunError, match="evaluation 5 .*cannot load"):
+        T.tune(ANGLES, scheduler=pool, out=tmp_path, **kw)
+    assert len((tmp_path / T.EVALUATIONS).read_text().splitlines()) == 7
+    monkeypatch.setattr(T, "tune_task", real)
+    again = T.tune(ANGLES, workers=1, out=tmp_path, **kw)
+    assert again.settings["n_resumed"] == 7
+    assert _table(again) == _table(whole)
