@@ -604,8 +604,8 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
                  for m in models for mu in floors for s in starts]
     dim = len(params)
     pop = int(population) if population else 4 + int(3 * math.log(dim))
-    if pop < 2:
-        raise ValueError(f"population = {population!r} is not allowed: must be >= 2")
+    if pop < 4:     # (CMA-ES's weights need at least two selected candidates)
+        raise ValueError(f"population = {population!r} is not allowed: must be >= 4")
     if budget < pop:
         raise ValueError(f"budget = {budget} is not allowed: it must hold at least one "
                          f"generation of {pop} evaluations")

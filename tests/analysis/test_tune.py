@@ -231,3 +231,34 @@ def test_an_evaluation_that_cannot_be_run_stops_the_tuning_and_keeps_the_rest(tm
     again = T.tune(ANGLES, workers=1, out=tmp_path, **kw)
     assert again.settings["n_resumed"] == 7
     assert _table(again) == _table(whole)
+
+
+def test_cost_of_transport_objective_and_a_current_constraint():
+    """The cot objective is the run's cost of transport (as an independent run with the
+    energy accounting reports it); a current limit below the run's peak current breaks
+    the constraint and costs the penalty."""
+    res = T.tune(ANGLES, objective="cot", budget=4, population=4, duration=6.0, workers=1)
+    b = res.best
+    ctrl = ControllerParameters().replace(
+        touchdown_angle_front=res.best_values["controller.touchdown_angle_front"],
+        touchdown_angle_back=res.best_values["controller.touchdown_angle_back"])
+    r = scoutsim.simulate(None, ctrl, None, 6.0, model="II", energy=True)
+    assert b["feasible"] and b["objective"] == r.summary()["cost_of_transport"]
+    peak = max(float(np.max(np.abs(r.motor_current(leg)))) for leg in (0, 1))
+    limited = T.tune(ANGLES, objective="cot", budget=4, population=4, duration=6.0,
+                     workers=1, max_current=0.9 * peak)
+    first = limited.rows[0]
+    assert "current" in first["violations"] and not first["feasible"]
+    assert first["score"] > T.PENALTY
+
+
+def test_stability_objective_is_the_spectral_radius_of_the_orbit():
+    task = {"goal": {"objective": "stability", "target": None, "aggregate": "worst",
+                     "max_belt_deflection": None, "max_current": None, "min_speed": None},
+            "duration": 6.0, "controller": {"kind": "table-i"}}
+    scen = {"model": "II", "friction": 1.0, "initial_state": None}
+    row = T._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(),
+                          None)
+    # the Table I bound is a stable orbit (docs/orbits.md): radius below 1
+    assert row["feasible"] and 0 < row["spectral_radius"] < 1
+    assert row["score"] == row["objective"] == row["spectral_radius"]
