@@ -69,16 +69,20 @@ Outputs in ``out``: ``tune.csv`` / ``tune.parquet`` (every evaluation), ``conver
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
 import math
+import os
 import pickle
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters,
                           allowed_range, field_dimension, physical_limit,
@@ -658,8 +662,6 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
         cma = _write_state(state_path, skey, 0, cma)
     n_resumed = len(done)
 
-    from tqdm import tqdm
-    import sys
     bar = tqdm(total=n_gen * pop, unit="run", desc="tune", file=sys.stderr,
                disable=not progress, leave=False)
     rows_by_key: dict = {}
@@ -674,8 +676,6 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
         bar.set_postfix_str(f"best {best:.4g}")
         bar.update(1)
 
-    import contextlib
-    import os
     n_workers = workers or os.cpu_count() or 1
     own_pool = scheduler is None and n_workers > 1
     pools = contextlib.ExitStack()
@@ -685,8 +685,10 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
             for i in range(pop):
                 k = _key([skey, g, i])
                 if k not in done:
-                    raise RuntimeError(f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} "
-                                       f"of generation {g}: run again with resume off")
+                    raise ValueError(f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} of "
+                                     f"generation {g}, which {out}/{OPTIMIZER_STATE} has "
+                                     "told the optimiser: start afresh (resume off, "
+                                     "--no-resume)")
                 record(k, done[k])
         while gen < n_gen:
             if cma.should_stop():

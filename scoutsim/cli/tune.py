@@ -39,7 +39,8 @@ def register(sub, common) -> None:
                     "as in ControllerParameters / RobotParameters; a _deg suffix on an angle "
                     "field takes degrees), each within its allowed range or NAME=LOW:HIGH, "
                     "with CMA-ES against an objective, on local cores or a Dask cluster. "
-                    "Every run must complete without falling and bound steadily. Writes "
+                    "Every evaluation runs --duration (here 20 s by default) and must "
+                    "complete without falling and bound steadily. Writes "
                     "tune.csv, tune.parquet, convergence.png, best.toml (scoutsim run "
                     "--controller DIR/best.toml) and best.json; an interrupted tuning "
                     "resumes from evaluations.jsonl and optimizer.pkl. Example: scoutsim "
@@ -153,7 +154,7 @@ def execute(args) -> int:
         warm_up()        # compiled (or loaded) once here; the workers then load the cache
     wall0 = time.perf_counter()
     try:
-        with usage_errors(SchedulerUnreachableError, MissingDependencyError):
+        with usage_errors(ValueError, SchedulerUnreachableError, MissingDependencyError):
             res = tune(params, objective=args.objective, target=args.target,
                        budget=args.budget, models=args.model, floors=floors, starts=starts,
                        aggregate=args.aggregate, duration=args.duration, robot=robot,
