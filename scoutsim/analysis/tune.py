@@ -15,7 +15,9 @@ What is minimised (``objective``), over the steady strides of each run:
 - ``"cot"``: the cost of transport [-] (electrical energy / (m g d), ``simulate(energy=True)``);
 - ``"stability"``: the spectral radius [-] of the stride map at the run's periodic orbit
   (Newton from the run's last strides, :func:`scoutsim.analysis.orbits.controlled_fixed_point`;
-  < 1: stable), a few seconds per evaluation.
+  < 1: stable), a few seconds per evaluation; Table I controller only (the orbit tools
+  cut the stride map at the lift-offs the controller logs, which compiled controllers
+  do not log).
 
 Constraints: the run must not fall (nor fail), must bound steadily
 (:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`: at least 7 steady strides
@@ -591,6 +593,10 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ValueError(f"{name} = {v!r} is not allowed: must be a number > 0")
     kind, cparams, spec = _controller_spec(controller)
+    if objective == "stability" and kind != "table-i":
+        raise ValueError(f"objective 'stability' is not allowed with the {kind} controller: "
+                         "the orbit tools cut the stride map where the controller logs a "
+                         "back-leg lift-off, which only the Table I controller logs")
     robot = robot or RobotParameters()
     params = [p if isinstance(p, TuneParameter) else parse_parameter(p, controller)
               for p in parameters]

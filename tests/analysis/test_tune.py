@@ -182,6 +182,8 @@ def test_a_parameter_given_twice_and_a_budget_below_one_generation_are_refused()
         T.tune(ANGLES, target=1.3, budget=3)
     with pytest.raises(ValueError, match="target"):
         T.tune(ANGLES)
+    with pytest.raises(ValueError, match="stability"):
+        T.tune(ANGLES, objective="stability", controller="pitch-feedback")
 
 
 def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
