@@ -629,7 +629,10 @@ def tune(parameters, *, objective: str = "speed", target: float | None = None,
             "min_speed": min_speed}
     settings = {"parameters": [dataclasses.asdict(p) for p in params], "goal": goal,
                 "controller": kind,
-                "controller_spec": {k: (repr(v) if k == "command" else v)
+                # (a user's command function by its importable name, not its address)
+                "controller_spec": {k: (f"{getattr(v, '__module__', '')}."
+                                        f"{getattr(v, '__qualname__', repr(v))}"
+                                        if k == "command" else v)
                                     for k, v in spec.items()},
                 "scenarios": [{"model": s["model"], "friction": None if math.isinf(s["friction"])
                                else s["friction"], "initial_state": None
