@@ -403,7 +403,10 @@ SECTIONS: dict[str, type] = {
 }
 
 #: sections of a robot file read by other loaders: name -> the function that reads them
-SEPARATE_SECTIONS: dict[str, str] = {"sensors": "scoutsim.control.sensors.load_sensors"}
+SEPARATE_SECTIONS: dict[str, str] = {
+    "sensors": "scoutsim.control.sensors.load_sensors",
+    "controller_law": "scoutsim.analysis.controller_file.read_controller_file",
+}
 
 _HALF_PI = 0.5 * math.pi
 
@@ -590,21 +593,30 @@ def physical_limit(name: str) -> float | None:
     return None if limit is None else limit.hi
 
 
-def allowed_range(name: str) -> tuple[float, float]:
-    """The closed interval (lo, hi) [SI] of the values the validation accepts for the field
-    ``name`` of :class:`RobotParameters` or :class:`ControllerParameters`: its rule's
-    bounds (an open end replaced by the nearest float inside it), capped by the field's
-    physical bound; -inf / inf where it has none (e.g. a touchdown angle: just inside
-    (-90, 90) deg)."""
+def allowed_range(name: str) -> tuple[float | None, float | None, bool, bool]:
+    """The interval [SI] :func:`validate_robot` / :func:`validate_controller` accept for a
+    field by itself: ``(low, high, low_closed, high_closed)``, None for an unbounded end
+    (its sign rule, then its physical bound, :func:`physical_limit`). Rules that couple
+    fields (liftoff below touchdown compression, ...) are not included."""
+    rule = _RULES.get(name, _Range())
+    hi, hi_closed = rule.hi, rule.hi_closed
+    limit = _LIMITS.get(name)
+    if limit is not None and (hi is None or limit.hi < hi):
+        hi, hi_closed = limit.hi, True
+    return rule.lo, hi, rule.lo_closed, hi_closed
+
+
+def closed_range(name: str) -> tuple[float, float]:
+    """The closed interval (lo, hi) [SI] of :func:`allowed_range` for the field ``name`` of
+    :class:`RobotParameters` or :class:`ControllerParameters`: an open end replaced by the
+    nearest float inside it; -inf / inf where it has none (e.g. a touchdown angle: just
+    inside (-90, 90) deg)."""
     if name not in _schema():
         raise KeyError(f"no parameter named {name!r}")
-    rule = _RULES.get(name, _Range())
-    lo = -math.inf if rule.lo is None else (
-        float(rule.lo) if rule.lo_closed else math.nextafter(rule.lo, math.inf))
-    hi = math.inf if rule.hi is None else (
-        float(rule.hi) if rule.hi_closed else math.nextafter(rule.hi, -math.inf))
-    limit = physical_limit(name)
-    return lo, (hi if limit is None else min(hi, limit))
+    lo, hi, lo_closed, hi_closed = allowed_range(name)
+    lo = -math.inf if lo is None else (float(lo) if lo_closed else math.nextafter(lo, math.inf))
+    hi = math.inf if hi is None else (float(hi) if hi_closed else math.nextafter(hi, -math.inf))
+    return lo, hi
 
 
 @dataclass(frozen=True)

@@ -45,8 +45,8 @@ import signal
 import sys
 import threading
 
-__all__ = ["map_tasks", "WorkerDiedError", "SchedulerUnreachableError", "MAX_BATCH",
-           "SCHEDULER_TIMEOUT_S"]
+__all__ = ["map_tasks", "worker_pool", "WorkerDiedError", "SchedulerUnreachableError",
+           "MAX_BATCH", "SCHEDULER_TIMEOUT_S"]
 
 #: seconds a worker waits between looks at its parent (it exits when the parent is gone)
 PARENT_POLL_S = 0.5
@@ -247,6 +247,32 @@ def _stop_pool(pool) -> None:
         except (OSError, AttributeError, ValueError):
             pass
     pool.shutdown(wait=True, cancel_futures=True)
+
+
+@contextlib.contextmanager
+def worker_pool(workers: int):
+    """A pool of ``workers`` spawn processes kept open for many :func:`map_tasks` calls
+    (pass it as ``scheduler``), so that worker start-up is paid once: its workers ignore
+    SIGINT and exit with their parent, as the pools :func:`map_tasks` starts. On leaving
+    the block by an exception (Ctrl-C) the workers are killed at once; otherwise the pool
+    is shut down. A pool whose worker died is broken: :func:`pool_is_broken` says so, and
+    the caller starts another."""
+    with _sigint_held_while_spawning():
+        pool = _new_pool(workers)
+        # start every worker now, SIGINT held (the pool spawns them as tasks arrive)
+        started = [pool.submit(os.getpid) for _ in range(workers)]
+    try:
+        cf.wait(started)
+        yield pool
+    except BaseException:
+        _stop_pool(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def pool_is_broken(pool) -> bool:
+    """Whether a worker of ``pool`` (from :func:`worker_pool`) died, which breaks it."""
+    return bool(getattr(pool, "_broken", False))
 
 
 def _map_local(func, tasks, workers, done, failed):

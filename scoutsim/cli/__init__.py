@@ -8,6 +8,7 @@ each (``scoutsim COMMAND --help`` for the options):
     animate   stick-figure animation of a saved run (GIF or MP4)
     orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
     sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
+    tune      optimise controller or robot parameters (CMA-ES) against an objective
     identify  fit Model II hip-unit parameters to bench-rig logs
     rig       run a virtual bench rig and write its log
 
@@ -31,7 +32,7 @@ import argparse
 import os
 import sys
 
-from . import animate, basin, compare, identify, orbit, plot, rig, run, sweep
+from . import animate, basin, compare, identify, orbit, plot, rig, run, sweep, tune
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
@@ -40,9 +41,9 @@ __all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_tim
            "format_summary", "format_basin", "MODELS", "SCOUT_FLOOR_FRICTION"]
 
 #: the sub-command modules, in the order of ``scoutsim --help``
-COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, identify, rig)
+COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig)
 #: commands that simulate, so may have to compile the core first (a notice says so)
-COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, identify, rig)}
+COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, tune, identify, rig)}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -57,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
                "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
                "  scoutsim run --json                # summary as JSON on stdout\n"
                "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
+               "  scoutsim tune --objective speed --target 1.3 --param "
+               "controller.touchdown_angle_front_deg --out tuned\n"
+               "  scoutsim run --controller tuned/best.toml\n"
                "  scoutsim compare run1.csv run2.csv --models I,II --out cmp\n"
                "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
                "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"

@@ -156,18 +156,40 @@ CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
 
 
 def add_controller_option(parser):
-    """--controller: which controller runs, with the robot file's [controller] section."""
-    parser.add_argument("--controller", choices=CONTROLLERS, default="table-i",
+    """--controller: which controller runs, with the robot file's [controller] section, or
+    a controller file (as ``scoutsim tune`` writes its best parameters)."""
+    parser.add_argument("--controller", default="table-i",
+                        metavar="{" + ",".join(CONTROLLERS) + ",FILE}",
                         help="table-i: the paper's Table I controller (no torso feedback); "
                              "pitch-feedback: Table I with the touchdown angles corrected "
                              "by torso pitch and pitch rate (PitchFeedbackController, gains "
                              "pitch_gain_* / pitch_rate_gain_* of the robot file's "
-                             "[controller]) (default: table-i)")
+                             "[controller]); FILE: a controller file, its law and every "
+                             "controller parameter (as scoutsim tune writes best.toml; it "
+                             "replaces the robot file's [controller]) (default: table-i)")
+
+
+def controller_choice(value: str, params):
+    """``(law, ControllerParameters)`` of ``--controller value``: a law's name with the
+    robot file's ``params``, or a controller file's law and parameters. UsageError naming
+    the file and the problem otherwise."""
+    if value in CONTROLLERS:
+        return value, params
+    p = Path(value)
+    if not p.exists():
+        raise UsageError(f"--controller {value!r} is not allowed: not one of "
+                         f"{', '.join(CONTROLLERS)}, and no controller file of that name")
+    if not p.is_file():
+        raise UsageError(f"--controller {value!r}: not a file")
+    from ..analysis.controller_file import read_controller_file
+    with usage_errors():
+        cf = read_controller_file(p)
+    return cf.law, cf.controller
 
 
 def make_controller(name: str, params):
-    """The controller ``--controller name`` runs with the ControllerParameters ``params``:
-    the parameters themselves (Table I) or a PitchFeedbackController."""
+    """The controller the law ``name`` runs with the ControllerParameters ``params``: the
+    parameters themselves (Table I) or a PitchFeedbackController."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
         return PitchFeedbackController(params)

@@ -25,6 +25,7 @@ from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
 from ..parameters import floor_label
 from ..run_directory import RunDirectory
 from ._common import (CONTROLLER_LABELS, SCOUT_FLOOR_FRICTION, add_controller_option,
+                      controller_choice,
                       add_models_option, check_expected_time, float_list, friction_list,
                       integrator, load_parameters, make_controller, out_dir, positive_int,
                       show_progress, write_json)
@@ -102,7 +103,8 @@ def _write_rows(path, rows) -> None:
 
 def execute(args) -> int:
     robot, cparams = load_parameters(args.robot)
-    controller = make_controller(args.controller, cparams)
+    law, cparams = controller_choice(args.controller, cparams)
+    controller = make_controller(law, cparams)
     integ = integrator(args)
     out = out_dir(args.out)
     models = args.model
@@ -166,11 +168,12 @@ def execute(args) -> int:
         d = InitialState()
         rd.write("basin.png", lambda p: plot_basin_map(
             rows, p, default_start=(d.dx, math.degrees(d.dtheta)),
-            controller=CONTROLLER_LABELS[args.controller]))
+            controller=CONTROLLER_LABELS[law]
+                           + ("" if law == args.controller else f" ({args.controller})")))
         written += ", basin.png"
     rd.finish(outcome="completed", partial=False)
 
-    print(format_basin(per, len(grid), args.duration, args.controller))
+    print(format_basin(per, len(grid), args.duration, law))
     n_invalid = sum(s["n_invalid_start"] for s in per.values())
     if n_invalid:
         example = next(r for r in rows if r["outcome"] == "invalid_start")

@@ -40,6 +40,7 @@ from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
 from ._common import (MODELS, UsageError, add_controller_option, check_expected_time,
+                      controller_choice,
                       command_wall_time, dumps, finite_float, integrator, load_parameters,
                       load_sensors, make_controller, out_dir, positive_float, show_progress,
                       usage_errors, write_json)
@@ -340,10 +341,11 @@ def execute(args) -> int:
     from ..simulation import default_initial_state, simulate, warm_up
     robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
+    law, cparams = controller_choice(args.controller, cparams)
     if args.controller != "table-i" and args.model == "passive":
         raise UsageError(f"--controller {args.controller} is not allowed with --model "
                          "passive (the passive model has no controller)")
-    controller = make_controller(args.controller, cparams)
+    controller = make_controller(law, cparams)
     integ = integrator(args)
     changes = {}
     if args.speed is not None:
@@ -362,7 +364,7 @@ def execute(args) -> int:
         if args.model == "passive":
             raise UsageError("--start standing is not allowed with --model passive (no "
                              "actuator holds or sets going the standing robot)")
-        if args.controller != "table-i":
+        if law != "table-i":
             raise UsageError(f"--start standing is not allowed with --controller "
                              f"{args.controller}: the start-up runs the Table I controller")
         init = "standing"

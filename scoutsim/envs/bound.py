@@ -23,7 +23,7 @@ from gymnasium import spaces
 from ..control.bounding import SCHEDULABLE
 from ..control.sensors import SensorParameters, load_sensors
 from ..model import layout as L
-from ..parameters import (ControllerParameters, RobotParameters, allowed_range,
+from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
 from ..simulation import IntegratorSettings, start_engine
 from ..state import HybridState, InitialState, standing_state
@@ -74,7 +74,7 @@ class BoundEnv(gymnasium.Env):
       (touchdown angles and sweep limits, back and front [rad]), which the compiled
       controller runs with at 1 kHz over the policy step (its gains and thresholds are
       ``controller``'s); the box is the parameter schema's range (just inside
-      (-90, 90) deg, :func:`~scoutsim.parameters.allowed_range`).
+      (-90, 90) deg, :func:`~scoutsim.parameters.closed_range`).
 
     An action outside the box is clipped to it.
 
@@ -234,7 +234,7 @@ class BoundEnv(gymnasium.Env):
             tau = self.robot.max_leg_torque
             self.action_space = spaces.Box(-tau, tau, (2,), np.float64)
         else:
-            lo, hi = zip(*(allowed_range(name) for name in SETPOINTS))
+            lo, hi = zip(*(closed_range(name) for name in SETPOINTS))
             self.action_space = spaces.Box(np.array(lo), np.array(hi), (len(SETPOINTS),),
                                            np.float64)
         #: the set-points' slots in the engine's controller array ``engine.C``
