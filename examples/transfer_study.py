@@ -20,9 +20,12 @@ Each optimised controller is then run on every model: its steady speed and cost 
 transport over 20 s from the default start, and its basin fraction on a small grid of
 starts (:func:`scoutsim.analysis.basin.basin_of_attraction`).
 
-    python examples/transfer_study.py [--budget 120] [--out transfer_out] [--quick]
+    python examples/transfer_study.py [--budget 120] [--out transfer_out] [--workers N]
 
-Prints the table (markdown) and writes it with every tuned parameter to ``--out``.
+Prints the table (markdown) and writes it with every tuned parameter to ``--out``. The
+ideal actuator has no electrical side: its cost of transport is hip work / (m g d), not
+comparable with the other models' electrical one. The table and what it shows are in the
+README, "Does a tuned or learned controller transfer?".
 """
 
 from __future__ import annotations
