@@ -1,0 +1,70 @@
+""":class:`ControllerParameters`: the bounding controller's settings (paper Table I)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .packaged import _packaged_defaults
+
+
+@dataclass(frozen=True)
+@_packaged_defaults("controller")
+class ControllerParameters:
+    """Bounding controller settings (paper Sec. II, Table I; docs/specification.md section 6), SI units.
+
+    Gains are per physical leg, leg side (N m/rad, N m s/rad). Angles are relative to the
+    torso [rad], positive with the toe ahead of the hip.
+
+    Attributes
+    ----------
+    touchdown_angle_front, touchdown_angle_back : float
+        Flight servo set point phi_td [rad] (Table I: 21 and 19 deg).
+    sweep_limit_front, sweep_limit_back : float
+        Sweep-limit angle ending stance-retraction [rad] (Table I: 0).
+    flight_kp_front, flight_kd_front, flight_kp_back, flight_kd_back : float
+        Flight PD gains [N m/rad], [N m s/rad] (Table I: 250, 5).
+    brake_kp_front, brake_kd_front, brake_kp_back, brake_kd_back : float
+        Stance-brake PD gains [N m/rad], [N m s/rad] (Table I: 300, 5).
+    control_period : float
+        Sample-and-hold period [s] (1 ms).
+    touchdown_compression : float
+        Leg compression l0 - l above which the controller declares touchdown [m] (assumed).
+    liftoff_compression : float
+        Leg compression below which the controller declares lift-off [m] (assumed);
+        must be smaller than touchdown_compression (hysteresis).
+    sense_motor_angle : bool
+        Model II only: sense the motor-side angle alpha (encoder) instead of phi.
+    pitch_gain_front, pitch_gain_back : float
+        Torso feedback of :class:`~scoutsim.control.pitch_feedback.PitchFeedbackController`
+        (not Table I; the Table I controller ignores them): change of the touchdown angle
+        per unit of torso pitch, k_theta [rad/rad] (given in deg/deg).
+    pitch_rate_gain_front, pitch_rate_gain_back : float
+        Its change of the touchdown angle per unit of pitch rate, k_omega [rad/(rad/s)] = [s]
+        (given in deg/(deg/s)).
+    """
+
+    touchdown_angle_front: float
+    touchdown_angle_back: float
+    sweep_limit_front: float
+    sweep_limit_back: float
+    flight_kp_front: float
+    flight_kd_front: float
+    flight_kp_back: float
+    flight_kd_back: float
+    brake_kp_front: float
+    brake_kd_front: float
+    brake_kp_back: float
+    brake_kd_back: float
+    control_period: float
+    touchdown_compression: float
+    liftoff_compression: float
+    sense_motor_angle: bool
+    pitch_gain_front: float
+    pitch_gain_back: float
+    pitch_rate_gain_front: float
+    pitch_rate_gain_back: float
+
+    def replace(self, **changes) -> "ControllerParameters":
+        """Return a copy with some fields changed."""
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,52 @@
+"""The packaged defaults: ``scoutsim/data/scout2.toml`` (the one home of every default value),
+read once through importlib.resources, and the class decorator that makes its values the
+defaults of the parameter dataclasses."""
+
+from __future__ import annotations
+
+import tomllib
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+from .units import _UNIT_INDEX
+
+
+_PACKAGED_NAME = "scout2.toml"
+
+#: the package that ships ``data/scout2.toml``: ``scoutsim``, the parent of this one
+_DATA_PACKAGE = (__package__ or "scoutsim.parameters").rpartition(".")[0]
+
+
+@lru_cache(maxsize=1)
+def _packaged() -> dict:
+    """Parsed packaged ``scout2.toml`` (importlib.resources, with a file-system fallback)."""
+    try:
+        text = resources.files(_DATA_PACKAGE).joinpath("data", _PACKAGED_NAME).read_text("utf-8")
+    except (OSError, TypeError, ValueError, ModuleNotFoundError):
+        # e.g. a namespace package under an editable install
+        text = (Path(__file__).resolve().parents[1] / "data" / _PACKAGED_NAME).read_text("utf-8")
+    return tomllib.loads(text)
+
+
+def _packaged_defaults(*sections: str):
+    """Class decorator: every annotated field of the class gets, as its default, the SI value
+    of its entry in the packaged ``scout2.toml`` (in one of ``sections``), converted with the
+    entry's unit. The dataclass field list and the file must name the same parameters."""
+    def fill(cls):
+        data = _packaged()
+        entries = {n: e for sec in sections for n, e in data[sec].items()}
+        for name, kind in cls.__annotations__.items():
+            if name not in entries:
+                raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
+            entry = entries[name]
+            value = entry["value"]
+            if kind == "bool":
+                default = bool(value)
+            elif kind == "int":
+                default = int(value)
+            else:
+                default = float(value) * _UNIT_INDEX[entry["unit"]][1]
+            setattr(cls, name, default)
+        return cls
+    return fill
