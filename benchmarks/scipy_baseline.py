@@ -28,7 +28,7 @@ from scoutsim.model.sensors import read_encoders
 from scoutsim.numerics.events import event_values
 from scoutsim.numerics.stats import NSTAT
 from scoutsim.numerics.transitions import apply_event, settle
-from scoutsim.simulation import _state_vector
+from scoutsim.starts import _state_vector
 
 
 def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):

@@ -10,10 +10,10 @@ from .parameters import (  # noqa: E402
     load_parameters, load_robot,
 )
 from .result import SimulationResult  # noqa: E402
-from .simulation import (  # noqa: E402
-    ControllerError, HybridState, InitialState, IntegratorSettings, Sensors,
-    default_initial_state, simulate,
-)
+from .simulation import ControllerError, Sensors, simulate  # noqa: E402
+from .integrator import IntegratorSettings  # noqa: E402
+from .starts import default_initial_state  # noqa: E402
+from .state import HybridState, InitialState  # noqa: E402
 from .control import (  # noqa: E402
     BoundingController, CompiledController, Controller, PitchFeedbackController,
     SensorChannel, SensorParameters, load_sensors,

@@ -233,7 +233,7 @@ class SimulationResult:
 
     def hybrid_state(self, k: int):
         """The complete hybrid state at recorded sample ``k`` (continuous state, plant and
-        controller modes, toe anchors) as a :class:`~scoutsim.simulation.HybridState`:
+        controller modes, toe anchors) as a :class:`~scoutsim.state.HybridState`:
         ``simulate(..., initial_state=result.hybrid_state(k))`` continues this run from
         t[k] (its time restarts at 0), to the integration tolerance: the integrator's own
         state is not carried (see :class:`~scoutsim.state.HybridState`)."""

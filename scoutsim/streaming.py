@@ -1,7 +1,7 @@
 """A run streamed to disk as it is computed: memory bounded whatever the duration.
 
 ``simulate(..., stream_to=DIR)`` hands each piece of the run
-(:data:`scoutsim.simulation.STREAM_CHUNK_SECONDS` of control samples) to a
+(:data:`scoutsim.budgets.STREAM_CHUNK_SECONDS` of control samples) to a
 :class:`RunStream` as soon as the compiled loop has computed it: the samples, events
 and (with ``record_steps``) integrator steps go to the tables of DIR
 (:class:`scoutsim.tables.TableWriter`: the same ``timeseries``, ``events`` and ``steps``

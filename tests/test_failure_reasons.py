@@ -21,7 +21,7 @@ from scoutsim.analysis.transitions import audit_transitions
 from scoutsim.cli import main
 from scoutsim.model import layout as L
 from scoutsim.parameters import ParameterError, load_robot, physical_limit
-from scoutsim.simulation import default_initial_state
+from scoutsim.starts import default_initial_state
 
 
 def _write(tmp_path, text, name="robot.toml"):

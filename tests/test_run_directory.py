@@ -104,7 +104,7 @@ def hold():
 
 
 if moment == "simulating":
-    from scoutsim.simulation import HybridEngine
+    from scoutsim.engine import HybridEngine
     advance = HybridEngine.advance
 
     def advance_then_hold(self, *args, **kwargs):

@@ -11,7 +11,9 @@ import pytest
 import scoutsim
 from scoutsim.result import SimulationResult
 from scoutsim.run_directory import check_run_directory
-from scoutsim.simulation import HybridEngine, check_stream_disk, simulate
+from scoutsim.budgets import check_stream_disk
+from scoutsim.engine import HybridEngine
+from scoutsim.simulation import simulate
 from scoutsim.tables import FORMATS, read_table
 
 pytest.importorskip("pyarrow")

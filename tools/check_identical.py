@@ -67,7 +67,7 @@ def _simulate(scoutsim, robot, controller, init, model, method, friction, **kw):
 def run_scenarios() -> dict:
     """name -> {array name -> array, 'outcome' -> str, 'gait' -> metrics vector}."""
     import scoutsim
-    from scoutsim.simulation import InitialState
+    from scoutsim.state import InitialState
     from scoutsim.analysis.orbits import passive_bounding_orbit, passive_robot
 
     out = {}

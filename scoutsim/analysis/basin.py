@@ -3,7 +3,7 @@
 The paper calls the Table I controller robust on the robot; a simulator in which only a
 narrow set of starts reaches steady bounding tells us a modelling assumption is off. This
 module runs a grid of starts (forward speed, pitch rate, torso height; the rest of
-:class:`~scoutsim.simulation.InitialState` at its defaults, i.e. level torso, legs at their
+:class:`~scoutsim.state.InitialState` at its defaults, i.e. level torso, legs at their
 touchdown angles) per model variant and floor, in parallel processes, and reports the
 fraction that reaches steady bounding
 (:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`) and the speed of the cycle
@@ -45,7 +45,8 @@ def _start_of(task: dict) -> dict:
 
 def basin_task(task: dict) -> dict:
     """Run one start of the basin grid (top level so that worker processes can import it)."""
-    from ..simulation import InitialState, simulate
+    from ..simulation import simulate
+    from ..state import InitialState
     row = _start_of(task)
     try:
         init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),

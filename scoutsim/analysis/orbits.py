@@ -27,7 +27,7 @@ prescribed touchdown angles from the world vertical, ``model="passive"``):
 Controlled robot (:func:`controlled_fixed_point`): the Table I law samples and holds at
 1 kHz, so the closed loop is a sampled-data system. **Section**: the control sample at which
 the controller detects back-leg lift-off; the section state is the complete hybrid state
-there (:class:`~scoutsim.simulation.HybridState`: continuous state without x, pinned toes'
+there (:class:`~scoutsim.state.HybridState`: continuous state without x, pinned toes'
 anchors relative to x, and the discrete plant/controller modes, which must recur). The
 stride map :func:`controlled_stride_map` is smooth as long as every controller transition
 stays on the same sample, so its fixed point is a periodic orbit lasting a whole number of
@@ -52,7 +52,9 @@ import numpy as np
 
 from ..model import layout as L
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-from ..simulation import HybridState, InitialState, IntegratorSettings, simulate
+from ..integrator import IntegratorSettings
+from ..simulation import simulate
+from ..state import HybridState, InitialState
 
 __all__ = ["MapError", "ApexMap", "PassiveOrbit", "ControlledCycle", "ControlledOrbit",
            "controlled_fixed_point", "controlled_stride_map", "section_state", "CONTROLLED_Z_NAMES", "passive_robot",

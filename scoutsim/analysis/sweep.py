@@ -95,7 +95,7 @@ ORBIT_TOL = 1e-7
 
 
 def _orbit_columns(result, robot, ctrl, task) -> dict:
-    from ..simulation import IntegratorSettings
+    from ..integrator import IntegratorSettings
     from .orbits import MapError, controlled_fixed_point
     out = {k: None for k in ORBIT_COLUMNS}
     try:

@@ -245,7 +245,7 @@ def check_expected_time(args, simulated_s: dict, *, workers: int = 1,
     """UsageError if a job of ``simulated_s`` ({model: simulated seconds}; plus
     ``per_run_s`` for each of ``runs`` runs), spread over ``workers`` processes, is expected
     to take longer than ``args.max_hours``."""
-    from ..simulation import expected_wall_time
+    from ..budgets import expected_wall_time
     wall = sum(expected_wall_time(sim_s, model) for model, sim_s in simulated_s.items())
     hours = (wall + per_run_s * runs) / max(1, workers) / 3600.0
     if hours > args.max_hours:
@@ -356,7 +356,7 @@ def load_robot(path):
 
 def integrator(args):
     """IntegratorSettings from --rtol / --atol (unset: the defaults)."""
-    from ..simulation import IntegratorSettings
+    from ..integrator import IntegratorSettings
     kw = {}
     if args.rtol is not None:
         kw["rtol"] = args.rtol

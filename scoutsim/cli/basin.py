@@ -164,7 +164,7 @@ def execute(args) -> int:
     written = "basin.csv, basin.json"
     if not args.no_plots:
         from ..presentation.plots import plot_basin_map
-        from ..simulation import InitialState
+        from ..state import InitialState
         d = InitialState()
         rd.write("basin.png", lambda p: plot_basin_map(
             rows, p, default_start=(d.dx, math.degrees(d.dtheta)),

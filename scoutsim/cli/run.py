@@ -217,7 +217,7 @@ def _rescue(result, what: str = "the run's data") -> str:
 def _stream_choice(args) -> bool:
     """Whether the run streams its tables to disk: asked with --stream, or chosen because
     the run would not fit in memory (said on stderr)."""
-    from ..simulation import check_run_memory
+    from ..budgets import check_run_memory
     if args.keep is not None and not args.stream:
         raise UsageError("--keep is only allowed with --stream")
     try:
@@ -338,7 +338,8 @@ def format_energy(summary: dict) -> str:
 
 
 def execute(args) -> int:
-    from ..simulation import default_initial_state, simulate, warm_up
+    from ..simulation import simulate, warm_up
+    from ..starts import default_initial_state
     robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
     law, cparams = controller_choice(args.controller, cparams)

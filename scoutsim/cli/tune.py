@@ -99,7 +99,7 @@ def _starts(args, robot, model):
     --pitch-rates (None: the default start alone)."""
     if args.speeds is None and args.pitch_rates is None:
         return None
-    from ..simulation import default_initial_state
+    from ..starts import default_initial_state
     base = default_initial_state(model, robot)
     out = []
     for v in args.speeds or [None]:

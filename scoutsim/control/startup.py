@@ -171,7 +171,7 @@ def run_startup(engine, params: StartupParameters,
     """Drive ``engine`` through the start-up from standing, up to the hand-over.
 
     ``engine`` runs the compiled Table I controller over the plant
-    (:class:`scoutsim.simulation.HybridEngine`: its controller array ``C``, leg states
+    (:class:`scoutsim.engine.HybridEngine`: its controller array ``C``, leg states
     ``ls``, sample index ``k``, period ``dt``, ``running`` and ``advance(k_stop,
     builtin)``), starting from :func:`scoutsim.state.standing_state` at sample 0. The
     start-up changes the sweep limits and stance-brake gains in ``C`` and puts the front

@@ -6,7 +6,7 @@ keyword, the simulator's own options (model, robot file, sensors, floor) pass st
 through, and ``step`` reports each reward term in ``info``.
 
 A policy step is ``policy_period / control_period`` samples of the compiled run loop
-(:class:`~scoutsim.simulation.HybridEngine`, one engine per episode): the policy's action
+(:class:`~scoutsim.engine.HybridEngine`, one engine per episode): the policy's action
 is held over them, as the 1 kHz controller's command is held over a control period.
 """
 
@@ -25,7 +25,8 @@ from ..control.sensors import SensorParameters, load_sensors
 from ..model import layout as L
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
-from ..simulation import IntegratorSettings, start_engine
+from ..engine import start_engine
+from ..integrator import IntegratorSettings
 from ..state import HybridState, InitialState, standing_state
 
 __all__ = ["BoundEnv", "ACTION_TYPES", "SETPOINTS", "STARTS", "RANDOM_START_HALF_WIDTHS"]
@@ -254,7 +255,7 @@ class BoundEnv(gymnasium.Env):
 
     @property
     def engine(self):
-        """The episode's :class:`~scoutsim.simulation.HybridEngine` (its state ``s``, modes,
+        """The episode's :class:`~scoutsim.engine.HybridEngine` (its state ``s``, modes,
         energy accumulator), read-only by convention."""
         return self._engine
 

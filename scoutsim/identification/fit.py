@@ -64,7 +64,7 @@ from scipy import optimize, stats
 from scipy.stats import qmc
 
 from ..parameters import RobotParameters, validate_robot
-from ..simulation import IntegratorSettings
+from ..integrator import IntegratorSettings
 from ..validation.logs import ExperimentLog, LogError, load_log
 from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS, FlightSteps, FreeSwing, RigNoise, run_rig
 

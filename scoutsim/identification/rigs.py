@@ -40,7 +40,8 @@ from .._version import __version__
 from ..model import layout as L
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
-from ..simulation import IntegratorSettings, run_bench
+from ..bench import run_bench
+from ..integrator import IntegratorSettings
 from ..validation.logs import ExperimentLog
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",

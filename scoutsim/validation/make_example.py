@@ -35,7 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-from ..simulation import InitialState, simulate
+from ..simulation import simulate
+from ..state import InitialState
 from .logs import save_log
 from .measurement import LaserGeometry, SensorNoise, to_log
 

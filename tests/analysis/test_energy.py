@@ -16,7 +16,7 @@ import pytest
 
 import scoutsim
 from scoutsim.model import layout as L
-from scoutsim.simulation import IntegratorSettings
+from scoutsim.integrator import IntegratorSettings
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 #: every option beyond the paper's models switched on, and a battery with internal

@@ -9,7 +9,8 @@ import pytest
 import scoutsim
 from scoutsim.analysis import orbits as O
 from scoutsim.cli import main
-from scoutsim.simulation import InitialState, IntegratorSettings
+from scoutsim.integrator import IntegratorSettings
+from scoutsim.state import InitialState
 
 
 @pytest.fixture(scope="module")

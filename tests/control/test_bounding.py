@@ -8,7 +8,7 @@ import pytest
 
 from scoutsim import BoundingController, ControllerParameters, RobotParameters
 from scoutsim.model import layout as L
-from scoutsim.simulation import Sensors
+from scoutsim.control.sensors import Sensors
 
 ROBOT = RobotParameters()
 TABLE_I = ControllerParameters()

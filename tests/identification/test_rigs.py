@@ -13,8 +13,10 @@ from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stal
                                           run_rig, stall_deflection)
 from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
-from scoutsim.simulation import (IntegratorSettings, _state_vector, default_initial_state,
-                                 run_bench, simulate)
+from scoutsim.bench import run_bench
+from scoutsim.integrator import IntegratorSettings
+from scoutsim.simulation import simulate
+from scoutsim.starts import _state_vector, default_initial_state
 
 
 def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():

@@ -26,7 +26,7 @@ from scoutsim.model.impact import impact
 from scoutsim.model.rigid_body import kinetic_energy
 from scoutsim.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
-from scoutsim.simulation import HybridState, InitialState
+from scoutsim.state import HybridState, InitialState
 
 #: the nose-up start of the stiction-bug study (docs/model.md "Transition audit"): a back-leg push-off's flight, nose rising
 NOSE_UP = InitialState(x=0.0, y=0.33, theta=0.0, dx=0.8, dy=0.0, dtheta=1.5)

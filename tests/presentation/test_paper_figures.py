@@ -15,7 +15,7 @@ from scoutsim.validation import SensorNoise, save_log, to_log
 from scoutsim.presentation import paper_figures as figures
 from scoutsim.validation.errors import ModelRun, assess_errors
 from scoutsim.validation.strides import log_strides
-from scoutsim.simulation import InitialState
+from scoutsim.state import InitialState
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the
 #: basin: Model I falls from it at about 1.4 s (the fallen-model paths of the comparison)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from scoutsim import simulate
-from scoutsim.simulation import InitialState
+from scoutsim.state import InitialState
 from scoutsim.validation import ExperimentLog, LogError, SensorNoise, load_log, save_log, to_log
 from scoutsim.validation.errors import compare
 from scoutsim.validation.make_example import example_paths

@@ -15,7 +15,7 @@ from scoutsim.validation import (ExperimentLog, LaserGeometry, LogError, SensorN
 from scoutsim.validation.errors import (CSV_COLUMNS, ERROR_METRICS, ModelRun, assess_errors,
                                         percent_errors)
 from scoutsim.validation.measurement import laser_ranges, pitch_height_from_lasers
-from scoutsim.simulation import InitialState
+from scoutsim.state import InitialState
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the
 #: basin: Model I falls from it at about 1.4 s (the fallen-model paths of the comparison)
