@@ -10,7 +10,7 @@ import numpy as np
 
 from .control.dispatch import plan_controller
 from .control.sensors import SensorParameters, Sensors
-from .loop import effective_method, first_readings, readings_at, run_entry
+from .loop import effective_method, readings_at, run_entry
 from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.packing import robot_array
@@ -94,8 +94,7 @@ class HybridEngine:
 
     def read_first_sensors(self) -> Sensors:
         """The readings of the run's first sample (what a controller's ``reset`` sees)."""
-        first_readings(self.s, self.P, self.mi, self.mf, self.cmd, self.block)
-        return Sensors.from_vector(self.block.y)
+        return Sensors.from_vector(self.read_sensors())
 
     def read_sensors(self) -> np.ndarray:
         """The sensor readings (``layout.SN_*``, SI) of the next control sample ``k`` at the

@@ -18,12 +18,13 @@ from .control.compiled import call_controller
 from .jit import allocating, kernel
 from .model.evaluate import evaluate_ws
 from .model.kinematics import project_state
-from .model.sensors import measure, true_readings
+from .model.sensors import measure, read_encoders, true_readings
 from .model.rigid_body import state_energy
 from .model.layout import (
-    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD, EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B,
-    MI_MOTOR_B, MODEL_II, NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B,
-    RM_MOTOR_B, SG_MEASURED, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
+    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
+    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B, MI_MOTOR_B, MODEL_II,
+    NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
+    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
@@ -33,8 +34,7 @@ from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_
 from .numerics.stats import S_NFEV
 from .numerics.transitions import settle_ws
 
-__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense",
-           "first_readings", "readings_at"]
+__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense", "readings_at"]
 
 
 @kernel
@@ -56,16 +56,10 @@ def sense(k, s, P, mi, mf, cmd, kept, cb, ew, s_tmp):
 
 
 @allocating
-def first_readings(s, P, mi, mf, cmd, cb):
-    """The sensor readings of a run's first sample (into ``cb.y``), before the run: what a
-    controller's ``reset`` sees (the loop reads the same again at that sample)."""
-    sense(0, s, P, mi, mf, cmd, False, cb, eval_workspace(), np.zeros(NS))
-
-
-@allocating
 def readings_at(k, s, P, mi, mf, cmd, kept, cb):
     """The sensor readings of control sample ``k`` at the state ``s`` (into ``cb.y``),
-    between two calls of :func:`run`: what the loop reads at the start of its next call
+    before a run (k = 0: what a controller's ``reset`` sees) or between two calls of
+    :func:`run`: what the loop reads at the start of its next call
     (the same numbers: the noise is a function of the sample, the delay buffer's row of
     sample ``k`` is written with the same values). ``kept``: the run's last evaluation
     (``cb.last``) is at ``s``, as after a call that ended running (``hwork[HW_EVAL_KEPT]``);
@@ -155,7 +149,12 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
         t = k * dt
         # (read under every kind, the held commands too: a caller that sets them, a
         # learning environment's policy, sees the readings and their delays sample by sample)
-        sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
+        if kind == CTRL_BUILTIN and cb.geom[SG_MEASURED] < 0.5:
+            # the Table I law reads only the hip encoders and leg lengths; with ideal
+            # sensors nothing else is needed here (readings_at reads every channel)
+            read_encoders(s, cb.geom[SG_MOTOR_SIDE] > 0.5, cb.y)
+        else:
+            sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
         if kind == CTRL_BUILTIN:
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev

@@ -26,12 +26,37 @@ import numpy as np
 from .run_directory import PARTIAL_SUFFIX, atomic_write
 
 __all__ = ["FORMATS", "SUFFIXES", "default_format", "write_table", "read_table",
-           "read_metadata", "table_path", "TableWriter", "TableError"]
+           "read_metadata", "table_path", "TableWriter", "TableError", "write_rows_csv",
+           "write_rows_parquet"]
 
 #: table formats and the suffix of their files
 SUFFIXES = {"parquet": ".parquet", "csv": ".csv.gz"}
 FORMATS = tuple(SUFFIXES)
 _KEY = "scoutsim"
+
+
+def write_rows_csv(path, columns: dict) -> None:
+    """A study's table of rows (named columns of equal length, Python values, None where a
+    row has no value) as a plain CSV: a header of the names, then a row each, None empty.
+    For study outputs a user reads (sweep, tune); runs use :func:`write_table`."""
+    import csv
+    names = list(columns)
+    n = len(columns[names[0]]) if names else 0
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(names)
+        for i in range(n):
+            w.writerow(["" if columns[c][i] is None else columns[c][i] for c in names])
+
+
+def write_rows_parquet(path, columns: dict, install_hint: str = "pip install pyarrow") -> None:
+    """The same table as Parquet (needs pyarrow: RuntimeError saying ``install_hint``)."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError as exc:
+        raise RuntimeError(f"writing Parquet needs pyarrow: {install_hint}") from exc
+    pq.write_table(pa.table(columns), path)
 
 
 class TableError(ValueError):

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
 from ..run_directory import RunDirectory
+from ..tables import write_rows_csv, write_rows_parquet
 from .parallel import map_tasks
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
@@ -170,22 +171,11 @@ class SweepResult:
         return {n: [r.get(n) for r in self.rows] for n in names}
 
     def to_csv(self, path):
-        import csv
-        cols = self.columns()
-        with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(list(cols))
-            for i in range(len(self.rows)):
-                w.writerow(["" if cols[c][i] is None else cols[c][i] for c in cols])
+        write_rows_csv(path, self.columns())
 
     def to_parquet(self, path):
-        try:
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-        except ImportError as exc:
-            raise RuntimeError("writing Parquet needs pyarrow: pip install pyarrow "
-                               "(or pip install 'scoutsim[sweep]')") from exc
-        pq.write_table(pa.table(self.columns()), path)
+        write_rows_parquet(path, self.columns(),
+                           "pip install pyarrow (or pip install 'scoutsim[sweep]')")
 
     def plot_map(self, x: str, y: str, value: str = "mean_speed_m_s", path=None):
         """Map of ``value`` over two swept parameters (grid sweeps); a convenience for

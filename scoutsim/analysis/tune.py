@@ -90,6 +90,7 @@ from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, Ro
                           allowed_range, field_dimension, physical_limit,
                           validate_parameters)
 from ..run_directory import RunDirectory, atomic_write
+from ..tables import write_rows_csv, write_rows_parquet
 from .parallel import map_tasks, pool_is_broken, worker_pool
 from .sweep import _check_name, _orbit_columns, parameter_names, read_checkpoint
 
@@ -444,23 +445,10 @@ class TuneResult:
         return {n: [r.get(n) for r in self.rows] for n in names}
 
     def to_csv(self, path):
-        import csv
-        cols = self.columns()
-        with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(list(cols))
-            for i in range(len(self.rows)):
-                w.writerow(["" if cols[c][i] is None else
-                            (repr(cols[c][i]) if isinstance(cols[c][i], float) else cols[c][i])
-                            for c in cols])
+        write_rows_csv(path, self.columns())
 
     def to_parquet(self, path):
-        try:
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-        except ImportError as exc:
-            raise RuntimeError("writing Parquet needs pyarrow: pip install pyarrow") from exc
-        pq.write_table(pa.table(self.columns()), path)
+        write_rows_parquet(path, self.columns())
 
     def best_so_far(self) -> np.ndarray:
         """The lowest score up to each evaluation [objective's unit, or penalised]."""

@@ -172,8 +172,8 @@ def run_startup(engine, params: StartupParameters,
 
     ``engine`` runs the compiled Table I controller over the plant
     (:class:`scoutsim.engine.HybridEngine`: its controller array ``C``, leg states
-    ``ls``, sample index ``k``, period ``dt``, ``running`` and ``advance(k_stop,
-    builtin)``), starting from :func:`scoutsim.state.standing_state` at sample 0. The
+    ``ls``, sample index ``k``, period ``dt``, ``running`` and ``advance(k_stop)``),
+    starting from :func:`scoutsim.state.standing_state` at sample 0. The
     start-up changes the sweep limits and stance-brake gains in ``C`` and puts the front
     legs into stance-retraction once (the push); each leg's values return to
     ``controller``'s at its first lift-off. Returns when both legs are handed over (or

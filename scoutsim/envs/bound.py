@@ -287,11 +287,11 @@ class BoundEnv(gymnasium.Env):
             eng.cmd[:] = a
         else:
             eng.C[self.setpoint_slots] = a
-        x0, t0, e0 = float(eng.s[0]), eng.t_now, self._electrical()
+        x0, t0, e0 = float(eng.s[L.IX]), eng.t_now, self._electrical()
         eng.advance(eng.k + self.samples_per_step)
         eng.discard_records()
         obs = eng.read_sensors().copy()
-        x1, t1 = float(eng.s[0]), eng.t_now
+        x1, t1 = float(eng.s[L.IX]), eng.t_now
         energy = self._electrical() - e0
         status = eng.status
         fell = status == L.ST_FELL
@@ -366,8 +366,8 @@ class BoundEnv(gymnasium.Env):
 
     def _info_now(self) -> dict:
         eng = self._engine
-        return {"t": eng.t_now, "x_position": float(eng.s[0]), "height": float(eng.s[1]),
-                "pitch": float(eng.s[2]), "outcome": L.STATUS_NAMES[eng.status]}
+        return {"t": eng.t_now, "x_position": float(eng.s[L.IX]), "height": float(eng.s[L.IY]),
+                "pitch": float(eng.s[L.ITH]), "outcome": L.STATUS_NAMES[eng.status]}
 
 
 def _interval(pair, name: str) -> tuple[float, float]:
