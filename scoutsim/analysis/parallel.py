@@ -222,19 +222,32 @@ def _new_pool(workers: int, started=None):
 
 @contextlib.contextmanager
 def _sigint_held_while_spawning():
-    """Block SIGINT in this thread while the pool spawns its workers (in ``submit``): a
-    spawned process keeps the signal mask through ``exec``, so a Ctrl-C can never reach a
-    worker still importing, before its initialiser ignores SIGINT; the threads the pool
-    starts here keep it blocked too. A Ctrl-C meanwhile is held, not lost: it is delivered
-    here when the block ends."""
+    """Hold SIGINT while the pool spawns its workers (in ``submit``), and deliver it when
+    the block ends, so that a Ctrl-C is never lost and never cuts a spawn in half.
+
+    Two things are held. The signal mask of this thread: a spawned process keeps it
+    through ``exec``, so a Ctrl-C can never reach a worker still importing, before its
+    initialiser ignores SIGINT (the threads the pool starts here keep it blocked too).
+    And the Python-level handler: SIGINT sent to the process (Ctrl-C in a terminal signals
+    the whole group) is delivered to any thread that does not block it (threads of the
+    numerical libraries, started earlier), and Python would then raise
+    ``KeyboardInterrupt`` here in the main thread anyway, possibly between a worker's
+    ``exec`` and the write of its start-up data, leaving the worker to fail on an empty
+    pipe. The handler installed here only notes the signal; on leaving the block the
+    previous handler is restored and the noted signal raised again through it."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    noted = []
+    previous_handler = signal.signal(signal.SIGINT, lambda signum, frame: noted.append(signum))
+    previous_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous_mask)
+        signal.signal(signal.SIGINT, previous_handler)
+        if noted:
+            signal.raise_signal(signal.SIGINT)
 
 
 def _stop_pool(pool) -> None:

@@ -84,3 +84,33 @@ def test_on_a_dask_cluster_a_task_that_kills_its_worker_fails_alone(n_workers, t
         out = map_tasks(_square_or_die, list(range(8)), scheduler=client, error_row=_failed)
     assert out[3][:2] == ("failed", "KilledWorker")
     assert [o for i, o in enumerate(out) if i != 3] == [i * i for i in range(8) if i != 3]
+
+
+def test_a_ctrl_c_while_workers_spawn_is_held_and_delivered_when_they_are_started():
+    """SIGINT sent to the process may land in any thread that does not block it (a
+    numerical library's); Python then runs its handler in the main thread. While the pool
+    spawns workers the interruption is noted, not raised (a worker left between its exec
+    and its start-up data would fail on an empty pipe), and raised when spawning ends."""
+    import threading
+
+    from scoutsim.analysis.parallel import _sigint_held_while_spawning
+
+    go, sent = threading.Event(), threading.Event()
+
+    def other_thread():                    # started before the block: SIGINT not blocked
+        go.wait()
+        signal.pthread_kill(threading.get_ident(), signal.SIGINT)
+        sent.set()
+
+    helper = threading.Thread(target=other_thread)
+    helper.start()
+    steps = 0
+    with pytest.raises(KeyboardInterrupt):
+        with _sigint_held_while_spawning():
+            go.set()
+            assert sent.wait(10)
+            for _ in range(10_000):        # bytecodes at which a raised Ctrl-C would land
+                steps += 1
+    helper.join()
+    assert steps == 10_000
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
