@@ -37,10 +37,10 @@ def _state_vector(init: InitialState, robot: RobotParameters,
         td = tuple(passive_angles)
     phib = td[0] if init.phi_back is None else init.phi_back
     phif = td[1] if init.phi_front is None else init.phi_front
-    l0 = robot.leg_rest_length
-    lb = l0 if init.leg_length_back is None else init.leg_length_back
-    lf = l0 if init.leg_length_front is None else init.leg_length_front
-    for name, v in (("leg_length_back", lb), ("leg_length_front", lf)):
+    l0b, l0f = robot.per_leg("leg_rest_length")
+    lb = l0b if init.leg_length_back is None else init.leg_length_back
+    lf = l0f if init.leg_length_front is None else init.leg_length_front
+    for name, v, l0 in (("leg_length_back", lb, l0b), ("leg_length_front", lf, l0f)):
         if not (0.0 < v <= l0):
             raise ValueError(f"initial_state.{name} = {v} m is not allowed: must be in "
                              f"(0, {l0}] m")
@@ -51,7 +51,7 @@ def _state_vector(init: InitialState, robot: RobotParameters,
     s[L.IL_F] = lf
     # both toes must start above ground (the run starts in double flight)
     for leg, name in ((0, "back"), (1, "front")):
-        sL = (2 * leg - 1) * robot.half_hip_spacing
+        sL = robot.hip_offset(leg)
         g = init.theta + s[3 + leg]
         toe_y = init.y + sL * math.sin(init.theta) - s[L.IL_B + leg] * math.cos(g)
         if toe_y < 0.0:
@@ -97,11 +97,11 @@ def default_initial_state(model: str = "II", robot: RobotParameters | None = Non
     # does not enter, and world and torso-relative angles coincide.)
     robot = robot if robot is not None else RobotParameters()
     ctrl = ControllerParameters()
-    l0 = robot.leg_rest_length
+    l0b, l0f = robot.per_leg("leg_rest_length")
     start = InitialState()
-    drop_controlled = l0 * max(math.cos(ctrl.touchdown_angle_back),
-                               math.cos(ctrl.touchdown_angle_front))
-    drop_passive = l0 * max(math.cos(a) for a in passive_touchdown_angles)
+    drop_controlled = max(l0b * math.cos(ctrl.touchdown_angle_back),
+                          l0f * math.cos(ctrl.touchdown_angle_front))
+    drop_passive = max(l0 * math.cos(a) for l0, a in zip((l0b, l0f), passive_touchdown_angles))
     return start.replace(y=start.y - drop_controlled + drop_passive, dx=1.0)
 
 
@@ -113,7 +113,7 @@ def fresh_modes(s: np.ndarray, P: np.ndarray):
     mi = np.zeros(L.NMI, dtype=np.int64)
     mf = np.zeros(L.NMF)
     for leg in range(2):
-        mi[L.MI_MOTOR_B + leg] = motor_mode_from_rate(float(s[L.NQ + 5 + leg]), P)
+        mi[L.MI_MOTOR_B + leg] = motor_mode_from_rate(float(s[L.NQ + 5 + leg]), leg, P)
         mi[L.MI_SLIDE_DIR_B + leg] = 1
     return mi, mf
 

@@ -18,7 +18,8 @@ import numpy as np
 from .model import layout as L
 from .parameters import ControllerParameters, RobotParameters
 
-__all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression"]
+__all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression",
+           "standing_leg_compressions"]
 
 
 @dataclass(frozen=True)
@@ -127,15 +128,38 @@ class HybridState:
 # -----------------------------------------------------------------------------------------
 # the robot standing at rest
 # -----------------------------------------------------------------------------------------
-def standing_leg_compression(robot: RobotParameters | None = None) -> float:
-    """Compression l0 - l [m] of each virtual leg of the robot standing level on vertical
-    legs: each carries half the weight, m g / (2 k_v), with m the whole robot's mass (torso
-    and every leg: the leg bodies hang on the hips, and the springs below them carry all
-    of it) and k_v = n k the virtual leg's spring (n physical legs of stiffness k; Table
-    III). Scout II: 24.745 kg x 9.81 m/s^2 / (2 x 7040 N/m) = 17.2 mm."""
+def standing_leg_compressions(robot: RobotParameters | None = None) -> tuple[float, float]:
+    """Compressions l0 - l [m] of the (back, front) virtual legs of the robot standing at
+    rest on vertical legs. Vertical legs put the spring forces and the leg bodies' weight
+    through the hips, so the hips hold no torque and the two springs carry the whole weight
+    m g (m: torso and every leg) in the ratio the moments about the robot's centre of mass
+    set: F_back = m g (h_f - x_c) / (h_f - h_b), F_front = m g (x_c - h_b) / (h_f - h_b),
+    with h the hips' positions along the torso axis from the torso COM
+    (:meth:`~scoutsim.parameters.RobotParameters.hip_offset`) and x_c = n (m_lb h_b +
+    m_lf h_f) / m the robot's COM there; each leg is compressed by F / (n k) (n physical legs
+    of stiffness k; Table III). Equal legs and a COM midway: half the weight each, m g /
+    (2 n k); Scout II: 24.745 kg x 9.81 m/s^2 / (2 x 7040 N/m) = 17.2 mm."""
     robot = robot if robot is not None else RobotParameters()
-    k_virtual = robot.legs_per_virtual_leg * robot.leg_stiffness
-    return robot.total_mass * robot.gravity / (2.0 * k_virtual)
+    n = robot.legs_per_virtual_leg
+    hb, hf = robot.hip_offset(0), robot.hip_offset(1)
+    mb, mf = robot.per_leg("leg_mass")
+    kb, kf = robot.per_leg("leg_stiffness")
+    weight = robot.total_mass * robot.gravity
+    xc = n * (mb * hb + mf * hf) / robot.total_mass
+    fb = weight * ((hf - xc) / (hf - hb))
+    ff = weight * ((xc - hb) / (hf - hb))
+    return fb / (n * kb), ff / (n * kf)
+
+
+def standing_leg_compression(robot: RobotParameters | None = None) -> float:
+    """Compression l0 - l [m] of each virtual leg of a robot with equal legs and its COM
+    midway standing level on vertical legs (:func:`standing_leg_compressions`, which gives
+    the two legs of any robot): m g / (2 n k). Scout II: 17.2 mm."""
+    back, front = standing_leg_compressions(robot)
+    if back != front:
+        raise ValueError(f"the standing legs are compressed unequally (back {back:.4g} m, "
+                         f"front {front:.4g} m): use standing_leg_compressions(robot)")
+    return back
 
 
 def standing_state(robot: RobotParameters | None = None, model: str = "II",
@@ -143,9 +167,12 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
                    x: float = 0.0) -> HybridState:
     """The robot at rest on its four legs: a static equilibrium.
 
-    The torso is level, both virtual legs vertical (phi = 0, the Table I sweep limit) with
-    their toes pinned on the ground (contact mode stick) below the hips, each leg compressed
-    by :func:`standing_leg_compression` so that the two springs carry the whole weight;
+    Both virtual legs are vertical, with their toes pinned on the ground (contact mode
+    stick) below the hips, each leg compressed by :func:`standing_leg_compressions` so that
+    the two springs carry the whole weight; the torso is level when the legs are equal and
+    the COM midway (phi = 0, the Table I sweep limit), and otherwise pitched to the angle
+    theta at which both toes reach the ground (sin theta = (l_f - l_b) / (h_f - h_b), the
+    legs at phi = -theta);
     every velocity is zero. On vertical legs the spring force passes through the hip and
     the leg bodies' weight acts along the legs, so the hips hold no torque: the Model II
     belts are undeflected (gear angle alpha = phi = 0) and the motor joints stuck by their
@@ -170,8 +197,8 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
     Returns
     -------
     HybridState
-        Pitch 0, COM height l0 - compression [m] (the hips are at the COM's height), toe
-        anchors at x -/+ d/2 (half the hip spacing).
+        For equal legs with the COM midway: pitch 0, COM height l0 - compression [m] (the
+        hips are at the COM's height), toe anchors at x -/+ d/2 (half the hip spacing).
 
     Raises
     ------
@@ -188,24 +215,31 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
                          "hold its legs)")
     if not (isinstance(x, (int, float)) and math.isfinite(x)):
         raise ValueError(f"x = {x!r} m is not allowed: must be a finite number")
-    l0 = robot.leg_rest_length
-    comp = standing_leg_compression(robot)
-    if not comp < l0:
-        raise ValueError(f"robot.leg_stiffness = {robot.leg_stiffness} N/m is not allowed "
-                         f"for a standing start: the legs would be compressed by {comp:.3g} m, "
-                         f"more than their rest length l0 = {l0} m")
-    if not comp > ctrl.touchdown_compression:
-        raise ValueError(f"controller.touchdown_compression = {ctrl.touchdown_compression} m "
-                         "is not allowed for a standing start: the standing legs are "
-                         f"compressed by {comp:.4g} m only, so the controller would read "
-                         "them as in flight; it must be below that")
-    length = l0 - comp
+    comps = standing_leg_compressions(robot)
+    lengths = []
+    for leg, comp in enumerate(comps):
+        l0 = robot.per_leg("leg_rest_length")[leg]
+        which = "" if not robot.legs_differ else f" ({L.LEG_NAMES[leg]} leg)"
+        if not comp < l0:
+            raise ValueError(f"robot.leg_stiffness = {robot.per_leg('leg_stiffness')[leg]} N/m"
+                             f"{which} is not allowed for a standing start: the leg would be "
+                             f"compressed by {comp:.3g} m, more than its rest length "
+                             f"l0 = {l0} m")
+        if not comp > ctrl.touchdown_compression:
+            raise ValueError(f"controller.touchdown_compression = {ctrl.touchdown_compression} "
+                             "m is not allowed for a standing start: the standing legs are "
+                             f"compressed by {comp:.4g} m only{which}, so the controller "
+                             "would read them as in flight; it must be below that")
+        lengths.append(l0 - comp)
+    hb, hf = robot.hip_offset(0), robot.hip_offset(1)
+    theta = math.asin((lengths[1] - lengths[0]) / (hf - hb))
     s = np.zeros(L.NS)
     s[L.IX] = x
-    s[L.IY] = length
-    s[L.IL_B] = length
-    s[L.IL_F] = length
-    half = robot.half_hip_spacing
+    s[L.IY] = lengths[0] - hb * math.sin(theta)
+    s[L.ITH] = theta
+    for leg in range(2):
+        s[L.IPHB + leg] = s[L.IALB + leg] = 0.0 - theta      # vertical legs (0.0, not -0.0)
+        s[L.IL_B + leg] = lengths[leg]
     return HybridState(state=tuple(s), leg_states=(L.LS_BRAKE, L.LS_BRAKE),
                        contact_modes=(L.STICK, L.STICK), motor_modes=(L.STUCK, L.STUCK),
-                       toe_anchors=(x - half, x + half))
+                       toe_anchors=(x + hb * math.cos(theta), x + hf * math.cos(theta)))

@@ -10,9 +10,12 @@ Model (docs/specification.md section 1, 2, 5)
 Generalized coordinates ``q = [x, y, theta, phi_b, phi_f, alpha_b, alpha_f]``.
 
 * Torso: mass ``m_t`` at (x, y), pitch inertia ``I_t``, angle ``theta``.
-* Hip of leg i (s = -1 back, +1 front): ``(x + s L cos theta, y + s L sin theta)``.
-* Virtual leg i = ``n_p`` physical legs: one rigid body of mass ``n_p m_l``, inertia
-  ``n_p I_l`` about its COM, COM at ``hip + d (sin g, -cos g)`` with ``g = theta + phi_i``.
+* Hip of leg i (s = -1 back, +1 front) at ``h_i = s L - e`` along the torso axis from
+  the torso COM (``e``: the COM's distance ahead of the hips' midpoint):
+  ``(x + h_i cos theta, y + h_i sin theta)``.
+* Virtual leg i = ``n_p`` physical legs, each leg with its own parameters (suffix ``_b``
+  back, ``_f`` front): one rigid body of mass ``n_p m_l``, inertia ``n_p I_l`` about its
+  COM, COM at ``hip + d (sin g, -cos g)`` with ``g = theta + phi_i``.
 * Model II gear pair per physical leg (n_p of them per virtual leg): driven gear ``J_2``
   with absolute angle ``theta + alpha_i``, drive gear ``J_1`` with absolute angle
   ``theta + N alpha_i``.
@@ -39,9 +42,12 @@ import sympy as sp
 
 # --- symbols ------------------------------------------------------------------------------
 Q_NAMES = ("x", "y", "theta", "phi_b", "phi_f", "alpha_b", "alpha_f")
-PARAM_NAMES = ("m_t", "I_t", "m_l", "I_l", "n_p", "L", "d", "g", "N", "J1", "J2",
-               "k", "l0", "k_b")
-LEG_SIGN = (-1, 1)           # leg 0 = back (hip at -L), leg 1 = front (+L)
+#: per-leg parameters, named with the suffix of their leg (``m_l_b``, ``m_l_f``, ...)
+LEG_PARAMS = ("m_l", "I_l", "d", "N", "J1", "J2", "k", "l0", "k_b")
+LEG_SUFFIX = ("_b", "_f")
+PARAM_NAMES = ("m_t", "I_t", "n_p", "L", "e", "g") + tuple(
+    n + sfx for sfx in LEG_SUFFIX for n in LEG_PARAMS)
+LEG_SIGN = (-1, 1)           # leg 0 = back (hip at -L - e), leg 1 = front (L - e)
 
 q = sp.symbols(" ".join(Q_NAMES), real=True)
 dq = sp.symbols(" ".join("d" + n for n in Q_NAMES), real=True)
@@ -55,6 +61,11 @@ ddlsym = sp.symbols("ddl_b ddl_f", real=True)
 x, y, th = q[0], q[1], q[2]
 
 
+def leg_param(name, leg):
+    """Symbol of the per-leg parameter ``name`` of leg ``leg``."""
+    return P[name + LEG_SUFFIX[leg]]
+
+
 def _time_derivative(expr, coords, rates, accels=None):
     """d/dt of expr(coords, rates) along coords' = rates, rates' = accels."""
     out = sum(sp.diff(expr, c) * r for c, r in zip(coords, rates))
@@ -64,8 +75,8 @@ def _time_derivative(expr, coords, rates, accels=None):
 
 
 def hip(leg):
-    s = LEG_SIGN[leg]
-    return sp.Matrix([x + s * P["L"] * sp.cos(th), y + s * P["L"] * sp.sin(th)])
+    h = LEG_SIGN[leg] * P["L"] - P["e"]
+    return sp.Matrix([x + h * sp.cos(th), y + h * sp.sin(th)])
 
 
 def leg_angle(leg):
@@ -83,7 +94,7 @@ def unit_normal(leg):
 
 
 def leg_com(leg):
-    return hip(leg) + P["d"] * unit_axis(leg)
+    return hip(leg) + leg_param("d", leg) * unit_axis(leg)
 
 
 def _velocity(r):
@@ -93,23 +104,25 @@ def _velocity(r):
 @functools.lru_cache(maxsize=None)
 def energies():
     """Symbolic (T, V_grav, V_springs)."""
-    n_p, m_l, I_l, N = P["n_p"], P["m_l"], P["I_l"], P["N"]
+    n_p = P["n_p"]
     T = sp.Rational(1, 2) * P["m_t"] * (dq[0] ** 2 + dq[1] ** 2) \
         + sp.Rational(1, 2) * P["I_t"] * dq[2] ** 2
     V_grav = P["m_t"] * P["g"] * y
     V_spr = 0
     for leg in range(2):
+        m_l, I_l, N = (leg_param(n, leg) for n in ("m_l", "I_l", "N"))
         vc = _velocity(leg_com(leg))
         w_leg = dq[2] + dq[3 + leg]
         w_j2 = dq[2] + dq[5 + leg]
         w_j1 = dq[2] + N * dq[5 + leg]
         T += sp.Rational(1, 2) * n_p * m_l * (vc.dot(vc)) \
             + sp.Rational(1, 2) * n_p * I_l * w_leg ** 2 \
-            + sp.Rational(1, 2) * n_p * P["J2"] * w_j2 ** 2 \
-            + sp.Rational(1, 2) * n_p * P["J1"] * w_j1 ** 2
+            + sp.Rational(1, 2) * n_p * leg_param("J2", leg) * w_j2 ** 2 \
+            + sp.Rational(1, 2) * n_p * leg_param("J1", leg) * w_j1 ** 2
         V_grav += n_p * m_l * P["g"] * leg_com(leg)[1]
-        V_spr += sp.Rational(1, 2) * n_p * P["k"] * (P["l0"] - lsym[leg]) ** 2 \
-            + sp.Rational(1, 2) * n_p * P["k_b"] * (q[5 + leg] - q[3 + leg]) ** 2
+        V_spr += sp.Rational(1, 2) * n_p * leg_param("k", leg) \
+            * (leg_param("l0", leg) - lsym[leg]) ** 2 \
+            + sp.Rational(1, 2) * n_p * leg_param("k_b", leg) * (q[5 + leg] - q[3 + leg]) ** 2
     return sp.expand(T), V_grav, V_spr
 
 
@@ -226,20 +239,27 @@ def leg_normal(q_, leg):
     return np.array(_compiled()[("normal", leg)](_vec(q_, 7)), dtype=float).reshape(2)
 
 
+def _pair(value):
+    """(back, front) of a RobotParameters field: one value or a pair."""
+    return tuple(value) if isinstance(value, (tuple, list)) else (value, value)
+
+
 def params_from_robot(robot, gears=True):
     """Named parameter dict from a ``scoutsim.RobotParameters`` (read field by field,
-    independently of ``scoutsim.model.packing``). ``gears=False`` zeroes J1, J2."""
-    return {
-        "m_t": robot.torso_mass, "I_t": robot.torso_inertia,
-        "m_l": robot.leg_mass, "I_l": robot.leg_inertia,
-        "n_p": float(robot.legs_per_virtual_leg), "L": robot.hip_spacing / 2.0,
-        "d": robot.leg_com_distance, "g": robot.gravity,
-        "N": robot.planetary_ratio * robot.sprocket_ratio,
-        "J1": robot.drive_gear_inertia if gears else 0.0,
-        "J2": robot.driven_gear_inertia if gears else 0.0,
-        "k": robot.leg_stiffness, "l0": robot.leg_rest_length,
-        "k_b": robot.belt_stiffness if gears else 0.0,
-    }
+    independently of ``scoutsim.model.packing``; a per-leg field given as a (back, front)
+    pair gives each leg its value). ``gears=False`` zeroes J1, J2 and k_b."""
+    out = {"m_t": robot.torso_mass, "I_t": robot.torso_inertia,
+           "n_p": float(robot.legs_per_virtual_leg), "L": robot.hip_spacing / 2.0,
+           "e": robot.com_offset, "g": robot.gravity}
+    fields = {"m_l": "leg_mass", "I_l": "leg_inertia", "d": "leg_com_distance",
+              "J1": "drive_gear_inertia", "J2": "driven_gear_inertia",
+              "k": "leg_stiffness", "l0": "leg_rest_length", "k_b": "belt_stiffness"}
+    for leg, sfx in enumerate(LEG_SUFFIX):
+        for name, field in fields.items():
+            value = _pair(getattr(robot, field))[leg]
+            out[name + sfx] = value if gears or name not in ("J1", "J2", "k_b") else 0.0
+        out["N" + sfx] = _pair(robot.planetary_ratio)[leg] * _pair(robot.sprocket_ratio)[leg]
+    return out
 
 
 def main():

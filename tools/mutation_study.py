@@ -123,15 +123,15 @@ MUTANTS = [
     # --- actuator: motor, amplifier, battery (model/actuator.py) ----------------------
     Mutant("back_emf_sign", "back-EMF in the torque-speed line of the amplifier current",
            "scoutsim/model/actuator.py",
-           "        v_lo = (-vb - P[P_KW] * omega_m) / r\n"
-           "        v_hi = (vb - P[P_KW] * omega_m) / r\n",
-           "        v_lo = (-vb + P[P_KW] * omega_m) / r\n"
-           "        v_hi = (vb + P[P_KW] * omega_m) / r\n",
+           "        v_lo = (-vb - P[P_KW + leg] * omega_m) / r\n"
+           "        v_hi = (vb - P[P_KW + leg] * omega_m) / r\n",
+           "        v_lo = (-vb + P[P_KW + leg] * omega_m) / r\n"
+           "        v_hi = (vb + P[P_KW + leg] * omega_m) / r\n",
            (LAWS + "test_amplifier_current_follows_the_torque_speed_line_and_the_limit",)),
     Mutant("current_limit_doubled", "current limit |i| <= i_max of the amplifier",
            "scoutsim/model/actuator.py",
-           "    imax = P[P_IMAX]\n    ic = cmd_torque / torque_per_amp(P)\n    if ic < -imax:\n",
-           "    imax = 2.0 * P[P_IMAX]\n    ic = cmd_torque / torque_per_amp(P)\n"
+           "    imax = P[P_IMAX + leg]\n    ic = cmd_torque / torque_per_amp(leg, P)\n    if ic < -imax:\n",
+           "    imax = 2.0 * P[P_IMAX + leg]\n    ic = cmd_torque / torque_per_amp(leg, P)\n"
            "    if ic < -imax:\n",
            (LAWS + "test_amplifier_current_follows_the_torque_speed_line_and_the_limit",)),
     Mutant("current_limit_removed", "current limit |i| <= i_max of the amplifier",
@@ -141,8 +141,8 @@ MUTANTS = [
            (LAWS + "test_amplifier_current_follows_the_torque_speed_line_and_the_limit",)),
     Mutant("efficiency_dropped", "delivered torque N eta K_T i (torque per ampere)",
            "scoutsim/model/actuator.py",
-           "    return P[P_N] * P[P_ETA] * P[P_KT]\n",
-           "    return P[P_N] * P[P_KT]\n",
+           "    return P[P_N + leg] * P[P_ETA + leg] * P[P_KT + leg]\n",
+           "    return P[P_N + leg] * P[P_KT + leg]\n",
            (LAWS + "test_delivered_torque_is_n_eta_kt_i",
             LAWS + "test_amplifier_current_follows_the_torque_speed_line_and_the_limit")),
     Mutant("battery_resistance_doubled", "battery V_b = V_oc - R_b P / V_b",
@@ -175,10 +175,10 @@ MUTANTS = [
                           "to a zero magnitude): no input gives a different output"),
     Mutant("speed_line_test_back_emf_sign", "back-EMF in the stiff-factor test of the "
            "torque-speed line", "scoutsim/model/actuator.py",
-           "    v_lo = (-vb - P[P_KW] * omega_m) / r_a\n"
-           "    v_hi = (vb - P[P_KW] * omega_m) / r_a\n",
-           "    v_lo = (-vb + P[P_KW] * omega_m) / r_a\n"
-           "    v_hi = (vb + P[P_KW] * omega_m) / r_a\n",
+           "    v_lo = (-vb - P[P_KW + leg] * omega_m) / r_a\n"
+           "    v_hi = (vb - P[P_KW + leg] * omega_m) / r_a\n",
+           "    v_lo = (-vb + P[P_KW + leg] * omega_m) / r_a\n"
+           "    v_hi = (vb + P[P_KW + leg] * omega_m) / r_a\n",
            (), equivalent="on_speed_line only decides whether the back-EMF damping joins the "
                           "implicit (stiff) part of the ARK step; for Scout II the motor-side "
                           "damping rate is about 400 /s with or without it, below "
@@ -200,8 +200,8 @@ MUTANTS = [
             EOM + "test_stance_constrained_dynamics")),
     Mutant("leg_damper_angle_doubled", "angle-dependent leg damper c (1 + a phi^2)",
            "scoutsim/model/leg.py",
-           "    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi * phi)\n",
-           "    return P[P_C] * (1.0 + 2.0 * P[P_LEG_C_ANGLE] * phi * phi)\n",
+           "    return P[P_C + leg] * (1.0 + P[P_LEG_C_ANGLE + leg] * phi * phi)\n",
+           "    return P[P_C + leg] * (1.0 + 2.0 * P[P_LEG_C_ANGLE + leg] * phi * phi)\n",
            (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
     Mutant("leg_friction_sign", "leg sliding-joint Coulomb friction",
            "scoutsim/model/leg.py",
@@ -215,44 +215,44 @@ MUTANTS = [
            (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
     Mutant("leg_friction_side_load_doubled", "leg friction level F_0 + c_s |tau_hip| / l",
            "scoutsim/model/leg.py",
-           "    return P[P_LEG_FRIC] + P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll\n",
-           "    return P[P_LEG_FRIC] + 2.0 * P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll\n",
+           "    return P[P_LEG_FRIC + leg] + P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll\n",
+           "    return P[P_LEG_FRIC + leg] + 2.0 * P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll\n",
            (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
     # --- Model II hip unit (model/transmission.py) ------------------------------------
     Mutant("belt_damper_sign", "belt damper c_b (alpha' - phi')",
            "scoutsim/model/transmission.py",
-           "            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
-           "            - P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
+           "            + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))\n",
+           "            - P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))\n",
            (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
             EOM + "test_stance_constrained_dynamics")),
     Mutant("belt_damper_doubled", "belt damper c_b (alpha' - phi')",
            "scoutsim/model/transmission.py",
-           "            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
-           "            + 2.0 * P[P_CB] * (dq[5 + leg] - dq[3 + leg]))\n",
+           "            + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))\n",
+           "            + 2.0 * P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))\n",
            (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
             EOM + "test_stance_constrained_dynamics")),
     Mutant("belt_backlash_dropped", "belt spring dead zone (backlash)",
            "scoutsim/model/transmission.py",
-           "    h = 0.5 * P[P_BACKLASH]\n",
-           "    h = 0.0 * P[P_BACKLASH]\n",
+           "    h = 0.5 * P[P_BACKLASH + leg]\n",
+           "    h = 0.0 * P[P_BACKLASH + leg]\n",
            (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",)),
     Mutant("joint_viscous_sign", "motor-joint viscous friction b_J w_m",
            "scoutsim/model/transmission.py",
-           "    tf = P[P_B_J] * om\n",
-           "    tf = -P[P_B_J] * om\n",
+           "    tf = P[P_B_J + leg] * om\n",
+           "    tf = -P[P_B_J + leg] * om\n",
            (LAWS + "test_slipping_motor_joint_friction",
             EOM + "test_stance_constrained_dynamics")),
     Mutant("joint_coulomb_doubled", "motor-joint Coulomb friction tau_s while slipping",
            "scoutsim/model/transmission.py",
-           "        tf += P[P_TAU_S] * mode\n",
-           "        tf += 2.0 * P[P_TAU_S] * mode\n",
+           "        tf += P[P_TAU_S + leg] * mode\n",
+           "        tf += 2.0 * P[P_TAU_S + leg] * mode\n",
            (LAWS + "test_slipping_motor_joint_friction",
             EOM + "test_stance_constrained_dynamics")),
     # --- events: stiction breakaway (numerics/events.py) ------------------------------
     Mutant("stiction_breakaway_doubled", "stiction breakaway |holding torque| = tau_s",
            "scoutsim/numerics/events.py",
-           "(P[P_TAU_S] - abs(aux[o + A_HOLD])) / P[P_TAU_S]",
-           "(2.0 * P[P_TAU_S] - abs(aux[o + A_HOLD])) / P[P_TAU_S]",
+           "(tau_s - abs(aux[o + A_HOLD])) / tau_s",
+           "(2.0 * tau_s - abs(aux[o + A_HOLD])) / tau_s",
            (LAWS + "test_stiction_breaks_away_at_its_level",)),
     # --- ground contact (model/contact.py) --------------------------------------------
     Mutant("toe_slide_friction_direction", "sliding toe friction mu F_n against the motion",
@@ -313,8 +313,8 @@ MUTANTS = [
            (BOUNDING + "test_stance_retraction_never_commands_a_positive_torque_eq_5",)),
     Mutant("retraction_slope_sign", "controller: retraction slope A of eq. (2)",
            "scoutsim/control/bounding.py",
-           "    tau = -C[C_TAU_MAX] + C[C_SLOPE] * rate\n",
-           "    tau = -C[C_TAU_MAX] - C[C_SLOPE] * rate\n",
+           "    tau = -C[C_TAU_MAX + leg] + C[C_SLOPE + leg] * rate\n",
+           "    tau = -C[C_TAU_MAX + leg] - C[C_SLOPE + leg] * rate\n",
            (BOUNDING + "test_stance_retraction_commands_the_motor_torque_speed_line_eqs_2_3",)),
     # --- gravity on the leg bodies (model/rigid_body.py) ------------------------------
     Mutant("leg_gravity_dropped_in_potential", "gravity on the leg bodies: potential energy",

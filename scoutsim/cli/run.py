@@ -422,7 +422,8 @@ def execute(args) -> int:
         print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end,
                              friction=args.friction, load_s=load_s,
                              command_wall_s=command_wall_time()))
-        if args.model == "passive" and result.outcome == "fell" and robot.leg_mass > 0:
+        if args.model == "passive" and result.outcome == "fell" \
+                and max(robot.per_leg("leg_mass")) > 0:
             print("  (passive model: no actuators, so legs with mass swing freely at the hips "
                   "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
                   "passively: see scoutsim orbit --passive)")

@@ -39,12 +39,13 @@ from .protocol import Controller
 # controller parameter array layout
 (C_TD_B, C_TD_F, C_SW_B, C_SW_F, C_KPF_B, C_KDF_B, C_KPF_F, C_KDF_F, C_KPB_B, C_KDB_B,
  C_KPB_F, C_KDB_F, C_TD_COMP, C_LO_COMP, C_SENSE_ALPHA, C_ENABLED) = range(16)
-# what the controller knows of the robot (packed once by controller_array)
+# what the controller knows of the robot (packed once by controller_array), per virtual
+# leg: two slots, back then front (C[C_X + leg])
 C_L0 = 16          # leg rest length l0 [m] (compression = l0 - sensed length)
-C_TAU_MAX = 17     # tau_max = N eta K_T V_bar / R_A of eq. (3), at the leg [N m]
-C_SLOPE = 18       # A = -N^2 eta K_T K_w / R_A of eq. (2), at the leg [N m s/rad]
-C_TAU_LIMIT = 19   # N eta K_T i_max of eq. (4), at the leg [N m]
-NC = 20
+C_TAU_MAX = 18     # tau_max = N eta K_T V_bar / R_A of eq. (3), at the leg [N m]
+C_SLOPE = 20       # A = -N^2 eta K_T K_w / R_A of eq. (2), at the leg [N m s/rad]
+C_TAU_LIMIT = 22   # N eta K_T i_max of eq. (4), at the leg [N m]
+NC = 24
 
 
 #: ControllerParameters field -> slot of the compiled controller's array, for the fields a
@@ -57,7 +58,8 @@ SCHEDULABLE = {
 
 def retraction_constants(robot: RobotParameters) -> tuple[float, float, float]:
     """(tau_max, A, torque limit) of the stance-retraction law, eqs. (2)-(4), at the leg
-    [N m, N m s/rad, N m] from the motor's constants: tau_max = N eta K_T V / R_A,
+    [N m, N m s/rad, N m] from the motor's constants of ``robot`` (one leg's:
+    ``robot.leg("front")`` when the legs differ): tau_max = N eta K_T V / R_A,
     A = -N^2 eta K_T K_w / R_A, limit = N eta K_T i_max (the robot's torque-speed line
     and current limit, :class:`~scoutsim.parameters.RobotParameters`)."""
     return robot.stall_torque, -robot.torque_speed_slope, robot.max_leg_torque
@@ -72,8 +74,10 @@ def controller_array(c: ControllerParameters | None,
     if c is None:
         return a
     robot = robot if robot is not None else RobotParameters()
-    a[C_L0] = robot.leg_rest_length
-    a[C_TAU_MAX], a[C_SLOPE], a[C_TAU_LIMIT] = retraction_constants(robot)
+    for leg in range(2):
+        one = robot.leg(leg)
+        a[C_L0 + leg] = one.leg_rest_length
+        a[C_TAU_MAX + leg], a[C_SLOPE + leg], a[C_TAU_LIMIT + leg] = retraction_constants(one)
     a[C_TD_B] = c.touchdown_angle_back
     a[C_TD_F] = c.touchdown_angle_front
     a[C_SW_B] = c.sweep_limit_back
@@ -94,12 +98,13 @@ def controller_array(c: ControllerParameters | None,
 
 
 @kernel
-def retraction_torque(rate, C):
-    """Stance-retraction command, eqs. (2)-(5) at the leg, per physical leg [N m].
+def retraction_torque(rate, leg, C):
+    """Stance-retraction command of virtual leg ``leg``, eqs. (2)-(5) at the leg, per
+    physical leg [N m].
 
     rate: hip angular rate relative to the torso [rad/s]."""
-    tau = -C[C_TAU_MAX] + C[C_SLOPE] * rate
-    lim = C[C_TAU_LIMIT]
+    tau = -C[C_TAU_MAX + leg] + C[C_SLOPE + leg] * rate
+    lim = C[C_TAU_LIMIT + leg]
     # eq. (5) before eq. (4): read literally in the paper's order, (4) would turn a positive
     # command larger than the current limit (a leg spun backwards beyond 1.4 x the motor's
     # no-load speed) into full negative torque; the paper's footnote 2 gives (4) for
@@ -124,11 +129,10 @@ def bounding_step(y, C, ls, cmd, transitions):
         transitions[0] = 0
         transitions[1] = 0
         return
-    l0 = C[C_L0]
     for leg in range(2):
         ang = y[SN_ANGLE_B + leg]
         rate = y[SN_RATE_B + leg]
-        comp = l0 - y[SN_LENGTH_B + leg]
+        comp = C[C_L0 + leg] - y[SN_LENGTH_B + leg]
         sweep = C[C_SW_B + leg]
         tr = 0
         st = ls[leg]
@@ -148,7 +152,7 @@ def bounding_step(y, C, ls, cmd, transitions):
         if st == LS_FLIGHT:
             cmd[leg] = C[C_KPF_B + 2 * leg] * (C[C_TD_B + leg] - ang) - C[C_KDF_B + 2 * leg] * rate
         elif st == LS_RETRACTION:
-            cmd[leg] = retraction_torque(rate, C)
+            cmd[leg] = retraction_torque(rate, leg, C)
         else:
             cmd[leg] = C[C_KPB_B + 2 * leg] * (sweep - ang) - C[C_KDB_B + 2 * leg] * rate
 
@@ -183,7 +187,7 @@ class BoundingController(Controller):
         self.leg_states[:] = LS_FLIGHT
         if sensors is not None:
             for leg in range(2):
-                comp = robot.leg_rest_length - sensors.leg_length[leg]
+                comp = robot.leg(leg).leg_rest_length - sensors.leg_length[leg]
                 if comp > self.params.touchdown_compression:
                     self.leg_states[leg] = LS_RETRACTION
 

@@ -169,18 +169,20 @@ class SensorChannel:
 
     noise : standard deviation of white Gaussian noise, one draw per sample and slot.
     bias : constant offset; a number, or (back, front) for a two-slot channel.
-    resolution : quantization step (0: continuous); the reading is the nearest multiple.
+    resolution : quantization step (0: continuous); the reading is the nearest multiple;
+        a number, or (back, front) for a two-slot channel (a motor encoder's step at the
+        hip of legs whose gear ratios differ).
     delay : how many control periods late the reading arrives (0 .. layout.MAX_SENSOR_DELAY).
     """
 
     noise: float = 0.0
     bias: float | tuple = 0.0
-    resolution: float = 0.0
+    resolution: float | tuple = 0.0
     delay: int = 0
 
     def is_ideal(self) -> bool:
         return (self.noise == 0 and np.all(np.asarray(self.bias) == 0)
-                and self.resolution == 0 and self.delay == 0)
+                and np.all(np.asarray(self.resolution) == 0) and self.delay == 0)
 
 
 _IDEAL = SensorChannel()
@@ -219,9 +221,14 @@ class SensorParameters:
             n = CHANNELS[name][1]
             for what in ("noise", "resolution"):
                 v = getattr(ch, what)
-                if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                values = v if (what == "resolution" and n == 2 and isinstance(v, tuple)
+                               and len(v) == 2) else (v,)
+                if not all(isinstance(x, (int, float)) and math.isfinite(x) and x >= 0
+                           for x in values):
+                    pair = " (or a (back, front) pair of them)" if what == "resolution" \
+                        and n == 2 else ""
                     raise ParameterError(f"sensors.{name}.{what} = {v!r} is not allowed: must "
-                                         f"be a finite number >= 0 {CHANNELS[name][2]}",
+                                         f"be a finite number >= 0{pair} {CHANNELS[name][2]}",
                                          f"sensors.{name}.{what}")
             bias = np.asarray(ch.bias, dtype=float)
             if not (bias.shape in ((), (n,)) and np.all(np.isfinite(bias))):
@@ -261,7 +268,8 @@ class SensorParameters:
             cols = slice(slot, slot + n)
             spec[L.SPEC_NOISE, cols] = ch.noise
             spec[L.SPEC_BIAS, cols] = np.broadcast_to(np.asarray(ch.bias, float), (n,))
-            spec[L.SPEC_RESOLUTION, cols] = ch.resolution
+            spec[L.SPEC_RESOLUTION, cols] = np.broadcast_to(np.asarray(ch.resolution, float),
+                                                            (n,))
             spec[L.SPEC_DELAY, cols] = ch.delay
         return spec
 
@@ -283,8 +291,10 @@ class SensorParameters:
             ch = getattr(self, name)
             if not ch.is_ideal():
                 bias = np.asarray(ch.bias, float)
+                res = ch.resolution
                 out[name] = {"noise": ch.noise, "bias": bias.tolist(),
-                             "resolution": ch.resolution, "delay": int(ch.delay)}
+                             "resolution": list(res) if isinstance(res, tuple) else res,
+                             "delay": int(ch.delay)}
         return out
 
 
@@ -347,8 +357,10 @@ def _channel(name: str, entry: dict, robot: RobotParameters, where: str) -> Sens
                 raise ParameterError(f"sensors.hip_angle: give resolution or "
                                      f"counts_per_revolution, not both{where}", label)
             # the encoder is on the motor: one count is 2 pi / counts of the motor shaft,
-            # 2 pi / (counts N) at the hip
-            kw["resolution"] = 2.0 * math.pi / (value * robot.gear_ratio)
+            # 2 pi / (counts N) at the hip (per leg when the gear ratios differ)
+            back, front = (2.0 * math.pi / (value * robot.leg(leg).gear_ratio)
+                           for leg in (0, 1))
+            kw["resolution"] = back if back == front else (back, front)
         else:
             allowed = _CHANNEL_KEYS if name == "hip_angle" else _CHANNEL_KEYS[:4]
             raise ParameterError(f"unknown key '{key}' in [sensors.{name}]{where}; allowed: "

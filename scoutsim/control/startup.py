@@ -44,15 +44,23 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from ..model.layout import LS_FLIGHT, LS_RETRACTION
+from ..model.layout import IPHB, LS_FLIGHT, LS_RETRACTION
 from ..parameters import ControllerParameters
 from .bounding import C_KDB_B, C_KPB_B, C_SW_B
 
 __all__ = ["StartupParameters", "StartupRecord", "run_startup"]
 
-#: the standing legs' angle relative to the torso [rad] (:func:`scoutsim.state.standing_state`)
+#: the standing legs' angle relative to the torso [rad] of a robot whose legs are equal
+#: (:func:`scoutsim.state.standing_state`: vertical legs under a level torso)
 STANDING_LEG_ANGLE = 0.0
 BACK, FRONT = 0, 1
+
+
+def standing_leg_angle(s, leg: int) -> float:
+    """The angle [rad] relative to the torso at which the stand holds leg ``leg``: its
+    angle in the standing state ``s`` (vertical, phi = -theta; :data:`STANDING_LEG_ANGLE`
+    for a level torso)."""
+    return float(s[IPHB + leg])
 
 
 @dataclass(frozen=True)
@@ -185,7 +193,7 @@ def run_startup(engine, params: StartupParameters,
              (controller.sweep_limit_front, controller.brake_kp_front,
               controller.brake_kd_front)]
     for leg in range(2):     # stand: hold the standing angle with the stance-brake law
-        _set_brake(C, leg, STANDING_LEG_ANGLE, table[leg][1], table[leg][2])
+        _set_brake(C, leg, standing_leg_angle(engine.s, leg), table[leg][1], table[leg][2])
     k_step = int(round(p.stand_duration / dt))
     k_timeout = k_step + int(round(p.handover_timeout / dt))
     liftoff = [None, None]

@@ -232,7 +232,7 @@ class BoundEnv(gymnasium.Env):
         self.render_mode = None
         self.observation_space = spaces.Box(-np.inf, np.inf, (L.NSN,), np.float64)
         if action_type == "torque":
-            tau = self.robot.max_leg_torque
+            tau = np.array([self.robot.leg(leg).max_leg_torque for leg in (0, 1)])
             self.action_space = spaces.Box(-tau, tau, (2,), np.float64)
         else:
             lo, hi = zip(*(closed_range(name) for name in SETPOINTS))

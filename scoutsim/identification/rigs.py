@@ -43,6 +43,7 @@ from ..result import SimulationResult
 from ..bench import run_bench
 from ..integrator import IntegratorSettings
 from ..validation.logs import ExperimentLog
+from ..validation.measurement import torque_per_amp
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",
            "rig_log", "with_toe_mass", "HIP_PARAMETERS", "hip_parameters", "stall_deflection"]
@@ -68,8 +69,10 @@ DEFAULT_PARAMS = {
 
 
 def hip_parameters(robot: RobotParameters) -> dict:
-    """The :data:`HIP_PARAMETERS` values of ``robot`` (SI)."""
-    return {k: float(getattr(robot, k)) for k in HIP_PARAMETERS}
+    """The :data:`HIP_PARAMETERS` values of ``robot`` (SI; [back, front] for a value that
+    differs between the legs)."""
+    return {k: (list(map(float, v)) if isinstance(v, tuple) else float(v))
+            for k in HIP_PARAMETERS for v in (getattr(robot, k),)}
 
 
 def _check(name, value, lo, hi, unit="", lo_open=False, hi_open=False, deg=False):
@@ -233,11 +236,16 @@ def with_toe_mass(robot: RobotParameters, toe_mass: float) -> RobotParameters:
     m' = m + m_t, d' = (m d + m_t l0) / m', I' = I + m (d - d')^2 + m_t (l0 - d')^2."""
     if toe_mass == 0.0:
         return robot
-    m, d, i0, l0 = robot.leg_mass, robot.leg_com_distance, robot.leg_inertia, robot.leg_rest_length
-    m2 = m + toe_mass
-    d2 = (m * d + toe_mass * l0) / m2
-    i2 = i0 + m * (d - d2) ** 2 + toe_mass * (l0 - d2) ** 2
-    return robot.replace(leg_mass=m2, leg_com_distance=d2, leg_inertia=i2)
+    new = {"leg_mass": [], "leg_com_distance": [], "leg_inertia": []}
+    for leg in (0, 1):
+        one = robot.leg(leg)
+        m, d, i0, l0 = one.leg_mass, one.leg_com_distance, one.leg_inertia, one.leg_rest_length
+        m2 = m + toe_mass
+        d2 = (m * d + toe_mass * l0) / m2
+        new["leg_mass"].append(m2)
+        new["leg_com_distance"].append(d2)
+        new["leg_inertia"].append(i0 + m * (d - d2) ** 2 + toe_mass * (l0 - d2) ** 2)
+    return robot.replace(**{k: tuple(v) for k, v in new.items()})
 
 
 def _clamped_state(clamp_height, phi_b, phi_f, robot):
@@ -245,10 +253,11 @@ def _clamped_state(clamp_height, phi_b, phi_f, robot):
     s[L.IY] = clamp_height
     s[L.IPHB], s[L.IPHF] = phi_b, phi_f
     s[L.IALB], s[L.IALF] = phi_b, phi_f      # belt relaxed at the start
-    s[L.IL_B] = s[L.IL_F] = robot.leg_rest_length
     for leg, phi in enumerate((phi_b, phi_f)):
-        sL = (2 * leg - 1) * robot.half_hip_spacing
-        if clamp_height - robot.leg_rest_length * math.cos(phi) <= 0.0 or \
+        l0 = robot.per_leg("leg_rest_length")[leg]
+        s[L.IL_B + leg] = l0
+        sL = robot.hip_offset(leg)
+        if clamp_height - l0 * math.cos(phi) <= 0.0 or \
                 clamp_height - 0.5 * robot.torso_height <= 0.0:
             raise ValueError(f"clamp_height = {clamp_height} m is not allowed: the "
                              f"{L.LEG_NAMES[leg]} toe or the torso would touch the ground "
@@ -319,7 +328,8 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 
 
-def encoder_reading(angle, robot: RobotParameters, noise: RigNoise | None, rng) -> np.ndarray:
+def encoder_reading(angle, robot: RobotParameters, noise: RigNoise | None, rng,
+                    leg=0) -> np.ndarray:
     """What the motor encoder reports for the motor-side angle ``angle`` [rad, leg side]:
     white noise, then quantisation to 2 pi / (counts N)."""
     a = np.asarray(angle, dtype=float)
@@ -328,7 +338,7 @@ def encoder_reading(angle, robot: RobotParameters, noise: RigNoise | None, rng) 
     if noise.angle_rad > 0:
         a = a + rng.normal(0.0, noise.angle_rad, a.shape)
     if noise.encoder_counts_per_rev > 0:
-        q = 2.0 * math.pi / (noise.encoder_counts_per_rev * robot.gear_ratio)
+        q = 2.0 * math.pi / (noise.encoder_counts_per_rev * robot.leg(leg).gear_ratio)
         a = q * np.round(a / q)
     return a
 
@@ -358,7 +368,7 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
     cols = {"t": t, "pitch_rad": np.zeros_like(t),
             "height_m": np.full_like(t, float(rig["clamp_height"]))}
     for leg, nm in enumerate(L.LEG_NAMES):
-        enc = encoder_reading(result.motor_angle(leg), robot, noise, rng)
+        enc = encoder_reading(result.motor_angle(leg), robot, noise, rng, leg)
         cols[f"phi_{nm}_rad"] = enc
         cols[f"dphi_{nm}_rad_s"] = np.gradient(enc, dt)
     for leg, nm in enumerate(L.LEG_NAMES):
@@ -382,7 +392,7 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
         "encoder": "motor-side angle alpha (motor encoder), at the leg",
         "sensor_noise": None if noise is None else asdict(noise),
         "noise_seed": seed if (seed is None or isinstance(seed, int)) else str(seed),
-        "torque_per_amp_nm_a": robot.torque_per_amp,
+        "torque_per_amp_nm_a": torque_per_amp(robot),
         "true_parameters": hip_parameters(robot),
         "robot": asdict(robot),
     }
@@ -404,12 +414,13 @@ def stall_deflection(robot: RobotParameters | None = None, rig: Stall | None = N
     res = run_rig(rig, robot, integrator=integrator)
     b = res.belt_deflection("back")
     tau = float(res.hip_torque_applied("back")[-1])
-    band = ((tau - robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness,
-            (tau + robot.gear_ratio * robot.joint_stiction) / robot.belt_stiffness)
+    back = robot.leg("back")
+    band = ((tau - back.gear_ratio * back.joint_stiction) / back.belt_stiffness,
+            (tau + back.gear_ratio * back.joint_stiction) / back.belt_stiffness)
     return {"torque_nm": tau, "deflection_final_rad": float(b[-1]),
             "deflection_final_deg": math.degrees(float(b[-1])),
             "deflection_max_rad": float(np.max(np.abs(b))),
             "deflection_max_deg": math.degrees(float(np.max(np.abs(b)))),
             "static_band_rad": band, "static_band_deg": tuple(math.degrees(x) for x in band),
-            "creep_time_constant_s": robot.belt_damping / robot.belt_stiffness,
+            "creep_time_constant_s": back.belt_damping / back.belt_stiffness,
             "result": res}

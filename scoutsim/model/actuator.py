@@ -24,37 +24,39 @@ from .transmission import motor_speed
 
 
 @kernel(inline="always")
-def torque_per_amp(P):
-    """Hip torque per ampere of motor current, N eta K_T [N m / A] (gear ratio, gear
-    efficiency, torque constant; Table II)."""
-    return P[P_N] * P[P_ETA] * P[P_KT]
+def torque_per_amp(leg, P):
+    """Hip torque per ampere of virtual leg ``leg``'s motor current, N eta K_T [N m / A]
+    (gear ratio, gear efficiency, torque constant; Table II)."""
+    return P[P_N + leg] * P[P_ETA + leg] * P[P_KT + leg]
 
 
 @kernel(inline="always")
-def back_emf_damping(P):
-    """Motor-side damping [N m s/rad] of the back-EMF while the current follows the
-    torque-speed line, eta K_T K_w / R_A (at the motor shaft, before the gear ratio)."""
-    return P[P_ETA] * P[P_KT] * P[P_KW] / P[P_RA]
+def back_emf_damping(leg, P):
+    """Motor-side damping [N m s/rad] of the back-EMF of virtual leg ``leg``'s motor while
+    the current follows the torque-speed line, eta K_T K_w / R_A (at the motor shaft,
+    before the gear ratio)."""
+    return P[P_ETA + leg] * P[P_KT + leg] * P[P_KW + leg] / P[P_RA + leg]
 
 
 @kernel(inline="always")
-def on_speed_line(cmd_torque, omega_m, vb, P):
+def on_speed_line(cmd_torque, omega_m, vb, leg, P):
     """True if the amplifier's current for ``cmd_torque`` [N m] at motor speed ``omega_m``
     [rad/s] and battery voltage ``vb`` [V] is limited by the torque-speed line (not by
     i_max, not in the ideal variant): the current then depends on the motor speed."""
     if int(P[P_MODEL]) == MODEL_IDEAL:
         return False
-    r_a = P[P_RA]
-    imax = P[P_IMAX]
-    ic = min(max(cmd_torque / torque_per_amp(P), -imax), imax)
-    v_lo = (-vb - P[P_KW] * omega_m) / r_a
-    v_hi = (vb - P[P_KW] * omega_m) / r_a
+    r_a = P[P_RA + leg]
+    imax = P[P_IMAX + leg]
+    ic = min(max(cmd_torque / torque_per_amp(leg, P), -imax), imax)
+    v_lo = (-vb - P[P_KW + leg] * omega_m) / r_a
+    v_hi = (vb - P[P_KW + leg] * omega_m) / r_a
     return ic > v_hi or ic < v_lo
 
 
 @kernel(inline="always")
-def motor_current(cmd_torque, omega_m, vb, P):
-    """Motor current [A] delivered for a commanded leg torque (per physical leg) [N m].
+def motor_current(cmd_torque, omega_m, vb, leg, P):
+    """Motor current [A] of virtual leg ``leg``'s motors delivered for a commanded leg
+    torque (per physical leg) [N m].
 
     Section 4: i_cmd = tau / (N eta K_T), limited by |i| <= i_max and, except in the ideal
     variant, by the torque-speed line (-V_b - K_w w)/R_A <= i <= (V_b - K_w w)/R_A.
@@ -69,17 +71,17 @@ def motor_current(cmd_torque, omega_m, vb, P):
     if circuit == CIRCUIT_OPEN:
         return 0.0      # bench rig, motor leads open
     if circuit == CIRCUIT_SHORT:
-        return -P[P_KW] * omega_m / P[P_RA]   # bench rig, leads shorted: 0 = R_A i + K_w w_m
-    imax = P[P_IMAX]
-    ic = cmd_torque / torque_per_amp(P)
+        return -P[P_KW + leg] * omega_m / P[P_RA + leg]  # bench rig, leads shorted
+    imax = P[P_IMAX + leg]
+    ic = cmd_torque / torque_per_amp(leg, P)
     if ic < -imax:
         ic = -imax
     if ic > imax:
         ic = imax
     if model != MODEL_IDEAL:
-        r = P[P_RA]
-        v_lo = (-vb - P[P_KW] * omega_m) / r
-        v_hi = (vb - P[P_KW] * omega_m) / r
+        r = P[P_RA + leg]
+        v_lo = (-vb - P[P_KW + leg] * omega_m) / r
+        v_hi = (vb - P[P_KW + leg] * omega_m) / r
         if ic < v_lo:
             ic = v_lo
         if ic > v_hi:
@@ -104,8 +106,9 @@ def _loss_branch(tau0, d, idle, cl):
 
 
 @kernel(inline="always")
-def delivered_torque(cur, omega_m, P):
-    """Torque delivered to the leg / driven gear, per physical leg [N m], for motor current
+def delivered_torque(cur, omega_m, leg, P):
+    """Torque delivered to virtual leg ``leg``'s leg / driven gear, per physical leg [N m],
+    for motor current
     ``cur`` [A] at motor speed ``omega_m`` relative to the torso [rad/s] (docs/model.md,
     "Transmission losses").
 
@@ -115,9 +118,9 @@ def delivered_torque(cur, omega_m, P):
     tau_0; back-driven (tau_0 w_m <= 0): tau_out = -sign(w_m) (|tau_0| + tau_idle) / (1 - c_load).
     For |w_m| < LOSS_SPEED_REG the two directions are blended linearly. With
     tau_idle = c_load = 0 this returns tau_0 exactly."""
-    tau0 = torque_per_amp(P) * cur
-    idle = P[P_TAU_IDLE]
-    cl = P[P_C_LOAD]
+    tau0 = torque_per_amp(leg, P) * cur
+    idle = P[P_TAU_IDLE + leg]
+    cl = P[P_C_LOAD + leg]
     if idle == 0.0 and cl == 0.0:
         return tau0
     w = omega_m / LOSS_SPEED_REG
@@ -137,8 +140,8 @@ def _battery_fixed_point(v, voc, rb, dq, cmd, P):
     pw = 0.0
     for leg in range(2):
         om = motor_speed(dq, leg, P)
-        i = motor_current(cmd[leg], om, v, P)
-        pw += P[P_NP] * i * (P[P_RA] * i + P[P_KW] * om)
+        i = motor_current(cmd[leg], om, v, leg, P)
+        pw += P[P_NP] * i * (P[P_RA + leg] * i + P[P_KW + leg] * om)
     disc = voc * voc - 4.0 * rb * pw
     if disc < 0.0:
         disc = 0.0

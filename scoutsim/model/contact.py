@@ -16,9 +16,10 @@ contact mode (docs/specification.md section 3; docs/model.md "Contact").
 from __future__ import annotations
 
 from ..jit import kernel
+from .kinematics import hip_offset
 from .kkt import new_row
 from .layout import (
-    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, P_K, P_L, P_L0, P_MU, P_NP, P_STRUT_OMEGA,
+    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, P_K, P_L0, P_MU, P_NP, P_STRUT_OMEGA,
     P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT,
 )
 from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
@@ -37,10 +38,10 @@ def leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q
     ``tau_hip`` [N m]: the torque the hip applies to one physical leg (for the side-load
     friction of the leg). Returns the new row count."""
     npl = P[P_NP]
-    l0 = P[P_L0]
-    k = P[P_K]
+    l0 = P[P_L0 + leg]
+    k = P[P_K + leg]
     mode = mi[MI_CONTACT_B + leg]
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = hip_offset(P, leg)
     dth = dq[2]
     dg = dth + dq[3 + leg]
     hx = q[0] + sL * cth
@@ -57,8 +58,8 @@ def leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q
     kk = 3 + leg
     # leg damper and sliding-joint friction (as Table III unless the effects beyond the
     # paper are switched on)
-    c_l = leg_damping(q[kk], P)
-    fc_l = leg_friction_level(tau_hip, ll, P)
+    c_l = leg_damping(q[kk], leg, P)
+    fc_l = leg_friction_level(tau_hip, ll, leg, P)
     # sin(phi), cos(phi) of the leg angle relative to the torso
     sph = sg * cth - cg * sth
     cph = cg * cth + sg * sth

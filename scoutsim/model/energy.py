@@ -52,7 +52,6 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
     with ``want_aux``)."""
     model = int(P[P_MODEL])
     npl = P[P_NP]
-    N = P[P_N]
     for i in range(out.shape[0]):
         out[i] = 0.0
     dq = wk[WK_DQ:WK_DQ + NQ]
@@ -61,15 +60,17 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
         o = leg * NAUX_LEG
         e = leg * NEN_LEG
         mode = mi[MI_CONTACT_B + leg]
+        N = P[P_N + leg]
         if model != MODEL_PASSIVE:
             cur = aux[o + A_CURRENT]
             om = aux[o + A_OMEGA_M]
             tout = aux[o + A_TAU_APP]
-            tau0 = N * P[P_ETA] * P[P_KT] * cur
-            p_el = npl * cur * (P[P_RA] * cur + P[P_KW] * om)
+            tau0 = N * P[P_ETA + leg] * P[P_KT + leg] * cur
+            p_el = npl * cur * (P[P_RA + leg] * cur + P[P_KW + leg] * om)
             out[e + EN_ELECTRICAL] = p_el
-            out[e + EN_COPPER] = npl * P[P_RA] * cur * cur
-            out[e + EN_CONVERSION] = npl * (P[P_KW] - P[P_ETA] * P[P_KT]) * cur * om
+            out[e + EN_COPPER] = npl * P[P_RA + leg] * cur * cur
+            out[e + EN_CONVERSION] = npl * (P[P_KW + leg] - P[P_ETA + leg] * P[P_KT + leg]) \
+                * cur * om
             out[e + EN_GEAR_LOSS] = npl * (tau0 - tout) * om / N
             out[e + EN_HIP_WORK] = npl * tout * om / N
             p_el_total += p_el
@@ -78,21 +79,21 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
             if mi[MI_MOTOR_B + leg] != STUCK:
                 # the joint's friction torque as it acted (viscous + Coulomb)
                 p_joint = npl * aux[o + A_HOLD] * om
-                p_visc = npl * P[P_B_J] * om * om
+                p_visc = npl * P[P_B_J + leg] * om * om
                 out[e + EN_JOINT_VISCOUS] = p_visc
                 out[e + EN_JOINT_COULOMB] = p_joint - p_visc
             rate = dq[5 + leg] - dq[3 + leg]
-            spring = P[P_KB] * belt_spring_deflection(s[5 + leg] - s[3 + leg], P)
+            spring = P[P_KB + leg] * belt_spring_deflection(s[5 + leg] - s[3 + leg], leg, P)
             out[e + EN_BELT_DAMPER] = npl * (aux[o + A_TAU_BELT] - spring) * rate
         # telescopic leg: the axial force as it acted, less its spring part, through the
         # leg's rate of extension (in flight the massless toe's force balance makes the
         # axial force zero: the spring's power is all dissipated)
         ld = ds[IL_B + leg]
         ll = s[IL_B + leg]
-        f_spring = npl * P[P_K] * (P[P_L0] - ll)
+        f_spring = npl * P[P_K + leg] * (P[P_L0 + leg] - ll)
         if mode != STRUT:
             p_leg = -(aux[o + A_FAX] - f_spring) * ld
-            p_damp = npl * leg_damping(s[3 + leg], P) * ld * ld
+            p_damp = npl * leg_damping(s[3 + leg], leg, P) * ld * ld
             out[e + EN_LEG_DAMPER] = p_damp
             out[e + EN_LEG_FRICTION] = p_leg - p_damp
         out[e + EN_TOE_SLIDE] = -aux[o + A_GT] * aux[o + A_SLIP_V]

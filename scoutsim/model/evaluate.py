@@ -31,7 +31,7 @@ import numpy as np
 from ..jit import allocating, kernel
 from .actuator import back_emf_damping, battery_voltage, delivered_torque, motor_current, on_speed_line
 from .contact import leg_contact
-from .kinematics import project
+from .kinematics import hip_offset, project
 from .kkt import (
     MAX_KKT, MAX_ROWS, SCHUR_MAX_ROWS, add_clamp_rows, kkt_reduced_factor, kkt_reduced_solve,
     kkt_schur_factor,
@@ -40,7 +40,7 @@ from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
     MI_CONTACT_B, MI_MOTOR_B, MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_CB, P_KB,
-    P_L, P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS, ROW_TOE_ALONG,
+    P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS, ROW_TOE_ALONG,
     STICK, STRUT, STUCK,
 )
 from .rigid_body import add_gravity_at, coriolis_at, kinetic_energy_at, mass_matrix_at, potential_energy_at
@@ -90,7 +90,6 @@ def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl
     exact."""
     model = int(P[P_MODEL])
     npl = P[P_NP]
-    N = P[P_N]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         if mode == STICK or mode == STRUT:
@@ -112,7 +111,7 @@ def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl
             LG[2 * LG_GT + leg] += lam * sg
             LG[2 * LG_GN + leg] -= lam * cg
         elif kind == ROW_GEAR:
-            LG[2 * LG_HOLD + leg] = lam / (npl * N)
+            LG[2 * LG_HOLD + leg] = lam / (npl * P[P_N + leg])
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         o = leg * NAUX_LEG
@@ -175,8 +174,8 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     row = 5 if model == MODEL_II else 3
     for leg in range(2):
         om = LG[2 * LG_OM + leg]
-        cur = motor_current(cmd[leg], om, vb, P)
-        tapp = delivered_torque(cur, om, P)
+        cur = motor_current(cmd[leg], om, vb, leg, P)
+        tapp = delivered_torque(cur, om, leg, P)
         if model != MODEL_PASSIVE:
             b2[row + leg] = npl * (tapp - LG[2 * LG_TAPP + leg])
         LG[2 * LG_CUR + leg] = cur
@@ -206,14 +205,12 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
         return
     n = nact + nr
     npl = P[P_NP]
-    N = P[P_N]
-    Lh = P[P_L]
     massless = P[P_MASSLESS] > 0.5
     dth = dq[2]
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
-    cb = P[P_CB]
-    kb = P[P_KB]
     for leg in range(2):
+        cb = P[P_CB + leg]
+        kb = P[P_KB + leg]
         for i in range(n):
             b2[i] = 0.0
         b2[5 + leg] = 1.0
@@ -233,7 +230,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
         if mode == STICK or mode == STRUT:
             sg = sgl0 if leg == 0 else sgl1
             cg = cgl0 if leg == 0 else cgl1
-            sL = (2.0 * leg - 1.0) * Lh
+            sL = hip_offset(P, leg)
             ll = l[leg]
             sph = sg * cth - cg * sth
             # phi = atan2(anchor - hip_x, hip_y) - theta; dphi from R dq = 0
@@ -277,9 +274,10 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
     for leg in range(2):
         if mi[MI_MOTOR_B + leg] == STUCK:
             continue
-        dm = P[P_B_J]
-        if on_speed_line(cmd[leg], LG[2 * LG_OM + leg], vb, P):
-            dm += back_emf_damping(P)
+        dm = P[P_B_J + leg]
+        if on_speed_line(cmd[leg], LG[2 * LG_OM + leg], vb, leg, P):
+            dm += back_emf_damping(leg, P)
+        N = P[P_N + leg]
         dm *= N * N
         if npl * dm < STIFF_MOTOR_RATE * M[5 + leg, 5 + leg]:
             continue    # not stiff: left to the explicit part (column stays zero)
@@ -345,8 +343,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     vb = battery_voltage(dq, cmd, P)
     for leg in range(2):
         om = motor_speed(dq, leg, P)
-        cur = motor_current(cmd[leg], om, vb, P)
-        tapp = delivered_torque(cur, om, P)
+        cur = motor_current(cmd[leg], om, vb, leg, P)
+        tapp = delivered_torque(cur, om, leg, P)
         LG[2 * LG_OM + leg] = om
         LG[2 * LG_CUR + leg] = cur
         LG[2 * LG_TAPP + leg] = tapp

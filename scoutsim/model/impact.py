@@ -8,10 +8,10 @@ import math
 import numpy as np
 
 from ..jit import allocating
-from .kinematics import project, project_state
+from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
 from .layout import (
-    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_L, P_MASSLESS, P_MODEL,
+    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_MASSLESS, P_MODEL,
     P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK, STRUT,
 )
 from .rigid_body import kinetic_energy_at, mass_matrix
@@ -58,7 +58,7 @@ def impact(s, P, mi, mf, out):
     th = q[2]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        sL = hip_offset(P, leg)
         g = th + q[3 + leg]
         sg = math.sin(g)
         cg = math.cos(g)
@@ -142,6 +142,6 @@ def impact(s, P, mi, mf, out):
         # leave a joint "slipping" against its motion, which settle() could only reconcile
         # with an impulse that stiction cannot give.
         for leg in range(2):
-            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], P)
+            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], leg, P)
     project_state(s, P, mi, mf)
     return True

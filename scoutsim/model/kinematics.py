@@ -4,8 +4,9 @@ projection of the dependent coordinates onto the active constraints.
 Coordinates and signs (docs/specification.md section 1): x forward, y up, pitch theta
 counter-clockwise (nose up) positive; leg angle phi relative to the torso, positive with the
 toe ahead of the hip; g = theta + phi the leg's angle from the world vertical; the toe of a
-leg of length l is at hip + l (sin g, -cos g). The back hip is at -L, the front hip at +L
-along the torso axis (L = hip_spacing / 2).
+leg of length l is at hip + l (sin g, -cos g). The back hip is at -L - e, the front hip at
+L - e along the torso axis from the torso COM (L = hip_spacing / 2, e = com_offset, the
+COM's distance ahead of the hips' midpoint; :func:`hip_offset`).
 """
 
 from __future__ import annotations
@@ -14,23 +15,32 @@ import math
 
 from ..jit import kernel
 from .layout import (
-    IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_C, P_CLAMP_LEGS,
-    P_CLAMP_TORSO, P_L, P_L0, P_MASSLESS, P_MODEL, P_TD_B, P_TD_WORLD, SLIDE, STICK, STRUT,
+    HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_C, P_CLAMP_LEGS,
+    P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_MODEL, P_TD_B, P_TD_WORLD, SLIDE, STICK, STRUT,
     STUCK,
 )
+
+
+@kernel(inline="always")
+def hip_offset(P, leg):
+    """Position [m] of virtual leg ``leg``'s hip along the torso axis, measured from the
+    torso COM: HIP_SIGN[leg] L - e, i.e. -L - e (back) and L - e (front), with
+    L = hip_spacing / 2 and e = com_offset, the COM's distance ahead of the hips' midpoint
+    (docs/specification.md section 1)."""
+    return HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
 
 
 @kernel
 def hip_position(q, P, leg):
     """Hip position (hx, hy) [m] of virtual leg ``leg`` (0 back, 1 front)."""
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = hip_offset(P, leg)
     return q[0] + sL * math.cos(q[2]), q[1] + sL * math.sin(q[2])
 
 
 @kernel
 def hip_velocity(q, dq, P, leg):
     """Hip velocity [m/s]."""
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = hip_offset(P, leg)
     return dq[0] - sL * math.sin(q[2]) * dq[2], dq[1] + sL * math.cos(q[2]) * dq[2]
 
 
@@ -51,7 +61,6 @@ def project(q, dq, l, P, mi, mf):
     :func:`~scoutsim.model.evaluate.evaluate_ws` to reuse.
     """
     model = int(P[P_MODEL])
-    l0 = P[P_L0]
     massless = P[P_MASSLESS] > 0.5
     if P[P_CLAMP_TORSO] > 0.5:
         # bench rig: the clamped torso is at rest (add_clamp_rows)
@@ -69,7 +78,8 @@ def project(q, dq, l, P, mi, mf):
     cg1 = 1.0
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        sL = hip_offset(P, leg)
+        l0 = P[P_L0 + leg]
         hx = q[0] + sL * cth
         hy = q[1] + sL * sth
         hvx = dq[0] - sL * sth * dq[2]
@@ -102,7 +112,7 @@ def project(q, dq, l, P, mi, mf):
                     dq[3 + leg] = 0.0
                 l[leg] = l0
             else:
-                if P[P_C] <= 0.0 or l[leg] > l0:
+                if P[P_C + leg] <= 0.0 or l[leg] > l0:
                     l[leg] = l0
             g = q[2] + q[3 + leg]
             sg = math.sin(g)

@@ -84,21 +84,48 @@ MF_ANCHOR_F = 1
 NMF = 2
 
 # --- parameter array P ----------------------------------------------------------------
-(P_MT, P_IT, P_ML, P_IL, P_K, P_C, P_L, P_L0, P_D, P_NP, P_G, P_TORSO_LEN, P_TORSO_H,
- P_N, P_ETA, P_J1, P_J2, P_TAU_S, P_B_J, P_KB, P_CB, P_KT, P_KW, P_RA, P_IMAX, P_VB, P_RB,
- P_MODEL, P_MU, P_MASSLESS, P_TD_WORLD, P_TD_B, P_TD_F, P_THETA_LIM, P_STRUT_OMEGA,
- P_SENSE_ALPHA, P_TAU_IDLE, P_C_LOAD) = range(38)
+# Whole-robot quantities take one slot each. Every leg, hip-unit and motor quantity takes
+# two consecutive slots, back then front: P[P_X + leg] (leg = BACK, FRONT), so a robot
+# whose legs differ is packed the same way as one whose legs are equal.
+(P_MT, P_IT, P_L, P_COM_OFFSET, P_NP, P_G, P_TORSO_LEN, P_TORSO_H, P_VB, P_RB, P_MODEL,
+ P_MU, P_MASSLESS, P_TD_WORLD, P_THETA_LIM, P_STRUT_OMEGA) = range(16)
+# P_COM_OFFSET: the torso COM's distance ahead of the hips' midpoint [m] (0: midway)
 # bench rigs (scoutsim.identification.rigs): clamps are extra constraint rows of
 # the same KKT system; the motor circuit replaces the amplifier in an unpowered rig
-P_CLAMP_TORSO = 38   # 1: torso x, y, theta held fixed (free swing, flight steps, stall)
-P_CLAMP_LEGS = 39    # 1: leg angles phi held fixed relative to the torso (stall)
-P_CIRCUIT = 40       # CIRCUIT_*: what drives the motor current
-# effects beyond the paper's models (RobotParameters docs; 0 = off)
-P_BACKLASH = 41      # total play of the belt spring's dead zone [rad]
-P_LEG_FRIC = 42      # Coulomb friction of the telescopic leg [N], per physical leg
-P_LEG_FRIC_SIDE = 43 # leg friction per unit side load |tau_hip| / l [-]
-P_LEG_C_ANGLE = 44   # leg damper factor (1 + a phi^2) [1/rad^2]
-NP_ = 45
+P_CLAMP_TORSO = 16   # 1: torso x, y, theta held fixed (free swing, flight steps, stall)
+P_CLAMP_LEGS = 17    # 1: leg angles phi held fixed relative to the torso (stall)
+P_CIRCUIT = 18       # CIRCUIT_*: what drives the motor current
+P_TD_B = 19          # passive massless legs: touchdown angle [rad], back
+P_TD_F = 20          # and front
+_FIRST_PER_LEG = 21
+# per leg (P[P_X + leg]): leg body, telescopic leg, hip unit, motor and amplifier
+(P_ML,         # mass of one physical leg body [kg]
+ P_IL,         # its inertia about its COM [kg m^2]
+ P_K,          # leg spring [N/m], per physical leg
+ P_C,          # leg damper [N s/m], per physical leg
+ P_L0,         # leg rest length = stop [m]
+ P_D,          # hip to leg-body COM [m]
+ P_N,          # gear ratio [-]
+ P_ETA,        # transmission efficiency [-]
+ P_J1,         # drive gear inertia [kg m^2]
+ P_J2,         # driven gear inertia [kg m^2]
+ P_TAU_S,      # motor-joint stiction [N m]
+ P_B_J,        # motor-joint viscous friction [N m s/rad]
+ P_KB,         # belt spring [N m/rad]
+ P_CB,         # belt damper [N m s/rad]
+ P_KT,         # torque constant [N m/A]
+ P_KW,         # back-EMF constant [V s/rad]
+ P_RA,         # armature resistance [ohm]
+ P_IMAX,       # amplifier current limit [A]
+ P_TAU_IDLE,   # torque-independent transmission loss [N m]
+ P_C_LOAD,     # load-proportional transmission loss [-]
+ # effects beyond the paper's models (RobotParameters docs; 0 = off)
+ P_BACKLASH,   # total play of the belt spring's dead zone [rad]
+ P_LEG_FRIC,   # Coulomb friction of the telescopic leg [N], per physical leg
+ P_LEG_FRIC_SIDE,  # leg friction per unit side load |tau_hip| / l [-]
+ P_LEG_C_ANGLE,    # leg damper factor (1 + a phi^2) [1/rad^2]
+ ) = range(_FIRST_PER_LEG, _FIRST_PER_LEG + 2 * 24, 2)
+NP_ = _FIRST_PER_LEG + 2 * 24
 
 # --- motor circuit (P_CIRCUIT) -----------------------------------------------------------
 CIRCUIT_AMPLIFIER = 0   # current amplifier with the limits of docs/specification.md section 4 (normal operation)

@@ -19,17 +19,18 @@ LEG_FRICTION_SPEED = 1e-3
 
 
 @kernel(inline="always")
-def leg_damping(phi, P):
-    """Leg damper [N s/m] per physical leg at leg angle ``phi`` [rad]: c (1 + a phi^2)
-    (a = ``P_LEG_C_ANGLE``, 0 = Table III's constant c)."""
-    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi * phi)
+def leg_damping(phi, leg, P):
+    """Leg damper [N s/m] per physical leg of virtual leg ``leg`` at leg angle ``phi``
+    [rad]: c (1 + a phi^2) (a = ``P_LEG_C_ANGLE``, 0 = Table III's constant c)."""
+    return P[P_C + leg] * (1.0 + P[P_LEG_C_ANGLE + leg] * phi * phi)
 
 
 @kernel(inline="always")
-def leg_friction_level(tau_hip, ll, P):
-    """Coulomb friction level [N] of one physical leg's sliding joint: a constant part and
-    a part proportional to the side load |tau_hip| / l of the hip torque (0 = off)."""
-    return P[P_LEG_FRIC] + P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll
+def leg_friction_level(tau_hip, ll, leg, P):
+    """Coulomb friction level [N] of the sliding joint of one physical leg of virtual leg
+    ``leg``: a constant part and a part proportional to the side load |tau_hip| / l of the
+    hip torque (0 = off)."""
+    return P[P_LEG_FRIC + leg] + P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll
 
 
 @kernel(inline="always")

@@ -1,5 +1,6 @@
 """Packing of RobotParameters into the compiled model's parameter array (the one place
-where per-physical-leg values meet the model variant and its options)."""
+where per-physical-leg values meet the model variant and its options; every leg quantity
+is packed per virtual leg, back and front, whether the robot's legs differ or not)."""
 
 from __future__ import annotations
 
@@ -64,40 +65,36 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P = np.zeros(L.NP_)
     P[L.P_MT] = robot.torso_mass
     P[L.P_IT] = robot.torso_inertia
-    P[L.P_ML] = robot.leg_mass
-    P[L.P_IL] = robot.leg_inertia
-    P[L.P_K] = robot.leg_stiffness
-    P[L.P_C] = robot.leg_damping
     P[L.P_L] = robot.half_hip_spacing
-    P[L.P_L0] = robot.leg_rest_length
-    P[L.P_D] = robot.leg_com_distance
+    P[L.P_COM_OFFSET] = robot.com_offset
     P[L.P_NP] = float(robot.legs_per_virtual_leg)
     P[L.P_G] = robot.gravity
     P[L.P_TORSO_LEN] = robot.torso_length
     P[L.P_TORSO_H] = robot.torso_height
-    P[L.P_N] = robot.gear_ratio
-    P[L.P_ETA] = robot.efficiency
-    P[L.P_TAU_IDLE] = robot.gearbox_idle_loss_torque
-    P[L.P_C_LOAD] = robot.gearbox_load_loss_coefficient
-    P[L.P_BACKLASH] = robot.belt_backlash
-    P[L.P_LEG_FRIC] = robot.leg_friction_force
-    P[L.P_LEG_FRIC_SIDE] = robot.leg_friction_side_load_coefficient
-    P[L.P_LEG_C_ANGLE] = robot.leg_damping_angle_coefficient
-    P[L.P_J1] = robot.drive_gear_inertia
-    P[L.P_J2] = robot.driven_gear_inertia
-    P[L.P_TAU_S] = robot.joint_stiction
-    P[L.P_B_J] = robot.joint_damping
-    P[L.P_KB] = robot.belt_stiffness
-    P[L.P_CB] = robot.belt_damping
-    P[L.P_KT] = robot.torque_constant
-    P[L.P_KW] = robot.speed_constant
-    P[L.P_RA] = robot.armature_resistance
-    P[L.P_IMAX] = robot.current_limit
     P[L.P_VB] = robot.battery_voltage
     P[L.P_RB] = robot.battery_resistance
+    for leg in (L.BACK, L.FRONT):
+        one = robot.leg(leg)
+        for slot, value in ((L.P_ML, one.leg_mass), (L.P_IL, one.leg_inertia),
+                            (L.P_K, one.leg_stiffness), (L.P_C, one.leg_damping),
+                            (L.P_L0, one.leg_rest_length), (L.P_D, one.leg_com_distance),
+                            (L.P_N, one.gear_ratio), (L.P_ETA, one.efficiency),
+                            (L.P_TAU_IDLE, one.gearbox_idle_loss_torque),
+                            (L.P_C_LOAD, one.gearbox_load_loss_coefficient),
+                            (L.P_BACKLASH, one.belt_backlash),
+                            (L.P_LEG_FRIC, one.leg_friction_force),
+                            (L.P_LEG_FRIC_SIDE, one.leg_friction_side_load_coefficient),
+                            (L.P_LEG_C_ANGLE, one.leg_damping_angle_coefficient),
+                            (L.P_J1, one.drive_gear_inertia), (L.P_J2, one.driven_gear_inertia),
+                            (L.P_TAU_S, one.joint_stiction), (L.P_B_J, one.joint_damping),
+                            (L.P_KB, one.belt_stiffness), (L.P_CB, one.belt_damping),
+                            (L.P_KT, one.torque_constant), (L.P_KW, one.speed_constant),
+                            (L.P_RA, one.armature_resistance), (L.P_IMAX, one.current_limit)):
+            P[slot + leg] = value
     P[L.P_MODEL] = L.MODEL_NAMES[model]
     P[L.P_MU] = friction_coefficient if math.isfinite(friction_coefficient) else 1e308
-    massless = robot.leg_mass == 0.0 and robot.leg_inertia == 0.0
+    massless = all(m == 0.0 and i == 0.0 for m, i in zip(robot.per_leg("leg_mass"),
+                                                          robot.per_leg("leg_inertia")))
     P[L.P_MASSLESS] = 1.0 if massless else 0.0
     P[L.P_TD_WORLD] = 1.0 if passive_touchdown_world else 0.0
     P[L.P_TD_B] = passive_touchdown_angles[0]
@@ -107,10 +104,13 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_CLAMP_TORSO] = 1.0 if clamp_torso else 0.0
     P[L.P_CLAMP_LEGS] = 1.0 if clamp_legs else 0.0
     P[L.P_CIRCUIT] = float(L.CIRCUIT_NAMES[motor_circuit])
-    if model == "II" and not (robot.driven_gear_inertia + robot.gear_ratio ** 2
-                              * robot.drive_gear_inertia > 0.0):
-        raise ValueError("robot.driven_gear_inertia / drive_gear_inertia = 0 is not allowed "
-                         "in Model II: the reflected gear inertia J_2 + N^2 J_1 must be > 0")
+    for leg in (L.BACK, L.FRONT):
+        one = robot.leg(leg)
+        if model == "II" and not (one.driven_gear_inertia + one.gear_ratio ** 2
+                                  * one.drive_gear_inertia > 0.0):
+            raise ValueError(f"robot.driven_gear_inertia / drive_gear_inertia = 0 ({L.LEG_NAMES[leg]} "
+                             "leg) is not allowed in Model II: the reflected gear inertia "
+                             "J_2 + N^2 J_1 must be > 0")
     if massless and model != "passive":
         raise ValueError("massless legs (leg_mass = leg_inertia = 0) carry no hip torque: "
                          "use model='passive'")

@@ -22,8 +22,9 @@ import numpy as np
 
 from ..jit import allocating, kernel
 from .layout import (
-    IL_B, MODEL_II, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L, P_L0, P_ML, P_MODEL, P_MT, P_NP,
+    IL_B, MODEL_II, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MODEL, P_MT, P_NP,
 )
+from .kinematics import hip_offset
 from .transmission import add_gear_inertia, belt_energy
 
 
@@ -36,14 +37,14 @@ def mass_matrix_at(M, P, sth, cth, sg0, cg0, sg1, cg1):
         for j in range(NQ):
             M[i, j] = 0.0
     npl = P[P_NP]
-    ml = npl * P[P_ML]
-    il = npl * P[P_IL]
-    d = P[P_D]
     M[0, 0] += P[P_MT]
     M[1, 1] += P[P_MT]
     M[2, 2] += P[P_IT]
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        ml = npl * P[P_ML + leg]
+        il = npl * P[P_IL + leg]
+        d = P[P_D + leg]
+        sL = hip_offset(P, leg)
         sg = sg0 if leg == 0 else sg1
         cg = cg0 if leg == 0 else cg1
         jth_x = -sL * sth + d * cg
@@ -78,11 +79,11 @@ def coriolis_at(h, dq, P, sth, cth, sg0, cg0, sg1, cg1):
     torso and the gears turn about fixed points of their own coordinates)."""
     for i in range(NQ):
         h[i] = 0.0
-    ml = P[P_NP] * P[P_ML]
-    d = P[P_D]
     dth = dq[2]
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        ml = P[P_NP] * P[P_ML + leg]
+        d = P[P_D + leg]
+        sL = hip_offset(P, leg)
         sg = sg0 if leg == 0 else sg1
         cg = cg0 if leg == 0 else cg1
         dg = dth + dq[3 + leg]
@@ -100,12 +101,11 @@ def coriolis_at(h, dq, P, sth, cth, sg0, cg0, sg1, cg1):
 def add_gravity_at(Q, P, sth, cth, sg0, cg0, sg1, cg1):
     """Add the generalized gravity forces of the torso and the leg bodies to Q."""
     grav = P[P_G]
-    ml = P[P_NP] * P[P_ML]
-    d = P[P_D]
     Q[1] -= P[P_MT] * grav
-    mlg = ml * grav
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        mlg = P[P_NP] * P[P_ML + leg] * grav
+        d = P[P_D + leg]
+        sL = hip_offset(P, leg)
         sg = sg0 if leg == 0 else sg1
         Q[1] -= mlg
         Q[2] -= mlg * (sL * cth + d * sg)
@@ -118,15 +118,15 @@ def potential_energy_at(q, l, P, sth, cg0, cg1):
     rest length l0) and the Model II belt springs."""
     grav = P[P_G]
     npl = P[P_NP]
-    ml = npl * P[P_ML]
     e = P[P_MT] * grav * q[1]
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        ml = npl * P[P_ML + leg]
+        sL = hip_offset(P, leg)
         cg = cg0 if leg == 0 else cg1
-        yc = q[1] + sL * sth - P[P_D] * cg
+        yc = q[1] + sL * sth - P[P_D + leg] * cg
         e += ml * grav * yc
-        dl = P[P_L0] - l[leg]
-        e += 0.5 * npl * P[P_K] * dl * dl
+        dl = P[P_L0 + leg] - l[leg]
+        e += 0.5 * npl * P[P_K + leg] * dl * dl
         if int(P[P_MODEL]) == MODEL_II:
             e += belt_energy(q, leg, P)
     return e

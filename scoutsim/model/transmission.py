@@ -30,15 +30,16 @@ def motor_speed(dq, leg, P):
     """Motor speed relative to the torso [rad/s] of leg ``leg``: N times the rate of the
     coordinate the gear output turns (the driven gear alpha in Model II, the leg phi
     otherwise)."""
-    return P[P_N] * (dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg])
+    return P[P_N + leg] * (dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg])
 
 
 @kernel(inline="always")
-def belt_spring_deflection(delta, P):
-    """Deflection [rad] the belt spring sees at gear/leg angle difference ``delta`` [rad]:
-    with the hip unit's play b (``P_BACKLASH``, 0 = the paper's model) the spring is slack
-    for |delta| <= b / 2 (dead zone) and deflected by the excess beyond it."""
-    h = 0.5 * P[P_BACKLASH]
+def belt_spring_deflection(delta, leg, P):
+    """Deflection [rad] the belt spring of virtual leg ``leg`` sees at gear/leg angle
+    difference ``delta`` [rad]: with the hip unit's play b (``P_BACKLASH``, 0 = the paper's
+    model) the spring is slack for |delta| <= b / 2 (dead zone) and deflected by the excess
+    beyond it."""
+    h = 0.5 * P[P_BACKLASH + leg]
     if delta > h:
         return delta - h
     if delta < -h:
@@ -49,8 +50,8 @@ def belt_spring_deflection(delta, P):
 @kernel(inline="always")
 def belt_energy(q, leg, P):
     """Potential energy [J] of the belt springs of virtual leg ``leg`` (Model II)."""
-    bd = belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
-    return 0.5 * P[P_NP] * P[P_KB] * bd * bd
+    bd = belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
+    return 0.5 * P[P_NP] * P[P_KB + leg] * bd * bd
 
 
 @kernel(inline="always")
@@ -59,10 +60,10 @@ def add_gear_inertia(M, P):
     n_p J_2 turning at theta + alpha and n_p J_1 at theta + N alpha, i.e. the reflected
     inertia J_2 + N^2 J_1 on alpha and its coupling to the pitch."""
     npl = P[P_NP]
-    j1 = npl * P[P_J1]
-    j2 = npl * P[P_J2]
-    N = P[P_N]
     for leg in range(2):
+        j1 = npl * P[P_J1 + leg]
+        j2 = npl * P[P_J2 + leg]
+        N = P[P_N + leg]
         a = 5 + leg
         M[2, 2] += j1 + j2
         M[2, a] += j2 + N * j1
@@ -70,13 +71,14 @@ def add_gear_inertia(M, P):
 
 
 @kernel(inline="always")
-def joint_friction_torque(om, mode, P):
-    """Friction torque [N m] of a Model II motor joint at motor speed ``om`` [rad/s] in
-    stick/slip mode ``mode``: viscous b_J om, plus the Coulomb level tau_s in the slip
-    direction while slipping (a stuck joint's holding torque is a constraint force)."""
-    tf = P[P_B_J] * om
+def joint_friction_torque(om, mode, leg, P):
+    """Friction torque [N m] of virtual leg ``leg``'s Model II motor joint at motor speed
+    ``om`` [rad/s] in stick/slip mode ``mode``: viscous b_J om, plus the Coulomb level
+    tau_s in the slip direction while slipping (a stuck joint's holding torque is a
+    constraint force)."""
+    tf = P[P_B_J + leg] * om
     if mode != STUCK:
-        tf += P[P_TAU_S] * mode
+        tf += P[P_TAU_S + leg] * mode
     return tf
 
 
@@ -85,8 +87,8 @@ def belt_torque(q, dq, leg, P):
     """Torque [N m] of the belt spring-damper on the leg of virtual leg ``leg``, per
     physical leg: k_b (alpha - phi) (with the dead zone of the backlash) plus
     c_b (alpha' - phi')."""
-    return (P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
-            + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))
+    return (P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
+            + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))
 
 
 @kernel(inline="always")
@@ -102,8 +104,8 @@ def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
     npl = P[P_NP]
     if model == MODEL_II:
         Q[5 + leg] += npl * tapp
-        tf = joint_friction_torque(om, mode, P)
-        Q[5 + leg] -= npl * P[P_N] * tf
+        tf = joint_friction_torque(om, mode, leg, P)
+        Q[5 + leg] -= npl * P[P_N + leg] * tf
         tb = belt_torque(q, dq, leg, P)
         Q[3 + leg] += npl * tb
         Q[5 + leg] -= npl * tb
@@ -125,8 +127,9 @@ def motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P):
 
 
 @kernel(inline="always")
-def motor_mode_from_rate(w, P):
-    """Stick/slip mode of a Model II motor joint whose gear rate is ``w`` [rad/s] with no
+def motor_mode_from_rate(w, leg, P):
+    """Stick/slip mode of virtual leg ``leg``'s Model II motor joint whose gear rate is
+    ``w`` [rad/s] with no
     other information: slipping in the direction of motion; at exactly zero rate stuck if
     the joint has stiction (a joint without stiction is never stuck: nothing could release
     it, so it "slips" with zero Coulomb torque)."""
@@ -134,4 +137,4 @@ def motor_mode_from_rate(w, P):
         return SLIP_POS
     if w < 0.0:
         return SLIP_NEG
-    return STUCK if P[P_TAU_S] > 0.0 else SLIP_POS
+    return STUCK if P[P_TAU_S + leg] > 0.0 else SLIP_POS

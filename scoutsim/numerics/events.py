@@ -16,13 +16,14 @@ import math
 import numpy as np
 
 from ..jit import kernel
+from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
+    A_FAX, A_GN, A_GT, BACK, FRONT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
     EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS, NEVBUF, NS,
     STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
     IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV, NEV_CONTACT, NQ,
-    P_G, P_K, P_L, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S,
+    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S,
     P_THETA_LIM, P_TORSO_H, P_TORSO_LEN, SLIDE, STICK, STRUT, STUCK, V_BEYOND_STOP,
     V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING,
     V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
@@ -49,14 +50,14 @@ TOE_AT_GROUND_TOL = 1e-7
 
 @kernel
 def body_weight(P):
-    return (P[P_MT] + 2.0 * P[P_NP] * P[P_ML]) * P[P_G]
+    """The robot's weight [N]: torso and all leg bodies (the force scale of the events)."""
+    return (P[P_MT] + P[P_NP] * (P[P_ML + BACK] + P[P_ML + FRONT])) * P[P_G]
 
 
 @kernel
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
-    l0 = P[P_L0]
     massless = P[P_MASSLESS] > 0.5
     coulomb = P[P_MU] < 1e300
     for i in range(NEV):
@@ -65,6 +66,8 @@ def event_values(s, aux, P, mi, out):
         o = leg * NAUX_LEG
         e = leg * NEV_CONTACT
         mode = mi[MI_CONTACT_B + leg]
+        l0 = P[P_L0 + leg]
+        tau_s = P[P_TAU_S + leg]
         if mode == FLIGHT:
             out[e] = aux[o + A_TOE_Y] / l0
         elif mode == STICK:
@@ -80,12 +83,12 @@ def event_values(s, aux, P, mi, out):
         elif mode == STRUT:
             out[e] = aux[o + A_GN] / W
             out[e + 1] = aux[o + A_STRUT] / W
-        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0:
+        if int(P[P_MODEL]) == MODEL_II and tau_s > 0.0:
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
-                out[EV_MOTOR_B + leg] = (P[P_TAU_S] - abs(aux[o + A_HOLD])) / P[P_TAU_S]
+                out[EV_MOTOR_B + leg] = (tau_s - abs(aux[o + A_HOLD])) / tau_s
             else:
-                out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N]
+                out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N + leg]
     th = s[2]
     a = 0.5 * P[P_TORSO_LEN]
     b = 0.5 * P[P_TORSO_H]
@@ -169,7 +172,7 @@ def mode_violations(s, ds, aux, P, mi):
                 bits |= V_OUTSIDE_CONE
             if mode == STRUT and aux[o + A_STRUT] < -ftol:
                 bits |= V_STRUT_COMPRESSED
-            if mode == STICK and s[IL_B + leg] > P[P_L0] + 1e-6:
+            if mode == STICK and s[IL_B + leg] > P[P_L0 + leg] + 1e-6:
                 # (1 um: a strut's length is Baumgarte-stabilised, not projected, and
                 # drifts by ~3e-8 m before it ends)
                 bits |= V_BEYOND_STOP
@@ -187,10 +190,10 @@ def mode_violations(s, ds, aux, P, mi):
                 bits |= V_TOE_BELOW_GROUND
             if flight_toe_enters_ground(s, ds, aux, P, leg):
                 bits |= V_TOE_ENTERS_GROUND
-        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0:
+        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S + leg] > 0.0:
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
-                if abs(aux[o + A_HOLD]) > P[P_TAU_S] * (1.0 + 1e-6):
+                if abs(aux[o + A_HOLD]) > P[P_TAU_S + leg] * (1.0 + 1e-6):
                     bits |= V_STICTION_EXCEEDED
             elif aux[o + A_OMEGA_M] * mm < -MOTOR_SPEED_TOL:
                 bits |= V_SLIP_DIRECTION
@@ -222,7 +225,7 @@ def toe_vertical_motion(s, ds, P, leg, ld):
     flight: leg-length rate ``ld`` [m/s] (the flight rate) and the flight relaxation's
     ldd = -k ld / c (exact for a constant damper without leg friction; first order
     otherwise)."""
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = hip_offset(P, leg)
     ll = s[IL_B + leg]
     th = s[ITH]
     dth = s[NQ + ITH]
@@ -233,9 +236,9 @@ def toe_vertical_motion(s, ds, P, leg, ld):
     sg = math.sin(g)
     cg = math.cos(g)
     ldd = 0.0
-    c = leg_damping(s[3 + leg], P)
+    c = leg_damping(s[3 + leg], leg, P)
     if ld != 0.0 and c > 0.0:
-        ldd = -P[P_K] * ld / c
+        ldd = -P[P_K + leg] * ld / c
     # toe height y + sL sin(th) - l cos(g)
     vy = s[NQ + IY] + sL * math.cos(th) * dth - ld * cg + ll * sg * dg
     ay = (ds[NQ + IY] + sL * (math.cos(th) * ddth - math.sin(th) * dth * dth)
@@ -285,7 +288,7 @@ def slide_toe_pressed(s, ds, aux, P, leg):
     again. Its flight leg-length rate is the slide's plus F / c (the damper balances the
     force F when the toe is free)."""
     ld = ds[IL_B + leg]
-    c = P[P_NP] * leg_damping(s[3 + leg], P)
+    c = P[P_NP] * leg_damping(s[3 + leg], leg, P)
     fax = aux[leg * NAUX_LEG + A_FAX]
     if c > 0.0:
         ld += fax / c

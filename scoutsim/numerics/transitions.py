@@ -11,12 +11,12 @@ import math
 from ..jit import allocating, kernel
 from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
-from ..model.kinematics import project_state
+from ..model.kinematics import hip_offset, project_state
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
+    A_FAX, A_GN, A_GT, A_HOLD, BACK, FRONT, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
     EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
     EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV_CONTACT, NQ, P_L, P_L0,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
     P_LEG_FRIC_SIDE, P_MASSLESS, P_MODEL, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
     SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
     STICK, STRUT, STUCK,
@@ -33,7 +33,7 @@ LEG_STOP_SPEED_TOL = 1e-6
 @kernel
 def stance_leg_rate(s, P, leg):
     """dl/dt [m/s] of a leg whose toe is pinned: minus the hip velocity along the leg."""
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = hip_offset(P, leg)
     th = s[2]
     g = th + s[3 + leg]
     hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
@@ -112,9 +112,10 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
     # release it at once (the toe would then be disarmed at height <= 0 and fall through)
     gn_tol = -1e-9 * W
     coulomb = P[P_MU] < 1e300
-    model2 = int(P[P_MODEL]) == MODEL_II and P[P_TAU_S] > 0.0
+    model2 = int(P[P_MODEL]) == MODEL_II
     for it in range(12):
-        if it == 0 and command_only and P[P_LEG_FRIC_SIDE] == 0.0:
+        if it == 0 and command_only and P[P_LEG_FRIC_SIDE + BACK] == 0.0 \
+                and P[P_LEG_FRIC_SIDE + FRONT] == 0.0:
             # (a side-load leg friction depends on the hip torque, so on the command, in
             # the leg force: then a fresh evaluation)
             evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
@@ -163,11 +164,11 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     # (the massless toe on its compliant leg carries none).
                     mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
                     changed = True
-            if model2:
+            if model2 and P[P_TAU_S + leg] > 0.0:
                 mm = mi[MI_MOTOR_B + leg]
                 if mm == STUCK:
                     hold = aux[o + A_HOLD]
-                    if abs(hold) > P[P_TAU_S] * (1.0 + 1e-9):
+                    if abs(hold) > P[P_TAU_S + leg] * (1.0 + 1e-9):
                         mi[MI_MOTOR_B + leg] = SLIP_NEG if hold > 0.0 else SLIP_POS
                         nev = log_event(ev, nev, t, EK_MOTOR_SLIP, leg, hold, 0.0, 0.0)
                         changed = True
@@ -195,7 +196,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     s_pre = s.copy()
     mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
-    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0] * (1.0 - 1e-12)
+    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
             and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
         # the toe lands with the leg at its stop while the hip moves away from it: the
         # massless toe cannot slide out beyond the stop, so the stop takes an impulse as

@@ -15,8 +15,9 @@ Modules (each imports only those above it):
 * ``units``: :data:`UNITS` (unit strings, dimensions, SI factors) and :func:`quantity_to_si`.
 * ``packaged``: reading the packaged ``scout2.toml`` and the decorator that makes its values
   the dataclasses' defaults.
-* ``robot``, ``controller``: :class:`RobotParameters` (with its derived quantities) and
-  :class:`ControllerParameters`.
+* ``robot``, ``controller``: :class:`RobotParameters` (with its derived quantities; the
+  leg, hip-unit and motor quantities of :data:`PER_LEG_FIELDS` may differ between the back
+  and front legs) and :class:`ControllerParameters`.
 * ``environment``: :class:`Environment` (the floor), :data:`DEFAULT_FRICTION_COEFFICIENT`,
   :func:`floor_label`.
 * ``schema``: every field's section, type, unit, dimension, default and source
@@ -34,7 +35,7 @@ from .environment import DEFAULT_FRICTION_COEFFICIENT, Environment, floor_label
 from .errors import ParameterError
 from .files import (SEPARATE_SECTIONS, from_dict, load_controller, load_parameters, load_robot,
                     parameter_table, to_dict)
-from .robot import RobotParameters
+from .robot import PER_LEG_FIELDS, RobotParameters
 from .schema import SECTIONS, field_dimension
 from .units import UNITS, quantity_to_si
 from .validation import (allowed_range, closed_range, physical_limit, validate_controller,
@@ -42,7 +43,7 @@ from .validation import (allowed_range, closed_range, physical_limit, validate_c
 
 __all__ = [
     "DEFAULT_FRICTION_COEFFICIENT", "UNITS", "SECTIONS", "SEPARATE_SECTIONS",
-    "Environment", "floor_label", "RobotParameters", "ControllerParameters", "ParameterError",
+    "Environment", "floor_label", "RobotParameters", "PER_LEG_FIELDS", "ControllerParameters", "ParameterError",
     "quantity_to_si", "field_dimension", "physical_limit", "allowed_range", "closed_range",
     "validate_robot", "validate_controller", "validate_parameters",
     "load_robot", "load_controller", "load_parameters", "parameter_table", "to_dict", "from_dict",

@@ -15,7 +15,7 @@ from .robot import RobotParameters
 from .schema import SECTIONS, _fields_of, _schema, _Spec
 from .units import _UNIT_INDEX, UNITS
 from .validation import (_coerce, _validate_controller, _validate_pair, _validate_robot,
-                         validate_parameters)
+                         coerce_value, validate_parameters)
 
 
 #: sections of a robot file read by other loaders: name -> the function that reads them
@@ -49,9 +49,16 @@ def _convert_entry(spec: _Spec, entry: object, where: str) -> tuple[object, str 
         raise ParameterError(f"{spec.label}: unit '{unit}' is a {dim} unit, but {spec.name} is a "
                              f"{spec.dimension}; allowed units: {', '.join(UNITS[spec.dimension])}{where}",
                              spec.name)
-    value = _coerce(spec, entry, where)
+    value = coerce_value(spec, entry, where)
     note = None if unit == spec.unit else f"given as {_fmt(entry)} {unit}"
-    return (value * factor if spec.kind == "float" else value), note
+    return _scaled(spec, value, factor), note
+
+
+def _scaled(spec: _Spec, value, factor: float):
+    """``value`` (one value or a (back, front) pair) times the unit factor (floats only)."""
+    if spec.kind != "float":
+        return value
+    return tuple(v * factor for v in value) if isinstance(value, tuple) else value * factor
 
 
 def _default_si(spec: _Spec) -> float | int | bool:
@@ -110,7 +117,7 @@ def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | N
                                      f"{cls.__name__} field{where_overrides}", name)
             raise _unknown(name, f"for {cls.__name__}{where_overrides}", specs)
         spec = specs[name]
-        values[name] = _coerce(spec, value, where_overrides)
+        values[name] = coerce_value(spec, value, where_overrides)
         note = f"given as {_fmt(value)} {spec.si_unit}" if spec.factor != 1.0 else None
         origins[name] = (where_overrides, note)
     return cls(**values), origins

@@ -1,18 +1,68 @@
 """:class:`RobotParameters`: the physical parameters of the planar Scout II model (paper
-Tables II, III) and the quantities derived from them."""
+Tables II, III) and the quantities derived from them; every leg, hip-unit and motor quantity
+may differ between the back and the front legs (:data:`PER_LEG_FIELDS`)."""
 
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from dataclasses import dataclass
 
+from .errors import ParameterError
 from .packaged import _packaged_defaults
+
+#: The legs, in the order of a (back, front) pair.
+LEG_NAMES = ("back", "front")
+
+#: Fields that take one value for both legs or a (back, front) pair: the leg bodies, the
+#: telescopic legs, the hip units (transmission) and the motors with their amplifiers.
+#: The torso, the hip spacing, the battery and gravity are one value for the robot.
+PER_LEG_FIELDS = (
+    "leg_mass", "leg_inertia", "leg_stiffness", "leg_damping", "leg_rest_length",
+    "leg_com_distance", "planetary_ratio", "sprocket_ratio", "gearbox_efficiency",
+    "sprocket_efficiency", "gearbox_idle_loss_torque", "gearbox_load_loss_coefficient",
+    "drive_gear_inertia", "driven_gear_inertia", "joint_stiction", "joint_damping",
+    "belt_stiffness", "belt_damping", "belt_backlash", "leg_friction_force",
+    "leg_friction_side_load_coefficient", "leg_damping_angle_coefficient",
+    "torque_constant", "speed_constant", "armature_resistance", "current_limit",
+)
+
+
+def leg_index(leg) -> int:
+    """0 for the back leg, 1 for the front: from 0 / 1 or "back" / "front"."""
+    if isinstance(leg, str) and leg in LEG_NAMES:
+        return LEG_NAMES.index(leg)
+    if isinstance(leg, numbers.Integral) and not isinstance(leg, bool) and leg in (0, 1):
+        return int(leg)
+    raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' (0) or 'front' (1)")
+
+
+def _per_leg_value(name: str, value):
+    """A per-leg field's value as stored: a scalar, or a (back, front) tuple whose values
+    differ (an equal pair is stored as its one value, so a robot given per leg with equal
+    values is the same robot as one given by scalars)."""
+    if isinstance(value, (list, tuple)) or (hasattr(value, "shape") and getattr(value, "ndim", 0) == 1):
+        pair = tuple(value)
+        if len(pair) != 2:
+            raise ParameterError(f"robot.{name} = {list(pair)!r} is not allowed: give one value "
+                                 "for both legs or a (back, front) pair", name)
+        back, front = (v.item() if hasattr(v, "item") else v for v in pair)
+        return back if back == front and type(back) is type(front) else (back, front)
+    return value
 
 
 @dataclass(frozen=True)
 @_packaged_defaults("robot", "transmission", "motor")
 class RobotParameters:
     """Physical parameters of the planar Scout II model (SI units).
+
+    Every field of :data:`PER_LEG_FIELDS` (the leg bodies, telescopic legs, hip units and
+    motors) takes one value for both legs or a (back, front) pair, e.g.
+    ``leg_rest_length=(0.323, 0.30)``; a robot file writes ``value = [0.323, 0.30]``. An
+    equal pair is stored as its one value. :meth:`leg` gives one leg's values (and derived
+    quantities), :meth:`per_leg` a field's (back, front) pair; the derived quantities below
+    (``gear_ratio``, ``stall_torque``, ...) need the legs to agree on their inputs and say
+    so otherwise.
 
     Attributes
     ----------
@@ -30,6 +80,10 @@ class RobotParameters:
         Leg damper constant c, one physical leg [N s/m] (Table III).
     hip_spacing : float
         Distance between front and back hips [m] (Table III); L = hip_spacing/2.
+    com_offset : float
+        Distance [m] of the torso's centre of mass ahead of the midpoint between the hips
+        (assumed, default 0: midway, as in the paper): the back hip is hip_spacing / 2 +
+        com_offset behind the COM, the front hip hip_spacing / 2 - com_offset ahead of it.
     leg_rest_length : float
         Leg rest length l0 = mechanical stop [m] (Table III).
     leg_com_distance : float
@@ -104,6 +158,7 @@ class RobotParameters:
     leg_stiffness: float
     leg_damping: float
     hip_spacing: float
+    com_offset: float
     leg_rest_length: float
     leg_com_distance: float
     legs_per_virtual_leg: int
@@ -133,33 +188,86 @@ class RobotParameters:
     battery_voltage: float
     battery_resistance: float
 
+    def __post_init__(self):
+        for name in PER_LEG_FIELDS:
+            value = getattr(self, name)
+            stored = _per_leg_value(name, value)
+            if stored is not value:
+                object.__setattr__(self, name, stored)
+
+    # -- the legs --------------------------------------------------------------------------
+    def per_leg(self, name: str) -> tuple:
+        """The (back, front) values of field ``name`` (a field of :data:`PER_LEG_FIELDS`
+        given as one value gives it twice)."""
+        if name not in PER_LEG_FIELDS:
+            raise ValueError(f"{name!r} is not a per-leg field; per-leg fields: "
+                             f"{', '.join(PER_LEG_FIELDS)}")
+        value = getattr(self, name)
+        return value if isinstance(value, tuple) else (value, value)
+
+    @property
+    def legs_differ(self) -> bool:
+        """Whether any per-leg field has different back and front values."""
+        return any(isinstance(getattr(self, n), tuple) for n in PER_LEG_FIELDS)
+
+    def leg(self, leg) -> "RobotParameters":
+        """The robot with both legs set to leg ``leg``'s values ("back" / 0 or "front" / 1):
+        one leg's quantities and everything derived from them
+        (``robot.leg("front").stall_torque``)."""
+        i = leg_index(leg)
+        return dataclasses.replace(self, **{n: self.per_leg(n)[i] for n in PER_LEG_FIELDS
+                                            if isinstance(getattr(self, n), tuple)})
+
+    def _same(self, derived: str, *names: str) -> tuple:
+        """The values of ``names``, which must be the same for both legs for ``derived``."""
+        for n in names:
+            v = getattr(self, n)
+            if isinstance(v, tuple):
+                raise ValueError(
+                    f"robot.{derived} is per leg here: {n} differs between the legs (back "
+                    f"{v[0]:g}, front {v[1]:g}); ask one leg, robot.leg('back').{derived} "
+                    f"or robot.leg('front').{derived}")
+        return tuple(getattr(self, n) for n in names)
+
     # -- derived quantities (docs/specification.md section 4) ------------------------------------------
     @property
     def gear_ratio(self) -> float:
         """Combined gear ratio N = planetary x sprocket [-] (docs/specification.md section 4: 102.18)."""
-        return self.planetary_ratio * self.sprocket_ratio
+        planetary, sprocket = self._same("gear_ratio", "planetary_ratio", "sprocket_ratio")
+        return planetary * sprocket
 
     @property
     def efficiency(self) -> float:
         """Constant transmission efficiency eta = gearbox x sprocket [-] (0.6528)."""
-        return self.gearbox_efficiency * self.sprocket_efficiency
+        gearbox, sprocket = self._same("efficiency", "gearbox_efficiency", "sprocket_efficiency")
+        return gearbox * sprocket
 
     @property
     def half_hip_spacing(self) -> float:
-        """L, distance from torso COM to each hip [m]."""
+        """L, half the distance between the hips [m] (the distance from the torso COM to each
+        hip when ``com_offset`` is 0; :meth:`hip_offset`)."""
         return 0.5 * self.hip_spacing
+
+    def hip_offset(self, leg) -> float:
+        """Position [m] of leg ``leg``'s hip along the torso axis from the torso COM:
+        -L - com_offset (back), L - com_offset (front); the compiled model's counterpart is
+        ``scoutsim.model.kinematics.hip_offset``."""
+        sign = (-1.0, 1.0)[leg_index(leg)]
+        return sign * self.half_hip_spacing - self.com_offset
 
     @property
     def torque_per_amp(self) -> float:
         """Hip torque per ampere of motor current, N eta K_T [N m/A] (the compiled model's
         counterpart is ``scoutsim.model.actuator.torque_per_amp``)."""
-        return self.gear_ratio * self.efficiency * self.torque_constant
+        return self.gear_ratio * self.efficiency * self._same("torque_per_amp",
+                                                              "torque_constant")[0]
 
     @property
     def stall_torque(self) -> float:
         """Torque-speed line at zero speed, at one physical leg: N eta K_T V / R_A [N m]
         (tau_max of the paper's eq. (3), written at the leg)."""
-        return self.torque_per_amp * self.battery_voltage / self.armature_resistance
+        return self.torque_per_amp * self.battery_voltage \
+            / self._same("stall_torque", "armature_resistance")[0]
 
     @property
     def torque_speed_slope(self) -> float:
@@ -167,23 +275,26 @@ class RobotParameters:
         N^2 eta K_T K_w / R_A [N m s/rad] (minus the slope A of the paper's eq. (3), written
         at the leg)."""
         N = self.gear_ratio
-        return N * N * self.efficiency * self.torque_constant * self.speed_constant \
-            / self.armature_resistance
+        kt, kw, ra = self._same("torque_speed_slope", "torque_constant", "speed_constant",
+                                "armature_resistance")
+        return N * N * self.efficiency * kt * kw / ra
 
     @property
     def no_load_speed(self) -> float:
         """Leg speed where the torque-speed line crosses zero torque, V / (K_w N) [rad/s]."""
-        return self.battery_voltage / (self.speed_constant * self.gear_ratio)
+        return self.battery_voltage / (self._same("no_load_speed", "speed_constant")[0]
+                                       * self.gear_ratio)
 
     @property
     def max_leg_torque(self) -> float:
         """Current-limited torque at one physical leg, N eta K_T i_max [N m]."""
-        return self.torque_per_amp * self.current_limit
+        return self.torque_per_amp * self._same("max_leg_torque", "current_limit")[0]
 
     @property
     def total_mass(self) -> float:
         """Torso plus all four physical legs [kg]."""
-        return self.torso_mass + 2 * self.legs_per_virtual_leg * self.leg_mass
+        back, front = self.per_leg("leg_mass")
+        return self.torso_mass + self.legs_per_virtual_leg * (back + front)
 
     def replace(self, **changes) -> "RobotParameters":
         """Return a copy with some fields changed (validated by the loader functions)."""

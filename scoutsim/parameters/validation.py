@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from .controller import ControllerParameters
 from .errors import ParameterError, _fmt, _fmt_bound
-from .robot import RobotParameters
+from .robot import LEG_NAMES, PER_LEG_FIELDS, RobotParameters
 from .schema import _fields_of, _schema, _Spec
 
 
@@ -218,37 +218,58 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
                          f"expected {expected}{where}", spec.name)
 
 
-def _fail(spec: _Spec, value: object, rule: str, origins) -> typing.NoReturn:
+def coerce_value(spec: _Spec, value: object, where: str = ""):
+    """:func:`_coerce` for any field: a per-leg field (:data:`PER_LEG_FIELDS`) also takes a
+    (back, front) pair (list, tuple or 1-d array of two), returned as a tuple."""
+    if isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) == 1:
+        pair = list(value)
+        if spec.name not in PER_LEG_FIELDS:
+            raise ParameterError(
+                f"{spec.label} = {pair!r} is not allowed: one value for the whole robot (only "
+                f"the leg, hip-unit and motor quantities may be given per leg as "
+                f"[back, front]){where}", spec.name)
+        if len(pair) != 2:
+            raise ParameterError(f"{spec.label} = {pair!r} is not allowed: give one value for "
+                                 f"both legs or a pair [back, front]{where}", spec.name)
+        return tuple(_coerce(spec, v, where) for v in pair)
+    return _coerce(spec, value, where)
+
+
+def _fail(spec: _Spec, value: object, rule: str, origins, leg: int | None = None) -> typing.NoReturn:
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     shown = _fmt(value / spec.factor) if spec.kind == "float" else _fmt(value)
     note = f" ({note})" if note else ""
-    raise ParameterError(f"{spec.label} = {shown}{unit}{note} is not allowed: {rule}{where}", spec.name)
+    label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
+    raise ParameterError(f"{label} = {shown}{unit}{note} is not allowed: {rule}{where}", spec.name)
 
 
 def _check_fields(obj: object, origins) -> None:
     """Type, finiteness and single-field range of every field of ``obj``."""
     for name, spec in _fields_of(type(obj)).items():
         where = origins.get(name, ("", None))[0]
-        value = getattr(obj, name)
-        _coerce(spec, value, where)  # raises on a wrong type
-        if spec.kind == "int" and not isinstance(value, numbers.Integral):
-            raise ParameterError(f"{spec.label} = {value!r} has the wrong type ({type(value).__name__}): "
-                                 f"expected an integer{where}", name)
-        if spec.kind == "bool":
-            continue
-        rule = _RULES.get(name)
-        finite = math.isfinite(value)
-        if not finite or (rule is not None and not rule.contains(value)):
-            # (the message is composed only for a value that fails: every simulate()
-            # checks every field)
-            text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
-            _fail(spec, value, f"must be finite and {text}" if not finite else f"must be {text}",
-                  origins)
-        limit = _LIMITS.get(name)
-        if limit is not None and value > limit.hi:
-            _fail(spec, value, f"must be {_describe_limit(rule, limit, spec)} ({limit.why})",
-                  origins)
+        given = getattr(obj, name)
+        coerce_value(spec, given, where)  # raises on a wrong type or a pair not allowed
+        pair = isinstance(given, tuple)
+        for leg, value in enumerate(given if pair else (given,)):
+            leg = leg if pair else None
+            if spec.kind == "int" and not isinstance(value, numbers.Integral):
+                raise ParameterError(f"{spec.label} = {value!r} has the wrong type "
+                                     f"({type(value).__name__}): expected an integer{where}", name)
+            if spec.kind == "bool":
+                continue
+            rule = _RULES.get(name)
+            finite = math.isfinite(value)
+            if not finite or (rule is not None and not rule.contains(value)):
+                # (the message is composed only for a value that fails: every simulate()
+                # checks every field)
+                text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
+                _fail(spec, value, f"must be finite and {text}" if not finite
+                      else f"must be {text}", origins, leg)
+            limit = _LIMITS.get(name)
+            if limit is not None and value > limit.hi:
+                _fail(spec, value, f"must be {_describe_limit(rule, limit, spec)} ({limit.why})",
+                      origins, leg)
 
 
 def _describe_limit(rule: _Range, limit: _Limit, spec: _Spec) -> str:
@@ -264,13 +285,32 @@ def _validate_robot(p: RobotParameters, origins) -> RobotParameters:
         raise TypeError(f"expected RobotParameters, got {type(p).__name__}")
     _check_fields(p, origins)
     spec = _schema()["leg_com_distance"]
-    l0 = _fmt_bound(p.leg_rest_length / spec.factor)
-    if p.leg_mass == 0.0:
-        if not 0.0 <= p.leg_com_distance <= p.leg_rest_length:
-            _fail(spec, p.leg_com_distance,
-                  f"must be in [0, leg_rest_length = {l0}] {spec.unit} (massless legs)", origins)
-    elif not 0.0 < p.leg_com_distance <= p.leg_rest_length:
-        _fail(spec, p.leg_com_distance, f"must be in (0, leg_rest_length = {l0}] {spec.unit}", origins)
+    differ = isinstance(p.leg_com_distance, tuple) or isinstance(p.leg_rest_length, tuple) \
+        or isinstance(p.leg_mass, tuple)
+    for leg in range(2):
+        one = p.leg(leg)
+        which = leg if differ else None
+        l0 = _fmt_bound(one.leg_rest_length / spec.factor)
+        if one.leg_mass == 0.0:
+            if not 0.0 <= one.leg_com_distance <= one.leg_rest_length:
+                _fail(spec, one.leg_com_distance, f"must be in [0, leg_rest_length = {l0}] "
+                      f"{spec.unit} (massless legs)", origins, which)
+        elif not 0.0 < one.leg_com_distance <= one.leg_rest_length:
+            _fail(spec, one.leg_com_distance,
+                  f"must be in (0, leg_rest_length = {l0}] {spec.unit}", origins, which)
+    massless = [m == 0.0 and i == 0.0 for m, i in zip(p.per_leg("leg_mass"),
+                                                      p.per_leg("leg_inertia"))]
+    if massless[0] != massless[1]:
+        spec = _schema()["leg_mass"]
+        _fail(spec, p.per_leg("leg_mass")[int(massless[1])], "the model's massless legs "
+              "(leg_mass = leg_inertia = 0) are both legs or neither", origins,
+              int(massless[1]))
+    half = 0.5 * p.hip_spacing
+    if not -half < p.com_offset < half:
+        spec = _schema()["com_offset"]
+        _fail(spec, p.com_offset, f"must be in (-hip_spacing / 2, hip_spacing / 2) = "
+              f"({_fmt_bound(-half / spec.factor)}, {_fmt_bound(half / spec.factor)}) "
+              f"{spec.unit} (the torso COM between the hips)", origins)
     return p
 
 
@@ -287,9 +327,9 @@ def _validate_controller(c: ControllerParameters, origins) -> ControllerParamete
 
 
 def _validate_pair(robot, controller, origins) -> None:
-    if controller.touchdown_compression >= robot.leg_rest_length:
+    if controller.touchdown_compression >= min(robot.per_leg("leg_rest_length")):
         spec = _schema()["touchdown_compression"]
-        l0 = _fmt_bound(robot.leg_rest_length / spec.factor)
+        l0 = _fmt_bound(min(robot.per_leg("leg_rest_length")) / spec.factor)
         _fail(spec, controller.touchdown_compression,
               f"must be > liftoff_compression and < leg_rest_length = {l0} {spec.unit}", origins)
 

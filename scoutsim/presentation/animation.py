@@ -77,14 +77,14 @@ def frame_times(result, fps: float = 25.0, t0: float | None = None,
     return a + np.arange(n) / float(fps)
 
 
-def _geometry(result) -> tuple[float, float, float]:
+def _geometry(result) -> tuple[tuple[float, float], float, float]:
+    """The hips' positions along the torso axis from the COM (back, front) [m], the torso's
+    length and height [m], of the run's robot (Scout II if the run does not say)."""
+    from ..parameters import RobotParameters
     robot = (result.provenance or {}).get("robot") or {}
-    if not robot:
-        from ..parameters import RobotParameters
-        import dataclasses
-        robot = dataclasses.asdict(RobotParameters())
-    return (0.5 * float(robot["hip_spacing"]), float(robot["torso_length"]),
-            float(robot["torso_height"]))
+    robot = RobotParameters(**robot) if robot else RobotParameters()
+    return ((robot.hip_offset(0), robot.hip_offset(1)), float(robot.torso_length),
+            float(robot.torso_height))
 
 
 def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None = None,
@@ -107,7 +107,7 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     states = [np.asarray(result.leg_state(leg)) if has_ctrl else np.zeros(t.size, int)
               for leg in (0, 1)]
     contact = [np.asarray(result.contact_mode(leg)) for leg in (0, 1)]
-    half_hip, length, height = _geometry(result)
+    hips, length, height = _geometry(result)
 
     fig = Figure(figsize=figsize, dpi=dpi)
     FigureCanvasAgg(fig)
@@ -156,7 +156,7 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
         ty = np.tile([0.0, -0.03, np.nan], tk.size)
         ticks.set_data(tx, ty)
         for leg in (0, 1):
-            hip = com + (2 * leg - 1) * half_hip * u
+            hip = com + hips[leg] * u
             o = leg * L.NAUX_LEG
             toe = np.array([aux[k, o + L.A_TOE_X], aux[k, o + L.A_TOE_Y]])
             if not np.all(np.isfinite(toe)):  # fall back to the leg geometry

@@ -231,13 +231,15 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     ax_tau.set_xlim(t0, t1)
 
 
-def motor_limits(robot: dict) -> dict:
+def motor_limits(robot: dict, leg=None) -> dict:
     """Actuator limits at one physical leg (docs/specification.md section 4; paper Sec. II, eq. (3)).
 
     Parameters
     ----------
     robot : dict
         Robot parameters as in ``result.provenance["robot"]`` (SI units).
+    leg : "back" / 0, "front" / 1 or None
+        Whose actuator (None: both legs', which must then agree).
 
     Returns
     -------
@@ -249,6 +251,8 @@ def motor_limits(robot: dict) -> dict:
         leg speed).
     """
     r = robot if isinstance(robot, RobotParameters) else RobotParameters(**robot)
+    if leg is not None:
+        r = r.leg(leg)
     return {"N": r.gear_ratio, "eta": r.efficiency, "tau_current": r.max_leg_torque,
             "tau_stall": r.stall_torque, "w_no_load": r.no_load_speed,
             "slope": r.torque_speed_slope}
@@ -258,7 +262,7 @@ def _torque_speed_axes(ax, result, li: int) -> None:
     robot = (result.provenance or {}).get("robot")
     model = (result.provenance or {}).get("model")
     tau = np.asarray(result.hip_torque_applied(li), dtype=float)
-    lim = motor_limits(robot) if robot else None
+    lim = motor_limits(robot, li) if robot else None
     # leg-side speed of the actuator: w_m / N = dphi (ideal, Model I) or dalpha (Model II)
     if lim is not None:
         w = np.asarray(result.motor_speed(li), dtype=float) / lim["N"]

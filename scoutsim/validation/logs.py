@@ -347,9 +347,17 @@ class ExperimentLog:
 
     @property
     def torque_per_amp(self) -> float:
-        """N eta K_T [N m/A] used to estimate torque from current."""
+        """N eta K_T [N m/A] used to estimate torque from current (of the back leg when the
+        log gives the two legs' values: :meth:`leg_torque_per_amp`)."""
+        return self.leg_torque_per_amp(0)
+
+    def leg_torque_per_amp(self, leg) -> float:
+        """N eta K_T [N m/A] of leg ``leg``: the log's ``torque_per_amp_nm_a`` (one value,
+        or [back, front] for a robot whose legs differ), or Scout II's."""
         v = self.meta.get("torque_per_amp_nm_a")
-        return float(v) if v is not None else _default_torque_per_amp()
+        if v is None:
+            return _default_torque_per_amp()
+        return float(v[_leg(leg)]) if isinstance(v, (list, tuple)) else float(v)
 
     def hip_torque(self, leg) -> np.ndarray:
         """Hip torque per physical leg [N m]: the logged torque, or N eta K_T i from the
@@ -357,7 +365,7 @@ class ExperimentLog:
         name = LEGS[_leg(leg)]
         if self.has(f"torque_{name}_nm"):
             return self.columns[f"torque_{name}_nm"]
-        return self.torque_per_amp * self.columns[f"current_{name}_a"]
+        return self.leg_torque_per_amp(leg) * self.columns[f"current_{name}_a"]
 
     hip_torque_applied = hip_torque
 

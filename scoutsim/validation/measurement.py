@@ -54,16 +54,22 @@ class SensorNoise:
     current_a: float = 0.1
 
 
-def torque_per_amp(robot) -> float:
-    """N eta K_T [N m/A] of a RobotParameters or its dict (``provenance["robot"]``)."""
+def torque_per_amp(robot, leg=None):
+    """N eta K_T [N m/A] of a RobotParameters or its dict (``provenance["robot"]``): of leg
+    ``leg`` ("back" / 0, "front" / 1), or, for ``leg`` None, the one value of both legs, or
+    [back, front] when their motors or transmissions differ."""
     if isinstance(robot, dict):
         robot = RobotParameters(**robot)
-    return float(robot.torque_per_amp)
+    if leg is not None:
+        return float(robot.leg(leg).torque_per_amp)
+    back, front = (float(robot.leg(i).torque_per_amp) for i in (0, 1))
+    return back if back == front else [back, front]
 
 
-def torque_from_current(current, robot) -> np.ndarray:
-    """Hip torque per physical leg estimated from motor current, ``N eta K_T i`` [N m]."""
-    return torque_per_amp(robot) * np.asarray(current, dtype=float)
+def torque_from_current(current, robot, leg=0) -> np.ndarray:
+    """Hip torque per physical leg of leg ``leg`` estimated from motor current,
+    ``N eta K_T i`` [N m]."""
+    return torque_per_amp(robot, leg) * np.asarray(current, dtype=float)
 
 
 def _on_grid(result):

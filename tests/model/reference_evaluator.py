@@ -48,7 +48,7 @@ from scoutsim.model.layout import (
     P_CLAMP_LEGS, P_CLAMP_TORSO, P_D, P_ETA, P_G, P_IL, P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB,
     P_KT, P_KW, P_L, P_L0, P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML,
     P_MODEL, P_MT, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B,
-    P_TD_WORLD, P_VB, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK,
+    P_TD_WORLD, P_VB, P_COM_OFFSET, HIP_SIGN, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK,
     STRUT, STUCK,
 )
 
@@ -76,9 +76,9 @@ def project(q, dq, l, P, mi, mf):
             dq[3:5] = 0.0
     th = q[2]
     dth = dq[2]
-    l0 = P[P_L0]
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        l0 = P[P_L0 + leg]
+        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
         hx = q[0] + sL * math.cos(th)
         hy = q[1] + sL * math.sin(th)
         hvx = dq[0] - sL * math.sin(th) * dth
@@ -106,7 +106,7 @@ def project(q, dq, l, P, mi, mf):
                 q[3 + leg] = td
                 dq[3 + leg] = 0.0
             l[leg] = l0
-        elif P[P_C] <= 0.0 or l[leg] > l0:
+        elif P[P_C + leg] <= 0.0 or l[leg] > l0:
             l[leg] = l0
         if int(P[P_MODEL]) != MODEL_II:
             q[5 + leg] = q[3 + leg]
@@ -117,19 +117,19 @@ def project(q, dq, l, P, mi, mf):
 
 # --- actuator (docs/specification.md section 4) ------------------------------------------
 
-def torque_per_amp(P):
+def torque_per_amp(leg, P):
     """Torque at the gear output per ampere, N eta K_T [N m / A]."""
-    return P[P_N] * P[P_ETA] * P[P_KT]
+    return P[P_N + leg] * P[P_ETA + leg] * P[P_KT + leg]
 
 
 def motor_speed(dq, leg, P):
     """w_m [rad/s]: N times the rate relative to the torso of the leg (ideal, Model I) or of
     the driven gear (Model II)."""
     rate = dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg]
-    return P[P_N] * rate
+    return P[P_N + leg] * rate
 
 
-def motor_current(cmd, om, vb, P):
+def motor_current(cmd, om, vb, leg, P):
     """Motor current [A] for a commanded leg torque ``cmd`` [N m per physical leg] at motor
     speed ``om`` and battery voltage ``vb``.
 
@@ -145,17 +145,17 @@ def motor_current(cmd, om, vb, P):
     if circuit == CIRCUIT_OPEN:
         return 0.0
     if circuit == CIRCUIT_SHORT:
-        return -P[P_KW] * om / P[P_RA]
-    i_max = P[P_IMAX]
-    wanted = min(max(cmd / torque_per_amp(P), -i_max), i_max)
+        return -P[P_KW + leg] * om / P[P_RA + leg]
+    i_max = P[P_IMAX + leg]
+    wanted = min(max(cmd / torque_per_amp(leg, P), -i_max), i_max)
     if model == MODEL_IDEAL:
         return wanted
-    reach_lo = (-vb - P[P_KW] * om) / P[P_RA]
-    reach_hi = (vb - P[P_KW] * om) / P[P_RA]
+    reach_lo = (-vb - P[P_KW + leg] * om) / P[P_RA + leg]
+    reach_hi = (vb - P[P_KW + leg] * om) / P[P_RA + leg]
     return min(max(wanted, reach_lo), reach_hi)
 
 
-def delivered_torque(cur, om, P):
+def delivered_torque(cur, om, leg, P):
     """Torque at the leg / driven gear [N m per physical leg] for current ``cur`` at motor
     speed ``om`` (docs/model.md, "Transmission losses").
 
@@ -164,9 +164,9 @@ def delivered_torque(cur, om, P):
     loss comes off the transmitted torque (never reversing it); when the output drives the
     motor, the output must supply tau_0 and the loss, and its torque opposes the motion.
     The direction of motion is blended linearly over |w_m| < LOSS_BLEND_BAND."""
-    tau0 = torque_per_amp(P) * cur
-    idle = P[P_TAU_IDLE]
-    c_load = P[P_C_LOAD]
+    tau0 = torque_per_amp(leg, P) * cur
+    idle = P[P_TAU_IDLE + leg]
+    c_load = P[P_C_LOAD + leg]
 
     def moving(direction):
         # the output turning in `direction` (+1 / -1) relative to the torso
@@ -202,8 +202,8 @@ def battery_voltage(dq, cmd, P):
         total = 0.0
         for leg in range(2):
             om = motor_speed(dq, leg, P)
-            i = motor_current(cmd[leg], om, v, P)
-            total += P[P_NP] * (P[P_RA] * i + P[P_KW] * om) * i
+            i = motor_current(cmd[leg], om, v, leg, P)
+            total += P[P_NP] * (P[P_RA + leg] * i + P[P_KW + leg] * om) * i
         return total
 
     def residual(v):
@@ -215,14 +215,14 @@ def battery_voltage(dq, cmd, P):
 
 # --- telescopic leg (docs/specification.md section 2, docs/model.md) ----------------------
 
-def leg_damper(phi, P):
+def leg_damper(phi, leg, P):
     """Leg damper [N s/m per physical leg] at leg angle phi: c (1 + a phi^2)."""
-    return P[P_C] * (1.0 + P[P_LEG_C_ANGLE] * phi ** 2)
+    return P[P_C + leg] * (1.0 + P[P_LEG_C_ANGLE + leg] * phi ** 2)
 
 
-def leg_friction_level(tau_hip, ll, P):
+def leg_friction_level(tau_hip, ll, leg, P):
     """Sliding-joint Coulomb level [N per physical leg]: F_c + mu_s |tau_hip| / l."""
-    return P[P_LEG_FRIC] + P[P_LEG_FRIC_SIDE] * abs(tau_hip) / ll
+    return P[P_LEG_FRIC + leg] + P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll
 
 
 def leg_force(k, c, l0, ll, ld, fc):
@@ -247,10 +247,10 @@ def flight_rate(k, c, l0, ll, fc):
 
 # --- hip unit (docs/specification.md section 5) ------------------------------------------
 
-def belt_spring_deflection(delta, P):
+def belt_spring_deflection(delta, leg, P):
     """What the belt spring is stretched by at gear-leg angle difference delta [rad]: the
     hip unit's total play b is a dead zone |delta| <= b / 2 around zero."""
-    half_play = 0.5 * P[P_BACKLASH]
+    half_play = 0.5 * P[P_BACKLASH + leg]
     return math.copysign(max(abs(delta) - half_play, 0.0), delta)
 
 
@@ -258,10 +258,10 @@ def belt_spring_deflection(delta, P):
 
 def _leg_com(q, P, leg):
     """Leg-body COM position, its Jacobian (2 x NQ) and the angle g = theta + phi."""
-    sL = (2.0 * leg - 1.0) * P[P_L]
+    sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
     th = q[2]
     g = th + q[3 + leg]
-    d = P[P_D]
+    d = P[P_D + leg]
     pos = np.array([q[0] + sL * math.cos(th) + d * math.sin(g),
                     q[1] + sL * math.sin(th) - d * math.cos(g)])
     J = np.zeros((2, NQ))
@@ -287,20 +287,20 @@ def mass_matrix(q, P):
     M[2, 2] += P[P_IT]
     for leg in range(2):
         _, J, _ = _leg_com(q, P, leg)
-        M += npl * P[P_ML] * J.T @ J
+        M += npl * P[P_ML + leg] * J.T @ J
         w = np.zeros(NQ)
         w[2] = 1.0
         w[3 + leg] = 1.0
-        M += npl * P[P_IL] * np.outer(w, w)
+        M += npl * P[P_IL + leg] * np.outer(w, w)
         if int(P[P_MODEL]) == MODEL_II:
             driven = np.zeros(NQ)
             driven[2] = 1.0
             driven[5 + leg] = 1.0
             drive = np.zeros(NQ)
             drive[2] = 1.0
-            drive[5 + leg] = P[P_N]
-            M += npl * P[P_J2] * np.outer(driven, driven)
-            M += npl * P[P_J1] * np.outer(drive, drive)
+            drive[5 + leg] = P[P_N + leg]
+            M += npl * P[P_J2 + leg] * np.outer(driven, driven)
+            M += npl * P[P_J1 + leg] * np.outer(drive, drive)
     return M
 
 
@@ -312,13 +312,13 @@ def velocity_terms(q, dq, P):
     th = q[2]
     dth = dq[2]
     for leg in range(2):
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
         _, J, g = _leg_com(q, P, leg)
         dg = dth + dq[3 + leg]
         # hip: sL (cos th, sin th) turning at dth; COM: d (sin g, -cos g) turning at dg
         a0 = (sL * dth ** 2 * np.array([-math.cos(th), -math.sin(th)])
-              + P[P_D] * dg ** 2 * np.array([-math.sin(g), math.cos(g)]))
-        h += P[P_NP] * P[P_ML] * J.T @ a0
+              + P[P_D + leg] * dg ** 2 * np.array([-math.sin(g), math.cos(g)]))
+        h += P[P_NP] * P[P_ML + leg] * J.T @ a0
     return h
 
 
@@ -330,10 +330,10 @@ def potential_energy(q, l, P):
     e = P[P_MT] * grav * q[1]
     for leg in range(2):
         pos, _, _ = _leg_com(q, P, leg)
-        e += npl * P[P_ML] * grav * pos[1]
-        e += 0.5 * npl * P[P_K] * (P[P_L0] - l[leg]) ** 2
+        e += npl * P[P_ML + leg] * grav * pos[1]
+        e += 0.5 * npl * P[P_K + leg] * (P[P_L0 + leg] - l[leg]) ** 2
         if int(P[P_MODEL]) == MODEL_II:
-            e += 0.5 * npl * P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P) ** 2
+            e += 0.5 * npl * P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P) ** 2
     return e
 
 
@@ -357,10 +357,6 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
 
     npl = P[P_NP]
     grav = P[P_G]
-    l0 = P[P_L0]
-    k = P[P_K]
-    d = P[P_D]
-    N = P[P_N]
     th = q[2]
     dth = dq[2]
     massless = P[P_MASSLESS] > 0.5
@@ -368,10 +364,11 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     Q = np.zeros(NQ)
     # gravity
     Q[1] -= P[P_MT] * grav
-    mlg = npl * P[P_ML] * grav
     for leg in range(2):
+        mlg = npl * P[P_ML + leg] * grav
+        d = P[P_D + leg]
         g = th + q[3 + leg]
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
         Q[1] -= mlg
         Q[2] -= mlg * (sL * math.cos(th) + d * math.sin(g))
         Q[3 + leg] -= mlg * d * math.sin(g)
@@ -385,18 +382,18 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     tau_fric = np.zeros(2)
     for leg in range(2):
         om[leg] = motor_speed(dq, leg, P)
-        cur[leg] = motor_current(cmd[leg], om[leg], vb, P)
-        tau_app[leg] = delivered_torque(cur[leg], om[leg], P)
+        cur[leg] = motor_current(cmd[leg], om[leg], vb, leg, P)
+        tau_app[leg] = delivered_torque(cur[leg], om[leg], leg, P)
         if model == MODEL_II:
             Q[5 + leg] += npl * tau_app[leg]
             mm = mi[MI_MOTOR_B + leg]
-            tf = P[P_B_J] * om[leg]
+            tf = P[P_B_J + leg] * om[leg]
             if mm != STUCK:
-                tf += P[P_TAU_S] * mm
+                tf += P[P_TAU_S + leg] * mm
             tau_fric[leg] = tf
-            Q[5 + leg] -= npl * N * tf
-            tb = (P[P_KB] * belt_spring_deflection(q[5 + leg] - q[3 + leg], P)
-                  + P[P_CB] * (dq[5 + leg] - dq[3 + leg]))
+            Q[5 + leg] -= npl * P[P_N + leg] * tf
+            tb = (P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
+                  + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))
             tau_belt[leg] = tb
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
@@ -418,7 +415,9 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     toe_vx = np.zeros(2)
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        sL = (2.0 * leg - 1.0) * P[P_L]
+        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+        l0 = P[P_L0 + leg]
+        k = P[P_K + leg]
         g = th + q[3 + leg]
         dg = dth + dq[3 + leg]
         sg = math.sin(g)
@@ -440,10 +439,10 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         kk = 3 + leg
         # leg damper and sliding-joint friction (both as Table III unless the effects
         # beyond the paper are switched on)
-        c_l = leg_damper(q[kk], P)
+        c_l = leg_damper(q[kk], leg, P)
         tau_hip = (tau_belt[leg] if model == MODEL_II else
                    (tau_app[leg] if model != MODEL_PASSIVE else 0.0))
-        fc_l = leg_friction_level(tau_hip, ll, P)
+        fc_l = leg_friction_level(tau_hip, ll, leg, P)
         if mode == STICK or mode == STRUT:
             ld = -(hvx * sg - hvy * cg)           # dl/dt = -dhip . u
             ldot[leg] = ld
@@ -565,7 +564,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             Gt[leg] += lam * math.sin(g)
             Gn[leg] -= lam * math.cos(g)
         elif row_kind[rr] == ROW_GEAR:    # holding torque at one motor
-            hold[leg] = lam / (npl * N)
+            hold[leg] = lam / (npl * P[P_N + leg])
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         if mode == STICK or mode == STRUT:

@@ -57,17 +57,17 @@ def test_delivered_torque_function_directions():
         tau0 = k0 * cur
         s = np.sign(cur)
         # motoring: reduced, never reversed
-        tm = actuator.delivered_torque(cur, 50.0 * s, P)
+        tm = actuator.delivered_torque(cur, 50.0 * s, 0, P)
         assert tm == pytest.approx(s * max(abs(tau0) - IDLE, 0.0) / (1 + CLOAD))
         assert abs(tm) <= abs(tau0) and tm * tau0 >= 0.0
         # back-driven: the leg must supply more than the constant-efficiency torque
-        tb = actuator.delivered_torque(cur, -50.0 * s, P)
+        tb = actuator.delivered_torque(cur, -50.0 * s, 0, P)
         assert tb == pytest.approx((tau0 + s * IDLE) / (1 - CLOAD))
         loss = IDLE + CLOAD * abs(tb)
         assert abs(tb) - abs(tau0) == pytest.approx(loss)
     # unpowered, output turning: pure idle friction opposing the motion
-    assert actuator.delivered_torque(0.0, 50.0, P) == pytest.approx(-IDLE / (1 - CLOAD))
-    assert actuator.delivered_torque(0.0, 0.0, P) == 0.0
+    assert actuator.delivered_torque(0.0, 50.0, 0, P) == pytest.approx(-IDLE / (1 - CLOAD))
+    assert actuator.delivered_torque(0.0, 0.0, 0, P) == 0.0
 
 
 def test_losses_reduce_delivered_torque_in_motoring_samples(lossy_run):

@@ -4,8 +4,10 @@
 kinematics from the kinetic and potential energy written down directly from docs/specification.md section 1, 2, 5
 (Lagrange's equations, no shared code). These tests compare them with
 ``scoutsim.model`` (rigid_body, evaluate) for random states (fixed seed), for Model II (gear inertias) and
-Model I (no gears), for the default robot and for a variant with one physical leg per
-virtual leg and a different leg COM distance. They also check the constrained stance
+Model I (no gears), for the default robot, for a variant with one physical leg per
+virtual leg and a different leg COM distance, and for a robot whose back and front legs
+differ in every leg, hip-unit and motor quantity and whose torso COM is ahead of the
+hips' midpoint. They also check the constrained stance
 dynamics (pinned toe) against an independently assembled KKT system and against finite
 differences of the toe's perpendicular velocity along the flow.
 """
@@ -47,7 +49,27 @@ RTOL = 1e-10
 ROBOTS = {
     "default": scoutsim.RobotParameters(),
     "single_leg": scoutsim.RobotParameters(legs_per_virtual_leg=1, leg_com_distance=0.1),
+    "unequal": scoutsim.RobotParameters(
+        com_offset=0.035, leg_mass=(1.0, 0.7), leg_inertia=(0.0052, 0.0031),
+        leg_com_distance=(0.16, 0.12), leg_rest_length=(0.323, 0.31),
+        leg_stiffness=(3520.0, 4100.0), leg_damping=(3.0, 4.5),
+        planetary_ratio=(5.0, 4.2), sprocket_ratio=(20.0, 22.0),
+        drive_gear_inertia=(2.0e-6, 3.1e-6), driven_gear_inertia=(0.012, 0.009),
+        belt_stiffness=(401.0, 350.0), belt_damping=(0.2, 0.35),
+        joint_damping=(4e-5, 7e-5), joint_stiction=(0.02, 0.035)),
 }
+
+
+def _leg(robot, field, leg):
+    """Leg ``leg``'s value of a RobotParameters field (one value or a (back, front) pair)."""
+    v = getattr(robot, field)
+    return v[leg] if isinstance(v, tuple) else v
+
+
+def _hip_offsets(robot):
+    """The hips' positions along the torso axis from the torso COM [m], from the fields."""
+    half = robot.hip_spacing / 2.0
+    return (-half - robot.com_offset, half - robot.com_offset)
 MODELS = ("II", "I")
 N_STATES = 8
 
@@ -192,20 +214,20 @@ def test_potential_energy(robot_name, model):
     prm = _params(robot, model)
     rng = np.random.default_rng(7)
     for q, _ in STATES:
-        l = rng.uniform(0.25, robot.leg_rest_length, 2)
+        l = rng.uniform(0.25, min(robot.per_leg("leg_rest_length")), 2)
         v_sym = sym.potential_energy(q, l, prm)
         v_c = rigid_body.potential_energy(q, l, P)
         assert v_c == pytest.approx(v_sym, rel=RTOL, abs=1e-12)
         # gravity part alone: springs relaxed, belts undeflected
         q0 = q.copy()
         q0[5:7] = q0[3:5]
-        l0 = np.full(2, robot.leg_rest_length)
+        l0 = np.array(robot.per_leg("leg_rest_length"))
         assert rigid_body.potential_energy(q0, l0, P) == pytest.approx(
             sym.potential_energy(q0, l0, prm), rel=RTOL)
     # the spring terms are really present in the comparison
     q = STATES[0][0]
     l_short = np.array([0.28, 0.30])
-    l0 = np.full(2, robot.leg_rest_length)
+    l0 = np.array(robot.per_leg("leg_rest_length"))
     dv = sym.potential_energy(q, l_short, prm) - sym.potential_energy(q, l0, prm)
     assert dv > 1.0
 
@@ -213,7 +235,7 @@ def test_potential_energy(robot_name, model):
 def test_gravity_force_is_gradient_of_potential():
     """-dV/dq by central differences of the tool's potential (checks the tool itself)."""
     prm = _params(ROBOTS["default"], "II")
-    prm0 = dict(prm, k=0.0, k_b=0.0)
+    prm0 = dict(prm, k_b=0.0, k_f=0.0, k_b_b=0.0, k_b_f=0.0)
     eps = 1e-6
     l = np.array([0.3, 0.3])
     for q, _ in STATES[:3]:
@@ -231,8 +253,8 @@ def _flight_state(q, dq, robot):
     s = np.zeros(L.NS)
     s[:7] = q
     s[7:14] = dq
-    s[L.IL_B] = robot.leg_rest_length
-    s[L.IL_F] = robot.leg_rest_length
+    s[L.IL_B] = _leg(robot, "leg_rest_length", 0)
+    s[L.IL_F] = _leg(robot, "leg_rest_length", 1)
     return s
 
 
@@ -307,7 +329,7 @@ def test_flight_dynamics_with_velocity(robot_name, model):
 def _stance_state(robot, model, legs, rng):
     """A state with the toes of ``legs`` exactly on the ground at l = 0.30, other legs in
     flight; returns (s, mi, mf)."""
-    Lh = robot.hip_spacing / 2.0
+    hips = _hip_offsets(robot)
     l_st = 0.30
     q = np.zeros(7)
     double = len(legs) == 2
@@ -320,14 +342,14 @@ def _stance_state(robot, model, legs, rng):
         # angle such that its toe is on the ground at l = 0.30: hip_y - l cos(g) = 0
         q[1] = rng.uniform(0.245, 0.265)
         for leg in legs:
-            hy = q[1] + (-1.0, 1.0)[leg] * Lh * math.sin(q[2])
+            hy = q[1] + hips[leg] * math.sin(q[2])
             g = math.acos(hy / l_st) * rng.choice((-1.0, 1.0))
             q[3 + leg] = g - q[2]
     else:
         # y such that the stance leg's toe is on the ground
         leg = legs[0]
         g = q[2] + q[3 + leg]
-        q[1] = l_st * math.cos(g) - (-1.0, 1.0)[leg] * Lh * math.sin(q[2])
+        q[1] = l_st * math.cos(g) - hips[leg] * math.sin(q[2])
     q[5:7] = q[3:5]
     if model == "II":
         q[5:7] += rng.uniform(-0.05, 0.05, 2)
@@ -336,12 +358,11 @@ def _stance_state(robot, model, legs, rng):
         dq[5:7] = dq[3:5]
     mi = _modes(motor=1)
     mf = np.zeros(L.NMF)
-    l = np.full(2, robot.leg_rest_length)
+    l = np.array([_leg(robot, "leg_rest_length", leg) for leg in range(2)])
     for leg in legs:
         mi[L.MI_CONTACT_B + leg] = L.STICK
-        sg = (-1.0, 1.0)[leg]
         gl = q[2] + q[3 + leg]
-        hx = q[0] + sg * Lh * math.cos(q[2])
+        hx = q[0] + hips[leg] * math.cos(q[2])
         mf[L.MF_ANCHOR_B + leg] = hx + l_st * math.sin(gl)
         l[leg] = l_st
     s = np.concatenate([q, dq, l])
@@ -370,14 +391,15 @@ def _independent_stance_ddq(s, mi, robot, model):
     Q = sym.gravity_force(q, prm) - sym.coriolis(q, dq, prm)
     if model == "II":
         # hip unit forces (docs/specification.md section 5), zero command: belt spring/damper, joint friction
-        Nr = robot.planetary_ratio * robot.sprocket_ratio
         for leg in range(2):
-            tb = robot.belt_stiffness * (q[5 + leg] - q[3 + leg]) \
-                + robot.belt_damping * (dq[5 + leg] - dq[3 + leg])
+            Nr = _leg(robot, "planetary_ratio", leg) * _leg(robot, "sprocket_ratio", leg)
+            tb = _leg(robot, "belt_stiffness", leg) * (q[5 + leg] - q[3 + leg]) \
+                + _leg(robot, "belt_damping", leg) * (dq[5 + leg] - dq[3 + leg])
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
             om = Nr * dq[5 + leg]
-            tf = robot.joint_damping * om + robot.joint_stiction * mi[L.MI_MOTOR_B + leg]
+            tf = _leg(robot, "joint_damping", leg) * om \
+                + _leg(robot, "joint_stiction", leg) * mi[L.MI_MOTOR_B + leg]
             Q[5 + leg] -= npl * Nr * tf
     rows, rhs, ldot, forces = [], [], {}, {}
     for leg in range(2):
@@ -389,8 +411,9 @@ def _independent_stance_ddq(s, mi, robot, model):
         v0 = sym.toe_velocity(q, dq, l[leg], 0.0, prm, leg)
         ld = -v0 @ u                              # pinned toe: v0 + ld u = 0 (axially)
         ldot[leg] = ld
-        F = npl * (robot.leg_stiffness * (robot.leg_rest_length - l[leg])
-                   - robot.leg_damping * ld)
+        F = npl * (_leg(robot, "leg_stiffness", leg) * (_leg(robot, "leg_rest_length", leg)
+                                                         - l[leg])
+                   - _leg(robot, "leg_damping", leg) * ld)
         J = _toe_jacobian(q, l[leg], prm, leg)
         Q += J.T @ (-F * u)
         bias = sym.toe_acceleration(q, dq, np.zeros(7), l[leg], ld, 0.0, prm, leg)
@@ -480,12 +503,13 @@ def _perp_toe_velocity(s, prm, leg):
     return sym.leg_normal(q, leg) @ sym.toe_velocity(q, dq, l[leg], 0.0, prm, leg)
 
 
+@pytest.mark.parametrize("robot_name", ("default", "unequal"))
 @pytest.mark.parametrize("model", ("I", "II"))
-def test_stance_toe_finite_difference(model):
+def test_stance_toe_finite_difference(model, robot_name):
     """Back leg pinned (STICK): the derivative of the toe's perpendicular velocity along the
     flow ds, by central differences of states advanced by +-h ds, vanishes (it equals the
     perpendicular toe acceleration since the toe velocity is zero); the front leg flies."""
-    robot = ROBOTS["default"]
+    robot = ROBOTS[robot_name]
     P = robot_array(robot, model)
     prm = _params(robot, model)
     rng = np.random.default_rng(4242)

@@ -32,6 +32,24 @@ EFFECTS = dict(belt_backlash=math.radians(0.5), leg_friction_force=6.0,
 EFFECTS_ROBOT = RobotParameters(**EFFECTS)
 #: ... and a battery with internal resistance (specification.md section 4)
 BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
+#: A robot whose back and front legs differ in every leg, hip-unit and motor quantity (the
+#: effects beyond the paper's models too), with its torso COM ahead of the hips' midpoint
+#: and a battery with internal resistance: each leg's law must read its own leg's values.
+UNEQUAL_ROBOT = RobotParameters(
+    com_offset=0.03, battery_resistance=0.1,
+    leg_mass=(1.0, 0.8), leg_inertia=(0.0052, 0.004), leg_com_distance=(0.16, 0.14),
+    leg_rest_length=(0.323, 0.31), leg_stiffness=(3520.0, 3900.0), leg_damping=(3.0, 4.0),
+    planetary_ratio=(5.0, 4.6), sprocket_ratio=(20.4, 21.0),
+    gearbox_efficiency=(0.8, 0.75), sprocket_efficiency=(0.816, 0.85),
+    drive_gear_inertia=(2.4e-6, 2.0e-6), driven_gear_inertia=(0.0118, 0.0135),
+    joint_stiction=(0.021, 0.03), joint_damping=(3.5e-5, 5e-5),
+    belt_stiffness=(401.0, 370.0), belt_damping=(0.23, 0.3),
+    torque_constant=(0.0302, 0.028), speed_constant=(0.0302, 0.029),
+    armature_resistance=(0.611, 0.7), current_limit=(12.0, 11.0),
+    belt_backlash=(math.radians(0.5), math.radians(0.8)), leg_friction_force=(6.0, 4.0),
+    leg_friction_side_load_coefficient=(0.05, 0.08),
+    leg_damping_angle_coefficient=(0.5 / math.radians(30.0) ** 2, 0.3 / math.radians(30.0) ** 2),
+    gearbox_idle_loss_torque=(0.3, 0.2), gearbox_load_loss_coefficient=(0.05, 0.07))
 
 #: Factor on the velocities of the slow copy of each sampled state: it puts the motor
 #: speeds into the blending band of the transmission losses (|w_m| < 1 rad/s) and the
@@ -119,18 +137,18 @@ def _regimes(P, mi, cmd, ds, aux):
         out.add("motor speed > 1" if om >= blend else "motor speed < -1" if om <= -blend
                 else "motor speed in blend band")
         i = aux[o + L.A_CURRENT]
-        i_cmd = cmd[leg] / (P[L.P_N] * P[L.P_ETA] * P[L.P_KT])
+        i_cmd = cmd[leg] / (P[L.P_N + leg] * P[L.P_ETA + leg] * P[L.P_KT + leg])
         if abs(om) >= blend and i != 0.0:
             out.add("motoring" if i * om > 0.0 else "back-driven")
-        line = [(sgn * vb - P[L.P_KW] * om) / P[L.P_RA] for sgn in (1.0, -1.0)]
-        if abs(i) == P[L.P_IMAX]:
+        line = [(sgn * vb - P[L.P_KW + leg] * om) / P[L.P_RA + leg] for sgn in (1.0, -1.0)]
+        if abs(i) == P[L.P_IMAX + leg]:
             out.add("current at i_max")
         elif model != L.MODEL_IDEAL and any(abs(i - v) <= 1e-12 * abs(v) for v in line):
             out.add("current on the speed line")
         elif i == i_cmd:
             out.add("current as commanded")
         if model == L.MODEL_II:
-            half_play = 0.5 * P[L.P_BACKLASH]
+            half_play = 0.5 * P[L.P_BACKLASH + leg]
             out.add("belt stretched" if abs(aux[o + L.A_BELT]) > half_play else "belt slack")
     if vb < P[L.P_VB] - 0.5:
         out.add("battery sags")
@@ -181,6 +199,9 @@ CONFIGS = [
     (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="open", clamp_torso=True))),
     (EFFECTS_ROBOT, "I", 0.8, dict(rig=dict(motor_circuit="short", clamp_torso=True,
                                             clamp_legs=True))),
+    (UNEQUAL_ROBOT, "II", 0.8, {}),
+    (UNEQUAL_ROBOT, "I", 0.8, {}),
+    (UNEQUAL_ROBOT, "ideal", 0.8, {}),
 ]
 
 
@@ -196,7 +217,7 @@ def test_evaluate_ws_matches_reference(robot, model, mu, kw):
     P, cases = _cases(robot, model, mu, **kw)
     worst, regimes = _parity(P, cases)
     assert worst < 1.0
-    if robot is EFFECTS_ROBOT and "rig" not in kw:
+    if robot in (EFFECTS_ROBOT, UNEQUAL_ROBOT) and "rig" not in kw:
         assert LEG_REGIMES | MOTOR_REGIMES <= regimes
         if model != "ideal":
             assert "current on the speed line" in regimes
@@ -222,9 +243,10 @@ def _flight_currents(evaluator, P, w, tau):
     back motor at speed w [rad/s] and command tau [N m], the front one at -w and -tau."""
     s = np.zeros(L.NS)
     s[L.IY] = 0.6
-    s[L.IL_B:] = P[L.P_L0]
-    s[L.NQ + L.IPHB] = w / P[L.P_N]
-    s[L.NQ + L.IPHF] = -w / P[L.P_N]
+    s[L.IL_B] = P[L.P_L0 + L.BACK]
+    s[L.IL_F] = P[L.P_L0 + L.FRONT]
+    s[L.NQ + L.IPHB] = w / P[L.P_N + L.BACK]
+    s[L.NQ + L.IPHF] = -w / P[L.P_N + L.FRONT]
     mi = np.zeros(L.NMI, dtype=np.int64)
     ds = np.zeros(L.NS)
     aux = np.zeros(L.NAUX)
@@ -240,7 +262,7 @@ def test_motor_current_is_odd_in_command_and_speed(evaluator):
     (beyond it neither limit lets the other hold) and commands up to beyond the
     current limit (Model I)."""
     P = robot_array(RobotParameters(), "I", friction_coefficient=0.8)
-    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]
+    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]   # (equal legs: the back's)
     for w in np.linspace(-2.0, 2.0, 41) * w_both:
         for tau in (-40.0, -5.0, 0.0, 5.0, 40.0):
             i_plus = _flight_currents(evaluator, P, w, tau)

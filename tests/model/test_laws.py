@@ -148,8 +148,8 @@ def test_motor_current_is_odd_beyond_both_limits():
     w_edge = (vb + ROBOT.armature_resistance * ROBOT.current_limit) / ROBOT.speed_constant
     for w in (0.0, 300.0, 0.9 * w_edge, 1.1 * w_edge, 3.0 * w_edge):
         for tau in (-80.0, -31.0, -5.0, 0.0, 5.0, 31.0, 80.0):
-            i = motor_current(tau, w, vb, P)
-            assert motor_current(-tau, -w, vb, P) == -i
+            i = motor_current(tau, w, vb, 0, P)
+            assert motor_current(-tau, -w, vb, 0, P) == -i
             if w > w_edge:     # the line's current, beyond the limit, whatever the command
                 assert i == pytest.approx((vb - ROBOT.speed_constant * w)
                                           / ROBOT.armature_resistance, rel=1e-12)
