@@ -47,8 +47,10 @@ except ImportError:  # pragma: no cover - message for users without the benchmar
 import scoutsim
 from scoutsim import (BoundingController, ControllerParameters, InitialState, RobotParameters,
                       Sensors, default_initial_state)
-from scoutsim.analysis.gait import (GaitMetrics, Stride, _extrema, _hermite, converged_tail,
-                                    stance_overlap)
+from scoutsim.analysis.gait import GaitMetrics
+from scoutsim.analysis.interpolation import _extrema, _hermite
+from scoutsim.analysis.stances import stance_overlap
+from scoutsim.analysis.strides import Stride, converged_tail
 
 MU = 0.8
 METRICS = ["mean_speed_m_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",

@@ -12,16 +12,22 @@ that moment), listing every file with its size in bytes. A directory whose manif
 still says ``"writing"`` was cut off while it was written; :func:`check_run_directory`
 refuses it. Each file is written under a temporary name (``NAME.partial.SUFFIX``) and
 renamed into place when complete, so no file is ever seen half-written.
+
+:func:`json_safe` makes a value fit for the strict JSON files of a run (summaries, best
+parameters): no NaN or Infinity, no NumPy scalars.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 
+import numpy as np
+
 __all__ = ["MANIFEST", "RunDirectory", "atomic_write", "read_manifest", "check_run_directory",
-           "add_to_manifest", "IncompleteRunError"]
+           "add_to_manifest", "IncompleteRunError", "json_safe"]
 
 #: name of the manifest file
 MANIFEST = "manifest.json"
@@ -51,6 +57,21 @@ def atomic_write(path, write) -> Path:
             pass
         raise
     return path
+
+
+def json_safe(v):
+    """``v`` for strict JSON (no NaN / Infinity): every non-finite float becomes None, NumPy
+    scalars become Python numbers, tuples lists; dicts and lists are converted item by
+    item, anything else is returned as it is."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: json_safe(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [json_safe(x) for x in v]
+    if isinstance(v, (np.floating, np.integer)):
+        return json_safe(v.item())
+    return v
 
 
 def read_manifest(directory) -> dict | None:

@@ -62,8 +62,8 @@ class HybridState:
     Unlike :class:`InitialState` (a physical start in double flight, the rest derived), it
     holds the continuous state and every mode the model carries from one sample to the
     next, so Model II gear angles, legs in stance and the controller's leg states can be
-    set (used by :func:`scoutsim.analysis.orbits.controlled_fixed_point`). Take one from a
-    run with :meth:`SimulationResult.hybrid_state`; a run from it starts at t = 0.
+    set (used by :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`). Take one
+    from a run with :meth:`SimulationResult.hybrid_state`; a run from it starts at t = 0.
 
     A resumed run continues the original to the integration tolerance, not bit for bit: it
     starts from the sample's state and modes but not from the integrator's own state (its

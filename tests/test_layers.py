@@ -37,7 +37,7 @@ CONVENIENCE_ACCESSORS = {
     ("scoutsim.result", "scoutsim.analysis.energy"),          # result.energy_balance()
     ("scoutsim.result", "scoutsim.presentation.plots"),                # result.plot()
     ("scoutsim.analysis.sweep", "scoutsim.presentation.plots"),        # sweep.plot_map()
-    ("scoutsim.analysis.tune", "scoutsim.presentation.plots"),  # tuning.plot_convergence()
+    ("scoutsim.analysis.tune_result", "scoutsim.presentation.plots"),  # tuning.plot_convergence()
     ("scoutsim.identification.fit",
      "scoutsim.presentation.identification_plots"),                    # fit result .plot()
 }

@@ -16,6 +16,12 @@ not start or end a stance.
 Units: seconds, metres, m/s, Hz, degrees for angles in the metrics (the time series are in
 radians), amperes for currents.
 
+The parts have their own modules: :mod:`~scoutsim.analysis.stances` (stance intervals
+from the contact events), :mod:`~scoutsim.analysis.strides` (the :class:`Stride` record,
+the split into strides, the converged tail), :mod:`~scoutsim.analysis.stride_energy`
+(what a stride costs) and :mod:`~scoutsim.analysis.interpolation` (values between
+samples). This module holds the metrics of a whole run and re-exports the public names.
+
 Public API
 ----------
 gait_metrics(result, transient_s=2.0) -> GaitMetrics
@@ -26,17 +32,20 @@ Stride, GaitMetrics, SUMMARY_KEYS, STRIDE_METRICS
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..model import layout as L
+from .stances import _leg, stance_intervals, stance_overlap
+from .stride_energy import _input_and_weight, stride_energy
+from .strides import (STRIDE_ENERGY_METRICS, STRIDE_METRICS, Stride, _json_float, _strides,
+                      converged_tail)
 
 __all__ = ["gait_metrics", "stance_intervals", "stride_table", "stride_energy", "Stride",
            "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_ENERGY_KEYS",
-           "STRIDE_METRICS", "STRIDE_ENERGY_METRICS"]
+           "STRIDE_METRICS", "STRIDE_ENERGY_METRICS", "stance_overlap", "converged_tail"]
 
 #: Keys that :meth:`GaitMetrics.summary` returns first, in this order.
 SUMMARY_KEYS = ("outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
@@ -54,36 +63,9 @@ SUMMARY_ENERGY_KEYS = ("electrical_energy_j", "copper_loss_j", "transmission_los
                        "mechanical_energy_change_j", "energy_residual_j",
                        "energy_relative_residual", "mean_electrical_power_w",
                        "cost_of_transport")
-#: Per-stride numeric metrics that are averaged over the steady strides.
-STRIDE_METRICS = ("period_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
-                  "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m",
-                  "mean_speed_m_s")
-
-#: Per-stride energy fields of :class:`Stride` (None without the energy accounting).
-STRIDE_ENERGY_METRICS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
-                         "hip_work_j", "friction_loss_j", "impact_loss_j",
-                         "mechanical_energy_change_j", "energy_residual_j", "distance_m",
-                         "mean_electrical_power_w", "cost_of_transport")
 
 #: Current mismatch [A] above which the amplifier/motor limit counts as active.
 SATURATION_TOLERANCE_A = 1e-6
-
-_LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
-
-
-def _leg(leg) -> int:
-    try:
-        return _LEGS[leg]
-    except (KeyError, TypeError):
-        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
-
-
-def _json_float(v):
-    """float(v), or None if v is None, NaN or infinite (JSON has no NaN/inf)."""
-    if v is None:
-        return None
-    v = float(v)
-    return v if math.isfinite(v) else None
 
 
 def _json_number(v):
@@ -94,348 +76,6 @@ def _json_number(v):
     return v
 
 
-def _events(result) -> np.ndarray:
-    ev = np.asarray(result.events, dtype=float)
-    if ev.size == 0:
-        return np.zeros((0, L.NEVREC))
-    return ev.reshape(-1, ev.shape[-1])
-
-
-# -----------------------------------------------------------------------------------------
-# interpolation
-# -----------------------------------------------------------------------------------------
-def _hermite(t, y, dy, te):
-    """Cubic Hermite interpolation of samples ``y`` with derivatives ``dy`` at times ``te``.
-
-    Parameters
-    ----------
-    t : (n,) array
-        Sample times [s], non-decreasing.
-    y, dy : (n,) arrays
-        Values and their time derivatives at the samples.
-    te : float or array
-        Query times [s]; clamped to [t[0], t[-1]].
-
-    Returns
-    -------
-    ndarray
-        Interpolated values, same shape as ``te``. For a smooth signal sampled at 1 kHz the
-        error is O(h^4) (about 1e-12 m for the torso position of a bounding run).
-    """
-    t = np.asarray(t, dtype=float)
-    y = np.asarray(y, dtype=float)
-    dy = np.asarray(dy, dtype=float)
-    te = np.asarray(te, dtype=float)
-    n = t.shape[0]
-    if n == 0:
-        return np.full(te.shape, np.nan)
-    if n == 1:
-        return np.full(te.shape, y[0])
-    tc = np.clip(te, t[0], t[-1])
-    i = np.clip(np.searchsorted(t, tc, side="right") - 1, 0, n - 2)
-    h = t[i + 1] - t[i]
-    ok = h > 0.0
-    hs = np.where(ok, h, 1.0)
-    s = np.where(ok, (tc - t[i]) / hs, 0.0)
-    s2 = s * s
-    s3 = s2 * s
-    h00 = 2 * s3 - 3 * s2 + 1
-    h10 = s3 - 2 * s2 + s
-    h01 = -2 * s3 + 3 * s2
-    h11 = s3 - s2
-    out = h00 * y[i] + h10 * hs * dy[i] + h01 * y[i + 1] + h11 * hs * dy[i + 1]
-    # a zero-length interval (duplicate sample time): take the later sample
-    return np.where(ok, out, y[np.minimum(i + 1, n - 1)])
-
-
-def _velocity(result, index):
-    return np.asarray(result.state, dtype=float)[:, L.NQ + index]
-
-
-# -----------------------------------------------------------------------------------------
-# stances
-# -----------------------------------------------------------------------------------------
-def stance_intervals(result, leg) -> np.ndarray:
-    """Stance intervals of one virtual leg from the plant's contact events.
-
-    A stance starts at a ``"touchdown"`` event and ends at the next ``"liftoff"`` event of
-    the same leg (continuous-time event times; docs/specification.md section 8). A ``"slide_start"`` or any other
-    event does not end a stance. A stance still open at the end of the data ends at
-    ``result.t_end``. If the first contact event of the leg is a lift-off, the leg started
-    the run on the ground and that stance starts at the first sample time ``result.t[0]``.
-
-    Parameters
-    ----------
-    result : SimulationResult
-    leg : {"back", "front", 0, 1}
-
-    Returns
-    -------
-    (k, 2) ndarray
-        Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
-    """
-    li = _leg(leg)
-    ev = _events(result)
-    m = (ev[:, 2] == li) & np.isin(ev[:, 1], (L.EK_TOUCHDOWN, L.EK_LIFTOFF))
-    sel = ev[m]
-    sel = sel[np.argsort(sel[:, 0], kind="stable")]
-    t0 = float(result.t[0]) if len(result.t) else 0.0
-    out = []
-    start = None
-    for i, row in enumerate(sel):
-        kind = int(row[1])
-        if kind == L.EK_TOUCHDOWN:
-            if start is None:
-                start = float(row[0])
-        else:  # lift-off
-            if start is not None:
-                out.append((start, float(row[0])))
-                start = None
-            elif i == 0:
-                out.append((t0, float(row[0])))
-    if start is not None:
-        out.append((start, max(float(result.t_end), start)))
-    return np.array(out, dtype=float).reshape(-1, 2)
-
-
-def stance_overlap(intervals: np.ndarray, a: float, b: float) -> float:
-    """Total length [s] of the intersection of ``intervals`` with [a, b]."""
-    if intervals.shape[0] == 0 or b <= a:
-        return 0.0
-    lo = np.maximum(intervals[:, 0], a)
-    hi = np.minimum(intervals[:, 1], b)
-    return float(np.sum(np.clip(hi - lo, 0.0, None)))
-
-
-# -----------------------------------------------------------------------------------------
-# strides
-# -----------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Stride:
-    """Metrics of one stride, back-leg lift-off to the next (docs/specification.md section 8; paper Sec. IV).
-
-    Supports attribute access (``s.period_s``) and mapping access (``s["period_s"]``,
-    ``dict(s)``).
-
-    Attributes
-    ----------
-    index : int
-        Stride number, 0 for the stride starting at the first back-leg lift-off.
-    t_start, t_end : float
-        Back-leg lift-off times bounding the stride [s].
-    period_s : float
-        t_end - t_start [s].
-    stride_frequency_hz : float
-        1 / period_s [Hz] (paper's omega_s).
-    duty_factor_back, duty_factor_front : float
-        Stance time of that virtual leg inside [t_start, t_end] divided by the period [-]
-        (paper's beta), from the continuous-time touchdown / lift-off events.
-    pitch_max_deg, pitch_min_deg : float
-        Extremes of the torso pitch over the samples inside the stride and the two
-        endpoints (interpolated) [deg], nose up positive.
-    height_max_m, height_min_m : float
-        Extremes of the torso COM height, likewise [m].
-    mean_speed_m_s : float
-        (x(t_end) - x(t_start)) / period [m/s], x at the event times by cubic Hermite
-        interpolation of the sampled position and forward speed.
-    steady : bool
-        The stride starts at or after the transient and ends before the data end.
-
-    The energy of the stride (None unless the run accounted for its energy,
-    ``simulate(energy=True)``) is taken between the control samples nearest to its two
-    back-leg lift-offs (``energy_t_start``, ``energy_t_end`` [s]; consecutive strides share
-    their boundary sample, so the strides' energies add up to the energy over their
-    samples), both virtual legs and every motor of each together:
-
-    electrical_energy_j : float
-        Electrical energy into the motor terminals [J] (docs/model.md "Work-energy balance").
-    copper_loss_j, transmission_loss_j : float
-        Motor copper losses R_A i^2; transmission losses (the paper's constant efficiency,
-        signed, and the optional load-dependent losses) [J]. With the hip work they make up
-        the electrical energy.
-    hip_work_j : float
-        Work of the delivered hip torques on the legs [J].
-    friction_loss_j : float
-        Every friction and damper of the mechanism: motor joint, belt damper, leg damper
-        and sliding joint, sliding toes [J].
-    impact_loss_j : float
-        Kinetic energy lost in the touchdown impacts in [energy_t_start, energy_t_end) [J].
-    mechanical_energy_change_j : float
-        Change of the mechanical energy (kinetic, gravity, leg and belt springs) [J].
-    energy_residual_j : float
-        hip_work - friction - constraint work - impacts - mechanical change [J]: the
-        integration error of the stride's mechanical balance.
-    distance_m : float
-        x at energy_t_end less x at energy_t_start [m].
-    mean_electrical_power_w : float
-        electrical_energy_j over the time between the two samples [W] (Model I / II).
-    cost_of_transport : float
-        The balance's input (electrical energy for Model I / II, hip work for the ideal
-        actuator) over m g distance_m, m the robot's total mass [-].
-    """
-
-    index: int
-    t_start: float
-    t_end: float
-    period_s: float
-    stride_frequency_hz: float
-    duty_factor_back: float
-    duty_factor_front: float
-    pitch_max_deg: float
-    pitch_min_deg: float
-    height_max_m: float
-    height_min_m: float
-    mean_speed_m_s: float
-    steady: bool
-    energy_t_start: float | None = None
-    energy_t_end: float | None = None
-    electrical_energy_j: float | None = None
-    copper_loss_j: float | None = None
-    transmission_loss_j: float | None = None
-    hip_work_j: float | None = None
-    friction_loss_j: float | None = None
-    impact_loss_j: float | None = None
-    mechanical_energy_change_j: float | None = None
-    energy_residual_j: float | None = None
-    distance_m: float | None = None
-    mean_electrical_power_w: float | None = None
-    cost_of_transport: float | None = None
-
-    def to_dict(self) -> dict:
-        """JSON-safe dict (plain int / float / bool; NaN or inf become None)."""
-        d = {}
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if f.name == "index":
-                d[f.name] = int(v)
-            elif f.name == "steady":
-                d[f.name] = bool(v)
-            else:
-                d[f.name] = _json_float(v)
-        return d
-
-    # mapping protocol, so that a stride also behaves like the dict it describes
-    def keys(self):
-        return [f.name for f in fields(self)]
-
-    def __getitem__(self, key):
-        if key not in self.keys():
-            raise KeyError(key)
-        return getattr(self, key)
-
-
-def _extrema(t, y, dy, a, b):
-    """(max, min) of samples of y strictly inside (a, b) plus y(a), y(b) interpolated."""
-    ends = _hermite(t, y, dy, np.array([a, b]))
-    i0 = np.searchsorted(t, a, side="right")
-    i1 = np.searchsorted(t, b, side="left")
-    vals = np.concatenate([ends, y[i0:i1]])
-    return float(np.max(vals)), float(np.min(vals))
-
-
-def _strides(result, transient_s, stances):
-    t = np.asarray(result.t, dtype=float)
-    lo = np.sort(result.event_times("liftoff", "back").astype(float))
-    if len(lo) < 2 or len(t) == 0:
-        return []
-    x = np.asarray(result.x, dtype=float)
-    dx = _velocity(result, L.IX)
-    th = np.asarray(result.pitch, dtype=float)
-    dth = _velocity(result, L.ITH)
-    hy = np.asarray(result.height, dtype=float)
-    dhy = _velocity(result, L.IY)
-    t_end_run = float(result.t_end)
-    xs = _hermite(t, x, dx, lo)
-    cumulative = {}
-    out = []
-    for k in range(len(lo) - 1):
-        a, b = float(lo[k]), float(lo[k + 1])
-        period = b - a
-        if not period > 0.0:
-            continue  # duplicate event time: not a stride
-        pmax, pmin = _extrema(t, th, dth, a, b)
-        hmax, hmin = _extrema(t, hy, dhy, a, b)
-        out.append(Stride(
-            index=len(out), t_start=a, t_end=b, period_s=period,
-            stride_frequency_hz=1.0 / period,
-            duty_factor_back=stance_overlap(stances[0], a, b) / period,
-            duty_factor_front=stance_overlap(stances[1], a, b) / period,
-            pitch_max_deg=math.degrees(pmax), pitch_min_deg=math.degrees(pmin),
-            height_max_m=hmax, height_min_m=hmin,
-            mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
-            steady=bool(a >= transient_s and b <= t_end_run),
-            **stride_energy(result, a, b, cumulative)))
-    return out
-
-
-def _input_and_weight(result):
-    """(the balance's input flow, m g [N]) of the run: "electrical" for Model I / II,
-    "hip_work" for the ideal actuator; (None, None) for the passive model or without the
-    robot in the provenance."""
-    prov = result.provenance or {}
-    robot = prov.get("robot")
-    model = prov.get("model")
-    if not robot or model not in ("I", "II", "ideal"):
-        return None, None
-    from ..parameters import RobotParameters
-    params = RobotParameters(**robot)
-    return ("electrical" if model in ("I", "II") else "hip_work",
-            params.total_mass * params.gravity)
-
-
-def _nearest_sample(t, te: float) -> int:
-    i = int(np.searchsorted(t, te))
-    if i >= len(t):
-        return len(t) - 1
-    if i > 0 and te - t[i - 1] <= t[i] - te:
-        return i - 1
-    return i
-
-
-def stride_energy(result, a: float, b: float, cumulative: dict | None = None) -> dict:
-    """The energy fields of :class:`Stride` for the stride from ``a`` to ``b`` [s] (the
-    run's samples nearest to them); {} if the run has no ``energy_series``.
-    ``cumulative``: a dict in which the run's cumulative energies by destination
-    (``result.cumulative_energy``) are kept from one stride to the next."""
-    if getattr(result, "energy_series", None) is None or len(result.t) < 2:
-        return {}
-    t = np.asarray(result.t, dtype=float)
-    i, j = _nearest_sample(t, a), _nearest_sample(t, b)
-    if j <= i:
-        return {}
-    cumulative = {} if cumulative is None else cumulative
-
-    def delta(name):
-        if name not in cumulative:
-            cumulative[name] = result.cumulative_energy(name)
-        return float(cumulative[name][j] - cumulative[name][i])
-
-    imp = result.impacts()
-    impacts = float(imp[(imp[:, 0] >= t[i]) & (imp[:, 0] < t[j]), 4].sum())
-    mech = float(result.energy[j] - result.energy[i])
-    hip = delta("hip_work")
-    friction = delta("friction")
-    distance = float(result.x[j] - result.x[i])
-    input_name, weight = _input_and_weight(result)
-    electrical = input_name == "electrical"
-    out = {"energy_t_start": float(t[i]), "energy_t_end": float(t[j]),
-           "electrical_energy_j": delta("electrical") if electrical else None,
-           "copper_loss_j": delta("copper") if electrical else None,
-           "transmission_loss_j": delta("transmission") if electrical else None,
-           "hip_work_j": hip, "friction_loss_j": friction, "impact_loss_j": impacts,
-           "mechanical_energy_change_j": mech,
-           "energy_residual_j": hip - friction - delta("constraint") - impacts - mech,
-           "distance_m": distance}
-    out["mean_electrical_power_w"] = (out["electrical_energy_j"] / float(t[j] - t[i])
-                                      if electrical else None)
-    out["cost_of_transport"] = (delta(input_name) / (weight * distance)
-                                if input_name is not None and distance > 0 else None)
-    return out
-
-
-# -----------------------------------------------------------------------------------------
-# the metrics object
-# -----------------------------------------------------------------------------------------
 @dataclass
 class GaitMetrics:
     """Strides and steady-state gait metrics of one run (docs/specification.md section 8; paper Sec. IV, Fig. 12).
@@ -710,24 +350,6 @@ class GaitMetrics:
                 "means": {k: _json_float(v) for k, v in self.means.items()},
                 "stride_period_cv": _json_float(self.stride_period_cv),
                 "strides": [s.to_dict() for s in self.strides]}
-
-
-def converged_tail(strides, tol):
-    """Keep ``steady`` only for the contiguous final run of candidate strides whose period
-    lies within ``tol`` (relative) of the median period of the last seven candidates: the
-    gait has converged there. Earlier strides are transient however late they start."""
-    cand = [i for i, st in enumerate(strides) if st.steady]
-    if not cand:
-        return strides
-    ref = float(np.median([strides[i].period_s for i in cand[-7:]]))
-    first = len(strides)
-    for i in reversed(cand):
-        if abs(strides[i].period_s - ref) <= tol * ref and (first == len(strides) or i == first - 1):
-            first = i
-        else:
-            break
-    return [dataclasses.replace(st, steady=(i >= first and st.steady))
-            for i, st in enumerate(strides)]
 
 
 def gait_metrics(result, transient_s: float = 2.0, period_tolerance: float = 0.05) -> GaitMetrics:

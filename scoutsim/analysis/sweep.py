@@ -86,7 +86,7 @@ def point_key(point: dict, settings: dict) -> str:
 
 
 #: columns added by ``orbit=True``: the controlled orbit at the point (Newton from the run's
-#: last strides, :func:`scoutsim.analysis.orbits.controlled_fixed_point`)
+#: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`)
 ORBIT_COLUMNS = ("orbit_period_s", "orbit_spectral_radius", "orbit_stable", "orbit_residual",
                  "orbit_status")
 #: integrator and tolerance of the per-point orbit (looser than the single-orbit default,
@@ -97,7 +97,8 @@ ORBIT_TOL = 1e-7
 
 def _orbit_columns(result, robot, ctrl, task) -> dict:
     from ..integrator import IntegratorSettings
-    from .orbits import MapError, controlled_fixed_point
+    from .controlled_orbit import controlled_fixed_point
+    from .poincare import MapError
     out = {k: None for k in ORBIT_COLUMNS}
     try:
         o = controlled_fixed_point(result, model=task["model"],

@@ -18,6 +18,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+from ..run_directory import json_safe
 
 _IMPORTED_AT = time.perf_counter()
 
@@ -415,17 +416,6 @@ def out_dir(path) -> Path:
     except OSError as exc:
         raise UsageError(f"cannot create output directory '{out}': {exc.strerror or exc}") from None
     return out
-
-
-def json_safe(v):
-    """Replace non-finite floats by None (strict JSON has no NaN / Infinity)."""
-    if isinstance(v, float):
-        return v if math.isfinite(v) else None
-    if isinstance(v, dict):
-        return {k: json_safe(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [json_safe(x) for x in v]
-    return v
 
 
 def dumps(obj) -> str:

@@ -52,7 +52,9 @@ def register(sub, common) -> None:
 
 
 def execute(args) -> int:
-    from ..analysis.orbits import MapError, controlled_fixed_point, passive_bounding_orbit
+    from ..analysis.controlled_orbit import controlled_fixed_point
+    from ..analysis.passive_orbits import passive_bounding_orbit
+    from ..analysis.poincare import MapError
     try:
         if args.passive:
             orb = passive_bounding_orbit(args.speed, args.apex_height,

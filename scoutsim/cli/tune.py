@@ -116,8 +116,10 @@ def _starts(args, robot, model):
 def execute(args) -> int:
     from ..analysis.parallel import SchedulerUnreachableError
     from ..analysis.sweep import read_checkpoint
-    from ..analysis.tune import (EVALUATIONS, EvaluationNotRunError, MissingDependencyError,
-                                 parse_parameter, tune)
+    from ..analysis.tune import TuneGoal, TuneRuns, TuneSearch, tune
+    from ..analysis.tune_evaluation import EvaluationNotRunError
+    from ..analysis.tune_optimizer import EVALUATIONS, MissingDependencyError
+    from ..analysis.tune_parameters import parse_parameter
     from ..simulation import warm_up
     if not args.param:
         raise UsageError("give at least one --param NAME[=LOW:HIGH] to tune")
@@ -155,14 +157,16 @@ def execute(args) -> int:
     wall0 = time.perf_counter()
     try:
         with usage_errors(ValueError, SchedulerUnreachableError, MissingDependencyError):
-            res = tune(params, objective=args.objective, target=args.target,
-                       budget=args.budget, models=args.model, floors=floors, starts=starts,
-                       aggregate=args.aggregate, duration=args.duration, robot=robot,
-                       controller=controller,
-                       max_belt_deflection=(None if args.max_belt_deflection is None
-                                            else math.radians(args.max_belt_deflection)),
-                       max_current=args.max_current, min_speed=args.min_speed,
-                       seed=args.seed, sigma=args.sigma, population=args.population,
+            goal = TuneGoal(objective=args.objective, target=args.target,
+                            aggregate=args.aggregate,
+                            max_belt_deflection=(None if args.max_belt_deflection is None
+                                                 else math.radians(args.max_belt_deflection)),
+                            max_current=args.max_current, min_speed=args.min_speed)
+            runs = TuneRuns(models=args.model, floors=floors, starts=starts,
+                            duration=args.duration, robot=robot, controller=controller)
+            search = TuneSearch(budget=args.budget, seed=args.seed, sigma=args.sigma,
+                                population=args.population)
+            res = tune(params, goal=goal, runs=runs, search=search,
                        out=out, workers=args.workers, scheduler=args.scheduler,
                        progress=show_progress(args), resume=not args.no_resume,
                        command=" ".join(["scoutsim"] + sys.argv[1:]))

@@ -18,7 +18,7 @@ instead of the simulator's continuous-time events:
   ``period_tolerance`` of the median period of the last seven candidates (as in
   :func:`scoutsim.analysis.gait.gait_metrics`).
 
-The results are :class:`scoutsim.analysis.gait.Stride` objects, so the metric names match.
+The results are :class:`scoutsim.analysis.strides.Stride` objects, so the metric names match.
 
 :func:`log_strides` accepts any log (a model that fell has few strides or none, which the
 comparison reports). :func:`experiment_strides`, used for the experiment logs of the
@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.gait import STRIDE_METRICS, Stride, converged_tail, stance_overlap
+from ..analysis.stances import stance_overlap
+from ..analysis.strides import STRIDE_METRICS, Stride, converged_tail
 from .logs import LogError
 from .sensors import EDGE_S
 

@@ -9,7 +9,8 @@ import pytest
 
 import scoutsim
 from scoutsim import SimulationResult
-from scoutsim.analysis.gait import gait_metrics, stance_intervals, stride_table
+from scoutsim.analysis.gait import gait_metrics, stride_table
+from scoutsim.analysis.stances import stance_intervals
 from scoutsim.model import layout as L
 
 DT = 1e-3

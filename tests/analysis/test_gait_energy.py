@@ -1,4 +1,4 @@
-"""What a gait costs (scoutsim.analysis.gait per-stride energy and summary, the energy
+"""What a gait costs (scoutsim.analysis.stride_energy per stride, the gait summary, the energy
 accessors of scoutsim.result): the cumulative energy of every flow at every sample, the power
 series, the energy of each stride and the cost of transport.
 

@@ -1,4 +1,5 @@
-"""Periodic orbits of the passive model and the controlled cycle (scoutsim.analysis.orbits)."""
+"""Periodic orbits of the passive model and the controlled cycle (scoutsim.analysis.orbits
+and the modules it re-exports)."""
 
 import json
 import math
@@ -8,6 +9,7 @@ import pytest
 
 import scoutsim
 from scoutsim.analysis import orbits as O
+from scoutsim.analysis import passive_reference, stride_map
 from scoutsim.cli import main
 from scoutsim.integrator import IntegratorSettings
 from scoutsim.state import InitialState
@@ -51,7 +53,7 @@ def test_apex_map_agrees_with_simulate(orbit50):
                           InitialState(y=z[0], theta=0.0, dx=z[2], dy=0.0, dtheta=z[3]),
                           0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
                           passive_touchdown_angles=orbit50.touchdown_angles)
-    assert not O._glitched(r.events)
+    assert not passive_reference._glitched(r.events)
     t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
     k = int(np.searchsorted(r.t, t_lo, side="right"))
     s = r.state[k]
@@ -134,7 +136,7 @@ def test_controlled_orbit_is_where_the_simulation_converges(controlled, long_run
     te = r.event_times("controller_liftoff", "back")
     k = np.round(te / dt).astype(int)
     assert np.all(np.round(np.diff(te[-20:]) / dt) * dt == pytest.approx(controlled.period))
-    dist = np.array([np.max(np.abs(O._z_of(r.hybrid_state(int(kk))) - controlled.z))
+    dist = np.array([np.max(np.abs(stride_map._z_of(r.hybrid_state(int(kk))) - controlled.z))
                      for kk in k[-30:]])
     assert dist[-1] < 1e-3
     assert dist[-1] < 0.2 * dist[0]

@@ -15,6 +15,7 @@ pytest.importorskip("cmaes")
 
 import scoutsim  # noqa: E402
 from scoutsim.analysis import tune as T  # noqa: E402
+from scoutsim.analysis import tune_evaluation as E  # noqa: E402
 from scoutsim.analysis.controller_file import (read_controller_file,  # noqa: E402
                                                write_controller_file)
 from scoutsim.parameters import ControllerParameters, ParameterError  # noqa: E402
@@ -37,7 +38,7 @@ def test_cma_es_finds_the_minimum_of_a_known_bowl(monkeypatch):
         return {"score": d, "objective": d, "feasible": True, "violations": "",
                 "outcome": "completed"}
 
-    monkeypatch.setattr(T, "_scenario_row", bowl)
+    monkeypatch.setattr(E, "_scenario_row", bowl)
     res = T.tune(ANGLES, target=1.3, budget=240, workers=1, seed=3)
     assert res.best["controller.touchdown_angle_front_deg"] == pytest.approx(22.5, abs=1e-3)
     assert res.best["controller.touchdown_angle_back_deg"] == pytest.approx(17.25, abs=1e-3)
@@ -186,6 +187,19 @@ def test_a_parameter_given_twice_and_a_budget_below_one_generation_are_refused()
         T.tune(ANGLES, objective="stability", controller="pitch-feedback")
 
 
+def test_the_settings_bundles_take_the_same_keywords_as_tune():
+    """tune(names, target=..., budget=...) sets the fields of TuneGoal / TuneSearch; a
+    keyword that is no field is refused, naming it."""
+    goal, runs, search = T._bundles(T.TuneGoal(objective="cot"), None, None,
+                                    {"budget": 8, "models": ["I"], "min_speed": 1.0})
+    assert goal == T.TuneGoal(objective="cot", min_speed=1.0)
+    assert runs == T.TuneRuns(models=["I"]) and search == T.TuneSearch(budget=8)
+    with pytest.raises(ValueError, match="budget = 3"):
+        T.tune(ANGLES, goal=T.TuneGoal(target=1.3), search=T.TuneSearch(budget=3))
+    with pytest.raises(TypeError, match="budgett"):
+        T.tune(ANGLES, target=1.3, budgett=8)
+
+
 def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
     """The score orders what CMA-ES compares: feasible < constraint broken < fell, and a
     later fall before an earlier one."""
@@ -198,7 +212,7 @@ def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
     def score(front_deg, back_deg, duration=4.0):
         c = ControllerParameters().replace(touchdown_angle_front=math.radians(front_deg),
                                            touchdown_angle_back=math.radians(back_deg))
-        return T._scenario_row(task | {"duration": duration}, scen, robot, c, None)
+        return E._scenario_row(task | {"duration": duration}, scen, robot, c, None)
 
     steady = score(21, 19)
     short = score(21, 19, duration=2.5)          # no steady strides yet: not steady
@@ -259,7 +273,7 @@ def test_stability_objective_is_the_spectral_radius_of_the_orbit():
                      "max_belt_deflection": None, "max_current": None, "min_speed": None},
             "duration": 6.0, "controller": {"kind": "table-i"}}
     scen = {"model": "II", "friction": 1.0, "initial_state": None}
-    row = T._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(),
+    row = E._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(),
                           None)
     # the Table I bound is a stable orbit (docs/orbits.md): radius below 1
     assert row["feasible"] and 0 < row["spectral_radius"] < 1

@@ -1,5 +1,6 @@
 """The compiled simulator on periodic passive bounding orbits (found by
-scoutsim.analysis.orbits with an independent SciPy integration of the stance phases)."""
+scoutsim.analysis.passive_orbits on the independent SciPy formulation of the passive model,
+scoutsim.analysis.passive_reference)."""
 
 import math
 
@@ -8,7 +9,8 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState, IntegratorSettings
-from scoutsim.analysis.orbits import passive_bounding_orbit, passive_robot
+from scoutsim.analysis.passive_orbits import passive_bounding_orbit
+from scoutsim.analysis.passive_reference import passive_robot
 from scoutsim.model import layout as L
 
 TIGHT = IntegratorSettings(rtol=1e-11, atol=1e-11)

@@ -226,7 +226,8 @@ def test_a_toe_stub_becomes_a_slide_that_loads_the_leg():
 
 
 def test_transition_invariants_hold_for_the_massless_passive_model():
-    from scoutsim.analysis.orbits import passive_bounding_orbit, passive_robot
+    from scoutsim.analysis.passive_orbits import passive_bounding_orbit
+    from scoutsim.analysis.passive_reference import passive_robot
     orb = passive_bounding_orbit(1.3, 0.35, math.radians(50.0))
     z = orb.z
     r = scoutsim.simulate(passive_robot(), None,
@@ -263,7 +264,8 @@ def test_simultaneous_touchdowns_are_decided_alike_whatever_rounding_does(eps):
     """A pronk's two touchdowns and lift-offs are simultaneous; perturbing the start at
     rounding level (either sign) decides which one is found first, and must change nothing
     beyond rounding (on another CPU a tie once decided it differently)."""
-    from scoutsim.analysis.orbits import passive_apex_map, passive_bounding_orbit, passive_robot
+    from scoutsim.analysis.passive_orbits import passive_bounding_orbit
+    from scoutsim.analysis.passive_reference import passive_apex_map, passive_robot
     pronk = passive_bounding_orbit(1.3, 0.35, 0.0)
     z = np.array(pronk.z) + np.array([0.0, eps, 0.0, eps])
     m = passive_apex_map(z, pronk.touchdown_angles)

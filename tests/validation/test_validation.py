@@ -140,7 +140,7 @@ def test_steady_model_is_compared_with_every_experimental_stride(sim, sim_log):
     # stride with that one value: the paper's comparison, errors = the experiment's scatter
     # about the model value
     run = _run("II", sim, sim_log)
-    from scoutsim.analysis.gait import Stride
+    from scoutsim.analysis.strides import Stride
     from scoutsim.validation.strides import LogGait
     exp = log_strides(sim_log).steady_strides
     for metric in ERROR_METRICS:

@@ -1,0 +1,81 @@
+"""What one stride costs: the energy flows of a run (``simulate(energy=True)``) between
+the control samples nearest to the stride's two back-leg lift-offs (docs/model.md
+"Work-energy balance").
+
+Energies in J (electrical energy into the motor terminals, copper and transmission losses,
+hip work, friction and dampers, touchdown impacts, change of mechanical energy, the
+balance's residual), distance in m, power in W, the cost of transport dimensionless.
+Consecutive strides share their boundary sample, so the strides' energies add up to the
+energy over their samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["stride_energy"]
+
+
+def _input_and_weight(result):
+    """(the balance's input flow, m g [N]) of the run: "electrical" for Model I / II,
+    "hip_work" for the ideal actuator; (None, None) for the passive model or without the
+    robot in the provenance."""
+    prov = result.provenance or {}
+    robot = prov.get("robot")
+    model = prov.get("model")
+    if not robot or model not in ("I", "II", "ideal"):
+        return None, None
+    from ..parameters import RobotParameters
+    params = RobotParameters(**robot)
+    return ("electrical" if model in ("I", "II") else "hip_work",
+            params.total_mass * params.gravity)
+
+
+def _nearest_sample(t, te: float) -> int:
+    i = int(np.searchsorted(t, te))
+    if i >= len(t):
+        return len(t) - 1
+    if i > 0 and te - t[i - 1] <= t[i] - te:
+        return i - 1
+    return i
+
+
+def stride_energy(result, a: float, b: float, cumulative: dict | None = None) -> dict:
+    """The energy fields of :class:`Stride` for the stride from ``a`` to ``b`` [s] (the
+    run's samples nearest to them); {} if the run has no ``energy_series``.
+    ``cumulative``: a dict in which the run's cumulative energies by destination
+    (``result.cumulative_energy``) are kept from one stride to the next."""
+    if getattr(result, "energy_series", None) is None or len(result.t) < 2:
+        return {}
+    t = np.asarray(result.t, dtype=float)
+    i, j = _nearest_sample(t, a), _nearest_sample(t, b)
+    if j <= i:
+        return {}
+    cumulative = {} if cumulative is None else cumulative
+
+    def delta(name):
+        if name not in cumulative:
+            cumulative[name] = result.cumulative_energy(name)
+        return float(cumulative[name][j] - cumulative[name][i])
+
+    imp = result.impacts()
+    impacts = float(imp[(imp[:, 0] >= t[i]) & (imp[:, 0] < t[j]), 4].sum())
+    mech = float(result.energy[j] - result.energy[i])
+    hip = delta("hip_work")
+    friction = delta("friction")
+    distance = float(result.x[j] - result.x[i])
+    input_name, weight = _input_and_weight(result)
+    electrical = input_name == "electrical"
+    out = {"energy_t_start": float(t[i]), "energy_t_end": float(t[j]),
+           "electrical_energy_j": delta("electrical") if electrical else None,
+           "copper_loss_j": delta("copper") if electrical else None,
+           "transmission_loss_j": delta("transmission") if electrical else None,
+           "hip_work_j": hip, "friction_loss_j": friction, "impact_loss_j": impacts,
+           "mechanical_energy_change_j": mech,
+           "energy_residual_j": hip - friction - delta("constraint") - impacts - mech,
+           "distance_m": distance}
+    out["mean_electrical_power_w"] = (out["electrical_energy_j"] / float(t[j] - t[i])
+                                      if electrical else None)
+    out["cost_of_transport"] = (delta(input_name) / (weight * distance)
+                                if input_name is not None and distance > 0 else None)
+    return out

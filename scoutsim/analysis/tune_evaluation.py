@@ -1,0 +1,181 @@
+"""One evaluation of a tuning (:mod:`scoutsim.analysis.tune`): every scenario run at a
+candidate and scored; what the optimiser sees.
+
+Each scenario is a run of the candidate robot and controller (``simulate``; the energy
+accounting on for the ``"cot"`` objective), scored by :func:`_scenario_row` as the tune
+module's docstring states: the objective over the steady strides (``"speed"``:
+``|v - target|`` [m/s]; ``"max-speed"``: ``-v`` [m/s]; ``"cot"``: cost of transport [-];
+``"stability"``: spectral radius [-] of the stride map at the run's periodic orbit) if
+every constraint holds, else :data:`PENALTY` times the number and relative excess of the
+broken ones (belt deflection [rad, shown in deg], motor current [A], steady speed [m/s],
+steady bounding), and ten times :data:`PENALTY` for a fall, less for a later one.
+:func:`tune_task` (run in a worker process or on a Dask worker) scores every scenario and
+keeps the worst, or the mean (``aggregate``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..parameters import validate_parameters
+from .sweep import _orbit_columns
+from .tune_parameters import _apply
+
+__all__ = ["tune_task", "OBJECTIVES", "AGGREGATES", "PENALTY", "MIN_STEADY_STRIDES",
+           "COLUMNS", "EvaluationNotRunError"]
+
+#: what can be minimised (module docstring)
+OBJECTIVES = ("speed", "max-speed", "cot", "stability")
+#: how the scenarios' scores make one
+AGGREGATES = ("worst", "mean")
+#: score of a broken constraint (module docstring); larger than any objective value
+PENALTY = 1000.0
+#: steady strides a steady bound needs (GaitMetrics.is_steady_bounding)
+MIN_STEADY_STRIDES = 7
+#: the table's columns after the parameters
+COLUMNS = ("evaluation", "generation", "score", "objective", "feasible", "violations",
+           "outcome", "t_end_s", "mean_speed_m_s", "average_speed_m_s", "n_steady_strides",
+           "steady_bounding", "cost_of_transport", "max_belt_deflection_deg",
+           "peak_current_a", "spectral_radius", "scenario", "error")
+
+#: a worker's compiled user controllers, by their function (compiled once per process)
+_COMPILED: dict = {}
+
+
+def _controller(spec, cparams, params):
+    """The controller of one run: Table I parameters, a PitchFeedbackController, or the
+    user's CompiledController with the parameter array ``params``."""
+    kind = spec["kind"]
+    if kind == "table-i":
+        return cparams
+    if kind == "pitch-feedback":
+        from ..control.pitch_feedback import PitchFeedbackController
+        return PitchFeedbackController(cparams)
+    from ..control.compiled import CompiledController
+    fn = spec["command"]
+    ctrl = _COMPILED.get(fn)
+    if ctrl is None:
+        ctrl = _COMPILED[fn] = CompiledController(fn, params, spec["state"],
+                                                   control_period=spec["control_period"],
+                                                   name=spec["name"])
+    ctrl.params = np.array(params, dtype=np.float64)
+    return ctrl
+
+
+def _peak_current(result) -> float | None:
+    try:
+        return float(max(np.max(np.abs(result.motor_current(leg))) for leg in (0, 1)))
+    except (AttributeError, KeyError, ValueError, TypeError):
+        return None
+
+
+def _scenario_row(task, scenario, robot, cparams, params) -> dict:
+    """Run one scenario and score it (module docstring)."""
+    from ..simulation import simulate
+    goal = task["goal"]
+    duration = task["duration"]
+    ctrl = _controller(task["controller"], cparams, params)
+    r = simulate(robot, ctrl, scenario["initial_state"], duration, model=scenario["model"],
+                 friction_coefficient=scenario["friction"], energy=goal["objective"] == "cot")
+    if r.outcome == "interrupted":
+        raise KeyboardInterrupt          # a cut run is not an evaluation: never recorded
+    s = r.summary()
+    t_end = float(r.t[-1])
+    avg = float((r.x[-1] - r.x[0]) / t_end) if t_end > 0 else None
+    row = {"outcome": s["outcome"], "t_end_s": t_end, "mean_speed_m_s": s["mean_speed_m_s"],
+           "average_speed_m_s": avg, "n_steady_strides": s["n_steady_strides"],
+           "steady_bounding": bool(s["steady_bounding"]),
+           "cost_of_transport": s.get("cost_of_transport"),
+           "max_belt_deflection_deg": s.get("max_belt_deflection_deg"),
+           "peak_current_a": _peak_current(r), "spectral_radius": None}
+    if r.outcome != "completed":
+        row.update(score=10.0 * PENALTY * (2.0 - min(1.0, t_end / duration)), objective=None,
+                   feasible=False, violations=r.outcome)
+        return row
+    v = s["mean_speed_m_s"] if s["mean_speed_m_s"] is not None else avg
+    broken = []                                   # (name, relative excess)
+    if not row["steady_bounding"]:
+        missing = 1.0 - min(s["n_steady_strides"] or 0, MIN_STEADY_STRIDES) / MIN_STEADY_STRIDES
+        broken.append(("not steady", missing if missing > 0 else 1.0))
+    if goal["max_belt_deflection"] is not None and row["max_belt_deflection_deg"] is not None:
+        lim = math.degrees(goal["max_belt_deflection"])
+        if row["max_belt_deflection_deg"] > lim:
+            broken.append(("belt deflection", row["max_belt_deflection_deg"] / lim - 1.0))
+    if goal["max_current"] is not None and row["peak_current_a"] is not None:
+        if row["peak_current_a"] > goal["max_current"]:
+            broken.append(("current", row["peak_current_a"] / goal["max_current"] - 1.0))
+    if goal["min_speed"] is not None and (v is None or v < goal["min_speed"]):
+        broken.append(("speed", 1.0 if v is None else 1.0 - v / goal["min_speed"]))
+    objective = None
+    kind = goal["objective"]
+    if kind == "speed":
+        objective = None if v is None else abs(v - goal["target"])
+    elif kind == "max-speed":
+        objective = None if v is None else -v
+    elif kind == "cot":
+        objective = row["cost_of_transport"]
+    elif kind == "stability":
+        if row["steady_bounding"]:
+            orbit = _orbit_columns(r, robot, ctrl, {"model": scenario["model"],
+                                                    "friction_coefficient": scenario["friction"]})
+            row["spectral_radius"] = orbit["orbit_spectral_radius"]
+            if orbit["orbit_spectral_radius"] is None:
+                broken.append(("no periodic orbit", 1.0))
+        objective = row["spectral_radius"]
+    if objective is None and not broken:
+        broken.append((f"no {kind} objective", 1.0))
+    if broken:
+        score = PENALTY * (1 + len(broken) + sum(min(1.0, e) for _, e in broken)) \
+            + (objective if objective is not None else 0.0)
+    else:
+        score = objective
+    row.update(score=float(score), objective=objective, feasible=not broken,
+               violations="; ".join(n for n, _ in broken))
+    return row
+
+
+def tune_task(task: dict) -> dict:
+    """One evaluation: every scenario at the candidate ``task["values"]`` ({key: SI}), its
+    score and the metrics of the scenario that set it (top level: picklable for worker
+    processes and Dask)."""
+    row = {"evaluation": task["evaluation"], "generation": task["generation"],
+           "values": dict(task["values"])}
+    try:
+        robot, cparams, params = _apply(task["values"], task["robot"], task["cparams"],
+                                        task["controller"].get("params"))
+        validate_parameters(robot, cparams)
+        rows = [_scenario_row(task, sc, robot, cparams, params) for sc in task["scenarios"]]
+        scores = [r["score"] for r in rows]
+        worst = int(np.argmax(scores))
+        picked = dict(rows[worst])
+        if task["goal"]["aggregate"] == "mean":
+            picked["score"] = float(np.mean(scores))
+            objs = [r["objective"] for r in rows]
+            picked["objective"] = (float(np.mean(objs)) if all(o is not None for o in objs)
+                                   else None)
+            picked["feasible"] = all(r["feasible"] for r in rows)
+        picked["scenario"] = worst
+        picked["error"] = ""
+        row.update(picked)
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # noqa: BLE001 - recorded per evaluation, the tuning goes on
+        row.update({k: None for k in COLUMNS[2:]})
+        row.update(score=30.0 * PENALTY, feasible=False, outcome="error",
+                   violations="error", error=f"{type(exc).__name__}: {exc}")
+    return row
+
+
+class EvaluationNotRunError(RuntimeError):
+    """An evaluation could not be run at all: its worker process died twice, or a Dask
+    worker could not load the task (a different environment). The tuning stops, keeping
+    every finished evaluation; the same call again goes on once the cause is fixed."""
+
+
+def _error_row(task: dict, exc: BaseException) -> dict:
+    """What map_tasks records for an evaluation that could not be run (not a row: the
+    tuning stops on it, see :class:`EvaluationNotRunError`)."""
+    return {"not_run": True, "evaluation": task["evaluation"], "values": task["values"],
+            "error": f"{type(exc).__name__}: {exc}"}

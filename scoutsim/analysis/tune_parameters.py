@@ -1,0 +1,167 @@
+"""The tuned parameters of a tuning (:mod:`scoutsim.analysis.tune`): names, bounds and
+units, and a candidate's values set on the robot, the controller parameters and a
+compiled controller's parameter array.
+
+A name is ``controller.<field>`` (a :class:`~scoutsim.parameters.ControllerParameters`
+field: Table I and the torso-feedback gains), ``robot.<field>`` (a
+:class:`~scoutsim.parameters.RobotParameters` field, for design studies) or
+``controller.params[i]`` (entry i of a :class:`~scoutsim.CompiledController`'s parameter
+array). A ``_deg`` suffix on an angle field takes degrees at the edge, converted here,
+once; bounds and values inside are SI (angles in rad). Without a range a parameter is
+searched over its field's allowed range (:func:`scoutsim.parameters.allowed_range`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..parameters import allowed_range, field_dimension, physical_limit
+from .sweep import _check_name, parameter_names
+
+__all__ = ["TuneParameter", "parse_parameter"]
+
+_PARAMS_NAME = re.compile(r"^controller\.params\[(\d+)\]$")
+
+
+@dataclass(frozen=True)
+class TuneParameter:
+    """One tuned parameter.
+
+    Attributes
+    ----------
+    name : the name as given (``controller.touchdown_angle_front_deg``, ``robot.leg_stiffness``,
+        ``controller.params[3]``); the table's column of its values in the given unit.
+    key : where it goes: ``controller.<field>``, ``robot.<field>`` (SI) or ``params[i]``.
+    low, high : bounds [SI].
+    scale : SI value per unit of the given value (pi / 180 for a ``_deg`` name, else 1).
+    """
+
+    name: str
+    key: str
+    low: float
+    high: float
+    scale: float = 1.0
+
+    def shown(self, si: float) -> float:
+        """The SI value ``si`` in the unit the name gives."""
+        return si / self.scale
+
+
+def parse_parameter(text: str, controller=None) -> TuneParameter:
+    """``NAME`` or ``NAME=LOW:HIGH`` (LOW, HIGH in the name's unit: degrees for a ``_deg``
+    name) as a :class:`TuneParameter`; without a range, the field's allowed range. A
+    ``controller.params[i]`` needs a range and a :class:`~scoutsim.CompiledController`
+    ``controller`` with at least i + 1 parameters. ValueError naming the parameter
+    otherwise."""
+    name, sep, rng = text.partition("=")
+    name = name.strip()
+    bounds = None
+    if sep:
+        parts = rng.split(":")
+        try:
+            bounds = [float(v) for v in parts]
+        except ValueError:
+            bounds = None
+        if bounds is None or len(bounds) != 2:
+            raise ValueError(f"parameter {text!r} is not allowed: give NAME or NAME=LOW:HIGH "
+                             "with two numbers")
+        if not all(math.isfinite(b) for b in bounds):
+            raise ValueError(f"parameter {text!r}: LOW and HIGH must be finite numbers")
+        if not bounds[0] < bounds[1]:
+            raise ValueError(f"parameter {text!r} is not allowed: LOW must be below HIGH")
+    m = _PARAMS_NAME.match(name)
+    if m:
+        i = int(m.group(1))
+        n = getattr(controller, "params", None)
+        if n is None or getattr(controller, "controller_parameters", None) is not None:
+            raise ValueError(f"parameter {name!r} is not allowed: controller.params[i] tunes "
+                             "the parameter array of a CompiledController given as the "
+                             "controller (Table I and pitch feedback: tune their "
+                             "controller.<field> instead)")
+        if i >= len(n):
+            raise ValueError(f"parameter {name!r} is not allowed: the controller has "
+                             f"{len(n)} parameters (params[0] .. params[{len(n) - 1}])")
+        if bounds is None:
+            raise ValueError(f"parameter {name!r} needs a range: {name}=LOW:HIGH")
+        return TuneParameter(name, f"params[{i}]", bounds[0], bounds[1])
+    scale = 1.0
+    base = name[:-4] if name.endswith("_deg") else name
+    _check_tuned_name(name, base)
+    if name.endswith("_deg"):
+        if field_dimension(base.partition(".")[2]) != "angle":
+            raise ValueError(f"parameter {name!r} is not allowed: the _deg suffix takes "
+                             f"degrees for an angle; {base!r} is not an angle (give it in SI "
+                             "units, without the suffix)")
+        scale = math.pi / 180.0
+    fld = base.partition(".")[2]
+    if fld in ("legs_per_virtual_leg", "sense_motor_angle"):
+        raise ValueError(f"parameter {name!r} is not allowed: tuning varies continuous "
+                         "parameters, and this one is a whole number or a switch")
+    lo_r, hi_r, lo_closed, hi_closed = allowed_range(fld)
+    if bounds is None:
+        # (an upper end that is only the physical bound, far beyond any robot, is no range
+        # to search)
+        if lo_r is None or hi_r is None or hi_r == physical_limit(fld):
+            raise ValueError(f"parameter {name!r} needs a range: its allowed values are not "
+                             f"a range to search; give {name}=LOW:HIGH")
+        # an open end is moved inside by one part in 1e9 of the range
+        eps = 1e-9 * (hi_r - lo_r)
+        lo = lo_r if lo_closed else lo_r + eps
+        hi = hi_r if hi_closed else hi_r - eps
+    else:
+        lo, hi = bounds[0] * scale, bounds[1] * scale
+        ok_lo = lo_r is None or lo > lo_r or (lo == lo_r and lo_closed)
+        ok_hi = hi_r is None or hi < hi_r or (hi == hi_r and hi_closed)
+        if not (ok_lo and ok_hi):
+            def show(v):
+                return "unbounded" if v is None else f"{v / scale:.9g}"
+            raise ValueError(f"parameter {text!r} is not allowed: the range must lie within "
+                             f"the field's allowed values, {'[' if lo_closed else '('}"
+                             f"{show(lo_r)}, {show(hi_r)}{']' if hi_closed else ')'}")
+    return TuneParameter(name, base, lo, hi, scale)
+
+
+def _check_tuned_name(name: str, base: str) -> None:
+    """ValueError naming ``name`` (``base``: without its _deg suffix) unless it is a field
+    of RobotParameters / ControllerParameters, with the nearest name as a hint."""
+    try:
+        _check_name(base)
+    except ValueError:
+        import difflib
+        names = parameter_names()
+        names += [n + "_deg" for n in names if field_dimension(n.partition(".")[2]) == "angle"]
+        near = difflib.get_close_matches(name, names, n=1)
+        hint = f"; did you mean {near[0]!r}?" if near else ""
+        raise ValueError(f"parameter {name!r} is not allowed: must be robot.<field> or "
+                         "controller.<field> of RobotParameters / ControllerParameters "
+                         "(a _deg suffix on an angle takes degrees), or controller.params[i] "
+                         f"of a CompiledController{hint}") from None
+
+
+def _apply(values: dict, robot, cparams, params):
+    """The robot, controller parameters and parameter array with the tuned ``values``
+    ({key: SI}) set."""
+    rob = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("robot.")}
+    ctl = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("controller.")}
+    robot = dataclasses.replace(robot, **rob) if rob else robot
+    cparams = dataclasses.replace(cparams, **ctl) if ctl else cparams
+    if params is not None:
+        params = np.array(params, dtype=float)
+        for k, v in values.items():
+            if k.startswith("params["):
+                params[int(k[7:-1])] = v
+    return robot, cparams, params
+
+
+def _base_value(p: TuneParameter, robot, cparams, spec) -> float:
+    """The base value of ``p`` [SI]: its field of ``robot`` or ``cparams``, or its entry of
+    the compiled controller's parameter array (``spec["params"]``)."""
+    if p.key.startswith("params["):
+        return float(spec["params"][int(p.key[7:-1])])
+    sec, _, fld = p.key.partition(".")
+    return float(getattr(robot if sec == "robot" else cparams, fld))
