@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from .model import layout as L
-from .result import TABLES_FORMAT, SimulationResult
+from .result import SimulationResult
+from .result_files import TABLES_FORMAT
 from .run_directory import RunDirectory
 from .tables import TableWriter
 

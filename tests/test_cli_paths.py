@@ -18,7 +18,7 @@ from scoutsim import ControllerParameters, HybridState, IntegratorSettings, Robo
 from scoutsim.cli import main
 from scoutsim.model import layout as L
 from scoutsim.run_directory import check_run_directory
-from scoutsim.validation.logs import load_log
+from scoutsim.validation.log_reading import load_log
 
 DT = 1e-3   # the Table I control period [s]: the rigs sample at it
 

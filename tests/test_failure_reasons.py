@@ -67,7 +67,8 @@ def test_physical_bounds_admit_every_value_the_package_uses():
     """The bounds lie far above Scout II (two decades at least) and admit the values the
     package's studies use: the identification search boxes, the rigid-transmission limit,
     the virtual Scout's effects, the efficiency example's current limit."""
-    from scoutsim.identification.fit import EXAMPLE_FACTORS, default_bounds
+    from scoutsim.identification.example import EXAMPLE_FACTORS
+    from scoutsim.identification.parameter_vector import default_bounds
     from scoutsim.identification.rigs import HIP_PARAMETERS
     from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
     base = RobotParameters()

@@ -22,6 +22,8 @@ LAYERS = {
     "scoutsim.model": 1,
     "scoutsim.numerics": 2, "scoutsim.control": 2,
     "scoutsim.state": 3, "scoutsim.loop": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
+    "scoutsim.result_series": 3, "scoutsim.result_events": 3, "scoutsim.result_energy": 3,
+    "scoutsim.result_columns": 3, "scoutsim.result_files": 3,
     "scoutsim.failure": 3, "scoutsim.streaming": 3, "scoutsim.integrator": 3,
     "scoutsim.starts": 3, "scoutsim.engine": 3, "scoutsim.bench": 3, "scoutsim.budgets": 3,
     "scoutsim.analysis": 4, "scoutsim.validation": 4, "scoutsim.identification": 4,
@@ -34,11 +36,11 @@ LAYERS = {
 #: (importer, imported) pairs against the layers: convenience accessors, deferred imports
 CONVENIENCE_ACCESSORS = {
     ("scoutsim.result", "scoutsim.analysis.gait"),                     # result.gait()
-    ("scoutsim.result", "scoutsim.analysis.energy"),          # result.energy_balance()
+    ("scoutsim.result_energy", "scoutsim.analysis.energy"),   # result.energy_balance()
     ("scoutsim.result", "scoutsim.presentation.plots"),                # result.plot()
     ("scoutsim.analysis.sweep", "scoutsim.presentation.plots"),        # sweep.plot_map()
     ("scoutsim.analysis.tune_result", "scoutsim.presentation.plots"),  # tuning.plot_convergence()
-    ("scoutsim.identification.fit",
+    ("scoutsim.identification.fit_result",
      "scoutsim.presentation.identification_plots"),                    # fit result .plot()
 }
 

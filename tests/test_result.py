@@ -5,7 +5,7 @@ import pytest
 
 import scoutsim
 from scoutsim.model import layout as L
-from scoutsim.result import column_unit
+from scoutsim.result_columns import column_unit
 
 
 @pytest.fixture(scope="module")

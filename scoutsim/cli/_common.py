@@ -381,7 +381,7 @@ def input_file(path: str, *, directory_ok: bool = False) -> Path:
 def is_saved_run(p: Path) -> bool:
     """True if ``p`` is a run saved by ``scoutsim run``: its output directory, its
     timeseries table or a result.npz (an experiment log is not)."""
-    from ..result import TABLES_FORMAT
+    from ..result_files import TABLES_FORMAT
     from ..tables import TableError, read_metadata
     if p.is_dir() or p.name.lower().endswith(".npz"):
         return True

@@ -64,7 +64,8 @@ def register(sub, common) -> None:
 
 def execute(args) -> int:
     from ..validation.errors import compare
-    from ..validation.logs import LogError, load_dataset
+    from ..validation.log_format import LogError
+    from ..validation.log_reading import load_dataset
     check_logs_or_example(args, "give at least one log file (or --example for the shipped "
                                 "synthetic data set)")
     if args.transient < 0:

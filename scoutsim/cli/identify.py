@@ -56,7 +56,8 @@ def register(sub, common) -> None:
 
 
 def execute(args) -> int:
-    from ..identification.fit import EXAMPLE_FACTORS, example_logs, identify
+    from ..identification.example import EXAMPLE_FACTORS, example_logs
+    from ..identification.fit import identify
     check_logs_or_example(args, "give at least one rig log (or --example)")
     if not 0.0 < args.confidence < 1.0:
         raise UsageError(f"--confidence {args.confidence:g} is not allowed: must be in (0, 1)")

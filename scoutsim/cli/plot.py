@@ -57,7 +57,8 @@ def _run_extent(p: Path):
 
 
 def execute(args) -> int:
-    from ..validation.logs import LOG_SUFFIXES, LogError, load_log
+    from ..validation.log_format import LOG_SUFFIXES, LogError
+    from ..validation.log_reading import load_log
     p = input_file(args.input, directory_ok=True)
     check_time_window(args)
     name = p.name.lower()
@@ -101,7 +102,7 @@ def execute(args) -> int:
         obj = load_result(p, t_range)
     with usage_errors():
         if is_log:
-            from ..presentation.paper_figures import plot_log
+            from ..presentation.log_figure import plot_log
             plot_log(obj, out, t_range=t_range)
         else:
             from ..presentation.plots import plot_run

@@ -35,7 +35,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
-from ..result import COLUMN_UNITS, column_unit
+from ..result_columns import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
@@ -47,8 +47,9 @@ from ._common import (MODELS, UsageError, add_controller_option, check_expected_
 
 NAME = "run"
 
-#: Unit of each ``result.columns()`` name (one home: :data:`scoutsim.result.COLUMN_UNITS`),
-#: written into the header of ``timeseries.csv`` as ``name [unit]``.
+#: Unit of each ``result.columns()`` name (one home:
+#: :data:`scoutsim.result_columns.COLUMN_UNITS`), written into the header of
+#: ``timeseries.csv`` as ``name [unit]``.
 TIMESERIES_UNITS = COLUMN_UNITS
 
 

@@ -12,8 +12,10 @@ _EXPORTS = {
     **{n: ".rigs" for n in ("HIP_PARAMETERS", "RIG_NAMES", "FlightSteps", "FreeSwing",
                             "RigNoise", "Stall", "hip_parameters", "rig_log", "run_rig",
                             "stall_deflection", "with_toe_mass", "DEFAULT_PARAMS")},
-    **{n: ".fit" for n in ("FittedParameter", "IdentificationResult", "example_logs",
-                           "example_robot", "identify", "prepare_log")},
+    **{n: ".fit_result" for n in ("FittedParameter", "IdentificationResult")},
+    **{n: ".example" for n in ("example_logs", "example_robot")},
+    **{n: ".fit" for n in ("FitSettings", "identify")},
+    "prepare_log": ".rig_data",
 }
 
 __all__ = list(_EXPORTS)

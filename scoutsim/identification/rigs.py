@@ -25,7 +25,7 @@ ground. Nothing else is special-cased:
   is what the motor encoder shows (the robot measured about 8 deg).
 
 :func:`rig_log` turns a rig run into a log in the project's log format
-(:mod:`scoutsim.validation.logs`) with the sensor chain of :class:`RigNoise` (motor
+(:mod:`scoutsim.validation.log_format`) with the sensor chain of :class:`RigNoise` (motor
 encoder quantisation plus white angle noise, current-sense noise; seeded).
 """
 
@@ -42,7 +42,7 @@ from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
 from ..bench import run_bench
 from ..integrator import IntegratorSettings
-from ..validation.logs import ExperimentLog
+from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",

@@ -7,7 +7,10 @@ Modules
 style                 colours of legs, leg states and models; model names; the file writer
 plots                 run time histories, torque-speed plane (paper Fig. 11), basin and sweep maps
 animation             stick-figure animation of a run (GIF / MP4)
-paper_figures         the paper's Figs. 5, 8-12 for an experiment and models
+paper_figures         the paper's Figs. 5, 8-12 for an experiment and models, all written at
+                      once; one module per figure group: experiment_figure (Fig. 5),
+                      stride_figures (Figs. 8-10), saturation_figure (Fig. 11),
+                      error_figure (Fig. 12), log_figure (one log), figure_parts (shared)
 phase_plots           the phase-normalized mean-stride comparison
 identification_plots  a rig log against the fitted hip-unit model
 
@@ -28,9 +31,9 @@ _EXPORTS = {
     "plot_run": "plots", "plot_torque_speed": "plots", "plot_basin_map": "plots",
     "plot_sweep_map": "plots", "motor_limits": "plots",
     "animate": "animation", "save_animation": "animation",
-    "fig5": "paper_figures", "fig8": "paper_figures", "fig9": "paper_figures",
-    "fig10": "paper_figures", "fig11": "paper_figures", "fig12": "paper_figures",
-    "fig_phase": "paper_figures", "plot_log": "paper_figures", "write_figures": "paper_figures",
+    "fig5": "experiment_figure", "fig8": "stride_figures", "fig9": "stride_figures",
+    "fig10": "stride_figures", "fig11": "saturation_figure", "fig12": "error_figure",
+    "fig_phase": "paper_figures", "plot_log": "log_figure", "write_figures": "paper_figures",
     "plot_phase": "phase_plots", "plot_fit": "identification_plots",
     "save_figure": "style",
 }

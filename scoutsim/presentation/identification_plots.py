@@ -23,7 +23,7 @@ def plot_fit(data, fitted_angle, fitted_current, start_angle, path=None) -> Figu
 
     Parameters
     ----------
-    data : :class:`scoutsim.identification.fit.RigData` (``log.t`` [s], ``angle`` (n, 2)
+    data : :class:`scoutsim.identification.rig_data.RigData` (``log.t`` [s], ``angle`` (n, 2)
         [rad], ``current`` (n, 2) [A] or None, ``legs``, ``rig.name``, ``name``).
     fitted_angle, start_angle : (n, 2) encoder angle [rad] simulated with the fitted and the
         starting parameters.

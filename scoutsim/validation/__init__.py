@@ -1,7 +1,9 @@
 """Simulation against experiment (paper Sec. IV.C, Fig. 12; docs/specification.md section 8).
 
-- :mod:`.logs`: the experiment log format, :func:`load_log`, :func:`load_dataset`,
-  :class:`ExperimentLog`.
+- :mod:`.logs`: experiment logs (re-exports :mod:`.log_format`, the file format and
+  :class:`LogError`; :mod:`.log_checks` and :mod:`.log_spikes`, the checks of a loaded
+  file; :mod:`.experiment_log`, :class:`ExperimentLog`; :mod:`.log_reading`,
+  :func:`load_log`, :func:`load_dataset`; :mod:`.log_writing`, :func:`save_log`).
 - :mod:`.measurement`: the robot's measurement chain simulated (lasers, 15 Hz FFT
   low-pass, torque from current); :func:`to_log` turns a simulation into a log.
 - :mod:`.strides`: strides and per-stride metrics of a log.
@@ -10,7 +12,10 @@
 See docs/validation.md.
 """
 
-from .logs import ExperimentLog, LogError, load_dataset, load_log, save_log
+from .experiment_log import ExperimentLog
+from .log_format import LogError
+from .log_reading import load_dataset, load_log
+from .log_writing import save_log
 from .measurement import LaserGeometry, SensorNoise, fft_lowpass, to_log
 from .strides import log_strides
 

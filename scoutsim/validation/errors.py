@@ -307,7 +307,8 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
         (:func:`~scoutsim.validation.strides.experiment_strides`), and when no log has a
         steady stride; before any model is simulated.
     """
-    from .logs import ExperimentLog, LogError
+    from .experiment_log import ExperimentLog
+    from .log_format import LogError
     if isinstance(logs, ExperimentLog):
         logs = [logs]
     logs = list(logs)

@@ -37,7 +37,7 @@ import numpy as np
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
 from ..simulation import simulate
 from ..state import InitialState
-from .logs import save_log
+from .log_writing import save_log
 from .measurement import LaserGeometry, SensorNoise, to_log
 
 DATA_DIR = Path(__file__).with_name("data")

@@ -9,7 +9,7 @@ robot would have logged (:func:`to_log`), and compared with a log like with like
     log = to_log(result)                       # noise-free
     log = to_log(result, noise=SensorNoise(), seed=1)
 
-Laser geometry: see :mod:`scoutsim.validation.logs` ("Laser geometry").
+Laser geometry: see :mod:`scoutsim.validation.log_format` ("Laser geometry").
 
 Low-pass (:func:`fft_lowpass`): zero-phase, applied in the frequency domain with
 ``numpy.fft``. Gain 1 below ``cutoff - transition/2``, 0 above ``cutoff + transition/2``,
@@ -31,7 +31,7 @@ import numpy as np
 
 from ..model import layout as L
 from ..parameters import RobotParameters
-from .logs import ExperimentLog
+from .experiment_log import ExperimentLog
 from .sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
                       pitch_height_from_lasers)
 

@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import layout as L
-from .logs import ExperimentLog
+from .experiment_log import ExperimentLog
 from .measurement import to_log_like
 from .strides import LogGait, log_strides
 

@@ -3,7 +3,7 @@ IV.B): the two laser range finders at the torso ends (:class:`LaserGeometry`, fr
 torso pose to ranges and back) and the zero-phase FFT low-pass applied to the laser data
 after the fact (:func:`fft_lowpass`; its shape and edge effects are described in
 :mod:`scoutsim.validation.measurement`). Used both to read a log
-(:mod:`scoutsim.validation.logs`) and to simulate what the robot would have logged
+(:mod:`scoutsim.validation.experiment_log`) and to simulate what the robot would have logged
 (:mod:`scoutsim.validation.measurement`).
 """
 
@@ -23,7 +23,7 @@ EDGE_S = 0.3
 
 @dataclass(frozen=True)
 class LaserGeometry:
-    """Where the two laser range finders are (see :mod:`scoutsim.validation.logs`).
+    """Where the two laser range finders are (see :mod:`scoutsim.validation.log_format`).
 
     half_spacing_m : distance of each laser from the torso COM along the torso axis [m]
         (default 0.35 = torso_length / 2, the torso ends).

@@ -22,7 +22,7 @@ The results are :class:`scoutsim.analysis.strides.Stride` objects, so the metric
 
 :func:`log_strides` accepts any log (a model that fell has few strides or none, which the
 comparison reports). :func:`experiment_strides`, used for the experiment logs of the
-comparison, refuses with :class:`~scoutsim.validation.logs.LogError` a log too short to
+comparison, refuses with :class:`~scoutsim.validation.log_format.LogError` a log too short to
 hold one steady stride (it must last at least ``max(transient_s, EDGE_S) + EDGE_S`` plus
 one stride period) and a log in which no stride is detected (fewer than two back-leg
 lift-offs, or a front leg that never touches down or never lifts off).
@@ -37,7 +37,7 @@ import numpy as np
 
 from ..analysis.stances import stance_overlap
 from ..analysis.strides import STRIDE_METRICS, Stride, converged_tail
-from .logs import LogError
+from .log_format import LogError
 from .sensors import EDGE_S
 
 __all__ = ["log_strides", "experiment_strides", "min_steady_duration", "LogGait",

@@ -13,7 +13,7 @@ from scoutsim.cli import main
 from scoutsim.identification import (FlightSteps, FreeSwing, example_robot, identify,
                                      prepare_log, rig_log, run_rig)
 from scoutsim.parameters import RobotParameters
-from scoutsim.validation.logs import LogError
+from scoutsim.validation.log_format import LogError
 
 SHORT_SWING = FreeSwing(duration=1.5)
 

@@ -190,7 +190,7 @@ def test_flight_steps_servo_reaches_each_commanded_angle():
 
 
 def test_rig_log_has_the_log_format_and_quantised_encoder(tmp_path):
-    from scoutsim.validation.logs import load_log
+    from scoutsim.validation.log_reading import load_log
     res = run_rig(FreeSwing(duration=0.3))
     noise = RigNoise(encoder_counts_per_rev=500, angle_rad=0.0, current_a=0.0)
     log = rig_log(res, noise=noise, seed=3)

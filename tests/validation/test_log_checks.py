@@ -1,6 +1,6 @@
 """Tests of the experiment-log input checks that keep `scoutsim compare` from being silently
 wrong: isolated spikes in the position-like signals (a Hampel test in
-scoutsim.validation.logs) and logs that hold no stride (scoutsim.validation.strides /
+scoutsim.validation.log_spikes) and logs that hold no stride (scoutsim.validation.strides /
 errors.compare and the CLI)."""
 
 import re
@@ -171,7 +171,7 @@ def test_rates_and_currents_are_not_spike_checked(example, tmp_path):
 
 def _worst_spike_ratio(log):
     """Largest |x - neighbours' median| / allowed deviation over the spike-checked columns."""
-    from scoutsim.validation.logs import SPIKE_FLOOR, isolated_spikes
+    from scoutsim.validation.log_spikes import SPIKE_FLOOR, isolated_spikes
     worst = 0.0
     for c, (floor, _) in SPIKE_FLOOR.items():
         if c in log.columns:

@@ -1,0 +1,76 @@
+"""The weighted residuals of the fit: for every log, the simulated minus the logged
+motor-encoder angle of every leg that moves, divided by the angle noise [rad / rad], and,
+where the rig drives current, the motor current likewise [A / A]::
+
+    r = [(alpha_sim(t_k; p) - alpha_log(t_k)) / sigma_angle,  (i_sim - i_log) / sigma_i]
+
+and, after the fit, the rms of each channel in units of its stated noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..integrator import IntegratorSettings
+from ..parameters import RobotParameters
+from ..validation.log_format import LogError
+from .parameter_vector import robot_with
+from .rig_data import simulate_log
+
+__all__ = ["Residuals", "residual_count", "channel_rms"]
+
+
+def residual_count(data: list, p: int) -> int:
+    """Number of residuals of the logs ``data``; LogError if they are not more than the
+    ``p`` fitted parameters."""
+    nres = sum(d.n_residuals for d in data)
+    if nres <= p:
+        raise LogError(f"{data[0].log.path or data[0].name}: only {nres} residuals for {p} "
+                       "parameters", data[0].log.path)
+    return nres
+
+
+class Residuals:
+    """r(x): the weighted residuals of every log with the fitted parameters at ``x`` (ln p)
+    and the others of ``base``; a non-finite residual counts as 1e6. ``nfev`` counts the
+    evaluations (each replays every rig)."""
+
+    def __init__(self, data: list, base: RobotParameters, names: list,
+                 integrator: IntegratorSettings | None):
+        self.data = data
+        self.base = base
+        self.names = names
+        self.integrator = integrator
+        self.nfev = 0
+
+    def __call__(self, x):
+        self.nfev += 1
+        rb = robot_with(self.base, self.names, x)
+        out = []
+        for d in self.data:
+            a, c, _ = simulate_log(d, rb, self.integrator)
+            for leg in d.legs:
+                out.append((a[:, leg] - d.angle[:, leg]) / d.sigma_angle)
+            if d.current is not None:
+                for leg in d.legs:
+                    out.append((c[:, leg] - d.current[:, leg]) / d.sigma_current)
+        r = np.concatenate(out)
+        r[~np.isfinite(r)] = 1e6
+        return r
+
+
+def channel_rms(r: np.ndarray, data: list) -> dict:
+    """RMS of each log's angle (and current) residuals ``r`` in units of the stated noise
+    [-], by channel name."""
+    rms = {}
+    o = 0
+    for j, d in enumerate(data):
+        n = d.angle.shape[0] * len(d.legs)
+        ra = r[o:o + n]
+        o += n
+        rms[f"log {j + 1} ({d.rig.name}) angle"] = float(np.sqrt(np.mean(ra * ra)))
+        if d.current is not None:
+            rc = r[o:o + n]
+            o += n
+            rms[f"log {j + 1} ({d.rig.name}) current"] = float(np.sqrt(np.mean(rc * rc)))
+    return rms
