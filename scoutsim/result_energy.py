@@ -112,8 +112,9 @@ class EnergyAccessors:
         for lg in legs:
             i = self.motor_current(lg)
             w = self.motor_speed(lg)
-            p += robot["legs_per_virtual_leg"] * i * (robot["armature_resistance"] * i
-                                                      + robot["speed_constant"] * w)
+            r_a, k_w = (_per_leg_value(robot[n], lg) for n in ("armature_resistance",
+                                                                "speed_constant"))
+            p += robot["legs_per_virtual_leg"] * i * (r_a * i + k_w * w)
         return p
 
 
@@ -123,3 +124,9 @@ class EnergyAccessors:
         ``simulate(energy=True)``."""
         from .analysis.energy import energy_balance
         return energy_balance(self)
+
+
+def _per_leg_value(value, leg: int) -> float:
+    """Leg ``leg``'s value of a robot field as stored in a provenance dict: one number, or
+    [back, front] for a robot whose legs differ."""
+    return float(value[leg]) if isinstance(value, (list, tuple)) else float(value)

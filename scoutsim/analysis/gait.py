@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import layout as L
+from ..parameters import RobotParameters
 from .stances import _leg, stance_intervals, stance_overlap
 from .stride_energy import _input_and_weight, stride_energy
 from .strides import (STRIDE_ENERGY_METRICS, STRIDE_METRICS, Stride, _json_float, _strides,
@@ -237,8 +238,9 @@ class GaitMetrics:
         i = np.asarray(result.motor_current(li))[m]
         w = np.asarray(result.motor_speed(li))[m]
         vb = np.asarray(result.battery_voltage)[m]
-        on_current = np.abs(i) >= (1.0 - 1e-3) * robot["current_limit"]
-        v_term = robot["armature_resistance"] * i + robot["speed_constant"] * w
+        motor = RobotParameters(**robot).leg(li)
+        on_current = np.abs(i) >= (1.0 - 1e-3) * motor.current_limit
+        v_term = motor.armature_resistance * i + motor.speed_constant * w
         on_voltage = np.abs(v_term) >= (1.0 - 1e-3) * vb
         return float(np.count_nonzero(on_current | on_voltage) / n)
 

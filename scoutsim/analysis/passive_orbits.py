@@ -90,9 +90,9 @@ class PassiveOrbit:
 
 def _slip_guess(robot: RobotParameters, speed: float) -> float:
     """Touchdown angle of the symmetric pronk of a spring-mass with both legs (first guess)."""
-    k = 2.0 * robot.legs_per_virtual_leg * robot.leg_stiffness
+    k = robot.legs_per_virtual_leg * sum(robot.per_leg("leg_stiffness"))
     t_stance = math.pi * math.sqrt(robot.torso_mass / k)
-    return math.asin(min(0.9, speed * t_stance / (2.0 * robot.leg_rest_length)))
+    return math.asin(min(0.9, speed * t_stance / sum(robot.per_leg("leg_rest_length"))))
 
 
 def _solve_angles(z, guess, robot, integ, tol, max_iter):

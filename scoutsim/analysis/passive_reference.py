@@ -85,12 +85,20 @@ def _glitched(events) -> bool:
     return False
 
 
+def _hips(rob: RobotParameters) -> tuple[float, float]:
+    """The hips' positions along the torso axis from the torso COM [m], -L - e and L - e
+    (L half the hip spacing, e the COM offset), written out here from the fields."""
+    half = 0.5 * rob.hip_spacing
+    return (-half - rob.com_offset, half - rob.com_offset)
+
+
 def _passive_rhs(rob: RobotParameters, anchors):
     """Torso equations of the massless-leg passive model (docs/specification.md section 2): up to two undamped
-    axial springs k_v = legs_per_virtual_leg * k between the hips and pinned toes."""
+    axial springs k_v = legs_per_virtual_leg * k between the hips and pinned toes (each leg
+    with its own k and l0)."""
     m, I, g = rob.torso_mass, rob.torso_inertia, rob.gravity
-    k = rob.legs_per_virtual_leg * rob.leg_stiffness
-    l0, Lh = rob.leg_rest_length, rob.half_hip_spacing
+    k = [rob.legs_per_virtual_leg * v for v in rob.per_leg("leg_stiffness")]
+    l0, hip = rob.per_leg("leg_rest_length"), _hips(rob)
 
     def rhs(t, u):
         x, y, th = u[0], u[1], u[2]
@@ -99,11 +107,11 @@ def _passive_rhs(rob: RobotParameters, anchors):
         for leg, ax in enumerate(anchors):
             if ax is None:
                 continue
-            sL = (2 * leg - 1) * Lh
+            sL = hip[leg]
             hx, hy = x + sL * c, y + sL * sn
             dx_, dy_ = hx - ax, hy
             ll = math.hypot(dx_, dy_)
-            F = k * (l0 - ll)
+            F = k[leg] * (l0[leg] - ll)
             Fx, Fy = F * dx_ / ll, F * dy_ / ll
             fx += Fx
             fy += Fy
@@ -121,7 +129,7 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     """From apex z, run the passive model until both legs have had a stance and both are in
     flight; return (state at the last lift-off, its time, order of first touchdowns)."""
     from scipy.integrate import solve_ivp
-    l0, Lh = rob.leg_rest_length, rob.half_hip_spacing
+    l0, hip = rob.per_leg("leg_rest_length"), _hips(rob)
     u = np.array([0.0, z[0], z[1], z[2], 0.0, z[3]], dtype=float)
     t = 0.0
     anchors = [None, None]
@@ -130,11 +138,11 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     armed = [True, True]   # a flight toe event counts only after the toe was seen above ground
 
     def toe_y(u, leg):
-        sL = (2 * leg - 1) * Lh
-        return u[1] + sL * math.sin(u[2]) - l0 * math.cos(gammas[leg])
+        sL = hip[leg]
+        return u[1] + sL * math.sin(u[2]) - l0[leg] * math.cos(gammas[leg])
 
     def leg_length(u, leg):
-        sL = (2 * leg - 1) * Lh
+        sL = hip[leg]
         return math.hypot(u[0] + sL * math.cos(u[2]) - anchors[leg], u[1] + sL * math.sin(u[2]))
 
     for leg in (0, 1):
@@ -152,10 +160,10 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
                 meaning.append(("touchdown" if armed[leg] else "arm", leg))
             else:
                 def e(t_, u_, leg=leg):
-                    sL = (2 * leg - 1) * Lh
+                    sL = hip[leg]
                     hx = u_[0] + sL * math.cos(u_[2])
                     hy = u_[1] + sL * math.sin(u_[2])
-                    return math.hypot(hx - anchors[leg], hy) - l0
+                    return math.hypot(hx - anchors[leg], hy) - l0[leg]
                 e.direction = 1.0
                 meaning.append(("liftoff", leg))
             e.terminal = True
@@ -190,13 +198,13 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
                     if toe_y(u, lg) > SIMULTANEOUS_EVENT_TOL:
                         continue
                 elif anchors[lg] is not None and kind == "liftoff":
-                    if leg_length(u, lg) - l0 < -SIMULTANEOUS_EVENT_TOL:
+                    if leg_length(u, lg) - l0[lg] < -SIMULTANEOUS_EVENT_TOL:
                         continue
                 else:
                     continue
             if kind == "touchdown":
-                sL = (2 * lg - 1) * Lh
-                anchors[lg] = u[0] + sL * math.cos(u[2]) + l0 * math.sin(gammas[lg])
+                sL = hip[lg]
+                anchors[lg] = u[0] + sL * math.cos(u[2]) + l0[lg] * math.sin(gammas[lg])
                 had_stance[lg] = True
                 first_td[lg] = min(first_td[lg], t)
             else:

@@ -4,7 +4,8 @@ level-torso apex (touchdown angles solved for); otherwise the controlled robot's
 found by Newton's method on the stride map sampled at the controller's back-leg lift-off.
 
     scoutsim orbit [--passive] [--speed V] [--apex-height H] [--pitch-rate W]
-                   [--model {ideal,I,II}] [--friction MU] [--duration S] [--json]
+                   [--model {ideal,I,II}] [--friction MU] [--duration S] [--robot FILE]
+                   [--json]
 
 Exit code 1 if no periodic orbit is found.
 """
@@ -15,8 +16,8 @@ import math
 import sys
 
 from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, add_friction_option,
-                      add_no_progress_option, dumps, finite_float, positive_float,
-                      progress_messages)
+                      add_no_progress_option, dumps, finite_float, load_parameters,
+                      positive_float, progress_messages)
 
 NAME = "orbit"
 
@@ -46,6 +47,10 @@ def register(sub, common) -> None:
     add_friction_option(orbit, f"controlled: toe friction (default: {SCOUT_FLOOR_FRICTION})")
     orbit.add_argument("--duration", type=positive_float, default=12.0, metavar="S",
                        help="controlled: simulated time to the Newton start [s] (default: 12)")
+    orbit.add_argument("--robot", metavar="FILE",
+                       help="TOML robot/controller file with the layout of "
+                            "scoutsim/data/scout2.toml (--passive: its massless-leg "
+                            "configuration); unset entries keep the Scout II defaults")
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     add_no_progress_option(orbit)
     orbit.set_defaults(func=execute)
@@ -55,12 +60,14 @@ def execute(args) -> int:
     from ..analysis.controlled_orbit import controlled_fixed_point
     from ..analysis.passive_orbits import passive_bounding_orbit
     from ..analysis.poincare import MapError
+    robot, controller = load_parameters(args.robot)
     try:
         if args.passive:
             orb = passive_bounding_orbit(args.speed, args.apex_height,
-                                         math.radians(args.pitch_rate))
+                                         math.radians(args.pitch_rate), robot=robot)
         else:
             orb = controlled_fixed_point(model=args.model, friction_coefficient=args.friction,
+                                         robot=robot, controller=controller,
                                          settle_duration=args.duration,
                                          progress=progress_messages(args, NAME))
     except MapError as exc:

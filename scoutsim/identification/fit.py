@@ -52,7 +52,7 @@ from .parameter_vector import default_bounds, fitted_names, robot_with, search_b
 from .residuals import Residuals, channel_rms, residual_count
 from .rig_data import (FITTABLE_RIGS, MIN_MOTION_RAD, RigData, prepare_log, prepare_logs,
                        simulate_log)
-from .rigs import DEFAULT_PARAMS
+from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS
 from .uncertainty import optimum, spread
 
 __all__ = ["identify", "FitSettings", "IdentificationResult", "FittedParameter", "RigData",
@@ -126,6 +126,13 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     """
     s = _settings(settings, options)
     base = validate_robot(robot if robot is not None else RobotParameters())
+    differ = [n for n in (*HIP_PARAMETERS, "planetary_ratio", "sprocket_ratio")
+              if isinstance(getattr(base, n), tuple)]
+    if differ:
+        raise ValueError(f"robot: the hip units differ between the legs in "
+                         f"{', '.join(differ)}; the fit identifies one hip unit for both "
+                         "legs: give those fields one value (in Python, robot.leg('back') "
+                         "or robot.leg('front') is one leg's robot)")
     if not (0.0 < s.confidence < 1.0):
         raise ValueError(f"confidence = {s.confidence} is not allowed: must be in (0, 1)")
     data = prepare_logs(logs, rig, base, use_current)

@@ -62,7 +62,7 @@ def _meta_noise(log: ExperimentLog, robot: RobotParameters):
         except (TypeError, ValueError) as exc:
             raise LogError(f"{log.path or log.name}: metadata 'sensor_noise' = {nz!r} is not "
                            f"usable: {exc}", log.path) from None
-    q = (2 * math.pi / (d.encoder_counts_per_rev * robot.gear_ratio)
+    q = (2 * math.pi / (d.encoder_counts_per_rev * robot.leg(0).gear_ratio)
          if d.encoder_counts_per_rev > 0 else 0.0)
     sa = math.sqrt(d.angle_rad ** 2 + q * q / 12.0)
     sc = d.current_a

@@ -322,9 +322,10 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
                          provenance=prov | {"controller": asdict(cparams)})
     if isinstance(rig, Stall):
         s0 = _clamped_state(rig.clamp_height, rig.leg_angle, rig.leg_angle, robot)
-        tau = robot.max_leg_torque if rig.torque is None else rig.torque
+        taus = tuple(robot.leg(leg).max_leg_torque if rig.torque is None else rig.torque
+                     for leg in (0, 1))
         return run_bench(robot, model, s0, rig.duration, clamp_torso=True, clamp_legs=True,
-                         held_torques=(tau, tau), dt=dt, integrator=integ, provenance=prov)
+                         held_torques=taus, dt=dt, integrator=integ, provenance=prov)
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 
 

@@ -37,16 +37,17 @@ def robot_pose(log, k: int, robot=None) -> dict:
                              y + corners[:, 0] * s + corners[:, 1] * c])
     legs = {}
     for i, name in enumerate(_LEGS):
-        sl = (2 * i - 1) * rob.half_hip_spacing
+        sl = rob.hip_offset(i)
+        l0 = rob.per_leg("leg_rest_length")[i]
         hx, hy = sl * c, y + sl * s
         g = th + float(np.asarray(log.leg_angle(name))[k])
         state = int(np.asarray(log.leg_state(name))[k])
         if log.has(f"leg_length_{name}_m"):
             ll = float(np.asarray(log.leg_length(name))[k])
         elif state != 0 and math.cos(g) > 0.2:
-            ll = min(hy / math.cos(g), rob.leg_rest_length)
+            ll = min(hy / math.cos(g), l0)
         else:
-            ll = rob.leg_rest_length
+            ll = l0
         legs[name] = dict(hip=(hx, hy), toe=(hx + ll * math.sin(g), hy - ll * math.cos(g)),
                           state=state)
     return dict(torso=torso, legs=legs)

@@ -39,11 +39,13 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
     torque-speed lines at the battery voltage). ``robot``: RobotParameters or dict for the
     limits (default: the models' parameters, else Scout II)."""
     exp, mods = _prepare(logs, models, transient_s)
-    lim = motor_limits(_robot_dict(robot, mods, exp))
+    robot_dict = _robot_dict(robot, mods, exp)
+    lims = [motor_limits(robot_dict, leg) for leg in (0, 1)]
     fig = Figure(figsize=(11, 5.0), layout="constrained")
     axes = fig.subplots(1, 2, sharey=True)
     missing = []
-    tmax, wmax = lim["tau_current"], lim["w_no_load"]
+    tmax = max(lim["tau_current"] for lim in lims)
+    wmax = max(lim["w_no_load"] for lim in lims)
     for c, leg in enumerate(_LEGS):
         ax = axes[c]
         pts = [(lg, s) for lg, s in exp.steady]
@@ -64,7 +66,8 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
             y = np.asarray(lg.leg_rate(leg))[k]
             ax.plot(x, y, label=f"{_tag(src, steady)}, one step", **_line_kw(src, i, steady))
         xl, yl = 1.15 * tmax, 1.15 * wmax
-        draw_motor_limits(ax, lim, xl, yl, current_ls=(0, (5, 2)), line_ls=(0, (6, 2, 1, 2)))
+        draw_motor_limits(ax, lims[c], xl, yl, current_ls=(0, (5, 2)),
+                          line_ls=(0, (6, 2, 1, 2)))
         ax.set_xlabel("hip torque per leg [N m]")
         ax.set_ylabel("leg angular speed (encoder) [rad/s]")
         ax.set_title(f"{leg} leg")

@@ -181,3 +181,30 @@ def test_cli_orbit_controlled_json(capsys):
     # the torso plus the pitch at touchdown: within the range of Table I +- the pitch range
     assert 5.0 < d["touchdown_angle_back_deg"] < 35.0
     assert 5.0 < d["touchdown_angle_front_deg"] < 35.0
+
+
+def test_apex_map_agrees_with_simulate_for_unequal_legs():
+    """The same agreement (two independent formulations of the passive model: SciPy here,
+    the compiled simulator) for a robot whose legs differ in stiffness and rest length and
+    whose torso COM is 2 cm ahead of the hips' midpoint, over one stride from an apex."""
+    robot = O.passive_robot(scoutsim.RobotParameters(
+        com_offset=0.02, leg_stiffness=(3520.0, 3900.0), leg_rest_length=(0.323, 0.31)))
+    z = np.array([0.35, 0.0, 1.3, 0.8])
+    td = (0.3, 0.25)
+    m = O.passive_apex_map(z, td, robot=robot)
+    r = scoutsim.simulate(robot, None,
+                          InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
+                          0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
+                          passive_touchdown_angles=td)
+    assert not passive_reference._glitched(r.events)
+    t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
+    k = int(np.searchsorted(r.t, t_lo, side="right"))
+    s = r.state[k]
+    g = robot.gravity
+    dy = s[8]
+    # ballistic flight from sample k (after the last lift-off) to the apex
+    sim = np.array([s[1] + dy * dy / (2 * g), s[2] + s[9] * dy / g, s[7], s[9]])
+    assert np.max(np.abs(sim - m.z)) < 1e-8
+    # and the asymmetry matters: the map of the symmetric robot is elsewhere
+    sym = O.passive_apex_map(z, td, robot=O.passive_robot())
+    assert np.max(np.abs(sym.z - m.z)) > 1e-3

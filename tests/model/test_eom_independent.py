@@ -52,7 +52,7 @@ ROBOTS = {
     "unequal": scoutsim.RobotParameters(
         com_offset=0.035, leg_mass=(1.0, 0.7), leg_inertia=(0.0052, 0.0031),
         leg_com_distance=(0.16, 0.12), leg_rest_length=(0.323, 0.31),
-        leg_stiffness=(3520.0, 4100.0), leg_damping=(3.0, 4.5),
+        leg_stiffness=(3520.0, 4100.0), leg_damping=(55.0, 62.0),
         planetary_ratio=(5.0, 4.2), sprocket_ratio=(20.0, 22.0),
         drive_gear_inertia=(2.0e-6, 3.1e-6), driven_gear_inertia=(0.012, 0.009),
         belt_stiffness=(401.0, 350.0), belt_damping=(0.2, 0.35),

@@ -38,7 +38,7 @@ BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
 UNEQUAL_ROBOT = RobotParameters(
     com_offset=0.03, battery_resistance=0.1,
     leg_mass=(1.0, 0.8), leg_inertia=(0.0052, 0.004), leg_com_distance=(0.16, 0.14),
-    leg_rest_length=(0.323, 0.31), leg_stiffness=(3520.0, 3900.0), leg_damping=(3.0, 4.0),
+    leg_rest_length=(0.323, 0.31), leg_stiffness=(3520.0, 3900.0), leg_damping=(55.0, 62.0),
     planetary_ratio=(5.0, 4.6), sprocket_ratio=(20.4, 21.0),
     gearbox_efficiency=(0.8, 0.75), sprocket_efficiency=(0.816, 0.85),
     drive_gear_inertia=(2.4e-6, 2.0e-6), driven_gear_inertia=(0.0118, 0.0135),
