@@ -125,7 +125,7 @@ class HybridEngine:
                 self.out_energy)
         if self._entry is None:   # the argument types stay those of the first call
             self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
-                                            int(self.P[L.P_MODEL]))
+                                            int(self.P[L.P_HIP_UNIT]))
             self._entry = run_entry(self._method, args)
         nev_before = self.nev
         self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,

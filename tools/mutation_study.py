@@ -218,7 +218,7 @@ MUTANTS = [
            "    return P[P_LEG_FRIC + leg] + P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll\n",
            "    return P[P_LEG_FRIC + leg] + 2.0 * P[P_LEG_FRIC_SIDE + leg] * abs(tau_hip) / ll\n",
            (MORE + "test_axial_leg_force_is_spring_damper_and_friction",)),
-    # --- Model II hip unit (model/transmission.py) ------------------------------------
+    # --- Model II hip units (model/transmission.py, belt.py, backlash.py) ---------------
     Mutant("belt_damper_sign", "belt damper c_b (alpha' - phi')",
            "scoutsim/model/transmission.py",
            "            + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))\n",
@@ -232,9 +232,9 @@ MUTANTS = [
            (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
             EOM + "test_stance_constrained_dynamics")),
     Mutant("belt_backlash_dropped", "belt spring dead zone (backlash)",
-           "scoutsim/model/transmission.py",
-           "    h = 0.5 * P[P_BACKLASH + leg]\n",
-           "    h = 0.0 * P[P_BACKLASH + leg]\n",
+           "scoutsim/model/backlash.py",
+           "    return 0.5 * P[P_BACKLASH + leg]\n",
+           "    return 0.0 * P[P_BACKLASH + leg]\n",
            (MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",)),
     Mutant("joint_viscous_sign", "motor-joint viscous friction b_J w_m",
            "scoutsim/model/transmission.py",
@@ -263,7 +263,7 @@ MUTANTS = [
     # --- touchdown impact (model/impact.py) -------------------------------------------
     Mutant("impact_belt_not_rigid", "Model II impact: rigid belt (alpha' = phi' after it)",
            "scoutsim/model/impact.py",
-           "        if model == MODEL_II:\n            # rigid belt over the impact",
+           "        if gear:\n            # rigid belt over the impact",
            "        if False:\n            # rigid belt over the impact",
            (IMPACT + "test_model_ii_belt_is_rigid_through_the_impact",
             IMPACT + "test_independent_impact_solve_gives_recorded_velocities_and_impulse")),

@@ -35,12 +35,12 @@ from .layout import (
     A_CURRENT, A_FAX, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_TAU_APP, A_TAU_BELT, A_VBATT,
     EN_BATTERY_LOSS, EN_BELT_DAMPER, EN_CONSTRAINT, EN_CONVERSION, EN_COPPER, EN_ELECTRICAL,
     EN_GEAR_LOSS, EN_HIP_WORK, EN_JOINT_COULOMB, EN_JOINT_VISCOUS, EN_LEG_DAMPER,
-    EN_LEG_FRICTION, EN_TOE_SLIDE, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_IDEAL, MODEL_II,
+    EN_LEG_FRICTION, EN_TOE_SLIDE, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_IDEAL,
     MODEL_PASSIVE, NAUX_LEG, NEN_LEG, NQ, P_B_J, P_ETA, P_K, P_KB, P_KT, P_KW, P_L0, P_MODEL,
     P_N, P_NP, P_RA, P_RB, STRUT, STUCK,
 )
 from .leg import leg_damping
-from .transmission import belt_spring_deflection
+from .hip_unit import belt_spring_deflection, geared
 from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_META, WK_RLEG
 
 
@@ -74,7 +74,7 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
             out[e + EN_GEAR_LOSS] = npl * (tau0 - tout) * om / N
             out[e + EN_HIP_WORK] = npl * tout * om / N
             p_el_total += p_el
-        if model == MODEL_II:
+        if geared(P):
             om = aux[o + A_OMEGA_M]
             if mi[MI_MOTOR_B + leg] != STUCK:
                 # the joint's friction torque as it acted (viscous + Coulomb)
@@ -99,7 +99,7 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
         out[e + EN_TOE_SLIDE] = -aux[o + A_GT] * aux[o + A_SLIP_V]
     # constraint forces: generalized force -R^T nu through dq, by the leg of each row
     nr = int(wk[WK_META + MT_NROWS])
-    nact = 7 if model == MODEL_II else 5
+    nact = 7 if geared(P) else 5
     for rr in range(nr):
         rdq = 0.0
         for j in range(nact):

@@ -31,6 +31,7 @@ import numpy as np
 from ..jit import allocating, kernel
 from .actuator import back_emf_damping, battery_voltage, delivered_torque, motor_current, on_speed_line
 from .contact import leg_contact
+from .hip_unit import belt_spring_engaged, geared
 from .kinematics import hip_offset, project
 from .kkt import (
     MAX_KKT, MAX_ROWS, SCHUR_MAX_ROWS, add_clamp_rows, kkt_reduced_factor, kkt_reduced_solve,
@@ -39,7 +40,7 @@ from .kkt import (
 from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
-    MI_CONTACT_B, MI_MOTOR_B, MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_CB, P_KB,
+    MI_CONTACT_B, MI_MOTOR_B, MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_CB, P_KB,
     P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS, ROW_TOE_ALONG,
     STICK, STRUT, STUCK,
 )
@@ -63,18 +64,18 @@ STIFF_MOTOR_RATE = 1000.0
 
 
 @kernel(inline="always")
-def fill_derivative(ds, dq, b, LG, nact, model, ok):
+def fill_derivative(ds, dq, b, LG, nact, gear, ok):
     """ds = [dq, ddq, dl]: the accelerations are the first ``nact`` entries of the KKT
     solution b (zero if the factorization failed, ``ok`` False), the leg-length rates come
-    from the per-leg scalars LG; outside Model II the gear angles follow the legs
-    (alpha = phi)."""
+    from the per-leg scalars LG; without a geared hip unit (``gear`` False) the gear angles
+    follow the legs (alpha = phi)."""
     for i in range(NQ):
         ds[i] = dq[i]
         ds[NQ + i] = 0.0
     if ok:
         for i in range(nact):
             ds[NQ + i] = b[i]
-    if model != MODEL_II:
+    if not gear:
         ds[NQ + 5] = ds[NQ + 3]
         ds[NQ + 6] = ds[NQ + 4]
     ds[IL_B] = LG[2 * LG_LDOT]
@@ -88,7 +89,7 @@ def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl
     solution b (multipliers b[nact:nact+nr]); the ground force of a pinned toe is summed
     afresh, so a second call after a new solve (:func:`evaluate_command_change`) is
     exact."""
-    model = int(P[P_MODEL])
+    gear = geared(P)
     npl = P[P_NP]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
@@ -123,7 +124,7 @@ def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl
         aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
         aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
         aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
-        if model == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+        if gear and mi[MI_MOTOR_B + leg] == STUCK:
             aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
         else:
             aux[o + A_HOLD] = LG[2 * LG_TFRIC + leg]
@@ -149,7 +150,8 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     to the accelerations and multipliers. Equal to a fresh evaluation up to round-off, for
     the cost of one solve. Returns the KKT flag."""
     model = int(P[P_MODEL])
-    nact = 7 if model == MODEL_II else 5
+    gear = geared(P)
+    nact = 7 if gear else 5
     meta = wk[WK_META:WK_META + NMETA]
     ok = meta[MT_KKT_OK] > 0.5
     if not ok:
@@ -171,7 +173,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     vb = battery_voltage(dq, cmd, P)
     for i in range(n):
         b2[i] = 0.0
-    row = 5 if model == MODEL_II else 3
+    row = 5 if gear else 3
     for leg in range(2):
         om = LG[2 * LG_OM + leg]
         cur = motor_current(cmd[leg], om, vb, leg, P)
@@ -180,13 +182,13 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
             b2[row + leg] = npl * (tapp - LG[2 * LG_TAPP + leg])
         LG[2 * LG_CUR + leg] = cur
         LG[2 * LG_TAPP + leg] = tapp
-    free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
-    free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
+    free0 = gear and mi[MI_MOTOR_B] != STUCK
+    free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
     kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk, WK_Y,
                       schur)
     for i in range(n):
         b[i] += b2[i]
-    fill_derivative(ds, dq, b, LG, nact, model, ok)
+    fill_derivative(ds, dq, b, LG, nact, gear, ok)
     meta[MT_VBATT] = vb
     fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, meta[MT_SG_B],
                  meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F], vb, meta[MT_ENERGY])
@@ -201,7 +203,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
     for i in range(NS):
         for j in range(2 * NSTIFF):
             stiff[i, j] = 0.0
-    if int(P[P_MODEL]) != MODEL_II or not ok:
+    if not geared(P) or not ok:
         return
     n = nact + nr
     npl = P[P_NP]
@@ -210,7 +212,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
     for leg in range(2):
         cb = P[P_CB + leg]
-        kb = P[P_KB + leg]
+        # the spring's stiffness where it is engaged (0 inside a backlash's play)
+        kb = P[P_KB + leg] if belt_spring_engaged(q[5 + leg] - q[3 + leg], leg, P) else 0.0
         for i in range(n):
             b2[i] = 0.0
         b2[5 + leg] = 1.0
@@ -309,7 +312,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     ``want_aux`` False (the integrators' inner stages, whose outputs nobody reads) skips the
     outputs: aux is then left as it was, except ``aux[A_KKT_OK]``."""
     model = int(P[P_MODEL])
-    nact = 7 if model == MODEL_II else 5
+    gear = geared(P)
+    nact = 7 if gear else 5
     q = wk[WK_Q:WK_Q + NQ]
     dq = wk[WK_DQ:WK_DQ + NQ]
     l = wk[WK_L:WK_L + 2]
@@ -349,7 +353,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         LG[2 * LG_CUR + leg] = cur
         LG[2 * LG_TAPP + leg] = tapp
         tf, tb = hip_unit_forces(Q, q, dq, leg, tapp, om, mi[MI_MOTOR_B + leg], P)
-        if model == MODEL_II:
+        if gear:
             LG[2 * LG_TFRIC + leg] = tf
             LG[2 * LG_TBELT + leg] = tb
 
@@ -358,8 +362,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
     nr = 0
     for leg in range(2):
-        # the torque the hip applies to the leg (through the belt in Model II)
-        tau_hip = (LG[2 * LG_TBELT + leg] if model == MODEL_II else
+        # the torque the hip applies to the leg (through the belt of a geared unit)
+        tau_hip = (LG[2 * LG_TBELT + leg] if gear else
                    (LG[2 * LG_TAPP + leg] if model != MODEL_PASSIVE else 0.0))
         sg = sgl0 if leg == 0 else sgl1
         cg = cgl0 if leg == 0 else cgl1
@@ -379,8 +383,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
         b[i] = Q[i] - h[i]
     for rr in range(nr):
         b[nact + rr] = r[rr]
-    free0 = model == MODEL_II and mi[MI_MOTOR_B] != STUCK
-    free1 = model == MODEL_II and mi[MI_MOTOR_B + 1] != STUCK
+    free0 = gear and mi[MI_MOTOR_B] != STUCK
+    free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
     # structured (Schur-complement) factorization whenever the mass matrix is positive
     # definite (its translation block is m I by construction, above); the LU path keeps
     # the massless-leg model (zero leg inertia)
@@ -402,7 +406,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     meta[MT_SG_F] = sgl1
     meta[MT_CG_F] = cgl1
 
-    fill_derivative(ds, dq, b, LG, nact, model, ok)
+    fill_derivative(ds, dq, b, LG, nact, gear, ok)
 
     if want_stiff:
         fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0, sgl1,

@@ -8,10 +8,11 @@ import math
 import numpy as np
 
 from ..jit import allocating
+from .hip_unit import geared
 from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
 from .layout import (
-    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_MASSLESS, P_MODEL,
+    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, NQ, P_MASSLESS,
     P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK, STRUT,
 )
 from .rigid_body import kinetic_energy_at, mass_matrix
@@ -24,8 +25,9 @@ def impact(s, P, mi, mf, out):
 
     Solves ``[M R^T; R 0] [dq+; Lambda] = [M dq-; 0]`` where R holds the velocity
     constraints that act impulsively: every pinned toe (perpendicular and, for a strut,
-    axial), massless flight legs, and in Model II a rigid belt for each leg (the belt damper
-    is far stiffer than the gear-train inertia over an impact: alpha' = phi' after it).
+    axial), massless flight legs, and with a geared hip unit (Model II) a rigid belt for
+    each leg (the belt damper is far stiffer than the gear-train inertia over an impact:
+    alpha' = phi' after it; the damper acts across a backlash's play too, model/backlash.py).
     Stiction cannot carry an impulse, so stuck motor joints do not constrain it. Every row
     is homogeneous, so dq+ is the M-orthogonal projection of dq- onto the constrained
     velocities and the kinetic energy lost, 1/2 |dq- - dq+|_M^2, is never negative.
@@ -33,8 +35,8 @@ def impact(s, P, mi, mf, out):
     out[leg*3 + 0..2]: normal impulse, tangential impulse [N s] of each pinned toe;
     out[6]: kinetic energy lost [J]. Returns False if singular.
     """
-    model = int(P[P_MODEL])
-    nact = 7 if model == MODEL_II else 5
+    gear = geared(P)
+    nact = 7 if gear else 5
     q = s[0:NQ].copy()
     dq = s[NQ:2 * NQ].copy()
     l = s[IL_B:IL_B + 2].copy()
@@ -46,7 +48,7 @@ def impact(s, P, mi, mf, out):
     M = np.empty((NQ, NQ))
     mass_matrix(q, P, M)
     dq0 = s[NQ:2 * NQ].copy()
-    if model != MODEL_II:
+    if not gear:
         dq0[5] = dq0[3]
         dq0[6] = dq0[4]
     ke0 = kinetic_energy_at(M, dq0)
@@ -85,7 +87,7 @@ def impact(s, P, mi, mf, out):
             rleg[nr] = leg
             rkind[nr] = ROW_MASSLESS
             nr += 1
-        if model == MODEL_II:
+        if gear:
             # rigid belt over the impact: the gear rate equals the leg rate after it (the
             # belt damper, 80 us against the gear train, evens out the relative rate
             # within the impact; the energy of that relative motion is part of the logged
@@ -117,7 +119,7 @@ def impact(s, P, mi, mf, out):
         return False
     for i in range(nact):
         dq[i] = b[i]
-    if model != MODEL_II:
+    if not gear:
         dq[5] = dq[3]
         dq[6] = dq[4]
     for rr in range(nr):
@@ -134,7 +136,7 @@ def impact(s, P, mi, mf, out):
     s[0:NQ] = q
     s[NQ:2 * NQ] = dq
     s[IL_B:IL_B + 2] = l
-    if model == MODEL_II:
+    if gear:
         # Stiction carries no impulse, so every motor joint's stick/slip mode follows its
         # new gear rate (docs/specification.md section 3): the rigid belt moves the gear train with the leg, which
         # can reverse a slipping joint; a joint left at exactly zero rate is stuck (settle()

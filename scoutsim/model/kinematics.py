@@ -14,9 +14,10 @@ from __future__ import annotations
 import math
 
 from ..jit import kernel
+from .hip_unit import geared
 from .layout import (
-    HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_II, NQ, P_C, P_CLAMP_LEGS,
-    P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_MODEL, P_TD_B, P_TD_WORLD, SLIDE, STICK, STRUT,
+    HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, NQ, P_C, P_CLAMP_LEGS,
+    P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_TD_B, P_TD_WORLD, SLIDE, STICK, STRUT,
     STUCK,
 )
 
@@ -53,14 +54,15 @@ def project(q, dq, l, P, mi, mf):
     * massless leg in flight: phi prescribed (touchdown angle, torso- or world-referenced),
       l = l0;
     * massive leg in flight: l limited to the stop l0 (and = l0 for an undamped leg);
-    * ideal / Model I / passive: alpha := phi; Model II stuck motor joint: dalpha = 0.
+    * rigid hip unit (ideal / Model I / passive): alpha := phi; a geared unit's (Model II)
+      stuck motor joint: dalpha = 0.
 
     Returns (sin theta, cos theta, sin g_b, cos g_b, sin g_f, cos g_f) of the projected
     configuration, g = theta + phi the leg's angle from the world vertical (for a pinned
     toe straight from the toe-hip vector), for
     :func:`~scoutsim.model.evaluate.evaluate_ws` to reuse.
     """
-    model = int(P[P_MODEL])
+    gear = geared(P)
     massless = P[P_MASSLESS] > 0.5
     if P[P_CLAMP_TORSO] > 0.5:
         # bench rig: the clamped torso is at rest (add_clamp_rows)
@@ -123,7 +125,7 @@ def project(q, dq, l, P, mi, mf):
         else:
             sg1 = sg
             cg1 = cg
-        if model != MODEL_II:
+        if not gear:
             q[5 + leg] = q[3 + leg]
             dq[5 + leg] = dq[3 + leg]
         elif mi[MI_MOTOR_B + leg] == STUCK:

@@ -22,8 +22,9 @@ import numpy as np
 
 from ..jit import allocating, kernel
 from .layout import (
-    IL_B, MODEL_II, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MODEL, P_MT, P_NP,
+    IL_B, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MT, P_NP,
 )
+from .hip_unit import geared
 from .kinematics import hip_offset
 from .transmission import add_gear_inertia, belt_energy
 
@@ -66,7 +67,7 @@ def mass_matrix_at(M, P, sth, cth, sg0, cg0, sg1, cg1):
         M[2, 2] += il
         M[2, k] += il
         M[k, k] += il
-    if int(P[P_MODEL]) == MODEL_II:
+    if geared(P):
         add_gear_inertia(M, P)
     for i in range(NQ):
         for j in range(i):
@@ -127,7 +128,7 @@ def potential_energy_at(q, l, P, sth, cg0, cg1):
         e += ml * grav * yc
         dl = P[P_L0 + leg] - l[leg]
         e += 0.5 * npl * P[P_K + leg] * dl * dl
-        if int(P[P_MODEL]) == MODEL_II:
+        if geared(P):
             e += belt_energy(q, leg, P)
     return e
 

@@ -1,55 +1,44 @@
-"""The transmission between motor and leg (compiled): ideal / Model I, and the Model II
-hip unit (docs/specification.md section 5; paper Sec. III, Table II, Fig. 6).
+"""The transmission between motor and leg (compiled): the rigid hip unit (ideal, Model I,
+passive) and what the geared hip units of Model II share (docs/specification.md
+section 5; paper Sec. III, Table II, Fig. 6). Which unit a run has, and the belt each
+geared unit brings, is :mod:`scoutsim.model.hip_unit`'s.
 
-Ideal and Model I: the gear output drives the leg angle phi directly (Model I adds the
-motor's torque-speed line and the battery; model/actuator.py). Model II: the motor drives a
-gear pair (drive gear J_1 on the motor shaft, driven gear J_2 at angle alpha relative to the
-torso, ratio N) that drives the leg through a belt modelled as a spring-damper
-(k_b, c_b) on alpha - phi; the motor joint has viscous friction b_J and stiction tau_s, so it
-is either stuck (alpha' = 0, a constraint row of kind ``ROW_GEAR``) or slipping
-(Coulomb torque tau_s against the motion). Everything the hip unit adds to the model is in
-this file: its inertia (:func:`add_gear_inertia`), its potential energy
-(:func:`belt_energy`), its generalized forces (:func:`hip_unit_forces`), the stuck joint's
-row (:func:`motor_joint_row`) and the joint's stick/slip mode after an impact
-(:func:`motor_mode_from_rate`). The effects beyond the paper (belt backlash) are off by
-default.
+Rigid unit: the gear output drives the leg angle phi directly (Model I adds the motor's
+torque-speed line and the battery; model/actuator.py). Geared units (Model II): the motor
+drives a gear pair (drive gear J_1 on the motor shaft, driven gear J_2 at angle alpha
+relative to the torso, ratio N) that drives the leg through a belt, a spring-damper
+(k_b, c_b) on alpha - phi (model/belt.py; with play, model/backlash.py); the motor joint has
+viscous friction b_J and stiction tau_s, so it is either stuck (alpha' = 0, a constraint
+row of kind ``ROW_GEAR``) or slipping (Coulomb torque tau_s against the motion). What the
+geared unit adds to the model is here: its inertia (:func:`add_gear_inertia`), its
+potential energy (:func:`belt_energy`), its generalized forces (:func:`hip_unit_forces`),
+the stuck joint's row (:func:`motor_joint_row`), whether a joint has stiction that can
+hold it (:func:`joint_has_stiction`) and the joint's stick/slip mode after an impact
+(:func:`motor_mode_from_rate`).
 """
 
 from __future__ import annotations
 
 from ..jit import kernel
+from .hip_unit import belt_spring_deflection, geared
 from .kkt import new_row
 from .layout import (
-    MI_MOTOR_B, MODEL_II, MODEL_PASSIVE, P_B_J, P_BACKLASH, P_CB, P_J1, P_J2, P_KB, P_MODEL,
-    P_N, P_NP, P_TAU_S, ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
+    MI_MOTOR_B, MODEL_PASSIVE, P_B_J, P_CB, P_J1, P_J2, P_KB, P_MODEL, P_N, P_NP, P_TAU_S,
+    ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
 )
 
 
 @kernel(inline="always")
 def motor_speed(dq, leg, P):
     """Motor speed relative to the torso [rad/s] of leg ``leg``: N times the rate of the
-    coordinate the gear output turns (the driven gear alpha in Model II, the leg phi
+    coordinate the gear output turns (the driven gear alpha of a geared unit, the leg phi
     otherwise)."""
-    return P[P_N + leg] * (dq[5 + leg] if int(P[P_MODEL]) == MODEL_II else dq[3 + leg])
-
-
-@kernel(inline="always")
-def belt_spring_deflection(delta, leg, P):
-    """Deflection [rad] the belt spring of virtual leg ``leg`` sees at gear/leg angle
-    difference ``delta`` [rad]: with the hip unit's play b (``P_BACKLASH``, 0 = the paper's
-    model) the spring is slack for |delta| <= b / 2 (dead zone) and deflected by the excess
-    beyond it."""
-    h = 0.5 * P[P_BACKLASH + leg]
-    if delta > h:
-        return delta - h
-    if delta < -h:
-        return delta + h
-    return 0.0
+    return P[P_N + leg] * (dq[5 + leg] if geared(P) else dq[3 + leg])
 
 
 @kernel(inline="always")
 def belt_energy(q, leg, P):
-    """Potential energy [J] of the belt springs of virtual leg ``leg`` (Model II)."""
+    """Potential energy [J] of the belt springs of virtual leg ``leg`` (geared units)."""
     bd = belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
     return 0.5 * P[P_NP] * P[P_KB + leg] * bd * bd
 
@@ -100,9 +89,8 @@ def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
     on the driven gear alpha; the joint friction (at the motor, N times larger at alpha)
     opposes it, and the belt couples alpha and phi. Returns (joint friction torque at the
     motor, belt torque on the leg) [N m], both 0 outside Model II."""
-    model = int(P[P_MODEL])
     npl = P[P_NP]
-    if model == MODEL_II:
+    if geared(P):
         Q[5 + leg] += npl * tapp
         tf = joint_friction_torque(om, mode, leg, P)
         Q[5 + leg] -= npl * P[P_N + leg] * tf
@@ -110,7 +98,7 @@ def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
         Q[3 + leg] += npl * tb
         Q[5 + leg] -= npl * tb
         return tf, tb
-    if model != MODEL_PASSIVE:
+    if int(P[P_MODEL]) != MODEL_PASSIVE:
         Q[3 + leg] += npl * tapp
     return 0.0, 0.0
 
@@ -119,11 +107,18 @@ def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
 def motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P):
     """Append the row alpha'' = 0 of a stuck Model II motor joint (kind ``ROW_GEAR``; its
     multiplier is the stiction holding torque). Returns the new row count."""
-    if int(P[P_MODEL]) == MODEL_II and mi[MI_MOTOR_B + leg] == STUCK:
+    if geared(P) and mi[MI_MOTOR_B + leg] == STUCK:
         new_row(R, r, rkind, rleg, nr, 0.0, ROW_GEAR, leg)
         R[nr, 5 + leg] = 1.0
         nr += 1
     return nr
+
+
+@kernel(inline="always")
+def joint_has_stiction(leg, P):
+    """True if virtual leg ``leg`` has a motor joint with stiction (a geared unit with
+    tau_s > 0): its joint can stick, and its stick/slip events and transitions apply."""
+    return geared(P) and P[P_TAU_S + leg] > 0.0
 
 
 @kernel(inline="always")

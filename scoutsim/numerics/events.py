@@ -18,12 +18,13 @@ import numpy as np
 from ..jit import kernel
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
+from ..model.transmission import joint_has_stiction
 from ..model.layout import (
     A_FAX, A_GN, A_GT, BACK, FRONT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
     EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS, NEVBUF, NS,
     STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
-    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV, NEV_CONTACT, NQ,
-    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NP, P_TAU_S,
+    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEV_CONTACT, NQ,
+    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S,
     P_THETA_LIM, P_TORSO_H, P_TORSO_LEN, SLIDE, STICK, STRUT, STUCK, V_BEYOND_STOP,
     V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING,
     V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
@@ -83,7 +84,7 @@ def event_values(s, aux, P, mi, out):
         elif mode == STRUT:
             out[e] = aux[o + A_GN] / W
             out[e + 1] = aux[o + A_STRUT] / W
-        if int(P[P_MODEL]) == MODEL_II and tau_s > 0.0:
+        if joint_has_stiction(leg, P):
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
                 out[EV_MOTOR_B + leg] = (tau_s - abs(aux[o + A_HOLD])) / tau_s
@@ -190,7 +191,7 @@ def mode_violations(s, ds, aux, P, mi):
                 bits |= V_TOE_BELOW_GROUND
             if flight_toe_enters_ground(s, ds, aux, P, leg):
                 bits |= V_TOE_ENTERS_GROUND
-        if int(P[P_MODEL]) == MODEL_II and P[P_TAU_S + leg] > 0.0:
+        if joint_has_stiction(leg, P):
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
                 if abs(aux[o + A_HOLD]) > P[P_TAU_S + leg] * (1.0 + 1e-6):

@@ -12,12 +12,13 @@ from ..jit import allocating, kernel
 from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
+from ..model.transmission import joint_has_stiction
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, BACK, FRONT, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
     EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
     EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_II, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
-    P_LEG_FRIC_SIDE, P_MASSLESS, P_MODEL, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
+    P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
     SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
     STICK, STRUT, STUCK,
 )
@@ -112,7 +113,6 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
     # release it at once (the toe would then be disarmed at height <= 0 and fall through)
     gn_tol = -1e-9 * W
     coulomb = P[P_MU] < 1e300
-    model2 = int(P[P_MODEL]) == MODEL_II
     for it in range(12):
         if it == 0 and command_only and P[P_LEG_FRIC_SIDE + BACK] == 0.0 \
                 and P[P_LEG_FRIC_SIDE + FRONT] == 0.0:
@@ -164,7 +164,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
                     # (the massless toe on its compliant leg carries none).
                     mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
                     changed = True
-            if model2 and P[P_TAU_S + leg] > 0.0:
+            if joint_has_stiction(leg, P):
                 mm = mi[MI_MOTOR_B + leg]
                 if mm == STUCK:
                     hold = aux[o + A_HOLD]

@@ -1,0 +1,27 @@
+"""The paper's belt (compiled): the Model II hip unit's lumped belt compliance and gear
+backlash as a linear torsional spring k_b in parallel with a damper c_b on the angle
+between the driven gear and the leg, alpha - phi (paper Sec. III, Fig. 6, Table II:
+k_b = 7 N m/deg, c_b = 4 N m/(deg/s); docs/specification.md section 5).
+
+One of the hip units registered in :mod:`scoutsim.model.hip_unit`; the gear pair and the
+motor joint it shares with the other geared units are in :mod:`scoutsim.model.transmission`.
+Each function takes the angle difference ``delta`` = alpha - phi [rad] of virtual leg
+``leg``.
+"""
+
+from __future__ import annotations
+
+from ..jit import kernel
+
+
+@kernel(inline="always")
+def spring_deflection(delta, leg, P):
+    """Deflection [rad] of the belt spring: the whole angle difference."""
+    return delta
+
+
+@kernel(inline="always")
+def spring_engaged(delta, leg, P):
+    """Whether the spring transmits torque at ``delta`` (its stiffness counts in the stiff
+    Jacobian): always."""
+    return True
