@@ -17,8 +17,8 @@ paper's belt. Consistent with that:
 
 Registered in :mod:`scoutsim.model.hip_unit`; a Model II robot with any play > 0 runs on
 this unit (``scoutsim.model.packing``), one without on :mod:`scoutsim.model.belt`.
-Each function takes the angle difference ``delta`` = alpha - phi [rad] of virtual leg
-``leg``.
+Its function :func:`spring` takes the angle difference ``delta`` = alpha - phi [rad] of
+virtual leg ``leg``.
 """
 
 from __future__ import annotations
@@ -34,18 +34,12 @@ def half_play(leg, P):
 
 
 @kernel(inline="always")
-def spring_deflection(delta, leg, P):
-    """Deflection [rad] of the belt spring beyond the dead zone |delta| <= b / 2; 0 inside."""
+def spring(delta, leg, P):
+    """(deflection [rad], engaged) of the belt spring at ``delta``: the excess beyond the
+    dead zone |delta| <= b / 2 and True there; (0, False) inside the play."""
     h = half_play(leg, P)
     if delta > h:
-        return delta - h
+        return delta - h, True
     if delta < -h:
-        return delta + h
-    return 0.0
-
-
-@kernel(inline="always")
-def spring_engaged(delta, leg, P):
-    """Whether the spring transmits torque at ``delta``: beyond the dead zone only."""
-    h = half_play(leg, P)
-    return delta > h or delta < -h
+        return delta + h, True
+    return 0.0, False

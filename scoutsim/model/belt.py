@@ -5,8 +5,8 @@ k_b = 7 N m/deg, c_b = 4 N m/(deg/s); docs/specification.md section 5).
 
 One of the hip units registered in :mod:`scoutsim.model.hip_unit`; the gear pair and the
 motor joint it shares with the other geared units are in :mod:`scoutsim.model.transmission`.
-Each function takes the angle difference ``delta`` = alpha - phi [rad] of virtual leg
-``leg``.
+Its one function, :func:`spring`, takes the angle difference ``delta`` = alpha - phi [rad]
+of virtual leg ``leg``.
 """
 
 from __future__ import annotations
@@ -15,13 +15,7 @@ from ..jit import kernel
 
 
 @kernel(inline="always")
-def spring_deflection(delta, leg, P):
-    """Deflection [rad] of the belt spring: the whole angle difference."""
-    return delta
-
-
-@kernel(inline="always")
-def spring_engaged(delta, leg, P):
-    """Whether the spring transmits torque at ``delta`` (its stiffness counts in the stiff
-    Jacobian): always."""
-    return True
+def spring(delta, leg, P):
+    """(deflection [rad], engaged) of the belt spring at ``delta``: the whole angle
+    difference, and always engaged (its stiffness always counts in the stiff Jacobian)."""
+    return delta, True

@@ -40,7 +40,7 @@ from .layout import (
     P_N, P_NP, P_RA, P_RB, STRUT, STUCK,
 )
 from .leg import leg_damping
-from .hip_unit import belt_spring_deflection, geared
+from .hip_unit import belt_spring, geared
 from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_META, WK_RLEG
 
 
@@ -83,7 +83,7 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
                 out[e + EN_JOINT_VISCOUS] = p_visc
                 out[e + EN_JOINT_COULOMB] = p_joint - p_visc
             rate = dq[5 + leg] - dq[3 + leg]
-            spring = P[P_KB + leg] * belt_spring_deflection(s[5 + leg] - s[3 + leg], leg, P)
+            spring = P[P_KB + leg] * belt_spring(s[5 + leg] - s[3 + leg], leg, P)[0]
             out[e + EN_BELT_DAMPER] = npl * (aux[o + A_TAU_BELT] - spring) * rate
         # telescopic leg: the axial force as it acted, less its spring part, through the
         # leg's rate of extension (in flight the massless toe's force balance makes the

@@ -31,7 +31,7 @@ import numpy as np
 from ..jit import allocating, kernel
 from .actuator import back_emf_damping, battery_voltage, delivered_torque, motor_current, on_speed_line
 from .contact import leg_contact
-from .hip_unit import belt_spring_engaged, geared
+from .hip_unit import belt_spring, geared
 from .kinematics import hip_offset, project
 from .kkt import (
     MAX_KKT, MAX_ROWS, SCHUR_MAX_ROWS, add_clamp_rows, kkt_reduced_factor, kkt_reduced_solve,
@@ -213,7 +213,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0
     for leg in range(2):
         cb = P[P_CB + leg]
         # the spring's stiffness where it is engaged (0 inside a backlash's play)
-        kb = P[P_KB + leg] if belt_spring_engaged(q[5 + leg] - q[3 + leg], leg, P) else 0.0
+        kb = P[P_KB + leg] if belt_spring(q[5 + leg] - q[3 + leg], leg, P)[1] else 0.0
         for i in range(n):
             b2[i] = 0.0
         b2[5 + leg] = 1.0

@@ -16,9 +16,10 @@ and stored in ``P[P_HIP_UNIT]``):
 A geared unit (belt, backlash) adds the driven-gear angles alpha to the coordinates. What
 a geared unit adds to the model (inertia, generalized forces, the stuck joint's row, the
 motor joint's stick/slip) is common to both and lives in :mod:`~scoutsim.model.transmission`;
-what differs, the belt spring, is reached through :func:`belt_spring_deflection` and
-:func:`belt_spring_engaged`, which dispatch to the unit's module. A new belt variant is a
-module with those two functions and its branch below.
+what differs, the belt spring, is reached through :func:`belt_spring`, which dispatches to
+the unit's module. A new belt variant is a module with a ``spring`` function and its
+registration: a code in ``layout`` (``HIP_*``), its branch of :func:`belt_spring`, and when a
+robot gets it (:func:`hip_unit_code`).
 """
 
 from __future__ import annotations
@@ -36,21 +37,15 @@ def geared(P):
 
 
 @kernel(inline="always")
-def belt_spring_deflection(delta, leg, P):
-    """Deflection [rad] of virtual leg ``leg``'s belt spring at the gear/leg angle
-    difference ``delta`` = alpha - phi [rad], by the run's hip unit."""
+def belt_spring(delta, leg, P):
+    """(deflection [rad], engaged) of virtual leg ``leg``'s belt spring at the gear/leg
+    angle difference ``delta`` = alpha - phi [rad], by the run's belt: the deflection its
+    torque k_b x deflection and energy 1/2 k_b deflection^2 follow, and whether its
+    stiffness counts (in the stiff Jacobian of the ARK methods). One branch per geared
+    unit."""
     if int(P[P_HIP_UNIT]) == HIP_BACKLASH:
-        return backlash.spring_deflection(delta, leg, P)
-    return belt.spring_deflection(delta, leg, P)
-
-
-@kernel(inline="always")
-def belt_spring_engaged(delta, leg, P):
-    """Whether virtual leg ``leg``'s belt spring transmits torque at ``delta`` [rad] (its
-    stiffness k_b then counts in the stiff Jacobian), by the run's hip unit."""
-    if int(P[P_HIP_UNIT]) == HIP_BACKLASH:
-        return backlash.spring_engaged(delta, leg, P)
-    return belt.spring_engaged(delta, leg, P)
+        return backlash.spring(delta, leg, P)
+    return belt.spring(delta, leg, P)
 
 
 def hip_unit_code(model: str, backlash_rad) -> int:

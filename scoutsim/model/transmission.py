@@ -20,7 +20,7 @@ hold it (:func:`joint_has_stiction`) and the joint's stick/slip mode after an im
 from __future__ import annotations
 
 from ..jit import kernel
-from .hip_unit import belt_spring_deflection, geared
+from .hip_unit import belt_spring, geared
 from .kkt import new_row
 from .layout import (
     MI_MOTOR_B, MODEL_PASSIVE, P_B_J, P_CB, P_J1, P_J2, P_KB, P_MODEL, P_N, P_NP, P_TAU_S,
@@ -39,7 +39,7 @@ def motor_speed(dq, leg, P):
 @kernel(inline="always")
 def belt_energy(q, leg, P):
     """Potential energy [J] of the belt springs of virtual leg ``leg`` (geared units)."""
-    bd = belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
+    bd = belt_spring(q[5 + leg] - q[3 + leg], leg, P)[0]
     return 0.5 * P[P_NP] * P[P_KB + leg] * bd * bd
 
 
@@ -76,7 +76,7 @@ def belt_torque(q, dq, leg, P):
     """Torque [N m] of the belt spring-damper on the leg of virtual leg ``leg``, per
     physical leg: k_b (alpha - phi) (with the dead zone of the backlash) plus
     c_b (alpha' - phi')."""
-    return (P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
+    return (P[P_KB + leg] * belt_spring(q[5 + leg] - q[3 + leg], leg, P)[0]
             + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))
 
 
