@@ -17,19 +17,24 @@ from __future__ import annotations
 
 from ..jit import kernel
 from .kinematics import hip_offset
-from .kkt import new_row
+from .kkt import MAX_ROWS, new_row
 from .layout import (
-    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, P_K, P_L0, P_MU, P_NP, P_STRUT_OMEGA,
+    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS, P_MU, P_NP,
+    P_STRUT_OMEGA,
     P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT,
 )
 from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
-from .workspace import LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY
+from .workspace import (
+    LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY, MT_CTH, MT_STH, NWK_LEG, WA_R,
+    WK_DQ, WK_L, WK_LEG, WK_META, WK_Q, WK_Q_, WK_R, WK_RKIND, WK_RLEG,
+)
 
 
 @kernel(inline="always")
-def leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q, R, r, rkind,
-                rleg, nr, LG):
-    """Contact forces and constraint rows of virtual leg ``leg`` in its contact mode.
+def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
+    """Contact forces and constraint rows of virtual leg ``leg`` in its contact mode, in the
+    evaluation workspace ``wk, wA`` (model/workspace.py: the projected state q, dq, l and
+    the pitch's sin/cos ``MT_STH``, ``MT_CTH``).
 
     Adds the leg's ground and leg forces to the generalized forces Q, appends its rows
     (R, right-hand sides r, kinds, legs) from row ``nr`` on, and writes the leg's per-leg
@@ -37,6 +42,18 @@ def leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q
     and velocity). ``sg, cg``: sin/cos of the leg's angle from the vertical;
     ``tau_hip`` [N m]: the torque the hip applies to one physical leg (for the side-load
     friction of the leg). Returns the new row count."""
+    q = wk[WK_Q:WK_Q + NQ]
+    dq = wk[WK_DQ:WK_DQ + NQ]
+    l = wk[WK_L:WK_L + 2]
+    Q = wk[WK_Q_:WK_Q_ + NQ]
+    r = wk[WK_R:WK_R + MAX_ROWS]
+    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
+    R = wA[WA_R:WA_R + MAX_ROWS]
+    sth = wk[WK_META + MT_STH]
+    cth = wk[WK_META + MT_CTH]
+    massless = P[P_MASSLESS] > 0.5
     npl = P[P_NP]
     l0 = P[P_L0 + leg]
     k = P[P_K + leg]

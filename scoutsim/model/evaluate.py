@@ -49,7 +49,7 @@ from .transmission import hip_unit_forces, motor_joint_row, motor_speed
 from .workspace import (
     LG_CUR, LG_FAX, LG_GN, LG_GT, LG_HOLD, LG_LDOT, LG_OM, LG_STRUT, LG_TAPP, LG_TBELT,
     LG_TFRIC, LG_TOEVX, LG_TOEX, LG_TOEY, MT_CG_B, MT_CG_F, MT_ENERGY, MT_KKT_OK, MT_NROWS,
-    MT_SCHUR, MT_SG_B, MT_SG_F, MT_VBATT, NLG, NMETA, NWK_LEG, WA_M, WA_R, WA_ROWS, WK_B,
+    MT_CTH, MT_SCHUR, MT_SG_B, MT_SG_F, MT_STH, MT_VBATT, NLG, NMETA, NWK_LEG, WA_M, WA_R, WA_ROWS, WK_B,
     WK_B2, WK_DQ, WK_H, WK_L, WK_LEG, WK_META, WK_Q, WK_Q_, WK_R, WK_RKIND, WK_RLEG,
     WK_SIZE, WK_Y,
 )
@@ -83,12 +83,24 @@ def fill_derivative(ds, dq, b, LG, nact, gear, ok):
 
 
 @kernel
-def fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
-                 vb, energy):
-    """The outputs aux of :func:`evaluate_ws` from its per-leg scalars LG and the KKT
-    solution b (multipliers b[nact:nact+nr]); the ground force of a pinned toe is summed
-    afresh, so a second call after a new solve (:func:`evaluate_command_change`) is
-    exact."""
+def fill_outputs(P, mi, cmd, aux, wk):
+    """The outputs aux of :func:`evaluate_ws` from the evaluation held in the workspace
+    ``wk`` (its per-leg scalars, the KKT solution with the multipliers after the ``nact``
+    accelerations, the rows' kinds and legs, and the summary ``MT_*``); the ground force
+    of a pinned toe is summed afresh, so a second call after a new solve
+    (:func:`evaluate_command_change`) is exact."""
+    q = wk[WK_Q:WK_Q + NQ]
+    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
+    b = wk[WK_B:WK_B + MAX_KKT]
+    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    meta = wk[WK_META:WK_META + NMETA]
+    nact = 7 if geared(P) else 5
+    nr = int(meta[MT_NROWS])
+    ok = meta[MT_KKT_OK] > 0.5
+    sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
+    vb = meta[MT_VBATT]
+    energy = meta[MT_ENERGY]
     gear = geared(P)
     npl = P[P_NP]
     for leg in range(2):
@@ -161,7 +173,6 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     nr = int(meta[MT_NROWS])
     n = nact + nr
     dq = wk[WK_DQ:WK_DQ + NQ]
-    q = wk[WK_Q:WK_Q + NQ]
     LG = wk[WK_LEG:WK_LEG + NWK_LEG]
     b = wk[WK_B:WK_B + MAX_KKT]
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
@@ -190,16 +201,34 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
         b[i] += b2[i]
     fill_derivative(ds, dq, b, LG, nact, gear, ok)
     meta[MT_VBATT] = vb
-    fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, meta[MT_SG_B],
-                 meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F], vb, meta[MT_ENERGY])
+    fill_outputs(P, mi, cmd, aux, wk)
     return ok
 
 
 @kernel
-def fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0, sgl1, cgl1,
-                       M, A, piv, rkind, rleg, nact, nr, free0, free1, schur, wk, ok):
+def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     """The rank-NSTIFF factorization of the stiff part of the Jacobian (see
-    :func:`evaluate_ws`), from the KKT factors of the evaluation just made."""
+    :func:`evaluate_ws`), from the evaluation just made, held in the workspace ``wk, wA,
+    piv`` (the projected state, per-leg scalars, KKT factors and summary ``MT_*``)."""
+    q = wk[WK_Q:WK_Q + NQ]
+    dq = wk[WK_DQ:WK_DQ + NQ]
+    l = wk[WK_L:WK_L + 2]
+    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
+    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    meta = wk[WK_META:WK_META + NMETA]
+    A = wA[0:MAX_KKT]
+    M = wA[WA_M:WA_M + NQ]
+    gear = geared(P)
+    nact = 7 if gear else 5
+    nr = int(meta[MT_NROWS])
+    ok = meta[MT_KKT_OK] > 0.5
+    schur = meta[MT_SCHUR] > 0.5
+    vb = meta[MT_VBATT]
+    sth, cth = meta[MT_STH], meta[MT_CTH]
+    sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
+    free0 = gear and mi[MI_MOTOR_B] != STUCK
+    free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
     for i in range(NS):
         for j in range(2 * NSTIFF):
             stiff[i, j] = 0.0
@@ -323,6 +352,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     l[0] = s[IL_B]
     l[1] = s[IL_B + 1]
     sth, cth, sgl0, cgl0, sgl1, cgl1 = project(q, dq, l, P, mi, mf)
+    meta = wk[WK_META:WK_META + NMETA]
+    meta[MT_STH] = sth
+    meta[MT_CTH] = cth
 
     Q = wk[WK_Q_:WK_Q_ + NQ]
     h = wk[WK_H:WK_H + NQ]
@@ -367,8 +399,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
                    (LG[2 * LG_TAPP + leg] if model != MODEL_PASSIVE else 0.0))
         sg = sgl0 if leg == 0 else sgl1
         cg = cgl0 if leg == 0 else cgl1
-        nr = leg_contact(leg, q, dq, l, P, mi, mf, sth, cth, sg, cg, tau_hip, massless, Q, R,
-                         r, rkind, rleg, nr, LG)
+        nr = leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA)
         nr = motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P)
     nr = add_clamp_rows(P, R, r, rkind, rleg, nr)
 
@@ -396,7 +427,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     if ok:
         kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y,
                           schur)
-    meta = wk[WK_META:WK_META + NMETA]
     meta[MT_SCHUR] = 1.0 if schur else 0.0
     meta[MT_NROWS] = nr
     meta[MT_KKT_OK] = 1.0 if ok else 0.0
@@ -409,15 +439,13 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     fill_derivative(ds, dq, b, LG, nact, gear, ok)
 
     if want_stiff:
-        fill_stiff_factors(stiff, P, mi, cmd, q, dq, l, LG, vb, sth, cth, sgl0, cgl0, sgl1,
-                           cgl1, M, A, piv, rkind, rleg, nact, nr, free0, free1, schur, wk, ok)
+        fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv)
 
     if not want_aux:
         aux[A_KKT_OK] = 1.0 if ok else 0.0
         return ok
     meta[MT_ENERGY] = ekin + epot
-    fill_outputs(P, mi, cmd, aux, q, LG, b, rkind, rleg, nact, nr, ok, sgl0, cgl0, sgl1, cgl1,
-                 vb, meta[MT_ENERGY])
+    fill_outputs(P, mi, cmd, aux, wk)
     return ok
 
 

@@ -29,7 +29,7 @@ WK_LEG = WK_RLEG + MAX_ROWS  # per-leg scalars, 16 slots x 2 legs (NLG used)
 NWK_LEG = 32
 WK_Y = WK_LEG + NWK_LEG    # reduced KKT right-hand side / solution
 WK_META = WK_Y + MAX_KKT   # what evaluate_command_change needs of the last evaluation (MT_*)
-NMETA = 9
+NMETA = 11
 WK_SIZE = WK_META + NMETA
 WA_R = MAX_KKT             # rows of wA holding the constraint rows R
 WA_M = WA_R + MAX_ROWS     # rows of wA holding the mass matrix M
@@ -49,6 +49,8 @@ MT_CG_B = 5
 MT_SG_F = 6       # sin / cos of the front leg's angle
 MT_CG_F = 7
 MT_ENERGY = 8     # total mechanical energy [J]
+MT_STH = 9        # sin / cos of the pitch theta
+MT_CTH = 10
 
 
 @allocating
