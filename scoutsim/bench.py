@@ -3,7 +3,7 @@ hip-unit identification needs (:mod:`scoutsim.identification.rigs`)."""
 
 from __future__ import annotations
 
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -19,12 +19,27 @@ from .engine import HybridEngine
 from .integrator import IntegratorSettings
 from .starts import fresh_modes
 
-__all__ = ["run_bench"]
+__all__ = ["run_bench", "Bench"]
+
+
+@dataclass(frozen=True)
+class Bench:
+    """How the robot is mounted and wired on the bench (:func:`run_bench`).
+
+    clamp_torso : the torso is held at rest (extra constraint rows of the KKT system).
+    clamp_legs : the legs are held at their angles relative to the torso too (a stall
+        test; needs ``clamp_torso``).
+    motor_circuit : "amplifier" (the current amplifier), "open" or "short" (the motor
+        leads open or shorted: no amplifier).
+    """
+
+    clamp_torso: bool = False
+    clamp_legs: bool = False
+    motor_circuit: str = "amplifier"
 
 
 def run_bench(robot: RobotParameters, model: str, start_state, duration: float, *,
-              clamp_torso: bool = False, clamp_legs: bool = False,
-              motor_circuit: str = "amplifier", controller: ControllerParameters | None = None,
+              bench: Bench = Bench(), controller: ControllerParameters | None = None,
               held_torques=None, schedule=None, dt: float = 1e-3,
               integrator: IntegratorSettings | None = None,
               provenance: dict | None = None) -> SimulationResult:
@@ -37,10 +52,7 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     start_state : (16,) state vector (layout ``STATE_NAMES``, SI); the modes are derived
         from it (no toe in contact; Model II joints stuck unless their gear turns).
     duration : simulated time [s]; dt : control / sample period [s].
-    clamp_torso : the torso is held at rest (extra constraint rows); clamp_legs : the legs
-        are held at their angles relative to the torso too (a stall test).
-    motor_circuit : "amplifier" (the current amplifier), "open" or "short" (the motor
-        leads open or shorted: no amplifier).
+    bench : :class:`Bench`: the clamps and the motor circuit (default: free, amplifier).
     controller : ControllerParameters: the compiled Table I law sets the commands; None:
         ``held_torques`` (back, front) [N m per physical leg, at the leg] are held for the
         whole run (zero if not given).
@@ -49,13 +61,13 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
         touchdown angles, sweep limits) [rad] take these values.
     integrator : IntegratorSettings (default: the reference, DOPRI5).
     """
-    P = robot_array(robot, model, clamp_torso=clamp_torso, clamp_legs=clamp_legs,
-                    motor_circuit=motor_circuit)
+    P = robot_array(robot, model, clamp_torso=bench.clamp_torso, clamp_legs=bench.clamp_legs,
+                    motor_circuit=bench.motor_circuit)
     C = controller_array(controller, robot)
     s = np.array(start_state, dtype=float)
     mi, mf = fresh_modes(s, P)
     integrator = (integrator or IntegratorSettings(method="dopri5")).resolve(model)
-    eng = HybridEngine(P, C, s, mi, mf, np.zeros(2, dtype=np.int64), duration, dt,
+    eng = HybridEngine(P, C, (s, mi, mf, np.zeros(2, dtype=np.int64)), duration, dt,
                        integrator, block=control_block(
                            L.CTRL_BUILTIN if controller is not None else L.CTRL_HELD,
                            geom=SensorParameters().geometry_array(

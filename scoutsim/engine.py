@@ -10,7 +10,8 @@ import numpy as np
 
 from .control.dispatch import plan_controller
 from .control.sensors import SensorParameters, Sensors
-from .loop import effective_method, readings_at, run_entry
+from .loop import Carry, Control, Records, Span, effective_method, readings_at, run_entry
+from .numerics.work import Plant
 from .model import layout as L
 from .model.evaluate import NSTIFF
 from .model.packing import robot_array
@@ -40,9 +41,13 @@ class HybridEngine:
     #: default tolerance: 1.3 steps per control period)
     STEP_ROWS = 8192
 
-    def __init__(self, P, C, s, mi, mf, ls, duration: float, dt: float,
+    def __init__(self, P, C, start, duration: float, dt: float,
                  integrator: IntegratorSettings, record_steps: bool = False,
                  rows: int | None = None, energy: bool = False, *, block):
+        """``P``, ``C``: the packed robot and Table I parameters; ``start`` = (s, mi, mf,
+        ls): the state, the modes and the leg states the run starts from (kept and
+        advanced in place)."""
+        s, mi, mf, ls = start
         self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
         # the controller and the sensors (control/block.py, control/dispatch.py)
         self.block = block
@@ -117,12 +122,14 @@ class HybridEngine:
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
-        args = (self.s, self.P, self.mi, self.mf, self.C, self.ls, self.cmd, self.k,
-                min(k_stop, self.k_last + 1), self.k_last, self.dt, self.integ.rtol,
-                self.integ.atol, self.block, self.hwork, self.out_t, self.out_s, self.out_aux,
-                self.out_ls, self.n_out, self.ev, self.nev, self.stats, self.armed,
-                self.sfwork, self.ew, self.steps, self.stepc, self.energy,
-                self.out_energy)
+        args = (Plant(self.s, self.P, self.mi, self.mf, self.cmd),
+                Control(self.C, self.ls, self.block),
+                Span(self.k, min(k_stop, self.k_last + 1), self.k_last, float(self.dt),
+                     float(self.integ.rtol), float(self.integ.atol)),
+                Records(self.out_t, self.out_s, self.out_aux, self.out_ls, self.ev,
+                        self.stats, self.steps, self.stepc, self.energy, self.out_energy),
+                Carry(self.hwork, self.armed, self.sfwork, self.ew),
+                self.n_out, self.nev)
         if self._entry is None:   # the argument types stay those of the first call
             self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
                                             int(self.P[L.P_HIP_UNIT]))
@@ -248,7 +255,7 @@ def start_engine(start: InitialState | HybridState | None, duration: float, *,
         raise TypeError("start must be an InitialState, a HybridState or None, not "
                         f"{type(init).__name__}")
     integ = (integrator or IntegratorSettings()).resolve(model)
-    return HybridEngine(P, plan.C, s, mi, mf, ls, duration, plan.control_period, integ,
+    return HybridEngine(P, plan.C, (s, mi, mf, ls), duration, plan.control_period, integ,
                         rows=rows, energy=energy, block=plan.block)
 
 

@@ -11,6 +11,8 @@ the integrator (:mod:`scoutsim.numerics`) knows neither the controller nor the r
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from .control.bounding import bounding_step
@@ -32,9 +34,11 @@ from .numerics.events import log_event, mode_violations, stamp_states, stamp_tra
 from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO,
                               METHOD_DOPRI5, STEP_HEADROOM, AdvanceScratch, advance)
 from .numerics.stats import S_NFEV
+from .numerics.work import EventLog, EventWork, StepWork
 from .numerics.transitions import settle_ws
 
-__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense", "readings_at"]
+__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense", "readings_at",
+           "Control", "Span", "Records", "Carry"]
 
 
 @kernel
@@ -48,7 +52,7 @@ def sense(k, s, P, mi, mf, cmd, kept, cb, ew, s_tmp):
         for i in range(NS):
             s_tmp[i] = s[i]
         project_state(s_tmp, P, mi, mf)
-        evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew[0], ew[1], ew[2],
+        evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew,
                     False, ew[3], True)
     true_readings(s, cb.last[:NS], cb.last[NS:], P[P_G], cb.geom, cb.y)
     if cb.geom[SG_MEASURED] > 0.5:
@@ -88,11 +92,32 @@ def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energ
     return n_out + 1
 
 
+#: what drives the plant: the compiled Table I law's parameters ``C``, the leg states
+#: ``ls`` and the control block ``cb`` (:mod:`scoutsim.control.block`)
+Control = namedtuple("Control", "C ls cb")
+#: the samples a call runs, k_start .. k_stop - 1 (the run's last sample ``k_last``), the
+#: control period ``dt`` [s] and the integrator's tolerances
+Span = namedtuple("Span", "k_start k_stop k_last dt rtol atol")
+#: where the run is recorded: the time series (``out_t``, ``out_s``, ``out_aux``,
+#: ``out_ls``), the event records and statistics (``ev``, ``stats``), the integrator
+#: steps (``steps``, ``stepc``) and the energy accounting (``energy``, ``out_energy``)
+Records = namedtuple("Records",
+                     "out_t out_s out_aux out_ls ev stats steps stepc energy out_energy")
+#: what a run carries from one call to the next: ``hwork`` (step-size guess and flags),
+#: which event functions are ``armed``, the ARK stiff factors ``sfwork`` and the evaluation
+#: workspace ``ew``
+Carry = namedtuple("Carry", "hwork armed sfwork ew")
+
+
 @allocating
-def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, hwork,
-        out_t, out_s, out_aux, out_ls, n_out, ev, nev, stats, armed, sfwork, ew, steps,
-        stepc, energy, out_energy, method):
-    """Run control periods k_start .. k_stop-1 (sample k at t = k dt).
+def run(plant, control, span, records, carry, n_out, nev, method):
+    """Run control periods span.k_start .. span.k_stop-1 (sample k at t = k dt).
+
+    ``plant`` (:class:`~scoutsim.numerics.work.Plant`: state ``s``, parameters ``P``, modes
+    ``mi``, ``mf``, held commands ``cmd``), ``control`` (:data:`Control`: ``C``, ``ls``,
+    ``cb``), ``span`` (:data:`Span`), ``records`` (:data:`Records`) and ``carry``
+    (:data:`Carry`) name the arrays below; ``n_out`` rows of the time series and ``nev``
+    event records are in use.
 
     At each sample: the sensors are read into ``cb.y`` (:func:`sense`) and the controller
     of the control block ``cb`` (:mod:`scoutsim.control.block`: the compiled Table I law
@@ -116,6 +141,11 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
     array switches the accounting off. ``out_energy`` (rows as ``out_t``, ``NEN`` columns;
     empty (0, NEN) without the accounting) receives ``energy`` at every recorded sample:
     the cumulative energy of every flow [J]. Returns (k, n_out, nev, status, t)."""
+    s, P, mi, mf, cmd = plant
+    C, ls, cb = control
+    k_start, k_stop, k_last, dt, rtol, atol = span
+    out_t, out_s, out_aux, out_ls, ev, stats, steps, stepc, energy, out_energy = records
+    hwork, armed, sfwork, ew = carry
     K = np.zeros((7, NS))
     y_new = np.zeros(NS)
     tmp = np.zeros(NS)
@@ -139,9 +169,12 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
     else:   # (no accounting: placeholders of the same types)
         ew_e = (np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros((1, 1)))
     sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
-                        np.zeros(NMI, dtype=np.int64), np.empty(NEV), np.empty(NAUX),
-                        np.empty(NS), steps, stepc, energy, ew_e, np.zeros(NS), np.zeros(NS),
-                        np.zeros(NAUX), np.zeros(energy.shape[0]))
+                        np.zeros(NMI, dtype=np.int64), np.empty(NS), steps, stepc, energy,
+                        ew_e, np.zeros(NS), np.zeros(NS), np.zeros(NAUX),
+                        np.zeros(energy.shape[0]), imp)
+    work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol)
+    evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
+    log = EventLog(ev, stats)
     sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
     t = k_start * dt
     k = k_start
@@ -176,7 +209,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
-        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, ev, nev, stats, ew,
+        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew,
                         hwork[HW_EVAL_KEPT] > 0.5)
         hwork[HW_EVAL_KEPT] = 0.0
         stats[S_NFEV] += 1
@@ -194,10 +227,8 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
             k += 1
             break
         t_next = (k + 1) * dt
-        t, nev, status = advance(t, t_next, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new,
-                                 tmp, aux, aux_new, ev, nev, stats, armed, e_old, e_new,
-                                 ybuf, imp, ew, method, SF0, SF1, Z, sc,
-                                 sf_ok or method == METHOD_DOPRI5)
+        t, nev, status = advance(t, t_next, plant, hwork, aux, log, nev, method, work, evw,
+                                 sc, sf_ok or method == METHOD_DOPRI5)
         sf_ok = True
         hwork[HW_STIFF_VALID] = 1.0
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
@@ -210,7 +241,7 @@ def run(s, P, mi, mf, C, ls, cmd, k_start, k_stop, k_last, dt, rtol, atol, cb, h
                 cb.last[NS + i] = aux[i]
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
-            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
             n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
                                   energy, out_energy)
             return k + 1, n_out, nev, status, t

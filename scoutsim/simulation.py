@@ -234,7 +234,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
         # fewer, larger pieces: each costs ~5 ms of table writing
         chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
-    eng = HybridEngine(P, plan.C, s, mi, mf, ls, duration, dt, integ, record_steps,
+    eng = HybridEngine(P, plan.C, (s, mi, mf, ls), duration, dt, integ, record_steps,
                        rows=None if stream is None else chunk + 2, energy=energy,
                        block=plan.block)
     user_ctrl = plan.controller

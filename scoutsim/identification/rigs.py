@@ -40,7 +40,7 @@ from .._version import __version__
 from ..model import layout as L
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
-from ..bench import run_bench
+from ..bench import Bench, run_bench
 from ..integrator import IntegratorSettings
 from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp
@@ -299,8 +299,9 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
         rb = with_toe_mass(robot, rig.toe_mass)
         s0 = _clamped_state(rig.clamp_height, rig.release_angle_back, rig.release_angle_front,
                             rb)
-        return run_bench(rb, model, s0, rig.duration, clamp_torso=True,
-                         motor_circuit=rig.motor, dt=dt, integrator=integ, provenance=prov)
+        return run_bench(rb, model, s0, rig.duration,
+                         bench=Bench(clamp_torso=True, motor_circuit=rig.motor), dt=dt,
+                         integrator=integ, provenance=prov)
     if isinstance(rig, FlightSteps):
         n = int(round(rig.duration / dt)) + 1
         if touchdown_commands is None:
@@ -317,15 +318,15 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
         pb = td[0, 0] if rig.initial_angle_back is None else rig.initial_angle_back
         pf = td[0, 1] if rig.initial_angle_front is None else rig.initial_angle_front
         s0 = _clamped_state(rig.clamp_height, pb, pf, robot)
-        return run_bench(robot, model, s0, rig.duration, clamp_torso=True,
+        return run_bench(robot, model, s0, rig.duration, bench=Bench(clamp_torso=True),
                          controller=cparams, schedule=schedule, dt=dt, integrator=integ,
                          provenance=prov | {"controller": asdict(cparams)})
     if isinstance(rig, Stall):
         s0 = _clamped_state(rig.clamp_height, rig.leg_angle, rig.leg_angle, robot)
         taus = tuple(robot.leg(leg).max_leg_torque if rig.torque is None else rig.torque
                      for leg in (0, 1))
-        return run_bench(robot, model, s0, rig.duration, clamp_torso=True, clamp_legs=True,
-                         held_torques=taus, dt=dt, integrator=integ, provenance=prov)
+        return run_bench(robot, model, s0, rig.duration,
+                         bench=Bench(clamp_torso=True, clamp_legs=True), held_torques=taus, dt=dt, integrator=integ, provenance=prov)
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 
 

@@ -195,8 +195,8 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
         LG[2 * LG_TAPP + leg] = tapp
     free0 = gear and mi[MI_MOTOR_B] != STUCK
     free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
-    kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk, WK_Y,
-                      schur)
+    kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
+                          WK_B2, wk, WK_Y)
     for i in range(n):
         b[i] += b2[i]
     fill_derivative(ds, dq, b, LG, nact, gear, ok)
@@ -247,8 +247,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             b2[i] = 0.0
         b2[5 + leg] = 1.0
         b2[3 + leg] = -1.0
-        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
-                          WK_Y, schur)
+        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
+                          WK_B2, wk, WK_Y)
         # U: response of ddq to a unit belt torque pair, -npl G w
         for i in range(nact):
             stiff[NQ + i, leg] = -npl * b2[i]
@@ -316,17 +316,19 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         for i in range(n):
             b2[i] = 0.0
         b2[5 + leg] = 1.0
-        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B2, wk,
-                          WK_Y, schur)
+        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
+                          WK_B2, wk, WK_Y)
         for i in range(nact):
             stiff[NQ + i, 2 + leg] = -npl * b2[i]
         stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
 
 
 @kernel
-def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want_aux):
-    """:func:`evaluate` without allocations, on the scratch arrays of
-    :func:`~scoutsim.model.workspace.new_eval_workspace`.
+def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
+    """:func:`evaluate` without allocations, on the evaluation workspace ``ew`` = (wk, wA,
+    piv, stiff scratch): the scratch arrays of
+    :func:`~scoutsim.model.workspace.new_eval_workspace` and a (NS, 2 NSTIFF) array
+    (:func:`~scoutsim.numerics.dopri5.eval_workspace` makes all four).
 
     If ``want_stiff``, also fills ``stiff`` (16 x 2 NSTIFF) with a rank-4 factorization
     J_s = U V^T (U = stiff[:, :NSTIFF], V = stiff[:, NSTIFF:]) of the Jacobian of ds with respect
@@ -340,6 +342,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
 
     ``want_aux`` False (the integrators' inner stages, whose outputs nobody reads) skips the
     outputs: aux is then left as it was, except ``aux[A_KKT_OK]``."""
+    wk, wA, piv = ew[0], ew[1], ew[2]
     model = int(P[P_MODEL])
     gear = geared(P)
     nact = 7 if gear else 5
@@ -425,8 +428,8 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, want_stiff, stiff, want
     else:
         ok, nred = kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1)
     if ok:
-        kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, wk, WK_B, wk, WK_Y,
-                          schur)
+        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
+                          WK_B, wk, WK_Y)
     meta[MT_SCHUR] = 1.0 if schur else 0.0
     meta[MT_NROWS] = nr
     meta[MT_KKT_OK] = 1.0 if ok else 0.0
@@ -473,4 +476,4 @@ def evaluate(s, P, mi, mf, cmd, ds, aux):
     wA = np.empty((WA_ROWS, MAX_KKT))
     piv = np.empty(MAX_KKT, dtype=np.int64)
     stiff = np.empty((1, 1))
-    return evaluate_ws(s, P, mi, mf, cmd, ds, aux, wk, wA, piv, False, stiff, True)
+    return evaluate_ws(s, P, mi, mf, cmd, ds, aux, (wk, wA, piv, stiff), False, stiff, True)

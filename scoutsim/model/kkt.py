@@ -161,10 +161,13 @@ def kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1):
 
 
 @kernel(inline="always")
-def kkt_reduced_solve(A, piv, M, rkind, rleg, nact, nr, free0, free1, b, o, y, yo, schur):
+def kkt_reduced_solve(A, piv, M, rkind, rleg, system, b, o, y, yo):
     """Solve the full KKT system [M R^T; R 0] x = b[o:o+nact+nr] (in place, original
-    ordering) with the factors of :func:`kkt_schur_factor` (``schur``) or
-    :func:`kkt_reduced_factor`; y[yo:] is scratch."""
+    ordering) with the factors of :func:`kkt_schur_factor` or :func:`kkt_reduced_factor`;
+    ``system`` = (nact, nr, free0, free1, schur): the active coordinates, the rows, whether
+    each motor joint is free (not stuck) and whether the factors are the Schur complement's;
+    y[yo:] is scratch."""
+    nact, nr, free0, free1, schur = system
     m = 5
     for i in range(m):
         y[yo + i] = b[o + i]

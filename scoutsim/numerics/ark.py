@@ -115,31 +115,33 @@ AD3 = AI3 - AE3
 
 
 @kernel
-def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-         eval_end, want_sf):
+def step(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
-                    Z, eval_end, want_sf, AE, AD, B, EW, GAMMA, NSTAGE)
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf,
+                    (AE, AD, B, EW, GAMMA, NSTAGE))
 
 
 @kernel
-def step3(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-          eval_end, want_sf):
+def step3(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
-                    Z, eval_end, want_sf, AE3, AD3, B3, EW3, GAMMA3, 4)
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf,
+                    (AE3, AD3, B3, EW3, GAMMA3, 4))
 
 
 @kernel(inline="always")
-def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1, Z,
-             eval_end, want_sf, AE, AD, B, EW, GAMMA, ns):
-    """One ARK4(3) step of size h from y, with K[0] = f(y) and SF0 = its stiff factors
-    (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:]) already filled.
+def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau):
+    """One ARK step of size h from y with the method's ``tableau`` (AE, AD, B, EW, GAMMA,
+    stages), on the step's ``work`` (:class:`~scoutsim.numerics.work.StepWork`), with
+    K[0] = f(y) and SF0 = its stiff factors (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:])
+    already filled.
 
     Fills K[1..5] (stage derivatives), y_new and, if the step is accepted (error <= 1) or
     ``eval_end``, K[6] = f(y_new), aux_new and, if ``want_sf``, SF1 (stiff factors at
     y_new, FSAL).
     Z (Z_ROWS, Z_COLS) is scratch. Returns (error_norm, ok, evaluations)."""
+    AE, AD, B, EW, GAMMA, ns = tableau
+    K, y_new, aux_new, tmp, ew = work.K, work.y_new, work.aux_new, work.tmp, work.ew
+    SF0, SF1, Z, rtol, atol = work.SF0, work.SF1, work.Z, work.rtol, work.atol
     ok = True
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
@@ -192,7 +194,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
             for b in range(R):
                 acc += VU[a, b] * pp[b]
             Z[st, a] = acc
-        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
+        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False,
                            ew[3], False):
             ok = False
         nfev += 1
@@ -220,7 +222,7 @@ def step_tab(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, 
         err += (e / sc) ** 2
     err = np.sqrt(err / NS)
     if ok and (eval_end or err <= 1.0):
-        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew[0], ew[1], ew[2], want_sf,
+        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew, want_sf,
                            SF1, True):
             ok = False
         nfev += 1

@@ -44,12 +44,14 @@ PD = np.array([
 
 
 @kernel
-def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
-    """One Dormand-Prince step of size h from y, with K[0] = f(y) already filled.
+def step(y, h, P, mi, mf, cmd, w):
+    """One Dormand-Prince step of size h from y, with w.K[0] = f(y) already filled, on the
+    step's work ``w`` (:class:`~scoutsim.numerics.work.StepWork`).
 
     Fills K[1..6], y_new and aux_new (outputs at y_new; K[6] = f(y_new) is FSAL).
-    ``ew`` is the evaluation workspace (:func:`new_eval_workspace`).
     Returns (error_norm, ok); ok is False if the dynamics were singular at a stage."""
+    K, y_new, aux_new, tmp, ew, rtol, atol = w.K, w.y_new, w.aux_new, w.tmp, w.ew, w.rtol, \
+        w.atol
     ok = True
     for st in range(1, 7):
         for i in range(NS):
@@ -63,7 +65,7 @@ def step(y, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew):
             for i in range(NS):
                 y_new[i] = tmp[i]
         # the outputs (aux_new) are needed at y_new only (the last stage)
-        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew[0], ew[1], ew[2], False,
+        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False,
                            ew[3], st == 6):
             ok = False
     err = 0.0

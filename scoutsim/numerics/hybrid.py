@@ -84,32 +84,26 @@ WHOLE_PERIOD_FRACTION = 0.5
 # compilation, docs/model.md "Compile time").
 
 
-def method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                SF1, Z, eval_end, want_sf):
-    """One step of ``method`` (a constant); compiled code only (:func:`_method_step`)."""
+def method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
+    """One step of ``method`` (a constant) on the step's ``work``
+    (:class:`~scoutsim.numerics.work.StepWork`); compiled code only (:func:`_method_step`)."""
     raise NotImplementedError("method_step is resolved when a kernel is compiled")
 
 
 @overload(method_step, prefer_literal=True, inline="always")
-def _method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                 SF1, Z, eval_end, want_sf):
+def _method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
     m = getattr(method, "literal_value", None)
     if m == METHOD_ARK4:
-        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                 SF1, Z, eval_end, want_sf):
-            return ark.step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                            SF1, Z, eval_end, want_sf)
+        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
+            return ark.step(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
         return impl
     if m == METHOD_ARK3:
-        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                 SF1, Z, eval_end, want_sf):
-            return ark.step3(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew,
-                             SF0, SF1, Z, eval_end, want_sf)
+        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
+            return ark.step3(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
         return impl
     if m == METHOD_DOPRI5:
-        def impl(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0,
-                 SF1, Z, eval_end, want_sf):
-            err, ok = step(s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew)
+        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
+            err, ok = step(s, h, P, mi, mf, cmd, work)
             return err, ok, 6
         return impl
     return None   # not a method constant: no implementation (a typing error names it)
@@ -136,31 +130,32 @@ def _method_dense(method, s, y_new, h, K, th, out):
 
 
 @kernel(inline="always")
-def do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew, SF0, SF1,
-            Z, eval_end, want_sf=True):
-    """One step of the selected method (a constant, :func:`method_step`); returns
-    (error_norm, ok, evaluations). ``want_sf``: the ARK methods also refresh the stiff
-    factors at the step's end (SF1)."""
-    return method_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol, ew,
-                       SF0, SF1, Z, eval_end, want_sf)
+def do_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf=True):
+    """One step of the selected method (a constant, :func:`method_step`) on the step's
+    ``work`` (:class:`~scoutsim.numerics.work.StepWork`); returns (error_norm, ok,
+    evaluations). ``want_sf``: the ARK methods also refresh the stiff factors at the
+    step's end (SF1)."""
+    return method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf)
 
 
 @kernel(inline="always")
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
-    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2],
+    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew,
                        method >= METHOD_ARK4, SF0, True)
 
 
 @kernel(inline="always")
-def dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf, tmp, aux_tmp, ew,
-                       e_tmp):
-    """Event functions (into e_tmp) at the fraction ``th`` of the step of size ``h`` from
-    ``s`` to ``y_new``, on the method's continuous extension (one evaluation)."""
-    method_dense(method, s, y_new, h, K, th, ybuf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+def dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw):
+    """Event functions (into evw.e_tmp) at the fraction ``th`` of the step of size ``h``
+    from ``s`` to ``work.y_new``, on the method's continuous extension (one evaluation;
+    ``work``: :class:`~scoutsim.numerics.work.StepWork`, ``evw``: its ``EventWork``)."""
+    ybuf, aux_tmp, ew = evw.ybuf, evw.aux_tmp, work.ew
+    method_dense(method, s, work.y_new, h, work.K, th, ybuf)
+    evaluate_ws(ybuf, P, mi, mf, cmd, work.tmp, aux_tmp, ew, False, ew[3],
+                True)
     project_state(ybuf, P, mi, mf)
-    event_values(ybuf, aux_tmp, P, mi, e_tmp)
+    event_values(ybuf, aux_tmp, P, mi, evw.e_tmp)
 
 
 @kernel(inline="always")
@@ -170,7 +165,7 @@ def smallest_armed_event(y, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed
     for i in range(NS):
         ybuf[i] = y[i]
     project_state(ybuf, P, mi, mf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew[0], ew[1], ew[2], False, ew[3], True)
+    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, False, ew[3], True)
     event_values(ybuf, aux_tmp, P, mi, e_tmp)
     fc = 1.0
     k = -1
@@ -182,8 +177,7 @@ def smallest_armed_event(y, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed
 
 
 @kernel
-def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, cmd, y_new,
-                 aux_new, tmp, rtol, atol, ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp):
+def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     """Make the step from ``s`` end on the earliest zero of the armed event functions
     themselves (not of their continuous-extension interpolants).
 
@@ -193,7 +187,12 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
     function g = min_i e_i has crossed (<= 0) by no more than EVENT_STATE_TOL of its slope;
     otherwise g's zero is located by Illinois iterations on redone steps. Using g, not
     e_kmin alone, keeps a refinement from stepping over another event. Returns
-    (he, event slot, evaluations); y_new holds the step to he."""
+    (he, event slot, evaluations); y_new holds the step to he. ``work``: the step's
+    :class:`~scoutsim.numerics.work.StepWork`; ``evw``: its ``EventWork`` (the armed events,
+    their values ``e_old`` at the step's start, the probe buffers)."""
+    armed, e_start, ybuf, aux_tmp, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.aux_tmp, \
+        evw.e_tmp
+    y_new, tmp, ew = work.y_new, work.tmp, work.ew
     nf = 0
     a = 0.0
     fa = 1.0
@@ -219,8 +218,7 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
         a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
         done = (b - a) * h < EVENT_TIME_TOL
         th = b if done else (a * fb - b * fa) / (fb - fa)
-        err, ok, nfs = do_step(method, s, th * h, K, P, mi, mf, cmd, y_new, aux_new, tmp,
-                               rtol, atol, ew, SF0, SF1, Z, True, False)
+        err, ok, nfs = do_step(method, s, th * h, P, mi, mf, cmd, work, True, False)
         nf += nfs
         if done:
             break
@@ -232,15 +230,15 @@ def refine_event(kmin, s, h, th0, armed, e_start, e_full, method, K, P, mi, mf, 
     return th * h, k, nf
 
 
-#: advance()'s scratch arrays, and the step recording (``steps``, ``stepc``:
+#: advance()'s scratch arrays (``imp``: the impulses of a touchdown), and the step recording (``steps``, ``stepc``:
 #: :func:`~scoutsim.numerics.events.record_step`), the state before a transition
 #: (``s_before``, for the event records) and the work-energy accounting (``energy``: the
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; ``ew_e``
 #: an evaluation workspace of its own and ``y_e, ds_e, aux_e, p_e`` its scratch:
 #: :func:`accumulate_energy`)
 AdvanceScratch = namedtuple("AdvanceScratch",
-                            "e_end pending mi_before e_tmp aux_tmp s_before steps stepc "
-                            "energy ew_e y_e ds_e aux_e p_e")
+                            "e_end pending mi_before s_before steps stepc energy ew_e y_e "
+                            "ds_e aux_e p_e imp")
 
 #: Gauss-Legendre nodes and weights on [0, 1] (3 points, exact for polynomials of degree 5)
 GAUSS_NODES = (0.5 - 0.15 ** 0.5, 0.5, 0.5 + 0.15 ** 0.5)
@@ -259,7 +257,7 @@ def accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc):
     for g in range(3):
         method_dense(method, s, y_new, h, K, GAUSS_NODES[g], y)
         project_state(y, P, mi, mf)
-        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew[0], ew[1], ew[2], False, ew[3],
+        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew, False, ew[3],
                     True)
         power_flows(y, sc.ds_e, sc.aux_e, P, mi, ew[0], ew[1], p)
         w = GAUSS_WEIGHTS[g] * h
@@ -268,15 +266,23 @@ def accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc):
 
 
 @kernel
-def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, aux_new,
-            ev, nev, stats, armed, e_old, e_new, ybuf, imp, ew, method, SF0, SF1, Z, sc,
-            fresh=False):
+def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=False):
     """Integrate from t to t_end (one control period) with events.
 
-    hwork[HW_STEP] carries the step-size guess between calls. ``method``: METHOD_DOPRI5 or
-    METHOD_ARK4 (SF0, SF1, Z: its stiff-factor and stage scratch). ``fresh``: K[0] and aux
-    already hold f(s) and its outputs (and SF0 usable stiff factors). Returns
-    (t, nev, status)."""
+    ``plant`` (:class:`~scoutsim.numerics.work.Plant`): the state ``s``, advanced in place,
+    with its parameters, modes and held commands; ``aux``: the outputs at ``s``; ``log``
+    (``EventLog``): the event records and the statistics, ``nev`` records in use;
+    ``work`` (``StepWork``): the steps' arrays and tolerances (``method``: METHOD_DOPRI5 or
+    an ARK method, whose stiff factors are ``work.SF0`` / ``SF1``); ``evw`` (``EventWork``):
+    the event functions' arrays; ``sc``: :data:`AdvanceScratch`. hwork[HW_STEP] carries the
+    step-size guess between calls. ``fresh``: K[0] and aux already hold f(s) and its
+    outputs (and SF0 usable stiff factors). Returns (t, nev, status)."""
+    s, P, mi, mf, cmd = plant
+    ev, stats = log
+    K, y_new, aux_new, ew, SF0, SF1 = work.K, work.y_new, work.aux_new, work.ew, work.SF0, \
+        work.SF1
+    armed, e_old, e_new = evw.armed, evw.e_old, evw.e_new
+    imp = sc.imp
     K0 = K[0]
     expo = -0.25 if method == METHOD_ARK4 else (-1.0 / 3.0 if method == METHOD_ARK3 else -0.2)
     nfail = 0
@@ -287,8 +293,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
     e_end = sc.e_end
     pending = sc.pending
     mi_before = sc.mi_before
-    e_tmp = sc.e_tmp
-    aux_tmp = sc.aux_tmp
+    e_tmp = evw.e_tmp
     if not fresh:
         # (if fresh, K0 and aux were just computed at s by settle(); the ARK stiff factors
         # SF0 are kept from the end of the previous step: any splitting matrix keeps the
@@ -312,8 +317,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
         # the ARK splitting matrix is refreshed at every accepted step and after every mode
         # change (measured: refreshing every 8th step saves ~2 % of a Model II run but
         # changes the step sequence, so 10 s gait metrics move by ~1e-3 at rtol 1e-5)
-        err, ok, nf = do_step(method, s, h, K, P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
-                              ew, SF0, SF1, Z, False, True)
+        err, ok, nf = do_step(method, s, h, P, mi, mf, cmd, work, False, True)
         stats[S_NFEV] += nf
         if not ok or not (err == err):
             h *= 0.25
@@ -359,8 +363,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     # decided it stays in flight)
                     thp = 0.5
                     for _ in range(40):
-                        dense_event_values(method, s, y_new, h, K, thp, P, mi, mf, cmd, ybuf,
-                                           tmp, aux_tmp, ew, e_tmp)
+                        dense_event_values(method, s, h, thp, P, mi, mf, cmd, work, evw)
                         stats[S_NFEV] += 1
                         if e_tmp[k] > 0.0:
                             if thp < th_hop:
@@ -375,8 +378,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     th = 1.0
                     for _ in range(100):
                         th = (a * fb - b * fa) / (fb - fa)
-                        dense_event_values(method, s, y_new, h, K, th, P, mi, mf, cmd, ybuf,
-                                           tmp, aux_tmp, ew, e_tmp)
+                        dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw)
                         stats[S_NFEV] += 1
                         fc = e_tmp[k]
                         a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
@@ -395,8 +397,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
             # redo the step exactly to the event time
             he = thmin * h
             if he > 0.0:
-                err, ok, nf = do_step(method, s, he, K, P, mi, mf, cmd, y_new, aux_new, tmp,
-                                      rtol, atol, ew, SF0, SF1, Z, True, False)
+                err, ok, nf = do_step(method, s, he, P, mi, mf, cmd, work, True, False)
                 stats[S_NFEV] += nf
                 # The continuous extension is only an interpolant: on a stiff component (a
                 # gear rate in the belt transient after a touchdown, under ARK's cubic
@@ -404,9 +405,8 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 # a transition applied there is applied to the wrong state (a joint "at
                 # rest" that still turns). Check the event function on the redone step and,
                 # if it is not at its zero, locate the zero on the steps themselves.
-                he, kmin, nf = refine_event(kmin, s, h, thmin, armed, e_old, e_end, method, K,
-                                            P, mi, mf, cmd, y_new, aux_new, tmp, rtol, atol,
-                                            ew, SF0, SF1, Z, ybuf, aux_tmp, e_tmp)
+                he, kmin, nf = refine_event(kmin, s, h, thmin, e_end, method, P, mi, mf, cmd,
+                                            work, evw)
                 stats[S_NFEV] += nf
                 if sc.energy.shape[0] > 0:
                     accumulate_energy(method, s, y_new, he, K, P, mi, mf, cmd, sc)
@@ -417,7 +417,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                     record_step(sc.steps, sc.stepc, t, s, mi)
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
-            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, False, ew[3], True)
             n_events_here += 1
             if n_events_here > MAX_EVENTS_PER_PERIOD:
                 return t, nev, ST_NUMERICAL_FAILURE
@@ -449,7 +449,7 @@ def advance(t, t_end, s, P, mi, mf, cmd, rtol, atol, hwork, K, y_new, tmp, aux, 
                 if not ok:
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
-                nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, ev, nev, stats, ew, False)
+                nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, log, nev, ew, False)
                 stats[S_NFEV] += 1
                 if aux[A_KKT_OK] < 0.5:
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)

@@ -25,6 +25,7 @@ from ..model.layout import (
 from .dopri5 import eval_workspace
 from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, flight_toe_enters_ground,
                      log_event, slide_toe_pressed)
+from .work import EventLog
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
 
 #: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
@@ -93,11 +94,12 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
 @allocating
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
-    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, eval_workspace(), False)
+    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, EventLog(ev, stats), nev, eval_workspace(),
+                     False)
 
 
 @kernel
-def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=False):
+def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
     """Make the modes consistent with the forces at the current state (after a reset or a
     change of command): a pinned toe the ground would have to pull is released (to flight,
     or to a slide if the leg still pushes, docs/specification.md section 3), a strut in compression becomes a
@@ -106,7 +108,10 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
 
     ``command_only``: s is projected and ds, aux and the workspace ``ew`` hold its last
     evaluation with the same modes, only ``cmd`` has changed (a new control sample after a
-    plain step): the first evaluation is then :func:`evaluate_command_change`."""
+    plain step): the first evaluation is then :func:`evaluate_command_change`. ``log``
+    (:class:`~scoutsim.numerics.work.EventLog`): the event records (``nev`` in use) and the
+    statistics."""
+    ev, stats = log
     W = body_weight(P)
     # a contact force counts as pulling only beyond rounding: a massless undamped leg
     # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
@@ -121,7 +126,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
             evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
         else:
             project_state(s, P, mi, mf)
-            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+            evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
         changed = False
         for leg in range(2):
             o = leg * NAUX_LEG
@@ -183,7 +188,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats, ew, command_only=Fa
             # ds and aux are those of the (projected) state as it stands
             return nev
     project_state(s, P, mi, mf)
-    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew[0], ew[1], ew[2], False, ew[3], True)
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
     return nev
 
 

@@ -178,7 +178,7 @@ def _parity(P, cases):
                 d2 = np.zeros(L.NS)
                 a2 = np.zeros(L.NAUX)
                 ok1 = evaluate_reference(s, P, mi2, mf, cmd, d1, a1)
-                ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, wk, wA, piv, True, st, True)
+                ok2 = D.evaluate_ws(s, P, mi2, mf, cmd, d2, a2, (wk, wA, piv, st), True, st, True)
                 assert ok1 == ok2
                 worst = max(worst, _mismatch(d1, d2), _mismatch(a1, a2))
                 regimes |= _regimes(P, mi2, cmd, d1, a1)
@@ -281,8 +281,8 @@ def test_inner_stage_evaluation_skips_only_the_outputs():
         d1, d2 = np.zeros(L.NS), np.zeros(L.NS)
         a1 = np.zeros(L.NAUX)
         a2 = np.full(L.NAUX, 7.0)
-        ok1 = D.evaluate_ws(s, P, mi, mf, cmd, d1, a1, wk, wA, piv, True, st1, True)
-        ok2 = D.evaluate_ws(s, P, mi, mf, cmd, d2, a2, wk, wA, piv, True, st2, False)
+        ok1 = D.evaluate_ws(s, P, mi, mf, cmd, d1, a1, (wk, wA, piv, st1), True, st1, True)
+        ok2 = D.evaluate_ws(s, P, mi, mf, cmd, d2, a2, (wk, wA, piv, st2), True, st2, False)
         assert ok1 == ok2
         assert np.array_equal(d1, d2) and np.array_equal(st1, st2)
         assert a2[L.A_KKT_OK] == a1[L.A_KKT_OK]
@@ -298,7 +298,7 @@ def test_stiff_factors_capture_belt_eigenvalues():
     aux = np.zeros(L.NAUX)
     for s, mi, mf, cmd in cases[::6]:
         f0 = np.zeros(L.NS)
-        D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, wk, wA, piv, True, st, True)
+        D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, (wk, wA, piv, st), True, st, True)
         J = np.zeros((L.NS, L.NS))
         for j in range(L.NS):
             e = 1e-7 * max(1.0, abs(s[j]))
@@ -367,11 +367,11 @@ def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
             mi2[2:4] = motor
             d1, a1 = np.zeros(L.NS), np.zeros(L.NAUX)
             d2, a2 = np.zeros(L.NS), np.zeros(L.NAUX)
-            D.evaluate_ws(s, P, mi2, mf, cmd, d1, a1, wk, wA, piv, True, st, True)
+            D.evaluate_ws(s, P, mi2, mf, cmd, d1, a1, (wk, wA, piv, st), True, st, True)
             d0 = d1.copy()
             new = cmd + rng.normal(0.0, 10.0, 2)
             ok2 = D.evaluate_command_change(P, mi2, new, d2, a2, wk, wA, piv)
-            ok1 = D.evaluate_ws(s, P, mi2, mf, new, d1, a1, wk, wA, piv, False, st, True)
+            ok1 = D.evaluate_ws(s, P, mi2, mf, new, d1, a1, (wk, wA, piv, st), False, st, True)
             assert ok1 == ok2
             changed += not np.allclose(d0, d1)   # the new command does act
             worst = max(worst, _mismatch(d1, d2), _mismatch(a1, a2))

@@ -65,7 +65,7 @@ def test_stiff_factor_is_the_jacobian_of_the_belt_spring(where):
     st = np.zeros((L.NS, 2 * D.NSTIFF))
     f0 = np.zeros(L.NS)
     aux = np.zeros(L.NAUX)
-    D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, wk, wA, piv, True, st, True)
+    D.evaluate_ws(s, P, mi, mf, cmd, f0, aux, (wk, wA, piv, st), True, st, True)
     Js = st[:, :D.NSTIFF] @ st[:, D.NSTIFF:].T
     e = 1e-7
     dp, dm = np.zeros(L.NS), np.zeros(L.NS)
