@@ -10,9 +10,10 @@ import dataclasses
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from ..validation.phase import Source
-from .figure_parts import (_LEGS, _finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown,
+from .figure_parts import (_finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown,
                            _tag)
 from .plots import draw_motor_limits, motor_limits
 
@@ -46,7 +47,7 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
     missing = []
     tmax = max(lim["tau_current"] for lim in lims)
     wmax = max(lim["w_no_load"] for lim in lims)
-    for c, leg in enumerate(_LEGS):
+    for c, leg in enumerate(LEG_NAMES):
         ax = axes[c]
         pts = [(lg, s) for lg, s in exp.steady]
         if pts:
