@@ -8,10 +8,11 @@
 Each frame shows the torso as a box (length ``torso_length``, height ``torso_height``,
 rotated by the pitch), the two virtual legs from hip to toe coloured by their controller
 leg state (:data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake
-green; the same colours as the dots of :func:`scoutsim.presentation.plots.plot_torque_speed`),
-the ground reaction force on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`),
-the ground line with tick marks every 0.25 m (so the forward motion shows while the view
-follows the torso) and the time stamp.
+green; the same colours as the dots of
+:func:`scoutsim.presentation.torque_speed.plot_torque_speed`), the ground reaction force
+on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the ground line with tick
+marks every 0.25 m (so the forward motion shows while the view follows the torso) and the
+time stamp.
 
 Frames are taken at ``t0 + k / fps`` for ``k = 0 .. floor((t1 - t0) * fps)``, so a window
 gives ``floor((t1 - t0) * fps) + 1`` frames (both ends included when ``(t1 - t0) * fps`` is
