@@ -97,6 +97,47 @@ class HybridEngine:
     def running(self) -> bool:
         return self.k <= self.k_last and self.status == L.ST_RUNNING
 
+    # -- the current state by name (for a caller that drives the engine itself) -----------
+    @property
+    def x(self) -> float:
+        """Torso COM forward position now [m]."""
+        return float(self.s[L.IX])
+
+    @property
+    def height(self) -> float:
+        """Torso COM height now [m]."""
+        return float(self.s[L.IY])
+
+    @property
+    def pitch(self) -> float:
+        """Torso pitch now [rad], nose up positive."""
+        return float(self.s[L.ITH])
+
+    @property
+    def stopped(self) -> bool:
+        """True once the run loop has stopped the run: it fell, failed numerically or its
+        controller failed (reaching the end of the run does not count)."""
+        return self.status != L.ST_RUNNING
+
+    @property
+    def fell(self) -> bool:
+        """True if the run stopped because the robot fell (height or pitch limit)."""
+        return self.status == L.ST_FELL
+
+    @property
+    def status_name(self) -> str:
+        """The run loop's status by name: "running" until it stops the run, then "fell",
+        "numerical_failure" or "controller_error"."""
+        return L.STATUS_NAMES[self.status]
+
+    def electrical_energy(self) -> float:
+        """Electrical energy into both legs' motor terminals since the start [J] (NaN
+        without the energy accounting)."""
+        e = self.energy
+        if not e.size:
+            return math.nan
+        return float(e[L.EN_ELECTRICAL] + e[L.NEN_LEG + L.EN_ELECTRICAL])
+
     def read_first_sensors(self) -> Sensors:
         """The readings of the run's first sample (what a controller's ``reset`` sees)."""
         return Sensors.from_vector(self.read_sensors())

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .model import layout as L
-from .result_series import _leg
+from .names import leg_index
 
 __all__ = ["EnergyAccessors", "ENERGY_GROUPS", "ENERGY_WHOLE_ROBOT", "ENERGY_COLUMNS"]
 
@@ -58,7 +58,7 @@ class EnergyAccessors:
                 raise ValueError(
                     f"name = {name!r} is not allowed: must be one of "
                     f"{list(L.EN_LEG_NAMES) + list(ENERGY_GROUPS) + list(ENERGY_WHOLE_ROBOT)}")
-        legs = (0, 1) if leg is None else (_leg(leg),)
+        legs = (0, 1) if leg is None else (leg_index(leg),)
         return [lg * L.NEN_LEG + L.EN_LEG_NAMES.index(f) for lg in legs for f in flows]
 
     def cumulative_energy(self, name: str, leg=None) -> np.ndarray:
@@ -107,7 +107,7 @@ class EnergyAccessors:
         if model not in ("I", "II") or not robot:
             raise ValueError(f"electrical_power needs a run of Model I or II with its robot "
                              f"in the provenance (this one: model {model!r})")
-        legs = (0, 1) if leg is None else (_leg(leg),)
+        legs = (0, 1) if leg is None else (leg_index(leg),)
         p = np.zeros(len(self.t))
         for lg in legs:
             i = self.motor_current(lg)

@@ -1,8 +1,9 @@
 """The time series of a run by name: torso position [m], pitch [rad], their rates, the
 mechanical energy [J] and battery voltage [V]; per leg the angles [rad], rates [rad/s],
-lengths [m], forces [N], hip torques [N m], motor currents [A] and speeds [rad/s], belt
-deflection [rad], controller leg states and plant contact modes; and the complete hybrid
-state at one sample. A mixin of :class:`~scoutsim.result.SimulationResult`, which holds the
+lengths [m], toe positions [m], forces [N], hip torques [N m], motor currents [A] and
+speeds [rad/s], belt deflection [rad], controller leg states, plant contact modes and
+motor-joint modes (codes of :mod:`scoutsim.names`); and the complete hybrid state at one
+sample. A mixin of :class:`~scoutsim.result.SimulationResult`, which holds the
 arrays (``state``, ``aux``, ``modes``; layout of :mod:`scoutsim.model.layout`).
 """
 
@@ -11,18 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from .model import layout as L
+from .names import leg_index
 from .state import HybridState
 
 __all__ = ["SeriesAccessors"]
-
-_LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
-
-
-def _leg(leg) -> int:
-    try:
-        return _LEGS[leg]
-    except KeyError:
-        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
 
 
 class SeriesAccessors:
@@ -50,6 +43,11 @@ class SeriesAccessors:
         return self.state[:, L.NQ + L.IX]
 
     @property
+    def vertical_speed(self):
+        """Torso COM vertical velocity dy/dt [m/s]."""
+        return self.state[:, L.NQ + L.IY]
+
+    @property
     def pitch_rate(self):
         """[rad/s]"""
         return self.state[:, L.NQ + L.ITH]
@@ -67,22 +65,31 @@ class SeriesAccessors:
     # -- legs ------------------------------------------------------------------------
     def leg_angle(self, leg):
         """Leg angle phi relative to the torso [rad] (toe ahead of hip positive)."""
-        return self.state[:, L.IPHB + _leg(leg)]
+        return self.state[:, L.IPHB + leg_index(leg)]
 
     def leg_rate(self, leg):
         """[rad/s]"""
-        return self.state[:, L.NQ + L.IPHB + _leg(leg)]
+        return self.state[:, L.NQ + L.IPHB + leg_index(leg)]
 
     def motor_angle(self, leg):
         """Driven-gear angle alpha relative to the torso [rad] (= phi outside Model II)."""
-        return self.state[:, L.IALB + _leg(leg)]
+        return self.state[:, L.IALB + leg_index(leg)]
+
+    def motor_angle_rate(self, leg):
+        """Rate of the driven-gear angle alpha [rad/s] (= the leg rate outside Model II)."""
+        return self.state[:, L.NQ + L.IALB + leg_index(leg)]
 
     def leg_length(self, leg):
         """[m]"""
-        return self.state[:, L.IL_B + _leg(leg)]
+        return self.state[:, L.IL_B + leg_index(leg)]
 
     def _aux(self, leg, slot):
-        return self.aux[:, _leg(leg) * L.NAUX_LEG + slot]
+        return self.aux[:, leg_index(leg) * L.NAUX_LEG + slot]
+
+    def toe_position(self, leg):
+        """(x, y) of the virtual leg's toe in the world [m]: the hip plus the leg along
+        its angle (on the ground in stance)."""
+        return self._aux(leg, L.A_TOE_X), self._aux(leg, L.A_TOE_Y)
 
     def ground_force(self, leg):
         """(tangential, normal) ground force on the virtual leg's toe [N]."""
@@ -114,12 +121,20 @@ class SeriesAccessors:
         return self._aux(leg, L.A_FAX)
 
     def leg_state(self, leg):
-        """Controller leg state per sample: 0 flight, 1 stance-retraction, 2 stance-brake."""
-        return self.modes[:, L.RM_LEG_STATE_B + _leg(leg)].astype(int)
+        """Controller leg state per sample, codes of :class:`~scoutsim.names.LegState`:
+        0 flight, 1 stance-retraction, 2 stance-brake."""
+        return self.modes[:, L.RM_LEG_STATE_B + leg_index(leg)].astype(int)
 
     def contact_mode(self, leg):
-        """Plant contact mode per sample: 0 flight, 1 stick, 2 slide, 3 strut."""
-        return self.modes[:, L.RM_CONTACT_B + _leg(leg)].astype(int)
+        """Plant contact mode per sample, codes of :class:`~scoutsim.names.ContactMode`:
+        0 flight, 1 stick, 2 slide, 3 strut."""
+        return self.modes[:, L.RM_CONTACT_B + leg_index(leg)].astype(int)
+
+    def motor_joint_mode(self, leg):
+        """Model II motor-joint mode per sample, codes of
+        :class:`~scoutsim.names.MotorJointMode`: -1 / +1 slipping in that direction,
+        0 stuck (0 throughout in the other variants)."""
+        return self.modes[:, L.RM_MOTOR_B + leg_index(leg)].astype(int)
 
     def hybrid_state(self, k: int):
         """The complete hybrid state at recorded sample ``k`` (continuous state, plant and

@@ -3,6 +3,10 @@ hybrid state of a control sample (:class:`HybridState`), from which a run resume
 integration tolerance, not bit for bit: see :class:`HybridState`). Used by
 :func:`scoutsim.simulate` and :meth:`SimulationResult.hybrid_state`.
 
+:data:`STATE_NAMES` names the components of the state vector; :func:`state_vector` builds
+one from its components by name and :func:`state_index` finds a component, so the layers
+above read and write a state vector without its layout.
+
 :func:`standing_state` is the robot at rest on its four legs (the start of
 ``simulate(..., initial_state="standing")``).
 """
@@ -19,7 +23,32 @@ from .model import layout as L
 from .parameters import ControllerParameters, RobotParameters
 
 __all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression",
-           "standing_leg_compressions"]
+           "standing_leg_compressions", "STATE_NAMES", "state_index", "state_vector"]
+
+#: The components of the state vector, in its order (SI: m, rad, m/s, rad/s): torso x, y,
+#: pitch theta, leg angles phi and Model II driven-gear angles alpha (back, front; relative
+#: to the torso), their rates (``d`` + name), leg lengths (back, front).
+STATE_NAMES = L.STATE_NAMES
+
+
+def state_index(name: str) -> int:
+    """Index of the component ``name`` (:data:`STATE_NAMES`) in a state vector; ValueError
+    for an unknown name."""
+    try:
+        return L.STATE_NAMES.index(name)
+    except ValueError:
+        raise ValueError(f"name = {name!r} is not allowed: must be one of "
+                         f"{list(L.STATE_NAMES)}") from None
+
+
+def state_vector(**components: float) -> np.ndarray:
+    """A state vector (:data:`STATE_NAMES`, SI) with the named components set and every
+    other one zero, e.g. ``state_vector(y=0.4, phi_back=0.1, leg_length_back=0.323)``;
+    ValueError for an unknown name."""
+    s = np.zeros(L.NS)
+    for name, value in components.items():
+        s[state_index(name)] = value
+    return s
 
 
 @dataclass(frozen=True)

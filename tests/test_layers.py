@@ -1,6 +1,7 @@
 """The package's import graph: no cycles, and imports go one way through the layers
 (README "Layout"): presentation -> analysis / validation / identification -> simulation ->
-numerics / control -> model -> parameters.
+numerics / control -> model -> parameters, names; and nothing from the analysis layer up
+imports the model itself (``test_upper_layers_do_not_import_the_model``).
 
 The graph is read from the source (module-level and deferred imports alike, by AST), so
 the test needs no import of the package. An import of the package that names no module of
@@ -19,6 +20,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
 #: layer of each module, by prefix (longest prefix wins); higher imports lower only
 LAYERS = {
     "scoutsim._version": 0, "scoutsim.jit": 0, "scoutsim.parameters": 0, "scoutsim.tables": 0, "scoutsim.run_directory": 0,
+    "scoutsim.names": 0,
     "scoutsim.model": 1,
     "scoutsim.numerics": 2, "scoutsim.control": 2,
     "scoutsim.state": 3, "scoutsim.loop": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
@@ -175,6 +177,28 @@ def test_imports_go_down_the_layers():
 def test_convenience_accessors_import_the_upper_layer_only_when_called():
     eager = _graph(module_level_only=True)
     assert not {(a, b) for a, b in CONVENIENCE_ACCESSORS if b in eager[a]}
+
+
+#: the first layer that reads the model only through the layers below it (the result's
+#: accessors, ``scoutsim.state``, ``scoutsim.names``), never ``scoutsim.model`` itself
+MODEL_FREE_LAYER = 4
+#: importer -> reason, for a module of those layers that still imports scoutsim.model
+#: (none: the list must match exactly, so a new import fails and so does a stale entry)
+MODEL_IMPORT_EXCEPTIONS = {}
+
+
+def test_upper_layers_do_not_import_the_model():
+    """Analysis, validation, identification, the environments, presentation and the
+    command line read a run through :class:`~scoutsim.result.SimulationResult`'s accessors,
+    build states with :mod:`scoutsim.state` and compare codes with :mod:`scoutsim.names`:
+    no module of theirs imports ``scoutsim.model`` (any submodule, deferred or not), so the
+    compiled core's array layout can change under them."""
+    edges = _graph()
+    found = {a for a, ts in edges.items() if _layer(a) >= MODEL_FREE_LAYER
+             for b in ts if b == "scoutsim.model" or b.startswith("scoutsim.model.")}
+    assert found == set(MODEL_IMPORT_EXCEPTIONS), (
+        "modules above the simulation layer that import scoutsim.model: "
+        + ", ".join(sorted(found - set(MODEL_IMPORT_EXCEPTIONS))))
 
 
 def _peer_forbidden(a, b):

@@ -87,6 +87,77 @@ def test_leg_rate_is_the_time_derivative_of_the_leg_angle(runs, model, leg):
         assert np.max(np.abs(change - integral)) > 2e-3
 
 
+@pytest.mark.parametrize("model", MODELS)
+def test_vertical_speed_is_the_time_derivative_of_the_height(runs, model):
+    """vertical_speed = dy/dt: over every 50 ms window its trapezoidal integral is the
+    height's change to 1e-4 m."""
+    r = runs[model]
+    change, integral = _window_increments(r.height, r.vertical_speed, r.t)
+    assert np.max(np.abs(change - integral)) < 1e-4
+    np.testing.assert_array_equal(r.vertical_speed, r.state[:, L.NQ + L.IY])
+
+
+@pytest.mark.parametrize("leg", ["back", "front"])
+def test_motor_angle_rate_is_the_time_derivative_of_the_gear_angle(runs, leg):
+    """motor_angle_rate = d(motor_angle)/dt in Model II (over every 50 ms window, to 5e-4
+    rad), and the leg rate itself where the gear angle is the leg angle (Model I)."""
+    r = runs["II"]
+    change, integral = _window_increments(r.motor_angle(leg), r.motor_angle_rate(leg), r.t)
+    assert np.max(np.abs(change - integral)) < 5e-4
+    np.testing.assert_array_equal(runs["I"].motor_angle_rate(leg), runs["I"].leg_rate(leg))
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_toe_position_is_the_hip_plus_the_leg(runs, model):
+    """toe_position = hip + l (sin(theta + phi), -cos(theta + phi)) [m], on the ground in
+    stance."""
+    r = runs[model]
+    for leg, side in LEGS:
+        (hip_x, hip_y), _ = _hip(r, side)
+        length, gamma = r.leg_length(leg), r.pitch + r.leg_angle(leg)
+        toe_x, toe_y = r.toe_position(leg)
+        np.testing.assert_allclose(toe_x, hip_x + length * np.sin(gamma), rtol=0, atol=1e-9)
+        np.testing.assert_allclose(toe_y, hip_y - length * np.cos(gamma), rtol=0, atol=1e-9)
+        assert np.max(np.abs(toe_y[_stance(r, leg)])) < 1e-9
+
+
+def test_motor_joint_mode_is_a_stiction_mode_and_stuck_outside_model_ii(runs):
+    """motor_joint_mode takes MotorJointMode codes, stuck at some samples of Model II's
+    bounding, and is always stuck (0) in Model I and the ideal actuator."""
+    from scoutsim.names import MotorJointMode
+    for leg, _ in LEGS:
+        m = runs["II"].motor_joint_mode(leg)
+        assert set(np.unique(m)) <= {int(v) for v in MotorJointMode}
+        assert MotorJointMode.STUCK in m
+        for model in ("I", "ideal"):
+            assert not np.any(runs[model].motor_joint_mode(leg))
+
+
+def test_event_log_names_the_event_records(runs):
+    """event_log: the records' columns by name, selected by kind and leg, agree with
+    event_times and impacts; impact_log is the touchdowns in a half-open window."""
+    from scoutsim.names import EventKind
+    r = runs["II"]
+    log = r.event_log()
+    assert len(log["t"]) == len(r.events)
+    np.testing.assert_array_equal(log["kind"], r.events[:, L.EVR_KIND])
+    np.testing.assert_array_equal(log["violations"], r.events[:, L.EVR_VIOLATIONS])
+    for leg, _ in LEGS:
+        td = r.event_log(kinds=("touchdown", EventKind.LIFTOFF), leg=leg)
+        assert set(td["kind"]) == {EventKind.TOUCHDOWN, EventKind.LIFTOFF}
+        assert np.all(td["leg"] == (0 if leg == "back" else 1))
+        np.testing.assert_array_equal(td["t"][td["kind"] == EventKind.TOUCHDOWN],
+                                      r.event_times("touchdown", leg))
+    imp = r.impacts()
+    t0, t1 = float(imp[3, 0]), float(imp[8, 0])
+    window = r.impact_log(t0, t1)
+    np.testing.assert_array_equal(window["t"], imp[3:8, 0])
+    np.testing.assert_array_equal(window["energy_lost"], imp[3:8, 4])
+    np.testing.assert_array_equal(r.impact_log()["normal_impulse"], imp[:, 2])
+    with pytest.raises(ValueError, match="kind"):
+        r.event_log(kinds=("landing",))
+
+
 # -----------------------------------------------------------------------------------------
 # leg_length, leg_axial_force, ground_force
 # -----------------------------------------------------------------------------------------

@@ -103,3 +103,17 @@ def test_standing_state_refuses_the_passive_model_and_too_soft_or_too_stiff_legs
             touchdown_compression=0.02, liftoff_compression=0.015))
     with pytest.raises(ValueError, match="x = "):
         standing_state(x=math.nan)
+
+
+def test_state_vector_sets_components_by_name():
+    """state_vector puts each named component in its slot of the layout (the rest zero);
+    state_index finds it; an unknown name is refused."""
+    from scoutsim.state import STATE_NAMES, state_index, state_vector
+    assert STATE_NAMES == L.STATE_NAMES
+    s = state_vector(y=0.4, dtheta=1.5, phi_front=-0.2, leg_length_back=0.3)
+    expected = np.zeros(L.NS)
+    expected[[L.IY, L.NQ + L.ITH, L.IPHF, L.IL_B]] = (0.4, 1.5, -0.2, 0.3)
+    np.testing.assert_array_equal(s, expected)
+    assert [state_index(n) for n in STATE_NAMES] == list(range(L.NS))
+    with pytest.raises(ValueError, match="height"):
+        state_vector(height=0.4)

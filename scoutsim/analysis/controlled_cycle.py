@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..integrator import IntegratorSettings
-from ..model import layout as L
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from ..simulation import simulate
 from ..state import InitialState
@@ -79,12 +78,11 @@ def _liftoff_states(result):
     t = result.t
     te = result.event_times("liftoff", "back")
     te = te[(te > t[0]) & (te < t[-1])]
-    S = result.state
     cols = []
-    for i in (L.IY, L.ITH):
-        cols.append(_hermite(t, S[:, i], S[:, L.NQ + i], te))
-    for i in (L.IX, L.IY, L.ITH):
-        cols.append(np.interp(te, t, S[:, L.NQ + i]))
+    for q, dq in ((result.height, result.vertical_speed), (result.pitch, result.pitch_rate)):
+        cols.append(_hermite(t, q, dq, te))
+    for dq in (result.forward_speed, result.vertical_speed, result.pitch_rate):
+        cols.append(np.interp(te, t, dq))
     return te, np.column_stack(cols)
 
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..integrator import IntegratorSettings
+from ..names import LEG_NAMES
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from ..simulation import simulate
 from ..state import HybridState
@@ -144,7 +145,7 @@ def controlled_fixed_point(start=None, *, model: str = "II",
     r = simulate(robot, controller, hs, T, model=model, integrator=integ,
                  friction_coefficient=friction_coefficient)
     td = []
-    for leg in ("back", "front"):
+    for leg in LEG_NAMES:
         te = r.event_times("touchdown", leg)
         if len(te) == 0:
             td.append(math.nan)

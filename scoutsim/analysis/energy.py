@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..model import layout as L
+from ..names import LEG_NAMES
 
 #: the terms of the balance, in order: (name, description, flows summed over both legs)
 ELECTRICAL_TERMS = (
@@ -140,7 +140,7 @@ def energy_balance(result) -> EnergyBalance:
     model = result.provenance.get("model", "II")
 
     def both(*names):
-        return sum(flows[f"{n}_{leg}"] for n in names for leg in L.LEG_NAMES)
+        return sum(flows[f"{n}_{leg}"] for n in names for leg in LEG_NAMES)
 
     electrical = both("electrical")
     hip = both("hip_work")
@@ -160,7 +160,7 @@ def energy_balance(result) -> EnergyBalance:
                   "change of mechanical energy (kinetic, gravity, leg and belt springs)"))
     distance = None
     if "stream" not in result.provenance and len(result.t):
-        distance = float(result.state[-1, L.IX] - result.state[0, L.IX])
+        distance = float(result.x[-1] - result.x[0])
     robot = result.provenance.get("robot") or {}
     mass = gravity = None
     if robot:

@@ -37,9 +37,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import LegState, leg_index
 from ..parameters import RobotParameters
-from .stances import _leg, stance_intervals, stance_overlap
+from .stances import stance_intervals, stance_overlap
 from .stride_energy import _input_and_weight, stride_energy
 from .strides import (STRIDE_ENERGY_METRICS, STRIDE_METRICS, Stride, _json_float, _strides,
                       converged_tail)
@@ -208,7 +208,7 @@ class GaitMetrics:
 
         Not the paper's Fig. 11 statement ("the motors are saturated most of the time"),
         which covers the whole step (tests/test_paper_claims.py measures that). A sample with
-        controller leg state stance-retraction (``leg_state == 1``) counts as saturated
+        controller leg state stance-retraction (``LegState.RETRACTION``) counts as saturated
         when the motor's operating point lies on the boundary of what the amplifier and
         motor can deliver (docs/specification.md section 4): on the current limit, |i| >= (1 - 1e-3) i_max, or
         on the torque-speed line, |R_A i + K_w w_m| >= (1 - 1e-3) V_b. The retraction
@@ -227,11 +227,11 @@ class GaitMetrics:
             In [0, 1]; None if the leg never was in stance-retraction or the robot
             parameters are not in the provenance.
         """
-        li = _leg(leg)
+        li = leg_index(leg)
         robot = (result.provenance or {}).get("robot")
         if not robot:
             return None
-        m = result.leg_state(li) == L.LS_RETRACTION
+        m = result.leg_state(li) == LegState.RETRACTION
         n = int(np.count_nonzero(m))
         if n == 0:
             return None

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import LEG_NAMES, EventKind, Leg
 from ..parameters import RobotParameters
 from .poincare import MapError
 
@@ -68,19 +68,20 @@ class ApexMap:
     order: tuple
 
 
-def _glitched(events) -> bool:
-    """True if a massless leg's touchdown in a ``simulate()`` run was undone at the same
-    instant (zero-length stance) and not redone: the toe then passes through the ground.
-    This rounding-level defect of the compiled massless touchdown (docs/orbits.md) is why
-    :func:`passive_apex_map` integrates the passive equations itself."""
-    for leg in (0, 1):
-        e = events[events[:, 2] == leg]
-        kinds = e[:, 1]
-        for i in range(len(e) - 1):
-            if (kinds[i] == L.EK_TOUCHDOWN and kinds[i + 1] == L.EK_LIFTOFF
-                    and e[i + 1, 0] - e[i, 0] < 1e-12):
-                if not (i + 2 < len(e) and kinds[i + 2] == L.EK_TOUCHDOWN
-                        and e[i + 2, 0] - e[i + 1, 0] < 1e-9):
+def _glitched(result) -> bool:
+    """True if a massless leg's touchdown in the ``simulate()`` run ``result`` was undone
+    at the same instant (zero-length stance) and not redone: the toe then passes through
+    the ground. This rounding-level defect of the compiled massless touchdown
+    (docs/orbits.md) is why :func:`passive_apex_map` integrates the passive equations
+    itself."""
+    for leg in Leg:
+        log = result.event_log(leg=leg)
+        t, kinds = log["t"], log["kind"]
+        for i in range(len(t) - 1):
+            if (kinds[i] == EventKind.TOUCHDOWN and kinds[i + 1] == EventKind.LIFTOFF
+                    and t[i + 1] - t[i] < 1e-12):
+                if not (i + 2 < len(t) and kinds[i + 2] == EventKind.TOUCHDOWN
+                        and t[i + 2] - t[i + 1] < 1e-9):
                     return True
     return False
 
@@ -147,10 +148,10 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
 
     for leg in (0, 1):
         if toe_y(u, leg) < 0.0:
-            raise MapError(f"the {L.LEG_NAMES[leg]} toe starts below the ground")
+            raise MapError(f"the {LEG_NAMES[leg]} toe starts below the ground")
     for _ in range(12):
         if all(had_stance) and anchors == [None, None]:
-            return u, t, tuple(L.LEG_NAMES[i] for i in np.argsort(first_td, kind="stable"))
+            return u, t, tuple(LEG_NAMES[i] for i in np.argsort(first_td, kind="stable"))
         evs, meaning = [], []
         for leg in (0, 1):
             if anchors[leg] is None:

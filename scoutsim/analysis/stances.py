@@ -12,25 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import EventKind, leg_index
 
 __all__ = ["stance_intervals", "stance_overlap"]
-
-_LEGS = {"back": 0, "front": 1, 0: 0, 1: 1}
-
-
-def _leg(leg) -> int:
-    try:
-        return _LEGS[leg]
-    except (KeyError, TypeError):
-        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
-
-
-def _events(result) -> np.ndarray:
-    ev = np.asarray(result.events, dtype=float)
-    if ev.size == 0:
-        return np.zeros((0, L.NEVREC))
-    return ev.reshape(-1, ev.shape[-1])
 
 
 def stance_intervals(result, leg) -> np.ndarray:
@@ -52,25 +36,23 @@ def stance_intervals(result, leg) -> np.ndarray:
     (k, 2) ndarray
         Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
     """
-    li = _leg(leg)
-    ev = _events(result)
-    m = (ev[:, 2] == li) & np.isin(ev[:, 1], (L.EK_TOUCHDOWN, L.EK_LIFTOFF))
-    sel = ev[m]
-    sel = sel[np.argsort(sel[:, 0], kind="stable")]
+    log = result.event_log(kinds=(EventKind.TOUCHDOWN, EventKind.LIFTOFF),
+                           leg=leg_index(leg))
+    order = np.argsort(log["t"], kind="stable")
+    times, kinds = log["t"][order], log["kind"][order]
     t0 = float(result.t[0]) if len(result.t) else 0.0
     out = []
     start = None
-    for i, row in enumerate(sel):
-        kind = int(row[1])
-        if kind == L.EK_TOUCHDOWN:
+    for i, (te, kind) in enumerate(zip(times, kinds)):
+        if kind == EventKind.TOUCHDOWN:
             if start is None:
-                start = float(row[0])
+                start = float(te)
         else:  # lift-off
             if start is not None:
-                out.append((start, float(row[0])))
+                out.append((start, float(te)))
                 start = None
             elif i == 0:
-                out.append((t0, float(row[0])))
+                out.append((t0, float(te)))
     if start is not None:
         out.append((start, max(float(result.t_end), start)))
     return np.array(out, dtype=float).reshape(-1, 2)

@@ -58,8 +58,7 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
             cumulative[name] = result.cumulative_energy(name)
         return float(cumulative[name][j] - cumulative[name][i])
 
-    imp = result.impacts()
-    impacts = float(imp[(imp[:, 0] >= t[i]) & (imp[:, 0] < t[j]), 4].sum())
+    impacts = float(result.impact_log(t[i], t[j])["energy_lost"].sum())
     mech = float(result.energy[j] - result.energy[i])
     hip = delta("hip_work")
     friction = delta("friction")

@@ -16,10 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..integrator import IntegratorSettings
-from ..model import layout as L
+from ..names import ContactMode, Leg
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from ..simulation import simulate
-from ..state import HybridState
+from ..state import HybridState, state_index, state_vector
 from .poincare import MapError
 
 __all__ = ["controlled_stride_map", "section_state", "CONTROLLED_Z_NAMES"]
@@ -29,19 +29,26 @@ CONTROLLED_Z_NAMES = (
     "y", "theta", "phi_back", "phi_front", "alpha_back", "alpha_front",
     "dx", "dy", "dtheta", "dphi_back", "dphi_front", "dalpha_back", "dalpha_front",
     "leg_length_back", "leg_length_front", "anchor_back_rel", "anchor_front_rel")
+#: the components of z taken from the state vector (all but x), in z's order
+_STATE_Z_NAMES = CONTROLLED_Z_NAMES[:-2]
+#: the contact modes in which a toe is pinned at its anchor
+_PINNED = (ContactMode.STICK, ContactMode.STRUT)
 
 
 def _z_of(hs) -> np.ndarray:
     """Section coordinates of a HybridState: the state without x, and the pinned toes'
     anchors relative to x (0 for a leg not pinned)."""
     s = np.asarray(hs.state)
-    rel = [(hs.toe_anchors[leg] - s[L.IX]) if hs.contact_modes[leg] in (L.STICK, L.STRUT)
-           else 0.0 for leg in range(2)]
-    return np.concatenate([s[1:], rel])
+    x = s[state_index("x")]
+    rel = [(hs.toe_anchors[leg] - x) if hs.contact_modes[leg] in _PINNED else 0.0
+           for leg in Leg]
+    return np.concatenate([s[[state_index(n) for n in _STATE_Z_NAMES]], rel])
 
 
 def _hs_of(z, discrete):
-    s = np.concatenate([[0.0], z[:L.NS - 1]])
+    """The HybridState of section coordinates ``z`` at x = 0 with the discrete modes
+    ``discrete`` (:func:`_discrete`)."""
+    s = state_vector(x=0.0, **dict(zip(_STATE_Z_NAMES, z)))
     return HybridState(state=s, toe_anchors=(float(z[-2]), float(z[-1])), **discrete)
 
 

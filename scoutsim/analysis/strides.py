@@ -19,7 +19,6 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..model import layout as L
 from .interpolation import _extrema, _hermite
 from .stances import stance_overlap
 from .stride_energy import stride_energy
@@ -44,10 +43,6 @@ def _json_float(v):
         return None
     v = float(v)
     return v if math.isfinite(v) else None
-
-
-def _velocity(result, index):
-    return np.asarray(result.state, dtype=float)[:, L.NQ + index]
 
 
 @dataclass(frozen=True)
@@ -170,11 +165,11 @@ def _strides(result, transient_s, stances):
     if len(lo) < 2 or len(t) == 0:
         return []
     x = np.asarray(result.x, dtype=float)
-    dx = _velocity(result, L.IX)
+    dx = np.asarray(result.forward_speed, dtype=float)
     th = np.asarray(result.pitch, dtype=float)
-    dth = _velocity(result, L.ITH)
+    dth = np.asarray(result.pitch_rate, dtype=float)
     hy = np.asarray(result.height, dtype=float)
-    dhy = _velocity(result, L.IY)
+    dhy = np.asarray(result.vertical_speed, dtype=float)
     t_end_run = float(result.t_end)
     xs = _hermite(t, x, dx, lo)
     cumulative = {}

@@ -4,9 +4,10 @@ Every discontinuity of the hybrid model (touchdown impact, lift-off, slide / sti
 motor-joint stick / slip, the massless passive touchdown, a mode change caused by a new
 command) is a *transition*. The compiled run loop records, for each one, the total
 mechanical energy just before it and after the modes have settled, and a bit mask of the
-mode invariants that the state violates afterwards (``layout.V_*``: a pinned toe the ground
-pulls, a stuck joint beyond breakaway, a joint slipping against its motion, ...). This
-module reads those records and checks the two laws every transition must obey:
+mode invariants that the state violates afterwards (:class:`scoutsim.names.Violation`: a
+pinned toe the ground pulls, a stuck joint beyond breakaway, a joint slipping against its
+motion, ...). This module reads those records (``result.event_log()``) and checks the two
+laws every transition must obey:
 
 * **energy**: mechanical energy may only drop, and only by a logged loss with a physical
   cause: the kinetic energy a touchdown impact dissipates (logged with its impulse). Every
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import EVENT_KIND_NAMES, VIOLATION_NAMES, EventKind
 
 #: default tolerance of the energy balance of one transition, relative to the larger of the
 #: energies before and after it and 1 J (Scout II holds about 80 J of mechanical energy)
@@ -47,7 +48,7 @@ class Transition:
     energy_before_J: float
     energy_after_J: float
     logged_loss_J: float     #: kinetic energy the touchdown impacts of this transition lost
-    violations: int          #: bit mask of layout.V_*
+    violations: int          #: bit mask of scoutsim.names.Violation
 
     @property
     def unexplained_loss_J(self) -> float:
@@ -55,7 +56,7 @@ class Transition:
         return (self.energy_before_J - self.energy_after_J) - self.logged_loss_J
 
     def violation_names(self) -> list:
-        return [name for bit, name in L.VIOLATION_NAMES.items() if self.violations & bit]
+        return [name for bit, name in VIOLATION_NAMES.items() if self.violations & bit]
 
 
 @dataclass(frozen=True)
@@ -119,36 +120,34 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
     balance (``audit.balance``) must close to ``BALANCE_RTOL_FACTOR`` times the integrator's
     rtol of the input (at least 1e-6). Results saved before the audit existed carry no
     audit columns: ValueError."""
-    ev = np.asarray(result.events)
-    if ev.ndim != 2 or ev.shape[1] < L.NEVREC:
-        raise ValueError("these events carry no transition audit (a result saved by an "
-                         "older scoutsim): re-run the simulation")
-    names = L.EVENT_KIND_NAMES
+    log = result.event_log()
+    t, kind, leg, v3 = log["t"], log["kind"], log["leg"], log["v3"]
+    e_before, e_after, violations = log["energy_before"], log["energy_after"], log["violations"]
     out = []
     cur = None
-    for row in ev:
-        eb, ea = row[L.EVR_E_BEFORE], row[L.EVR_E_AFTER]
+    for i in range(len(t)):
+        eb, ea = e_before[i], e_after[i]
         if np.isnan(eb):
             cur = None          # a controller record: not a plant transition
             continue
-        key = (row[L.EVR_T], eb, ea if not np.isnan(ea) else None)
+        key = (t[i], eb, ea if not np.isnan(ea) else None)
         if cur is None or cur["key"] != key:
             cur = {"key": key, "rows": []}
             out.append(cur)
-        cur["rows"].append(row)
+        cur["rows"].append(i)
     trs = []
     for g in out:
         rows = g["rows"]
-        loss = sum(r[L.EVR_V3] for r in rows if int(r[L.EVR_KIND]) == L.EK_TOUCHDOWN)
+        loss = sum(v3[i] for i in rows if kind[i] == EventKind.TOUCHDOWN)
         bits = 0
-        for r in rows:
-            bits |= int(r[L.EVR_VIOLATIONS])
+        for i in rows:
+            bits |= int(violations[i])
         trs.append(Transition(
-            t=float(rows[0][L.EVR_T]),
-            kinds=tuple(names.get(int(r[L.EVR_KIND]), "?") for r in rows),
-            legs=tuple(int(r[L.EVR_LEG]) for r in rows),
-            energy_before_J=float(rows[0][L.EVR_E_BEFORE]),
-            energy_after_J=float(rows[0][L.EVR_E_AFTER]),
+            t=float(t[rows[0]]),
+            kinds=tuple(EVENT_KIND_NAMES.get(int(kind[i]), "?") for i in rows),
+            legs=tuple(int(leg[i]) for i in rows),
+            energy_before_J=float(e_before[rows[0]]),
+            energy_after_J=float(e_after[rows[0]]),
             logged_loss_J=float(loss), violations=bits))
     balance = None
     balance_tol = 1e-6

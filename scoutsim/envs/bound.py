@@ -20,8 +20,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..control.bounding import SCHEDULABLE
-from ..control.sensors import SensorParameters, load_sensors
-from ..model import layout as L
+from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
 from ..engine import start_engine
@@ -53,14 +52,14 @@ class BoundEnv(gymnasium.Env):
     """Planar bounding of Scout II (ideal, Model I or Model II) as a Gymnasium environment.
 
     **Observation**: the robot's sensor readings at the sample that starts the next policy
-    step, as a controller sees them (:class:`~scoutsim.control.sensors.Sensors`,
-    ``layout.SN_*`` order, SI): hip angles (back, front) [rad], hip rates [rad/s], leg
-    lengths [m], pitch [rad], pitch rate [rad/s], accelerometer along the torso axis and
-    its normal [m/s^2], laser ranges (back, front) [m], motor currents [A], battery voltage
-    [V]; with the measurement model of ``sensors`` (noise, bias, resolution, delay).
-    float64: the numbers the compiled controllers see, unrounded, so that an observation
-    is bit for bit a controller's reading (tested against :func:`~scoutsim.simulate`) and
-    an episode reproducible in it; float32's rounding (1e-7 relative) would not matter to
+    step, as a controller sees them (:class:`~scoutsim.control.sensors.Sensors`, in its
+    order, SI): hip angles (back, front) [rad], hip rates [rad/s], leg lengths [m], pitch
+    [rad], pitch rate [rad/s], accelerometer along the torso axis and its normal [m/s^2],
+    laser ranges (back, front) [m], motor currents [A], battery voltage [V]; with the
+    measurement model of ``sensors`` (noise, bias, resolution, delay). float64: the numbers
+    the compiled controllers see, unrounded, so that an observation is bit for bit a
+    controller's reading (tested against :func:`~scoutsim.simulate`) and an episode
+    reproducible in it; float32's rounding (1e-7 relative) would not matter to
     a learner, which casts if it wants to (``gymnasium.wrappers.DtypeObservation``).
     Unbounded: the readings are physical quantities with no hard limit (noise included).
 
@@ -229,7 +228,7 @@ class BoundEnv(gymnasium.Env):
         self.pitch_limit_deg = pitch_limit_deg
         self.integrator = integrator
         self.render_mode = None
-        self.observation_space = spaces.Box(-np.inf, np.inf, (L.NSN,), np.float64)
+        self.observation_space = spaces.Box(-np.inf, np.inf, (N_SENSORS,), np.float64)
         if action_type == "torque":
             tau = np.array([self.robot.leg(leg).max_leg_torque for leg in (0, 1)])
             self.action_space = spaces.Box(-tau, tau, (2,), np.float64)
@@ -286,14 +285,13 @@ class BoundEnv(gymnasium.Env):
             eng.cmd[:] = a
         else:
             eng.C[self.setpoint_slots] = a
-        x0, t0, e0 = float(eng.s[L.IX]), eng.t_now, self._electrical()
+        x0, t0, e0 = eng.x, eng.t_now, self._electrical()
         eng.advance(eng.k + self.samples_per_step)
         eng.discard_records()
         obs = eng.read_sensors().copy()
-        x1, t1 = float(eng.s[L.IX]), eng.t_now
+        x1, t1 = eng.x, eng.t_now
         energy = self._electrical() - e0
-        status = eng.status
-        fell = status == L.ST_FELL
+        fell = eng.fell
         up = not fell and self._is_up()
         v = (x1 - x0) / (t1 - t0) if t1 > t0 else 0.0
         if self.target_speed is None:
@@ -304,7 +302,7 @@ class BoundEnv(gymnasium.Env):
         r_healthy = self.healthy_reward if up else 0.0
         reward = r_forward + r_energy + r_healthy
         terminated = fell or (self.terminate_when_fallen and not up)
-        truncated = not terminated and status != L.ST_RUNNING
+        truncated = not terminated and eng.stopped
         self._running = not (terminated or truncated)
         info = self._info_now()
         info.update(reward_forward=r_forward, reward_energy=r_energy,
@@ -353,20 +351,17 @@ class BoundEnv(gymnasium.Env):
     def _electrical(self) -> float:
         """Electrical energy into both legs' motor terminals since the start [J] (NaN
         without the accounting)."""
-        e = self._engine.energy
-        if not e.size:
-            return math.nan
-        return float(e[L.EN_ELECTRICAL] + e[L.NEN_LEG + L.EN_ELECTRICAL])
+        return self._engine.electrical_energy()
 
     def _is_up(self) -> bool:
-        s = self._engine.s
+        eng = self._engine
         (h0, h1), (p0, p1) = self.healthy_height_range, self.healthy_pitch_range
-        return bool(h0 <= s[1] <= h1 and p0 <= s[2] <= p1)
+        return bool(h0 <= eng.height <= h1 and p0 <= eng.pitch <= p1)
 
     def _info_now(self) -> dict:
         eng = self._engine
-        return {"t": eng.t_now, "x_position": float(eng.s[L.IX]), "height": float(eng.s[L.IY]),
-                "pitch": float(eng.s[L.ITH]), "outcome": L.STATUS_NAMES[eng.status]}
+        return {"t": eng.t_now, "x_position": eng.x, "height": eng.height,
+                "pitch": eng.pitch, "outcome": eng.status_name}
 
 
 def _interval(pair, name: str) -> tuple[float, float]:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from ..validation.experiment_log import ExperimentLog
 from ..validation.log_format import LogError
@@ -144,13 +145,13 @@ def prepare_log(log: ExperimentLog | str | Path, rig: str | None = None,
             raise
         raise LogError(f"{where}: metadata 'rig_config' is not usable: {exc}", log.path) from None
     moving = []
-    for leg, nm in enumerate(("back", "front")):
+    for leg, nm in enumerate(LEG_NAMES):
         span = float(np.ptp(angle[:, leg]))
         if span > max(MIN_MOTION_RAD, 20 * sa):
             moving.append(leg)
     if not moving:
         spans = ", ".join(f"{nm} {np.ptp(angle[:, i]):.3g} rad"
-                          for i, nm in enumerate(("back", "front")))
+                          for i, nm in enumerate(LEG_NAMES))
         raise LogError(f"{where}: column 'phi_back_rad' / 'phi_front_rad': no leg moves (angle "
                        f"ranges {spans}, need more than {max(MIN_MOTION_RAD, 20 * sa):.3g} rad); "
                        "a leg that never moves carries no information on the hip unit",

@@ -37,9 +37,10 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .._version import __version__
-from ..model import layout as L
+from ..names import LEG_NAMES
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result import SimulationResult
+from ..state import state_vector
 from ..bench import Bench, run_bench
 from ..integrator import IntegratorSettings
 from ..validation.experiment_log import ExperimentLog
@@ -249,20 +250,20 @@ def with_toe_mass(robot: RobotParameters, toe_mass: float) -> RobotParameters:
 
 
 def _clamped_state(clamp_height, phi_b, phi_f, robot):
-    s = np.zeros(L.NS)
-    s[L.IY] = clamp_height
-    s[L.IPHB], s[L.IPHF] = phi_b, phi_f
-    s[L.IALB], s[L.IALF] = phi_b, phi_f      # belt relaxed at the start
-    for leg, phi in enumerate((phi_b, phi_f)):
-        l0 = robot.per_leg("leg_rest_length")[leg]
-        s[L.IL_B + leg] = l0
+    """The state vector of the clamped rig at the start: torso at ``clamp_height`` [m], level,
+    legs at the angles ``phi_b``, ``phi_f`` [rad] and at their rest lengths, the Model II
+    gear angles equal to them (belts relaxed), everything at rest."""
+    l0b, l0f = robot.per_leg("leg_rest_length")
+    for leg, phi, l0 in ((0, phi_b, l0b), (1, phi_f, l0f)):
         sL = robot.hip_offset(leg)
         if clamp_height - l0 * math.cos(phi) <= 0.0 or \
                 clamp_height - 0.5 * robot.torso_height <= 0.0:
             raise ValueError(f"clamp_height = {clamp_height} m is not allowed: the "
-                             f"{L.LEG_NAMES[leg]} toe or the torso would touch the ground "
+                             f"{LEG_NAMES[leg]} toe or the torso would touch the ground "
                              f"(hip at x = {sL:+.3f} m); use a height > l0 + torso_height/2")
-    return s
+    return state_vector(y=clamp_height, phi_back=phi_b, phi_front=phi_f,
+                        alpha_back=phi_b, alpha_front=phi_f,
+                        leg_length_back=l0b, leg_length_front=l0f)
 
 
 def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
@@ -369,16 +370,16 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
     dt = float(prov["control_period_s"])
     cols = {"t": t, "pitch_rad": np.zeros_like(t),
             "height_m": np.full_like(t, float(rig["clamp_height"]))}
-    for leg, nm in enumerate(L.LEG_NAMES):
+    for leg, nm in enumerate(LEG_NAMES):
         enc = encoder_reading(result.motor_angle(leg), robot, noise, rng, leg)
         cols[f"phi_{nm}_rad"] = enc
         cols[f"dphi_{nm}_rad_s"] = np.gradient(enc, dt)
-    for leg, nm in enumerate(L.LEG_NAMES):
+    for leg, nm in enumerate(LEG_NAMES):
         i = np.asarray(result.motor_current(leg), dtype=float)
         if noise is not None and noise.current_a > 0:
             i = i + rng.normal(0.0, noise.current_a, i.shape)
         cols[f"current_{nm}_a"] = i
-    for leg, nm in enumerate(L.LEG_NAMES):
+    for leg, nm in enumerate(LEG_NAMES):
         cols[f"leg_state_{nm}"] = result.leg_state(leg).astype(float)
     if rig["name"] == "flight-steps":
         fs = FlightSteps(**{k: v for k, v in rig.items() if k != "name"})

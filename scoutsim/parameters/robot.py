@@ -5,14 +5,15 @@ may differ between the back and the front legs (:data:`PER_LEG_FIELDS`)."""
 from __future__ import annotations
 
 import dataclasses
-import numbers
 from dataclasses import dataclass
 
+from ..names import LEG_NAMES, leg_index
 from .errors import ParameterError
 from .packaged import _packaged_defaults
 
-#: The legs, in the order of a (back, front) pair.
-LEG_NAMES = ("back", "front")
+# LEG_NAMES (the legs, in the order of a (back, front) pair) and leg_index live in
+# scoutsim.names, the one home of the legs' names; they stay importable from here.
+__all__ = ["RobotParameters", "PER_LEG_FIELDS", "LEG_NAMES", "leg_index"]
 
 #: Fields that take one value for both legs or a (back, front) pair: the leg bodies, the
 #: telescopic legs, the hip units (transmission) and the motors with their amplifiers.
@@ -26,15 +27,6 @@ PER_LEG_FIELDS = (
     "leg_friction_side_load_coefficient", "leg_damping_angle_coefficient",
     "torque_constant", "speed_constant", "armature_resistance", "current_limit",
 )
-
-
-def leg_index(leg) -> int:
-    """0 for the back leg, 1 for the front: from 0 / 1 or "back" / "front"."""
-    if isinstance(leg, str) and leg in LEG_NAMES:
-        return LEG_NAMES.index(leg)
-    if isinstance(leg, numbers.Integral) and not isinstance(leg, bool) and leg in (0, 1):
-        return int(leg)
-    raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' (0) or 'front' (1)")
 
 
 def _per_leg_value(name: str, value):

@@ -8,9 +8,10 @@ import numbers
 import typing
 from dataclasses import dataclass
 
+from ..names import LEG_NAMES
 from .controller import ControllerParameters
 from .errors import ParameterError, _fmt, _fmt_bound
-from .robot import LEG_NAMES, PER_LEG_FIELDS, RobotParameters
+from .robot import PER_LEG_FIELDS, RobotParameters
 from .schema import _fields_of, _schema, _Spec
 
 

@@ -5,7 +5,12 @@ except the deferred convenience accessors ``SimulationResult.plot``,
 Modules
 -------
 style                 colours of legs, leg states and models; model names; the file writer
-plots                 run time histories, torque-speed plane (paper Fig. 11), basin and sweep maps
+plots                 run time histories; re-exports the run figures below
+torque_speed          the torque-speed plane of a run (paper Fig. 11) and the motor limits
+stride_power          the power over one stride by destination
+maps                  the basin map and sweep maps over a grid of runs
+tune_plots            a tuning's convergence
+run_parts             what the run figures share (title, leg-state bands)
 animation             stick-figure animation of a run (GIF / MP4)
 paper_figures         the paper's Figs. 5, 8-12 for an experiment and models, all written at
                       once; one module per figure group: experiment_figure (Fig. 5),
@@ -28,8 +33,9 @@ import importlib
 
 #: public name -> submodule that defines it
 _EXPORTS = {
-    "plot_run": "plots", "plot_torque_speed": "plots", "plot_basin_map": "plots",
-    "plot_sweep_map": "plots", "motor_limits": "plots",
+    "plot_run": "plots", "plot_torque_speed": "torque_speed", "plot_basin_map": "maps",
+    "plot_sweep_map": "maps", "motor_limits": "torque_speed",
+    "plot_stride_power": "stride_power", "plot_tune_convergence": "tune_plots",
     "animate": "animation", "save_animation": "animation",
     "fig5": "experiment_figure", "fig8": "stride_figures", "fig9": "stride_figures",
     "fig10": "stride_figures", "fig11": "saturation_figure", "fig12": "error_figure",

@@ -8,10 +8,11 @@
 Each frame shows the torso as a box (length ``torso_length``, height ``torso_height``,
 rotated by the pitch), the two virtual legs from hip to toe coloured by their controller
 leg state (:data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake
-green; the same colours as the dots of :func:`scoutsim.presentation.plots.plot_torque_speed`), the
-ground reaction force on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the
-ground line with tick marks every 0.25 m (so the forward motion shows while the view
-follows the torso) and the time stamp.
+green; the same colours as the dots of
+:func:`scoutsim.presentation.torque_speed.plot_torque_speed`), the ground reaction force
+on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the ground line with tick
+marks every 0.25 m (so the forward motion shows while the view follows the torso) and the
+time stamp.
 
 Frames are taken at ``t0 + k / fps`` for ``k = 0 .. floor((t1 - t0) * fps)``, so a window
 gives ``floor((t1 - t0) * fps) + 1`` frames (both ends included when ``(t1 - t0) * fps`` is
@@ -35,7 +36,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
-from ..model import layout as L
+from ..names import ContactMode, Leg, LegState
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
 __all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS",
@@ -101,12 +102,18 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     times = frame_times(result, fps, t0, t1)
     t = np.asarray(result.t, dtype=float)
     idx = np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, t.size - 1)
-    state = np.asarray(result.state, dtype=float)
-    aux = np.asarray(result.aux, dtype=float)
+    x_com, y_com, pitch = (np.asarray(v, dtype=float)
+                           for v in (result.x, result.height, result.pitch))
+    phis = [np.asarray(result.leg_angle(leg), dtype=float) for leg in Leg]
+    lengths = [np.asarray(result.leg_length(leg), dtype=float) for leg in Leg]
+    toe_xy = [np.column_stack([np.asarray(v, dtype=float) for v in result.toe_position(leg)])
+              for leg in Leg]
+    ground = [np.column_stack([np.asarray(v, dtype=float) for v in result.ground_force(leg)])
+              for leg in Leg]
     has_ctrl = (result.provenance or {}).get("controller") is not None
-    states = [np.asarray(result.leg_state(leg)) if has_ctrl else np.zeros(t.size, int)
-              for leg in (0, 1)]
-    contact = [np.asarray(result.contact_mode(leg)) for leg in (0, 1)]
+    states = [np.asarray(result.leg_state(leg)) if has_ctrl
+              else np.full(t.size, LegState.FLIGHT, int) for leg in Leg]
+    contact = [np.asarray(result.contact_mode(leg)) for leg in Leg]
     hips, length, height = _geometry(result)
 
     fig = Figure(figsize=figsize, dpi=dpi)
@@ -115,9 +122,9 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     ax.set_aspect("equal")
     ax.set_xlabel("forward position x [m]")
     ax.set_ylabel("height y [m]")
-    ytop = max(0.65, float(np.max(state[:, L.IY])) + 0.25)
+    ytop = max(0.65, float(np.max(y_com)) + 0.25)
     ax.set_ylim(-0.08, ytop)
-    ground, = ax.plot([], [], color="0.3", lw=1.5)
+    floor, = ax.plot([], [], color="0.3", lw=1.5)
     ticks, = ax.plot([], [], color="0.3", lw=1.0)
     torso = Polygon(np.zeros((4, 2)), closed=True, facecolor="0.75", edgecolor="k", lw=1.2,
                     zorder=3)
@@ -141,7 +148,7 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
 
     def draw(i):
         k = int(idx[i])
-        x, y, th = state[k, L.IX], state[k, L.IY], state[k, L.ITH]
+        x, y, th = x_com[k], y_com[k], pitch[k]
         c, s = math.cos(th), math.sin(th)
         u, n = np.array([c, s]), np.array([-s, c])  # torso axis, its upward normal
         com = np.array([x, y])
@@ -150,30 +157,30 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
                                com - hl * u - hh * n, com + hl * u - hh * n]))
         x0, x1 = x - _VIEW_HALF_WIDTH_M, x + _VIEW_HALF_WIDTH_M
         ax.set_xlim(x0, x1)
-        ground.set_data([x0, x1], [0.0, 0.0])
+        floor.set_data([x0, x1], [0.0, 0.0])
         tk = np.arange(math.floor(x0 / _TICK_SPACING_M), math.ceil(x1 / _TICK_SPACING_M) + 1)
         tx = np.repeat(tk * _TICK_SPACING_M, 3)
         ty = np.tile([0.0, -0.03, np.nan], tk.size)
         ticks.set_data(tx, ty)
-        for leg in (0, 1):
+        for leg in Leg:
             hip = com + hips[leg] * u
-            o = leg * L.NAUX_LEG
-            toe = np.array([aux[k, o + L.A_TOE_X], aux[k, o + L.A_TOE_Y]])
+            toe = toe_xy[leg][k].copy()
             if not np.all(np.isfinite(toe)):  # fall back to the leg geometry
-                phi = state[k, L.IPHB + leg]
-                ll = state[k, L.IL_B + leg]
+                phi = phis[leg][k]
+                ll = lengths[leg][k]
                 toe = hip + ll * np.array([math.sin(th + phi), -math.cos(th + phi)])
             legs[leg].set_data([hip[0], toe[0]], [hip[1], toe[1]])
-            legs[leg].set_color(LEG_STATE_COLORS[int(states[leg][k]) % 3])
+            legs[leg].set_color(LEG_STATE_COLORS[LegState(int(states[leg][k]))])
             toes[leg].set_data([toe[0]], [toe[1]])
-            f = np.array([aux[k, o + L.A_GT], aux[k, o + L.A_GN]])
-            on = contact[leg][k] != 0 and np.all(np.isfinite(f)) and np.hypot(*f) > 1.0
+            f = ground[leg][k].copy()    # tangential, normal [N]
+            on = (contact[leg][k] != ContactMode.FLIGHT and np.all(np.isfinite(f))
+                  and np.hypot(*f) > 1.0)
             tip = toe + FORCE_SCALE_M_PER_N * f if on else toe
             forces[leg].xy = (tip[0], tip[1])
             forces[leg].set_position((toe[0], toe[1]))
             forces[leg].set_visible(bool(on))
         stamp.set_text(f"t = {times[i]:7.3f} s")
-        return [torso, ground, ticks, stamp, *legs, *toes, *forces]
+        return [torso, floor, ticks, stamp, *legs, *toes, *forces]
 
     anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
                          repeat=False)

@@ -11,8 +11,9 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..names import LEG_NAMES
 from ..parameters import RobotParameters
-from .figure_parts import _DEG, _LEGS, _experiment, _finish, _sel
+from .figure_parts import _DEG, _experiment, _finish, _sel
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
 __all__ = ["robot_pose", "fig5"]
@@ -36,7 +37,7 @@ def robot_pose(log, k: int, robot=None) -> dict:
     torso = np.column_stack([corners[:, 0] * c - corners[:, 1] * s,
                              y + corners[:, 0] * s + corners[:, 1] * c])
     legs = {}
-    for i, name in enumerate(_LEGS):
+    for i, name in enumerate(LEG_NAMES):
         sl = rob.hip_offset(i)
         l0 = rob.per_leg("leg_rest_length")[i]
         hx, hy = sl * c, y + sl * s

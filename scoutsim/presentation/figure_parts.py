@@ -13,16 +13,17 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..names import LegState
 from ..validation.phase import Source, as_source, as_sources
 from .style import model_style, save_figure
 
 __all__ = ["STATE_LEVELS"]
 
 #: Level of each controller leg state in the square wave of Figs. 9 and 10 (paper: flight
-#: high, stance-retraction low, stance-brake medium), indexed by the state code.
+#: high, stance-retraction low, stance-brake medium), indexed by the state code
+#: (:class:`scoutsim.names.LegState`).
 STATE_LEVELS = (1.0, 0.0, 0.5)
 _DEG = math.degrees(1.0)
-_LEGS = ("back", "front")
 
 
 def _experiment(logs, transient_s: float) -> Source:
@@ -136,7 +137,8 @@ def _leg_window(lg, stride, leg: str):
 
 
 def _state_wave(ax, t, states, kw, label=None):
-    lv = np.asarray(STATE_LEVELS)[np.clip(np.asarray(states, dtype=int), 0, 2)]
+    codes = np.clip(np.asarray(states, dtype=int), min(LegState), max(LegState))
+    lv = np.asarray(STATE_LEVELS)[codes]
     ax.plot(t, lv, drawstyle="steps-post", label=label, **kw)
 
 

@@ -9,7 +9,8 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
-from .figure_parts import _DEG, _LEGS, STATE_LEVELS, _state_axis
+from ..names import LEG_NAMES
+from .figure_parts import _DEG, STATE_LEVELS, _state_axis
 from .style import save_figure
 
 __all__ = ["plot_log"]
@@ -38,7 +39,7 @@ def plot_log(log, path=None, t_range=None) -> Figure:
     ax_p.set_ylabel("pitch [deg]")
     ax_h.plot(tt, np.asarray(log.height)[k], color="k", lw=1.0)
     ax_h.set_ylabel("COM height [m]")
-    for li, (leg, col) in enumerate(zip(_LEGS, ("tab:blue", "tab:red"))):
+    for li, (leg, col) in enumerate(zip(LEG_NAMES, ("tab:blue", "tab:red"))):
         ax_a.plot(tt, np.asarray(log.leg_angle(leg))[k] * _DEG, color=col, lw=1.0,
                   label=f"{leg}")
         lv = np.asarray(STATE_LEVELS)[log.leg_state(leg)[k]] + (0.04 if li else -0.04)

@@ -10,11 +10,12 @@ import dataclasses
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from ..validation.phase import Source
-from .figure_parts import (_LEGS, _finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown,
+from .figure_parts import (_finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown,
                            _tag)
-from .plots import draw_motor_limits, motor_limits
+from .torque_speed import draw_motor_limits, motor_limits
 
 __all__ = ["fig11"]
 
@@ -35,9 +36,10 @@ def _robot_dict(robot, mods: dict, exp: Source) -> dict:
 def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) -> Figure:
     """Leg angular speed [rad/s] against hip torque per leg [N m] (paper Fig. 11): the
     experiment's steady-stride samples as dots, each source's representative step as a
-    line, and the actuator limits of :func:`scoutsim.presentation.plots.motor_limits` (current limit,
-    torque-speed lines at the battery voltage). ``robot``: RobotParameters or dict for the
-    limits (default: the models' parameters, else Scout II)."""
+    line, and the actuator limits of
+    :func:`scoutsim.presentation.torque_speed.motor_limits` (current limit, torque-speed
+    lines at the battery voltage). ``robot``: RobotParameters or dict for the limits
+    (default: the models' parameters, else Scout II)."""
     exp, mods = _prepare(logs, models, transient_s)
     robot_dict = _robot_dict(robot, mods, exp)
     lims = [motor_limits(robot_dict, leg) for leg in (0, 1)]
@@ -46,7 +48,7 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
     missing = []
     tmax = max(lim["tau_current"] for lim in lims)
     wmax = max(lim["w_no_load"] for lim in lims)
-    for c, leg in enumerate(_LEGS):
+    for c, leg in enumerate(LEG_NAMES):
         ax = axes[c]
         pts = [(lg, s) for lg, s in exp.steady]
         if pts:

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from .figure_parts import (_DEG, _LEGS, _clip_note, _Extent, _finish, _leg_window, _line_kw,
+from ..names import LEG_NAMES
+from .figure_parts import (_DEG, _clip_note, _Extent, _finish, _leg_window, _line_kw,
                            _notes, _prepare, _sel, _shown, _state_axis, _state_wave, _tag)
 
 __all__ = ["fig8", "fig9", "fig10"]
@@ -55,7 +56,7 @@ def _step_figure(exp, mods, rows, title, path):
     ext = _Extent()
     for i, src, lg, st, steady in _shown(exp, mods):
         kw = _line_kw(src, i, steady)
-        for c, leg in enumerate(_LEGS):
+        for c, leg in enumerate(LEG_NAMES):
             win = _leg_window(lg, st, leg)
             if win is None:
                 missing.append(f"{src.label}: no complete {leg} step")
@@ -71,7 +72,7 @@ def _step_figure(exp, mods, rows, title, path):
             if steady:
                 ext.add(axes[-1, c], tt)
     ext.apply()
-    for c, leg in enumerate(_LEGS):
+    for c, leg in enumerate(LEG_NAMES):
         axes[0, c].set_title(f"{leg} leg")
         for r, (ylab, _) in enumerate(rows):
             axes[r, c].set_ylabel(ylab)

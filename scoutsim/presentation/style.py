@@ -9,26 +9,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..model import layout as L
+from .. import names as _names
+from ..names import leg_index
 
 __all__ = ["LEG_NAMES", "LEG_COLORS", "LEG_STATE_NAMES", "LEG_STATE_LINE_COLORS",
            "LEG_STATE_COLORS", "MODEL_LABELS", "MODEL_STYLES", "PNG_DPI", "FIGURE_SUFFIXES",
            "model_label", "model_style", "save_figure", "leg_index"]
 
-#: Virtual legs, in the order of the compiled model's leg index.
-LEG_NAMES = L.LEG_NAMES
+#: Virtual legs, in the order of their index (:class:`scoutsim.names.Leg`).
+LEG_NAMES = _names.LEG_NAMES
 #: Line colour of each virtual leg (back, front).
 LEG_COLORS = ("tab:blue", "tab:red")
 
 #: Controller leg states (paper Sec. II), indexed by the state code of ``result.leg_state``.
-LEG_STATE_NAMES = L.LEG_STATE_NAMES
+LEG_STATE_NAMES = _names.LEG_STATE_NAMES
 #: Colour of each leg state as a line (legs in the animation, film strips, square waves).
 LEG_STATE_LINE_COLORS = ("tab:blue", "tab:orange", "tab:green")
 #: The same hues, pale, as time-axis backgrounds (run plots).
 LEG_STATE_COLORS = ("#d6e9ff", "#ffd9a8", "#c9efc4")
 
 #: Display name of each model variant and of the experiment.
-MODEL_LABELS = {**L.MODEL_LABELS, "experiment": "experiment"}
+MODEL_LABELS = {**_names.MODEL_LABELS, "experiment": "experiment"}
 #: Line colour and style per source: experiment solid, Model I dotted, Model II dashed, as
 #: the paper's Figs. 8-10 (ideal and passive dash-dotted).
 MODEL_STYLES = {"experiment": ("k", "-"), "ideal": ("tab:green", "-."),
@@ -51,15 +52,6 @@ def model_label(name) -> str:
 def model_style(name, i: int = 0) -> tuple[str, str]:
     """(colour, line style) of a model; names without a style get the ``i``-th extra one."""
     return MODEL_STYLES.get(name, _EXTRA_STYLES[i % len(_EXTRA_STYLES)])
-
-
-def leg_index(leg) -> int:
-    """0 (back) or 1 (front) from a leg name or index; ValueError otherwise."""
-    if leg in (0, 1) and not isinstance(leg, bool):
-        return int(leg)
-    if leg in LEG_NAMES:
-        return LEG_NAMES.index(leg)
-    raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'")
 
 
 def save_figure(fig, path, dpi: float | None = None) -> Path | None:

@@ -13,21 +13,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..names import LEG_NAMES, LegState, leg_index
 from .log_format import DEFAULT_META
 from .log_writing import save_log
 from .sensors import LaserGeometry, fft_lowpass, pitch_height_from_lasers
 
 __all__ = ["ExperimentLog", "LEGS"]
 
-LEGS = ("back", "front")
-_LEG_INDEX = {"back": 0, "front": 1, 0: 0, 1: 1}
-
-
-def _leg(leg) -> int:
-    try:
-        return _LEG_INDEX[leg]
-    except (KeyError, TypeError):
-        raise ValueError(f"leg = {leg!r} is not allowed: must be 'back' or 'front'") from None
+#: the legs' names in a log's columns (``phi_back_rad``, ...): :data:`scoutsim.names.LEG_NAMES`
+LEGS = LEG_NAMES
 
 
 def _default_torque_per_amp() -> float:
@@ -137,23 +131,24 @@ class ExperimentLog:
     # -- legs --------------------------------------------------------------------------
     def leg_angle(self, leg) -> np.ndarray:
         """Leg angle relative to the torso [rad] (toe ahead of hip positive)."""
-        return self.columns[f"phi_{LEGS[_leg(leg)]}_rad"]
+        return self.columns[f"phi_{LEG_NAMES[leg_index(leg)]}_rad"]
 
     def leg_rate(self, leg) -> np.ndarray:
         """[rad/s]"""
-        return self.columns[f"dphi_{LEGS[_leg(leg)]}_rad_s"]
+        return self.columns[f"dphi_{LEG_NAMES[leg_index(leg)]}_rad_s"]
 
     def leg_state(self, leg) -> np.ndarray:
-        """Controller leg state per sample: 0 flight, 1 stance-retraction, 2 stance-brake."""
-        return self.columns[f"leg_state_{LEGS[_leg(leg)]}"].astype(int)
+        """Controller leg state per sample, codes of :class:`~scoutsim.names.LegState`:
+        0 flight, 1 stance-retraction, 2 stance-brake."""
+        return self.columns[f"leg_state_{LEG_NAMES[leg_index(leg)]}"].astype(int)
 
     def leg_length(self, leg) -> np.ndarray:
         """[m] (KeyError if the log has no leg length)."""
-        return self.columns[f"leg_length_{LEGS[_leg(leg)]}_m"]
+        return self.columns[f"leg_length_{LEG_NAMES[leg_index(leg)]}_m"]
 
     def motor_current(self, leg) -> np.ndarray:
         """[A] per motor (KeyError if the log has torques instead)."""
-        return self.columns[f"current_{LEGS[_leg(leg)]}_a"]
+        return self.columns[f"current_{LEG_NAMES[leg_index(leg)]}_a"]
 
     @property
     def torque_per_amp(self) -> float:
@@ -167,12 +162,12 @@ class ExperimentLog:
         v = self.meta.get("torque_per_amp_nm_a")
         if v is None:
             return _default_torque_per_amp()
-        return float(v[_leg(leg)]) if isinstance(v, (list, tuple)) else float(v)
+        return float(v[leg_index(leg)]) if isinstance(v, (list, tuple)) else float(v)
 
     def hip_torque(self, leg) -> np.ndarray:
         """Hip torque per physical leg [N m]: the logged torque, or N eta K_T i from the
         motor current (how the experiment estimated it)."""
-        name = LEGS[_leg(leg)]
+        name = LEG_NAMES[leg_index(leg)]
         if self.has(f"torque_{name}_nm"):
             return self.columns[f"torque_{name}_nm"]
         return self.leg_torque_per_amp(leg) * self.columns[f"current_{name}_a"]
@@ -183,13 +178,13 @@ class ExperimentLog:
     def liftoff_times(self, leg) -> np.ndarray:
         """Times [s] of the first flight sample after a stance (state 1/2 -> 0)."""
         s = self.leg_state(leg)
-        k = np.flatnonzero((s[1:] == 0) & (s[:-1] != 0)) + 1
+        k = np.flatnonzero((s[1:] == LegState.FLIGHT) & (s[:-1] != LegState.FLIGHT)) + 1
         return self.t[k]
 
     def touchdown_times(self, leg) -> np.ndarray:
         """Times [s] of the first stance sample after a flight (state 0 -> 1/2)."""
         s = self.leg_state(leg)
-        k = np.flatnonzero((s[1:] != 0) & (s[:-1] == 0)) + 1
+        k = np.flatnonzero((s[1:] != LegState.FLIGHT) & (s[:-1] == LegState.FLIGHT)) + 1
         return self.t[k]
 
     def save(self, path) -> Path:

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from ..names import LegState
 from .log_format import ALTERNATIVE_COLUMNS, COLUMN_UNITS, REQUIRED_COLUMNS, LogError, _row_text
 from .log_spikes import _check_spikes
 
@@ -124,7 +125,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
     for c in used:
         v = cols[c]
         if c.startswith("leg_state_"):
-            bad = ~np.isin(v, (0.0, 1.0, 2.0))
+            bad = ~np.isin(v, [float(state) for state in LegState])
             if bad.any():
                 k = int(np.argmax(bad))
                 raise LogError(f"{path}: column '{c}', {_row_text(k + 1, header_line)}: value "

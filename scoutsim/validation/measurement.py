@@ -29,7 +29,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from .experiment_log import ExperimentLog
 from .sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
@@ -99,23 +99,29 @@ def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
     geometry = geometry or LaserGeometry()
     k = _on_grid(result)
     prov = result.provenance or {}
-    state = np.asarray(result.state, dtype=float)[k]
     t = np.asarray(result.t, dtype=float)[k]
     robot = prov.get("robot")
     ctrl = prov.get("controller") or {}
     encoder_on_motor = prov.get("model") == "II" and bool(ctrl.get("sense_motor_angle", True))
-    rf, rb = laser_ranges(state[:, L.IY], state[:, L.ITH], geometry)
+
+    def sampled(series):
+        return np.asarray(series, dtype=float)[k]
+
+    rf, rb = laser_ranges(sampled(result.height), sampled(result.pitch), geometry)
     cols = {"t": t, "laser_front_m": rf, "laser_back_m": rb}
-    for leg, name in enumerate(("back", "front")):
-        iang = (L.IALB if encoder_on_motor else L.IPHB) + leg
-        cols[f"phi_{name}_rad"] = state[:, iang]
-        cols[f"dphi_{name}_rad_s"] = state[:, L.NQ + iang]
-    for leg, name in enumerate(("back", "front")):
-        cols[f"current_{name}_a"] = np.asarray(result.motor_current(leg), dtype=float)[k]
-    for leg, name in enumerate(("back", "front")):
+    for leg, name in enumerate(LEG_NAMES):
+        if encoder_on_motor:
+            angle, rate = result.motor_angle(leg), result.motor_angle_rate(leg)
+        else:
+            angle, rate = result.leg_angle(leg), result.leg_rate(leg)
+        cols[f"phi_{name}_rad"] = sampled(angle)
+        cols[f"dphi_{name}_rad_s"] = sampled(rate)
+    for leg, name in enumerate(LEG_NAMES):
+        cols[f"current_{name}_a"] = sampled(result.motor_current(leg))
+    for leg, name in enumerate(LEG_NAMES):
         cols[f"leg_state_{name}"] = np.asarray(result.leg_state(leg), dtype=float)[k]
-    for leg, name in enumerate(("back", "front")):
-        cols[f"leg_length_{name}_m"] = state[:, L.IL_B + leg]
+    for leg, name in enumerate(LEG_NAMES):
+        cols[f"leg_length_{name}_m"] = sampled(result.leg_length(leg))
     if noise is not None:
         nz = noise if isinstance(noise, SensorNoise) else SensorNoise(**dict(noise))
         rng = np.random.default_rng(seed)

@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import layout as L
+from ..names import MODEL_LABELS
 from .experiment_log import ExperimentLog
 from .measurement import to_log_like
 from .strides import LogGait, log_strides
@@ -69,7 +69,7 @@ SIGNALS = {
 }
 
 def _label(name: str) -> str:
-    return L.MODEL_LABELS.get(name, str(name))
+    return MODEL_LABELS.get(name, str(name))
 
 
 # -----------------------------------------------------------------------------------------

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..analysis.stances import stance_overlap
 from ..analysis.strides import STRIDE_METRICS, Stride, converged_tail
+from ..names import LegState
 from .log_format import LogError
 from .sensors import EDGE_S
 
@@ -49,7 +50,7 @@ def stance_intervals_log(log, leg) -> np.ndarray:
     open at the start begins at t[0], one open at the end ends at t[-1]."""
     s = log.leg_state(leg)
     t = log.t
-    stance = s != 0
+    stance = s != LegState.FLIGHT
     edges = np.diff(stance.astype(int))
     starts = list(np.flatnonzero(edges == 1) + 1)
     ends = list(np.flatnonzero(edges == -1) + 1)

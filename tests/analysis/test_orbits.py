@@ -53,7 +53,7 @@ def test_apex_map_agrees_with_simulate(orbit50):
                           InitialState(y=z[0], theta=0.0, dx=z[2], dy=0.0, dtheta=z[3]),
                           0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
                           passive_touchdown_angles=orbit50.touchdown_angles)
-    assert not passive_reference._glitched(r.events)
+    assert not passive_reference._glitched(r)
     t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
     k = int(np.searchsorted(r.t, t_lo, side="right"))
     s = r.state[k]
@@ -196,7 +196,7 @@ def test_apex_map_agrees_with_simulate_for_unequal_legs():
                           InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
                           0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
                           passive_touchdown_angles=td)
-    assert not passive_reference._glitched(r.events)
+    assert not passive_reference._glitched(r)
     t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
     k = int(np.searchsorted(r.t, t_lo, side="right"))
     s = r.state[k]

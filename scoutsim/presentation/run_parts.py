@@ -1,0 +1,54 @@
+"""What the figures of one run share: the model's display name and the title, and the
+controller leg states drawn as shaded bands over time (paper Sec. II, Table I: flight,
+stance-retraction, stance-brake; colours of :mod:`scoutsim.presentation.style`). Times in
+seconds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.collections import PolyCollection
+
+from ..names import LegState
+from .style import LEG_STATE_COLORS, model_label
+
+
+def _model_label(result) -> str:
+    """Display name of the run's model ("Model II"; :func:`~.style.model_label`)."""
+    return model_label((result.provenance or {}).get("model"))
+
+
+def _title(result) -> str:
+    """The title of a run's figure: the model and the outcome (with the time [s] of a fall
+    or failure)."""
+    outcome = result.outcome
+    if outcome != "completed":
+        outcome = f"{outcome} at t = {result.t_end:.2f} s"
+    return f"Scout II bounding, {_model_label(result)}: {outcome}"
+
+
+def _runs(values: np.ndarray):
+    """(start index, stop index, value) of the runs of equal consecutive values."""
+    if values.size == 0:
+        return []
+    edges = np.flatnonzero(np.diff(values)) + 1
+    starts = np.concatenate([[0], edges])
+    stops = np.concatenate([edges, [values.size]])
+    return [(int(a), int(b), int(values[a])) for a, b in zip(starts, stops)]
+
+
+def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) -> None:
+    """Shade the controller leg state over time in the axes-fraction strip [y0, y1].
+
+    A sample's state holds from its time until the next sample (zero-order hold, as the
+    1 kHz controller does)."""
+    verts = {state: [] for state in LegState}
+    for a, b, k in _runs(states):
+        ta = t[a]
+        tb = t[b] if b < t.size else t[-1]
+        if k in verts and tb > ta:
+            verts[k].append([(ta, y0), (tb, y0), (tb, y1), (ta, y1)])
+    for k, v in verts.items():
+        if v:
+            ax.add_collection(PolyCollection(v, facecolors=LEG_STATE_COLORS[k], edgecolors="none",
+                                             transform=ax.get_xaxis_transform(), zorder=0))
