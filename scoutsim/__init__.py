@@ -10,7 +10,7 @@ from .parameters import (  # noqa: E402
     load_parameters, load_robot,
 )
 from .result import SimulationResult  # noqa: E402
-from .simulation import ControllerError, Sensors, simulate  # noqa: E402
+from .simulation import ControllerError, Recording, Sensors, simulate  # noqa: E402
 from .integrator import IntegratorSettings  # noqa: E402
 from .starts import default_initial_state  # noqa: E402
 from .state import HybridState, InitialState  # noqa: E402
@@ -27,5 +27,5 @@ __all__ = [
     "ParameterError", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
     "Controller", "CompiledController", "PitchFeedbackController", "SensorParameters",
-    "SensorChannel", "load_sensors", "StartupParameters", "standing_state",
+    "SensorChannel", "load_sensors", "StartupParameters", "standing_state", "Recording",
 ]

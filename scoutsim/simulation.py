@@ -16,10 +16,11 @@ the names other code uses are re-exported here.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 import warnings
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from .engine import HybridEngine, start_engine
 from .integrator import IntegratorSettings
 from .starts import _named_start, _resumed_modes, _state_vector, default_initial_state, fresh_modes
 
-__all__ = ["simulate", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
+__all__ = ["simulate", "Recording", "PLANT_OPTIONS", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
            "default_initial_state", "run_bench", "warm_up", "start_engine",
            "check_run_memory", "check_stream_disk", "expected_wall_time",
            "physical_memory_bytes"]
@@ -58,19 +59,47 @@ def warm_up() -> float:
     return time.perf_counter() - t0
 
 
+@dataclass(frozen=True)
+class Recording:
+    """What :func:`simulate` records and how it runs (each field is also a keyword of
+    :func:`simulate`, which overrides the bundle's): ``progress``, ``chunk_seconds`` [s],
+    ``record_steps``, ``check_memory``, ``stream_to``, ``keep_seconds`` [s],
+    ``table_format``, ``energy`` (see :func:`simulate`)."""
+
+    progress: bool = False
+    chunk_seconds: float = 1.0
+    record_steps: bool = False
+    check_memory: bool = True
+    stream_to: object = None
+    keep_seconds: float | None = None
+    table_format: str | None = None
+    energy: bool = False
+
+
+#: :func:`simulate`'s keywords for the plant beyond the robot, with their defaults
+PLANT_OPTIONS = {"friction_coefficient": None, "pitch_limit_deg": 60.0,
+                 "passive_touchdown_angles": (0.0, 0.0), "passive_touchdown_world": True}
+
+
+def _options(recording: Recording | None, options: dict) -> tuple[Recording, dict]:
+    """The run's :class:`Recording` (the bundle with the keywords of its fields applied)
+    and its plant options (:data:`PLANT_OPTIONS`) from :func:`simulate`'s keywords; a
+    keyword of neither is refused as Python refuses one."""
+    fields = {f.name for f in dataclasses.fields(Recording)}
+    rec = {k: options.pop(k) for k in list(options) if k in fields}
+    plant = {k: options.pop(k, default) for k, default in PLANT_OPTIONS.items()}
+    if options:
+        raise TypeError(f"simulate() got an unexpected keyword argument {next(iter(options))!r}")
+    return dataclasses.replace(recording or Recording(), **rec), plant
+
+
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,
              model: str = "II", environment: Environment | None = None,
              integrator: IntegratorSettings | None = None,
-             friction_coefficient: float | None = None,
-             pitch_limit_deg: float = 60.0,
-             passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
-             progress: bool = False, chunk_seconds: float = 1.0,
-             record_steps: bool = False, check_memory: bool = True,
-             stream_to=None, keep_seconds: float | None = None,
-             table_format: str | None = None, energy: bool = False,
              sensors: SensorParameters | None = None,
-             startup: StartupParameters | None = None) -> SimulationResult:
+             startup: StartupParameters | None = None,
+             recording: Recording | None = None, **options) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -156,6 +185,13 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     startup : StartupParameters, optional
         With ``initial_state="standing"`` only: the start-up's parameters (default
         ``StartupParameters()``).
+    recording : Recording, optional
+        The recording keywords below as one bundle (``progress`` ... ``energy``); a
+        keyword given as well overrides its field.
+    **options
+        The keywords above from ``friction_coefficient`` to ``passive_touchdown_world``
+        (:data:`PLANT_OPTIONS`, with their defaults) and from ``progress`` to ``energy``
+        (the fields of :class:`Recording`).
 
     Returns
     -------
@@ -178,6 +214,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         before, with ``outcome = "controller_error"`` (a streamed run's tables hold it
         too, marked partial).
     """
+    rec, plant = _options(recording, options)
+    progress, chunk_seconds, record_steps, check_memory = (rec.progress, rec.chunk_seconds,
+                                                           rec.record_steps, rec.check_memory)
+    stream_to, keep_seconds, table_format, energy = (rec.stream_to, rec.keep_seconds,
+                                                     rec.table_format, rec.energy)
+    friction_coefficient = plant["friction_coefficient"]
+    pitch_limit_deg = plant["pitch_limit_deg"]
+    passive_touchdown_angles = plant["passive_touchdown_angles"]
+    passive_touchdown_world = plant["passive_touchdown_world"]
     robot = validate_robot(robot if robot is not None else RobotParameters())
     integ = (integrator or IntegratorSettings()).resolve(model)
     if environment is not None and friction_coefficient is not None:

@@ -185,18 +185,33 @@ class SweepResult:
         return plot_sweep_map(self, x, y, value, path)
 
 
-def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot=None,
-          controller=None, initial_state=None, friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-          out=None, workers: int | None = None, scheduler=None, progress: bool = False,
-          resume: bool = True, orbit: bool = False, command: str = "") -> SweepResult:
+@dataclass(frozen=True)
+class SweepBase:
+    """The base configuration every point of a sweep modifies (``simulate`` arguments):
+    ``model``, ``duration`` [s], ``robot``, ``controller``, ``initial_state`` and
+    ``friction_coefficient`` (the package's default floor, Coulomb mu = 1.0)."""
+
+    model: str = "II"
+    duration: float = 2.0
+    robot: object = None
+    controller: object = None
+    initial_state: object = None
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
+
+
+def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
+          workers: int | None = None, scheduler=None, progress: bool = False,
+          resume: bool = True, orbit: bool = False, command: str = "",
+          **base_fields) -> SweepResult:
     """Run every point (see module docstring).
 
     Parameters
     ----------
     points : list of {name: value} (see :func:`grid_points`, :func:`random_points`).
-    model, duration, robot, controller, initial_state, friction_coefficient :
-        the base configuration every point modifies (``simulate`` arguments; the sweep's
-        floor defaults to the package's default floor, Coulomb mu = 1.0).
+    base : :class:`SweepBase`, the configuration every point modifies; its fields
+        (``model``, ``duration``, ``robot``, ``controller``, ``initial_state``,
+        ``friction_coefficient``) may also be given as keywords, which override the
+        bundle's.
     out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv`` and
         ``manifest.json`` ("complete" once the tables are written whole; "partial", with no
         table, after an interruption: the same call again resumes).
@@ -209,6 +224,13 @@ def sweep(points: list[dict], *, model: str = "II", duration: float = 2.0, robot
         last strides and record its period, spectral radius, stability and residual
         (:data:`ORBIT_COLUMNS`; a few seconds per point).
     """
+    fields = {f.name for f in dataclasses.fields(SweepBase)}
+    if unknown := sorted(set(base_fields) - fields):
+        raise TypeError(f"sweep() got an unexpected keyword argument {unknown[0]!r}")
+    base = dataclasses.replace(base or SweepBase(), **base_fields)
+    model, duration, robot, controller, initial_state, friction_coefficient = (
+        base.model, base.duration, base.robot, base.controller, base.initial_state,
+        base.friction_coefficient)
     if not points:
         raise ValueError("points is empty: nothing to sweep")
     names = list(dict.fromkeys(k for p in points for k in p))

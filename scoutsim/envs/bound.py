@@ -13,6 +13,7 @@ is held over them, as the 1 kHz controller's command is held over a control peri
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 import math
 
 import gymnasium
@@ -24,10 +25,10 @@ from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
 from ..engine import start_engine
-from ..integrator import IntegratorSettings
 from ..state import HybridState, InitialState, standing_state
 
-__all__ = ["BoundEnv", "ACTION_TYPES", "SETPOINTS", "STARTS", "RANDOM_START_HALF_WIDTHS"]
+__all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
+           "RANDOM_START_HALF_WIDTHS"]
 
 #: what an action is: the hip torques, or the set-points of the Table I controller
 ACTION_TYPES = ("torque", "setpoints")
@@ -119,6 +120,9 @@ class BoundEnv(gymnasium.Env):
     policy_period : float
         Time between the policy's actions [s] (default 0.01 s, 100 Hz); a whole multiple
         of the control period (``controller.control_period``, 1 ms).
+    reward : Reward, optional
+        The reward's and the termination's settings below as one bundle; a keyword given
+        as well overrides its field.
     forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
         Reward weights (above); ``target_speed`` None rewards speed itself.
     terminate_when_fallen : bool
@@ -150,8 +154,10 @@ class BoundEnv(gymnasium.Env):
         The integrator (default: the model's, as :func:`~scoutsim.simulate`).
     render_mode : None
         No rendering (``scoutsim.presentation.animation`` draws a run).
-    **parameters
-        Any field of :class:`~scoutsim.parameters.RobotParameters` or
+    **options
+        The keywords above that are fields of :class:`Reward` or of :data:`PLANT_OPTIONS`
+        (``friction_coefficient``, ``pitch_limit_deg``, ``integrator``), and any field of
+        :class:`~scoutsim.parameters.RobotParameters` or
         :class:`~scoutsim.parameters.ControllerParameters` [SI], applied over ``robot`` /
         ``controller`` / the robot file (e.g. ``current_limit=10.0``).
     """
@@ -159,19 +165,21 @@ class BoundEnv(gymnasium.Env):
     metadata = {"render_modes": []}
 
     def __init__(self, model: str = "II", action_type: str = "torque",
-                 policy_period: float = 0.01, *,
-                 forward_reward_weight: float = 1.0, target_speed: float | None = None,
-                 energy_cost_weight: float = 0.01, healthy_reward: float = 1.0,
-                 terminate_when_fallen: bool = True,
-                 healthy_height_range: tuple = (0.2, math.inf),
-                 healthy_pitch_range: tuple = (-math.radians(30.0), math.radians(30.0)),
+                 policy_period: float = 0.01, *, reward: Reward | None = None,
                  start="flight", reset_noise_scale: float = 1.0,
                  robot: RobotParameters | None = None,
                  controller: ControllerParameters | None = None,
                  robot_file=None, sensors: SensorParameters | None = None,
-                 friction_coefficient: float | None = None, pitch_limit_deg: float = 60.0,
-                 integrator: IntegratorSettings | None = None, render_mode=None,
-                 **parameters):
+                 render_mode=None, **options):
+        reward, plant, parameters = _options(reward, options)
+        forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
+            reward.forward_reward_weight, reward.target_speed, reward.energy_cost_weight,
+            reward.healthy_reward)
+        terminate_when_fallen, healthy_height_range, healthy_pitch_range = (
+            reward.terminate_when_fallen, reward.healthy_height_range,
+            reward.healthy_pitch_range)
+        friction_coefficient, pitch_limit_deg, integrator = (
+            plant["friction_coefficient"], plant["pitch_limit_deg"], plant["integrator"])
         if model not in ("ideal", "I", "II"):
             raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
         if action_type not in ACTION_TYPES:
@@ -372,6 +380,36 @@ def _interval(pair, name: str) -> tuple[float, float]:
     if math.isnan(lo) or math.isnan(hi) or lo > hi:
         raise ValueError(f"{name} = {pair!r} is not allowed: must be (min, max), min <= max")
     return lo, hi
+
+
+@dataclass(frozen=True)
+class Reward:
+    """The reward and the termination of :class:`BoundEnv` (each field is also a keyword of
+    the environment, which overrides the bundle's): ``forward_reward_weight``,
+    ``target_speed`` [m/s] (None: reward speed itself), ``energy_cost_weight`` [1/J],
+    ``healthy_reward``, ``terminate_when_fallen``, ``healthy_height_range`` [m],
+    ``healthy_pitch_range`` [rad] (see :class:`BoundEnv`)."""
+
+    forward_reward_weight: float = 1.0
+    target_speed: float | None = None
+    energy_cost_weight: float = 0.01
+    healthy_reward: float = 1.0
+    terminate_when_fallen: bool = True
+    healthy_height_range: tuple = (0.2, math.inf)
+    healthy_pitch_range: tuple = (-math.radians(30.0), math.radians(30.0))
+
+
+#: the environment's keywords for the plant beyond the robot, with their defaults
+PLANT_OPTIONS = {"friction_coefficient": None, "pitch_limit_deg": 60.0, "integrator": None}
+
+
+def _options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:
+    """The environment's :class:`Reward` (with the keywords of its fields applied), its
+    plant options (:data:`PLANT_OPTIONS`) and the rest: robot and controller fields."""
+    fields = {f.name for f in dataclasses.fields(Reward)}
+    rew = {k: options.pop(k) for k in list(options) if k in fields}
+    plant = {k: options.pop(k, default) for k, default in PLANT_OPTIONS.items()}
+    return dataclasses.replace(reward or Reward(), **rew), plant, options
 
 
 def _parameters(robot, controller, robot_file, overrides):

@@ -1,0 +1,45 @@
+"""The package's shape: no module over 600 lines, no function over 12 parameters (kernel
+arguments travel in named bundles, public entry points take bundles and their fields as
+keywords), and the integrators and the run loop free of the model variants (they reach
+the hip unit through scoutsim.model.hip_unit). Read from the source, no import."""
+
+import ast
+import pathlib
+import re
+
+ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
+MAX_LINES = 600
+MAX_PARAMETERS = 12
+
+
+def _sources():
+    return sorted(p for p in ROOT.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def test_no_module_over_600_lines():
+    long = {str(p.relative_to(ROOT)): n for p in _sources()
+            if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert not long, long
+
+
+def test_no_function_over_12_parameters():
+    wide = []
+    for p in _sources():
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                a = node.args
+                n = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
+                     + (a.vararg is not None) + (a.kwarg is not None))
+                if a.args and a.args[0].arg in ("self", "cls"):
+                    n -= 1
+                if n > MAX_PARAMETERS:
+                    wide.append(f"{p.relative_to(ROOT)}:{node.lineno} {node.name} ({n})")
+    assert not wide, wide
+
+
+def test_integrators_and_run_loop_know_no_model_variant():
+    found = [f"{p.relative_to(ROOT)}:{i}" for p in [*sorted((ROOT / "numerics").glob("*.py")),
+                                                    ROOT / "loop.py"]
+             for i, line in enumerate(p.read_text().splitlines(), 1)
+             if re.search(r"\bMODEL_(II|I|IDEAL|PASSIVE)\b|\bP_MODEL\b", line)]
+    assert not found, found
