@@ -117,21 +117,22 @@ AD3 = AI3 - AE3
 @kernel
 def step(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf,
-                    (AE, AD, B, EW, GAMMA, NSTAGE))
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE, AD, B, EW, GAMMA),
+                    NSTAGE)
 
 
 @kernel
 def step3(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf,
-                    (AE3, AD3, B3, EW3, GAMMA3, 4))
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE3, AD3, B3, EW3, GAMMA3),
+                    4)
 
 
 @kernel(inline="always")
-def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau):
-    """One ARK step of size h from y with the method's ``tableau`` (AE, AD, B, EW, GAMMA,
-    stages), on the step's ``work`` (:class:`~scoutsim.numerics.work.StepWork`), with
+def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
+    """One ARK step of size h from y with the method's ``tableau`` (AE, AD, B, EW, GAMMA)
+    and ``ns`` stages (a constant where it is called, so the stage loops have a known trip
+    count), on the step's ``work`` (:class:`~scoutsim.numerics.work.StepWork`), with
     K[0] = f(y) and SF0 = its stiff factors (U = SF0[:, :NSTIFF], V = SF0[:, NSTIFF:])
     already filled.
 
@@ -139,7 +140,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau):
     ``eval_end``, K[6] = f(y_new), aux_new and, if ``want_sf``, SF1 (stiff factors at
     y_new, FSAL).
     Z (Z_ROWS, Z_COLS) is scratch. Returns (error_norm, ok, evaluations)."""
-    AE, AD, B, EW, GAMMA, ns = tableau
+    AE, AD, B, EW, GAMMA = tableau
     K, y_new, aux_new, tmp, ew = work.K, work.y_new, work.aux_new, work.tmp, work.ew
     SF0, SF1, Z, rtol, atol = work.SF0, work.SF1, work.Z, work.rtol, work.atol
     ok = True
