@@ -83,40 +83,80 @@ def test_a_callee_is_compiled_once_whatever_constants_its_callers_pass():
     assert len(plain.signatures) == 2
 
 
-def test_the_compiled_cache_is_keyed_by_every_core_source(tmp_path):
-    """An edit of any compiled-core module (not only of a function's own file, which is
-    all Numba checks) gives a new cache directory; other modules do not."""
+def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
+    """An edit of a compiled-core module (not only of a function's own file, which is all
+    Numba checks) gives new cache directories to that module and to every module that
+    imports it, directly or through others; the other modules keep theirs, and modules
+    outside the core change nothing."""
     import pathlib
     import shutil
     pkg = pathlib.Path(jit.__file__).parent
     copy = tmp_path / "scoutsim"
     shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    d0 = jit.core_digest(copy)
-    assert d0 == jit.core_digest(pkg)
-    with open(copy / "analysis" / "gait.py", "a") as f:
-        f.write("\n# not part of the compiled core\n")
-    assert jit.core_digest(copy) == d0
-    with open(copy / "model" / "layout.py", "a") as f:
-        f.write("\n# an edit of a module that compiled functions import\n")
-    assert jit.core_digest(copy) != d0
-    used = pathlib.Path(jit.config.CACHE_DIR).name
-    assert used in (f"numba-{d0}", f"{jit.USER_CACHE_PREFIX}{d0}")
+    d0 = jit.module_digests(copy)
+    assert d0 == jit.module_digests(pkg)
+    assert set(d0) >= {"loop.py", "jit.py", "model/evaluate.py", "numerics/hybrid.py"}
+
+    def edit(rel):
+        with open(copy / rel, "a") as f:
+            f.write("\n# an edit\n")
+        return jit.module_digests(copy)
+
+    d1 = edit("analysis/gait.py")     # not part of the compiled core
+    assert d1 == d0
+    d2 = edit("loop.py")              # nothing imports the run loop
+    assert {rel for rel in d0 if d2[rel] != d0[rel]} == {"loop.py"}
+    d3 = edit("model/leg.py")         # inlined into the right-hand side, in another file
+    changed = {rel for rel in d0 if d3[rel] != d2[rel]}
+    assert {"model/leg.py", "model/contact.py", "model/evaluate.py", "numerics/ark.py",
+            "numerics/hybrid.py", "loop.py"} <= changed
+    assert not changed & {"model/layout.py", "model/kkt.py", "control/bounding.py", "jit.py"}
+    d4 = edit("jit.py")               # the compilation options: every compiled module
+    assert all(d4[rel] != d3[rel] for rel in ("loop.py", "model/evaluate.py", "model/leg.py",
+                                              "numerics/ark.py", "control/bounding.py"))
+    assert d4["model/layout.py"] == d3["model/layout.py"]   # constants only
+    # a module's directory is named by the module and its digest, under the cache's root
+    here = jit.module_digests()
+    for rel, path in jit._MODULE_DIRS.items():
+        rel = pathlib.Path(rel).relative_to(pkg).as_posix()
+        assert path == jit.module_cache_dir(jit.cache_directory(), rel, here[rel])
+    assert jit._MODULE_DIRS[str(pkg / "loop.py")].name == f"loop-{here['loop.py']}"
+    assert jit._MODULE_DIRS[str(pkg / "model" / "evaluate.py")].name == \
+        f"model.evaluate-{here['model/evaluate.py']}"
+
+
+def test_a_function_is_cached_in_its_modules_directory():
+    """Numba's cache of a core function is its module's directory (the locator jit.py
+    installs), whatever Numba's own cache directory setting."""
+    from numba.core.caching import FunctionCache
+    cache = FunctionCache(evaluate.evaluate_ws.py_func)
+    assert cache.cache_path == str(jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))])
+    assert cache._impl.locator.get_source_stamp() == \
+        jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
+
+
+def pathlib_path(f):
+    import pathlib
+    return pathlib.Path(f).resolve()
 
 
 #: run in a new process with NUMBA_CACHE_DIR set: import the package's jit module only (no
 #: compilation) and report where Numba will cache and the digest of the core's sources
 _REPORT_CACHE_DIR = """
 import json, numba, scoutsim.jit as jit
-print(json.dumps({"cache_dir": numba.config.CACHE_DIR, "digest": jit.core_digest()}))
+print(json.dumps({"numba_cache_dir": numba.config.CACHE_DIR, "root": str(jit.cache_directory()),
+                  "loop": str(jit._MODULE_DIRS[str(jit._PACKAGE / "loop.py")]),
+                  "digests": jit.module_digests()}))
 """
 
 
-def test_a_user_numba_cache_dir_is_keyed_by_the_core_digest_too(tmp_path):
-    """With NUMBA_CACHE_DIR set, the compiled core is cached in a directory of it named by
-    the digest of every core source (an edit of an inlined callee in another file must not
-    be served from a stale caller), a different digest names a different directory, and
-    only this package's directories of other digests that nothing wrote to for a day are
-    removed there: a recent one of ours and everything not ours stay."""
+def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
+    """With NUMBA_CACHE_DIR set, the compiled core is cached in a directory of it
+    (scoutsim-numba), one subdirectory per module named by its digest (an edit of an
+    inlined callee in another file must not be served from a stale caller), and only this
+    package's directories of other digests (and the whole-core directories of older
+    versions) that nothing wrote to for a day are removed there: a recent one of ours and
+    everything not ours stay. Numba's own setting is left as the user set it."""
     import json
     import os
     import pathlib
@@ -124,16 +164,21 @@ def test_a_user_numba_cache_dir_is_keyed_by_the_core_digest_too(tmp_path):
     import sys
     import time
     user = tmp_path / "user-cache"
-    ours_stale = user / f"{jit.USER_CACHE_PREFIX}{'0' * 16}"
-    ours_recent = user / f"{jit.USER_CACHE_PREFIX}{'1' * 16}"
+    root = jit.user_cache_dir(user)
+    assert root == user / jit.USER_CACHE_NAME
+    old_whole_stale = user / f"{jit.USER_CACHE_PREFIX}{'0' * 16}"
+    old_whole_recent = user / f"{jit.USER_CACHE_PREFIX}{'1' * 16}"
+    ours_stale = root / f"loop-{'0' * 16}"
+    ours_recent = root / f"model.evaluate-{'1' * 16}"
     not_ours = [user / "numba-0000000000000000", user / "scoutsim-numba-notadigest",
-                user / "another_program_abc123"]
-    for d in (ours_stale, ours_recent, *not_ours):
+                user / "another_program_abc123", root / f"notacoremodule-{'0' * 16}",
+                root / "loop-notadigest"]
+    for d in (old_whole_stale, old_whole_recent, ours_stale, ours_recent, *not_ours):
         (d / "sub").mkdir(parents=True)
         (d / "sub" / "f.nbi").write_bytes(b"x")
     (user / "a-file.txt").write_text("the user's\n")
     old = time.time() - 2 * jit.STALE_USER_CACHE_S
-    for d in (ours_stale, *not_ours):
+    for d in (old_whole_stale, ours_stale, *not_ours):
         for path in (d / "sub" / "f.nbi", d / "sub", d):
             os.utime(path, (old, old))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(user),
@@ -142,15 +187,33 @@ def test_a_user_numba_cache_dir_is_keyed_by_the_core_digest_too(tmp_path):
     out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR], env=env, cwd=tmp_path,
                          capture_output=True, text=True, timeout=300, check=True)
     report = json.loads(out.stdout.strip().splitlines()[-1])
-    digest = report["digest"]
-    assert digest == jit.core_digest()
-    cache_dir = pathlib.Path(report["cache_dir"])
-    assert cache_dir.parent == user and digest in cache_dir.name
-    assert cache_dir == jit.user_cache_dir(user, digest)
-    other = "f" * 16 if digest != "f" * 16 else "e" * 16
-    assert jit.user_cache_dir(user, other) != jit.user_cache_dir(user, digest)
-    assert jit.user_cache_dir(user, other).parent == user
-    assert not ours_stale.exists()
+    assert report["digests"] == jit.module_digests()
+    assert pathlib.Path(report["numba_cache_dir"]) == user
+    assert pathlib.Path(report["root"]) == root
+    loop_dir = pathlib.Path(report["loop"])
+    assert loop_dir == jit.module_cache_dir(root, "loop.py", report["digests"]["loop.py"])
+    assert loop_dir.parent == root
+    assert not ours_stale.exists() and not old_whole_stale.exists()
     assert (ours_recent / "sub" / "f.nbi").exists()
+    assert (old_whole_recent / "sub" / "f.nbi").exists()
     assert all((d / "sub" / "f.nbi").exists() for d in not_ours)
     assert (user / "a-file.txt").read_text() == "the user's\n"
+
+
+def test_compile_progress_says_what_was_compiled():
+    """While the core compiles, the command line says so (one line at the end when the
+    stream is not a terminal); nothing when nothing of the core compiled."""
+    import io
+
+    def g(x):
+        return x * 3.0
+
+    g.__module__ = "scoutsim._progress_probe"
+    stream = io.StringIO()
+    with jit.compile_progress(stream):
+        assert njit(g)(2.0) == 6.0
+    assert "compiled 1 function of the core in" in stream.getvalue()
+    quiet = io.StringIO()
+    with jit.compile_progress(quiet):
+        njit(lambda x: x + 1.0)(1.0)      # not the core's
+    assert quiet.getvalue() == ""

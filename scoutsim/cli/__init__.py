@@ -29,6 +29,7 @@ where), 130 interrupted (Ctrl-C; the data computed so far is still written).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 
@@ -88,13 +89,16 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    progress = contextlib.nullcontext()
     if args.command in COMPILING_COMMANDS and not getattr(args, "quiet", False):
-        from ..jit import FIRST_COMPILE_NOTICE, core_is_compiled
+        from ..jit import FIRST_COMPILE_NOTICE, compile_progress, core_is_compiled
         if not core_is_compiled():
             print(f"scoutsim {args.command}: {FIRST_COMPILE_NOTICE} ...", file=sys.stderr,
                   flush=True)
+            progress = compile_progress(sys.stderr)
     try:
-        return args.func(args)
+        with progress:
+            return args.func(args)
     except UsageError as exc:
         print(f"scoutsim {args.command}: error: {exc}", file=sys.stderr)
         return 2

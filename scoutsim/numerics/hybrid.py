@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 from numba.extending import overload
 
-from ..jit import kernel
+from ..jit import inline_only, kernel
 from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
@@ -96,16 +96,16 @@ def _method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
     if m == METHOD_ARK4:
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             return ark.step(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
-        return impl
+        return inline_only(impl)
     if m == METHOD_ARK3:
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             return ark.step3(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
-        return impl
+        return inline_only(impl)
     if m == METHOD_DOPRI5:
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             err, ok = step(s, h, P, mi, mf, cmd, work)
             return err, ok, 6
-        return impl
+        return inline_only(impl)
     return None   # not a method constant: no implementation (a typing error names it)
 
 
@@ -121,11 +121,11 @@ def _method_dense(method, s, y_new, h, K, th, out):
     if m == METHOD_ARK4 or m == METHOD_ARK3:
         def impl(method, s, y_new, h, K, th, out):
             ark.dense(s, y_new, h, K, th, out)
-        return impl
+        return inline_only(impl)
     if m == METHOD_DOPRI5:
         def impl(method, s, y_new, h, K, th, out):
             dense(s, h, K, th, out)
-        return impl
+        return inline_only(impl)
     return None
 
 
