@@ -17,18 +17,16 @@ A geared unit (belt, backlash) adds the driven-gear angles alpha to the coordina
 a geared unit adds to the model (inertia, generalized forces, the stuck joint's row, the
 motor joint's stick/slip) is common to both and lives in :mod:`~scoutsim.model.transmission`;
 what differs, the belt spring, is reached through :func:`belt_spring`, which dispatches to
-the unit's module through :data:`BELTS`. A new belt variant is a module with a ``spring``
-function and its registration: its entry in :data:`BELTS`, its code in ``layout``
-(``HIP_*``) and when a robot gets it (:func:`hip_unit_code`).
+the unit's module. A new belt variant is a module with a ``spring`` function and its
+registration: a code in ``layout`` (``HIP_*``), its branch of :func:`belt_spring`, and when a
+robot gets it (:func:`hip_unit_code`).
 """
 
 from __future__ import annotations
 
-from numba import literal_unroll
-
 from ..jit import kernel
 from . import backlash, belt
-from .layout import HIP_BACKLASH, HIP_BELT, HIP_RIGID, P_HIP_UNIT
+from .layout import HIP_BACKLASH, HIP_RIGID, P_HIP_UNIT
 
 
 @kernel(inline="always")
@@ -38,24 +36,16 @@ def geared(P):
     return int(P[P_HIP_UNIT]) != HIP_RIGID
 
 
-#: The belts of the geared units, by their code: a belt is a module with a ``spring``
-#: function (model/belt.py); registering one is one entry here, its code in ``layout``
-#: and when a robot gets it (:func:`hip_unit_code`).
-BELTS = ((HIP_BELT, belt.spring), (HIP_BACKLASH, backlash.spring))
-
-
 @kernel(inline="always")
 def belt_spring(delta, leg, P):
     """(deflection [rad], engaged) of virtual leg ``leg``'s belt spring at the gear/leg
-    angle difference ``delta`` = alpha - phi [rad], by the run's belt (:data:`BELTS`): the
-    deflection its torque k_b x deflection and energy 1/2 k_b deflection^2 follow, and
-    whether its stiffness counts (in the stiff Jacobian of the ARK methods)."""
-    unit = int(P[P_HIP_UNIT])
-    deflection, engaged = delta, True
-    for code_spring in literal_unroll(BELTS):
-        if code_spring[0] == unit:
-            deflection, engaged = code_spring[1](delta, leg, P)
-    return deflection, engaged
+    angle difference ``delta`` = alpha - phi [rad], by the run's belt: the deflection its
+    torque k_b x deflection and energy 1/2 k_b deflection^2 follow, and whether its
+    stiffness counts (in the stiff Jacobian of the ARK methods). One branch per geared
+    unit."""
+    if int(P[P_HIP_UNIT]) == HIP_BACKLASH:
+        return backlash.spring(delta, leg, P)
+    return belt.spring(delta, leg, P)
 
 
 def hip_unit_code(model: str, backlash_rad) -> int:
