@@ -19,7 +19,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
 
 #: layer of each module, by prefix (longest prefix wins); higher imports lower only
 LAYERS = {
-    "scoutsim._version": 0, "scoutsim.jit": 0, "scoutsim.parameters": 0, "scoutsim.tables": 0, "scoutsim.run_directory": 0,
+    "scoutsim._version": 0, "scoutsim.jit": 0, "scoutsim.compile_steps": 0, "scoutsim.parameters": 0, "scoutsim.tables": 0, "scoutsim.run_directory": 0,
     "scoutsim.names": 0,
     "scoutsim.model": 1,
     "scoutsim.numerics": 2, "scoutsim.control": 2,

@@ -23,7 +23,8 @@ from collections import namedtuple
 import numpy as np
 from numba.extending import overload
 
-from ..jit import inline_only, kernel
+from ..compile_steps import inline_only
+from ..jit import kernel
 from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
