@@ -12,6 +12,7 @@ import numpy as np
 
 from .model import layout as L
 from .names import leg_index
+from .parameters import RobotParameters
 
 __all__ = ["EnergyAccessors", "ENERGY_GROUPS", "ENERGY_WHOLE_ROBOT", "ENERGY_COLUMNS"]
 
@@ -112,9 +113,9 @@ class EnergyAccessors:
         for lg in legs:
             i = self.motor_current(lg)
             w = self.motor_speed(lg)
-            r_a, k_w = (_per_leg_value(robot[n], lg) for n in ("armature_resistance",
-                                                                "speed_constant"))
-            p += robot["legs_per_virtual_leg"] * i * (r_a * i + k_w * w)
+            motor = RobotParameters(**robot).leg(lg)
+            p += robot["legs_per_virtual_leg"] * i * (motor.armature_resistance * i
+                                                      + motor.speed_constant * w)
         return p
 
 
@@ -124,9 +125,3 @@ class EnergyAccessors:
         ``simulate(energy=True)``."""
         from .analysis.energy import energy_balance
         return energy_balance(self)
-
-
-def _per_leg_value(value, leg: int) -> float:
-    """Leg ``leg``'s value of a robot field as stored in a provenance dict: one number, or
-    [back, front] for a robot whose legs differ."""
-    return float(value[leg]) if isinstance(value, (list, tuple)) else float(value)

@@ -207,8 +207,9 @@ class RobotParameters:
         one leg's quantities and everything derived from them
         (``robot.leg("front").stall_torque``)."""
         i = leg_index(leg)
-        return dataclasses.replace(self, **{n: self.per_leg(n)[i] for n in PER_LEG_FIELDS
-                                            if isinstance(getattr(self, n), tuple)})
+        pairs = {n: getattr(self, n)[i] for n in PER_LEG_FIELDS
+                 if isinstance(getattr(self, n), tuple)}
+        return dataclasses.replace(self, **pairs) if pairs else self
 
     def _same(self, derived: str, *names: str) -> tuple:
         """The values of ``names``, which must be the same for both legs for ``derived``."""
