@@ -33,12 +33,12 @@ its entry in :data:`UNITS`.
 from __future__ import annotations
 
 from ..jit import kernel
-from . import belt, rigid_hip
+from . import backlash, belt, rigid_hip
 from .layout import P_HIP_UNIT
 
 #: the registered hip units; a unit's code is its index (the rigid unit is code 0, the one
 #: a parameter array without a unit gets)
-UNITS = (rigid_hip, belt)
+UNITS = (rigid_hip, belt, backlash)
 
 #: name of each unit, by code
 NAMES = tuple(unit.NAME for unit in UNITS)
