@@ -19,12 +19,13 @@ from .control.bounding import bounding_step
 from .control.compiled import call_controller
 from .jit import allocating, kernel
 from .model.evaluate import evaluate_ws
+from .model.hip_unit import is_geared
 from .model.kinematics import project_state
 from .model.sensors import measure, read_encoders, true_readings
 from .model.rigid_body import state_energy
 from .model.layout import (
     A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
-    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, HIP_RIGID, MI_CONTACT_B, MI_MOTOR_B,
+    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B, MI_MOTOR_B,
     NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
     SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
 )
@@ -261,7 +262,7 @@ def effective_method(method: int, hip_unit: int) -> int:
     """The method :func:`run` integrates with for the hip unit ``hip_unit`` (``P_HIP_UNIT``):
     the ARK methods split off the belt of a geared unit (Model II), so they exist for
     those only; DOPRI5 otherwise and for METHOD_AUTO."""
-    if method == METHOD_AUTO or (method >= METHOD_ARK4 and hip_unit == HIP_RIGID):
+    if method == METHOD_AUTO or (method >= METHOD_ARK4 and not is_geared(hip_unit)):
         return METHOD_DOPRI5
     return method
 

@@ -15,16 +15,24 @@ paper's belt. Consistent with that:
   that row stands for the damper evening out the relative rate within the impact
   (docs/model.md "Impact"), and the damper acts across the play.
 
-Registered in :mod:`scoutsim.model.hip_unit`; a Model II robot with any play > 0 runs on
-this unit (``scoutsim.model.packing``), one without on :mod:`scoutsim.model.belt`.
-Its function :func:`spring` takes the angle difference ``delta`` = alpha - phi [rad] of
-virtual leg ``leg``.
+Registered in :mod:`scoutsim.model.hip_unit` after the belt: a Model II robot with any
+play > 0 runs on this unit, one without on :mod:`scoutsim.model.belt`. Its gear train is
+the belt's (:mod:`scoutsim.model.transmission`); its function :func:`spring` takes the
+angle difference ``delta`` = alpha - phi [rad] of virtual leg ``leg``.
 """
 
 from __future__ import annotations
 
 from ..jit import kernel
 from .layout import P_BACKLASH
+
+NAME = "belt with backlash"
+GEARED = True
+
+
+def applies(model: str, robot) -> bool:
+    """Model II with play in either leg's belt (``RobotParameters.belt_backlash`` > 0)."""
+    return model == "II" and any(b > 0.0 for b in robot.per_leg("belt_backlash"))
 
 
 @kernel(inline="always")

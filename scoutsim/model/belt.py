@@ -13,6 +13,14 @@ from __future__ import annotations
 
 from ..jit import kernel
 
+NAME = "belt"
+GEARED = True
+
+
+def applies(model: str, robot) -> bool:
+    """Model II."""
+    return model == "II"
+
 
 @kernel(inline="always")
 def spring(delta, leg, P):

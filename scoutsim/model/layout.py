@@ -35,12 +35,6 @@ MODEL_NAMES = {"ideal": MODEL_IDEAL, "I": MODEL_I, "II": MODEL_II, "passive": MO
 MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
                 "passive": "passive (no controller)"}
 
-# --- hip units (P_HIP_UNIT; model/hip_unit.py registers each with its module) -----------
-HIP_RIGID = 0     # ideal, Model I, passive: the gear output is the leg (alpha = phi)
-HIP_BELT = 1      # Model II: gear pair, motor-joint friction, belt spring-damper (paper Fig. 6)
-HIP_BACKLASH = 2  # Model II with play: the belt spring acts beyond a dead zone
-HIP_UNIT_NAMES = ("rigid", "belt", "belt with backlash")
-
 # --- contact modes (per leg) ------------------------------------------------------------
 FLIGHT = 0
 STICK = 1   # toe pinned at its anchor, spring/damper along the leg axis
@@ -103,7 +97,7 @@ P_CLAMP_LEGS = 17    # 1: leg angles phi held fixed relative to the torso (stall
 P_CIRCUIT = 18       # CIRCUIT_*: what drives the motor current
 P_TD_B = 19          # passive massless legs: touchdown angle [rad], back
 P_TD_F = 20          # and front
-P_HIP_UNIT = 21      # HIP_*: the transmission between motor and leg (model/hip_unit.py)
+P_HIP_UNIT = 21      # the hip unit's code: its place in model/hip_unit.py's UNITS
 _FIRST_PER_LEG = 22
 # per leg (P[P_X + leg]): leg body, telescopic leg, hip unit, motor and amplifier
 (P_ML,         # mass of one physical leg body [kg]

@@ -93,7 +93,7 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
                             (L.P_RA, one.armature_resistance), (L.P_IMAX, one.current_limit)):
             P[slot + leg] = value
     P[L.P_MODEL] = L.MODEL_NAMES[model]
-    P[L.P_HIP_UNIT] = hip_unit_code(model, robot.per_leg("belt_backlash"))
+    P[L.P_HIP_UNIT] = hip_unit_code(model, robot)
     P[L.P_MU] = friction_coefficient if math.isfinite(friction_coefficient) else 1e308
     massless = all(m == 0.0 and i == 0.0 for m, i in zip(robot.per_leg("leg_mass"),
                                                           robot.per_leg("leg_inertia")))

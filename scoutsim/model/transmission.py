@@ -1,5 +1,5 @@
 """The transmission between motor and leg (compiled): the rigid hip unit (ideal, Model I,
-passive) and what the geared hip units of Model II share (docs/specification.md
+passive; model/rigid_hip.py) and what the geared hip units of Model II share (docs/specification.md
 section 5; paper Sec. III, Table II, Fig. 6). Which unit a run has, and the belt each
 geared unit brings, is :mod:`scoutsim.model.hip_unit`'s.
 
