@@ -43,3 +43,22 @@ def test_integrators_and_run_loop_know_no_model_variant():
              for i, line in enumerate(p.read_text().splitlines(), 1)
              if re.search(r"\bMODEL_(II|I|IDEAL|PASSIVE)\b|\bP_MODEL\b", line)]
     assert not found, found
+
+
+def test_hip_units_are_reached_only_through_their_registry():
+    """Every hip-unit module (a module of scoutsim/model that declares ``GEARED``) is
+    imported by model/hip_unit.py alone: the rest of the package reaches a unit through the
+    registry's hooks, so adding a unit is its module and its entry in the registry."""
+    model = ROOT / "model"
+    units = sorted(p.stem for p in model.glob("*.py")
+                   if re.search(r"^GEARED\s*=", p.read_text(), re.M))
+    assert {"rigid_hip", "belt", "backlash"} <= set(units), units
+    registry = (model / "hip_unit.py").read_text()
+    for unit in units:
+        assert re.search(rf"^from \. import .*\b{unit}\b", registry, re.M), unit
+    pattern = re.compile(rf"^\s*(from\s+\S*\b({'|'.join(units)})\b\s+import|from\s+\.+\S*\s+"
+                         rf"import\s+.*\b({'|'.join(units)})\b|import\s+\S*\.({'|'.join(units)})\b)",
+                         re.M)
+    found = [str(p.relative_to(ROOT)) for p in _sources()
+             if p != model / "hip_unit.py" and pattern.search(p.read_text())]
+    assert not found, found
