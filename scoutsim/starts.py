@@ -6,7 +6,7 @@ mode arrays of a fresh or a resumed start, and the starts known by name ("flight
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
+from dataclasses import fields
 
 import numpy as np
 
@@ -22,7 +22,7 @@ __all__ = ["default_initial_state", "fresh_modes", "NAMED_STARTS"]
 def _state_vector(init: InitialState, robot: RobotParameters,
                   ctrl: ControllerParameters | None, passive_angles, passive_world) -> np.ndarray:
     s = np.zeros(L.NS)
-    vals = asdict(init)
+    vals = {f.name: getattr(init, f.name) for f in fields(init)}
     for name, v in vals.items():
         if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
             raise ValueError(f"initial_state.{name} = {v!r} is not allowed: must be finite")

@@ -295,3 +295,14 @@ def test_event_records_that_overflow_one_period_are_counted_not_left_as_empty_ro
     assert np.all(np.diff(r.events[:, L.EVR_T]) >= 0.0)
     assert r.stats["event_records_lost"] > 0
     assert "event_records_lost" not in scoutsim.simulate(duration=1.0).stats
+
+
+def test_provenance_records_every_parameter_as_given():
+    """The run's provenance holds each parameter set field by field, as
+    ``dataclasses.asdict`` gives it (a per-leg robot's pairs included)."""
+    robot = scoutsim.RobotParameters(leg_rest_length=(0.323, 0.30), leg_mass=(1.0, 1.2))
+    r = scoutsim.simulate(robot, duration=0.01, model="II")
+    assert r.provenance["robot"] == dataclasses.asdict(robot)
+    assert r.provenance["controller"] == dataclasses.asdict(ControllerParameters())
+    assert r.provenance["integrator"] == dataclasses.asdict(
+        scoutsim.IntegratorSettings().resolve("II"))

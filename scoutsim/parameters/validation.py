@@ -335,6 +335,42 @@ def _validate_pair(robot, controller, origins) -> None:
               f"must be > liftoff_compression and < leg_rest_length = {l0} {spec.unit}", origins)
 
 
+#: parameter sets that passed :func:`validate_robot` / :func:`validate_controller`, by their
+#: field values and those values' types (:func:`_typed_values`): a sweep or a learning
+#: environment runs one robot thousands of times, and checking every field each time costs
+#: more than a short run's integration. Bounded: emptied when it holds _PASSED_MAX sets.
+_PASSED: dict = {}
+_PASSED_MAX = 1024
+
+
+def _typed_values(obj) -> tuple:
+    """Key of a parameter set in :data:`_PASSED`: its class and every field's value with
+    the value's type (so ``True`` and ``1``, equal in Python, are told apart)."""
+    values = []
+    for name in _fields_of(type(obj)):
+        v = getattr(obj, name)
+        values.append((type(v), tuple((type(x), x) for x in v) if isinstance(v, tuple) else v))
+    return type(obj), tuple(values)
+
+
+def _checked_once(obj, cls, check):
+    """``check(obj, {})`` unless a set with the same typed values passed it before."""
+    key = None
+    if isinstance(obj, cls):
+        try:
+            key = _typed_values(obj)
+            if key in _PASSED:
+                return obj
+        except TypeError:       # an unhashable value: the check refuses it
+            key = None
+    check(obj, {})
+    if key is not None:
+        if len(_PASSED) >= _PASSED_MAX:
+            _PASSED.clear()
+        _PASSED[key] = True
+    return obj
+
+
 def validate_robot(p: RobotParameters) -> RobotParameters:
     """Check every field of a :class:`RobotParameters`.
 
@@ -356,7 +392,7 @@ def validate_robot(p: RobotParameters) -> RobotParameters:
         length above 100 m, ...; :func:`physical_limit`); the message names the field, the
         value (in the paper's unit) and the allowed range.
     """
-    return _validate_robot(p, {})
+    return _checked_once(p, RobotParameters, _validate_robot)
 
 
 def validate_controller(c: ControllerParameters) -> ControllerParameters:
@@ -377,7 +413,7 @@ def validate_controller(c: ControllerParameters) -> ControllerParameters:
     ParameterError
         As :func:`validate_robot`.
     """
-    return _validate_controller(c, {})
+    return _checked_once(c, ControllerParameters, _validate_controller)
 
 
 def validate_parameters(robot: RobotParameters, controller: ControllerParameters) -> None:
