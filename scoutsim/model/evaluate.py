@@ -39,10 +39,10 @@ from .kkt import (
 )
 from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
-    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
-    MI_CONTACT_B, MI_MOTOR_B, MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_CB, P_KB,
-    P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS, ROW_TOE_ALONG,
-    STICK, STRUT, STUCK,
+    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IALB, IALF,
+    IL_B, IPHB, IPHF, ITH, IX, IY, MI_CONTACT_B, MI_MOTOR_B, MODEL_PASSIVE, NAUX_LEG, NQ, NS,
+    P_B_J, P_CB, P_KB, P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS,
+    ROW_TOE_ALONG, STICK, STRUT, STUCK,
 )
 from .rigid_body import add_gravity_at, coriolis_at, kinetic_energy_at, mass_matrix_at, potential_energy_at
 from .transmission import hip_unit_forces, motor_joint_row, motor_speed
@@ -76,8 +76,8 @@ def fill_derivative(ds, dq, b, LG, nact, gear, ok):
         for i in range(nact):
             ds[NQ + i] = b[i]
     if not gear:
-        ds[NQ + 5] = ds[NQ + 3]
-        ds[NQ + 6] = ds[NQ + 4]
+        ds[NQ + IALB] = ds[NQ + IPHB]
+        ds[NQ + IALF] = ds[NQ + IPHF]
     ds[IL_B] = LG[2 * LG_LDOT]
     ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
 
@@ -135,7 +135,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
         aux[o + A_TAU_APP] = LG[2 * LG_TAPP + leg]
         aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
         aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
-        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
+        aux[o + A_BELT] = q[IALB + leg] - q[IPHB + leg]
         if gear and mi[MI_MOTOR_B + leg] == STUCK:
             aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
         else:
@@ -237,16 +237,16 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     n = nact + nr
     npl = P[P_NP]
     massless = P[P_MASSLESS] > 0.5
-    dth = dq[2]
+    dth = dq[ITH]
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
     for leg in range(2):
         cb = P[P_CB + leg]
         # the spring's stiffness where it is engaged (0 inside a backlash's play)
-        kb = P[P_KB + leg] if belt_spring(q[5 + leg] - q[3 + leg], leg, P)[1] else 0.0
+        kb = P[P_KB + leg] if belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[1] else 0.0
         for i in range(n):
             b2[i] = 0.0
-        b2[5 + leg] = 1.0
-        b2[3 + leg] = -1.0
+        b2[IALB + leg] = 1.0
+        b2[IPHB + leg] = -1.0
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B2, wk, WK_Y)
         # U: response of ddq to a unit belt torque pair, -npl G w
@@ -255,9 +255,9 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         # V: belt torque c_b (dalpha - dphi) + k_b (alpha - phi) differentiated
         # with respect to s through the projection of the dependent coordinates
         vcol = NSTIFF + leg
-        stiff[5 + leg, vcol] = kb
+        stiff[IALB + leg, vcol] = kb
         if mi[MI_MOTOR_B + leg] != STUCK:
-            stiff[NQ + 5 + leg, vcol] = cb
+            stiff[NQ + IALB + leg, vcol] = cb
         mode = mi[MI_CONTACT_B + leg]
         if mode == STICK or mode == STRUT:
             sg = sgl0 if leg == 0 else sgl1
@@ -272,8 +272,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             # the damper also depends on q through the projected dphi:
             # dphi = dg - dtheta, dg = -(hvx b + hvy a) / ll^2 with
             # a = anchor - hip_x = ll sin g, b = hip_y = ll cos g
-            hvx = dq[0] - sL * sth * dth
-            hvy = dq[1] + sL * cth * dth
+            hvx = dq[IX] - sL * sth * dth
+            hvy = dq[IY] + sL * cth * dth
             aa = ll * sg
             bb = ll * cg
             D2 = ll * ll
@@ -284,19 +284,19 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             e1 = dgb
             e2 = (dga * sL * sth + dgb * sL * cth
                   + (bb * sL * cth + aa * sL * sth) * dth / D2)
-            stiff[0, vcol] = kb * d0 - cb * e0
-            stiff[1, vcol] = kb * d1 - cb * e1
-            stiff[2, vcol] = kb * d2 - cb * e2
-            stiff[NQ + 0, vcol] = cb * d0
-            stiff[NQ + 1, vcol] = cb * d1
-            stiff[NQ + 2, vcol] = cb * d2
+            stiff[IX, vcol] = kb * d0 - cb * e0
+            stiff[IY, vcol] = kb * d1 - cb * e1
+            stiff[ITH, vcol] = kb * d2 - cb * e2
+            stiff[NQ + IX, vcol] = cb * d0
+            stiff[NQ + IY, vcol] = cb * d1
+            stiff[NQ + ITH, vcol] = cb * d2
         elif mode == FLIGHT and massless:
             if P[P_TD_WORLD] > 0.5:
-                stiff[2, vcol] = kb
-                stiff[NQ + 2, vcol] = cb
+                stiff[ITH, vcol] = kb
+                stiff[NQ + ITH, vcol] = cb
         else:
-            stiff[3 + leg, vcol] = -kb
-            stiff[NQ + 3 + leg, vcol] = -cb
+            stiff[IPHB + leg, vcol] = -kb
+            stiff[NQ + IPHB + leg, vcol] = -cb
 
     # motor-side damping on alpha: joint viscous friction and, while the current is
     # limited by the torque-speed line, the back-EMF; only where it is stiff, i.e.
@@ -315,12 +315,12 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             continue    # not stiff: left to the explicit part (column stays zero)
         for i in range(n):
             b2[i] = 0.0
-        b2[5 + leg] = 1.0
+        b2[IALB + leg] = 1.0
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B2, wk, WK_Y)
         for i in range(nact):
             stiff[NQ + i, 2 + leg] = -npl * b2[i]
-        stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
+        stiff[NQ + IALB + leg, NSTIFF + 2 + leg] = dm
 
 
 @kernel

@@ -12,8 +12,9 @@ from .hip_unit import geared
 from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
 from .layout import (
-    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, NQ, P_MASSLESS,
-    P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK, STRUT,
+    FLIGHT, IALB, IALF, IL_B, IPHB, IPHF, ITH, IX, IY, MI_CONTACT_B, MI_MOTOR_B, NQ,
+    P_MASSLESS, P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK,
+    STRUT,
 )
 from .rigid_body import kinetic_energy_at, mass_matrix
 from .transmission import motor_mode_from_rate
@@ -57,33 +58,33 @@ def impact(s, P, mi, mf, out):
     rleg = np.zeros(MAX_ROWS, dtype=np.int64)
     rkind = np.zeros(MAX_ROWS, dtype=np.int64)
     nr = 0
-    th = q[2]
+    th = q[ITH]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         sL = hip_offset(P, leg)
-        g = th + q[3 + leg]
+        g = th + q[IPHB + leg]
         sg = math.sin(g)
         cg = math.cos(g)
         kk = 3 + leg
         if mode == STICK or mode == STRUT:
-            R[nr, 0] = cg
-            R[nr, 1] = sg
-            R[nr, 2] = sL * math.sin(q[3 + leg]) + l[leg]
+            R[nr, IX] = cg
+            R[nr, IY] = sg
+            R[nr, ITH] = sL * math.sin(q[IPHB + leg]) + l[leg]
             R[nr, kk] = l[leg]
             rleg[nr] = leg
             rkind[nr] = ROW_TOE_ACROSS
             nr += 1
             if mode == STRUT:
-                R[nr, 0] = sg
-                R[nr, 1] = -cg
-                R[nr, 2] = -sL * math.cos(q[3 + leg])
+                R[nr, IX] = sg
+                R[nr, IY] = -cg
+                R[nr, ITH] = -sL * math.cos(q[IPHB + leg])
                 rleg[nr] = leg
                 rkind[nr] = ROW_TOE_ALONG
                 nr += 1
         elif mode == FLIGHT and P[P_MASSLESS] > 0.5:
             R[nr, kk] = 1.0
             if P[P_TD_WORLD] > 0.5:
-                R[nr, 2] = 1.0
+                R[nr, ITH] = 1.0
             rleg[nr] = leg
             rkind[nr] = ROW_MASSLESS
             nr += 1
@@ -120,12 +121,12 @@ def impact(s, P, mi, mf, out):
     for i in range(nact):
         dq[i] = b[i]
     if not gear:
-        dq[5] = dq[3]
-        dq[6] = dq[4]
+        dq[IALB] = dq[IPHB]
+        dq[IALF] = dq[IPHF]
     for rr in range(nr):
         lam = -b[nact + rr]
         leg = rleg[rr]
-        g = th + q[3 + leg]
+        g = th + q[IPHB + leg]
         if rkind[rr] == ROW_TOE_ACROSS:
             out[3 * leg] += lam * math.sin(g)
             out[3 * leg + 1] += lam * math.cos(g)
@@ -144,6 +145,6 @@ def impact(s, P, mi, mf, out):
         # leave a joint "slipping" against its motion, which settle() could only reconcile
         # with an impulse that stiction cannot give.
         for leg in range(2):
-            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], leg, P)
+            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[IALB + leg], leg, P)
     project_state(s, P, mi, mf)
     return True

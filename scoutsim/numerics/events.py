@@ -20,15 +20,15 @@ from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, BACK, FRONT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
-    EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS, NEVBUF, NS,
-    STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
-    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEV_CONTACT, NQ,
-    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S,
-    P_THETA_LIM, P_TORSO_H, P_TORSO_LEN, SLIDE, STICK, STRUT, STUCK, V_BEYOND_STOP,
-    V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING,
-    V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
-    V_TOE_ENTERS_GROUND,
+    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, BACK,
+    EVR_E_AFTER, EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS,
+    EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH, IY,
+    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEVBUF, NEV_CONTACT, NQ, NS, P_G,
+    P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM, P_TORSO_H,
+    P_TORSO_LEN, SLIDE, STICK, STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, STRUT, STUCK,
+    V_BEYOND_STOP, V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION,
+    V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED,
+    V_TOE_BELOW_GROUND, V_TOE_ENTERS_GROUND,
 )
 
 
@@ -90,10 +90,10 @@ def event_values(s, aux, P, mi, out):
                 out[EV_MOTOR_B + leg] = (tau_s - abs(aux[o + A_HOLD])) / tau_s
             else:
                 out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N + leg]
-    th = s[2]
+    th = s[ITH]
     a = 0.5 * P[P_TORSO_LEN]
     b = 0.5 * P[P_TORSO_H]
-    out[EV_FALL_HEIGHT] = s[1] - a * abs(math.sin(th)) - b * abs(math.cos(th))
+    out[EV_FALL_HEIGHT] = s[IY] - a * abs(math.sin(th)) - b * abs(math.cos(th))
     out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
 
 
@@ -231,13 +231,13 @@ def toe_vertical_motion(s, ds, P, leg, ld):
     th = s[ITH]
     dth = s[NQ + ITH]
     ddth = ds[NQ + ITH]
-    g = th + s[3 + leg]
-    dg = dth + s[NQ + 3 + leg]
-    ddg = ddth + ds[NQ + 3 + leg]
+    g = th + s[IPHB + leg]
+    dg = dth + s[NQ + IPHB + leg]
+    ddg = ddth + ds[NQ + IPHB + leg]
     sg = math.sin(g)
     cg = math.cos(g)
     ldd = 0.0
-    c = leg_damping(s[3 + leg], leg, P)
+    c = leg_damping(s[IPHB + leg], leg, P)
     if ld != 0.0 and c > 0.0:
         ldd = -P[P_K + leg] * ld / c
     # toe height y + sL sin(th) - l cos(g)
@@ -289,7 +289,7 @@ def slide_toe_pressed(s, ds, aux, P, leg):
     again. Its flight leg-length rate is the slide's plus F / c (the damper balances the
     force F when the toe is free)."""
     ld = ds[IL_B + leg]
-    c = P[P_NP] * leg_damping(s[3 + leg], leg, P)
+    c = P[P_NP] * leg_damping(s[IPHB + leg], leg, P)
     fax = aux[leg * NAUX_LEG + A_FAX]
     if c > 0.0:
         ld += fax / c

@@ -14,10 +14,10 @@ from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
 from ..model.transmission import joint_has_stiction
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, BACK, FRONT, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
-    EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
-    EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
+    A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
+    EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
+    EK_STRUT_START, EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH,
+    IY, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
     P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
     SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
     STICK, STRUT, STUCK,
@@ -36,10 +36,10 @@ LEG_STOP_SPEED_TOL = 1e-6
 def stance_leg_rate(s, P, leg):
     """dl/dt [m/s] of a leg whose toe is pinned: minus the hip velocity along the leg."""
     sL = hip_offset(P, leg)
-    th = s[2]
-    g = th + s[3 + leg]
-    hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
-    hvy = s[NQ + 1] + sL * math.cos(th) * s[NQ + 2]
+    th = s[ITH]
+    g = th + s[IPHB + leg]
+    hvx = s[NQ] - sL * math.sin(th) * s[NQ + ITH]
+    hvy = s[NQ + IY] + sL * math.cos(th) * s[NQ + ITH]
     return -(hvx * math.sin(g) - hvy * math.cos(g))
 
 
@@ -289,7 +289,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
             mi[MI_MOTOR_B + leg] = STUCK
             nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, aux[o + A_HOLD], 0.0, 0.0)
     else:
-        nev = log_event(ev, nev, t, EK_FALL, -1, s[1], s[2], 0.0)
+        nev = log_event(ev, nev, t, EK_FALL, -1, s[IY], s[ITH], 0.0)
     return nev, ok
 
 
