@@ -26,7 +26,8 @@ from .model.layout import (
     A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, HIP_RIGID, MI_CONTACT_B, MI_MOTOR_B,
     NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
-    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
+    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING, TR_LIFTOFF, TR_SWEEP,
+    TR_TOUCHDOWN,
 )
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
@@ -192,11 +193,11 @@ def run(plant, control, span, records, carry, n_out, nev, method):
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev
             for leg in range(2):
-                if tr[leg] & 1:
+                if tr[leg] & TR_TOUCHDOWN:
                     nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 2:
+                if tr[leg] & TR_SWEEP:
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 4:
+                if tr[leg] & TR_LIFTOFF:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
             if nev > nevc:
                 stamp_states(ev, nevc, nev, s, s)

@@ -32,7 +32,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import kernel
-from ..model.layout import LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B
+from ..model.layout import (
+    LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B, TR_LIFTOFF,
+    TR_SWEEP, TR_TOUCHDOWN,
+)
 from ..parameters import ControllerParameters, RobotParameters
 from .protocol import Controller
 
@@ -121,8 +124,8 @@ def bounding_step(y, C, ls, cmd, transitions):
     """One controller sample from the sensor readings ``y`` (``layout.SN_*``): update leg
     states ``ls`` and hold commands ``cmd``.
 
-    transitions[leg] is set to a bit mask of what happened this sample (1 touchdown
-    detected, 2 sweep limit passed, 4 lift-off detected)."""
+    transitions[leg] is set to a bit mask of what happened this sample (``layout.TR_*``:
+    touchdown detected, sweep limit passed, lift-off detected)."""
     if C[C_ENABLED] < 0.5:
         cmd[0] = 0.0
         cmd[1] = 0.0
@@ -139,14 +142,14 @@ def bounding_step(y, C, ls, cmd, transitions):
         if st == LS_FLIGHT:
             if comp > C[C_TD_COMP]:
                 st = LS_RETRACTION
-                tr |= 1
+                tr |= TR_TOUCHDOWN
         else:
             if comp < C[C_LO_COMP]:
                 st = LS_FLIGHT
-                tr |= 4
+                tr |= TR_LIFTOFF
         if st == LS_RETRACTION and ang < sweep:
             st = LS_BRAKE
-            tr |= 2
+            tr |= TR_SWEEP
         ls[leg] = st
         transitions[leg] = tr
         if st == LS_FLIGHT:

@@ -344,6 +344,11 @@ LS_FLIGHT = 0
 LS_RETRACTION = 1
 LS_BRAKE = 2
 LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+# bits of the controller's per-leg transition mask (control/bounding.py): what one sample
+# of the Table I law detected; the run loop logs each as an EK_CTRL_* event
+TR_TOUCHDOWN = 1   # flight -> stance-retraction (leg compression beyond the threshold)
+TR_SWEEP = 2       # stance-retraction -> stance-brake (hip angle below the sweep limit)
+TR_LIFTOFF = 4     # stance -> flight (compression below the lift-off threshold)
 
 # --- run status -----------------------------------------------------------------------
 ST_RUNNING = 0
