@@ -25,7 +25,7 @@ from .model.rigid_body import state_energy
 from .model.layout import (
     A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, HIP_RIGID, MI_CONTACT_B, MI_MOTOR_B,
-    NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
+    NAUX, NEV, NIMP, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
     SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING, TR_LIFTOFF, TR_SWEEP,
     TR_TOUCHDOWN,
 )
@@ -155,7 +155,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     e_old = np.zeros(NEV)
     e_new = np.zeros(NEV)
     ybuf = np.zeros(NS)
-    imp = np.zeros(7)
+    imp = np.zeros(NIMP)
     ds = np.zeros(NS)
     s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)

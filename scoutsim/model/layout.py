@@ -190,6 +190,14 @@ EN_LEG_NAMES = ("electrical", "copper", "conversion", "gear_loss", "hip_work",
                 "joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
                 "leg_friction", "toe_slide", "constraint")
 
+# --- touchdown impact outputs (model/impact.py) ------------------------------------------
+# per leg (offset leg * NIMP_LEG): the impulse on each pinned toe [N s]
+IMP_NORMAL = 0        # ground normal impulse
+IMP_TANGENT = 1       # ground tangential impulse
+NIMP_LEG = 2
+IMP_ENERGY_LOST = 2 * NIMP_LEG   # kinetic energy lost in the impact [J]
+NIMP = IMP_ENERGY_LOST + 1
+
 # --- events ---------------------------------------------------------------------------
 # slots: per leg 3 contact slots, per leg 1 motor slot, 2 fall slots
 NEV_CONTACT = 3

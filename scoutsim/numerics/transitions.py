@@ -16,11 +16,11 @@ from ..model.transmission import joint_has_stiction
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
     EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
-    EK_STRUT_START, EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH,
-    IY, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
-    P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
-    SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
-    STICK, STRUT, STUCK,
+    EK_STRUT_START, EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, FRONT, IL_B,
+    IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B, MI_CONTACT_B,
+    MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NIMP_LEG, NQ, P_L0, P_LEG_FRIC_SIDE,
+    P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE, SLIDE_CAUSE_LEG_PUSHES,
+    SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS, STICK, STRUT, STUCK,
 )
 from .dopri5 import eval_workspace
 from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, flight_toe_enters_ground,
@@ -214,8 +214,8 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         mi[MI_CONTACT_B + leg] = STRUT
         stats[S_NSTRUT] += 1
         ok = impact(s, P, mi, mf, imp)
-    pn = imp[3 * leg]
-    pt = imp[3 * leg + 1]
+    pn = imp[leg * NIMP_LEG + IMP_NORMAL]
+    pt = imp[leg * NIMP_LEG + IMP_TANGENT]
     if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
         # Coulomb floor: the pinning impulse lies outside the friction cone (for a
         # massless toe on a compliant leg the only cone-consistent impulse is zero):
@@ -236,7 +236,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         if r > stats[S_MAX_IMPULSE_RATIO]:
             stats[S_MAX_IMPULSE_RATIO] = r
     # stiction carries no impulse: impact() released stuck joints; settle() re-examines
-    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[6])
+    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[IMP_ENERGY_LOST])
     return nev, ok
 
 
