@@ -201,6 +201,13 @@ NIMP = IMP_ENERGY_LOST + 1
 # --- events ---------------------------------------------------------------------------
 # slots: per leg 3 contact slots, per leg 1 motor slot, 2 fall slots
 NEV_CONTACT = 3
+# the contact slots of a leg (offset leg * NEV_CONTACT; numerics/events.py), by contact mode:
+EVC_GROUND = 0         # flight: toe height (touchdown); stick, slide, strut: ground normal
+                       # force (lift-off, or a slide if the leg still pushes)
+EVC_STOP_OR_REST = 1   # stick: leg length at its stop (-> strut); slide: toe velocity along
+                       # its slide direction (-> stick, Coulomb floor); strut: strut force
+                       # (-> stick)
+EVC_CONE = 2           # stick on a Coulomb floor: friction force within mu F_n (-> slide)
 EV_MOTOR_B = 6
 EV_MOTOR_F = 7
 EV_FALL_HEIGHT = 8

@@ -147,7 +147,8 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
     # damping is stiff (model.evaluate.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
-    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0 or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
+    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0
+                   or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
     hg = h * GAMMA
     VU = Z[NSTAGE:NSTAGE + R]            # V^T U
     Si = Z[NSTAGE + R:NSTAGE + 2 * R]    # (I - h gamma V^T U)^-1

@@ -20,11 +20,11 @@ from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, BACK,
-    EVR_E_AFTER, EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS,
-    EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH, IY,
-    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEVBUF, NEV_CONTACT, NQ, NS, P_G,
-    P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM, P_TORSO_H,
+    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, BACK, EVC_CONE,
+    EVC_GROUND, EVC_STOP_OR_REST, EVR_E_AFTER, EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE,
+    EVR_VIOLATIONS, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH,
+    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEVBUF, NEV_CONTACT, NQ, NS,
+    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM, P_TORSO_H,
     P_TORSO_LEN, SLIDE, STICK, STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, STRUT, STUCK,
     V_BEYOND_STOP, V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION,
     V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED,
@@ -49,6 +49,30 @@ TOE_HOP_TOL = 1e-9
 TOE_AT_GROUND_TOL = 1e-7
 
 
+@kernel(inline="always")
+def contact_event(leg, slot):
+    """Event slot of virtual leg ``leg``'s contact event ``slot`` (layout ``EVC_*``)."""
+    return leg * NEV_CONTACT + slot
+
+
+@kernel(inline="always")
+def is_contact_event(k):
+    """True if event slot ``k`` is one of the legs' contact events."""
+    return k < 2 * NEV_CONTACT
+
+
+@kernel(inline="always")
+def event_leg(k):
+    """The virtual leg of contact event slot ``k``."""
+    return k // NEV_CONTACT
+
+
+@kernel(inline="always")
+def event_slot(k):
+    """Which of its leg's contact events (layout ``EVC_*``) event slot ``k`` is."""
+    return k % NEV_CONTACT
+
+
 @kernel
 def body_weight(P):
     """The robot's weight [N]: torso and all leg bodies (the force scale of the events)."""
@@ -65,25 +89,26 @@ def event_values(s, aux, P, mi, out):
         out[i] = 1.0
     for leg in range(2):
         o = leg * NAUX_LEG
-        e = leg * NEV_CONTACT
         mode = mi[MI_CONTACT_B + leg]
         l0 = P[P_L0 + leg]
         tau_s = P[P_TAU_S + leg]
         if mode == FLIGHT:
-            out[e] = aux[o + A_TOE_Y] / l0
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_TOE_Y] / l0
         elif mode == STICK:
-            out[e] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             if not massless:
-                out[e + 1] = (l0 - s[IL_B + leg]) / l0
+                out[contact_event(leg, EVC_STOP_OR_REST)] = (l0 - s[IL_B + leg]) / l0
             if coulomb:
-                out[e + 2] = (P[P_MU] * aux[o + A_GN] - abs(aux[o + A_GT])) / W
+                out[contact_event(leg, EVC_CONE)] = (P[P_MU] * aux[o + A_GN]
+                                                     - abs(aux[o + A_GT])) / W
         elif mode == SLIDE:
-            out[e] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             if coulomb:
-                out[e + 1] = aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg]
+                out[contact_event(leg, EVC_STOP_OR_REST)] = (aux[o + A_SLIP_V]
+                                                             * mi[MI_SLIDE_DIR_B + leg])
         elif mode == STRUT:
-            out[e] = aux[o + A_GN] / W
-            out[e + 1] = aux[o + A_STRUT] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_STOP_OR_REST)] = aux[o + A_STRUT] / W
         if joint_has_stiction(leg, P):
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:

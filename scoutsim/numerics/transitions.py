@@ -16,15 +16,16 @@ from ..model.transmission import joint_has_stiction
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
     EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
-    EK_STRUT_START, EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, FRONT, IL_B,
-    IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NIMP_LEG, NQ, P_L0, P_LEG_FRIC_SIDE,
-    P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE, SLIDE_CAUSE_LEG_PUSHES,
-    SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS, STICK, STRUT, STUCK,
+    EK_STRUT_START, EK_TOUCHDOWN, EVC_GROUND, EVC_STOP_OR_REST, EV_FALL_HEIGHT, EV_MOTOR_B,
+    FLIGHT, FRONT, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B,
+    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NIMP_LEG, NQ, P_L0,
+    P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
+    SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
+    STICK, STRUT, STUCK,
 )
 from .dopri5 import eval_workspace
-from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, flight_toe_enters_ground,
-                     log_event, slide_toe_pressed)
+from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, event_leg, event_slot,
+                     flight_toe_enters_ground, is_contact_event, log_event, slide_toe_pressed)
 from .work import EventLog
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
 
@@ -244,25 +245,25 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
 def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     """Mode transition for event slot k at time t (state s already at the event)."""
     ok = True
-    if k < 2 * NEV_CONTACT:
-        leg = k // NEV_CONTACT
-        slot = k % NEV_CONTACT
+    if is_contact_event(k):
+        leg = event_leg(k)
+        slot = event_slot(k)
         mode = mi[MI_CONTACT_B + leg]
         o = leg * NAUX_LEG
         if mode == FLIGHT:
             nev, ok = touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp)
         elif mode == STICK:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 # normal force reached zero: lift-off, or a slide if the leg still pushes
                 nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
-            elif slot == 1:
+            elif slot == EVC_STOP_OR_REST:
                 mi[MI_CONTACT_B + leg] = STRUT
                 stats[S_NSTRUT] += 1
                 nev = log_event(ev, nev, t, EK_STRUT_START, leg, aux[o + A_GN], 0.0, 0.0)
             else:
                 nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
         elif mode == SLIDE:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 # slide velocity reached zero: stick here; settle() slides on (possibly
@@ -271,7 +272,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
                 mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
                 nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
         elif mode == STRUT:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 mi[MI_CONTACT_B + leg] = STICK
