@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import kernel
+from ..model.flags import FLAG_ON, is_set
 from ..model.layout import (
     LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B, TR_LIFTOFF,
     TR_SWEEP, TR_TOUCHDOWN,
@@ -96,7 +97,7 @@ def controller_array(c: ControllerParameters | None,
     a[C_TD_COMP] = c.touchdown_compression
     a[C_LO_COMP] = c.liftoff_compression
     a[C_SENSE_ALPHA] = 1.0 if c.sense_motor_angle else 0.0
-    a[C_ENABLED] = 1.0
+    a[C_ENABLED] = FLAG_ON
     return a
 
 
@@ -126,7 +127,7 @@ def bounding_step(y, C, ls, cmd, transitions):
 
     transitions[leg] is set to a bit mask of what happened this sample (``layout.TR_*``:
     touchdown detected, sweep limit passed, lift-off detected)."""
-    if C[C_ENABLED] < 0.5:
+    if not is_set(C[C_ENABLED]):
         cmd[0] = 0.0
         cmd[1] = 0.0
         transitions[0] = 0

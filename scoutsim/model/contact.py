@@ -18,6 +18,7 @@ from __future__ import annotations
 from ..jit import kernel
 from .kinematics import hip_offset
 from .kkt import MAX_ROWS, new_row
+from .flags import is_set
 from .layout import (
     IPHB, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS,
     P_MU, P_NP, P_STRUT_OMEGA, P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE,
@@ -53,7 +54,7 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
     R = wA[WA_R:WA_R + MAX_ROWS]
     sth = wk[WK_META + MT_STH]
     cth = wk[WK_META + MT_CTH]
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
     npl = P[P_NP]
     l0 = P[P_L0 + leg]
     k = P[P_K + leg]
@@ -132,7 +133,7 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         if massless:
             new_row(R, r, rkind, rleg, nr, 0.0, ROW_MASSLESS, leg)
             R[nr, kk] = 1.0
-            if P[P_TD_WORLD] > 0.5:
+            if is_set(P[P_TD_WORLD]):
                 R[nr, ITH] = 1.0
             nr += 1
             ld = 0.0

@@ -37,6 +37,7 @@ from .kkt import (
     MAX_KKT, MAX_ROWS, SCHUR_MAX_ROWS, add_clamp_rows, kkt_reduced_factor, kkt_reduced_solve,
     kkt_schur_factor,
 )
+from .flags import FLAG_OFF, FLAG_ON, is_set
 from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IALB, IALF,
@@ -97,7 +98,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
     meta = wk[WK_META:WK_META + NMETA]
     nact = 7 if geared(P) else 5
     nr = int(meta[MT_NROWS])
-    ok = meta[MT_KKT_OK] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
     sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
     vb = meta[MT_VBATT]
     energy = meta[MT_ENERGY]
@@ -147,7 +148,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
         aux[o + A_TAU_BELT] = LG[2 * LG_TBELT + leg]
     aux[A_VBATT] = vb
     aux[A_ENERGY] = energy
-    aux[A_KKT_OK] = 1.0 if ok else 0.0
+    aux[A_KKT_OK] = FLAG_ON if ok else FLAG_OFF
 
 
 @kernel
@@ -165,11 +166,11 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     gear = geared(P)
     nact = 7 if gear else 5
     meta = wk[WK_META:WK_META + NMETA]
-    ok = meta[MT_KKT_OK] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
     if not ok:
-        aux[A_KKT_OK] = 0.0
+        aux[A_KKT_OK] = FLAG_OFF
         return False
-    schur = meta[MT_SCHUR] > 0.5
+    schur = is_set(meta[MT_SCHUR])
     nr = int(meta[MT_NROWS])
     n = nact + nr
     dq = wk[WK_DQ:WK_DQ + NQ]
@@ -222,8 +223,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     gear = geared(P)
     nact = 7 if gear else 5
     nr = int(meta[MT_NROWS])
-    ok = meta[MT_KKT_OK] > 0.5
-    schur = meta[MT_SCHUR] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
+    schur = is_set(meta[MT_SCHUR])
     vb = meta[MT_VBATT]
     sth, cth = meta[MT_STH], meta[MT_CTH]
     sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
@@ -236,7 +237,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         return
     n = nact + nr
     npl = P[P_NP]
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
     dth = dq[ITH]
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
     for leg in range(2):
@@ -291,7 +292,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             stiff[NQ + IY, vcol] = cb * d1
             stiff[NQ + ITH, vcol] = cb * d2
         elif mode == FLIGHT and massless:
-            if P[P_TD_WORLD] > 0.5:
+            if is_set(P[P_TD_WORLD]):
                 stiff[ITH, vcol] = kb
                 stiff[NQ + ITH, vcol] = cb
         else:
@@ -370,7 +371,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     A = wA[0:MAX_KKT]
     R = wA[WA_R:WA_R + MAX_ROWS]
     M = wA[WA_M:WA_M + NQ]
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
 
     # rigid bodies: mass matrix, velocity terms, gravity, potential energy
     mass_matrix_at(M, P, sth, cth, sgl0, cgl0, sgl1, cgl1)
@@ -430,9 +431,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     if ok:
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B, wk, WK_Y)
-    meta[MT_SCHUR] = 1.0 if schur else 0.0
+    meta[MT_SCHUR] = FLAG_ON if schur else FLAG_OFF
     meta[MT_NROWS] = nr
-    meta[MT_KKT_OK] = 1.0 if ok else 0.0
+    meta[MT_KKT_OK] = FLAG_ON if ok else FLAG_OFF
     meta[MT_VBATT] = vb
     meta[MT_SG_B] = sgl0
     meta[MT_CG_B] = cgl0
@@ -445,7 +446,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
         fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv)
 
     if not want_aux:
-        aux[A_KKT_OK] = 1.0 if ok else 0.0
+        aux[A_KKT_OK] = FLAG_ON if ok else FLAG_OFF
         return ok
     meta[MT_ENERGY] = ekin + epot
     fill_outputs(P, mi, cmd, aux, wk)

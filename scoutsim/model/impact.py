@@ -11,6 +11,7 @@ from ..jit import allocating
 from .hip_unit import geared
 from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
+from .flags import is_set
 from .layout import (
     FLIGHT, IALB, IALF, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, IPHF, ITH, IX,
     IY, MI_CONTACT_B, MI_MOTOR_B, NIMP, NIMP_LEG, NQ, P_MASSLESS, P_TD_WORLD, ROW_GEAR,
@@ -82,9 +83,9 @@ def impact(s, P, mi, mf, out):
                 rleg[nr] = leg
                 rkind[nr] = ROW_TOE_ALONG
                 nr += 1
-        elif mode == FLIGHT and P[P_MASSLESS] > 0.5:
+        elif mode == FLIGHT and is_set(P[P_MASSLESS]):
             R[nr, kk] = 1.0
-            if P[P_TD_WORLD] > 0.5:
+            if is_set(P[P_TD_WORLD]):
                 R[nr, ITH] = 1.0
             rleg[nr] = leg
             rkind[nr] = ROW_MASSLESS

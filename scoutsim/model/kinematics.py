@@ -15,6 +15,7 @@ import math
 
 from ..jit import kernel
 from .hip_unit import geared
+from .flags import is_set
 from .layout import (
     HIP_SIGN, IALB, IL_B, IPHB, IPHF, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, NQ,
     P_C, P_CLAMP_LEGS, P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_TD_B, P_TD_WORLD,
@@ -63,13 +64,13 @@ def project(q, dq, l, P, mi, mf):
     :func:`~scoutsim.model.evaluate.evaluate_ws` to reuse.
     """
     gear = geared(P)
-    massless = P[P_MASSLESS] > 0.5
-    if P[P_CLAMP_TORSO] > 0.5:
+    massless = is_set(P[P_MASSLESS])
+    if is_set(P[P_CLAMP_TORSO]):
         # bench rig: the clamped torso is at rest (add_clamp_rows)
         dq[IX] = 0.0
         dq[IY] = 0.0
         dq[ITH] = 0.0
-        if P[P_CLAMP_LEGS] > 0.5:
+        if is_set(P[P_CLAMP_LEGS]):
             dq[IPHB] = 0.0
             dq[IPHF] = 0.0
     sth = math.sin(q[ITH])
@@ -106,7 +107,7 @@ def project(q, dq, l, P, mi, mf):
         else:
             if massless:
                 td = P[P_TD_B + leg]
-                if P[P_TD_WORLD] > 0.5:
+                if is_set(P[P_TD_WORLD]):
                     q[IPHB + leg] = td - q[ITH]
                     dq[IPHB + leg] = -dq[ITH]
                 else:

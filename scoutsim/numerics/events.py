@@ -19,6 +19,7 @@ from ..jit import kernel
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
+from ..model.flags import is_set
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, BACK, EVC_CONE,
     EVC_GROUND, EVC_STOP_OR_REST, EVR_E_AFTER, EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE,
@@ -83,7 +84,7 @@ def body_weight(P):
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
     coulomb = P[P_MU] < 1e300
     for i in range(NEV):
         out[i] = 1.0
@@ -184,7 +185,7 @@ def mode_violations(s, ds, aux, P, mi):
     ftol = 1e-6 * W
     coulomb = P[P_MU] < 1e300
     bits = 0
-    if aux[A_KKT_OK] < 0.5:
+    if not is_set(aux[A_KKT_OK]):
         bits |= V_SINGULAR
     for leg in range(2):
         o = leg * NAUX_LEG
@@ -208,7 +209,7 @@ def mode_violations(s, ds, aux, P, mi):
             if ((aux[o + A_FAX] < -ftol or gn < -ftol)
                     and not slide_toe_pressed(s, ds, aux, P, leg)):
                 bits |= V_SLIDE_NOT_PUSHING
-        elif P[P_MASSLESS] < 0.5:
+        elif not is_set(P[P_MASSLESS]):
             # (a massless leg is placed kinematically at its touchdown angle in flight, which
             # can put its toe below the ground just after lift-off: the passive model's
             # convention, docs/specification.md section 2; it touches down when the toe comes down through it)
@@ -285,7 +286,7 @@ def toe_enters_ground(s, ds, P, leg, ld):
     released to flight, the toe moves into the ground. The consistent contact is a slide in
     which the leg is compressed as it is swept on (settle_ws). A hop of at most TOE_HOP_TOL
     counts as pressed."""
-    if P[P_MASSLESS] > 0.5:
+    if is_set(P[P_MASSLESS]):
         return TOE_STAYS
     vy, ay = toe_vertical_motion(s, ds, P, leg, ld)
     if vy < -TOE_REST_SPEED:

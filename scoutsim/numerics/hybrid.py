@@ -29,6 +29,7 @@ from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
 from ..model.roots import illinois_update
+from ..model.flags import is_set
 from ..model.layout import (
     A_ENERGY, A_KKT_OK, EVC_CONE, EVC_GROUND, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B,
     FLIGHT, MI_CONTACT_B, MI_MOTOR_B, NAUX, NEV, NMI, NS, P_MASSLESS, STICK,
@@ -348,7 +349,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         for k in range(NEV):
             hop = (not armed[k] and e_end[k] < 0.0 and is_contact_event(k)
                    and event_slot(k) == EVC_GROUND and mi[MI_CONTACT_B + event_leg(k)] == FLIGHT
-                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and P[P_MASSLESS] < 0.5)
+                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and not is_set(P[P_MASSLESS]))
             if (armed[k] or hop) and e_end[k] < 0.0:
                 # Illinois on the continuous extension, bracket [0, 1]
                 a = 0.0
@@ -453,7 +454,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                     return t, nev, ST_NUMERICAL_FAILURE
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, log, nev, ew, False)
                 stats[S_NFEV] += 1
-                if aux[A_KKT_OK] < 0.5:
+                if not is_set(aux[A_KKT_OK]):
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
                 event_values(s, aux, P, mi, e_old)

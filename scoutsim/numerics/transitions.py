@@ -13,6 +13,7 @@ from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
 from ..model.transmission import joint_has_stiction
+from ..model.flags import is_set
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
     EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
@@ -86,7 +87,7 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
     pull): it slides if its leg still pushes, otherwise it lifts off (the end-of-stance
     rule: releasing a toe its leg still pushes would drive it into the ground). Returns
     the event count."""
-    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
+    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and not is_set(P[P_MASSLESS]):
         stats[S_NEND_SLIDE] += 1
         return slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_LEG_PUSHES)
     return lift_off(t, s, mi, ev, nev, leg)
@@ -202,7 +203,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     s_pre = s.copy()
     mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
-    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
+    if (ok and not is_set(P[P_MASSLESS]) and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
             and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
         # the toe lands with the leg at its stop while the hip moves away from it: the
         # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
@@ -217,7 +218,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         ok = impact(s, P, mi, mf, imp)
     pn = imp[leg * NIMP_LEG + IMP_NORMAL]
     pt = imp[leg * NIMP_LEG + IMP_TANGENT]
-    if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
+    if P[P_MU] < 1e300 and not is_set(P[P_MASSLESS]) and abs(pt) > P[P_MU] * pn:
         # Coulomb floor: the pinning impulse lies outside the friction cone (for a
         # massless toe on a compliant leg the only cone-consistent impulse is zero):
         # no impulse, the toe lands sliding. (A no-slip floor pins the toe whatever the
