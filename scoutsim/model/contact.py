@@ -21,14 +21,21 @@ from .kkt import MAX_ROWS, new_row
 from .flags import is_set
 from .layout import (
     IPHB, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS,
-    P_MU, P_NP, P_STRUT_OMEGA, P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE,
-    STICK, STRUT,
+    P_MU, P_NO_SLIP, P_NP, P_STRUT_OMEGA, P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS,
+    ROW_TOE_ALONG, SLIDE, STICK, STRUT,
 )
 from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
 from .workspace import (
     LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY, MT_CTH, MT_STH, NWK_LEG, WA_R,
     WK_DQ, WK_L, WK_LEG, WK_META, WK_Q, WK_Q_, WK_R, WK_RKIND, WK_RLEG,
 )
+
+
+@kernel(inline="always")
+def toe_can_slip(P):
+    """True on a Coulomb floor (friction coefficient ``P[P_MU]``); False when the toes
+    cannot slip (``P_NO_SLIP``: friction_coefficient = inf, a pinned toe holds any force)."""
+    return not is_set(P[P_NO_SLIP])
 
 
 @kernel(inline="always")
@@ -115,10 +122,9 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         LG[2 * LG_LDOT + leg] = ld
         F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
         LG[2 * LG_FAX + leg] = F
-        mu = P[P_MU]
         sig = 0.0
-        if mu < 1e300:
-            sig = mu * mi[MI_SLIDE_DIR_B + leg]
+        if toe_can_slip(P):
+            sig = P[P_MU] * mi[MI_SLIDE_DIR_B + leg]
         gn = F / (cg + sig * sg)
         gt = -sig * gn
         LG[2 * LG_GN + leg] = gn

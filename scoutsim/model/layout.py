@@ -104,7 +104,8 @@ P_CIRCUIT = 18       # CIRCUIT_*: what drives the motor current
 P_TD_B = 19          # passive massless legs: touchdown angle [rad], back
 P_TD_F = 20          # and front
 P_HIP_UNIT = 21      # HIP_*: the transmission between motor and leg (model/hip_unit.py)
-_FIRST_PER_LEG = 22
+P_NO_SLIP = 22       # 1: the toes cannot slip (friction_coefficient = inf; P_MU is then 0)
+_FIRST_PER_LEG = 23
 # per leg (P[P_X + leg]): leg body, telescopic leg, hip unit, motor and amplifier
 (P_ML,         # mass of one physical leg body [kg]
  P_IL,         # its inertia about its COM [kg m^2]

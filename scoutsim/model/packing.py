@@ -95,7 +95,9 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
             P[slot + leg] = value
     P[L.P_MODEL] = L.MODEL_NAMES[model]
     P[L.P_HIP_UNIT] = hip_unit_code(model, robot.per_leg("belt_backlash"))
-    P[L.P_MU] = friction_coefficient if math.isfinite(friction_coefficient) else 1e308
+    no_slip = not math.isfinite(friction_coefficient)
+    P[L.P_NO_SLIP] = FLAG_ON if no_slip else FLAG_OFF
+    P[L.P_MU] = 0.0 if no_slip else friction_coefficient   # read only where toes can slip
     massless = all(m == 0.0 and i == 0.0 for m, i in zip(robot.per_leg("leg_mass"),
                                                           robot.per_leg("leg_inertia")))
     P[L.P_MASSLESS] = FLAG_ON if massless else FLAG_OFF

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ..jit import kernel
+from ..model.contact import toe_can_slip
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
@@ -85,7 +86,7 @@ def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
     massless = is_set(P[P_MASSLESS])
-    coulomb = P[P_MU] < 1e300
+    coulomb = toe_can_slip(P)
     for i in range(NEV):
         out[i] = 1.0
     for leg in range(2):
@@ -183,7 +184,7 @@ def mode_violations(s, ds, aux, P, mi):
     for forces)."""
     W = body_weight(P)
     ftol = 1e-6 * W
-    coulomb = P[P_MU] < 1e300
+    coulomb = toe_can_slip(P)
     bits = 0
     if not is_set(aux[A_KKT_OK]):
         bits |= V_SINGULAR

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 from ..jit import allocating, kernel
+from ..model.contact import toe_can_slip
 from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
@@ -119,7 +120,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
     # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
     # release it at once (the toe would then be disarmed at height <= 0 and fall through)
     gn_tol = -1e-9 * W
-    coulomb = P[P_MU] < 1e300
+    coulomb = toe_can_slip(P)
     for it in range(12):
         if it == 0 and command_only and P[P_LEG_FRIC_SIDE + BACK] == 0.0 \
                 and P[P_LEG_FRIC_SIDE + FRONT] == 0.0:
@@ -218,7 +219,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         ok = impact(s, P, mi, mf, imp)
     pn = imp[leg * NIMP_LEG + IMP_NORMAL]
     pt = imp[leg * NIMP_LEG + IMP_TANGENT]
-    if P[P_MU] < 1e300 and not is_set(P[P_MASSLESS]) and abs(pt) > P[P_MU] * pn:
+    if toe_can_slip(P) and not is_set(P[P_MASSLESS]) and abs(pt) > P[P_MU] * pn:
         # Coulomb floor: the pinning impulse lies outside the friction cone (for a
         # massless toe on a compliant leg the only cone-consistent impulse is zero):
         # no impulse, the toe lands sliding. (A no-slip floor pins the toe whatever the
