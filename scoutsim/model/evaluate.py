@@ -312,7 +312,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             dm += back_emf_damping(leg, P)
         N = P[P_N + leg]
         dm *= N * N
-        if npl * dm < STIFF_MOTOR_RATE * M[5 + leg, 5 + leg]:
+        if npl * dm < STIFF_MOTOR_RATE * M[IALB + leg, IALB + leg]:
             continue    # not stiff: left to the explicit part (column stays zero)
         for i in range(n):
             b2[i] = 0.0
