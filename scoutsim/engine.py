@@ -14,6 +14,7 @@ from .loop import Carry, Control, Records, Span, effective_method, readings_at, 
 from .numerics.work import Plant
 from .model import layout as L
 from .model.evaluate import NSTIFF
+from .model.flags import flag_is_set
 from .model.packing import robot_array
 from .model.rigid_body import state_energy
 from .numerics.dopri5 import eval_workspace
@@ -149,7 +150,7 @@ class HybridEngine:
         (measurement model included); after a run that ended (a fall), the readings at
         its final state."""
         readings_at(self.k, self.s, self.P, self.mi, self.mf, self.cmd,
-                    self.status == L.ST_RUNNING and self.hwork[HW_EVAL_KEPT] > 0.5,
+                    self.status == L.ST_RUNNING and flag_is_set(self.hwork[HW_EVAL_KEPT]),
                     self.block)
         return self.block.y
 

@@ -43,6 +43,7 @@ from functools import lru_cache
 import numpy as np
 
 from .model import layout as L
+from .model.flags import flag_is_set
 from .parameters import (UNITS, ControllerParameters, RobotParameters, field_dimension,
                          parameter_table)
 
@@ -233,7 +234,7 @@ def diagnose_failure(result) -> FailureDiagnosis | None:
         v = events[:, L.EVR_VIOLATIONS]
         last = (events[:, L.EVR_T] >= t_end) & np.isfinite(v)
         singular = [row for row in events[last] if int(row[L.EVR_VIOLATIONS]) & L.V_SINGULAR]
-    if (len(aux) and aux[-1, L.A_KKT_OK] < 0.5) or singular:
+    if (len(aux) and not flag_is_set(aux[-1, L.A_KKT_OK])) or singular:
         where = f" (at the {_event_name(singular[-1])})" if singular else ""
         return make("singular_dynamics",
                     f"at t = {t_end:.6g} s the constrained equations of motion could not be "

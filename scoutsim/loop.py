@@ -23,11 +23,13 @@ from .model.hip_unit import is_geared
 from .model.kinematics import project_state
 from .model.sensors import measure, read_encoders, true_readings
 from .model.rigid_body import state_energy
+from .model.flags import FLAG_OFF, FLAG_ON, is_set
 from .model.layout import (
     A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
     EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B, MI_MOTOR_B,
-    NAUX, NEV, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
-    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING,
+    NAUX, NEV, NIMP, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
+    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING, TR_LIFTOFF, TR_SWEEP,
+    TR_TOUCHDOWN,
 )
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
@@ -56,7 +58,7 @@ def sense(k, s, P, mi, mf, cmd, kept, cb, ew, s_tmp):
         evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew,
                     False, ew[3], True)
     true_readings(s, cb.last[:NS], cb.last[NS:], P[P_G], cb.geom, cb.y)
-    if cb.geom[SG_MEASURED] > 0.5:
+    if is_set(cb.geom[SG_MEASURED]):
         measure(k, cb.spec, cb.ints[CB_SEED], cb.hist, cb.y)
 
 
@@ -155,7 +157,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     e_old = np.zeros(NEV)
     e_new = np.zeros(NEV)
     ybuf = np.zeros(NS)
-    imp = np.zeros(7)
+    imp = np.zeros(NIMP)
     ds = np.zeros(NS)
     s_prev = np.zeros(NS)
     tr = np.zeros(2, dtype=np.int64)
@@ -176,28 +178,28 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol)
     evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
     log = EventLog(ev, stats)
-    sf_ok = hwork[HW_STIFF_VALID] > 0.5   # SF0 holds stiff factors from an earlier step
+    sf_ok = is_set(hwork[HW_STIFF_VALID])   # SF0 holds stiff factors from an earlier step
     t = k_start * dt
     k = k_start
     while k < k_stop:
         t = k * dt
         # (read under every kind, the held commands too: a caller that sets them, a
         # learning environment's policy, sees the readings and their delays sample by sample)
-        if kind == CTRL_BUILTIN and cb.geom[SG_MEASURED] < 0.5:
+        if kind == CTRL_BUILTIN and not is_set(cb.geom[SG_MEASURED]):
             # the Table I law reads only the hip encoders and leg lengths; with ideal
             # sensors nothing else is needed here (readings_at reads every channel)
-            read_encoders(s, cb.geom[SG_MOTOR_SIDE] > 0.5, cb.y)
+            read_encoders(s, is_set(cb.geom[SG_MOTOR_SIDE]), cb.y)
         else:
-            sense(k, s, P, mi, mf, cmd, hwork[HW_EVAL_KEPT] > 0.5, cb, ew_s, s_tmp)
+            sense(k, s, P, mi, mf, cmd, is_set(hwork[HW_EVAL_KEPT]), cb, ew_s, s_tmp)
         if kind == CTRL_BUILTIN:
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev
             for leg in range(2):
-                if tr[leg] & 1:
+                if tr[leg] & TR_TOUCHDOWN:
                     nev = log_event(ev, nev, t, EK_CTRL_TOUCHDOWN, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 2:
+                if tr[leg] & TR_SWEEP:
                     nev = log_event(ev, nev, t, EK_CTRL_SWEEP, leg, 0.0, 0.0, 0.0)
-                if tr[leg] & 4:
+                if tr[leg] & TR_LIFTOFF:
                     nev = log_event(ev, nev, t, EK_CTRL_LIFTOFF, leg, 0.0, 0.0, 0.0)
             if nev > nevc:
                 stamp_states(ev, nevc, nev, s, s)
@@ -211,8 +213,8 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         for i in range(NS):
             s_prev[i] = s[i]
         nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew,
-                        hwork[HW_EVAL_KEPT] > 0.5)
-        hwork[HW_EVAL_KEPT] = 0.0
+                        is_set(hwork[HW_EVAL_KEPT]))
+        hwork[HW_EVAL_KEPT] = FLAG_OFF
         stats[S_NFEV] += 1
         if nev > nev0:
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
@@ -222,7 +224,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         # record the sample
         n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
                               energy, out_energy)
-        if aux[A_KKT_OK] < 0.5:
+        if not is_set(aux[A_KKT_OK]):
             return k, n_out, nev, ST_NUMERICAL_FAILURE, t
         if k >= k_last:
             k += 1
@@ -231,10 +233,10 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         t, nev, status = advance(t, t_next, plant, hwork, aux, log, nev, method, work, evw,
                                  sc, sf_ok or method == METHOD_DOPRI5)
         sf_ok = True
-        hwork[HW_STIFF_VALID] = 1.0
+        hwork[HW_STIFF_VALID] = FLAG_ON
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
         # state after an event), with the command of the period just ended
-        hwork[HW_EVAL_KEPT] = 1.0 if status == ST_RUNNING else 0.0
+        hwork[HW_EVAL_KEPT] = FLAG_ON if status == ST_RUNNING else FLAG_OFF
         if status == ST_RUNNING:    # what the sensors of the next sample read
             for i in range(NS):
                 cb.last[i] = K[0, i]

@@ -44,15 +44,15 @@ def _state_vector(init: InitialState, robot: RobotParameters,
         if not (0.0 < v <= l0):
             raise ValueError(f"initial_state.{name} = {v} m is not allowed: must be in "
                              f"(0, {l0}] m")
-    s[:7] = [init.x, init.y, init.theta, phib, phif, phib, phif]
-    s[7:14] = [init.dx, init.dy, init.dtheta, init.dphi_back, init.dphi_front,
+    s[:L.NQ] = [init.x, init.y, init.theta, phib, phif, phib, phif]
+    s[L.NQ:2 * L.NQ] = [init.dx, init.dy, init.dtheta, init.dphi_back, init.dphi_front,
                init.dphi_back, init.dphi_front]
     s[L.IL_B] = lb
     s[L.IL_F] = lf
     # both toes must start above ground (the run starts in double flight)
     for leg, name in ((0, "back"), (1, "front")):
         sL = robot.hip_offset(leg)
-        g = init.theta + s[3 + leg]
+        g = init.theta + s[L.IPHB + leg]
         toe_y = init.y + sL * math.sin(init.theta) - s[L.IL_B + leg] * math.cos(g)
         if toe_y < 0.0:
             raise ValueError(f"initial_state.y = {init.y} m is not allowed: the {name} toe "
@@ -113,7 +113,7 @@ def fresh_modes(s: np.ndarray, P: np.ndarray):
     mi = np.zeros(L.NMI, dtype=np.int64)
     mf = np.zeros(L.NMF)
     for leg in range(2):
-        mi[L.MI_MOTOR_B + leg] = motor_mode_from_rate(float(s[L.NQ + 5 + leg]), leg, P)
+        mi[L.MI_MOTOR_B + leg] = motor_mode_from_rate(float(s[L.NQ + L.IALB + leg]), leg, P)
         mi[L.MI_SLIDE_DIR_B + leg] = 1
     return mi, mf
 

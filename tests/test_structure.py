@@ -62,3 +62,37 @@ def test_hip_units_are_reached_only_through_their_registry():
     found = [str(p.relative_to(ROOT)) for p in _sources()
              if p != model / "hip_unit.py" and pattern.search(p.read_text())]
     assert not found, found
+
+
+#: forms of the compiled core's arrays read by number where layout.py has a name:
+#: (what, pattern, files relative to the package)
+MAGIC_FORMS = (
+    ("a leg or gear angle indexed by number (layout IPHB / IALB + leg)",
+     re.compile(r"\[\s*(NQ\s*\+\s*)?[35]\s*\+\s*leg\b"), ("**/*.py",)),
+    ("a huge number standing for an infinite friction coefficient (P_NO_SLIP)",
+     re.compile(r"\b1e30[0-9]\b"), ("**/*.py",)),
+    ("a flag slot compared with one half by hand (model/flags.py is_set)",
+     re.compile(r"\b(P|meta|hwork|aux|C|geom)\[(-1,\s*)?(L\.)?[A-Z_]+\]\s*[<>]=?\s*0\.5\b"),
+     ("**/*.py",)),
+    ("a controller transition bit by its value (layout TR_*)",
+     re.compile(r"(&|\|=)\s*[124]\b"), ("loop.py", "control/bounding.py")),
+    ("contact-event slot arithmetic by hand (numerics/events.py contact_event, event_leg, "
+     "event_slot)", re.compile(r"(//|%)\s*NEV_CONTACT\b|NEV_CONTACT\s*\+\s*[0-9]"),
+     ("loop.py", "numerics/hybrid.py", "numerics/transitions.py")),
+    ("an impact output by number (layout IMP_*)",
+     re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"), ("model/impact.py", "numerics/transitions.py")),
+)
+
+
+def test_core_arrays_are_read_by_their_names():
+    """The slots of the compiled core's arrays are read through the names of
+    scoutsim/model/layout.py and the helpers beside it, not by number (comments aside)."""
+    found = []
+    for what, pattern, globs in MAGIC_FORMS:
+        files = sorted({p for g in globs for p in ROOT.glob(g) if "__pycache__" not in p.parts})
+        assert files, globs
+        for p in files:
+            for i, line in enumerate(p.read_text().splitlines(), 1):
+                if pattern.search(line.split("#", 1)[0]):
+                    found.append(f"{p.relative_to(ROOT)}:{i}: {what}: {line.strip()}")
+    assert not found, "\n".join(found)

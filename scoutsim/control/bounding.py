@@ -32,7 +32,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import kernel
-from ..model.layout import LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B
+from ..model.flags import FLAG_ON, is_set
+from ..model.layout import (
+    LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B, TR_LIFTOFF,
+    TR_SWEEP, TR_TOUCHDOWN,
+)
 from ..parameters import ControllerParameters, RobotParameters
 from .protocol import Controller
 
@@ -93,7 +97,7 @@ def controller_array(c: ControllerParameters | None,
     a[C_TD_COMP] = c.touchdown_compression
     a[C_LO_COMP] = c.liftoff_compression
     a[C_SENSE_ALPHA] = 1.0 if c.sense_motor_angle else 0.0
-    a[C_ENABLED] = 1.0
+    a[C_ENABLED] = FLAG_ON
     return a
 
 
@@ -121,9 +125,9 @@ def bounding_step(y, C, ls, cmd, transitions):
     """One controller sample from the sensor readings ``y`` (``layout.SN_*``): update leg
     states ``ls`` and hold commands ``cmd``.
 
-    transitions[leg] is set to a bit mask of what happened this sample (1 touchdown
-    detected, 2 sweep limit passed, 4 lift-off detected)."""
-    if C[C_ENABLED] < 0.5:
+    transitions[leg] is set to a bit mask of what happened this sample (``layout.TR_*``:
+    touchdown detected, sweep limit passed, lift-off detected)."""
+    if not is_set(C[C_ENABLED]):
         cmd[0] = 0.0
         cmd[1] = 0.0
         transitions[0] = 0
@@ -139,14 +143,14 @@ def bounding_step(y, C, ls, cmd, transitions):
         if st == LS_FLIGHT:
             if comp > C[C_TD_COMP]:
                 st = LS_RETRACTION
-                tr |= 1
+                tr |= TR_TOUCHDOWN
         else:
             if comp < C[C_LO_COMP]:
                 st = LS_FLIGHT
-                tr |= 4
+                tr |= TR_LIFTOFF
         if st == LS_RETRACTION and ang < sweep:
             st = LS_BRAKE
-            tr |= 2
+            tr |= TR_SWEEP
         ls[leg] = st
         transitions[leg] = tr
         if st == LS_FLIGHT:

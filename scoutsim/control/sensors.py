@@ -54,6 +54,7 @@ from os import PathLike
 import numpy as np
 
 from ..model import layout as L
+from ..model.flags import FLAG_OFF, FLAG_ON
 from ..parameters import ParameterError, RobotParameters, quantity_to_si
 
 __all__ = ["Sensors", "SensorChannel", "SensorParameters", "load_sensors", "CHANNELS",
@@ -279,8 +280,8 @@ class SensorParameters:
         g[L.SG_LASER_HALF_SPACING] = (0.5 * robot.torso_length if self.laser_half_spacing
                                       is None else self.laser_half_spacing)
         g[L.SG_LASER_MOUNT_OFFSET] = self.laser_mount_offset
-        g[L.SG_MOTOR_SIDE] = 1.0 if motor_side else 0.0
-        g[L.SG_MEASURED] = 0.0 if self.is_ideal() else 1.0
+        g[L.SG_MOTOR_SIDE] = FLAG_ON if motor_side else FLAG_OFF
+        g[L.SG_MEASURED] = FLAG_OFF if self.is_ideal() else FLAG_ON
         return g
 
     def as_dict(self) -> dict:

@@ -18,16 +18,24 @@ from __future__ import annotations
 from ..jit import kernel
 from .kinematics import hip_offset
 from .kkt import MAX_ROWS, new_row
+from .flags import is_set
 from .layout import (
-    MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS, P_MU, P_NP,
-    P_STRUT_OMEGA,
-    P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT,
+    IPHB, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS,
+    P_MU, P_NO_SLIP, P_NP, P_STRUT_OMEGA, P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS,
+    ROW_TOE_ALONG, SLIDE, STICK, STRUT,
 )
 from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
 from .workspace import (
     LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY, MT_CTH, MT_STH, NWK_LEG, WA_R,
     WK_DQ, WK_L, WK_LEG, WK_META, WK_Q, WK_Q_, WK_R, WK_RKIND, WK_RLEG,
 )
+
+
+@kernel(inline="always")
+def toe_can_slip(P):
+    """True on a Coulomb floor (friction coefficient ``P[P_MU]``); False when the toes
+    cannot slip (``P_NO_SLIP``: friction_coefficient = inf, a pinned toe holds any force)."""
+    return not is_set(P[P_NO_SLIP])
 
 
 @kernel(inline="always")
@@ -53,18 +61,18 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
     R = wA[WA_R:WA_R + MAX_ROWS]
     sth = wk[WK_META + MT_STH]
     cth = wk[WK_META + MT_CTH]
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
     npl = P[P_NP]
     l0 = P[P_L0 + leg]
     k = P[P_K + leg]
     mode = mi[MI_CONTACT_B + leg]
     sL = hip_offset(P, leg)
-    dth = dq[2]
-    dg = dth + dq[3 + leg]
-    hx = q[0] + sL * cth
-    hy = q[1] + sL * sth
-    hvx = dq[0] - sL * sth * dth
-    hvy = dq[1] + sL * cth * dth
+    dth = dq[ITH]
+    dg = dth + dq[IPHB + leg]
+    hx = q[IX] + sL * cth
+    hy = q[IY] + sL * sth
+    hvx = dq[IX] - sL * sth * dth
+    hvy = dq[IY] + sL * cth * dth
     ll = l[leg]
     jt_th_x = -sL * sth + ll * cg
     jt_th_y = sL * cth + ll * sg
@@ -89,24 +97,24 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         LG[2 * LG_FAX + leg] = F
         fx = -F * sg
         fy = F * cg
-        Q[0] += fx
-        Q[1] += fy
-        Q[2] += jt_th_x * fx + jt_th_y * fy
+        Q[IX] += fx
+        Q[IY] += fy
+        Q[ITH] += jt_th_x * fx + jt_th_y * fy
         Q[kk] += jt_ph_x * fx + jt_ph_y * fy
         new_row(R, r, rkind, rleg, nr, -(bx * cg + by * sg + 2.0 * ld * dg), ROW_TOE_ACROSS,
                 leg)
-        R[nr, 0] = cg
-        R[nr, 1] = sg
-        R[nr, 2] = sL * sph + ll
+        R[nr, IX] = cg
+        R[nr, IY] = sg
+        R[nr, ITH] = sL * sph + ll
         R[nr, kk] = ll
         nr += 1
         if mode == STRUT:
             w = P[P_STRUT_OMEGA]
             new_row(R, r, rkind, rleg, nr, -(bx * sg - by * cg) + ll * dg * dg
                     + 2.0 * w * ld + w * w * (ll - l0), ROW_TOE_ALONG, leg)
-            R[nr, 0] = sg
-            R[nr, 1] = -cg
-            R[nr, 2] = -sL * cph
+            R[nr, IX] = sg
+            R[nr, IY] = -cg
+            R[nr, ITH] = -sL * cph
             nr += 1
         LG[2 * LG_TOEX + leg] = mf[MF_ANCHOR_B + leg]
     elif mode == SLIDE:
@@ -114,17 +122,16 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         LG[2 * LG_LDOT + leg] = ld
         F = npl * leg_axial_force(k, c_l, l0, ll, ld, fc_l)
         LG[2 * LG_FAX + leg] = F
-        mu = P[P_MU]
         sig = 0.0
-        if mu < 1e300:
-            sig = mu * mi[MI_SLIDE_DIR_B + leg]
+        if toe_can_slip(P):
+            sig = P[P_MU] * mi[MI_SLIDE_DIR_B + leg]
         gn = F / (cg + sig * sg)
         gt = -sig * gn
         LG[2 * LG_GN + leg] = gn
         LG[2 * LG_GT + leg] = gt
-        Q[0] += gt
-        Q[1] += gn
-        Q[2] += jt_th_x * gt + jt_th_y * gn
+        Q[IX] += gt
+        Q[IY] += gn
+        Q[ITH] += jt_th_x * gt + jt_th_y * gn
         Q[kk] += jt_ph_x * gt + jt_ph_y * gn
         LG[2 * LG_TOEX + leg] = hx + ll * sg
         LG[2 * LG_TOEVX + leg] = hvx + ld * sg + ll * cg * dg
@@ -132,8 +139,8 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         if massless:
             new_row(R, r, rkind, rleg, nr, 0.0, ROW_MASSLESS, leg)
             R[nr, kk] = 1.0
-            if P[P_TD_WORLD] > 0.5:
-                R[nr, 2] = 1.0
+            if is_set(P[P_TD_WORLD]):
+                R[nr, ITH] = 1.0
             nr += 1
             ld = 0.0
         else:

@@ -35,7 +35,7 @@ from .layout import (
     A_CURRENT, A_FAX, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_TAU_APP, A_TAU_BELT, A_VBATT,
     EN_BATTERY_LOSS, EN_BELT_DAMPER, EN_CONSTRAINT, EN_CONVERSION, EN_COPPER, EN_ELECTRICAL,
     EN_GEAR_LOSS, EN_HIP_WORK, EN_JOINT_COULOMB, EN_JOINT_VISCOUS, EN_LEG_DAMPER,
-    EN_LEG_FRICTION, EN_TOE_SLIDE, IL_B, MI_CONTACT_B, MI_MOTOR_B, MODEL_IDEAL,
+    EN_LEG_FRICTION, EN_TOE_SLIDE, IALB, IL_B, IPHB, MI_CONTACT_B, MI_MOTOR_B, MODEL_IDEAL,
     MODEL_PASSIVE, NAUX_LEG, NEN_LEG, NQ, P_B_J, P_ETA, P_K, P_KB, P_KT, P_KW, P_L0, P_MODEL,
     P_N, P_NP, P_RA, P_RB, STRUT, STUCK,
 )
@@ -82,8 +82,8 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
                 p_visc = npl * P[P_B_J + leg] * om * om
                 out[e + EN_JOINT_VISCOUS] = p_visc
                 out[e + EN_JOINT_COULOMB] = p_joint - p_visc
-            rate = dq[5 + leg] - dq[3 + leg]
-            spring = P[P_KB + leg] * belt_spring(s[5 + leg] - s[3 + leg], leg, P)[0]
+            rate = dq[IALB + leg] - dq[IPHB + leg]
+            spring = P[P_KB + leg] * belt_spring(s[IALB + leg] - s[IPHB + leg], leg, P)[0]
             out[e + EN_BELT_DAMPER] = npl * (aux[o + A_TAU_BELT] - spring) * rate
         # telescopic leg: the axial force as it acted, less its spring part, through the
         # leg's rate of extension (in flight the massless toe's force balance makes the
@@ -93,7 +93,7 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
         f_spring = npl * P[P_K + leg] * (P[P_L0 + leg] - ll)
         if mode != STRUT:
             p_leg = -(aux[o + A_FAX] - f_spring) * ld
-            p_damp = npl * leg_damping(s[3 + leg], leg, P) * ld * ld
+            p_damp = npl * leg_damping(s[IPHB + leg], leg, P) * ld * ld
             out[e + EN_LEG_DAMPER] = p_damp
             out[e + EN_LEG_FRICTION] = p_leg - p_damp
         out[e + EN_TOE_SLIDE] = -aux[o + A_GT] * aux[o + A_SLIP_V]

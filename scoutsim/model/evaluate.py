@@ -37,12 +37,13 @@ from .kkt import (
     MAX_KKT, MAX_ROWS, SCHUR_MAX_ROWS, add_clamp_rows, kkt_reduced_factor, kkt_reduced_solve,
     kkt_schur_factor,
 )
+from .flags import FLAG_OFF, FLAG_ON, is_set
 from .layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
-    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IL_B,
-    MI_CONTACT_B, MI_MOTOR_B, MODEL_PASSIVE, NAUX_LEG, NQ, NS, P_B_J, P_CB, P_KB,
-    P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS, ROW_TOE_ALONG,
-    STICK, STRUT, STUCK,
+    A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, FLIGHT, IALB, IALF,
+    IL_B, IPHB, IPHF, ITH, IX, IY, MI_CONTACT_B, MI_MOTOR_B, MODEL_PASSIVE, NAUX_LEG, NQ, NS,
+    P_B_J, P_CB, P_KB, P_MASSLESS, P_MODEL, P_N, P_NP, P_TD_WORLD, ROW_GEAR, ROW_TOE_ACROSS,
+    ROW_TOE_ALONG, STICK, STRUT, STUCK,
 )
 from .rigid_body import add_gravity_at, coriolis_at, kinetic_energy_at, mass_matrix_at, potential_energy_at
 from .transmission import hip_unit_forces, motor_joint_row, motor_speed
@@ -76,8 +77,8 @@ def fill_derivative(ds, dq, b, LG, nact, gear, ok):
         for i in range(nact):
             ds[NQ + i] = b[i]
     if not gear:
-        ds[NQ + 5] = ds[NQ + 3]
-        ds[NQ + 6] = ds[NQ + 4]
+        ds[NQ + IALB] = ds[NQ + IPHB]
+        ds[NQ + IALF] = ds[NQ + IPHF]
     ds[IL_B] = LG[2 * LG_LDOT]
     ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
 
@@ -97,7 +98,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
     meta = wk[WK_META:WK_META + NMETA]
     nact = 7 if geared(P) else 5
     nr = int(meta[MT_NROWS])
-    ok = meta[MT_KKT_OK] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
     sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
     vb = meta[MT_VBATT]
     energy = meta[MT_ENERGY]
@@ -135,7 +136,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
         aux[o + A_TAU_APP] = LG[2 * LG_TAPP + leg]
         aux[o + A_CURRENT] = LG[2 * LG_CUR + leg]
         aux[o + A_OMEGA_M] = LG[2 * LG_OM + leg]
-        aux[o + A_BELT] = q[5 + leg] - q[3 + leg]
+        aux[o + A_BELT] = q[IALB + leg] - q[IPHB + leg]
         if gear and mi[MI_MOTOR_B + leg] == STUCK:
             aux[o + A_HOLD] = LG[2 * LG_HOLD + leg]
         else:
@@ -147,7 +148,7 @@ def fill_outputs(P, mi, cmd, aux, wk):
         aux[o + A_TAU_BELT] = LG[2 * LG_TBELT + leg]
     aux[A_VBATT] = vb
     aux[A_ENERGY] = energy
-    aux[A_KKT_OK] = 1.0 if ok else 0.0
+    aux[A_KKT_OK] = FLAG_ON if ok else FLAG_OFF
 
 
 @kernel
@@ -165,11 +166,11 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     gear = geared(P)
     nact = 7 if gear else 5
     meta = wk[WK_META:WK_META + NMETA]
-    ok = meta[MT_KKT_OK] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
     if not ok:
-        aux[A_KKT_OK] = 0.0
+        aux[A_KKT_OK] = FLAG_OFF
         return False
-    schur = meta[MT_SCHUR] > 0.5
+    schur = is_set(meta[MT_SCHUR])
     nr = int(meta[MT_NROWS])
     n = nact + nr
     dq = wk[WK_DQ:WK_DQ + NQ]
@@ -222,8 +223,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     gear = geared(P)
     nact = 7 if gear else 5
     nr = int(meta[MT_NROWS])
-    ok = meta[MT_KKT_OK] > 0.5
-    schur = meta[MT_SCHUR] > 0.5
+    ok = is_set(meta[MT_KKT_OK])
+    schur = is_set(meta[MT_SCHUR])
     vb = meta[MT_VBATT]
     sth, cth = meta[MT_STH], meta[MT_CTH]
     sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
@@ -236,17 +237,17 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         return
     n = nact + nr
     npl = P[P_NP]
-    massless = P[P_MASSLESS] > 0.5
-    dth = dq[2]
+    massless = is_set(P[P_MASSLESS])
+    dth = dq[ITH]
     b2 = wk[WK_B2:WK_B2 + MAX_KKT]
     for leg in range(2):
         cb = P[P_CB + leg]
         # the spring's stiffness where it is engaged (0 inside a backlash's play)
-        kb = P[P_KB + leg] if belt_spring(q[5 + leg] - q[3 + leg], leg, P)[1] else 0.0
+        kb = P[P_KB + leg] if belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[1] else 0.0
         for i in range(n):
             b2[i] = 0.0
-        b2[5 + leg] = 1.0
-        b2[3 + leg] = -1.0
+        b2[IALB + leg] = 1.0
+        b2[IPHB + leg] = -1.0
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B2, wk, WK_Y)
         # U: response of ddq to a unit belt torque pair, -npl G w
@@ -255,9 +256,9 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         # V: belt torque c_b (dalpha - dphi) + k_b (alpha - phi) differentiated
         # with respect to s through the projection of the dependent coordinates
         vcol = NSTIFF + leg
-        stiff[5 + leg, vcol] = kb
+        stiff[IALB + leg, vcol] = kb
         if mi[MI_MOTOR_B + leg] != STUCK:
-            stiff[NQ + 5 + leg, vcol] = cb
+            stiff[NQ + IALB + leg, vcol] = cb
         mode = mi[MI_CONTACT_B + leg]
         if mode == STICK or mode == STRUT:
             sg = sgl0 if leg == 0 else sgl1
@@ -272,8 +273,8 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             # the damper also depends on q through the projected dphi:
             # dphi = dg - dtheta, dg = -(hvx b + hvy a) / ll^2 with
             # a = anchor - hip_x = ll sin g, b = hip_y = ll cos g
-            hvx = dq[0] - sL * sth * dth
-            hvy = dq[1] + sL * cth * dth
+            hvx = dq[IX] - sL * sth * dth
+            hvy = dq[IY] + sL * cth * dth
             aa = ll * sg
             bb = ll * cg
             D2 = ll * ll
@@ -284,19 +285,19 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             e1 = dgb
             e2 = (dga * sL * sth + dgb * sL * cth
                   + (bb * sL * cth + aa * sL * sth) * dth / D2)
-            stiff[0, vcol] = kb * d0 - cb * e0
-            stiff[1, vcol] = kb * d1 - cb * e1
-            stiff[2, vcol] = kb * d2 - cb * e2
-            stiff[NQ + 0, vcol] = cb * d0
-            stiff[NQ + 1, vcol] = cb * d1
-            stiff[NQ + 2, vcol] = cb * d2
+            stiff[IX, vcol] = kb * d0 - cb * e0
+            stiff[IY, vcol] = kb * d1 - cb * e1
+            stiff[ITH, vcol] = kb * d2 - cb * e2
+            stiff[NQ + IX, vcol] = cb * d0
+            stiff[NQ + IY, vcol] = cb * d1
+            stiff[NQ + ITH, vcol] = cb * d2
         elif mode == FLIGHT and massless:
-            if P[P_TD_WORLD] > 0.5:
-                stiff[2, vcol] = kb
-                stiff[NQ + 2, vcol] = cb
+            if is_set(P[P_TD_WORLD]):
+                stiff[ITH, vcol] = kb
+                stiff[NQ + ITH, vcol] = cb
         else:
-            stiff[3 + leg, vcol] = -kb
-            stiff[NQ + 3 + leg, vcol] = -cb
+            stiff[IPHB + leg, vcol] = -kb
+            stiff[NQ + IPHB + leg, vcol] = -cb
 
     # motor-side damping on alpha: joint viscous friction and, while the current is
     # limited by the torque-speed line, the back-EMF; only where it is stiff, i.e.
@@ -311,16 +312,16 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             dm += back_emf_damping(leg, P)
         N = P[P_N + leg]
         dm *= N * N
-        if npl * dm < STIFF_MOTOR_RATE * M[5 + leg, 5 + leg]:
+        if npl * dm < STIFF_MOTOR_RATE * M[IALB + leg, IALB + leg]:
             continue    # not stiff: left to the explicit part (column stays zero)
         for i in range(n):
             b2[i] = 0.0
-        b2[5 + leg] = 1.0
+        b2[IALB + leg] = 1.0
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B2, wk, WK_Y)
         for i in range(nact):
             stiff[NQ + i, 2 + leg] = -npl * b2[i]
-        stiff[NQ + 5 + leg, NSTIFF + 2 + leg] = dm
+        stiff[NQ + IALB + leg, NSTIFF + 2 + leg] = dm
 
 
 @kernel
@@ -370,7 +371,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     A = wA[0:MAX_KKT]
     R = wA[WA_R:WA_R + MAX_ROWS]
     M = wA[WA_M:WA_M + NQ]
-    massless = P[P_MASSLESS] > 0.5
+    massless = is_set(P[P_MASSLESS])
 
     # rigid bodies: mass matrix, velocity terms, gravity, potential energy
     mass_matrix_at(M, P, sth, cth, sgl0, cgl0, sgl1, cgl1)
@@ -430,9 +431,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     if ok:
         kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
                           WK_B, wk, WK_Y)
-    meta[MT_SCHUR] = 1.0 if schur else 0.0
+    meta[MT_SCHUR] = FLAG_ON if schur else FLAG_OFF
     meta[MT_NROWS] = nr
-    meta[MT_KKT_OK] = 1.0 if ok else 0.0
+    meta[MT_KKT_OK] = FLAG_ON if ok else FLAG_OFF
     meta[MT_VBATT] = vb
     meta[MT_SG_B] = sgl0
     meta[MT_CG_B] = cgl0
@@ -445,7 +446,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
         fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv)
 
     if not want_aux:
-        aux[A_KKT_OK] = 1.0 if ok else 0.0
+        aux[A_KKT_OK] = FLAG_ON if ok else FLAG_OFF
         return ok
     meta[MT_ENERGY] = ekin + epot
     fill_outputs(P, mi, cmd, aux, wk)

@@ -11,9 +11,11 @@ from ..jit import allocating
 from .hip_unit import geared
 from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
+from .flags import is_set
 from .layout import (
-    FLIGHT, IL_B, MI_CONTACT_B, MI_MOTOR_B, NQ, P_MASSLESS,
-    P_TD_WORLD, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, STICK, STRUT,
+    FLIGHT, IALB, IALF, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, IPHF, ITH, IX,
+    IY, MI_CONTACT_B, MI_MOTOR_B, NIMP, NIMP_LEG, NQ, P_MASSLESS, P_TD_WORLD, ROW_GEAR,
+    ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIP_POS, STICK, STRUT,
 )
 from .rigid_body import kinetic_energy_at, mass_matrix
 from .transmission import motor_mode_from_rate
@@ -32,8 +34,9 @@ def impact(s, P, mi, mf, out):
     is homogeneous, so dq+ is the M-orthogonal projection of dq- onto the constrained
     velocities and the kinetic energy lost, 1/2 |dq- - dq+|_M^2, is never negative.
 
-    out[leg*3 + 0..2]: normal impulse, tangential impulse [N s] of each pinned toe;
-    out[6]: kinetic energy lost [J]. Returns False if singular.
+    out[leg * NIMP_LEG + IMP_NORMAL], out[leg * NIMP_LEG + IMP_TANGENT]: normal and
+    tangential impulse [N s] of each pinned toe; out[IMP_ENERGY_LOST]: kinetic energy lost
+    [J] (layout ``IMP_*``, NIMP slots). Returns False if singular.
     """
     gear = geared(P)
     nact = 7 if gear else 5
@@ -42,48 +45,48 @@ def impact(s, P, mi, mf, out):
     l = s[IL_B:IL_B + 2].copy()
     # stiction does not act impulsively: treat motor joints as free while projecting
     mi2 = mi.copy()
-    mi2[MI_MOTOR_B] = 1
-    mi2[MI_MOTOR_B + 1] = 1
+    mi2[MI_MOTOR_B] = SLIP_POS   # any mode but STUCK
+    mi2[MI_MOTOR_B + 1] = SLIP_POS
     project(q, dq, l, P, mi2, mf)
     M = np.empty((NQ, NQ))
     mass_matrix(q, P, M)
     dq0 = s[NQ:2 * NQ].copy()
     if not gear:
-        dq0[5] = dq0[3]
-        dq0[6] = dq0[4]
+        dq0[IALB] = dq0[IPHB]
+        dq0[IALF] = dq0[IPHF]
     ke0 = kinetic_energy_at(M, dq0)
     R = np.zeros((MAX_ROWS, NQ))
     r = np.zeros(MAX_ROWS)
     rleg = np.zeros(MAX_ROWS, dtype=np.int64)
     rkind = np.zeros(MAX_ROWS, dtype=np.int64)
     nr = 0
-    th = q[2]
+    th = q[ITH]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
         sL = hip_offset(P, leg)
-        g = th + q[3 + leg]
+        g = th + q[IPHB + leg]
         sg = math.sin(g)
         cg = math.cos(g)
         kk = 3 + leg
         if mode == STICK or mode == STRUT:
-            R[nr, 0] = cg
-            R[nr, 1] = sg
-            R[nr, 2] = sL * math.sin(q[3 + leg]) + l[leg]
+            R[nr, IX] = cg
+            R[nr, IY] = sg
+            R[nr, ITH] = sL * math.sin(q[IPHB + leg]) + l[leg]
             R[nr, kk] = l[leg]
             rleg[nr] = leg
             rkind[nr] = ROW_TOE_ACROSS
             nr += 1
             if mode == STRUT:
-                R[nr, 0] = sg
-                R[nr, 1] = -cg
-                R[nr, 2] = -sL * math.cos(q[3 + leg])
+                R[nr, IX] = sg
+                R[nr, IY] = -cg
+                R[nr, ITH] = -sL * math.cos(q[IPHB + leg])
                 rleg[nr] = leg
                 rkind[nr] = ROW_TOE_ALONG
                 nr += 1
-        elif mode == FLIGHT and P[P_MASSLESS] > 0.5:
+        elif mode == FLIGHT and is_set(P[P_MASSLESS]):
             R[nr, kk] = 1.0
-            if P[P_TD_WORLD] > 0.5:
-                R[nr, 2] = 1.0
+            if is_set(P[P_TD_WORLD]):
+                R[nr, ITH] = 1.0
             rleg[nr] = leg
             rkind[nr] = ROW_MASSLESS
             nr += 1
@@ -113,26 +116,26 @@ def impact(s, P, mi, mf, out):
             A[j, nact + rr] = R[rr, j]
         b[nact + rr] = r[rr]
     ok = solve_dense(A, b, n)
-    for i in range(7):
+    for i in range(NIMP):
         out[i] = 0.0
     if not ok:
         return False
     for i in range(nact):
         dq[i] = b[i]
     if not gear:
-        dq[5] = dq[3]
-        dq[6] = dq[4]
+        dq[IALB] = dq[IPHB]
+        dq[IALF] = dq[IPHF]
     for rr in range(nr):
         lam = -b[nact + rr]
         leg = rleg[rr]
-        g = th + q[3 + leg]
+        g = th + q[IPHB + leg]
         if rkind[rr] == ROW_TOE_ACROSS:
-            out[3 * leg] += lam * math.sin(g)
-            out[3 * leg + 1] += lam * math.cos(g)
+            out[leg * NIMP_LEG + IMP_NORMAL] += lam * math.sin(g)
+            out[leg * NIMP_LEG + IMP_TANGENT] += lam * math.cos(g)
         elif rkind[rr] == ROW_TOE_ALONG:
-            out[3 * leg] -= lam * math.cos(g)
-            out[3 * leg + 1] += lam * math.sin(g)
-    out[6] = ke0 - kinetic_energy_at(M, dq)
+            out[leg * NIMP_LEG + IMP_NORMAL] -= lam * math.cos(g)
+            out[leg * NIMP_LEG + IMP_TANGENT] += lam * math.sin(g)
+    out[IMP_ENERGY_LOST] = ke0 - kinetic_energy_at(M, dq)
     s[0:NQ] = q
     s[NQ:2 * NQ] = dq
     s[IL_B:IL_B + 2] = l
@@ -144,6 +147,6 @@ def impact(s, P, mi, mf, out):
         # leave a joint "slipping" against its motion, which settle() could only reconcile
         # with an impulse that stiction cannot give.
         for leg in range(2):
-            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[5 + leg], leg, P)
+            mi[MI_MOTOR_B + leg] = motor_mode_from_rate(dq[IALB + leg], leg, P)
     project_state(s, P, mi, mf)
     return True

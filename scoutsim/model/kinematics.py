@@ -15,10 +15,11 @@ import math
 
 from ..jit import kernel
 from .hip_unit import geared
+from .flags import is_set
 from .layout import (
-    HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, NQ, P_C, P_CLAMP_LEGS,
-    P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_TD_B, P_TD_WORLD, SLIDE, STICK, STRUT,
-    STUCK,
+    HIP_SIGN, IALB, IL_B, IPHB, IPHF, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, NQ,
+    P_C, P_CLAMP_LEGS, P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_TD_B, P_TD_WORLD,
+    SLIDE, STICK, STRUT, STUCK,
 )
 
 
@@ -35,14 +36,14 @@ def hip_offset(P, leg):
 def hip_position(q, P, leg):
     """Hip position (hx, hy) [m] of virtual leg ``leg`` (0 back, 1 front)."""
     sL = hip_offset(P, leg)
-    return q[0] + sL * math.cos(q[2]), q[1] + sL * math.sin(q[2])
+    return q[IX] + sL * math.cos(q[ITH]), q[IY] + sL * math.sin(q[ITH])
 
 
 @kernel
 def hip_velocity(q, dq, P, leg):
     """Hip velocity [m/s]."""
     sL = hip_offset(P, leg)
-    return dq[0] - sL * math.sin(q[2]) * dq[2], dq[1] + sL * math.cos(q[2]) * dq[2]
+    return dq[IX] - sL * math.sin(q[ITH]) * dq[ITH], dq[IY] + sL * math.cos(q[ITH]) * dq[ITH]
 
 
 @kernel(inline="always")
@@ -63,17 +64,17 @@ def project(q, dq, l, P, mi, mf):
     :func:`~scoutsim.model.evaluate.evaluate_ws` to reuse.
     """
     gear = geared(P)
-    massless = P[P_MASSLESS] > 0.5
-    if P[P_CLAMP_TORSO] > 0.5:
+    massless = is_set(P[P_MASSLESS])
+    if is_set(P[P_CLAMP_TORSO]):
         # bench rig: the clamped torso is at rest (add_clamp_rows)
-        dq[0] = 0.0
-        dq[1] = 0.0
-        dq[2] = 0.0
-        if P[P_CLAMP_LEGS] > 0.5:
-            dq[3] = 0.0
-            dq[4] = 0.0
-    sth = math.sin(q[2])
-    cth = math.cos(q[2])
+        dq[IX] = 0.0
+        dq[IY] = 0.0
+        dq[ITH] = 0.0
+        if is_set(P[P_CLAMP_LEGS]):
+            dq[IPHB] = 0.0
+            dq[IPHF] = 0.0
+    sth = math.sin(q[ITH])
+    cth = math.cos(q[ITH])
     sg0 = 0.0
     cg0 = 1.0
     sg1 = 0.0
@@ -82,10 +83,10 @@ def project(q, dq, l, P, mi, mf):
         mode = mi[MI_CONTACT_B + leg]
         sL = hip_offset(P, leg)
         l0 = P[P_L0 + leg]
-        hx = q[0] + sL * cth
-        hy = q[1] + sL * sth
-        hvx = dq[0] - sL * sth * dq[2]
-        hvy = dq[1] + sL * cth * dq[2]
+        hx = q[IX] + sL * cth
+        hy = q[IY] + sL * sth
+        hvx = dq[IX] - sL * sth * dq[ITH]
+        hvy = dq[IY] + sL * cth * dq[ITH]
         if mode == STICK or mode == STRUT:
             px = mf[MF_ANCHOR_B + leg]
             ddx = px - hx
@@ -94,29 +95,29 @@ def project(q, dq, l, P, mi, mf):
             g = math.atan2(ddx, -ddy)
             sg = ddx / ll
             cg = -ddy / ll
-            q[3 + leg] = g - q[2]
+            q[IPHB + leg] = g - q[ITH]
             dg = -(hvx * cg + hvy * sg) / ll
-            dq[3 + leg] = dg - dq[2]
+            dq[IPHB + leg] = dg - dq[ITH]
             l[leg] = ll
         elif mode == SLIDE:
-            g = q[2] + q[3 + leg]
+            g = q[ITH] + q[IPHB + leg]
             sg = math.sin(g)
             cg = math.cos(g)
             l[leg] = hy / cg
         else:
             if massless:
                 td = P[P_TD_B + leg]
-                if P[P_TD_WORLD] > 0.5:
-                    q[3 + leg] = td - q[2]
-                    dq[3 + leg] = -dq[2]
+                if is_set(P[P_TD_WORLD]):
+                    q[IPHB + leg] = td - q[ITH]
+                    dq[IPHB + leg] = -dq[ITH]
                 else:
-                    q[3 + leg] = td
-                    dq[3 + leg] = 0.0
+                    q[IPHB + leg] = td
+                    dq[IPHB + leg] = 0.0
                 l[leg] = l0
             else:
                 if P[P_C + leg] <= 0.0 or l[leg] > l0:
                     l[leg] = l0
-            g = q[2] + q[3 + leg]
+            g = q[ITH] + q[IPHB + leg]
             sg = math.sin(g)
             cg = math.cos(g)
         if leg == 0:
@@ -126,10 +127,10 @@ def project(q, dq, l, P, mi, mf):
             sg1 = sg
             cg1 = cg
         if not gear:
-            q[5 + leg] = q[3 + leg]
-            dq[5 + leg] = dq[3 + leg]
+            q[IALB + leg] = q[IPHB + leg]
+            dq[IALB + leg] = dq[IPHB + leg]
         elif mi[MI_MOTOR_B + leg] == STUCK:
-            dq[5 + leg] = 0.0
+            dq[IALB + leg] = 0.0
     return sth, cth, sg0, cg0, sg1, cg1
 
 

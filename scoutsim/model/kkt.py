@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..jit import allocating, kernel
+from .flags import is_set
 from .layout import NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO, ROW_GEAR
 
 MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
@@ -40,12 +41,12 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
     docs/identification.md): with P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (``ROW_CLAMP_TORSO``); with P_CLAMP_LEGS also ddphi = 0 for
     both legs (``ROW_CLAMP_LEG``). The multipliers are the clamp's force and torques. Returns the new
     row count."""
-    if P[P_CLAMP_TORSO] > 0.5:
+    if is_set(P[P_CLAMP_TORSO]):
         for j in range(3):
             new_row(R, r, rkind, rleg, nr, 0.0, ROW_CLAMP_TORSO, 0)
             R[nr, j] = 1.0
             nr += 1
-        if P[P_CLAMP_LEGS] > 0.5:
+        if is_set(P[P_CLAMP_LEGS]):
             for leg in range(2):
                 new_row(R, r, rkind, rleg, nr, 0.0, ROW_CLAMP_LEG, leg)
                 R[nr, 3 + leg] = 1.0

@@ -98,7 +98,8 @@ P_CIRCUIT = 18       # CIRCUIT_*: what drives the motor current
 P_TD_B = 19          # passive massless legs: touchdown angle [rad], back
 P_TD_F = 20          # and front
 P_HIP_UNIT = 21      # the hip unit's code: its place in model/hip_unit.py's UNITS
-_FIRST_PER_LEG = 22
+P_NO_SLIP = 22       # 1: the toes cannot slip (friction_coefficient = inf; P_MU is then 0)
+_FIRST_PER_LEG = 23
 # per leg (P[P_X + leg]): leg body, telescopic leg, hip unit, motor and amplifier
 (P_ML,         # mass of one physical leg body [kg]
  P_IL,         # its inertia about its COM [kg m^2]
@@ -184,9 +185,24 @@ EN_LEG_NAMES = ("electrical", "copper", "conversion", "gear_loss", "hip_work",
                 "joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
                 "leg_friction", "toe_slide", "constraint")
 
+# --- touchdown impact outputs (model/impact.py) ------------------------------------------
+# per leg (offset leg * NIMP_LEG): the impulse on each pinned toe [N s]
+IMP_NORMAL = 0        # ground normal impulse
+IMP_TANGENT = 1       # ground tangential impulse
+NIMP_LEG = 2
+IMP_ENERGY_LOST = 2 * NIMP_LEG   # kinetic energy lost in the impact [J]
+NIMP = IMP_ENERGY_LOST + 1
+
 # --- events ---------------------------------------------------------------------------
 # slots: per leg 3 contact slots, per leg 1 motor slot, 2 fall slots
 NEV_CONTACT = 3
+# the contact slots of a leg (offset leg * NEV_CONTACT; numerics/events.py), by contact mode:
+EVC_GROUND = 0         # flight: toe height (touchdown); stick, slide, strut: ground normal
+                       # force (lift-off, or a slide if the leg still pushes)
+EVC_STOP_OR_REST = 1   # stick: leg length at its stop (-> strut); slide: toe velocity along
+                       # its slide direction (-> stick, Coulomb floor); strut: strut force
+                       # (-> stick)
+EVC_CONE = 2           # stick on a Coulomb floor: friction force within mu F_n (-> slide)
 EV_MOTOR_B = 6
 EV_MOTOR_F = 7
 EV_FALL_HEIGHT = 8
@@ -338,6 +354,11 @@ LS_FLIGHT = 0
 LS_RETRACTION = 1
 LS_BRAKE = 2
 LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+# bits of the controller's per-leg transition mask (control/bounding.py): what one sample
+# of the Table I law detected; the run loop logs each as an EK_CTRL_* event
+TR_TOUCHDOWN = 1   # flight -> stance-retraction (leg compression beyond the threshold)
+TR_SWEEP = 2       # stance-retraction -> stance-brake (hip angle below the sweep limit)
+TR_LIFTOFF = 4     # stance -> flight (compression below the lift-off threshold)
 
 # --- run status -----------------------------------------------------------------------
 ST_RUNNING = 0

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..parameters import Environment, RobotParameters
 from . import layout as L
+from .flags import FLAG_OFF, FLAG_ON
 from .hip_unit import hip_unit_code
 
 
@@ -94,17 +95,19 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
             P[slot + leg] = value
     P[L.P_MODEL] = L.MODEL_NAMES[model]
     P[L.P_HIP_UNIT] = hip_unit_code(model, robot)
-    P[L.P_MU] = friction_coefficient if math.isfinite(friction_coefficient) else 1e308
+    no_slip = not math.isfinite(friction_coefficient)
+    P[L.P_NO_SLIP] = FLAG_ON if no_slip else FLAG_OFF
+    P[L.P_MU] = 0.0 if no_slip else friction_coefficient   # read only where toes can slip
     massless = all(m == 0.0 and i == 0.0 for m, i in zip(robot.per_leg("leg_mass"),
                                                           robot.per_leg("leg_inertia")))
-    P[L.P_MASSLESS] = 1.0 if massless else 0.0
-    P[L.P_TD_WORLD] = 1.0 if passive_touchdown_world else 0.0
+    P[L.P_MASSLESS] = FLAG_ON if massless else FLAG_OFF
+    P[L.P_TD_WORLD] = FLAG_ON if passive_touchdown_world else FLAG_OFF
     P[L.P_TD_B] = passive_touchdown_angles[0]
     P[L.P_TD_F] = passive_touchdown_angles[1]
     P[L.P_THETA_LIM] = pitch_limit
     P[L.P_STRUT_OMEGA] = strut_omega
-    P[L.P_CLAMP_TORSO] = 1.0 if clamp_torso else 0.0
-    P[L.P_CLAMP_LEGS] = 1.0 if clamp_legs else 0.0
+    P[L.P_CLAMP_TORSO] = FLAG_ON if clamp_torso else FLAG_OFF
+    P[L.P_CLAMP_LEGS] = FLAG_ON if clamp_legs else FLAG_OFF
     P[L.P_CIRCUIT] = float(L.CIRCUIT_NAMES[motor_circuit])
     for leg in (L.BACK, L.FRONT):
         one = robot.leg(leg)

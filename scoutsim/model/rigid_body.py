@@ -22,7 +22,7 @@ import numpy as np
 
 from ..jit import allocating, kernel
 from .layout import (
-    IL_B, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MT, P_NP,
+    IL_B, IPHB, IPHF, ITH, IX, IY, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MT, P_NP,
 )
 from .hip_unit import geared
 from .kinematics import hip_offset
@@ -80,37 +80,37 @@ def coriolis_at(h, dq, P, sth, cth, sg0, cg0, sg1, cg1):
     torso and the gears turn about fixed points of their own coordinates)."""
     for i in range(NQ):
         h[i] = 0.0
-    dth = dq[2]
+    dth = dq[ITH]
     for leg in range(2):
         ml = P[P_NP] * P[P_ML + leg]
         d = P[P_D + leg]
         sL = hip_offset(P, leg)
         sg = sg0 if leg == 0 else sg1
         cg = cg0 if leg == 0 else cg1
-        dg = dth + dq[3 + leg]
+        dg = dth + dq[IPHB + leg]
         ax = -sL * cth * dth * dth - d * sg * dg * dg
         ay = -sL * sth * dth * dth + d * cg * dg * dg
         jth_x = -sL * sth + d * cg
         jth_y = sL * cth + d * sg
-        h[0] += ml * ax
-        h[1] += ml * ay
-        h[2] += ml * (jth_x * ax + jth_y * ay)
-        h[3 + leg] += ml * d * (cg * ax + sg * ay)
+        h[IX] += ml * ax
+        h[IY] += ml * ay
+        h[ITH] += ml * (jth_x * ax + jth_y * ay)
+        h[IPHB + leg] += ml * d * (cg * ax + sg * ay)
 
 
 @kernel(inline="always")
 def add_gravity_at(Q, P, sth, cth, sg0, cg0, sg1, cg1):
     """Add the generalized gravity forces of the torso and the leg bodies to Q."""
     grav = P[P_G]
-    Q[1] -= P[P_MT] * grav
+    Q[IY] -= P[P_MT] * grav
     for leg in range(2):
         mlg = P[P_NP] * P[P_ML + leg] * grav
         d = P[P_D + leg]
         sL = hip_offset(P, leg)
         sg = sg0 if leg == 0 else sg1
-        Q[1] -= mlg
-        Q[2] -= mlg * (sL * cth + d * sg)
-        Q[3 + leg] -= mlg * d * sg
+        Q[IY] -= mlg
+        Q[ITH] -= mlg * (sL * cth + d * sg)
+        Q[IPHB + leg] -= mlg * d * sg
 
 
 @kernel(inline="always")
@@ -119,12 +119,12 @@ def potential_energy_at(q, l, P, sth, cg0, cg1):
     rest length l0) and the Model II belt springs."""
     grav = P[P_G]
     npl = P[P_NP]
-    e = P[P_MT] * grav * q[1]
+    e = P[P_MT] * grav * q[IY]
     for leg in range(2):
         ml = npl * P[P_ML + leg]
         sL = hip_offset(P, leg)
         cg = cg0 if leg == 0 else cg1
-        yc = q[1] + sL * sth - P[P_D + leg] * cg
+        yc = q[IY] + sL * sth - P[P_D + leg] * cg
         e += ml * grav * yc
         dl = P[P_L0 + leg] - l[leg]
         e += 0.5 * npl * P[P_K + leg] * dl * dl
@@ -147,10 +147,10 @@ def kinetic_energy_at(M, dq):
 
 @kernel(inline="always")
 def _trig(q):
-    sth = math.sin(q[2])
-    cth = math.cos(q[2])
-    g0 = q[2] + q[3]
-    g1 = q[2] + q[4]
+    sth = math.sin(q[ITH])
+    cth = math.cos(q[ITH])
+    g0 = q[ITH] + q[IPHB]
+    g1 = q[ITH] + q[IPHF]
     return sth, cth, math.sin(g0), math.cos(g0), math.sin(g1), math.cos(g1)
 
 

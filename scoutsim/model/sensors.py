@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from ..jit import kernel
+from .flags import is_set
 from .layout import (
     A_CURRENT, A_VBATT, IALB, IL_B, IPHB, ITH, IX, IY, NAUX_LEG, NQ, NSN, SG_LASER_HALF_SPACING,
     SG_LASER_MOUNT_OFFSET, SG_MOTOR_SIDE, SN_ACCEL_X, SN_ACCEL_Z, SN_ANGLE_B, SN_BATTERY,
@@ -58,7 +59,7 @@ def true_readings(s, ds, aux, gravity, geom, y):
     """Every sensor's true reading (``layout.SN_*``, SI) at the state ``s``, with ``ds`` and
     ``aux`` the model's evaluation there (accelerations, motor currents, battery voltage),
     ``gravity`` [m/s^2] and the sensor geometry ``geom`` (``layout.SG_*``)."""
-    read_encoders(s, geom[SG_MOTOR_SIDE] > 0.5, y)
+    read_encoders(s, is_set(geom[SG_MOTOR_SIDE]), y)
     th = s[ITH]
     c = math.cos(th)
     sn = math.sin(th)

@@ -23,8 +23,8 @@ from ..jit import kernel
 from .hip_unit import belt_spring, geared
 from .kkt import new_row
 from .layout import (
-    MI_MOTOR_B, MODEL_PASSIVE, P_B_J, P_CB, P_J1, P_J2, P_KB, P_MODEL, P_N, P_NP, P_TAU_S,
-    ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
+    IALB, IPHB, MI_MOTOR_B, MODEL_PASSIVE, P_B_J, P_CB, P_J1, P_J2, P_KB, P_MODEL, P_N, P_NP,
+    P_TAU_S, ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
 )
 
 
@@ -33,13 +33,13 @@ def motor_speed(dq, leg, P):
     """Motor speed relative to the torso [rad/s] of leg ``leg``: N times the rate of the
     coordinate the gear output turns (the driven gear alpha of a geared unit, the leg phi
     otherwise)."""
-    return P[P_N + leg] * (dq[5 + leg] if geared(P) else dq[3 + leg])
+    return P[P_N + leg] * (dq[IALB + leg] if geared(P) else dq[IPHB + leg])
 
 
 @kernel(inline="always")
 def belt_energy(q, leg, P):
     """Potential energy [J] of the belt springs of virtual leg ``leg`` (geared units)."""
-    bd = belt_spring(q[5 + leg] - q[3 + leg], leg, P)[0]
+    bd = belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0]
     return 0.5 * P[P_NP] * P[P_KB + leg] * bd * bd
 
 
@@ -76,8 +76,8 @@ def belt_torque(q, dq, leg, P):
     """Torque [N m] of the belt spring-damper on the leg of virtual leg ``leg``, per
     physical leg: k_b (alpha - phi) (with the dead zone of the backlash) plus
     c_b (alpha' - phi')."""
-    return (P[P_KB + leg] * belt_spring(q[5 + leg] - q[3 + leg], leg, P)[0]
-            + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))
+    return (P[P_KB + leg] * belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0]
+            + P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg]))
 
 
 @kernel(inline="always")
@@ -91,15 +91,15 @@ def hip_unit_forces(Q, q, dq, leg, tapp, om, mode, P):
     motor, belt torque on the leg) [N m], both 0 outside Model II."""
     npl = P[P_NP]
     if geared(P):
-        Q[5 + leg] += npl * tapp
+        Q[IALB + leg] += npl * tapp
         tf = joint_friction_torque(om, mode, leg, P)
-        Q[5 + leg] -= npl * P[P_N + leg] * tf
+        Q[IALB + leg] -= npl * P[P_N + leg] * tf
         tb = belt_torque(q, dq, leg, P)
-        Q[3 + leg] += npl * tb
-        Q[5 + leg] -= npl * tb
+        Q[IPHB + leg] += npl * tb
+        Q[IALB + leg] -= npl * tb
         return tf, tb
     if int(P[P_MODEL]) != MODEL_PASSIVE:
-        Q[3 + leg] += npl * tapp
+        Q[IPHB + leg] += npl * tapp
     return 0.0, 0.0
 
 

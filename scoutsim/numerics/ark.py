@@ -31,7 +31,7 @@ import numpy as np
 
 from ..jit import kernel
 from ..model.evaluate import NSTIFF, evaluate_ws
-from ..model.layout import NQ, NS
+from ..model.layout import IALB, IALF, NQ, NS
 
 # U (the first NSTIFF columns of the stiff factors) is zero outside the acceleration rows
 # NQ .. 2 NQ - 1 of the state (evaluate_ws: U = -npl G w, G the constrained inverse mass
@@ -147,7 +147,8 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
     # damping is stiff (model.evaluate.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
-    R = NSTIFF if (SF0[NQ + 5, NSTIFF + 2] != 0.0 or SF0[NQ + 6, NSTIFF + 3] != 0.0) else 2
+    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0
+                   or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
     hg = h * GAMMA
     VU = Z[NSTAGE:NSTAGE + R]            # V^T U
     Si = Z[NSTAGE + R:NSTAGE + 2 * R]    # (I - h gamma V^T U)^-1

@@ -16,19 +16,21 @@ import math
 import numpy as np
 
 from ..jit import kernel
+from ..model.contact import toe_can_slip
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
+from ..model.flags import is_set
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, BACK, FRONT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, EVR_E_AFTER,
-    EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE, EVR_VIOLATIONS, NEVBUF, NS,
-    STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, IL_B, ITH,
-    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEV_CONTACT, NQ,
-    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S,
-    P_THETA_LIM, P_TORSO_H, P_TORSO_LEN, SLIDE, STICK, STRUT, STUCK, V_BEYOND_STOP,
-    V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION, V_SLIDE_NOT_PUSHING,
-    V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED, V_TOE_BELOW_GROUND,
-    V_TOE_ENTERS_GROUND,
+    A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_Y, BACK, EVC_CONE,
+    EVC_GROUND, EVC_STOP_OR_REST, EVR_E_AFTER, EVR_E_BEFORE, EVR_STATE_AFTER, EVR_STATE_BEFORE,
+    EVR_VIOLATIONS, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, FRONT, IL_B, IPHB, ITH,
+    IY, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV, NEVBUF, NEV_CONTACT, NQ, NS,
+    P_G, P_K, P_L0, P_MASSLESS, P_ML, P_MT, P_MU, P_N, P_NP, P_TAU_S, P_THETA_LIM, P_TORSO_H,
+    P_TORSO_LEN, SLIDE, STICK, STP_CONTACT_B, STP_MOTOR_B, STP_STATE, STP_T, STRUT, STUCK,
+    V_BEYOND_STOP, V_GROUND_PULLS, V_OUTSIDE_CONE, V_SINGULAR, V_SLIDE_DIRECTION,
+    V_SLIDE_NOT_PUSHING, V_SLIP_DIRECTION, V_STICTION_EXCEEDED, V_STRUT_COMPRESSED,
+    V_TOE_BELOW_GROUND, V_TOE_ENTERS_GROUND,
 )
 
 
@@ -49,6 +51,30 @@ TOE_HOP_TOL = 1e-9
 TOE_AT_GROUND_TOL = 1e-7
 
 
+@kernel(inline="always")
+def contact_event(leg, slot):
+    """Event slot of virtual leg ``leg``'s contact event ``slot`` (layout ``EVC_*``)."""
+    return leg * NEV_CONTACT + slot
+
+
+@kernel(inline="always")
+def is_contact_event(k):
+    """True if event slot ``k`` is one of the legs' contact events."""
+    return k < 2 * NEV_CONTACT
+
+
+@kernel(inline="always")
+def event_leg(k):
+    """The virtual leg of contact event slot ``k``."""
+    return k // NEV_CONTACT
+
+
+@kernel(inline="always")
+def event_slot(k):
+    """Which of its leg's contact events (layout ``EVC_*``) event slot ``k`` is."""
+    return k % NEV_CONTACT
+
+
 @kernel
 def body_weight(P):
     """The robot's weight [N]: torso and all leg bodies (the force scale of the events)."""
@@ -59,41 +85,42 @@ def body_weight(P):
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
     W = body_weight(P)
-    massless = P[P_MASSLESS] > 0.5
-    coulomb = P[P_MU] < 1e300
+    massless = is_set(P[P_MASSLESS])
+    coulomb = toe_can_slip(P)
     for i in range(NEV):
         out[i] = 1.0
     for leg in range(2):
         o = leg * NAUX_LEG
-        e = leg * NEV_CONTACT
         mode = mi[MI_CONTACT_B + leg]
         l0 = P[P_L0 + leg]
         tau_s = P[P_TAU_S + leg]
         if mode == FLIGHT:
-            out[e] = aux[o + A_TOE_Y] / l0
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_TOE_Y] / l0
         elif mode == STICK:
-            out[e] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             if not massless:
-                out[e + 1] = (l0 - s[IL_B + leg]) / l0
+                out[contact_event(leg, EVC_STOP_OR_REST)] = (l0 - s[IL_B + leg]) / l0
             if coulomb:
-                out[e + 2] = (P[P_MU] * aux[o + A_GN] - abs(aux[o + A_GT])) / W
+                out[contact_event(leg, EVC_CONE)] = (P[P_MU] * aux[o + A_GN]
+                                                     - abs(aux[o + A_GT])) / W
         elif mode == SLIDE:
-            out[e] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             if coulomb:
-                out[e + 1] = aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg]
+                out[contact_event(leg, EVC_STOP_OR_REST)] = (aux[o + A_SLIP_V]
+                                                             * mi[MI_SLIDE_DIR_B + leg])
         elif mode == STRUT:
-            out[e] = aux[o + A_GN] / W
-            out[e + 1] = aux[o + A_STRUT] / W
+            out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
+            out[contact_event(leg, EVC_STOP_OR_REST)] = aux[o + A_STRUT] / W
         if joint_has_stiction(leg, P):
             mm = mi[MI_MOTOR_B + leg]
             if mm == STUCK:
                 out[EV_MOTOR_B + leg] = (tau_s - abs(aux[o + A_HOLD])) / tau_s
             else:
                 out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N + leg]
-    th = s[2]
+    th = s[ITH]
     a = 0.5 * P[P_TORSO_LEN]
     b = 0.5 * P[P_TORSO_H]
-    out[EV_FALL_HEIGHT] = s[1] - a * abs(math.sin(th)) - b * abs(math.cos(th))
+    out[EV_FALL_HEIGHT] = s[IY] - a * abs(math.sin(th)) - b * abs(math.cos(th))
     out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
 
 
@@ -157,9 +184,9 @@ def mode_violations(s, ds, aux, P, mi):
     for forces)."""
     W = body_weight(P)
     ftol = 1e-6 * W
-    coulomb = P[P_MU] < 1e300
+    coulomb = toe_can_slip(P)
     bits = 0
-    if aux[A_KKT_OK] < 0.5:
+    if not is_set(aux[A_KKT_OK]):
         bits |= V_SINGULAR
     for leg in range(2):
         o = leg * NAUX_LEG
@@ -183,7 +210,7 @@ def mode_violations(s, ds, aux, P, mi):
             if ((aux[o + A_FAX] < -ftol or gn < -ftol)
                     and not slide_toe_pressed(s, ds, aux, P, leg)):
                 bits |= V_SLIDE_NOT_PUSHING
-        elif P[P_MASSLESS] < 0.5:
+        elif not is_set(P[P_MASSLESS]):
             # (a massless leg is placed kinematically at its touchdown angle in flight, which
             # can put its toe below the ground just after lift-off: the passive model's
             # convention, docs/specification.md section 2; it touches down when the toe comes down through it)
@@ -231,13 +258,13 @@ def toe_vertical_motion(s, ds, P, leg, ld):
     th = s[ITH]
     dth = s[NQ + ITH]
     ddth = ds[NQ + ITH]
-    g = th + s[3 + leg]
-    dg = dth + s[NQ + 3 + leg]
-    ddg = ddth + ds[NQ + 3 + leg]
+    g = th + s[IPHB + leg]
+    dg = dth + s[NQ + IPHB + leg]
+    ddg = ddth + ds[NQ + IPHB + leg]
     sg = math.sin(g)
     cg = math.cos(g)
     ldd = 0.0
-    c = leg_damping(s[3 + leg], leg, P)
+    c = leg_damping(s[IPHB + leg], leg, P)
     if ld != 0.0 and c > 0.0:
         ldd = -P[P_K + leg] * ld / c
     # toe height y + sL sin(th) - l cos(g)
@@ -260,7 +287,7 @@ def toe_enters_ground(s, ds, P, leg, ld):
     released to flight, the toe moves into the ground. The consistent contact is a slide in
     which the leg is compressed as it is swept on (settle_ws). A hop of at most TOE_HOP_TOL
     counts as pressed."""
-    if P[P_MASSLESS] > 0.5:
+    if is_set(P[P_MASSLESS]):
         return TOE_STAYS
     vy, ay = toe_vertical_motion(s, ds, P, leg, ld)
     if vy < -TOE_REST_SPEED:
@@ -289,7 +316,7 @@ def slide_toe_pressed(s, ds, aux, P, leg):
     again. Its flight leg-length rate is the slide's plus F / c (the damper balances the
     force F when the toe is free)."""
     ld = ds[IL_B + leg]
-    c = P[P_NP] * leg_damping(s[3 + leg], leg, P)
+    c = P[P_NP] * leg_damping(s[IPHB + leg], leg, P)
     fax = aux[leg * NAUX_LEG + A_FAX]
     if c > 0.0:
         ld += fax / c

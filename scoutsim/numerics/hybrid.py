@@ -29,14 +29,16 @@ from ..model.energy import power_flows
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project_state
 from ..model.roots import illinois_update
+from ..model.flags import is_set
 from ..model.layout import (
-    A_ENERGY, A_KKT_OK, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B, FLIGHT, MI_CONTACT_B,
-    MI_MOTOR_B, NAUX, NEV, NEV_CONTACT, NMI, NS, P_MASSLESS, STICK, ST_FELL,
-    ST_NUMERICAL_FAILURE, ST_RUNNING, V_SINGULAR,
+    A_ENERGY, A_KKT_OK, EVC_CONE, EVC_GROUND, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B,
+    FLIGHT, MI_CONTACT_B, MI_MOTOR_B, NAUX, NEV, NMI, NS, P_MASSLESS, STICK,
+    ST_FELL, ST_NUMERICAL_FAILURE, ST_RUNNING, V_SINGULAR,
 )
 from . import ark
 from .dopri5 import dense, step
-from .events import event_values, mode_violations, record_step, stamp_transition
+from .events import (contact_event, event_leg, event_slot, event_values, is_contact_event,
+                     mode_violations, record_step, stamp_transition)
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -345,9 +347,9 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         for i in range(NEV):
             e_end[i] = e_new[i]
         for k in range(NEV):
-            hop = (not armed[k] and e_end[k] < 0.0 and k < 2 * NEV_CONTACT
-                   and k % NEV_CONTACT == 0 and mi[MI_CONTACT_B + k // NEV_CONTACT] == FLIGHT
-                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and P[P_MASSLESS] < 0.5)
+            hop = (not armed[k] and e_end[k] < 0.0 and is_contact_event(k)
+                   and event_slot(k) == EVC_GROUND and mi[MI_CONTACT_B + event_leg(k)] == FLIGHT
+                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and not is_set(P[P_MASSLESS]))
             if (armed[k] or hop) and e_end[k] < 0.0:
                 # Illinois on the continuous extension, bracket [0, 1]
                 a = 0.0
@@ -452,7 +454,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                     return t, nev, ST_NUMERICAL_FAILURE
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, log, nev, ew, False)
                 stats[S_NFEV] += 1
-                if aux[A_KKT_OK] < 0.5:
+                if not is_set(aux[A_KKT_OK]):
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
                 event_values(s, aux, P, mi, e_old)
@@ -462,8 +464,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                         # only if the slot still means the same thing (its leg's modes
                         # unchanged)
                         same = True
-                        if i < 2 * NEV_CONTACT:
-                            lg = i // NEV_CONTACT
+                        if is_contact_event(i):
+                            lg = event_leg(i)
                             same = mi[MI_CONTACT_B + lg] == mi_before[MI_CONTACT_B + lg]
                         elif i < EV_FALL_HEIGHT:
                             lg = i - EV_MOTOR_B
@@ -482,7 +484,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 # with the friction at mu F_n) starts with its stick -> slip function at
                 # zero, within the stick rule's tolerance: armed, so that it fires at once
                 # if the force leaves the cone (otherwise it could leave it unnoticed)
-                kc = leg * NEV_CONTACT + 2
+                kc = contact_event(leg, EVC_CONE)
                 if mi[MI_CONTACT_B + leg] == STICK and e_old[kc] > -CONE_ARM_TOL:
                     armed[kc] = True
             if method >= METHOD_ARK4:

@@ -9,22 +9,25 @@ from __future__ import annotations
 import math
 
 from ..jit import allocating, kernel
+from ..model.contact import toe_can_slip
 from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
 from ..model.transmission import joint_has_stiction
+from ..model.flags import is_set
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, BACK, FRONT, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, EK_FALL, EK_LIFTOFF,
-    EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END, EK_STRUT_START,
-    EK_TOUCHDOWN, EV_FALL_HEIGHT, EV_MOTOR_B, FLIGHT, IL_B, MF_ANCHOR_B, MI_CONTACT_B,
-    MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NEV_CONTACT, NQ, P_L0,
+    A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
+    EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
+    EK_STRUT_START, EK_TOUCHDOWN, EVC_GROUND, EVC_STOP_OR_REST, EV_FALL_HEIGHT, EV_MOTOR_B,
+    FLIGHT, FRONT, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B,
+    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NIMP_LEG, NQ, P_L0,
     P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
     SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
     STICK, STRUT, STUCK,
 )
 from .dopri5 import eval_workspace
-from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, flight_toe_enters_ground,
-                     log_event, slide_toe_pressed)
+from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, event_leg, event_slot,
+                     flight_toe_enters_ground, is_contact_event, log_event, slide_toe_pressed)
 from .work import EventLog
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
 
@@ -36,10 +39,10 @@ LEG_STOP_SPEED_TOL = 1e-6
 def stance_leg_rate(s, P, leg):
     """dl/dt [m/s] of a leg whose toe is pinned: minus the hip velocity along the leg."""
     sL = hip_offset(P, leg)
-    th = s[2]
-    g = th + s[3 + leg]
-    hvx = s[NQ] - sL * math.sin(th) * s[NQ + 2]
-    hvy = s[NQ + 1] + sL * math.cos(th) * s[NQ + 2]
+    th = s[ITH]
+    g = th + s[IPHB + leg]
+    hvx = s[NQ] - sL * math.sin(th) * s[NQ + ITH]
+    hvy = s[NQ + IY] + sL * math.cos(th) * s[NQ + ITH]
     return -(hvx * math.sin(g) - hvy * math.cos(g))
 
 
@@ -85,7 +88,7 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
     pull): it slides if its leg still pushes, otherwise it lifts off (the end-of-stance
     rule: releasing a toe its leg still pushes would drive it into the ground). Returns
     the event count."""
-    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and P[P_MASSLESS] < 0.5:
+    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and not is_set(P[P_MASSLESS]):
         stats[S_NEND_SLIDE] += 1
         return slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_LEG_PUSHES)
     return lift_off(t, s, mi, ev, nev, leg)
@@ -117,7 +120,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
     # touches down at rest length with a normal force of 0 +- 1e-14 N, which must not
     # release it at once (the toe would then be disarmed at height <= 0 and fall through)
     gn_tol = -1e-9 * W
-    coulomb = P[P_MU] < 1e300
+    coulomb = toe_can_slip(P)
     for it in range(12):
         if it == 0 and command_only and P[P_LEG_FRIC_SIDE + BACK] == 0.0 \
                 and P[P_LEG_FRIC_SIDE + FRONT] == 0.0:
@@ -201,7 +204,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     s_pre = s.copy()
     mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
-    if (ok and P[P_MASSLESS] < 0.5 and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
+    if (ok and not is_set(P[P_MASSLESS]) and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
             and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
         # the toe lands with the leg at its stop while the hip moves away from it: the
         # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
@@ -214,9 +217,9 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         mi[MI_CONTACT_B + leg] = STRUT
         stats[S_NSTRUT] += 1
         ok = impact(s, P, mi, mf, imp)
-    pn = imp[3 * leg]
-    pt = imp[3 * leg + 1]
-    if P[P_MU] < 1e300 and P[P_MASSLESS] < 0.5 and abs(pt) > P[P_MU] * pn:
+    pn = imp[leg * NIMP_LEG + IMP_NORMAL]
+    pt = imp[leg * NIMP_LEG + IMP_TANGENT]
+    if toe_can_slip(P) and not is_set(P[P_MASSLESS]) and abs(pt) > P[P_MU] * pn:
         # Coulomb floor: the pinning impulse lies outside the friction cone (for a
         # massless toe on a compliant leg the only cone-consistent impulse is zero):
         # no impulse, the toe lands sliding. (A no-slip floor pins the toe whatever the
@@ -236,7 +239,7 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
         if r > stats[S_MAX_IMPULSE_RATIO]:
             stats[S_MAX_IMPULSE_RATIO] = r
     # stiction carries no impulse: impact() released stuck joints; settle() re-examines
-    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[6])
+    nev = log_event(ev, nev, t, EK_TOUCHDOWN, leg, pn, pt, imp[IMP_ENERGY_LOST])
     return nev, ok
 
 
@@ -244,25 +247,25 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
 def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     """Mode transition for event slot k at time t (state s already at the event)."""
     ok = True
-    if k < 2 * NEV_CONTACT:
-        leg = k // NEV_CONTACT
-        slot = k % NEV_CONTACT
+    if is_contact_event(k):
+        leg = event_leg(k)
+        slot = event_slot(k)
         mode = mi[MI_CONTACT_B + leg]
         o = leg * NAUX_LEG
         if mode == FLIGHT:
             nev, ok = touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp)
         elif mode == STICK:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 # normal force reached zero: lift-off, or a slide if the leg still pushes
                 nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
-            elif slot == 1:
+            elif slot == EVC_STOP_OR_REST:
                 mi[MI_CONTACT_B + leg] = STRUT
                 stats[S_NSTRUT] += 1
                 nev = log_event(ev, nev, t, EK_STRUT_START, leg, aux[o + A_GN], 0.0, 0.0)
             else:
                 nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
         elif mode == SLIDE:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 # slide velocity reached zero: stick here; settle() slides on (possibly
@@ -271,7 +274,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
                 mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
                 nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
         elif mode == STRUT:
-            if slot == 0:
+            if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
             else:
                 mi[MI_CONTACT_B + leg] = STICK
@@ -289,7 +292,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
             mi[MI_MOTOR_B + leg] = STUCK
             nev = log_event(ev, nev, t, EK_MOTOR_STICK, leg, aux[o + A_HOLD], 0.0, 0.0)
     else:
-        nev = log_event(ev, nev, t, EK_FALL, -1, s[1], s[2], 0.0)
+        nev = log_event(ev, nev, t, EK_FALL, -1, s[IY], s[ITH], 0.0)
     return nev, ok
 
 

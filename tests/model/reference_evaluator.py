@@ -43,13 +43,13 @@ from scoutsim.model.kkt import MAX_ROWS, add_clamp_rows, solve_dense
 from scoutsim.model.layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, CIRCUIT_OPEN,
-    CIRCUIT_SHORT, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, MODEL_IDEAL,
-    MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, P_B_J, P_BACKLASH, P_C, P_C_LOAD, P_CB, P_CIRCUIT,
-    P_CLAMP_LEGS, P_CLAMP_TORSO, P_D, P_ETA, P_G, P_IL, P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB,
-    P_KT, P_KW, P_L, P_L0, P_LEG_C_ANGLE, P_LEG_FRIC, P_LEG_FRIC_SIDE, P_MASSLESS, P_ML,
-    P_MODEL, P_MT, P_MU, P_N, P_NP, P_RA, P_RB, P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B,
-    P_TD_WORLD, P_VB, P_COM_OFFSET, HIP_SIGN, ROW_GEAR, ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK,
-    STRUT, STUCK,
+    CIRCUIT_SHORT, HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B,
+    MODEL_IDEAL, MODEL_II, MODEL_PASSIVE, NAUX_LEG, NQ, P_BACKLASH, P_B_J, P_C, P_CB,
+    P_CIRCUIT, P_CLAMP_LEGS, P_CLAMP_TORSO, P_COM_OFFSET, P_C_LOAD, P_D, P_ETA, P_G, P_IL,
+    P_IMAX, P_IT, P_J1, P_J2, P_K, P_KB, P_KT, P_KW, P_L, P_L0, P_LEG_C_ANGLE, P_LEG_FRIC,
+    P_LEG_FRIC_SIDE, P_MASSLESS, P_ML, P_MODEL, P_MT, P_MU, P_N, P_NO_SLIP, P_NP, P_RA, P_RB,
+    P_STRUT_OMEGA, P_TAU_IDLE, P_TAU_S, P_TD_B, P_TD_WORLD, P_VB, ROW_GEAR, ROW_MASSLESS,
+    ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIDE, STICK, STRUT, STUCK,
 )
 
 #: Leg-length rate [m/s] below which the sliding joint's Coulomb friction is linear in the
@@ -484,10 +484,9 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             ldot[leg] = ld
             F = npl * leg_force(k, c_l, l0, ll, ld, fc_l)
             Fax[leg] = F
-            mu = P[P_MU]
             sig = 0.0
-            if mu < 1e300:
-                sig = mu * mi[MI_SLIDE_DIR_B + leg]
+            if P[P_NO_SLIP] < 0.5:     # a Coulomb floor: the toe slides against mu F_n
+                sig = P[P_MU] * mi[MI_SLIDE_DIR_B + leg]
             gn = F / (cg + sig * sg)
             gt = -sig * gn
             Gn[leg] = gn
