@@ -93,10 +93,12 @@ def _dispatch_source() -> str:
 
 
 def _compile_dispatch():
-    namespace = {"P_HIP_UNIT": P_HIP_UNIT,
-                 **{f"_unit_{c}": u for c, u in enumerate(UNITS)}}
-    # compiled with this file's name, so that the on-disk cache of the compiled core
-    # files the hooks with this module
+    """Define the hooks' Python functions in this module from :func:`_dispatch_source`,
+    with the units under the names ``_unit_<code>`` they call them by."""
+    namespace = globals()
+    namespace.update({f"_unit_{c}": u for c, u in enumerate(UNITS)})
+    # compiled with this file's name: the on-disk cache of the compiled core files the
+    # hooks with this module, and Numba finds their globals by the module's name
     exec(compile(_dispatch_source(), __file__, "exec"), namespace)
     return namespace["geared"], namespace["belt_spring"]
 
