@@ -85,11 +85,15 @@ def _period(controller) -> float:
     return float(dt)
 
 
+#: the default sensors (every channel ideal), made once: a frozen set, shared by every run
+_IDEAL_SENSORS = SensorParameters()
+
+
 def plan_controller(controller, model: str, robot: RobotParameters,
                     sensors: SensorParameters | None = None) -> ControllerPlan:
     """The plan of a run of ``model`` on ``robot`` controlled by ``controller`` (see the
     module docstring) with the sensors ``sensors`` (default: ideal)."""
-    sensors = sensors if sensors is not None else SensorParameters()
+    sensors = sensors if sensors is not None else _IDEAL_SENSORS
     if not isinstance(sensors, SensorParameters):
         raise TypeError(f"sensors must be SensorParameters, not {type(sensors).__name__}")
     user = None

@@ -182,8 +182,16 @@ class SensorChannel:
     delay: int = 0
 
     def is_ideal(self) -> bool:
-        return (self.noise == 0 and np.all(np.asarray(self.bias) == 0)
-                and np.all(np.asarray(self.resolution) == 0) and self.delay == 0)
+        return (self.noise == 0 and _all_zero(self.bias) and _all_zero(self.resolution)
+                and self.delay == 0)
+
+
+def _all_zero(value) -> bool:
+    """A number, or each entry of a (back, front) pair or array, is 0."""
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return all(x == 0 for x in np.ravel(value)) if isinstance(value, np.ndarray) \
+            else all(x == 0 for x in value)
+    return value == 0
 
 
 _IDEAL = SensorChannel()
@@ -266,6 +274,8 @@ class SensorParameters:
         spec = np.zeros((L.NSPEC, L.NSN))
         for name, (slot, n, _) in CHANNELS.items():
             ch = getattr(self, name)
+            if ch is _IDEAL:        # every entry 0, as the array starts
+                continue
             cols = slice(slot, slot + n)
             spec[L.SPEC_NOISE, cols] = ch.noise
             spec[L.SPEC_BIAS, cols] = np.broadcast_to(np.asarray(ch.bias, float), (n,))
