@@ -25,6 +25,7 @@ from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
 from ..engine import start_engine
+from ..simulation import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
 from ..state import HybridState, InitialState, standing_state
 
 __all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
@@ -399,8 +400,11 @@ class Reward:
     healthy_pitch_range: tuple = (-math.radians(30.0), math.radians(30.0))
 
 
-#: the environment's keywords for the plant beyond the robot, with their defaults
-PLANT_OPTIONS = {"friction_coefficient": None, "pitch_limit_deg": 60.0, "integrator": None}
+#: the environment's keywords for the plant beyond the robot, with their defaults: the floor's
+#: friction and the pitch limit as :func:`scoutsim.simulate` has them, and the integrator
+PLANT_OPTIONS = {**{k: SIMULATE_PLANT_OPTIONS[k] for k in ("friction_coefficient",
+                                                         "pitch_limit_deg")},
+                 "integrator": None}
 
 
 def _options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:

@@ -29,11 +29,17 @@ PER_LEG_FIELDS = (
 )
 
 
+def given_per_leg(value) -> bool:
+    """Whether a field's value is given leg by leg: a list, a tuple or a 1-d array (of two
+    values, back then front, for a valid one)."""
+    return isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) == 1
+
+
 def _per_leg_value(name: str, value):
     """A per-leg field's value as stored: a scalar, or a (back, front) tuple whose values
     differ (an equal pair is stored as its one value, so a robot given per leg with equal
     values is the same robot as one given by scalars)."""
-    if isinstance(value, (list, tuple)) or (hasattr(value, "shape") and getattr(value, "ndim", 0) == 1):
+    if given_per_leg(value):
         pair = tuple(value)
         if len(pair) != 2:
             raise ParameterError(f"robot.{name} = {list(pair)!r} is not allowed: give one value "

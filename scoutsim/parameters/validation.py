@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from ..names import LEG_NAMES
 from .controller import ControllerParameters
 from .errors import ParameterError, _fmt, _fmt_bound
-from .robot import PER_LEG_FIELDS, RobotParameters
+from .robot import PER_LEG_FIELDS, RobotParameters, given_per_leg
 from .schema import _fields_of, _schema, _Spec
 
 
@@ -222,7 +222,7 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
 def coerce_value(spec: _Spec, value: object, where: str = ""):
     """:func:`_coerce` for any field: a per-leg field (:data:`PER_LEG_FIELDS`) also takes a
     (back, front) pair (list, tuple or 1-d array of two), returned as a tuple."""
-    if isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) == 1:
+    if given_per_leg(value):
         pair = list(value)
         if spec.name not in PER_LEG_FIELDS:
             raise ParameterError(
