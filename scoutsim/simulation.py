@@ -30,6 +30,7 @@ from .control.protocol import ControllerError, failure_message
 from .control.sensors import SensorParameters, Sensors
 from .control.startup import StartupParameters, run_startup
 from .model import layout as L
+from .model.hip_unit import NAMES as HIP_UNIT_NAMES
 from .model.packing import robot_array
 from .parameters import (ControllerParameters, Environment, RobotParameters,
                          validate_parameters, validate_robot)
@@ -339,6 +340,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     provenance = {
         "scoutsim_version": __version__,
         "model": model,
+        "hip_unit": HIP_UNIT_NAMES[int(P[L.P_HIP_UNIT])],
         "robot": _fields_dict(robot),
         "controller": (_fields_dict(cparams) if cparams is not None else None),
         "controller_kind": plan.label,

@@ -306,3 +306,12 @@ def test_provenance_records_every_parameter_as_given():
     assert r.provenance["controller"] == dataclasses.asdict(ControllerParameters())
     assert r.provenance["integrator"] == dataclasses.asdict(
         scoutsim.IntegratorSettings().resolve("II"))
+
+
+@pytest.mark.parametrize("model,play,unit", [
+    ("II", 0.0, "belt"), ("II", 0.01, "belt with backlash"), ("I", 0.01, "rigid"),
+    ("ideal", 0.0, "rigid")])
+def test_provenance_names_the_hip_unit_the_run_had(model, play, unit):
+    r = scoutsim.simulate(scoutsim.RobotParameters(belt_backlash=play), duration=0.01,
+                          model=model)
+    assert r.provenance["hip_unit"] == unit
