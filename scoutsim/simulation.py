@@ -94,7 +94,6 @@ def _options(recording: Recording | None, options: dict) -> tuple[Recording, dic
     return dataclasses.replace(recording or Recording(), **rec), plant
 
 
-
 def _fields_dict(obj) -> dict:
     """``dataclasses.asdict(obj)`` for a parameter set of plain values (numbers, strings,
     None, tuples of numbers), without its deep copies (a tenth of a millisecond per run
@@ -105,6 +104,7 @@ def _fields_dict(obj) -> dict:
                 or (isinstance(v, tuple) and all(isinstance(x, (int, float)) for x in v))):
             return asdict(obj)
     return out
+
 
 def simulate(robot: RobotParameters | None = None, controller=None,
              initial_state: InitialState | None = None, duration: float = 10.0, *,

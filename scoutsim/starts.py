@@ -46,7 +46,7 @@ def _state_vector(init: InitialState, robot: RobotParameters,
                              f"(0, {l0}] m")
     s[:L.NQ] = [init.x, init.y, init.theta, phib, phif, phib, phif]
     s[L.NQ:2 * L.NQ] = [init.dx, init.dy, init.dtheta, init.dphi_back, init.dphi_front,
-               init.dphi_back, init.dphi_front]
+                        init.dphi_back, init.dphi_front]
     s[L.IL_B] = lb
     s[L.IL_F] = lf
     # both toes must start above ground (the run starts in double flight)

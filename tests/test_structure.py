@@ -68,7 +68,7 @@ def test_hip_units_are_reached_only_through_their_registry():
 #: (what, pattern, files relative to the package)
 MAGIC_FORMS = (
     ("a leg or gear angle indexed by number (layout IPHB / IALB + leg)",
-     re.compile(r"\[\s*(NQ\s*\+\s*)?[35]\s*\+\s*leg\b"), ("**/*.py",)),
+     re.compile(r"(?<![\w.])[35]\s*\+\s*leg\b"), ("**/*.py",)),
     ("a huge number standing for an infinite friction coefficient (P_NO_SLIP)",
      re.compile(r"\b1e30[0-9]\b"), ("**/*.py",)),
     ("a flag slot compared with one half by hand (model/flags.py is_set)",

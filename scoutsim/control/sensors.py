@@ -188,10 +188,9 @@ class SensorChannel:
 
 def _all_zero(value) -> bool:
     """A number, or each entry of a (back, front) pair or array, is 0."""
-    if isinstance(value, (tuple, list, np.ndarray)):
-        return all(x == 0 for x in np.ravel(value)) if isinstance(value, np.ndarray) \
-            else all(x == 0 for x in value)
-    return value == 0
+    if isinstance(value, (int, float)):
+        return value == 0
+    return all(x == 0 for x in np.ravel(value))
 
 
 _IDEAL = SensorChannel()

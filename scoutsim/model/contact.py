@@ -80,7 +80,7 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
     jt_ph_y = ll * sg
     bx = -sL * cth * dth * dth
     by = -sL * sth * dth * dth
-    kk = 3 + leg
+    kk = IPHB + leg
     # leg damper and sliding-joint friction (as Table III unless the effects beyond the
     # paper are switched on)
     c_l = leg_damping(q[kk], leg, P)

@@ -67,7 +67,7 @@ def impact(s, P, mi, mf, out):
         g = th + q[IPHB + leg]
         sg = math.sin(g)
         cg = math.cos(g)
-        kk = 3 + leg
+        kk = IPHB + leg
         if mode == STICK or mode == STRUT:
             R[nr, IX] = cg
             R[nr, IY] = sg
@@ -95,8 +95,8 @@ def impact(s, P, mi, mf, out):
             # belt damper, 80 us against the gear train, evens out the relative rate
             # within the impact; the energy of that relative motion is part of the logged
             # impact loss). A homogeneous row: the impact can only remove energy.
-            R[nr, 5 + leg] = 1.0
-            R[nr, 3 + leg] = -1.0
+            R[nr, IALB + leg] = 1.0
+            R[nr, IPHB + leg] = -1.0
             r[nr] = 0.0
             rleg[nr] = leg
             rkind[nr] = ROW_GEAR

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..jit import allocating, kernel
 from .flags import is_set
-from .layout import NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO, ROW_GEAR
+from .layout import (IPHB, NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO,
+                     ROW_GEAR)
 
 MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS
@@ -49,7 +50,7 @@ def add_clamp_rows(P, R, r, rkind, rleg, nr):
         if is_set(P[P_CLAMP_LEGS]):
             for leg in range(2):
                 new_row(R, r, rkind, rleg, nr, 0.0, ROW_CLAMP_LEG, leg)
-                R[nr, 3 + leg] = 1.0
+                R[nr, IPHB + leg] = 1.0
                 nr += 1
     return nr
 

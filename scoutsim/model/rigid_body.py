@@ -52,7 +52,7 @@ def mass_matrix_at(M, P, sth, cth, sg0, cg0, sg1, cg1):
         jth_y = sL * cth + d * sg
         jph_x = d * cg
         jph_y = d * sg
-        k = 3 + leg
+        k = IPHB + leg
         # translational part m J^T J over coordinates (x, y, theta, phi_leg)
         M[0, 0] += ml
         M[1, 1] += ml

@@ -53,7 +53,7 @@ def add_gear_inertia(M, P):
         j1 = npl * P[P_J1 + leg]
         j2 = npl * P[P_J2 + leg]
         N = P[P_N + leg]
-        a = 5 + leg
+        a = IALB + leg
         M[2, 2] += j1 + j2
         M[2, a] += j2 + N * j1
         M[a, a] += j2 + N * N * j1
@@ -109,7 +109,7 @@ def motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P):
     multiplier is the stiction holding torque). Returns the new row count."""
     if geared(P) and mi[MI_MOTOR_B + leg] == STUCK:
         new_row(R, r, rkind, rleg, nr, 0.0, ROW_GEAR, leg)
-        R[nr, 5 + leg] = 1.0
+        R[nr, IALB + leg] = 1.0
         nr += 1
     return nr
 
