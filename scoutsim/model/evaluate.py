@@ -96,13 +96,13 @@ def fill_outputs(P, mi, cmd, aux, wk):
     rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
     rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
     meta = wk[WK_META:WK_META + NMETA]
-    nact = 7 if geared(P) else 5
+    gear = geared(P)
+    nact = 7 if gear else 5
     nr = int(meta[MT_NROWS])
     ok = is_set(meta[MT_KKT_OK])
     sgl0, cgl0, sgl1, cgl1 = meta[MT_SG_B], meta[MT_CG_B], meta[MT_SG_F], meta[MT_CG_F]
     vb = meta[MT_VBATT]
     energy = meta[MT_ENERGY]
-    gear = geared(P)
     npl = P[P_NP]
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
@@ -197,7 +197,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     free0 = gear and mi[MI_MOTOR_B] != STUCK
     free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
     kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
-                          WK_B2, wk, WK_Y)
+                      WK_B2, wk, WK_Y)
     for i in range(n):
         b[i] += b2[i]
     fill_derivative(ds, dq, b, LG, nact, gear, ok)
@@ -233,7 +233,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     for i in range(NS):
         for j in range(2 * NSTIFF):
             stiff[i, j] = 0.0
-    if not geared(P) or not ok:
+    if not gear or not ok:
         return
     n = nact + nr
     npl = P[P_NP]
