@@ -136,9 +136,13 @@ def impact(s, P, mi, mf, out):
             out[leg * NIMP_LEG + IMP_NORMAL] -= lam * math.cos(g)
             out[leg * NIMP_LEG + IMP_TANGENT] += lam * math.sin(g)
     out[IMP_ENERGY_LOST] = ke0 - kinetic_energy_at(M, dq)
-    s[0:NQ] = q
-    s[NQ:2 * NQ] = dq
-    s[IL_B:IL_B + 2] = l
+    # element by element: an array-to-slice assignment compiles Numba's shape-mismatch
+    # error message (its string formatting: 2 s of the first run's compilation)
+    for i in range(NQ):
+        s[i] = q[i]
+        s[NQ + i] = dq[i]
+    s[IL_B] = l[0]
+    s[IL_B + 1] = l[1]
     if gear:
         # Stiction carries no impulse, so every motor joint's stick/slip mode follows its
         # new gear rate (docs/specification.md section 3): the rigid belt moves the gear train with the leg, which
