@@ -192,7 +192,7 @@ class SweepBase:
     ``friction_coefficient`` (the package's default floor, Coulomb mu = 1.0)."""
 
     model: str = "II"
-    duration: float = 2.0
+    duration: float = 10.0
     robot: object = None
     controller: object = None
     initial_state: object = None

@@ -62,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
                "  scoutsim tune --objective speed --target 1.3 --param "
                "controller.touchdown_angle_front_deg --out tuned\n"
                "  scoutsim run --controller tuned/best.toml\n"
-               "  scoutsim compare run1.csv run2.csv --models I,II --out cmp\n"
+               "  scoutsim compare run1.csv run2.csv --model I,II --out cmp\n"
                "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
                "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"
                "  scoutsim animate scoutsim_out --out run.gif --t0 3 --t1 4",

@@ -157,51 +157,85 @@ CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
 
 
 def add_controller_option(parser):
-    """--controller: which controller runs, with the robot file's [controller] section, or
-    a controller file (as ``scoutsim tune`` writes its best parameters)."""
+    """--controller: which controller runs: a built-in law with the robot file's
+    [controller] section, a controller file (as ``scoutsim tune`` writes its best
+    parameters) or a user's controller named ``MODULE:FACTORY``."""
     parser.add_argument("--controller", default="table-i",
-                        metavar="{" + ",".join(CONTROLLERS) + ",FILE}",
+                        metavar="{" + ",".join(CONTROLLERS) + ",FILE,MODULE:FACTORY}",
                         help="table-i: the paper's Table I controller (no torso feedback); "
                              "pitch-feedback: Table I with the touchdown angles corrected "
                              "by torso pitch and pitch rate (PitchFeedbackController, gains "
                              "pitch_gain_* / pitch_rate_gain_* of the robot file's "
                              "[controller]); FILE: a controller file, its law and every "
                              "controller parameter (as scoutsim tune writes best.toml; it "
-                             "replaces the robot file's [controller]) (default: table-i)")
+                             "replaces the robot file's [controller]); MODULE:FACTORY: your "
+                             "own controller, FACTORY(robot, params) in the importable "
+                             "module MODULE (on PYTHONPATH) returning any controller "
+                             "scoutsim.simulate accepts (default: table-i)")
 
 
 def controller_choice(value: str, params):
     """``(law, ControllerParameters)`` of ``--controller value``: a law's name with the
-    robot file's ``params``, or a controller file's law and parameters. UsageError naming
-    the file and the problem otherwise."""
+    robot file's ``params``, a controller file's law and parameters, or a ``MODULE:FACTORY``
+    string (the law) with ``params``. UsageError naming the file and the problem otherwise."""
+    from ..control.factory import is_factory_spec
     if value in CONTROLLERS:
         return value, params
     p = Path(value)
-    if not p.exists():
-        raise UsageError(f"--controller {value!r} is not allowed: not one of "
-                         f"{', '.join(CONTROLLERS)}, and no controller file of that name")
-    if not p.is_file():
+    if p.is_file():
+        from ..analysis.controller_file import read_controller_file
+        with usage_errors():
+            cf = read_controller_file(p)
+        return cf.law, cf.controller
+    if p.exists():
         raise UsageError(f"--controller {value!r}: not a file")
-    from ..analysis.controller_file import read_controller_file
-    with usage_errors():
-        cf = read_controller_file(p)
-    return cf.law, cf.controller
+    if is_factory_spec(value):
+        return value.strip(), params
+    raise UsageError(f"--controller {value!r} is not allowed: not one of "
+                     f"{', '.join(CONTROLLERS)}, no controller file of that name, and not "
+                     "of the form MODULE:FACTORY")
 
 
-def make_controller(name: str, params):
-    """The controller the law ``name`` runs with the ControllerParameters ``params``: the
-    parameters themselves (Table I) or a PitchFeedbackController."""
+def controller_label(law: str) -> str:
+    """How outputs name the law of :func:`controller_choice` (a user's: its string)."""
+    return CONTROLLER_LABELS.get(law, law)
+
+
+def make_controller(name: str, params, robot=None, *, on_workers: bool = False):
+    """The controller the law ``name`` (of :func:`controller_choice`) runs with the
+    ControllerParameters ``params``: the parameters themselves (Table I), a
+    PitchFeedbackController, or a user's ``MODULE:FACTORY`` controller made for ``robot``
+    (``on_workers``: a :class:`~scoutsim.control.factory.ControllerSpec` that each worker
+    of a study makes itself, after the factory was tried here once)."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
         return PitchFeedbackController(params)
-    return params
+    if name in CONTROLLERS:
+        return params
+    from ..control.factory import ControllerSpec, FactoryError, controller_from_spec
+    try:
+        controller = controller_from_spec(name, robot, params)   # fails here, not on workers
+        return ControllerSpec(name, robot, params) if on_workers else controller
+    except FactoryError as exc:
+        raise UsageError(str(exc)) from None
 
 
-def add_models_option(parser, flag: str):
-    """A comma-separated list of models, by default the controlled ones."""
-    parser.add_argument(flag, type=model_list, default=list(CONTROLLED_MODELS), metavar="LIST",
+def add_models_option(parser):
+    """--model LIST (alias --models): a comma-separated list of models, by default the
+    controlled ones (every command that takes a model calls the option --model; the
+    commands that run one model take one)."""
+    parser.add_argument("--model", "--models", dest="model", type=model_list,
+                        default=list(CONTROLLED_MODELS), metavar="LIST",
                         help="comma-separated models (default: "
                              + ",".join(CONTROLLED_MODELS) + ")")
+
+
+def add_plots_option(parser, default: bool, what: str):
+    """--plots / --no-plots, the same pair in every command that draws figures; ``what``
+    says which figures, ``default`` whether the command draws them unasked."""
+    parser.add_argument("--plots", action=argparse.BooleanOptionalAction, default=default,
+                        help=f"{'' if default else 'also '}draw {what} (default: "
+                             f"{'--plots' if default else '--no-plots'})")
 
 
 def add_time_window_options(parser, t0_help: str, t1_help: str):
@@ -209,11 +243,18 @@ def add_time_window_options(parser, t0_help: str, t1_help: str):
     parser.add_argument("--t1", type=finite_float, default=None, metavar="S", help=t1_help)
 
 
+def add_duration_option(parser, default: float, what: str = "simulated time per run"):
+    """--duration S with the command's own ``default`` [s] (each command has its own, from
+    the function it calls: argparse would share one default between the commands whose
+    parsers have the option from a common parent)."""
+    parser.add_argument("--duration", type=positive_float, default=float(default),
+                        metavar="S", help=f"{what} [s] (default: {default:g})")
+
+
 def simulation_options() -> argparse.ArgumentParser:
-    """The parent parser of the sub-commands that simulate runs (run, basin, sweep)."""
+    """The parent parser of the sub-commands that simulate runs (run, basin, sweep, tune);
+    each adds its own --duration (:func:`add_duration_option`)."""
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--duration", type=positive_float, default=10.0, metavar="S",
-                        help="simulated time per run [s] (default: 10)")
     common.add_argument("--robot", metavar="FILE",
                         help="TOML robot/controller file with the layout of "
                              "scoutsim/data/scout2.toml; unset entries keep the Scout II "

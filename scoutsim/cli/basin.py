@@ -14,23 +14,28 @@ Exit code 1 if a start crashed (the table and files are still written).
 from __future__ import annotations
 
 import csv
+import inspect
 import math
 import os
 import sys
 import time
 
 from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
-                              DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_stats, basin_tasks,
-                              run_basin_tasks)
+                              DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_of_attraction,
+                              basin_stats, basin_tasks, run_basin_tasks)
 from ..parameters import floor_label
 from ..run_directory import RunDirectory
-from ._common import (CONTROLLER_LABELS, SCOUT_FLOOR_FRICTION, add_controller_option,
+from ._common import (SCOUT_FLOOR_FRICTION, add_controller_option, add_duration_option,
+                      controller_label,
                       controller_choice,
-                      add_models_option, check_expected_time, float_list, friction_list,
+                      add_models_option, add_plots_option, check_expected_time, float_list, friction_list,
                       integrator, load_parameters, make_controller, out_dir, positive_int,
                       show_progress, write_json)
 
 NAME = "basin"
+
+#: simulated time per start [s]: basin_of_attraction()'s default
+DEFAULT_DURATION_S = inspect.signature(basin_of_attraction).parameters["duration"].default
 
 
 def _defaults(values) -> str:
@@ -45,11 +50,12 @@ def register(sub, common) -> None:
                     "level torso, legs at their touchdown angles) for each model and floor in "
                     "parallel and report the fraction that reaches steady bounding "
                     "(GaitMetrics.is_steady_bounding: completed, >= 7 steady strides after "
-                    "the 2 s transient, stride-period CV <= 5 %%) and the cycle's speed. "
+                    "the 2 s transient, stride-period CV <= 5 %) and the cycle's speed. "
                     "Starts with a toe below the ground are recorded as invalid_start and "
                     "left out of the fraction. Writes basin.csv, basin.json and the map "
                     "basin.png to DIR.")
-    add_models_option(basin, "--model")
+    add_duration_option(basin, DEFAULT_DURATION_S, "simulated time per start")
+    add_models_option(basin)
     add_controller_option(basin)
     basin.add_argument("--floors", type=friction_list, default=None, metavar="LIST",
                        help="comma-separated toe friction coefficients, 'inf' = no slip "
@@ -63,7 +69,7 @@ def register(sub, common) -> None:
     basin.add_argument("--heights", type=float_list(positive=True), default=list(DEFAULT_HEIGHTS),
                        metavar="LIST", help="initial torso COM heights [m] (default: "
                        + _defaults(DEFAULT_HEIGHTS) + ")")
-    basin.add_argument("--no-plots", action="store_true", help="do not write basin.png")
+    add_plots_option(basin, True, "the map basin.png")
     basin.add_argument("--workers", type=positive_int, default=None, metavar="N",
                        help="parallel processes (default: os.cpu_count(); 1 runs in this "
                             "process)")
@@ -74,7 +80,7 @@ def format_basin(per: dict, n_grid: int, duration: float, controller: str = "tab
     """The human-readable basin table (one row per model and floor)."""
     head = ("model", "floor", "starts", "invalid", "valid", "steady", "fraction", "fell",
             "other", "cycle m/s")
-    lines = [f"scoutsim basin ({CONTROLLER_LABELS[controller]} controller): {n_grid} starts "
+    lines = [f"scoutsim basin ({controller_label(controller)} controller): {n_grid} starts "
              f"per model and floor, {duration:g} s each; "
              "fraction = steady bounding / valid starts; cycle m/s = median speed of the "
              "starts that bound",
@@ -104,7 +110,7 @@ def _write_rows(path, rows) -> None:
 def execute(args) -> int:
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
-    controller = make_controller(law, cparams)
+    controller = make_controller(law, cparams, robot, on_workers=True)
     integ = integrator(args)
     out = out_dir(args.out)
     models = args.model
@@ -162,13 +168,13 @@ def execute(args) -> int:
     }
     rd.write("basin.json", lambda p: write_json(p, summary))
     written = "basin.csv, basin.json"
-    if not args.no_plots:
+    if args.plots:
         from ..presentation.plots import plot_basin_map
         from ..state import InitialState
         d = InitialState()
         rd.write("basin.png", lambda p: plot_basin_map(
             rows, p, default_start=(d.dx, math.degrees(d.dtheta)),
-            controller=CONTROLLER_LABELS[law]
+            controller=controller_label(law)
                            + ("" if law == args.controller else f" ({args.controller})")))
         written += ", basin.png"
     rd.finish(outcome="completed", partial=False)

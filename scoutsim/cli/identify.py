@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 
-from ._common import (UsageError, add_no_progress_option, add_out_option,
+from ._common import (UsageError, add_no_progress_option, add_out_option, add_plots_option,
                       check_logs_or_example, load_robot, out_dir, positive_int,
                       progress_messages, usage_errors)
 
@@ -49,7 +49,7 @@ def register(sub, common) -> None:
     idf.add_argument("--seed", type=int, default=0, help="Sobol / noise seed (default: 0)")
     idf.add_argument("--confidence", type=float, default=0.95, metavar="C",
                      help="interval confidence level (default: 0.95)")
-    idf.add_argument("--no-plots", action="store_true", help="do not write fit figures")
+    add_plots_option(idf, True, "the fit figures")
     idf.add_argument("--json", action="store_true", help="print identified.json to stdout")
     add_no_progress_option(idf)
     idf.set_defaults(func=execute)
@@ -83,11 +83,11 @@ def execute(args) -> int:
                        n_local=args.local, seed=args.seed, confidence=args.confidence,
                        progress=progress_messages(args, NAME))
     wall = time.perf_counter() - wall0
-    path = res.save(out, figures=not args.no_plots)
+    path = res.save(out, figures=args.plots)
     if args.json:
         print(path.read_text())
     else:
         print(res.report())
         print(f"wall time {wall:.1f} s ({res.nfev} rig simulations); wrote {path}"
-              + ("" if args.no_plots else " and fit figures") + f" to {out}/")
+              + (" and fit figures" if args.plots else "") + f" to {out}/")
     return 0

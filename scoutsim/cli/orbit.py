@@ -15,9 +15,10 @@ from __future__ import annotations
 import math
 import sys
 
-from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, add_friction_option,
-                      add_no_progress_option, dumps, finite_float, load_parameters,
-                      positive_float, progress_messages)
+from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, UsageError,
+                      add_controller_option, add_friction_option, add_no_progress_option,
+                      controller_choice, dumps, finite_float,
+                      load_parameters, make_controller, positive_float, progress_messages)
 
 NAME = "orbit"
 
@@ -51,6 +52,7 @@ def register(sub, common) -> None:
                        help="TOML robot/controller file with the layout of "
                             "scoutsim/data/scout2.toml (--passive: its massless-leg "
                             "configuration); unset entries keep the Scout II defaults")
+    add_controller_option(orbit)
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     add_no_progress_option(orbit)
     orbit.set_defaults(func=execute)
@@ -60,7 +62,24 @@ def execute(args) -> int:
     from ..analysis.controlled_orbit import controlled_fixed_point
     from ..analysis.passive_orbits import passive_bounding_orbit
     from ..analysis.poincare import MapError
-    robot, controller = load_parameters(args.robot)
+    from ..parameters import ControllerParameters
+    robot, cparams = load_parameters(args.robot)
+    law, cparams = controller_choice(args.controller, cparams)
+    controller = cparams
+    if args.passive and args.controller != "table-i":
+        raise UsageError("--controller is not allowed with --passive (the passive model "
+                         "has no controller)")
+    if not args.passive:
+        controller = make_controller(law, cparams, robot)
+        if not isinstance(controller, ControllerParameters):
+            raise UsageError(
+                f"--controller {args.controller} is not allowed here: scoutsim orbit finds "
+                "periodic orbits of the Table I law, whose section (the sample at which it "
+                "detects back-leg lift-off) and whose state are part of the hybrid state a "
+                f"stride restarts from; {args.controller} made a "
+                f"{type(controller).__name__}, whose own state a restarted stride would "
+                "lose. Give the Table I law your parameters instead: a controller file, or "
+                "a MODULE:FACTORY that returns ControllerParameters")
     try:
         if args.passive:
             orb = passive_bounding_orbit(args.speed, args.apex_height,
@@ -97,7 +116,8 @@ def _print_passive(args, orb, d) -> None:
 
 def _print_controlled(args, orb, d) -> None:
     import numpy as np
-    print(f"scoutsim orbit: model {args.model}, Table I controller at 1 kHz, mu = "
+    law = "Table I" + ("" if args.controller == "table-i" else f" ({args.controller})")
+    print(f"scoutsim orbit: model {args.model}, {law} controller at 1 kHz, mu = "
           f"{args.friction:g}; section: the sample at which the controller detects back-leg "
           "lift-off; Newton on the sampled stride map")
     print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "

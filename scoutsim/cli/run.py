@@ -39,7 +39,9 @@ from ..result_columns import COLUMN_UNITS, column_unit
 from ..run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
 from ..streaming import DEFAULT_KEEP_SECONDS
-from ._common import (MODELS, UsageError, add_controller_option, check_expected_time,
+from ._common import (MODELS, UsageError, add_controller_option, add_duration_option,
+                      add_plots_option,
+                      check_expected_time,
                       controller_choice,
                       command_wall_time, dumps, finite_float, integrator, load_parameters,
                       load_sensors, make_controller, out_dir, positive_float, show_progress,
@@ -54,6 +56,17 @@ TIMESERIES_UNITS = COLUMN_UNITS
 
 
 _DEFAULT_START = InitialState()
+
+
+def _simulate_default(name: str):
+    """The default of :func:`scoutsim.simulate`'s argument ``name`` (its one home)."""
+    import inspect
+    from ..simulation import simulate
+    return inspect.signature(simulate).parameters[name].default
+
+
+#: simulated time of a run [s]: simulate()'s default
+DEFAULT_DURATION_S = _simulate_default("duration")
 
 
 def register(sub, common) -> None:
@@ -71,6 +84,7 @@ def register(sub, common) -> None:
                           "the start-up (a step of the back legs, then a push of all four) "
                           "into the Table I bound "
                           "(summary: startup_duration_s)")
+    add_duration_option(run, DEFAULT_DURATION_S)
     add_controller_option(run)
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
@@ -88,14 +102,11 @@ def register(sub, common) -> None:
     run.add_argument("--format", choices=FORMATS, default=None,
                      help="format of the tables: parquet (default when pyarrow is "
                           "installed) or csv (gzip-compressed, the default otherwise)")
-    run.add_argument("--plots", action="store_true",
-                     help="also draw run.png (pitch, height, leg angles and states, hip "
-                          "torques; runs over 4 s: an overview and the last strides), "
-                          "torque_speed.png (paper Fig. 11) and, with the energy accounting, "
-                          "stride_power.png (power over the last steady stride by "
-                          "destination)")
-    run.add_argument("--no-plots", action="store_true",
-                     help="no figures (the default; kept for older scripts)")
+    add_plots_option(run, False, "run.png (pitch, height, leg angles and states, hip "
+                                 "torques; runs over 4 s: an overview and the last strides), "
+                                 "torque_speed.png (paper Fig. 11) and, with the energy "
+                                 "accounting, stride_power.png (power over the last steady "
+                                 "stride by destination)")
     run.add_argument("--csv", action="store_true",
                      help="also write timeseries.csv (plain CSV, one row per sample)")
     run.add_argument("--npz", action="store_true",
@@ -144,7 +155,7 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
         rd.write("timeseries.csv", lambda p: write_timeseries_csv(result, p))
     if args.npz:
         rd.write("result.npz", lambda p: result.save(p))
-    if args.plots and not args.no_plots:
+    if args.plots:
         from ..presentation.plots import plot_run, plot_torque_speed
         rd.write("run.png", lambda p: plot_run(result, p, overview="auto"))
         rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
@@ -347,7 +358,7 @@ def execute(args) -> int:
     if args.controller != "table-i" and args.model == "passive":
         raise UsageError(f"--controller {args.controller} is not allowed with --model "
                          "passive (the passive model has no controller)")
-    controller = make_controller(law, cparams)
+    controller = make_controller(law, cparams, robot)
     integ = integrator(args)
     changes = {}
     if args.speed is not None:
@@ -366,9 +377,10 @@ def execute(args) -> int:
         if args.model == "passive":
             raise UsageError("--start standing is not allowed with --model passive (no "
                              "actuator holds or sets going the standing robot)")
-        if law != "table-i":
+        if not isinstance(controller, type(cparams)):
             raise UsageError(f"--start standing is not allowed with --controller "
-                             f"{args.controller}: the start-up runs the Table I controller")
+                             f"{args.controller}: the start-up hands over to the Table I "
+                             "controller")
         init = "standing"
     out = out_dir(args.out)
     progress = show_progress(args)

@@ -18,8 +18,14 @@ import os
 import sys
 import time
 
-from ._common import (CONTROLLED_MODELS, UsageError, check_expected_time, load_parameters,
-                      out_dir, positive_int, show_progress, usage_errors)
+from ..analysis.sweep import SweepBase
+from ._common import (CONTROLLED_MODELS, UsageError, add_controller_option,
+                      add_duration_option, check_expected_time, controller_choice,
+                      load_parameters, make_controller, out_dir, positive_int, show_progress,
+                      usage_errors)
+
+#: simulated time per point [s]: SweepBase's default
+DEFAULT_DURATION_S = SweepBase.duration
 
 #: wall seconds of --orbit per point (Newton on the stride map; "a few seconds")
 ORBIT_SECONDS_PER_POINT = 5.0
@@ -39,6 +45,8 @@ def register(sub, common) -> None:
                     "Example: scoutsim sweep --grid controller.touchdown_angle_front_deg="
                     "15:27:20 --grid controller.touchdown_angle_back_deg=13:25:20 "
                     "--duration 2")
+    add_duration_option(sw, DEFAULT_DURATION_S, "simulated time per point")
+    add_controller_option(sw)
     sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:NUM",
                     help="grid axis (repeatable): NUM values from START to STOP")
     sw.add_argument("--random", action="append", default=[], metavar="NAME=LOW:HIGH",
@@ -138,7 +146,9 @@ def execute(args) -> int:
                         per_run_s=ORBIT_SECONDS_PER_POINT if args.orbit else 0.0,
                         workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
                         what=f"the sweep of {len(points)} points")
-    robot, controller = load_parameters(args.robot)
+    robot, cparams = load_parameters(args.robot)
+    law, cparams = controller_choice(args.controller, cparams)
+    controller = make_controller(law, cparams, robot, on_workers=True)
     out = out_dir(args.out)
     progress = show_progress(args)
     wall0 = time.perf_counter()

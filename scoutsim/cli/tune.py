@@ -21,14 +21,16 @@ import os
 import sys
 import time
 
+from ..analysis.tune import TuneRuns
 from ._common import (CONTROLLED_MODELS, UsageError, add_controller_option,
-                      check_expected_time, controller_choice, make_controller, float_list, friction_list, load_parameters,
+                      add_duration_option, check_expected_time, controller_choice,
+                      float_list, friction_list, load_parameters, make_controller,
                       model_list, out_dir, positive_float, positive_int, show_progress,
                       usage_errors)
 
 NAME = "tune"
-#: default simulated time of every evaluation [s]
-DEFAULT_DURATION_S = 20.0
+#: default simulated time of every evaluation [s]: TuneRuns' default
+DEFAULT_DURATION_S = TuneRuns.duration
 
 
 def register(sub, common) -> None:
@@ -39,7 +41,7 @@ def register(sub, common) -> None:
                     "as in ControllerParameters / RobotParameters; a _deg suffix on an angle "
                     "field takes degrees), each within its allowed range or NAME=LOW:HIGH, "
                     "with CMA-ES against an objective, on local cores or a Dask cluster. "
-                    "Every evaluation runs --duration (here 20 s by default) and must "
+                    f"Every evaluation runs --duration ({DEFAULT_DURATION_S:g} s by default) and must "
                     "complete without falling and bound steadily. Writes "
                     "tune.csv, tune.parquet, convergence.png, best.toml (scoutsim run "
                     "--controller DIR/best.toml) and best.json; an interrupted tuning "
@@ -47,7 +49,7 @@ def register(sub, common) -> None:
                     "tune --objective speed --target 1.30 --param "
                     "controller.touchdown_angle_front_deg --param "
                     "controller.touchdown_angle_back_deg --model II --budget 200 --out DIR")
-    tu.set_defaults(duration=DEFAULT_DURATION_S)
+    add_duration_option(tu, DEFAULT_DURATION_S, "simulated time of every evaluation's runs")
     tu.add_argument("--param", action="append", default=[], metavar="NAME[=LOW:HIGH]",
                     help="a tuned parameter (repeatable); LOW:HIGH in the name's unit, "
                          "default its allowed range")
@@ -151,7 +153,7 @@ def execute(args) -> int:
                         workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
                         what=f"the tuning of {args.budget} evaluations")
     out = out_dir(args.out)
-    controller = make_controller(law, cparams)
+    controller = make_controller(law, cparams, robot, on_workers=True)
     if args.scheduler is None:
         warm_up()        # compiled (or loaded) once here; the workers then load the cache
     wall0 = time.perf_counter()

@@ -1,0 +1,162 @@
+"""A user's own controller from the shell: ``--controller MODULE:FACTORY`` in every command
+that takes a controller (scoutsim.cli, scoutsim.control.factory).
+
+The test writes a module into a temporary directory, puts it on PYTHONPATH (as a user
+would) and runs each command as a separate process, so the module is imported by the
+command and by its worker processes alike.
+"""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+USER_MODULE = textwrap.dedent('''
+    """A researcher's controllers, outside the package."""
+    import dataclasses
+
+    import numpy as np
+
+    from scoutsim.control import CompiledController, PitchFeedbackController
+    from scoutsim.control import sensors as S
+
+    def table_i(robot, params):
+        """The Table I law with a front touchdown angle 5 mrad steeper."""
+        return dataclasses.replace(
+            params, touchdown_angle_front=params.touchdown_angle_front - 0.005)
+
+    def pitch(robot, params):
+        """Table I with torso feedback (a Python controller object)."""
+        return PitchFeedbackController(params)
+
+    def hold(t, y, params, state, torque, leg_states):
+        for leg in range(2):
+            torque[leg] = (params[0] * (params[2 + leg] - y[S.HIP_ANGLE + leg])
+                           - params[1] * y[S.HIP_RATE + leg])
+        return 0
+
+    def compiled(robot):
+        """A compiled PD hold of both hips (it does not bound)."""
+        return CompiledController(hold, params=np.array([50.0, 1.0, 0.3, 0.3]))
+
+    def not_a_controller(robot, params):
+        return 42
+    ''')
+
+
+@pytest.fixture(scope="module")
+def user_dir(tmp_path_factory):
+    d = tmp_path_factory.mktemp("user")
+    (d / "usermod.py").write_text(USER_MODULE)
+    return d
+
+
+def scoutsim(user_dir, *args, cwd):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(user_dir)] + [p for p in
+                                        env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return subprocess.run([sys.executable, "-m", "scoutsim", *args, "--quiet"], cwd=cwd,
+                          env=env, capture_output=True, text=True, timeout=900)
+
+
+def run_controller(out) -> str:
+    """How the saved run's provenance names the controller that ran."""
+    from scoutsim import SimulationResult
+    return SimulationResult.load(out).provenance["controller_kind"]
+
+
+def test_run_takes_a_compiled_controller_from_a_module(user_dir, tmp_path):
+    """run: the factory's CompiledController runs, and the provenance names it."""
+    p = scoutsim(user_dir, "run", "--controller", "usermod:compiled", "--duration", "0.5",
+                 "--model", "I", "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert run_controller(tmp_path / "o") == "hold"
+
+
+def test_run_takes_a_python_controller_from_a_module(user_dir, tmp_path):
+    p = scoutsim(user_dir, "run", "--controller", "usermod:pitch", "--duration", "0.5",
+                 "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "PitchFeedback" in run_controller(tmp_path / "o")
+
+
+@pytest.mark.parametrize("spec,expected", [
+    ("nosuchmodule:make", "cannot import module 'nosuchmodule'"),
+    ("usermod:nosuch", "has no attribute 'nosuch'"),
+    ("usermod:not_a_controller", "returned int, not a controller"),
+])
+def test_a_bad_factory_is_a_usage_error(user_dir, tmp_path, spec, expected):
+    """An unimportable module, a missing factory or a factory that returns no controller:
+    exit 2 and a message saying which, before anything runs."""
+    p = scoutsim(user_dir, "run", "--controller", spec, "--duration", "0.5",
+                 "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert p.returncode == 2
+    assert expected in p.stderr
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_basin_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
+    """basin with workers: every start runs the user's controller (none is an error of the
+    study), and the table equals the one-worker table."""
+    tables = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"b{workers}"
+        p = scoutsim(user_dir, "basin", "--controller", "usermod:pitch", "--model", "ideal",
+                     "--floors", "1", "--speeds", "1.2,1.4", "--pitch-rates", "0",
+                     "--heights", "0.33", "--duration", "1", "--workers", workers,
+                     "--no-plots", "--out", str(out), cwd=tmp_path)
+        assert p.returncode == 0, p.stderr
+        with open(out / "basin.csv") as fh:
+            rows = list(csv.DictReader(fh))
+        assert rows and all(r["outcome"] != "error" for r in rows), rows
+        tables[workers] = rows
+    assert tables["1"] == tables["2"]
+
+
+def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
+    tables = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"s{workers}"
+        p = scoutsim(user_dir, "sweep", "--controller", "usermod:compiled", "--model", "I",
+                     "--grid", "controller.touchdown_angle_front_deg=17:19:2",
+                     "--duration", "0.5", "--workers", workers, "--out", str(out),
+                     cwd=tmp_path)
+        assert p.returncode == 0, p.stderr
+        with open(out / "sweep.csv") as fh:
+            rows = list(csv.DictReader(fh))
+        assert len(rows) == 2 and all(r["outcome"] != "error" for r in rows), rows
+        tables[workers] = rows
+    assert tables["1"] == tables["2"]
+
+
+def test_tune_runs_a_module_controller(user_dir, tmp_path):
+    p = scoutsim(user_dir, "tune", "--controller", "usermod:table_i", "--model", "ideal",
+                 "--param", "controller.touchdown_angle_front_deg", "--objective",
+                 "max-speed", "--budget", "2", "--population", "2", "--duration", "1",
+                 "--workers", "2", "--out", str(tmp_path / "t"), cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+    with open(tmp_path / "t" / "tune.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 2
+    assert all("Error" not in (r.get("error") or "") for r in rows), rows
+
+
+def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
+    """orbit: the factory's parameters are the ones whose orbit is found (its front
+    touchdown angle differs from the default orbit's), and a controller object with state
+    of its own is refused with the reason."""
+    own = scoutsim(user_dir, "orbit", "--controller", "usermod:table_i", "--model", "ideal",
+                   "--json", cwd=tmp_path)
+    assert own.returncode == 0, own.stderr
+    default = scoutsim(user_dir, "orbit", "--model", "ideal", "--json", cwd=tmp_path)
+    assert default.returncode == 0, default.stderr
+    a, b = json.loads(own.stdout), json.loads(default.stdout)
+    assert a["residual"] < 1e-9 and b["residual"] < 1e-9
+    assert a["touchdown_angle_front_deg"] != b["touchdown_angle_front_deg"]
+    refused = scoutsim(user_dir, "orbit", "--controller", "usermod:pitch", cwd=tmp_path)
+    assert refused.returncode == 2
+    assert "PitchFeedbackController" in refused.stderr
