@@ -20,7 +20,8 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from ..control.bounding import SCHEDULABLE, BoundingController
+from ..control.bounding import SCHEDULABLE
+from ..control.dispatch import plan_controller
 from ..control.factory import FactoryError, controller_from_spec, is_factory_spec
 from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
@@ -118,10 +119,12 @@ class BoundEnv(gymnasium.Env):
     * ``truncated`` too, with ``terminated`` False, when the simulator cannot go on
       (:data:`NON_PHYSICAL_ENDS`): the integrator or the constrained dynamics failed
       ("numerical_failure", ``info["numerical_failure"]`` True) or the controller did
-      ("controller_error"). This is Gymnasium's truncation, an end "outside the scope of
-      the MDP": the robot did not fall, its state at the failure is a real state whose
-      future is not worth zero, and a learner that bootstraps from the last observation
-      values it rightly, where ``terminated`` would teach it that the state is terminal.
+      ("controller_error"), unless the robot is down by then (the rule above; the step
+      is then ``terminated`` as any other). This is Gymnasium's truncation, an end
+      "outside the scope of the MDP": the robot did not fall, its state at the failure is
+      a real state whose future is not worth zero, and a learner that bootstraps from the
+      last observation values it rightly, where ``terminated`` would teach it that the
+      state is terminal.
       It is never a healthy step: the step earns no ``reward_healthy`` (its forward and
       energy terms cover the motion up to the failure, ``info["t"]``), and ``info`` says
       what it was, so it is not mistaken for the time limit: ``info["outcome"]``,
@@ -247,7 +250,8 @@ class BoundEnv(gymnasium.Env):
                                  "pixels >= 16 (or None: the default)")
         #: the "MODULE:FACTORY" the Table I parameters were made by (None: given)
         self.controller_spec = controller if isinstance(controller, str) else None
-        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters)
+        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters,
+                                                  model)
         if sensors is None:
             sensors = load_sensors(robot_file, self.robot) if robot_file is not None \
                 else SensorParameters()
@@ -533,7 +537,7 @@ def _options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:
     return dataclasses.replace(reward or Reward(), **rew), plant, options
 
 
-def _parameters(robot, controller, robot_file, overrides):
+def _parameters(robot, controller, robot_file, overrides, model):
     """(RobotParameters, ControllerParameters) from the constructor's arguments."""
     robot_fields = {f.name for f in dataclasses.fields(RobotParameters)}
     ctrl_fields = {f.name for f in dataclasses.fields(ControllerParameters)}
@@ -564,22 +568,21 @@ def _parameters(robot, controller, robot_file, overrides):
                       else ControllerParameters()).replace(**c_over)
         validate_robot(robot)
     if spec is not None:
-        controller = _from_factory(spec, robot, controller).replace(**c_over)
+        controller = _from_factory(spec, robot, controller, model).replace(**c_over)
     validate_parameters(robot, controller)
     return robot, controller
 
 
-def _from_factory(spec: str, robot: RobotParameters,
-                  params: ControllerParameters) -> ControllerParameters:
+def _from_factory(spec: str, robot: RobotParameters, params: ControllerParameters,
+                  model: str) -> ControllerParameters:
     """The Table I parameters the factory ``spec`` makes for ``robot`` from ``params``."""
     made = controller_from_spec(spec, robot, params)
-    if isinstance(made, BoundingController) and \
-            type(made).command is BoundingController.command:
-        made = made.params
-    if not isinstance(made, ControllerParameters):
+    # what simulate() would run it as: the built-in law (with these parameters) or not
+    plan = plan_controller(made, model, robot)
+    if plan.kind != "builtin":
         raise FactoryError(f"controller {spec!r} returned {type(made).__name__}, a controller "
                            "with a command() of its own: BoundEnv runs the Table I law (the "
                            "agent sets its set-points) or the agent's hip torques, so its "
                            "factory must return ControllerParameters (or a "
                            "BoundingController with the built-in law)")
-    return made
+    return plan.parameters

@@ -108,3 +108,23 @@ def test_an_integrator_stop_mid_episode_ends_healthy_steps_with_a_truncation():
     # the data up to the failure: a finite last observation, time short of the step's end
     assert np.all(np.isfinite(obs))
     assert info["t"] < (len(healthy) + 1) * env.unwrapped.dt
+
+
+def test_a_failure_with_the_robot_already_down_is_a_termination(monkeypatch):
+    """The task's rule comes first: a step that ends with the robot down (COM below the
+    healthy height) is terminated, whatever stopped the simulator; info still names the
+    numerical failure."""
+    env = BoundEnv(model="ideal", action_type="setpoints")
+    env.reset(seed=0)
+    eng = env.engine
+    advance = eng.advance
+
+    def failing_low(k_stop):
+        advance(k_stop)
+        eng.s[L.IY] = 0.1           # below the healthy range's 0.2 m
+        eng.status = L.ST_NUMERICAL_FAILURE
+
+    monkeypatch.setattr(eng, "advance", failing_low)
+    _, _, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
+    assert (terminated, truncated) == (True, False)
+    assert info["numerical_failure"] and info["reward_healthy"] == 0.0
