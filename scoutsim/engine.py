@@ -94,6 +94,10 @@ class HybridEngine:
         self._entry = None        # the compiled run loop for this engine's method
         self.t_now = 0.0
 
+    def __getstate__(self):
+        # the compiled run loop does not pickle: the next advance() looks it up again
+        return self.__dict__ | {"_entry": None}
+
     @property
     def running(self) -> bool:
         return self.k <= self.k_last and self.status == L.ST_RUNNING
@@ -130,6 +134,19 @@ class HybridEngine:
         """The run loop's status by name: "running" until it stops the run, then "fell",
         "numerical_failure" or "controller_error"."""
         return L.STATUS_NAMES[self.status]
+
+    def toe_position(self, leg) -> tuple[float, float]:
+        """(x, y) of virtual leg ``leg``'s toe [m] (0 back, 1 front), from the model's
+        evaluation at the state of the last :meth:`read_sensors` (what
+        ``SimulationResult.toe_position`` records at a sample)."""
+        o = int(leg) * L.NAUX_LEG
+        aux = self.block.last[L.NS:]
+        return float(aux[o + L.A_TOE_X]), float(aux[o + L.A_TOE_Y])
+
+    def contact_mode(self, leg) -> int:
+        """Plant contact mode of leg ``leg`` now, a code of
+        :class:`~scoutsim.names.ContactMode` (0 flight, 1 stick, 2 slide, 3 strut)."""
+        return int(self.mi[L.MI_CONTACT_B + int(leg)])
 
     def electrical_energy(self) -> float:
         """Electrical energy into both legs' motor terminals since the start [J] (NaN

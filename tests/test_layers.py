@@ -44,6 +44,7 @@ CONVENIENCE_ACCESSORS = {
     ("scoutsim.analysis.tune_result", "scoutsim.presentation.plots"),  # tuning.plot_convergence()
     ("scoutsim.identification.fit_result",
      "scoutsim.presentation.identification_plots"),                    # fit result .plot()
+    ("scoutsim.envs.bound", "scoutsim.presentation.frames"),           # BoundEnv.render()
 }
 
 

@@ -5,6 +5,9 @@
     import gymnasium, scoutsim.envs
     env = gymnasium.make("scoutsim/Bound-v0", model="II", action_type="setpoints")
     envs = gymnasium.make_vec("scoutsim/Bound-v0", num_envs=4, vectorization_mode="async")
+    env = gymnasium.make("scoutsim/Bound-v0", render_mode="rgb_array")   # env.render(): a frame
+    env = gymnasium.make("scoutsim/Bound-v0", action_type="setpoints",
+                         controller="my_gaits:make")   # Table I parameters of one's own
 
 Needs Gymnasium (``pip install "scoutsim[rl]"``); ``import scoutsim`` alone does not import
 it.

@@ -21,15 +21,19 @@ import numpy as np
 from gymnasium import spaces
 
 from ..control.bounding import SCHEDULABLE
+from ..control.dispatch import plan_controller
+from ..control.factory import FactoryError, controller_from_spec, is_factory_spec
 from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
 from ..engine import start_engine
+from ..failure import diagnose_failure
+from ..names import ContactMode
 from ..simulation import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
 from ..state import HybridState, InitialState, standing_state
 
 __all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
-           "RANDOM_START_HALF_WIDTHS"]
+           "RANDOM_START_HALF_WIDTHS", "RENDER_MODES", "RENDER_SIZE", "NON_PHYSICAL_ENDS"]
 
 #: what an action is: the hip torques, or the set-points of the Table I controller
 ACTION_TYPES = ("torque", "setpoints")
@@ -45,6 +49,14 @@ STARTS = ("flight", "standing", "random")
 #: ideal, Model I and Model II all bound under the Table I controller (docs/model.md
 #: "Default start and floor"; the height interval is centred on 0.33 m: 0.315-0.345 m)
 RANDOM_START_HALF_WIDTHS = {"y": 0.015, "dx": 0.2, "dtheta": math.radians(50.0)}
+#: what :meth:`BoundEnv.render` can draw (Gymnasium's ``render_mode``)
+RENDER_MODES = ("rgb_array",)
+#: the frame's size keywords [pixels] with their defaults (None: the default of
+#: :func:`scoutsim.presentation.frames.draw_pose`, 480 x 240)
+RENDER_SIZE = {"render_width": None, "render_height": None}
+#: the ends of an episode that are the simulator's, not the robot's (``info["outcome"]``):
+#: the integrator or the constrained dynamics could not go on, or the controller failed
+NON_PHYSICAL_ENDS = ("numerical_failure", "controller_error")
 #: the engine's run length [s]: a limit no episode reaches (the time limit is the
 #: registration's ``max_episode_steps``); the buffers hold one policy step, whatever it is
 _ENGINE_DURATION = 1.0e7
@@ -92,14 +104,34 @@ class BoundEnv(gymnasium.Env):
       term 0;
     * ``reward_healthy``: ``healthy_reward`` while the robot is up: its COM height in
       ``healthy_height_range`` [m] and its pitch in ``healthy_pitch_range`` [rad] at the
-      end of the step, and not fallen during it.
+      end of the step, and not fallen during it; none for a step the simulator could not
+      complete (below).
 
-    **Episode end**: ``terminated`` when the simulator detects a fall (the torso touches
-    the ground or |pitch| exceeds ``pitch_limit_deg``; the model cannot go on from there)
-    and, with ``terminate_when_fallen``, when the robot is not up; ``truncated`` at a
-    numerical failure of the integrator (``info["outcome"]``) and, through the
-    registration's ``max_episode_steps`` (1000 steps: 10 s at the default policy period),
-    at the time limit.
+    **Episode end** (``info["outcome"]``: "running", "fell", "numerical_failure" or
+    "controller_error", the simulator's status at the end of the step):
+
+    * ``terminated`` when the simulator detects a fall ("fell": the torso touches the
+      ground or |pitch| exceeds ``pitch_limit_deg``; the model cannot go on from there)
+      and, with ``terminate_when_fallen``, when the robot is not up: terminal states of
+      the task, worth nothing after them;
+    * ``truncated`` through the registration's ``max_episode_steps`` (1000 steps: 10 s at
+      the default policy period), at the time limit;
+    * ``truncated`` too, with ``terminated`` False, when the simulator cannot go on
+      (:data:`NON_PHYSICAL_ENDS`): the integrator or the constrained dynamics failed
+      ("numerical_failure", ``info["numerical_failure"]`` True) or the controller did
+      ("controller_error"), unless the robot is down by then (the rule above; the step
+      is then ``terminated`` as any other). This is Gymnasium's truncation, an end
+      "outside the scope of the MDP": the robot did not fall, its state at the failure is
+      a real state whose future is not worth zero, and a learner that bootstraps from the
+      last observation values it rightly, where ``terminated`` would teach it that the
+      state is terminal.
+      It is never a healthy step: the step earns no ``reward_healthy`` (its forward and
+      energy terms cover the motion up to the failure, ``info["t"]``), and ``info`` says
+      what it was, so it is not mistaken for the time limit: ``info["outcome"]``,
+      ``info["numerical_failure"]`` (False at every other step) and
+      ``info["failure_message"]``, the simulator's diagnosis
+      (:meth:`~scoutsim.failure.FailureDiagnosis.message`). A learner that would rather
+      count such an episode as lost tests ``info["numerical_failure"]``.
 
     **Start** (``start``): "flight" (:class:`~scoutsim.state.InitialState`: released in
     flight at 0.33 m, 1.2 m/s, nose rising at 150 deg/s), "standing"
@@ -139,9 +171,19 @@ class BoundEnv(gymnasium.Env):
         The start (above).
     reset_noise_scale : float
         Width of the "random" start as a fraction of :data:`RANDOM_START_HALF_WIDTHS`.
-    robot, controller : RobotParameters, ControllerParameters, optional
-        The robot and the Table I parameters (default: Scout II, Table I); not together
-        with ``robot_file``.
+    robot : RobotParameters, optional
+        The robot (default: Scout II); not together with ``robot_file``.
+    controller : ControllerParameters or str, optional
+        The Table I parameters (default: Table I): the gains and thresholds of the
+        controller the "setpoints" action drives, and the leg angles of a start in flight
+        (both action types). A string ``"MODULE:FACTORY"`` names a factory of one's own
+        (:mod:`scoutsim.control.factory`), called with the environment's robot and the
+        Table I parameters it would otherwise use (the robot file's ``[controller]``, or
+        Table I) and returning ControllerParameters (or a
+        :class:`~scoutsim.control.bounding.BoundingController` with the built-in law); the
+        string, not the object, is what the environment keeps, so it is made again in each
+        worker of a vector environment. Not a ControllerParameters object together with
+        ``robot_file``.
     robot_file : path, optional
         A robot file (TOML: robot, controller and ``[sensors]`` sections, as
         ``scoutsim run --robot``).
@@ -153,25 +195,37 @@ class BoundEnv(gymnasium.Env):
         |pitch| [deg] the simulator counts as a fall (default 60).
     integrator : IntegratorSettings, optional
         The integrator (default: the model's, as :func:`~scoutsim.simulate`).
-    render_mode : None
-        No rendering (``scoutsim.presentation.animation`` draws a run).
+    render_mode : {None, "rgb_array"}
+        "rgb_array": :meth:`render` returns the robot now as an (``render_height``,
+        ``render_width``, 3) uint8 image (:func:`scoutsim.presentation.frames.draw_pose`:
+        a side view following the torso; torso, legs coloured by the controller's leg
+        state, toes filled while on the ground, the ground with a tick every 0.25 m).
+        ``metadata["render_fps"]`` is the policy rate, 1 / ``policy_period``, so a video
+        of one frame per step plays in real time. None: no rendering.
+    render_width, render_height : int
+        The frame's size [pixels] (default 480 x 240: 320 pixels per metre).
     **options
-        The keywords above that are fields of :class:`Reward` or of :data:`PLANT_OPTIONS`
-        (``friction_coefficient``, ``pitch_limit_deg``, ``integrator``), and any field of
+        The keywords above that are fields of :class:`Reward`, of :data:`PLANT_OPTIONS`
+        (``friction_coefficient``, ``pitch_limit_deg``, ``integrator``) or of
+        :data:`RENDER_SIZE`, and any field of
         :class:`~scoutsim.parameters.RobotParameters` or
         :class:`~scoutsim.parameters.ControllerParameters` [SI], applied over ``robot`` /
         ``controller`` / the robot file (e.g. ``current_limit=10.0``).
     """
 
-    metadata = {"render_modes": []}
+    #: Gymnasium's metadata; an instance's ``render_fps`` is its policy rate (this one is
+    #: that of the default policy period, 10 ms)
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 100}
 
     def __init__(self, model: str = "II", action_type: str = "torque",
                  policy_period: float = 0.01, *, reward: Reward | None = None,
                  start="flight", reset_noise_scale: float = 1.0,
                  robot: RobotParameters | None = None,
-                 controller: ControllerParameters | None = None,
+                 controller: ControllerParameters | str | None = None,
                  robot_file=None, sensors: SensorParameters | None = None,
-                 render_mode=None, **options):
+                 render_mode: str | None = None, **options):
+        render_width, render_height = (options.pop(name, default) for name, default in
+                                       RENDER_SIZE.items())
         reward, plant, parameters = _options(reward, options)
         forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
             reward.forward_reward_weight, reward.target_speed, reward.energy_cost_weight,
@@ -186,10 +240,18 @@ class BoundEnv(gymnasium.Env):
         if action_type not in ACTION_TYPES:
             raise ValueError(f"action_type = {action_type!r} is not allowed: must be one of "
                              f"{list(ACTION_TYPES)}")
-        if render_mode is not None:
-            raise ValueError(f"render_mode = {render_mode!r} is not allowed: BoundEnv does "
-                             "not render (None)")
-        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters)
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode = {render_mode!r} is not allowed: must be None or "
+                             f"one of {list(RENDER_MODES)}")
+        for name, v in (("render_width", render_width), ("render_height", render_height)):
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
+                                  or v < 16):
+                raise ValueError(f"{name} = {v!r} is not allowed: must be a whole number of "
+                                 "pixels >= 16 (or None: the default)")
+        #: the "MODULE:FACTORY" the Table I parameters were made by (None: given)
+        self.controller_spec = controller if isinstance(controller, str) else None
+        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters,
+                                                  model)
         if sensors is None:
             sensors = load_sensors(robot_file, self.robot) if robot_file is not None \
                 else SensorParameters()
@@ -236,7 +298,15 @@ class BoundEnv(gymnasium.Env):
         self.friction_coefficient = friction_coefficient
         self.pitch_limit_deg = pitch_limit_deg
         self.integrator = integrator
-        self.render_mode = None
+        self.render_mode = render_mode
+        #: the frame's size keywords of draw_pose (none: its default size)
+        self._frame_size = {key: int(v) for key, v in (("width", render_width),
+                                                       ("height", render_height))
+                            if v is not None}
+        rate = 1.0 / self.policy_period
+        self.metadata = {**type(self).metadata,
+                         "render_fps": round(rate) if abs(rate - round(rate)) < 1e-9 * rate
+                         else rate}
         self.observation_space = spaces.Box(-np.inf, np.inf, (N_SENSORS,), np.float64)
         if action_type == "torque":
             tau = np.array([self.robot.leg(leg).max_leg_torque for leg in (0, 1)])
@@ -252,6 +322,7 @@ class BoundEnv(gymnasium.Env):
         # episode's)
         self._new_engine(self._start_state(None), 0)
         self._running = False
+        self._reset_done = False
 
     # -- the episode ----------------------------------------------------------------------
 
@@ -276,6 +347,7 @@ class BoundEnv(gymnasium.Env):
         # under the first action: the accelerometer, currents and battery of that reading
         # are what a channel delayed past sample 0 reports at first)
         obs = self._engine.read_sensors().copy()
+        self._reset_done = True
         return obs, self._info_now()
 
     def step(self, action):
@@ -296,12 +368,19 @@ class BoundEnv(gymnasium.Env):
             eng.C[self.setpoint_slots] = a
         x0, t0, e0 = eng.x, eng.t_now, self._electrical()
         eng.advance(eng.k + self.samples_per_step)
+        outcome = eng.status_name
+        broken = outcome in NON_PHYSICAL_ENDS
+        message = self._failure_message() if broken else None   # (from the step's records)
         eng.discard_records()
         obs = eng.read_sensors().copy()
         x1, t1 = eng.x, eng.t_now
         energy = self._electrical() - e0
         fell = eng.fell
-        up = not fell and self._is_up()
+        up_now = self._is_up()
+        # healthy: a whole step that ended up; down: fallen, or not up (when that ends it)
+        # at a state that is one (a state that is not finite says nothing either way)
+        up = not fell and not broken and up_now
+        down = fell or (self.terminate_when_fallen and not up_now and self._state_finite())
         v = (x1 - x0) / (t1 - t0) if t1 > t0 else 0.0
         if self.target_speed is None:
             r_forward = self.forward_reward_weight * v
@@ -310,14 +389,39 @@ class BoundEnv(gymnasium.Env):
         r_energy = -self.energy_cost_weight * energy if self._accounting else 0.0
         r_healthy = self.healthy_reward if up else 0.0
         reward = r_forward + r_energy + r_healthy
-        terminated = fell or (self.terminate_when_fallen and not up)
+        terminated = down
+        # the simulator could not go on (a numerical failure, a controller error): the end
+        # of an episode outside the task, Gymnasium's truncation (class docstring)
         truncated = not terminated and eng.stopped
         self._running = not (terminated or truncated)
         info = self._info_now()
         info.update(reward_forward=r_forward, reward_energy=r_energy,
                     reward_healthy=r_healthy, x_velocity=v, electrical_energy=energy,
-                    is_healthy=up)
+                    is_healthy=up, numerical_failure=outcome == "numerical_failure")
+        if broken:
+            info["failure_message"] = message
         return obs, float(reward), bool(terminated), bool(truncated), info
+
+    def render(self):
+        """The robot now (after the last :meth:`reset` or :meth:`step`) as an
+        (``render_height``, ``render_width``, 3) uint8 RGB array with ``render_mode``
+        "rgb_array" (see the class docstring); None with ``render_mode`` None."""
+        if self.render_mode is None:
+            return None
+        if not self._reset_done:
+            raise gymnasium.error.ResetNeeded("BoundEnv.render: call reset() before "
+                                              "render()")
+        # the drawing lives in the presentation layer (deferred: imported on first render)
+        from ..presentation.frames import RobotPose, draw_pose
+        eng = self._engine
+        legs = (0, 1)
+        pose = RobotPose.of(
+            self.robot, eng.x, eng.height, eng.pitch,
+            toes=[eng.toe_position(leg) for leg in legs],
+            contact=[eng.contact_mode(leg) != ContactMode.FLIGHT for leg in legs],
+            # the Table I controller's leg states ("torque": no controller runs)
+            leg_states=tuple(eng.ls) if self.action_type == "setpoints" else None)
+        return draw_pose(pose, **self._frame_size)
 
     # -- pieces -----------------------------------------------------------------------------
 
@@ -361,6 +465,23 @@ class BoundEnv(gymnasium.Env):
         """Electrical energy into both legs' motor terminals since the start [J] (NaN
         without the accounting)."""
         return self._engine.electrical_energy()
+
+    def _failure_message(self) -> str:
+        """What stopped the simulator in the step just run (its records still in the
+        engine): the diagnosis of a numerical failure
+        (:func:`~scoutsim.failure.diagnose_failure`), or the controller's failure."""
+        eng = self._engine
+        if eng.status_name != "numerical_failure":
+            return (f"the controller failed at t = {eng.t_now:.6g} s (outcome "
+                    f"{eng.status_name!r})")
+        provenance = {"model": self.model, "robot": dataclasses.asdict(self.robot),
+                      "controller": dataclasses.asdict(self.controller),
+                      "integrator": dataclasses.asdict(eng.integ)}
+        diagnosis = diagnose_failure(eng.result(provenance))
+        return diagnosis.message()
+
+    def _state_finite(self) -> bool:
+        return bool(np.all(np.isfinite(self._engine.s)))
 
     def _is_up(self) -> bool:
         eng = self._engine
@@ -416,7 +537,7 @@ def _options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:
     return dataclasses.replace(reward or Reward(), **rew), plant, options
 
 
-def _parameters(robot, controller, robot_file, overrides):
+def _parameters(robot, controller, robot_file, overrides, model):
     """(RobotParameters, ControllerParameters) from the constructor's arguments."""
     robot_fields = {f.name for f in dataclasses.fields(RobotParameters)}
     ctrl_fields = {f.name for f in dataclasses.fields(ControllerParameters)}
@@ -430,13 +551,38 @@ def _parameters(robot, controller, robot_file, overrides):
                         + (f"; did you mean {close[0]!r}?" if close else ""))
     r_over = {k: v for k, v in overrides.items() if k in robot_fields}
     c_over = {k: v for k, v in overrides.items() if k in ctrl_fields}
+    spec = controller if isinstance(controller, str) else None
+    if spec is not None:
+        controller = None
+        if not is_factory_spec(spec):
+            raise ValueError(f"controller = {spec!r} is not allowed: a string must be "
+                             "'MODULE:FACTORY' (e.g. 'my_gaits:make', a function in "
+                             "my_gaits.py returning ControllerParameters)")
     if robot_file is not None:
         if robot is not None or controller is not None:
             raise ValueError("robot_file is not allowed together with robot or controller")
-        return load_parameters(robot_file, r_over, c_over)
-    robot = (robot if robot is not None else RobotParameters()).replace(**r_over)
-    controller = (controller if controller is not None
-                  else ControllerParameters()).replace(**c_over)
-    validate_robot(robot)
+        robot, controller = load_parameters(robot_file, r_over, c_over)
+    else:
+        robot = (robot if robot is not None else RobotParameters()).replace(**r_over)
+        controller = (controller if controller is not None
+                      else ControllerParameters()).replace(**c_over)
+        validate_robot(robot)
+    if spec is not None:
+        controller = _from_factory(spec, robot, controller, model).replace(**c_over)
     validate_parameters(robot, controller)
     return robot, controller
+
+
+def _from_factory(spec: str, robot: RobotParameters, params: ControllerParameters,
+                  model: str) -> ControllerParameters:
+    """The Table I parameters the factory ``spec`` makes for ``robot`` from ``params``."""
+    made = controller_from_spec(spec, robot, params)
+    # what simulate() would run it as: the built-in law (with these parameters) or not
+    plan = plan_controller(made, model, robot)
+    if plan.kind != "builtin":
+        raise FactoryError(f"controller {spec!r} returned {type(made).__name__}, a controller "
+                           "with a command() of its own: BoundEnv runs the Table I law (the "
+                           "agent sets its set-points) or the agent's hip torques, so its "
+                           "factory must return ControllerParameters (or a "
+                           "BoundingController with the built-in law)")
+    return plan.parameters

@@ -1,6 +1,6 @@
 """Figures and animation: everything scoutsim draws (the top layer; nothing below imports it
 except the deferred convenience accessors ``SimulationResult.plot``,
-``SweepResult.plot_map`` and ``IdentificationResult.plot``).
+``SweepResult.plot_map``, ``IdentificationResult.plot`` and ``BoundEnv.render``).
 
 Modules
 -------
@@ -12,6 +12,8 @@ maps                  the basin map and sweep maps over a grid of runs
 tune_plots            a tuning's convergence
 run_parts             what the run figures share (title, leg-state bands)
 animation             stick-figure animation of a run (GIF / MP4)
+frames                one picture of the robot as an RGB array, rasterised with NumPy (the
+                      learning environment's ``render``)
 paper_figures         the paper's Figs. 5, 8-12 for an experiment and models, all written at
                       once; one module per figure group: experiment_figure (Fig. 5),
                       stride_figures (Figs. 8-10), saturation_figure (Fig. 11),
