@@ -34,7 +34,8 @@ Run it (after ``pip install -e .`` in the repository):
                                            [--pitch-rate-gain 0.0] [--quick]
 
 ``--robot FILE`` is a robot file as ``scoutsim run --robot`` reads it (its
-``[controller]`` section sets the Table I parameters of both controllers); ``--quick``
+``[controller]`` section sets the Table I parameters of both controllers, its
+``[sensors]`` section what both read); ``--quick``
 runs 4 s instead of 10 s (seconds in all). It prints the compile time, each run's outcome,
 gait, speed and distance, and whether the two runs agree.
 """
@@ -153,13 +154,14 @@ def main(argv=None):
     duration = (args.duration if args.duration is not None
                 else QUICK_DURATION if args.quick else 10.0)
     robot, table = scoutsim.load_parameters(args.robot)
+    sensors = scoutsim.load_sensors(args.robot, robot)    # the file's [sensors], else ideal
     scoutsim.simulation.warm_up()
     ctrl = make_controller(robot, args.pitch_rate_gain, table)   # deg/deg-s = rad/rad-s
     print(f"compiled the controller in {ctrl.compile_time_s:.2f} s")
     runs = {}
     for name, c in (("built-in Table I", table), ("this example", ctrl)):
         t0 = time.perf_counter()
-        r = scoutsim.simulate(robot, c, duration=duration, model=args.model)
+        r = scoutsim.simulate(robot, c, duration=duration, model=args.model, sensors=sensors)
         wall = time.perf_counter() - t0
         runs[name] = r
         s = r.summary()
