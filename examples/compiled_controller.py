@@ -20,13 +20,24 @@ initial state at every run), ``torque`` receives the hip torques per physical le
 
 This example is a bounding controller written from scratch in that form: per leg, a
 flight servo to a touchdown angle, stance-retraction at the motor's full torque-speed
-line, a brake at the sweep limit (the structure of the paper's Table I controller), and a
-pitch-rate term on the touchdown angles (gain ``K_PITCH_RATE``, 0 by default) to play
-with. Run it:
+line, a brake at the sweep limit (the structure of the paper's Table I controller, eqs.
+2-5), and a pitch-rate term on the touchdown angles (gain ``K_PITCH_RATE``, 0 by default)
+to play with. Its parameter array has named slots; every quantity that may differ between
+the legs (set-points, gains, the leg rest length, the motor constants of a robot whose
+legs differ) has two, back then front (``params[NAME + leg]``), so it runs any robot.
+With the gain at 0 it is the Table I law, and the script checks that it reproduces the
+built-in controller's run bit for bit.
 
-    python examples/compiled_controller.py [--duration 10] [--pitch-rate-gain 0.0]
+Run it (after ``pip install -e .`` in the repository):
 
-It prints the compile time, the run's gait and its speed next to the built-in controller's.
+    python examples/compiled_controller.py [--robot FILE] [--duration 10] [--model II]
+                                           [--pitch-rate-gain 0.0] [--quick]
+
+``--robot FILE`` is a robot file as ``scoutsim run --robot`` reads it (its
+``[controller]`` section sets the Table I parameters of both controllers, its
+``[sensors]`` section what both read); ``--quick``
+runs 4 s instead of 10 s (seconds in all). It prints the compile time, each run's outcome,
+gait, speed and distance, and whether the two runs agree.
 """
 
 from __future__ import annotations
@@ -40,24 +51,29 @@ import numpy as np
 import scoutsim
 from scoutsim.control import CompiledController
 from scoutsim.control import sensors as S
+from scoutsim.names import LEG_NAMES, LegState
 
-# --- the controller's parameter array, by name --------------------------------------
-TD = 0            # touchdown angles [rad], back, front (TD + 1)
-SWEEP = 2         # sweep limits [rad], back, front
-KP_FLIGHT = 4     # flight servo gains [N m/rad], [N m s/rad]
-KD_FLIGHT = 5
-KP_BRAKE = 6      # brake servo gains
-KD_BRAKE = 7
-TD_COMPRESSION = 8    # leg compression that means touchdown [m]
-LO_COMPRESSION = 9    # ... below which the leg has lifted off [m]
-REST_LENGTH = 10      # leg rest length l0 [m]
-STALL_TORQUE = 11     # the motor's torque-speed line at the leg: tau = -stall + slope rate
-SLOPE = 12
-TORQUE_LIMIT = 13     # the amplifier's current limit, as a leg torque [N m]
-K_PITCH_RATE = 14     # touchdown angle correction per pitch rate [rad per rad/s]
-N_PARAMS = 15
+# --- the controller's parameter array, by name ------------------------------------------
+# a per-leg quantity takes two slots, back then front: params[NAME + leg]
+PER_LEG = len(LEG_NAMES)
+TD = 0                                  # touchdown angles [rad]
+SWEEP = TD + PER_LEG                    # sweep limits [rad]
+KP_FLIGHT = SWEEP + PER_LEG             # flight servo gains [N m/rad]
+KD_FLIGHT = KP_FLIGHT + PER_LEG         # ... [N m s/rad]
+KP_BRAKE = KD_FLIGHT + PER_LEG          # brake servo gains [N m/rad]
+KD_BRAKE = KP_BRAKE + PER_LEG           # ... [N m s/rad]
+REST_LENGTH = KD_BRAKE + PER_LEG        # leg rest length l0 [m]
+STALL_TORQUE = REST_LENGTH + PER_LEG    # the motor's torque-speed line at the leg,
+SLOPE = STALL_TORQUE + PER_LEG          # tau = -stall + slope rate [N m], [N m s/rad]
+TORQUE_LIMIT = SLOPE + PER_LEG          # the amplifier's current limit at the leg [N m]
+# one value for both legs
+TD_COMPRESSION = TORQUE_LIMIT + PER_LEG  # leg compression that means touchdown [m]
+LO_COMPRESSION = TD_COMPRESSION + 1      # ... below which the leg has lifted off [m]
+K_PITCH_RATE = LO_COMPRESSION + 1        # touchdown angle correction [rad per rad/s]
+N_PARAMS = K_PITCH_RATE + 1
 
-FLIGHT, RETRACTION, BRAKE = 0, 1, 2
+FLIGHT, RETRACTION, BRAKE = int(LegState.FLIGHT), int(LegState.RETRACTION), int(LegState.BRAKE)
+QUICK_DURATION = 4.0    # simulated time [s] of --quick
 
 
 def bound_with_pitch_rate(t, y, params, state, torque, leg_states):
@@ -65,7 +81,7 @@ def bound_with_pitch_rate(t, y, params, state, torque, leg_states):
     for leg in range(2):
         angle = y[S.HIP_ANGLE + leg]
         rate = y[S.HIP_RATE + leg]
-        compression = params[REST_LENGTH] - y[S.LEG_LENGTH + leg]
+        compression = params[REST_LENGTH + leg] - y[S.LEG_LENGTH + leg]
         st = leg_states[leg]
         if st == FLIGHT and compression > params[TD_COMPRESSION]:
             st = RETRACTION
@@ -76,56 +92,89 @@ def bound_with_pitch_rate(t, y, params, state, torque, leg_states):
         leg_states[leg] = st
         if st == FLIGHT:
             target = params[TD + leg] + params[K_PITCH_RATE] * y[S.PITCH_RATE]
-            torque[leg] = params[KP_FLIGHT] * (target - angle) - params[KD_FLIGHT] * rate
+            torque[leg] = (params[KP_FLIGHT + leg] * (target - angle)
+                           - params[KD_FLIGHT + leg] * rate)
         elif st == RETRACTION:
-            tau = -params[STALL_TORQUE] + params[SLOPE] * rate
-            torque[leg] = min(0.0, max(tau, -params[TORQUE_LIMIT]))
+            tau = -params[STALL_TORQUE + leg] + params[SLOPE + leg] * rate
+            torque[leg] = min(0.0, max(tau, -params[TORQUE_LIMIT + leg]))
         else:
-            torque[leg] = (params[KP_BRAKE] * (params[SWEEP + leg] - angle)
-                           - params[KD_BRAKE] * rate)
+            torque[leg] = (params[KP_BRAKE + leg] * (params[SWEEP + leg] - angle)
+                           - params[KD_BRAKE + leg] * rate)
     return 0
 
 
-def make_controller(robot: scoutsim.RobotParameters | None = None,
-                    pitch_rate_gain: float = 0.0) -> CompiledController:
-    """The example controller on ``robot`` (default Scout II), with the Table I set-points
-    and gains and the robot's motor constants (eqs. 2-4 of the paper)."""
+def controller_params(robot: scoutsim.RobotParameters | None = None,
+                      table: scoutsim.ControllerParameters | None = None,
+                      pitch_rate_gain: float = 0.0) -> np.ndarray:
+    """The parameter array (slots above) for ``robot`` (default Scout II) and the Table I
+    parameters ``table`` (default Table I): each leg's set-points and gains, and each leg's
+    rest length and motor constants (eqs. 2-4 of the paper, ``robot.leg(leg)``)."""
     robot = robot or scoutsim.RobotParameters()
-    table = scoutsim.ControllerParameters()
+    table = table or scoutsim.ControllerParameters()
     p = np.zeros(N_PARAMS)
-    p[TD:TD + 2] = table.touchdown_angle_back, table.touchdown_angle_front
-    p[SWEEP:SWEEP + 2] = table.sweep_limit_back, table.sweep_limit_front
-    p[KP_FLIGHT], p[KD_FLIGHT] = table.flight_kp_back, table.flight_kd_back
-    p[KP_BRAKE], p[KD_BRAKE] = table.brake_kp_back, table.brake_kd_back
+    for leg, name in enumerate(LEG_NAMES):
+        one = robot.leg(leg)
+        p[TD + leg] = getattr(table, f"touchdown_angle_{name}")
+        p[SWEEP + leg] = getattr(table, f"sweep_limit_{name}")
+        p[KP_FLIGHT + leg] = getattr(table, f"flight_kp_{name}")
+        p[KD_FLIGHT + leg] = getattr(table, f"flight_kd_{name}")
+        p[KP_BRAKE + leg] = getattr(table, f"brake_kp_{name}")
+        p[KD_BRAKE + leg] = getattr(table, f"brake_kd_{name}")
+        p[REST_LENGTH + leg] = one.leg_rest_length
+        p[STALL_TORQUE + leg] = one.stall_torque
+        p[SLOPE + leg] = -one.torque_speed_slope
+        p[TORQUE_LIMIT + leg] = one.max_leg_torque
     p[TD_COMPRESSION] = table.touchdown_compression
     p[LO_COMPRESSION] = table.liftoff_compression
-    p[REST_LENGTH] = robot.leg_rest_length
-    p[STALL_TORQUE] = robot.stall_torque
-    p[SLOPE] = -robot.torque_speed_slope
-    p[TORQUE_LIMIT] = robot.max_leg_torque
     p[K_PITCH_RATE] = pitch_rate_gain
-    return CompiledController(bound_with_pitch_rate, params=p, name="bound_with_pitch_rate")
+    return p
+
+
+def make_controller(robot: scoutsim.RobotParameters | None = None,
+                    pitch_rate_gain: float = 0.0,
+                    table: scoutsim.ControllerParameters | None = None) -> CompiledController:
+    """The example controller on ``robot`` (default Scout II, legs alike or not), with the
+    set-points and gains of ``table`` (default Table I) and the robot's motor constants."""
+    return CompiledController(bound_with_pitch_rate,
+                              params=controller_params(robot, table, pitch_rate_gain),
+                              name="bound_with_pitch_rate")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--duration", type=float, default=10.0, help="simulated time [s]")
+    ap.add_argument("--robot", metavar="FILE",
+                    help="TOML robot file, as `scoutsim run --robot` (default: Scout II)")
+    ap.add_argument("--duration", type=float, default=None,
+                    help="simulated time [s] (default 10, 4 with --quick)")
     ap.add_argument("--model", default="II", choices=["ideal", "I", "II"])
     ap.add_argument("--pitch-rate-gain", type=float, default=0.0,
                     help="touchdown angle correction [deg per deg/s]")
+    ap.add_argument("--quick", action="store_true", help="a short run (seconds in all)")
     args = ap.parse_args(argv)
+    duration = (args.duration if args.duration is not None
+                else QUICK_DURATION if args.quick else 10.0)
+    robot, table = scoutsim.load_parameters(args.robot)
+    sensors = scoutsim.load_sensors(args.robot, robot)    # the file's [sensors], else ideal
     scoutsim.simulation.warm_up()
-    ctrl = make_controller(pitch_rate_gain=args.pitch_rate_gain)   # deg/deg-s = rad/rad-s
+    ctrl = make_controller(robot, args.pitch_rate_gain, table)   # deg/deg-s = rad/rad-s
     print(f"compiled the controller in {ctrl.compile_time_s:.2f} s")
-    for name, c in (("built-in Table I", None), ("this example", ctrl)):
+    runs = {}
+    for name, c in (("built-in Table I", table), ("this example", ctrl)):
         t0 = time.perf_counter()
-        r = scoutsim.simulate(controller=c, duration=args.duration, model=args.model)
+        r = scoutsim.simulate(robot, c, duration=duration, model=args.model, sensors=sensors)
         wall = time.perf_counter() - t0
+        runs[name] = r
         s = r.summary()
         speed = s.get("mean_speed_m_s")
         print(f"{name:18s} {r.outcome:10s} {wall * 1e3:7.1f} ms ({r.t_end / wall:5.0f}x real "
               f"time), {s.get('n_steady_strides', 0)} steady strides, mean speed "
-              f"{'n/a' if speed is None or math.isnan(speed) else f'{speed:.3f} m/s'}")
+              f"{'n/a' if speed is None or math.isnan(speed) else f'{speed:.3f} m/s'}, "
+              f"{r.x[-1] - r.x[0]:.4f} m in {r.t_end:.2f} s")
+    a, b = runs.values()
+    same = (a.outcome == b.outcome and np.array_equal(a.t, b.t)
+            and np.array_equal(a.state, b.state))
+    print(f"the two runs agree bit for bit: {'yes' if same else 'no'}"
+          + ("" if args.pitch_rate_gain == 0.0 else " (expected: the pitch-rate gain is not 0)"))
 
 
 if __name__ == "__main__":
