@@ -359,9 +359,10 @@ def _motion(result, gait, c, tol) -> Behaviour:
         speed = sum(s.mean_speed_m_s * s.period_s for s in last) / cycle
         parts = " / ".join(f"{s.period_s:.3f}" for s in last)
         where = " in place" if abs(speed) < IN_PLACE_SPEED_M_S else ""
-        return Behaviour("periodic", f"a steady gait{where} that is not a bound: the back legs "
-                         f"lift off {k} times per cycle (strides of {parts} s, cycle "
-                         f"{cycle:.3f} s), at {speed:.2f} m/s" + (f"; {slid}" if slid else ""))
+        return Behaviour("periodic", f"a steady gait{where} with {k} back-leg lift-offs per "
+                         f"cycle (strides of {parts} s; cycle {cycle:.3f} s, "
+                         f"{1.0 / cycle:.2f} Hz) at {speed:.2f} m/s: not a bound of one "
+                         "lift-off per stride" + (f"; {slid}" if slid else ""))
     note = f"; {slid}" if slid else ""
     if speed is not None and abs(speed) < IN_PLACE_SPEED_M_S:
         lo = sum(c["liftoffs"].values())

@@ -26,7 +26,8 @@ from matplotlib.patches import Patch
 
 from ..names import LegState
 from .maps import plot_basin_map, plot_sweep_map
-from .run_parts import _state_bands, _title
+from .run_overview import draw_overview
+from .run_parts import _legend_above, _state_bands, _title
 from .stride_power import STRIDE_POWER_SINKS, STRIDE_POWER_SOURCES, plot_stride_power
 from .style import LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, save_figure
 from .torque_speed import draw_motor_limits, motor_limits, plot_torque_speed
@@ -57,9 +58,16 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     4. hip torque per physical leg [N m]: commanded (dashed) and delivered by the actuator,
        N eta K_T i (solid).
 
-    With an overview, two panels above them show pitch and COM height over the whole run
-    and the four panels show the last :data:`DETAIL_STRIDES` strides (the last second if
-    the run has fewer), shaded in the overview.
+    With an overview, three panels above them show the whole run
+    (:mod:`~scoutsim.presentation.run_overview`): the range of the pitch and of the COM
+    height over one stride (running maximum and minimum, readable over hundreds of strides)
+    and every stride's period, the steady ones filled; the four panels show the last
+    :data:`DETAIL_STRIDES` strides (the last second if the run has fewer), shaded in the
+    overview.
+
+    The title says what the run did (:meth:`SimulationResult.behaviour
+    <scoutsim.result.SimulationResult.behaviour>`: steady bounding at its speed, or what
+    instead); the legends sit above their panels, off the traces.
 
     Parameters
     ----------
@@ -101,13 +109,14 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
         t0, t1 = (float(t[0]), float(t[-1])) if t.size else (0.0, 1.0)
 
     if overview:
-        fig = Figure(figsize=(10, 12.5), layout="constrained")
-        top, bottom = fig.subfigures(2, 1, height_ratios=[2.6, 9.5])
-        _draw_overview(top.subplots(1, 2), result, t, t0, t1)
+        fig = Figure(figsize=(11, 13.5), layout="constrained")
+        top, bottom = fig.subfigures(2, 1, height_ratios=[3.0, 10.0])
+        draw_overview(top, result, t0, t1)
         axes = bottom.subplots(4, 1, sharex=True)
-        bottom.suptitle(f"last {DETAIL_STRIDES} strides", fontsize=10)
+        bottom.suptitle(f"detail: t = {t0:.2f} - {t1:.2f} s (last {DETAIL_STRIDES} strides)",
+                        fontsize=10)
     else:
-        fig = Figure(figsize=(10, 9.5), layout="constrained")
+        fig = Figure(figsize=(10, 10), layout="constrained")
         axes = fig.subplots(4, 1, sharex=True)
     _draw_run_panels(axes, result, t[sel], sel, t0, t1)
     fig.suptitle(_title(result))
@@ -126,25 +135,6 @@ def _last_strides_start(result) -> float:
     if len(strides) >= DETAIL_STRIDES:
         return float(strides[-DETAIL_STRIDES]["t_start"])
     return max(float(result.t[0]), t_end - 1.0)
-
-
-def _draw_overview(axes, result, t, t0, t1) -> None:
-    """Pitch and COM height over the whole run, the detail window [t0, t1] shaded."""
-    ax_p, ax_h = axes
-    ax_p.plot(t, np.degrees(np.asarray(result.pitch)), color="k", lw=0.6)
-    ax_p.set_ylabel("pitch [deg]")
-    ax_h.plot(t, np.asarray(result.height), color="k", lw=0.6)
-    ax_h.set_ylabel("COM height [m]")
-    for ax in axes:
-        ax.axvspan(t0, t1, color="tab:blue", alpha=0.15, lw=0, label="detail below")
-        if result.outcome == "fell":
-            ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
-        ax.set_xlabel("time [s]")
-        ax.grid(True, lw=0.4, alpha=0.5)
-        if t.size:
-            ax.set_xlim(float(t[0]), float(t[-1]))
-    ax_p.legend(loc="upper right", fontsize=8)
-    ax_p.set_title("whole run", fontsize=10)
 
 
 def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
@@ -175,8 +165,7 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
         for li, name in enumerate(LEG_NAMES):
             ax_leg.text(1.005, 0.25 + 0.5 * li, f"{name}\nstate", transform=ax_leg.transAxes,
                         fontsize=7, va="center", ha="left", color=LEG_COLORS[li])
-    ax_leg.legend(handles, labels, loc="upper left", fontsize=8, ncol=5, framealpha=0.85,
-                  bbox_to_anchor=(0.0, 1.0))
+    _legend_above(ax_leg, handles, labels)
 
     for li, name in enumerate(LEG_NAMES):
         ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=LEG_COLORS[li],
@@ -186,14 +175,14 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     ax_tau.axhline(0.0, color="0.6", lw=0.6)
     ax_tau.set_ylabel("hip torque per leg [N m]")
     ax_tau.set_xlabel("time [s]")
-    ax_tau.legend(loc="upper left", fontsize=8, ncol=4, framealpha=0.85)
+    _legend_above(ax_tau)
 
     if result.outcome == "fell" and t0 <= result.t_end <= t1:
         for ax in axes:
             ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
         ax_pitch.plot([], [], color="crimson", lw=1.0, ls=":", label="fall")
-    ax_pitch.legend(loc="upper left", fontsize=8)
-    ax_height.legend(loc="upper left", fontsize=8)
+    _legend_above(ax_pitch)
+    _legend_above(ax_height)
 
     for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)

@@ -1,5 +1,6 @@
-"""What the figures of one run share: the model's display name and the title, and the
-controller leg states drawn as shaded bands over time (paper Sec. II, Table I: flight,
+"""What the figures of one run share: the model's display name and the title (what the run
+did), the legend above its axes, and the controller leg states drawn as shaded bands over
+time (paper Sec. II, Table I: flight,
 stance-retraction, stance-brake; colours of :mod:`scoutsim.presentation.style`). Times in
 seconds.
 """
@@ -18,13 +19,35 @@ def _model_label(result) -> str:
     return model_label((result.provenance or {}).get("model"))
 
 
-def _title(result) -> str:
-    """The title of a run's figure: the model and the outcome (with the time [s] of a fall
-    or failure)."""
-    outcome = result.outcome
-    if outcome != "completed":
-        outcome = f"{outcome} at t = {result.t_end:.2f} s"
-    return f"Scout II bounding, {_model_label(result)}: {outcome}"
+def behaviour_text(result) -> str:
+    """What the run did (:meth:`SimulationResult.behaviour
+    <scoutsim.result.SimulationResult.behaviour>`: "steady bounding at 1.39 m/s, ...",
+    "fell at t = 0.66 s: ..."); the outcome (with the time [s] of a fall or failure) for
+    a run whose strides cannot be analysed."""
+    try:
+        return result.behaviour().text
+    except Exception:   # a result too broken for the stride analysis: its outcome
+        outcome = result.outcome
+        return outcome if outcome == "completed" else f"{outcome} at t = {result.t_end:.2f} s"
+
+
+def _title(result, width: int = 110) -> str:
+    """The title of a run's figure: the model and what the run did (:func:`behaviour_text`),
+    wrapped at ``width`` characters."""
+    import textwrap
+    return "\n".join(textwrap.wrap(f"Scout II, {_model_label(result)}: "
+                                    f"{behaviour_text(result)}", width,
+                                    break_on_hyphens=False))
+
+
+def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
+    """The axes' legend in one row above the axes, outside the data (as many columns as
+    entries)."""
+    if handles is None:
+        handles, labels = ax.get_legend_handles_labels()
+    ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(labels),
+              fontsize=fontsize, frameon=False, borderaxespad=0.15, handlelength=1.8,
+              columnspacing=1.2)
 
 
 def _runs(values: np.ndarray):

@@ -46,8 +46,8 @@ def test_plot_run_has_four_labelled_panels_with_units(result_II):
         assert ax.get_legend() is not None
     # panels share the time axis
     assert axes[0].get_shared_x_axes().joined(axes[0], axes[3])
-    title = fig._suptitle.get_text()
-    assert "Model II" in title and result_II.outcome in title
+    title = " ".join(fig._suptitle.get_text().split())      # (wrapped over lines)
+    assert "Model II" in title and result_II.behaviour().text in title
 
 
 def test_plot_run_values_are_in_degrees(result_II):
@@ -165,8 +165,8 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     from scoutsim.presentation.plots import DETAIL_STRIDES
     fig = plot_run(result_II, overview=True)
     axes = fig.get_axes()
-    assert len(axes) == 6
-    overview, detail = axes[:2], axes[2:]
+    assert len(axes) == 7
+    overview, detail = axes[:3], axes[3:]
     t = result_II.t
     assert overview[0].get_xlim() == pytest.approx((t[0], t[-1]))
     t0, t1 = detail[-1].get_xlim()
@@ -175,7 +175,7 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     assert t0 == pytest.approx(strides[-DETAIL_STRIDES]["t_start"])
     # "auto": only runs longer than LONG_RUN_S get the overview
     assert len(plot_run(result_II, overview="auto").get_axes()) == \
-        (6 if t[-1] - t[0] > 4.0 else 4)
+        (7 if t[-1] - t[0] > 4.0 else 4)
     with pytest.raises(ValueError, match="overview"):
         plot_run(result_II, overview="yes")
 
