@@ -63,7 +63,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import layout as L
 from ..names import ContactMode, EventKind
 from .stances import stance_overlap
 from .strides import MIN_STEADY_STRIDES, PERIOD_TOLERANCE
@@ -174,16 +173,13 @@ def toe_slide_distance(result, leg, t0: float | None = None) -> float:
 def _fall(result):
     """(time [s], cause "pitch" / "torso_contact") of the run's fall record, or the end of
     the run and None if it has none."""
-    ev = np.asarray(result.events, dtype=float).reshape(-1, L.NEVREC) \
-        if np.size(result.events) else np.zeros((0, L.NEVREC))
-    rows = ev[ev[:, L.EVR_KIND] == EventKind.FALL] if len(ev) else ev
-    if len(rows) == 0:
+    log = result.event_log(kinds=(EventKind.FALL,))
+    if log["t"].size == 0:
         return float(result.t_end), None
-    row = rows[-1]
     limit = math.radians(float((result.provenance or {}).get("pitch_limit_deg", 60.0)))
-    pitch = abs(float(row[L.EVR_V2]))             # the fall record: v1 = y, v2 = theta
+    pitch = abs(float(log["v2"][-1]))            # the fall record: v1 = y, v2 = theta
     cause = "pitch" if pitch >= limit * (1.0 - 1e-6) else "torso_contact"
-    return float(row[L.EVR_T]), cause
+    return float(log["t"][-1]), cause
 
 
 def _settled(strides, tol: float) -> bool:

@@ -123,6 +123,10 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     fps : frames per second of simulated time (playback in real time)
     t0, t1 : time window [s] (default: the whole run)
     figsize, dpi : size of the frames (default 640 x 320 pixels)
+
+    The animation's ``frame_times`` are the frames' times [s], its ``artists`` the drawn
+    parts by name ("torso", "legs" and "toes" (back, front), "forces", the per-leg
+    "status" lines, the time "stamp").
     """
     times = frame_times(result, fps, t0, t1)
     t = np.asarray(result.t, dtype=float)
@@ -216,6 +220,9 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
                          repeat=False)
     anim.frame_times = times
+    # the drawn parts by name, each updated by every frame
+    anim.artists = {"torso": torso, "legs": legs, "toes": toes, "forces": forces,
+                    "status": status, "stamp": stamp}
     return anim
 
 

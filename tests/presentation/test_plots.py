@@ -199,3 +199,72 @@ def test_plot_stride_power_shows_each_destination_with_its_energy(tmp_path):
     assert any("friction" in t.get_text() for t in ax_out.get_legend().get_texts())
     with pytest.raises(ValueError, match="energy=True"):
         plot_stride_power(scoutsim.simulate(duration=1.0, model="II"))
+
+
+def _drawn(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    FigureCanvasAgg(fig).draw()
+    return fig
+
+
+def test_plot_run_legends_sit_above_their_panels_off_the_traces(result_II):
+    """Every legend of the four panels lies above its axes (in display coordinates), so it
+    covers no trace; the title says what the run did."""
+    fig = _drawn(plot_run(result_II))
+    for ax in fig.get_axes():
+        legend = ax.get_legend().get_window_extent()
+        assert legend.y0 >= ax.get_window_extent().y1 - 0.5, ax.get_ylabel()
+
+
+def test_plot_run_overview_draws_the_range_over_one_stride_and_every_stride():
+    """A 5 s run: the overview's pitch band holds every sample between its edges, its upper
+    edge reaching the run's largest pitch; one marker per stride, the steady ones filled."""
+    r = scoutsim.simulate(duration=5.0, model="II")
+    fig = plot_run(r, overview="auto")
+    ax_p, ax_h, ax_s = fig.get_axes()[:3]
+    pitch = np.degrees(r.pitch)
+    hi, lo = (ln.get_ydata() for ln in ax_p.get_lines()[:2])
+    assert np.all(lo <= pitch) and np.all(pitch <= hi)
+    assert hi.max() == pitch.max() and lo.min() == pitch.min()
+    # the band is a stride wide: in the steady bound it is the stride's pitch range
+    steady = r.gait().steady_strides
+    k = np.searchsorted(r.t, 0.5 * (steady[-1].t_start + steady[-1].t_end))
+    assert hi[k] == pytest.approx(steady[-1].pitch_max_deg, abs=0.05)
+    assert lo[k] == pytest.approx(steady[-1].pitch_min_deg, abs=0.05)
+    open_marks, filled = ax_s.get_lines()
+    assert len(filled.get_xdata()) == r.gait().n_steady_strides
+    assert len(open_marks.get_xdata()) + len(filled.get_xdata()) == r.gait().n_strides
+    np.testing.assert_array_equal(filled.get_ydata(), [s.period_s for s in steady])
+
+
+def test_plot_run_title_of_a_fall_says_so():
+    """A robot that fell is not "bounding ... completed": the title says when and how."""
+    import math
+    r = scoutsim.simulate(initial_state=scoutsim.InitialState(theta=math.radians(40.0), y=0.5),
+                          duration=1.0)
+    title = " ".join(plot_run(r)._suptitle.get_text().split())
+    assert "fell at t = " in title and "pitch passed 60 deg" in title
+    assert "bounding" not in title and "completed" not in title
+
+
+def test_plot_stride_power_has_a_legend_for_the_leg_state_colours():
+    """The background bands' colours are named in a legend: flight, stance-retraction,
+    stance-brake, each patch the colour of the bands of that state."""
+    from matplotlib.patches import Patch
+    from matplotlib.colors import to_rgba
+    from scoutsim.names import LegState
+    from scoutsim.presentation.plots import plot_stride_power
+    r = scoutsim.simulate(duration=1.0, model="II", energy=True)
+    fig = plot_stride_power(r)
+    ax_in, ax_out = fig.get_axes()
+    legend = ax_in.get_legend()
+    patches = {t.get_text(): h for t, h in zip(legend.get_texts(), legend.legend_handles)
+               if isinstance(h, Patch) and h.get_visible()}
+    for state in LegState:
+        assert to_rgba(patches[state.label].get_facecolor()) == to_rgba(LEG_STATE_COLORS[state])
+    band_colours = {to_rgba(tuple(c)) for coll in ax_out.collections
+                    if isinstance(coll, PolyCollection) for c in coll.get_facecolors()}
+    assert band_colours <= {to_rgba(c) for c in LEG_STATE_COLORS}
+    _drawn(fig)
+    for ax in (ax_in, ax_out):         # the legends right of the panels, off the traces
+        assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
