@@ -44,7 +44,7 @@ LONG_RUN_S = 4.0
 DETAIL_STRIDES = 3
 
 
-def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
+def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) -> Figure:
     """Time histories of a run: pitch, COM height, leg angles with leg states, hip torques.
 
     Four stacked panels share the time axis [s]:
@@ -81,6 +81,10 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     overview : bool or "auto"
         Add the whole-run overview; "auto": for runs longer than :data:`LONG_RUN_S`
         when no ``t_range`` is given.
+    behaviour : str, optional
+        What the run did, for the title (default: ``result.behaviour()``; a result that
+        holds only a window of its run says its outcome and the window, unless given its
+        run's, e.g. the ``"behaviour"`` of the run's summary.json).
 
     Returns
     -------
@@ -119,7 +123,7 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
         fig = Figure(figsize=(10, 10), layout="constrained")
         axes = fig.subplots(4, 1, sharex=True)
     _draw_run_panels(axes, result, t[sel], sel, t0, t1)
-    fig.suptitle(_title(result))
+    fig.suptitle(_title(result, behaviour=behaviour))
     save_figure(fig, path)
     return fig
 

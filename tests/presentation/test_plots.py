@@ -268,3 +268,34 @@ def test_plot_stride_power_has_a_legend_for_the_leg_state_colours():
     _drawn(fig)
     for ax in (ax_in, ax_out):         # the legends right of the panels, off the traces
         assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
+
+
+def test_a_window_of_a_run_is_titled_by_its_run_not_by_its_own_strides(result_II):
+    """A window holds too few strides to judge the gait: the title gives the run's outcome
+    and the window shown, or what the whole run did when told (a saved run's summary)."""
+    part = result_II.window(0.2, 0.6)
+    title = " ".join(plot_run(part)._suptitle.get_text().split())
+    assert "t = 0.20 - 0.60 s shown of the run's 0 - 1.00 s" in title
+    assert "stride" not in title
+    whole = result_II.behaviour().text
+    title = " ".join(plot_run(part, behaviour=whole)._suptitle.get_text().split())
+    assert title.startswith(f"Scout II, Model II: {whole} (t = 0.20 - 0.60 s shown")
+
+
+def test_scoutsim_plot_of_a_window_titles_it_by_the_saved_summary(tmp_path, monkeypatch):
+    import json
+    from scoutsim.cli import main
+    import scoutsim.presentation.plots as plots
+    out = tmp_path / "run"
+    assert main(["run", "--duration", "0.5", "--out", str(out), "--no-progress",
+                 "--quiet"]) == 0
+    seen = {}
+    real = plots.plot_run
+
+    def spy(result, path=None, **kwargs):
+        seen.update(kwargs)
+        return real(result, path, **kwargs)
+    monkeypatch.setattr(plots, "plot_run", spy)
+    assert main(["plot", str(out), "--t0", "0.1", "--t1", "0.3",
+                 "--out", str(tmp_path / "w.png")]) == 0
+    assert seen["behaviour"] == json.loads((out / "summary.json").read_text())["behaviour"]
