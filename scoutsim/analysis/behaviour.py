@@ -47,8 +47,9 @@ First match wins:
     the transient holds fewer than 8 strides of the last period (a run that ended before
     the transient did, too): the only kind whose advice is "run longer".
 ``irregular``
-    strides after the transient whose periods did not settle: none steady, or a converged
-    tail that followed unsettled strides.
+    strides whose periods did not settle (none steady, or fewer than
+    :data:`SETTLED_STRIDES` converged after unsettled ones), or back legs that stopped
+    lifting off (no stride for the last :data:`REST_S` seconds and three periods).
 
 The sentence of every kind mentions the toes' sliding when they slid at least
 :data:`SLIDE_NOTE_PER_METRE` metres per metre travelled.
