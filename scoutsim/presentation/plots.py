@@ -26,7 +26,7 @@ from matplotlib.patches import Patch
 
 from ..names import LegState
 from .maps import plot_basin_map, plot_sweep_map
-from .run_overview import draw_overview
+from .run_overview import _strides, draw_overview
 from .run_parts import _legend_above, _state_bands, _title
 from .stride_power import STRIDE_POWER_SINKS, STRIDE_POWER_SOURCES, plot_stride_power
 from .style import LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, save_figure
@@ -42,6 +42,10 @@ __all__ = ["plot_run", "plot_torque_speed", "plot_stride_power", "plot_basin_map
 LONG_RUN_S = 4.0
 #: strides the detail panels of an overview figure show (the last ones of the run)
 DETAIL_STRIDES = 3
+#: smallest span of the pitch [deg] and COM height [m] axes of the time histories (a bound
+#: swings about 11 deg and 8 mm; a robot at rest is drawn flat, not its round-off)
+MIN_PITCH_SPAN_DEG = 2.0
+MIN_HEIGHT_SPAN_M = 0.005
 
 
 def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) -> Figure:
@@ -96,8 +100,11 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
     t = np.asarray(result.t, dtype=float)
     if overview == "auto":
         overview = t_range is None and t.size > 1 and float(t[-1] - t[0]) > LONG_RUN_S
+    detail = "the window asked for"
     if overview and t_range is None and t.size:
         t_range = (_last_strides_start(result), float(t[-1]))
+        detail = (f"the last {DETAIL_STRIDES} strides"
+                  if len(_strides(result)) >= DETAIL_STRIDES else "the last second")
     if t_range is not None:
         try:
             t0, t1 = (float(v) for v in t_range)
@@ -117,8 +124,7 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
         top, bottom = fig.subfigures(2, 1, height_ratios=[3.0, 10.0])
         draw_overview(top, result, t0, t1)
         axes = bottom.subplots(4, 1, sharex=True)
-        bottom.suptitle(f"detail: t = {t0:.2f} - {t1:.2f} s (last {DETAIL_STRIDES} strides)",
-                        fontsize=10)
+        bottom.suptitle(f"detail: t = {t0:.2f} - {t1:.2f} s ({detail})", fontsize=10)
     else:
         fig = Figure(figsize=(10, 10), layout="constrained")
         axes = fig.subplots(4, 1, sharex=True)
@@ -132,10 +138,7 @@ def _last_strides_start(result) -> float:
     """Start [s] of the last DETAIL_STRIDES strides of a run (1 s before its end if it has
     fewer)."""
     t_end = float(result.t[-1])
-    try:
-        strides = result.strides
-    except Exception:   # a run too short or too broken for stride analysis
-        strides = []
+    strides = _strides(result)
     if len(strides) >= DETAIL_STRIDES:
         return float(strides[-DETAIL_STRIDES]["t_start"])
     return max(float(result.t[0]), t_end - 1.0)
@@ -191,3 +194,14 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_tau.set_xlim(t0, t1)
+    # a torso at rest: its sub-micrometre motion is not zoomed into a bound's swing
+    _min_span(ax_pitch, MIN_PITCH_SPAN_DEG)
+    _min_span(ax_height, MIN_HEIGHT_SPAN_M)
+
+
+def _min_span(ax, span: float) -> None:
+    """Widen the y-limits of ``ax`` to at least ``span`` about their middle."""
+    lo, hi = ax.get_ylim()
+    if hi - lo < span:
+        mid = 0.5 * (lo + hi)
+        ax.set_ylim(mid - 0.5 * span, mid + 0.5 * span)

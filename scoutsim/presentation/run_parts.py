@@ -63,11 +63,11 @@ def _title(result, width: int = 110, behaviour: str | None = None) -> str:
 
 
 def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
-    """The axes' legend in one row above the axes, outside the data (as many columns as
-    entries)."""
+    """The axes' legend in one row above the axes at their right end, outside the data (as
+    many columns as entries; the left end keeps the axis' offset text)."""
     if handles is None:
         handles, labels = ax.get_legend_handles_labels()
-    ax.legend(handles, labels, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(labels),
+    ax.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(labels),
               fontsize=fontsize, frameon=False, borderaxespad=0.15, handlelength=1.8,
               columnspacing=1.2)
 
