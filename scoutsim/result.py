@@ -103,8 +103,20 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         """Per-stride metrics (list of dicts) of all strides."""
         return self.gait().strides
 
+    def behaviour(self):
+        """What the run did: steady bounding (at what speed), or what instead: fell, stood,
+        slid, hopped in place, too short to tell, irregular strides, failed
+        (:class:`~scoutsim.analysis.behaviour.Behaviour`: ``kind``, ``text``, ``t_s``,
+        ``advice``, ``counts``; :func:`~scoutsim.analysis.behaviour.classify_behaviour`)."""
+        key = ("behaviour",)
+        if key not in self._cache:
+            self._cache[key] = self.gait().behaviour(self)
+        return self._cache[key]
+
     def summary(self) -> dict:
-        """The run summary (outcome, steady-state gait metrics and what the gait costs:
+        """The run summary (outcome, what the run did: ``behaviour``, a sentence, with
+        ``behaviour_kind`` and ``behaviour_detail``, :meth:`behaviour`; steady-state gait
+        metrics and what the gait costs:
         ``electrical_energy_j`` [J] over the run, ``cost_of_transport`` [-] over the steady
         strides, ...; None without the energy accounting,
         :meth:`~scoutsim.analysis.gait.GaitMetrics.energy_summary`), JSON-safe; a run that

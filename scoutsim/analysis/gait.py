@@ -39,13 +39,15 @@ import numpy as np
 
 from ..names import LegState, leg_index
 from ..parameters import RobotParameters
+from .behaviour import classify_behaviour
 from .stances import stance_intervals, stance_overlap
 from .stride_energy import _input_and_weight, stride_energy
-from .strides import (STRIDE_ENERGY_METRICS, STRIDE_METRICS, Stride, _json_float, _strides,
-                      converged_tail)
+from .strides import (MIN_STEADY_STRIDES, PERIOD_TOLERANCE, STRIDE_ENERGY_METRICS,
+                      STRIDE_METRICS, Stride, _json_float, _strides, converged_tail)
 
 __all__ = ["gait_metrics", "stance_intervals", "stride_table", "stride_energy", "Stride",
-           "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_ENERGY_KEYS",
+           "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_BEHAVIOUR_KEYS",
+           "SUMMARY_ENERGY_KEYS",
            "STRIDE_METRICS", "STRIDE_ENERGY_METRICS", "stance_overlap", "converged_tail"]
 
 #: Keys that :meth:`GaitMetrics.summary` returns first, in this order.
@@ -57,7 +59,11 @@ SUMMARY_EXTRA_KEYS = ("t_end_s", "n_strides", "stride_period_cv", "steady_boundi
                       "motor_saturation_retraction_back", "motor_saturation_retraction_front",
                       "max_belt_deflection_deg", "max_impact_impulse_ratio",
                       "end_of_stance_slides", "model")
-#: Keys that follow :data:`SUMMARY_EXTRA_KEYS` in :meth:`GaitMetrics.summary`: what the
+#: Keys that follow :data:`SUMMARY_EXTRA_KEYS` in :meth:`GaitMetrics.summary`: what the run
+#: did (:func:`~scoutsim.analysis.behaviour.classify_behaviour`): the sentence, its kind
+#: and the counts it was decided from (with the time and the advice).
+SUMMARY_BEHAVIOUR_KEYS = ("behaviour", "behaviour_kind", "behaviour_detail")
+#: Keys that follow :data:`SUMMARY_BEHAVIOUR_KEYS` in :meth:`GaitMetrics.summary`: what the
 #: gait costs (all None for a run made without the energy accounting).
 SUMMARY_ENERGY_KEYS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
                        "hip_work_j", "friction_loss_j", "impact_loss_j",
@@ -187,7 +193,8 @@ class GaitMetrics:
         p = np.array([s.period_s for s in steady])
         return float(np.std(p) / np.mean(p))
 
-    def is_steady_bounding(self, min_strides: int = 7, max_period_cv: float = 0.05) -> bool:
+    def is_steady_bounding(self, min_strides: int = MIN_STEADY_STRIDES,
+                           max_period_cv: float = 0.05) -> bool:
         """Whether the run is steady bounding.
 
         True iff the robot did not fall and the integration did not fail (outcome
@@ -200,6 +207,11 @@ class GaitMetrics:
             return False
         cv = self.stride_period_cv
         return cv is not None and cv <= max_period_cv
+
+    def behaviour(self, result):
+        """What the run did: steady bounding, or what instead
+        (:func:`~scoutsim.analysis.behaviour.classify_behaviour`, from these strides)."""
+        return classify_behaviour(result, self)
 
     # -- actuator diagnostics -------------------------------------------------------------
     @staticmethod
@@ -261,7 +273,13 @@ class GaitMetrics:
         Keys, in order: :data:`SUMMARY_KEYS` (outcome, steady-state means, the maximum
         ratio |tangential|/normal ground force ``max_friction_ratio`` from
         ``result.stats``, the number of steady strides), then :data:`SUMMARY_EXTRA_KEYS`,
-        then what the gait costs, :data:`SUMMARY_ENERGY_KEYS` (:meth:`energy_summary`).
+        then what the run did, :data:`SUMMARY_BEHAVIOUR_KEYS` (``behaviour``: the
+        sentence, e.g. "steady bounding at 1.39 m/s, 4.27 Hz (76 steady strides)" or
+        "fell at t = 0.66 s: the torso touched the ground, after 0 strides";
+        ``behaviour_kind``: one of :data:`~scoutsim.analysis.behaviour.BEHAVIOUR_KINDS`;
+        ``behaviour_detail``: :meth:`Behaviour.to_dict
+        <scoutsim.analysis.behaviour.Behaviour.to_dict>` without the sentence and kind:
+        the time, the advice and the counts), then what the gait costs, :data:`SUMMARY_ENERGY_KEYS` (:meth:`energy_summary`).
         Missing or non-finite values are None (JSON null), never NaN.
 
         Parameters
@@ -288,6 +306,10 @@ class GaitMetrics:
         out["max_impact_impulse_ratio"] = _json_float(stats.get("max_impact_impulse_ratio"))
         out["end_of_stance_slides"] = _json_number(stats.get("end_of_stance_slides"))
         out["model"] = prov.get("model")
+        what = self.behaviour(result).to_dict()
+        out["behaviour"] = what.pop("text")
+        out["behaviour_kind"] = what.pop("kind")
+        out["behaviour_detail"] = what
         out.update(self.energy_summary(result))
         return out
 
@@ -354,7 +376,8 @@ class GaitMetrics:
                 "strides": [s.to_dict() for s in self.strides]}
 
 
-def gait_metrics(result, transient_s: float = 2.0, period_tolerance: float = 0.05) -> GaitMetrics:
+def gait_metrics(result, transient_s: float = 2.0,
+                 period_tolerance: float = PERIOD_TOLERANCE) -> GaitMetrics:
     """Split a run into strides and compute the gait metrics (docs/specification.md section 8; paper Sec. IV).
 
     Parameters

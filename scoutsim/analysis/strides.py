@@ -23,7 +23,14 @@ from .interpolation import _extrema, _hermite
 from .stances import stance_overlap
 from .stride_energy import stride_energy
 
-__all__ = ["Stride", "converged_tail", "STRIDE_METRICS", "STRIDE_ENERGY_METRICS"]
+__all__ = ["Stride", "converged_tail", "STRIDE_METRICS", "STRIDE_ENERGY_METRICS",
+           "MIN_STEADY_STRIDES", "PERIOD_TOLERANCE"]
+
+#: Steady strides that make a run steady bounding (the paper used at least 7 per run,
+#: Sec. IV.C).
+MIN_STEADY_STRIDES = 7
+#: Relative spread of the stride periods within which a gait has converged (5 %).
+PERIOD_TOLERANCE = 0.05
 
 #: Per-stride numeric metrics that are averaged over the steady strides.
 STRIDE_METRICS = ("period_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",

@@ -1,6 +1,7 @@
 """``scoutsim animate``: a stick-figure animation (GIF or MP4) of a run saved by ``scoutsim
-run`` (its output directory or a result.npz): torso, legs coloured by controller leg
-state, ground forces, time stamp.
+run`` (its output directory or a result.npz): torso, legs coloured by the controller's leg
+state, toes marked by the simulated contact (on the ground, sliding, in the air), ground
+forces, time stamp, and the title saying what the run did.
 
     scoutsim animate RUN_DIR|RESULT.npz --out FILE.gif|.mp4 [--fps N] [--t0 S] [--t1 S]
                      [--dpi N]
@@ -21,8 +22,9 @@ def register(sub, common) -> None:
         NAME, help="stick-figure animation of a saved run (GIF or MP4)",
         description="Animate a run saved by `scoutsim run` (its output directory, "
                     "timeseries table or result.npz): torso box, legs "
-                    "coloured by controller leg state, ground-force arrows, ground line, "
-                    "time stamp. Frames at t0 + k/fps, k = 0 .. floor((t1 - t0) fps). GIF "
+                    "coloured by the controller's leg state, toes marked by the simulated "
+                    "contact (filled: on the ground, diamond: sliding, open: in the air), "
+                    "ground-force arrows, ground line, time stamp. Frames at t0 + k/fps, k = 0 .. floor((t1 - t0) fps). GIF "
                     "via Pillow; MP4 needs ffmpeg on the PATH.")
     anim.add_argument("input", metavar="RUN", help="saved run (the directory of scoutsim "
                       "run --out, its timeseries table, or a result.npz)")

@@ -56,6 +56,23 @@ def _run_extent(p: Path):
     return (float(r.t[0]), float(r.t[-1]), None, r) if len(r.t) else (0.0, 0.0, None, r)
 
 
+def _saved_behaviour(p: Path):
+    """What a saved run did, from the summary.json next to its tables (None without one, or
+    for a streamed run, whose summary covers only its kept end: manifest.json says)."""
+    import json
+    d = p if p.is_dir() else p.parent
+    try:
+        summary = json.loads((d / "summary.json").read_text())
+        manifest = json.loads((d / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return None
+    if not (isinstance(summary, dict) and isinstance(manifest, dict)) \
+            or manifest.get("streamed") is not False:
+        return None
+    what = summary.get("behaviour")
+    return what if isinstance(what, str) else None
+
+
 def execute(args) -> int:
     from ..validation.log_format import LOG_SUFFIXES, LogError
     from ..validation.log_reading import load_log
@@ -106,6 +123,7 @@ def execute(args) -> int:
             plot_log(obj, out, t_range=t_range)
         else:
             from ..presentation.plots import plot_run
-            plot_run(obj, out, t_range=t_range, overview="auto")
+            plot_run(obj, out, t_range=t_range, overview="auto",
+                     behaviour=_saved_behaviour(p) if t_range is not None else None)
     print(f"wrote {out}")
     return 0

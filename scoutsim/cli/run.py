@@ -280,16 +280,28 @@ def _pair(a, b, spec: str, unit: str) -> str:
 def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float,
                    friction: float | None = None, load_s: float | None = None,
                    command_wall_s: float | None = None) -> str:
-    """The human-readable summary table of a run: ``wall_s`` is the simulation's wall time
-    [s] (its real-time factor is t_end / wall_s), ``load_s`` the time the compiled core took
-    to get ready before it, ``command_wall_s`` the whole command's."""
+    """The human-readable summary table of a run: what the robot did (``behaviour``:
+    steady bounding, or what instead, :mod:`scoutsim.analysis.behaviour`), the gait means
+    over the steady strides, ``wall_s`` the simulation's wall time [s] (its real-time factor
+    is t_end / wall_s), ``load_s`` the time the compiled core took to get ready before it,
+    ``command_wall_s`` the whole command's."""
+    import textwrap
     outcome = summary.get("outcome")
     if outcome != "completed" and t_end is not None:
         outcome = f"{outcome} at t = {t_end:.3f} s"
     rtf = (t_end / wall_s) if wall_s > 0 and t_end else None
+    steady = bool(summary.get("n_steady_strides"))
+    speed = _fmt(summary.get("mean_speed_m_s"), ".3f", "m/s")
+    if not steady:
+        # no steady stride: the run's average instead, said to be one
+        average = ((summary.get("behaviour_detail") or {}).get("counts") or {}).get(
+            "average_speed_m_s")
+        speed = "n/a (no steady stride)" + (
+            f"; {average:.3f} m/s averaged over the run" if average is not None else "")
     rows = [
         ("outcome", outcome),
-        ("mean forward speed", _fmt(summary.get("mean_speed_m_s"), ".3f", "m/s")),
+        ("what the robot did", summary.get("behaviour") or "n/a"),
+        ("mean forward speed", speed),
         ("stride frequency", _fmt(summary.get("stride_frequency_hz"), ".3f", "Hz")),
         ("duty factor back / front", _pair(summary.get("duty_factor_back"),
                                            summary.get("duty_factor_front"), ".3f", "")),
@@ -321,10 +333,13 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
     floor = ("" if friction is None else
              ", floor: no slip" if math.isinf(friction) else f", floor: Coulomb mu = {friction:g}")
     lines = [f"scoutsim run: model {model}, {duration:g} s requested{floor}"]
-    lines += [f"  {k:<{width}}  {v}" for k, v in rows]
-    if summary.get("n_steady_strides") == 0 and summary.get("outcome") == "completed":
-        lines.append("  (no steady strides: the gait means need strides after the 2 s "
-                     "transient; run longer)")
+    for k, v in rows:
+        line = f"  {k:<{width}}  {v}"
+        if k == "what the robot did":       # a sentence: wrapped under its column
+            lines += textwrap.wrap(line, 100, subsequent_indent=" " * (width + 4),
+                                   break_on_hyphens=False)
+        else:
+            lines.append(line)
     return "\n".join(lines)
 
 

@@ -6,11 +6,13 @@ Modules
 -------
 style                 colours of legs, leg states and models; model names; the file writer
 plots                 run time histories; re-exports the run figures below
+run_overview          a long run's whole-run panels: pitch and height ranges, stride periods
 torque_speed          the torque-speed plane of a run (paper Fig. 11) and the motor limits
 stride_power          the power over one stride by destination
 maps                  the basin map and sweep maps over a grid of runs
 tune_plots            a tuning's convergence
-run_parts             what the run figures share (title, leg-state bands)
+run_parts             what the run figures share (title: what the run did, legends above
+                      their panels, leg-state bands)
 animation             stick-figure animation of a run (GIF / MP4)
 frames                one picture of the robot as an RGB array, rasterised with NumPy (the
                       learning environment's ``render``)

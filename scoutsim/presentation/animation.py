@@ -6,13 +6,21 @@
     anim = animate(result, fps=25)      # matplotlib.animation.FuncAnimation (Jupyter: HTML)
 
 Each frame shows the torso as a box (length ``torso_length``, height ``torso_height``,
-rotated by the pitch), the two virtual legs from hip to toe coloured by their controller
-leg state (:data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake
-green; the same colours as the dots of
-:func:`scoutsim.presentation.torque_speed.plot_torque_speed`), the ground reaction force
-on each toe in stance as an arrow (:data:`FORCE_SCALE_M_PER_N`), the ground line with tick
+rotated by the pitch), the two virtual legs from hip to toe, the ground reaction force on
+each toe in contact as an arrow (:data:`FORCE_SCALE_M_PER_N`), the ground line with tick
 marks every 0.25 m (so the forward motion shows while the view follows the torso) and the
-time stamp.
+time stamp. Two different things are drawn apart, with a legend for each:
+
+* what the **controller** thinks, the leg's colour: its leg state (paper Sec. II, Table I;
+  :data:`LEG_STATE_COLORS`: flight blue, stance-retraction orange, stance-brake green; the
+  same colours as the dots of :func:`scoutsim.presentation.torque_speed.plot_torque_speed`);
+* what the **simulated toe** does, its marker (:data:`TOE_MARKERS`): on the ground, pinned
+  (filled circle), on the ground sliding (filled diamond), in the air (open circle), from
+  the plant's contact mode.
+
+A controller that detects touchdown late shows a leg standing on the ground in its flight
+colour, with a filled toe; the status lines right of the view spell out both for each leg,
+and the title says what the run did (steady bounding, or what instead).
 
 Frames are taken at ``t0 + k / fps`` for ``k = 0 .. floor((t1 - t0) * fps)``, so a window
 gives ``floor((t1 - t0) * fps) + 1`` frames (both ends included when ``(t1 - t0) * fps`` is
@@ -37,14 +45,20 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from ..names import ContactMode, Leg, LegState
+from .run_parts import _model_label, behaviour_text
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
-__all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS",
-           "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
+__all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS", "TOE_MARKERS",
+           "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
 LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
 _STATE_NAMES = LEG_STATE_NAMES
+#: Toe marker per simulated contact: (marker, filled, legend label), by the names of
+#: :func:`toe_contact`.
+TOE_MARKERS = {"ground": ("o", True, "toe on the ground"),
+               "sliding": ("D", True, "toe on the ground, sliding"),
+               "air": ("o", False, "toe in the air")}
 #: Length of a ground-force arrow per newton [m/N] (the robot's weight, about 203 N, is
 #: drawn 0.2 m long).
 FORCE_SCALE_M_PER_N = 1.0e-3
@@ -78,6 +92,17 @@ def frame_times(result, fps: float = 25.0, t0: float | None = None,
     return a + np.arange(n) / float(fps)
 
 
+def toe_contact(result, leg) -> np.ndarray:
+    """Per sample, what the simulated toe of ``leg`` does: "ground" (pinned: the plant's
+    contact mode stick or strut), "sliding" (slide) or "air" (flight); the keys of
+    :data:`TOE_MARKERS`."""
+    mode = np.asarray(result.contact_mode(leg))
+    out = np.full(mode.shape, "ground", dtype=object)
+    out[mode == ContactMode.SLIDE] = "sliding"
+    out[mode == ContactMode.FLIGHT] = "air"
+    return out
+
+
 def _geometry(result) -> tuple[tuple[float, float], float, float]:
     """The hips' positions along the torso axis from the COM (back, front) [m], the torso's
     length and height [m], of the run's robot (Scout II if the run does not say)."""
@@ -98,6 +123,10 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     fps : frames per second of simulated time (playback in real time)
     t0, t1 : time window [s] (default: the whole run)
     figsize, dpi : size of the frames (default 640 x 320 pixels)
+
+    The animation's ``frame_times`` are the frames' times [s], its ``artists`` the drawn
+    parts by name ("torso", "legs" and "toes" (back, front), "forces", the per-leg
+    "status" lines, the time "stamp").
     """
     times = frame_times(result, fps, t0, t1)
     t = np.asarray(result.t, dtype=float)
@@ -113,12 +142,12 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     has_ctrl = (result.provenance or {}).get("controller") is not None
     states = [np.asarray(result.leg_state(leg)) if has_ctrl
               else np.full(t.size, LegState.FLIGHT, int) for leg in Leg]
-    contact = [np.asarray(result.contact_mode(leg)) for leg in Leg]
+    contact = [toe_contact(result, leg) for leg in Leg]
     hips, length, height = _geometry(result)
 
     fig = Figure(figsize=figsize, dpi=dpi)
     FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.1, 0.14, 0.87, 0.78))
+    ax = fig.add_axes((0.08, 0.13, 0.62, 0.74))
     ax.set_aspect("equal")
     ax.set_xlabel("forward position x [m]")
     ax.set_ylabel("height y [m]")
@@ -130,21 +159,19 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
                     zorder=3)
     ax.add_patch(torso)
     legs = [ax.plot([], [], lw=3.0, solid_capstyle="round", zorder=4)[0] for _ in range(2)]
-    toes = [ax.plot([], [], marker="o", ms=5, color="k", zorder=5)[0] for _ in range(2)]
+    toes = [ax.plot([], [], marker="o", ms=6, color="k", mec="k", mew=1.2, zorder=5)[0]
+            for _ in range(2)]
     forces = [ax.annotate("", xy=(0, 0), xytext=(0, 0), zorder=6,
                           arrowprops=dict(arrowstyle="-|>", color="crimson", lw=1.5))
               for _ in range(2)]
     stamp = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=10,
                     family="monospace")
-    from matplotlib.lines import Line2D
-    handles = [Line2D([], [], color=c, lw=3) for c in LEG_STATE_COLORS]
-    handles.append(Line2D([], [], color="crimson", lw=1.5))
-    names = list(_STATE_NAMES) + [f"ground force ({FORCE_SCALE_M_PER_N * 1e3:g} m/kN)"]
-    if not has_ctrl:
-        handles, names = handles[:1] + handles[3:], ["leg (no controller)", names[-1]]
-    ax.legend(handles, names, loc="upper right", fontsize=7, ncol=2, framealpha=0.85)
-    model = (result.provenance or {}).get("model")
-    ax.set_title(f"Scout II, model {model}", fontsize=10)
+    status = fig.text(0.715, 0.05, "", va="bottom", ha="left", fontsize=7, family="monospace")
+    _legends(fig, has_ctrl)
+    import textwrap
+    fig.suptitle("\n".join(textwrap.wrap(f"Scout II, {_model_label(result)}: "
+                                          f"{behaviour_text(result)}", 100)),
+                 fontsize=8, y=0.99, va="top")
 
     def draw(i):
         k = int(idx[i])
@@ -162,6 +189,7 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
         tx = np.repeat(tk * _TICK_SPACING_M, 3)
         ty = np.tile([0.0, -0.03, np.nan], tk.size)
         ticks.set_data(tx, ty)
+        lines = [f"{'':<6s}{'toe':<10s}" + ("controller" if has_ctrl else "")]
         for leg in Leg:
             hip = com + hips[leg] * u
             toe = toe_xy[leg][k].copy()
@@ -169,23 +197,60 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
                 phi = phis[leg][k]
                 ll = lengths[leg][k]
                 toe = hip + ll * np.array([math.sin(th + phi), -math.cos(th + phi)])
+            state = LegState(int(states[leg][k]))
             legs[leg].set_data([hip[0], toe[0]], [hip[1], toe[1]])
-            legs[leg].set_color(LEG_STATE_COLORS[LegState(int(states[leg][k]))])
+            legs[leg].set_color(LEG_STATE_COLORS[state])
+            what = contact[leg][k]
+            marker, filled, _ = TOE_MARKERS[what]
             toes[leg].set_data([toe[0]], [toe[1]])
+            toes[leg].set_marker(marker)
+            toes[leg].set_markerfacecolor("k" if filled else "white")
             f = ground[leg][k].copy()    # tangential, normal [N]
-            on = (contact[leg][k] != ContactMode.FLIGHT and np.all(np.isfinite(f))
-                  and np.hypot(*f) > 1.0)
+            on = what != "air" and np.all(np.isfinite(f)) and np.hypot(*f) > 1.0
             tip = toe + FORCE_SCALE_M_PER_N * f if on else toe
             forces[leg].xy = (tip[0], tip[1])
             forces[leg].set_position((toe[0], toe[1]))
             forces[leg].set_visible(bool(on))
+            lines.append(f"{leg.label:<6s}{_TOE_WORDS[what]:<10s}"
+                         + (state.label if has_ctrl else ""))
+        status.set_text("\n".join(lines))
         stamp.set_text(f"t = {times[i]:7.3f} s")
-        return [torso, floor, ticks, stamp, *legs, *toes, *forces]
+        return [torso, floor, ticks, stamp, status, *legs, *toes, *forces]
 
     anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
                          repeat=False)
     anim.frame_times = times
+    # the drawn parts by name, each updated by every frame
+    anim.artists = {"torso": torso, "legs": legs, "toes": toes, "forces": forces,
+                    "status": status, "stamp": stamp}
     return anim
+
+
+#: The toe's contact in the status lines, by the names of :func:`toe_contact`.
+_TOE_WORDS = {"ground": "on ground", "sliding": "sliding", "air": "in air"}
+
+
+def _legends(fig, has_ctrl: bool) -> None:
+    """The two legends right of the view: the leg's colour (the controller's leg state) and
+    the toe's marker (the simulated contact), with the ground-force arrow."""
+    from matplotlib.lines import Line2D
+    if has_ctrl:
+        handles = [Line2D([], [], color=c, lw=3) for c in LEG_STATE_COLORS]
+        names, title = list(_STATE_NAMES), "leg colour: controller state"
+    else:
+        handles = [Line2D([], [], color=LEG_STATE_COLORS[LegState.FLIGHT], lw=3)]
+        names, title = ["leg (no controller)"], "leg"
+    fig.legend(handles, names, loc="upper left", bbox_to_anchor=(0.72, 0.88),
+                     fontsize=7, title=title, title_fontsize=7, alignment="left",
+                     frameon=False)
+    handles = [Line2D([], [], marker=m, ms=6, ls="none", color="k", mec="k",
+                      mfc="k" if filled else "white") for m, filled, _ in TOE_MARKERS.values()]
+    names = [label for _, _, label in TOE_MARKERS.values()]
+    handles.append(Line2D([], [], color="crimson", lw=1.5))
+    names.append(f"ground force ({FORCE_SCALE_M_PER_N * 1e3:g} m/kN)")
+    fig.legend(handles, names, loc="upper left", bbox_to_anchor=(0.72, 0.56), fontsize=7,
+               title="toe: simulated contact", title_fontsize=7, alignment="left",
+               frameon=False)
 
 
 def save_animation(result, path, fps: float = 25.0, t0: float | None = None,

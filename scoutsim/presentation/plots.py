@@ -26,7 +26,8 @@ from matplotlib.patches import Patch
 
 from ..names import LegState
 from .maps import plot_basin_map, plot_sweep_map
-from .run_parts import _state_bands, _title
+from .run_overview import _strides, draw_overview
+from .run_parts import _legend_above, _state_bands, _title
 from .stride_power import STRIDE_POWER_SINKS, STRIDE_POWER_SOURCES, plot_stride_power
 from .style import LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, save_figure
 from .torque_speed import draw_motor_limits, motor_limits, plot_torque_speed
@@ -41,9 +42,13 @@ __all__ = ["plot_run", "plot_torque_speed", "plot_stride_power", "plot_basin_map
 LONG_RUN_S = 4.0
 #: strides the detail panels of an overview figure show (the last ones of the run)
 DETAIL_STRIDES = 3
+#: smallest span of the pitch [deg] and COM height [m] axes of the time histories (a bound
+#: swings about 11 deg and 8 mm; a robot at rest is drawn flat, not its round-off)
+MIN_PITCH_SPAN_DEG = 2.0
+MIN_HEIGHT_SPAN_M = 0.005
 
 
-def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
+def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) -> Figure:
     """Time histories of a run: pitch, COM height, leg angles with leg states, hip torques.
 
     Four stacked panels share the time axis [s]:
@@ -57,9 +62,16 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     4. hip torque per physical leg [N m]: commanded (dashed) and delivered by the actuator,
        N eta K_T i (solid).
 
-    With an overview, two panels above them show pitch and COM height over the whole run
-    and the four panels show the last :data:`DETAIL_STRIDES` strides (the last second if
-    the run has fewer), shaded in the overview.
+    With an overview, three panels above them show the whole run
+    (:mod:`~scoutsim.presentation.run_overview`): the range of the pitch and of the COM
+    height over one stride (running maximum and minimum, readable over hundreds of strides)
+    and every stride's period, the steady ones filled; the four panels show the last
+    :data:`DETAIL_STRIDES` strides (the last second if the run has fewer), shaded in the
+    overview.
+
+    The title says what the run did (:meth:`SimulationResult.behaviour
+    <scoutsim.result.SimulationResult.behaviour>`: steady bounding at its speed, or what
+    instead); the legends sit above their panels, off the traces.
 
     Parameters
     ----------
@@ -73,6 +85,10 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     overview : bool or "auto"
         Add the whole-run overview; "auto": for runs longer than :data:`LONG_RUN_S`
         when no ``t_range`` is given.
+    behaviour : str, optional
+        What the run did, for the title (default: ``result.behaviour()``; a result that
+        holds only a window of its run says its outcome and the window, unless given its
+        run's, e.g. the ``"behaviour"`` of the run's summary.json).
 
     Returns
     -------
@@ -84,8 +100,11 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
     t = np.asarray(result.t, dtype=float)
     if overview == "auto":
         overview = t_range is None and t.size > 1 and float(t[-1] - t[0]) > LONG_RUN_S
+    detail = "the window asked for"
     if overview and t_range is None and t.size:
         t_range = (_last_strides_start(result), float(t[-1]))
+        detail = (f"the last {DETAIL_STRIDES} strides"
+                  if len(_strides(result)) >= DETAIL_STRIDES else "the last second")
     if t_range is not None:
         try:
             t0, t1 = (float(v) for v in t_range)
@@ -101,16 +120,16 @@ def plot_run(result, path=None, t_range=None, overview=False) -> Figure:
         t0, t1 = (float(t[0]), float(t[-1])) if t.size else (0.0, 1.0)
 
     if overview:
-        fig = Figure(figsize=(10, 12.5), layout="constrained")
-        top, bottom = fig.subfigures(2, 1, height_ratios=[2.6, 9.5])
-        _draw_overview(top.subplots(1, 2), result, t, t0, t1)
+        fig = Figure(figsize=(11, 13.5), layout="constrained")
+        top, bottom = fig.subfigures(2, 1, height_ratios=[3.0, 10.0])
+        draw_overview(top, result, t0, t1)
         axes = bottom.subplots(4, 1, sharex=True)
-        bottom.suptitle(f"last {DETAIL_STRIDES} strides", fontsize=10)
+        bottom.suptitle(f"detail: t = {t0:.2f} - {t1:.2f} s ({detail})", fontsize=10)
     else:
-        fig = Figure(figsize=(10, 9.5), layout="constrained")
+        fig = Figure(figsize=(10, 10), layout="constrained")
         axes = fig.subplots(4, 1, sharex=True)
     _draw_run_panels(axes, result, t[sel], sel, t0, t1)
-    fig.suptitle(_title(result))
+    fig.suptitle(_title(result, behaviour=behaviour))
     save_figure(fig, path)
     return fig
 
@@ -119,32 +138,10 @@ def _last_strides_start(result) -> float:
     """Start [s] of the last DETAIL_STRIDES strides of a run (1 s before its end if it has
     fewer)."""
     t_end = float(result.t[-1])
-    try:
-        strides = result.strides
-    except Exception:   # a run too short or too broken for stride analysis
-        strides = []
+    strides = _strides(result)
     if len(strides) >= DETAIL_STRIDES:
         return float(strides[-DETAIL_STRIDES]["t_start"])
     return max(float(result.t[0]), t_end - 1.0)
-
-
-def _draw_overview(axes, result, t, t0, t1) -> None:
-    """Pitch and COM height over the whole run, the detail window [t0, t1] shaded."""
-    ax_p, ax_h = axes
-    ax_p.plot(t, np.degrees(np.asarray(result.pitch)), color="k", lw=0.6)
-    ax_p.set_ylabel("pitch [deg]")
-    ax_h.plot(t, np.asarray(result.height), color="k", lw=0.6)
-    ax_h.set_ylabel("COM height [m]")
-    for ax in axes:
-        ax.axvspan(t0, t1, color="tab:blue", alpha=0.15, lw=0, label="detail below")
-        if result.outcome == "fell":
-            ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
-        ax.set_xlabel("time [s]")
-        ax.grid(True, lw=0.4, alpha=0.5)
-        if t.size:
-            ax.set_xlim(float(t[0]), float(t[-1]))
-    ax_p.legend(loc="upper right", fontsize=8)
-    ax_p.set_title("whole run", fontsize=10)
 
 
 def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
@@ -175,8 +172,7 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
         for li, name in enumerate(LEG_NAMES):
             ax_leg.text(1.005, 0.25 + 0.5 * li, f"{name}\nstate", transform=ax_leg.transAxes,
                         fontsize=7, va="center", ha="left", color=LEG_COLORS[li])
-    ax_leg.legend(handles, labels, loc="upper left", fontsize=8, ncol=5, framealpha=0.85,
-                  bbox_to_anchor=(0.0, 1.0))
+    _legend_above(ax_leg, handles, labels)
 
     for li, name in enumerate(LEG_NAMES):
         ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=LEG_COLORS[li],
@@ -186,15 +182,26 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     ax_tau.axhline(0.0, color="0.6", lw=0.6)
     ax_tau.set_ylabel("hip torque per leg [N m]")
     ax_tau.set_xlabel("time [s]")
-    ax_tau.legend(loc="upper left", fontsize=8, ncol=4, framealpha=0.85)
+    _legend_above(ax_tau)
 
     if result.outcome == "fell" and t0 <= result.t_end <= t1:
         for ax in axes:
             ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
         ax_pitch.plot([], [], color="crimson", lw=1.0, ls=":", label="fall")
-    ax_pitch.legend(loc="upper left", fontsize=8)
-    ax_height.legend(loc="upper left", fontsize=8)
+    _legend_above(ax_pitch)
+    _legend_above(ax_height)
 
     for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_tau.set_xlim(t0, t1)
+    # a torso at rest: its sub-micrometre motion is not zoomed into a bound's swing
+    _min_span(ax_pitch, MIN_PITCH_SPAN_DEG)
+    _min_span(ax_height, MIN_HEIGHT_SPAN_M)
+
+
+def _min_span(ax, span: float) -> None:
+    """Widen the y-limits of ``ax`` to at least ``span`` about their middle."""
+    lo, hi = ax.get_ylim()
+    if hi - lo < span:
+        mid = 0.5 * (lo + hi)
+        ax.set_ylim(mid - 0.5 * span, mid + 0.5 * span)

@@ -1,5 +1,6 @@
-"""What the figures of one run share: the model's display name and the title, and the
-controller leg states drawn as shaded bands over time (paper Sec. II, Table I: flight,
+"""What the figures of one run share: the model's display name and the title (what the run
+did), the legend above its axes, and the controller leg states drawn as shaded bands over
+time (paper Sec. II, Table I: flight,
 stance-retraction, stance-brake; colours of :mod:`scoutsim.presentation.style`). Times in
 seconds.
 """
@@ -18,13 +19,57 @@ def _model_label(result) -> str:
     return model_label((result.provenance or {}).get("model"))
 
 
-def _title(result) -> str:
-    """The title of a run's figure: the model and the outcome (with the time [s] of a fall
-    or failure)."""
+def is_part_of_run(result) -> bool:
+    """Whether ``result`` holds only a window of its run (:meth:`SimulationResult.window
+    <scoutsim.result.SimulationResult.window>`, a window loaded from a saved run): its
+    samples end before the run's end, or start after t = 0 (a streamed run's kept end, whose
+    summary covers the kept end, is taken whole)."""
+    t = np.asarray(result.t, dtype=float)
+    if t.size == 0:
+        return False
+    streamed = "stream" in (result.provenance or {})
+    return bool(t[-1] < float(result.t_end) - 1e-9 or (t[0] > 1e-9 and not streamed))
+
+
+def behaviour_text(result, behaviour: str | None = None) -> str:
+    """What the run did (:meth:`SimulationResult.behaviour
+    <scoutsim.result.SimulationResult.behaviour>`: "steady bounding at 1.39 m/s, ...",
+    "fell at t = 0.66 s: ..."), or ``behaviour`` if given (e.g. a saved run's summary). A
+    window of a run says its outcome and the window shown instead, as its strides are not
+    the run's; a run whose strides cannot be analysed, its outcome (with the time [s] of a
+    fall or failure)."""
     outcome = result.outcome
-    if outcome != "completed":
-        outcome = f"{outcome} at t = {result.t_end:.2f} s"
-    return f"Scout II bounding, {_model_label(result)}: {outcome}"
+    outcome = outcome if outcome == "completed" else f"{outcome} at t = {result.t_end:.2f} s"
+    t = np.asarray(result.t, dtype=float)
+    shown = (f"t = {t[0]:.2f} - {t[-1]:.2f} s shown of the run's 0 - {result.t_end:.2f} s"
+             if t.size else "")
+    if behaviour is not None:
+        return behaviour + (f" ({shown})" if is_part_of_run(result) else "")
+    if is_part_of_run(result):
+        return f"run {outcome} ({shown})"
+    try:
+        return result.behaviour().text
+    except Exception:   # a result too broken for the stride analysis: its outcome
+        return outcome
+
+
+def _title(result, width: int = 110, behaviour: str | None = None) -> str:
+    """The title of a run's figure: the model and what the run did (:func:`behaviour_text`),
+    wrapped at ``width`` characters."""
+    import textwrap
+    return "\n".join(textwrap.wrap(f"Scout II, {_model_label(result)}: "
+                                    f"{behaviour_text(result, behaviour)}", width,
+                                    break_on_hyphens=False))
+
+
+def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
+    """The axes' legend in one row above the axes at their right end, outside the data (as
+    many columns as entries; the left end keeps the axis' offset text)."""
+    if handles is None:
+        handles, labels = ax.get_legend_handles_labels()
+    ax.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(labels),
+              fontsize=fontsize, frameon=False, borderaxespad=0.15, handlelength=1.8,
+              columnspacing=1.2)
 
 
 def _runs(values: np.ndarray):

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.patches import Patch
 
-from ..names import Leg
-from .run_parts import _model_label, _state_bands
-from .style import save_figure
+from ..names import Leg, LegState
+from .run_parts import _model_label, _state_bands, behaviour_text
+from .style import LEG_STATE_COLORS, save_figure
 
 __all__ = ["plot_stride_power", "STRIDE_POWER_SOURCES", "STRIDE_POWER_SINKS"]
 
@@ -44,8 +45,11 @@ def plot_stride_power(result, path=None, stride=None) -> Figure:
        change of the mechanical energy (kinetic, gravity, springs); touchdowns are marked,
        with their impact losses [J] (none where the toes land sliding).
 
-    The legend gives each destination's energy over the stride [J]; the background shows
-    each leg's controller state (back leg in the lower half, front in the upper).
+    The legends, right of the panels, give each destination's energy over the stride [J]
+    and the colours of the background: each leg's controller state (paper Sec. II, Table I:
+    flight, stance-retraction, stance-brake), the back leg in the lower half of each panel,
+    the front leg in the upper half. The title says whether the stride is steady and, if
+    the run did not bound steadily, what it did instead.
 
     Parameters
     ----------
@@ -88,7 +92,7 @@ def plot_stride_power(result, path=None, stride=None) -> Figure:
     def steps(p):
         return np.append(p[i:j], p[j - 1])
 
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
+    fig = Figure(figsize=(12.5, 7.5), layout="constrained")
     ax_in, ax_out = fig.subplots(2, 1, sharex=True)
     electrical = model in ("I", "II")
     sources = STRIDE_POWER_SOURCES if electrical else STRIDE_POWER_SOURCES[-1:]
@@ -118,15 +122,34 @@ def plot_stride_power(result, path=None, stride=None) -> Figure:
         ax.axhline(0.0, color="k", lw=0.5)
         for leg, (y0, y1) in zip(Leg, ((0.0, 0.5), (0.5, 1.0))):
             _state_bands(ax, t[i:j + 1], result.leg_state(leg)[i:j + 1], y0, y1)
-        ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+            ax.text(1.005, 0.5 * (leg + 0.5), f"{leg.label}\nleg", transform=ax.transAxes,
+                    fontsize=7, va="center", ha="left", color="0.35")
+        handles, labels = ax.get_legend_handles_labels()
+        if ax is ax_in:
+            # the background's colours: each leg's controller state
+            handles.append(Patch(visible=False))
+            labels.append("background: controller leg state\n(back leg: lower half of a "
+                          "panel;\nfront leg: upper half)")
+            handles += [Patch(facecolor=LEG_STATE_COLORS[state], edgecolor="0.5", lw=0.5)
+                        for state in LegState]
+            labels += [state.label for state in LegState]
+        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.055, 1.0),
+                  fontsize=8, framealpha=0.9, borderaxespad=0.0)
         ax.grid(alpha=0.3)
     ax_in.set_ylabel("power from the battery [W]")
     ax_out.set_ylabel("power of the hip work [W]")
     ax_out.set_xlabel("time [s]")
     ax_out.set_xlim(tk[0], tk[-1])
     cot = "" if st.cost_of_transport is None else f", cost of transport {st.cost_of_transport:.2f}"
-    fig.suptitle(f"Power over stride {st.index} ({tk[0]:.3f} - {tk[-1]:.3f} s), "
-                 f"{_model_label(result)}{cot}\n(background: leg states; back leg below, "
-                 "front leg above)", fontsize=10)
+    title = (f"Power over stride {st.index} ({tk[0]:.3f} - {tk[-1]:.3f} s"
+             f"{'' if st.steady else ', not a steady stride'}), {_model_label(result)}{cot}")
+    try:
+        what = result.behaviour()
+    except Exception:   # a run too broken for the stride analysis
+        what = None
+    if what is None or not what.bounding:
+        import textwrap
+        title += "\n" + "\n".join(textwrap.wrap(f"the run: {behaviour_text(result)}", 120))
+    fig.suptitle(title, fontsize=10)
     save_figure(fig, path)
     return fig

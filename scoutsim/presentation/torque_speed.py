@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from ..names import Leg, LegState
 from ..parameters import RobotParameters
-from .run_parts import _model_label
+from .run_parts import _model_label, behaviour_text
 from .style import LEG_NAMES, LEG_STATE_LINE_COLORS, leg_index, save_figure
 
 __all__ = ["plot_torque_speed", "motor_limits", "draw_motor_limits"]
@@ -140,6 +140,9 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     axes = np.atleast_1d(fig.subplots(1, len(legs), sharey=True, squeeze=False)[0])
     for ax, li in zip(axes, legs):
         _torque_speed_axes(ax, result, li)
-    fig.suptitle(f"Torque-speed, {_model_label(result)} ({result.outcome})")
+    import textwrap
+    fig.suptitle("\n".join(textwrap.wrap(f"Torque-speed, {_model_label(result)}: "
+                                          f"{behaviour_text(result)}", 50 * len(legs))),
+                 fontsize=10)
     save_figure(fig, path)
     return fig

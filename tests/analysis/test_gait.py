@@ -28,6 +28,7 @@ EXTRA_KEYS = ["t_end_s", "n_strides", "stride_period_cv", "steady_bounding",
               "motor_saturation_retraction_back", "motor_saturation_retraction_front",
               "max_belt_deflection_deg", "max_impact_impulse_ratio", "end_of_stance_slides",
               "model"]
+BEHAVIOUR_KEYS = ["behaviour", "behaviour_kind", "behaviour_detail"]
 ENERGY_KEYS = ["electrical_energy_j", "copper_loss_j", "transmission_loss_j", "hip_work_j",
                "friction_loss_j", "impact_loss_j", "mechanical_energy_change_j",
                "energy_residual_j", "energy_relative_residual", "mean_electrical_power_w",
@@ -209,7 +210,7 @@ def test_summary_keys_and_json():
     r = make_result()
     s = gait_metrics(r).summary(r)
     assert list(s)[:len(FIRST_KEYS)] == FIRST_KEYS
-    assert list(s)[len(FIRST_KEYS):] == EXTRA_KEYS + ENERGY_KEYS
+    assert list(s)[len(FIRST_KEYS):] == EXTRA_KEYS + BEHAVIOUR_KEYS + ENERGY_KEYS
     assert all(s[k] is None for k in ENERGY_KEYS)    # made without the energy accounting
     json.dumps(s, allow_nan=False)
     assert s["outcome"] == "completed" and s["model"] == "I"

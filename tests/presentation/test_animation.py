@@ -126,3 +126,32 @@ def test_result_without_robot_in_provenance_is_drawn_with_the_default_robot(resu
         np.testing.assert_array_equal(corners, with_robot._func(i)[0].get_xy()[:4])
     for anim in (with_robot, without):
         anim._draw_was_started = True  # drawn by hand: no "deleted without rendering" warning
+
+
+def test_leg_colour_is_the_controller_state_and_toe_marker_the_simulated_contact(result):
+    """Contact and controller state are two things: at a sample where the controller still
+    says flight but the simulated toe is on the ground, the leg is drawn in the flight
+    colour and its toe filled; in the air the toe is open. Both have a legend."""
+    from matplotlib.colors import to_rgba
+    from scoutsim.names import ContactMode, LegState
+    from scoutsim.presentation.animation import LEG_STATE_COLORS, TOE_MARKERS
+    leg = 0
+    state, contact = result.leg_state(leg), result.contact_mode(leg)
+    late = np.flatnonzero((state == LegState.FLIGHT) & (contact != ContactMode.FLIGHT))
+    air = np.flatnonzero(contact == ContactMode.FLIGHT)
+    assert late.size and air.size, "the run has a touchdown the controller detects later"
+    for k in (late[0], air[0]):
+        t = result.t[k]
+        anim = animate(result, fps=1000, t0=t, t1=min(t + 0.0005, result.t[-1]))
+        anim._func(0)
+        legs, toes = anim.artists["legs"], anim.artists["toes"]
+        assert to_rgba(legs[leg].get_color()) == to_rgba(LEG_STATE_COLORS[state[k]])
+        on_ground = contact[k] != ContactMode.FLIGHT
+        assert (to_rgba(toes[leg].get_markerfacecolor()) == to_rgba("k")) == on_ground
+        sliding = contact[k] == ContactMode.SLIDE
+        assert toes[leg].get_marker() == (TOE_MARKERS["sliding"][0] if sliding else "o")
+        status = anim.artists["status"].get_text()
+        assert ("in air" in status.splitlines()[1]) == (not on_ground)
+        titles = [lg.get_title().get_text() for lg in anim._fig.legends]
+        assert titles == ["leg colour: controller state", "toe: simulated contact"]
+        anim._draw_was_started = True

@@ -46,8 +46,8 @@ def test_plot_run_has_four_labelled_panels_with_units(result_II):
         assert ax.get_legend() is not None
     # panels share the time axis
     assert axes[0].get_shared_x_axes().joined(axes[0], axes[3])
-    title = fig._suptitle.get_text()
-    assert "Model II" in title and result_II.outcome in title
+    title = " ".join(fig._suptitle.get_text().split())      # (wrapped over lines)
+    assert "Model II" in title and result_II.behaviour().text in title
 
 
 def test_plot_run_values_are_in_degrees(result_II):
@@ -165,8 +165,8 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     from scoutsim.presentation.plots import DETAIL_STRIDES
     fig = plot_run(result_II, overview=True)
     axes = fig.get_axes()
-    assert len(axes) == 6
-    overview, detail = axes[:2], axes[2:]
+    assert len(axes) == 7
+    overview, detail = axes[:3], axes[3:]
     t = result_II.t
     assert overview[0].get_xlim() == pytest.approx((t[0], t[-1]))
     t0, t1 = detail[-1].get_xlim()
@@ -175,7 +175,7 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     assert t0 == pytest.approx(strides[-DETAIL_STRIDES]["t_start"])
     # "auto": only runs longer than LONG_RUN_S get the overview
     assert len(plot_run(result_II, overview="auto").get_axes()) == \
-        (6 if t[-1] - t[0] > 4.0 else 4)
+        (7 if t[-1] - t[0] > 4.0 else 4)
     with pytest.raises(ValueError, match="overview"):
         plot_run(result_II, overview="yes")
 
@@ -191,10 +191,111 @@ def test_plot_stride_power_shows_each_destination_with_its_energy(tmp_path):
     ax_in, ax_out = fig.get_axes()
     assert "[W]" in ax_in.get_ylabel() and "[W]" in ax_out.get_ylabel()
     labels = [t.get_text() for t in ax_in.get_legend().get_texts()]
-    energy = {lab.split(":")[0]: float(lab.split(":")[1].split()[0]) for lab in labels}
+    energy = {lab.split(":")[0]: float(lab.split(":")[1].split()[0]) for lab in labels
+              if lab.endswith(" J")}
     assert energy["battery output"] == pytest.approx(
         energy["copper losses R_A i^2"] + energy["transmission losses (signed)"]
         + energy["hip work (mechanical)"], abs=0.15)            # legend rounds to 0.1 J
     assert any("friction" in t.get_text() for t in ax_out.get_legend().get_texts())
     with pytest.raises(ValueError, match="energy=True"):
         plot_stride_power(scoutsim.simulate(duration=1.0, model="II"))
+
+
+def _drawn(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    FigureCanvasAgg(fig).draw()
+    return fig
+
+
+def test_plot_run_legends_sit_above_their_panels_off_the_traces(result_II):
+    """Every legend of the four panels lies above its axes (in display coordinates), so it
+    covers no trace; the title says what the run did."""
+    fig = _drawn(plot_run(result_II))
+    for ax in fig.get_axes():
+        legend = ax.get_legend().get_window_extent()
+        assert legend.y0 >= ax.get_window_extent().y1 - 0.5, ax.get_ylabel()
+
+
+def test_plot_run_overview_draws_the_range_over_one_stride_and_every_stride():
+    """A 5 s run: the overview's pitch band holds every sample between its edges, its upper
+    edge reaching the run's largest pitch; one marker per stride, the steady ones filled."""
+    r = scoutsim.simulate(duration=5.0, model="II")
+    fig = plot_run(r, overview="auto")
+    ax_p, ax_h, ax_s = fig.get_axes()[:3]
+    pitch = np.degrees(r.pitch)
+    hi, lo = (ln.get_ydata() for ln in ax_p.get_lines()[:2])
+    assert np.all(lo <= pitch) and np.all(pitch <= hi)
+    assert hi.max() == pitch.max() and lo.min() == pitch.min()
+    # the band is a stride wide: in the steady bound it is the stride's pitch range
+    steady = r.gait().steady_strides
+    k = np.searchsorted(r.t, 0.5 * (steady[-1].t_start + steady[-1].t_end))
+    assert hi[k] == pytest.approx(steady[-1].pitch_max_deg, abs=0.05)
+    assert lo[k] == pytest.approx(steady[-1].pitch_min_deg, abs=0.05)
+    open_marks, filled = ax_s.get_lines()
+    assert len(filled.get_xdata()) == r.gait().n_steady_strides
+    assert len(open_marks.get_xdata()) + len(filled.get_xdata()) == r.gait().n_strides
+    np.testing.assert_array_equal(filled.get_ydata(), [s.period_s for s in steady])
+
+
+def test_plot_run_title_of_a_fall_says_so():
+    """A robot that fell is not "bounding ... completed": the title says when and how."""
+    import math
+    r = scoutsim.simulate(initial_state=scoutsim.InitialState(theta=math.radians(40.0), y=0.5),
+                          duration=1.0)
+    title = " ".join(plot_run(r)._suptitle.get_text().split())
+    assert "fell at t = " in title and "pitch passed 60 deg" in title
+    assert "bounding" not in title and "completed" not in title
+
+
+def test_plot_stride_power_has_a_legend_for_the_leg_state_colours():
+    """The background bands' colours are named in a legend: flight, stance-retraction,
+    stance-brake, each patch the colour of the bands of that state."""
+    from matplotlib.patches import Patch
+    from matplotlib.colors import to_rgba
+    from scoutsim.names import LegState
+    from scoutsim.presentation.plots import plot_stride_power
+    r = scoutsim.simulate(duration=1.0, model="II", energy=True)
+    fig = plot_stride_power(r)
+    ax_in, ax_out = fig.get_axes()
+    legend = ax_in.get_legend()
+    patches = {t.get_text(): h for t, h in zip(legend.get_texts(), legend.legend_handles)
+               if isinstance(h, Patch) and h.get_visible()}
+    for state in LegState:
+        assert to_rgba(patches[state.label].get_facecolor()) == to_rgba(LEG_STATE_COLORS[state])
+    band_colours = {to_rgba(tuple(c)) for coll in ax_out.collections
+                    if isinstance(coll, PolyCollection) for c in coll.get_facecolors()}
+    assert band_colours <= {to_rgba(c) for c in LEG_STATE_COLORS}
+    _drawn(fig)
+    for ax in (ax_in, ax_out):         # the legends right of the panels, off the traces
+        assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
+
+
+def test_a_window_of_a_run_is_titled_by_its_run_not_by_its_own_strides(result_II):
+    """A window holds too few strides to judge the gait: the title gives the run's outcome
+    and the window shown, or what the whole run did when told (a saved run's summary)."""
+    part = result_II.window(0.2, 0.6)
+    title = " ".join(plot_run(part)._suptitle.get_text().split())
+    assert "t = 0.20 - 0.60 s shown of the run's 0 - 1.00 s" in title
+    assert "stride" not in title
+    whole = result_II.behaviour().text
+    title = " ".join(plot_run(part, behaviour=whole)._suptitle.get_text().split())
+    assert title.startswith(f"Scout II, Model II: {whole} (t = 0.20 - 0.60 s shown")
+
+
+def test_scoutsim_plot_of_a_window_titles_it_by_the_saved_summary(tmp_path, monkeypatch):
+    import json
+    from scoutsim.cli import main
+    import scoutsim.presentation.plots as plots
+    out = tmp_path / "run"
+    assert main(["run", "--duration", "0.5", "--out", str(out), "--no-progress",
+                 "--quiet"]) == 0
+    seen = {}
+    real = plots.plot_run
+
+    def spy(result, path=None, **kwargs):
+        seen.update(kwargs)
+        return real(result, path, **kwargs)
+    monkeypatch.setattr(plots, "plot_run", spy)
+    assert main(["plot", str(out), "--t0", "0.1", "--t1", "0.3",
+                 "--out", str(tmp_path / "w.png")]) == 0
+    assert seen["behaviour"] == json.loads((out / "summary.json").read_text())["behaviour"]
