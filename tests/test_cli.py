@@ -444,3 +444,17 @@ def test_run_start_standing_refuses_flight_options_and_the_passive_model(tmp_pat
     err = capsys.readouterr().err
     assert code == 2
     assert text in err and "Traceback" not in err
+
+
+def test_summary_table_says_when_its_gait_means_are_not_a_steady_bound():
+    """A run with a few steady strides that is no steady bound: the table says the gait
+    means cover those strides alone; a steady bound's table carries no such line."""
+    from scoutsim.cli.run import format_summary
+    base = {"outcome": "completed", "behaviour": "a steady gait with 2 lift-offs per cycle",
+            "mean_speed_m_s": 1.45, "n_strides": 189, "model": "I"}
+    few = format_summary(base | {"n_steady_strides": 1, "steady_bounding": False},
+                         duration=20.0, wall_s=0.3, t_end=20.0)
+    assert "over 1 steady stride only (not a steady bound)" in few
+    bound = format_summary(base | {"n_steady_strides": 60, "steady_bounding": True},
+                           duration=20.0, wall_s=0.3, t_end=20.0)
+    assert "gait means below" not in bound

@@ -301,6 +301,14 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
     rows = [
         ("outcome", outcome),
         ("what the robot did", summary.get("behaviour") or "n/a"),
+    ]
+    n_steady = summary.get("n_steady_strides") or 0
+    if steady and summary.get("steady_bounding") is False:
+        # a few strides passed the steadiness test, but the run is no steady bound: the
+        # means below describe those strides alone, and say so
+        rows.append(("gait means below", f"over {n_steady} steady stride"
+                     f"{'s' if n_steady != 1 else ''} only (not a steady bound)"))
+    rows += [
         ("mean forward speed", speed),
         ("stride frequency", _fmt(summary.get("stride_frequency_hz"), ".3f", "Hz")),
         ("duty factor back / front", _pair(summary.get("duty_factor_back"),
