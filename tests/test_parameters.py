@@ -270,17 +270,15 @@ def test_from_dict_refuses_bad_content():
         from_dict(d)
 
 
-def test_a_robot_that_passed_once_is_still_checked_by_value():
-    """Validation remembers the parameter sets that passed it by their values and the
-    values' types: an equal set passes without a new check, while a set that differs in
-    one value, or only in a value's type (True and 1 are equal in Python), is checked."""
-    from scoutsim.parameters.validation import _PASSED, _typed_values
+def test_every_construction_is_checked_by_value_and_type():
+    """Each construction checks its own values and their types: a per-leg robot equal to
+    one built before is valid, one that differs in one leg's value is refused, and so is
+    one that differs only in a value's type (True and 1.0 are equal in Python)."""
     robot = RobotParameters(leg_rest_length=(0.323, 0.30))
     assert validate_robot(robot) is robot
-    assert _typed_values(RobotParameters(leg_rest_length=(0.323, 0.30))) in _PASSED
+    assert RobotParameters(leg_rest_length=(0.323, 0.30)) == robot
     with pytest.raises(ParameterError, match="leg_rest_length"):
-        validate_robot(RobotParameters(leg_rest_length=(0.323, -0.30)))
-    validate_robot(RobotParameters(torso_mass=1.0))
-    assert RobotParameters(torso_mass=True) == RobotParameters(torso_mass=1.0)
+        RobotParameters(leg_rest_length=(0.323, -0.30))
+    RobotParameters(torso_mass=1.0)
     with pytest.raises(ParameterError, match="torso_mass"):
-        validate_robot(RobotParameters(torso_mass=True))
+        RobotParameters(torso_mass=True)
