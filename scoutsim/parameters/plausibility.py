@@ -51,9 +51,9 @@ _SLIP_TOLERANCE = math.log(1.5)
 
 
 def _ratio_text(r: float) -> str:
-    """``1000x`` / ``57.3x`` for r >= 1, ``1/1000 of`` for r < 1."""
+    """``1000x`` / ``57.3x`` / ``1e+300x`` for r >= 1, ``1/1000 of`` for r < 1."""
     x = r if r >= 1.0 else 1.0 / r
-    shown = f"{x:.3g}" if x < 100.0 else str(round(float(f"{x:.3g}")))
+    shown = str(round(float(f"{x:.3g}"))) if 100.0 <= x < 1.0e7 else f"{x:.3g}"
     return f"{shown}x" if r >= 1.0 else f"1/{shown} of"
 
 
@@ -82,30 +82,45 @@ def likely_slip(spec: _Spec, ratio: float, given_unit: str | None = None) -> str
     return best
 
 
+def _given_unit(spec: _Spec, note: str | None) -> str | None:
+    """The unit a value was given in, from its origin's note ("given as 3520 N/mm")."""
+    if not note:
+        return None
+    return next((u for u in sorted(UNITS[spec.dimension], key=len, reverse=True)
+                 if note.endswith(f" {u}")), None)
+
+
+def slip_hint(spec: _Spec, value: float, note: str | None = None) -> str | None:
+    """:func:`likely_slip` of ``value`` [SI] against Scout II's value, or None (a value or
+    a Scout II value that is not > 0, or no slip near)."""
+    scout = spec.default_si
+    if spec.kind != "float" or not (value > 0.0 and scout > 0.0 and math.isfinite(value)):
+        return None
+    return likely_slip(spec, value / scout, _given_unit(spec, note))
+
+
 def implausible_message(spec: _Spec, value: float, origins, leg: int | None = None) -> str:
     """The warning's text for ``value`` [SI] of the field ``spec`` (of leg ``leg`` when the
     legs differ); ``origins`` as in validation (the file and the unit it was given in)."""
     where, note = origins.get(spec.name, ("", None))
-    given_unit = note.rsplit(" ", 1)[-1] if note and note.startswith("given as ") else None
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     scale = spec.factor if spec.kind == "float" else 1.0
     label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
     shown = f"{label} = {_fmt(value / scale)}{unit}{f' ({note})' if note else ''}"
     p = spec.plausible
-    span = f"{p.low / scale:.3g} to {p.high / scale:.3g}{unit}"
+    span = f"{p.low / scale:.6g} to {p.high / scale:.6g}{unit}"
     if p.zero and p.low > 0.0:
         span += ", or 0"
     scout = spec.default_si
     if value > 0.0 and scout > 0.0:
-        ratio = value / scout
-        text = (f"{shown} is {_ratio_text(ratio)} Scout II's {spec.written:.4g}{unit}, far "
-                f"outside what a robot of its kind has ({span})")
-        slip = likely_slip(spec, ratio, given_unit)
+        text = (f"{shown} is {_ratio_text(value / scout)} Scout II's {spec.written:.4g}{unit}, "
+                f"outside the plausible range for a robot of its kind ({span})")
+        slip = slip_hint(spec, value, note)
         if slip:
             text += f": {slip}"
     else:
-        text = (f"{shown} is far outside what a robot of its kind has ({span}; Scout II: "
-                f"{spec.written:.4g}{unit})")
+        text = (f"{shown} is outside the plausible range for a robot of its kind ({span}; "
+                f"Scout II: {spec.written:.4g}{unit})")
     return text + where
 
 

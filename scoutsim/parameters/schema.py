@@ -91,14 +91,17 @@ _ZERO_PLAUSIBLE = frozenset({
 @dataclass(frozen=True)
 class Plausible:
     """Plausible values of a field in SI: ``low <= x <= high``, or ``x == 0`` if
-    ``zero``."""
+    ``zero``. The comparison is widened by rounding's worth (:attr:`bounds`), so that
+    e.g. exactly 10 times Scout II's value, computed in SI, is inside."""
 
     low: float
     high: float
     zero: bool = False
 
-    def contains(self, x: float) -> bool:
-        return self.low <= x <= self.high or (self.zero and x == 0.0)
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """(low, high) as compared."""
+        return self.low * (1.0 - 1.0e-9), self.high * (1.0 + 1.0e-9)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ from functools import lru_cache
 
 from ..names import LEG_NAMES
 from .errors import ParameterError, _fmt, _fmt_bound
-from .plausibility import warn_implausible
+from .plausibility import slip_hint, warn_implausible
 from .schema import (CONTROLLER_SECTIONS, PER_LEG_FIELDS, ROBOT_SECTIONS, _fields_of, _schema,
                      _Spec, given_per_leg)
 
@@ -251,9 +251,12 @@ def _fail(spec: _Spec, value: object, rule: str, origins, leg: int | None = None
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     shown = _fmt(value / spec.factor) if spec.kind == "float" else _fmt(value)
+    slip = slip_hint(spec, value, note) if isinstance(value, float) else None
+    slip = f" ({slip})" if slip else ""
     note = f" ({note})" if note else ""
     label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
-    raise ParameterError(f"{label} = {shown}{unit}{note} is not allowed: {rule}{where}", spec.name)
+    raise ParameterError(f"{label} = {shown}{unit}{note} is not allowed: {rule}{where}{slip}",
+                         spec.name)
 
 
 def _check_fields(obj: object, origins) -> None:
@@ -375,9 +378,9 @@ def _plan(cls: type) -> tuple:
     for name, spec in _fields_of(cls).items():
         lo, hi = closed_range(name)
         p = spec.plausible
+        p_lo, p_hi = (-math.inf, math.inf) if p is None else p.bounds
         plan.append((name, _ACCEPTED_TYPES[spec.kind], name in PER_LEG_FIELDS,
-                     max(lo, -_FLOAT_MAX), min(hi, _FLOAT_MAX),
-                     -math.inf if p is None else p.low, math.inf if p is None else p.high,
+                     max(lo, -_FLOAT_MAX), min(hi, _FLOAT_MAX), p_lo, p_hi,
                      p is not None and p.zero))
     return tuple(plan)
 

@@ -133,6 +133,14 @@ def test_count_and_switch_refuse_the_wrong_kind():
     _refused("torso_mass", True)
 
 
+def test_an_angle_in_degrees_read_as_radians_is_refused_naming_the_slip():
+    """Table I's touchdown angle, 21 (degrees), passed in radians is 1203 deg: outside
+    the +-90 deg a leg can point, refused; the message names the deg - rad slip."""
+    message = _refused("touchdown_angle_front", 21.0)
+    assert "must be in (-90, 90) deg" in message
+    assert re.search(r"slip between (rad and deg|deg and rad)", message), message
+
+
 def test_replace_checks_as_construction_does():
     robot, controller = RobotParameters(), ControllerParameters()
     for make in (lambda: dataclasses.replace(robot, leg_stiffness=-3520.0),
