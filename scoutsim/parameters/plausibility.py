@@ -48,6 +48,9 @@ _OTHER_UNITS: dict[str, dict[str, float]] = {
 #: a slip is named when the ratio to Scout II's value is within this factor of the slip's
 #: (a robot up to 1.5 times Scout II's value either way, given in the wrong unit)
 _SLIP_TOLERANCE = math.log(1.5)
+#: ... and only for a value more than this factor from Scout II's (closer, it is another
+#: robot, not a slip)
+_SLIP_MIN_RATIO = 3.0
 
 
 def _ratio_text(r: float) -> str:
@@ -59,9 +62,12 @@ def _ratio_text(r: float) -> str:
 
 def likely_slip(spec: _Spec, ratio: float, given_unit: str | None = None) -> str | None:
     """The unit slip that best explains a value ``ratio`` times Scout II's, as text ("a slip
-    between N/mm and N/m?"), or None if no slip is near (within a factor 1.5). Candidates:
-    the field's units in ``scout2.toml``, in SI and as the user gave it, each against every
-    unit of the dimension; then a bare power of 1000."""
+    between N/mm and N/m?"), or None if no slip is near (within a factor 1.5) or the value
+    is within a factor 3 of Scout II's. Candidates: the field's units in ``scout2.toml``,
+    in SI and as the user gave it, each against every unit of the dimension; then a bare
+    power of 1000."""
+    if 1.0 / _SLIP_MIN_RATIO <= ratio <= _SLIP_MIN_RATIO:
+        return None
     units = {**UNITS[spec.dimension], **_OTHER_UNITS.get(spec.dimension, {})}
     anchors = dict.fromkeys(u for u in (spec.unit, spec.si_unit, given_unit) if u in units)
     best, best_distance = None, _SLIP_TOLERANCE

@@ -297,29 +297,32 @@ def _describe_limit(rule: _Range, limit: _Limit, spec: _Spec) -> str:
 
 
 # -- the rules that couple fields ------------------------------------------------------------
+def _pair(value) -> tuple:
+    """A per-leg field's stored value as its (back, front) pair."""
+    return value if type(value) is tuple else (value, value)
+
+
 def _check_robot_couplings(p, origins) -> None:
     """The leg's centre of mass on the leg, massless legs on both legs or neither, and the
     torso's centre of mass between the hips."""
-    spec = _schema()["leg_com_distance"]
-    differ = any(isinstance(getattr(p, n), tuple)
-                 for n in ("leg_com_distance", "leg_rest_length", "leg_mass"))
-    masses, inertias = p.per_leg("leg_mass"), p.per_leg("leg_inertia")
-    for leg, (mass, distance, rest) in enumerate(zip(masses, p.per_leg("leg_com_distance"),
-                                                     p.per_leg("leg_rest_length"))):
-        which = leg if differ else None
+    masses, inertias = _pair(p.leg_mass), _pair(p.leg_inertia)
+    distances, rests = _pair(p.leg_com_distance), _pair(p.leg_rest_length)
+    for leg in (0, 1):
+        mass, distance, rest = masses[leg], distances[leg], rests[leg]
+        if 0.0 < distance <= rest or (mass == 0.0 and distance == 0.0):
+            continue
+        spec = _schema()["leg_com_distance"]
+        differ = any(isinstance(getattr(p, n), tuple)
+                     for n in ("leg_com_distance", "leg_rest_length", "leg_mass"))
         l0 = _fmt_bound(rest / spec.factor)
-        if mass == 0.0:
-            if not 0.0 <= distance <= rest:
-                _fail(spec, distance, f"must be in [0, leg_rest_length = {l0}] "
-                      f"{spec.unit} (massless legs)", origins, which)
-        elif not 0.0 < distance <= rest:
-            _fail(spec, distance, f"must be in (0, leg_rest_length = {l0}] {spec.unit}",
-                  origins, which)
-    massless = [m == 0.0 and i == 0.0 for m, i in zip(masses, inertias)]
-    if massless[0] != massless[1]:
-        _fail(_schema()["leg_mass"], masses[int(massless[1])], "the model's massless legs "
+        massless = " (massless legs)" if mass == 0.0 else ""
+        _fail(spec, distance, f"must be in {'[' if mass == 0.0 else '('}0, leg_rest_length = "
+              f"{l0}] {spec.unit}{massless}", origins, leg if differ else None)
+    if (masses[0] == 0.0 and inertias[0] == 0.0) != (masses[1] == 0.0 and inertias[1] == 0.0):
+        front_massless = masses[1] == 0.0 and inertias[1] == 0.0
+        _fail(_schema()["leg_mass"], masses[int(front_massless)], "the model's massless legs "
               "(leg_mass = leg_inertia = 0) are both legs or neither", origins,
-              int(massless[1]))
+              int(front_massless))
     half = 0.5 * p.hip_spacing
     if not -half < p.com_offset < half:
         spec = _schema()["com_offset"]
