@@ -189,6 +189,7 @@ def _schema() -> dict[str, _Spec]:
 
 @lru_cache(maxsize=None)
 def _fields_of(cls: type) -> dict[str, _Spec]:
-    """Field name -> :class:`_Spec` of every field of the dataclass ``cls``, in its order."""
-    names = [f.name for f in dataclasses.fields(cls)]
-    return {n: _schema()[n] for n in names}
+    """Field name -> :class:`_Spec` of every parameter field of the dataclass ``cls``, in its
+    order (a subclass's own extra fields are not parameters)."""
+    schema = _schema()
+    return {f.name: schema[f.name] for f in dataclasses.fields(cls) if f.name in schema}

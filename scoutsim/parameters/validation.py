@@ -412,9 +412,9 @@ def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
     return implausible
 
 
-def _check(obj, couplings) -> None:
-    """Every single-field rule of ``obj``'s fields, then ``couplings(obj, origins)``; then a
-    warning for each value outside its plausible range."""
+def _check(obj, couplings, warn: bool = True) -> None:
+    """Every single-field rule of ``obj``'s fields, then ``couplings(obj, origins)``; then
+    (if ``warn``) a warning for each value outside its plausible range."""
     cls = type(obj)
     plan = _plan(cls)
     origins = _ORIGINS.get()
@@ -425,7 +425,7 @@ def _check(obj, couplings) -> None:
         implausible = _quick_scan({n: coerce_value(specs[n], getattr(obj, n))
                                    for n in specs}, plan)
     couplings(obj, origins)
-    for name, value, leg in implausible:
+    for name, value, leg in implausible if warn else ():
         warn_implausible(_schema()[name], value, origins, leg)
 
 
@@ -447,7 +447,7 @@ def _sections_of(cls: type) -> tuple | None:
     class)."""
     if not dataclasses.is_dataclass(cls):
         return None
-    names = {f.name for f in dataclasses.fields(cls)}
+    names = set(_fields_of(cls))
     for sections in (ROBOT_SECTIONS, CONTROLLER_SECTIONS):
         if names == {n for n, s in _schema().items() if s.section in sections}:
             return sections
@@ -461,7 +461,8 @@ def _require(obj, sections: tuple, expected: str) -> None:
 
 def validate_robot(p):
     """Check every field of a :class:`RobotParameters` (its constructor does; this checks
-    one made otherwise, e.g. unpickled).
+    one made otherwise, e.g. unpickled). It raises only: the plausibility warnings are the
+    constructor's.
 
     Parameters
     ----------
@@ -483,7 +484,7 @@ def validate_robot(p):
         range.
     """
     _require(p, ROBOT_SECTIONS, "RobotParameters")
-    check_robot(p)
+    _check(p, _check_robot_couplings, warn=False)    # (its constructor warned)
     return p
 
 
@@ -507,7 +508,7 @@ def validate_controller(c):
         As :func:`validate_robot`.
     """
     _require(c, CONTROLLER_SECTIONS, "ControllerParameters")
-    check_controller(c)
+    _check(c, _check_controller_couplings, warn=False)
     return c
 
 
