@@ -419,8 +419,10 @@ def _check(obj, couplings, warn: bool = True) -> None:
     plan = _plan(cls)
     origins = _ORIGINS.get()
     implausible = _quick_scan(obj.__dict__, plan)
-    if implausible is None:   # a value the comparison alone cannot pass: the full check
-        _check_fields(obj, origins)  # (raises, naming the field, or the value is e.g. a NumPy number)
+    if implausible is None:
+        # a value the comparison alone does not pass: the full check raises, naming the
+        # field, or the value is valid (e.g. a NumPy number)
+        _check_fields(obj, origins)
         specs = _fields_of(cls)
         implausible = _quick_scan({n: coerce_value(specs[n], getattr(obj, n))
                                    for n in specs}, plan)

@@ -164,12 +164,13 @@ def test_a_per_leg_robot_names_the_bad_leg(leg, pair):
 
 
 def test_a_per_leg_robot_warns_of_the_implausible_leg_once():
-    """The back leg's stiffness given in N/mm: the warning names the back leg, and asking
-    for that leg's robot (``robot.leg("back")``) does not warn again."""
+    """The back leg's stiffness given in N/mm: the warning names the back leg, and neither
+    asking for that leg's robot (``robot.leg("back")``) nor checking the robot again (as
+    simulate() does) warns again."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         robot = RobotParameters(leg_stiffness=(3.52, 3520.0))
-        robot.leg("back"), robot.leg("front")
+        robot.leg("back"), robot.leg("front"), validate_robot(robot)
     texts = [str(w.message) for w in caught if w.category is ImplausibleParameterWarning]
     assert len(texts) == 1, texts
     assert "leg_stiffness (back leg) = 3.52 N/m" in texts[0] and "N/mm" in texts[0]
