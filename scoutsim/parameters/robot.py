@@ -19,6 +19,7 @@ from .validation import check_robot
 # between the legs) in the schema; they stay importable from here.
 __all__ = ["RobotParameters", "PER_LEG_FIELDS", "LEG_NAMES", "leg_index", "given_per_leg"]
 
+
 def _per_leg_value(name: str, value):
     """A per-leg field's value as stored: a scalar, or a (back, front) tuple whose values
     differ (an equal pair is stored as its one value, so a robot given per leg with equal
