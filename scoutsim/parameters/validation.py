@@ -390,9 +390,9 @@ def _plan(cls: type) -> tuple:
 
 def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
     """The fields' single-field checks by comparison alone: None if a value is not of its
-    field's plain type (``float``, ``int``, ``bool``, or a (back, front) tuple of them) or
-    is outside its allowed range (:func:`_check_fields` then says why), else the
-    implausible values as (name, value, leg)."""
+    field's plain type (``float`` or a subclass, ``int``, ``bool``, or a (back, front) tuple
+    of them) or is outside its allowed range (:func:`_check_fields` then says why), else
+    the implausible values as (name, value, leg)."""
     implausible = []
     for name, types, per_leg, lo, hi, p_lo, p_hi, p_zero in plan:
         v = values[name]
@@ -407,6 +407,11 @@ def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
                     return None
                 if not p_lo <= x <= p_hi and not (p_zero and x == 0):
                     implausible.append((name, x, leg))
+        elif float in types and isinstance(v, float):    # a subclass: NumPy's float64
+            if not lo <= v <= hi:
+                return None
+            if not p_lo <= v <= p_hi and not (p_zero and v == 0):
+                implausible.append((name, v, None))
         else:
             return None
     return implausible

@@ -26,6 +26,7 @@ import re
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from scoutsim.parameters import (ControllerParameters, Environment, ImplausibleParameterWarning,
@@ -124,6 +125,21 @@ def test_a_quantity_that_is_absent_at_zero_refuses_negative_and_takes_zero(name)
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_a_real_quantity_refuses_nan_and_infinity(name, value):
     assert "finite" in _refused(name, value)
+
+
+def test_numpy_numbers_are_checked_as_python_numbers():
+    """A sweep over ``np.linspace`` passes NumPy numbers: the same refusals and warnings."""
+    with pytest.raises(ParameterError, match="leg_mass"):
+        RobotParameters(leg_mass=np.float64(-1.0))
+    with pytest.raises(ParameterError, match="leg_mass.*finite"):
+        RobotParameters(leg_mass=np.float64(np.nan))
+    with pytest.raises(ParameterError, match=r"leg_mass \(front leg\)"):
+        RobotParameters(leg_mass=np.array([1.0, -1.0]))
+    with pytest.raises(ParameterError, match="legs_per_virtual_leg"):
+        RobotParameters(legs_per_virtual_leg=np.float64(2.0))
+    assert RobotParameters(legs_per_virtual_leg=np.int64(1)).legs_per_virtual_leg == 1
+    with pytest.warns(ImplausibleParameterWarning, match="leg_stiffness.*N/mm"):
+        RobotParameters(leg_stiffness=np.float64(3520.0e3))
 
 
 def test_count_and_switch_refuse_the_wrong_kind():
