@@ -6,15 +6,20 @@ import dataclasses
 from dataclasses import dataclass
 
 from .packaged import _packaged_defaults
+from .schema import CONTROLLER_SECTIONS
+from .validation import check_controller
 
 
 @dataclass(frozen=True)
-@_packaged_defaults("controller")
+@_packaged_defaults(*CONTROLLER_SECTIONS)
 class ControllerParameters:
     """Bounding controller settings (paper Sec. II, Table I; docs/specification.md section 6), SI units.
 
     Gains are per physical leg, leg side (N m/rad, N m s/rad). Angles are relative to the
     torso [rad], positive with the toe ahead of the hip.
+
+    Constructing one (also with :meth:`replace` or ``dataclasses.replace``) checks every
+    value, as :class:`~scoutsim.parameters.RobotParameters` does.
 
     Attributes
     ----------
@@ -64,6 +69,9 @@ class ControllerParameters:
     pitch_gain_back: float
     pitch_rate_gain_front: float
     pitch_rate_gain_back: float
+
+    def __post_init__(self):
+        check_controller(self)
 
     def replace(self, **changes) -> "ControllerParameters":
         """Return a copy with some fields changed."""

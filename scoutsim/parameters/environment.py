@@ -41,7 +41,8 @@ class Environment:
         if mu is not None and not (isinstance(mu, numbers.Real) and not isinstance(mu, bool)
                                    and mu > 0.0):
             raise ParameterError(f"Environment.friction_coefficient = {mu!r} is not allowed: "
-                                 "must be a number > 0 (inf for a no-slip floor) or None")
+                                 "must be a number > 0 (inf for a no-slip floor) or None",
+                                 "friction_coefficient")
 
     def friction_for(self, robot: "RobotParameters") -> float:
         """The toe's Coulomb coefficient mu [-] for ``robot`` on this floor (the default

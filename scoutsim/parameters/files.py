@@ -12,11 +12,14 @@ from os import PathLike
 from .controller import ControllerParameters
 from .errors import ParameterError, _fmt, _unknown
 from .robot import RobotParameters
-from .schema import SECTIONS, _fields_of, _schema, _Spec
+from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema, _Spec
 from .units import _UNIT_INDEX, UNITS
-from .validation import (_coerce, _validate_controller, _validate_pair, _validate_robot,
-                         coerce_value, validate_parameters)
+from .validation import _validate_pair, coerce_value, reporting_origins, validate_parameters
 
+
+#: TOML section -> dataclass whose fields it holds.
+SECTIONS: dict[str, type] = {**dict.fromkeys(ROBOT_SECTIONS, RobotParameters),
+                             **dict.fromkeys(CONTROLLER_SECTIONS, ControllerParameters)}
 
 #: sections of a robot file read by other loaders: name -> the function that reads them
 SEPARATE_SECTIONS: dict[str, str] = {
@@ -63,8 +66,7 @@ def _scaled(spec: _Spec, value, factor: float):
 
 def _default_si(spec: _Spec) -> float | int | bool:
     """SI value of the packaged default of one field."""
-    value = _coerce(spec, spec.written)
-    return value * spec.factor if spec.kind == "float" else value
+    return spec.default_si
 
 
 def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple[str, str | None]]]:
@@ -101,7 +103,8 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
 
 def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | None,
            where_overrides: str = " (from overrides)"):
-    """Defaults -> user file -> overrides; return the instance (unvalidated) and origins."""
+    """Defaults -> user file -> overrides; return the instance (checked by its constructor,
+    whose messages name the values' origins) and the origins."""
     specs = _fields_of(cls)
     values = {name: _default_si(spec) for name, spec in specs.items()}
     origins: dict[str, tuple[str, str | None]] = {}
@@ -120,7 +123,8 @@ def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | N
         values[name] = coerce_value(spec, value, where_overrides)
         note = f"given as {_fmt(value)} {spec.si_unit}" if spec.factor != 1.0 else None
         origins[name] = (where_overrides, note)
-    return cls(**values), origins
+    with reporting_origins(origins):
+        return cls(**values), origins
 
 
 def load_robot(path: str | PathLike | None = None,
@@ -148,8 +152,7 @@ def load_robot(path: str | PathLike | None = None,
         Malformed TOML, unknown section or key, wrong unit dimension, wrong type, or a value
         out of range (see :func:`validate_robot`).
     """
-    robot, origins = _build(RobotParameters, path, overrides)
-    return _validate_robot(robot, origins)
+    return _build(RobotParameters, path, overrides)[0]
 
 
 def load_controller(path: str | PathLike | None = None,
@@ -169,8 +172,7 @@ def load_controller(path: str | PathLike | None = None,
         Validated parameters (SI units). The coupling ``touchdown_compression <
         leg_rest_length`` is only checked by :func:`load_parameters`.
     """
-    controller, origins = _build(ControllerParameters, path, overrides)
-    return _validate_controller(controller, origins)
+    return _build(ControllerParameters, path, overrides)[0]
 
 
 def load_parameters(path: str | PathLike | None = None,
@@ -191,10 +193,8 @@ def load_parameters(path: str | PathLike | None = None,
     tuple of (RobotParameters, ControllerParameters)
         Validated parameters.
     """
-    robot, r_origins = _build(RobotParameters, path, robot_overrides)
+    robot, _ = _build(RobotParameters, path, robot_overrides)
     controller, c_origins = _build(ControllerParameters, path, controller_overrides)
-    _validate_robot(robot, r_origins)
-    _validate_controller(controller, c_origins)
     _validate_pair(robot, controller, c_origins)
     return robot, controller
 
@@ -273,7 +273,5 @@ def from_dict(d: typing.Mapping) -> tuple[RobotParameters, ControllerParameters]
         out.append(obj)
         origins.update(o)
     robot, controller = out
-    _validate_robot(robot, origins)
-    _validate_controller(controller, origins)
     _validate_pair(robot, controller, origins)
     return robot, controller

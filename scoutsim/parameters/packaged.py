@@ -32,15 +32,21 @@ def _packaged() -> dict:
 def _packaged_defaults(*sections: str):
     """Class decorator: every annotated field of the class gets, as its default, the SI value
     of its entry in the packaged ``scout2.toml`` (in one of ``sections``), converted with the
-    entry's unit. The dataclass field list and the file must name the same parameters."""
+    entry's unit. The dataclass field list and the file must name the same parameters, and
+    each value must be written with its field's type (``2``, ``2.0``, ``true``)."""
     def fill(cls):
         data = _packaged()
         entries = {n: e for sec in sections for n, e in data[sec].items()}
+        if extra := sorted(set(entries) - set(cls.__annotations__)):
+            raise RuntimeError(f"packaged {_PACKAGED_NAME}: {cls.__name__} has no field {extra}")
         for name, kind in cls.__annotations__.items():
             if name not in entries:
                 raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
             entry = entries[name]
             value = entry["value"]
+            if type(value).__name__ != kind:  # the schema reads each field's type from the file
+                raise RuntimeError(f"packaged {_PACKAGED_NAME}: {name} = {value!r} is not a "
+                                   f"{kind}, the type of {cls.__name__}.{name}")
             if kind == "bool":
                 default = bool(value)
             elif kind == "int":

@@ -4,35 +4,20 @@ may differ between the back and the front legs (:data:`PER_LEG_FIELDS`)."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass
 
 from ..names import LEG_NAMES, leg_index
 from .errors import ParameterError
 from .packaged import _packaged_defaults
+from .schema import PER_LEG_FIELDS, ROBOT_SECTIONS, given_per_leg
+from .validation import check_robot
 
 # LEG_NAMES (the legs, in the order of a (back, front) pair) and leg_index live in
-# scoutsim.names, the one home of the legs' names; they stay importable from here.
-__all__ = ["RobotParameters", "PER_LEG_FIELDS", "LEG_NAMES", "leg_index"]
-
-#: Fields that take one value for both legs or a (back, front) pair: the leg bodies, the
-#: telescopic legs, the hip units (transmission) and the motors with their amplifiers.
-#: The torso, the hip spacing, the battery and gravity are one value for the robot.
-PER_LEG_FIELDS = (
-    "leg_mass", "leg_inertia", "leg_stiffness", "leg_damping", "leg_rest_length",
-    "leg_com_distance", "planetary_ratio", "sprocket_ratio", "gearbox_efficiency",
-    "sprocket_efficiency", "gearbox_idle_loss_torque", "gearbox_load_loss_coefficient",
-    "drive_gear_inertia", "driven_gear_inertia", "joint_stiction", "joint_damping",
-    "belt_stiffness", "belt_damping", "belt_backlash", "leg_friction_force",
-    "leg_friction_side_load_coefficient", "leg_damping_angle_coefficient",
-    "torque_constant", "speed_constant", "armature_resistance", "current_limit",
-)
-
-
-def given_per_leg(value) -> bool:
-    """Whether a field's value is given leg by leg: a list, a tuple or a 1-d array (of two
-    values, back then front, for a valid one)."""
-    return isinstance(value, (list, tuple)) or getattr(value, "ndim", 0) == 1
+# scoutsim.names, the one home of the legs' names; PER_LEG_FIELDS (which fields may differ
+# between the legs) in the schema; they stay importable from here.
+__all__ = ["RobotParameters", "PER_LEG_FIELDS", "LEG_NAMES", "leg_index", "given_per_leg"]
 
 
 def _per_leg_value(name: str, value):
@@ -50,7 +35,7 @@ def _per_leg_value(name: str, value):
 
 
 @dataclass(frozen=True)
-@_packaged_defaults("robot", "transmission", "motor")
+@_packaged_defaults(*ROBOT_SECTIONS)
 class RobotParameters:
     """Physical parameters of the planar Scout II model (SI units).
 
@@ -61,6 +46,11 @@ class RobotParameters:
     quantities), :meth:`per_leg` a field's (back, front) pair; the derived quantities below
     (``gear_ratio``, ``stall_torque``, ...) need the legs to agree on their inputs and say
     so otherwise.
+
+    Constructing one (also with :meth:`replace` or ``dataclasses.replace``) checks every
+    value: a :class:`~scoutsim.parameters.ParameterError` names the field (and the leg), the
+    value and its allowed range; a value far outside what a robot of this kind has warns
+    (:class:`~scoutsim.parameters.ImplausibleParameterWarning`, once per value and process).
 
     Attributes
     ----------
@@ -192,6 +182,7 @@ class RobotParameters:
             stored = _per_leg_value(name, value)
             if stored is not value:
                 object.__setattr__(self, name, stored)
+        check_robot(self)
 
     # -- the legs --------------------------------------------------------------------------
     def per_leg(self, name: str) -> tuple:
@@ -215,7 +206,14 @@ class RobotParameters:
         i = leg_index(leg)
         pairs = {n: getattr(self, n)[i] for n in PER_LEG_FIELDS
                  if isinstance(getattr(self, n), tuple)}
-        return dataclasses.replace(self, **pairs) if pairs else self
+        if not pairs:
+            return self
+        # one leg's values of a robot checked when it was made (leg by leg): a copy with
+        # them, not a new construction (which would check, and warn of, them again)
+        one = copy.copy(self)
+        for name, value in pairs.items():
+            object.__setattr__(one, name, value)
+        return one
 
     def _same(self, derived: str, *names: str) -> tuple:
         """The values of ``names``, which must be the same for both legs for ``derived``."""
@@ -296,5 +294,5 @@ class RobotParameters:
         return self.torso_mass + self.legs_per_virtual_leg * (back + front)
 
     def replace(self, **changes) -> "RobotParameters":
-        """Return a copy with some fields changed (validated by the loader functions)."""
+        """Return a copy with some fields changed (checked, as every construction is)."""
         return dataclasses.replace(self, **changes)

@@ -1,18 +1,29 @@
 """Validation: the allowed range of every field (sign rules and physical bounds), the type
-check of a value, and the checks of one parameter set and of the rules that couple the two."""
+check of a value, and the checks of one parameter set and of the rules that couple the two.
+
+The parameter dataclasses run these checks when they are constructed (also through
+``dataclasses.replace``: :func:`check_robot`, :func:`check_controller`), so a parameter set
+that exists is valid; its values outside their plausible ranges are warned of
+(:mod:`.plausibility`). The checks read the schema only, not the dataclasses, which are
+built on top of them."""
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
+import dataclasses
 import math
 import numbers
+import sys
 import typing
 from dataclasses import dataclass
+from functools import lru_cache
 
 from ..names import LEG_NAMES
-from .controller import ControllerParameters
 from .errors import ParameterError, _fmt, _fmt_bound
-from .robot import PER_LEG_FIELDS, RobotParameters, given_per_leg
-from .schema import _fields_of, _schema, _Spec
+from .plausibility import slip_hint, warn_implausible
+from .schema import (CONTROLLER_SECTIONS, PER_LEG_FIELDS, ROBOT_SECTIONS, _fields_of, _schema,
+                     _Spec, given_per_leg)
 
 
 _HALF_PI = 0.5 * math.pi
@@ -240,9 +251,12 @@ def _fail(spec: _Spec, value: object, rule: str, origins, leg: int | None = None
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     shown = _fmt(value / spec.factor) if spec.kind == "float" else _fmt(value)
+    slip = slip_hint(spec, value, note) if isinstance(value, float) else None
+    slip = f" ({slip})" if slip else ""
     note = f" ({note})" if note else ""
     label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
-    raise ParameterError(f"{label} = {shown}{unit}{note} is not allowed: {rule}{where}", spec.name)
+    raise ParameterError(f"{label} = {shown}{unit}{note} is not allowed: {rule}{where}{slip}",
+                         spec.name)
 
 
 def _check_fields(obj: object, origins) -> None:
@@ -281,50 +295,48 @@ def _describe_limit(rule: _Range, limit: _Limit, spec: _Spec) -> str:
     return f"in {'[' if rule.lo_closed else '('}{lo}, {hi}]{unit}"
 
 
-def _validate_robot(p: RobotParameters, origins) -> RobotParameters:
-    if not isinstance(p, RobotParameters):
-        raise TypeError(f"expected RobotParameters, got {type(p).__name__}")
-    _check_fields(p, origins)
-    spec = _schema()["leg_com_distance"]
-    differ = isinstance(p.leg_com_distance, tuple) or isinstance(p.leg_rest_length, tuple) \
-        or isinstance(p.leg_mass, tuple)
-    for leg in range(2):
-        one = p.leg(leg)
-        which = leg if differ else None
-        l0 = _fmt_bound(one.leg_rest_length / spec.factor)
-        if one.leg_mass == 0.0:
-            if not 0.0 <= one.leg_com_distance <= one.leg_rest_length:
-                _fail(spec, one.leg_com_distance, f"must be in [0, leg_rest_length = {l0}] "
-                      f"{spec.unit} (massless legs)", origins, which)
-        elif not 0.0 < one.leg_com_distance <= one.leg_rest_length:
-            _fail(spec, one.leg_com_distance,
-                  f"must be in (0, leg_rest_length = {l0}] {spec.unit}", origins, which)
-    massless = [m == 0.0 and i == 0.0 for m, i in zip(p.per_leg("leg_mass"),
-                                                      p.per_leg("leg_inertia"))]
-    if massless[0] != massless[1]:
-        spec = _schema()["leg_mass"]
-        _fail(spec, p.per_leg("leg_mass")[int(massless[1])], "the model's massless legs "
+
+# -- the rules that couple fields ------------------------------------------------------------
+def _pair(value) -> tuple:
+    """A per-leg field's stored value as its (back, front) pair."""
+    return value if type(value) is tuple else (value, value)
+
+
+def _check_robot_couplings(p, origins) -> None:
+    """The leg's centre of mass on the leg, massless legs on both legs or neither, and the
+    torso's centre of mass between the hips."""
+    masses, inertias = _pair(p.leg_mass), _pair(p.leg_inertia)
+    distances, rests = _pair(p.leg_com_distance), _pair(p.leg_rest_length)
+    for leg in (0, 1):
+        mass, distance, rest = masses[leg], distances[leg], rests[leg]
+        if 0.0 < distance <= rest or (mass == 0.0 and distance == 0.0):
+            continue
+        spec = _schema()["leg_com_distance"]
+        differ = any(isinstance(getattr(p, n), tuple)
+                     for n in ("leg_com_distance", "leg_rest_length", "leg_mass"))
+        l0 = _fmt_bound(rest / spec.factor)
+        massless = " (massless legs)" if mass == 0.0 else ""
+        _fail(spec, distance, f"must be in {'[' if mass == 0.0 else '('}0, leg_rest_length = "
+              f"{l0}] {spec.unit}{massless}", origins, leg if differ else None)
+    if (masses[0] == 0.0 and inertias[0] == 0.0) != (masses[1] == 0.0 and inertias[1] == 0.0):
+        front_massless = masses[1] == 0.0 and inertias[1] == 0.0
+        _fail(_schema()["leg_mass"], masses[int(front_massless)], "the model's massless legs "
               "(leg_mass = leg_inertia = 0) are both legs or neither", origins,
-              int(massless[1]))
+              int(front_massless))
     half = 0.5 * p.hip_spacing
     if not -half < p.com_offset < half:
         spec = _schema()["com_offset"]
         _fail(spec, p.com_offset, f"must be in (-hip_spacing / 2, hip_spacing / 2) = "
               f"({_fmt_bound(-half / spec.factor)}, {_fmt_bound(half / spec.factor)}) "
               f"{spec.unit} (the torso COM between the hips)", origins)
-    return p
 
 
-def _validate_controller(c: ControllerParameters, origins) -> ControllerParameters:
-    if not isinstance(c, ControllerParameters):
-        raise TypeError(f"expected ControllerParameters, got {type(c).__name__}")
-    _check_fields(c, origins)
+def _check_controller_couplings(c, origins) -> None:
     if c.liftoff_compression >= c.touchdown_compression:
         spec = _schema()["liftoff_compression"]
         td = _fmt_bound(c.touchdown_compression / spec.factor)
         _fail(spec, c.liftoff_compression,
               f"must be >= 0 and < touchdown_compression = {td} {spec.unit}", origins)
-    return c
 
 
 def _validate_pair(robot, controller, origins) -> None:
@@ -335,44 +347,129 @@ def _validate_pair(robot, controller, origins) -> None:
               f"must be > liftoff_compression and < leg_rest_length = {l0} {spec.unit}", origins)
 
 
-#: parameter sets that passed :func:`validate_robot` / :func:`validate_controller`, by their
-#: field values and those values' types (:func:`_typed_values`): a sweep or a learning
-#: environment runs one robot thousands of times, and checking every field each time costs
-#: more than a short run's integration. Bounded: emptied when it holds _PASSED_MAX sets.
-_PASSED: dict = {}
-_PASSED_MAX = 1024
+# -- the check of one parameter set ----------------------------------------------------------
+#: Where the values being checked came from: field -> (where, note) as in :func:`_fail`
+#: (``files`` sets it while it builds a parameter set from a file, so the messages of the
+#: checks run by the constructor name the file and the unit the value was given in).
+_ORIGINS: contextvars.ContextVar[typing.Mapping] = contextvars.ContextVar(
+    "parameter_origins", default={})
 
 
-def _typed_values(obj) -> tuple:
-    """Key of a parameter set in :data:`_PASSED`: its class and every field's value with
-    the value's type (so ``True`` and ``1``, equal in Python, are told apart)."""
-    values = []
-    for name in _fields_of(type(obj)):
-        v = getattr(obj, name)
-        values.append((type(v), tuple((type(x), x) for x in v) if isinstance(v, tuple) else v))
-    return type(obj), tuple(values)
+@contextlib.contextmanager
+def reporting_origins(origins: typing.Mapping):
+    """Within the block, the checks' errors and warnings name the origins of the values
+    (``field -> (where, note)``)."""
+    token = _ORIGINS.set(origins)
+    try:
+        yield
+    finally:
+        _ORIGINS.reset(token)
 
 
-def _checked_once(obj, cls, check):
-    """``check(obj, {})`` unless a set with the same typed values passed it before."""
-    key = None
-    if isinstance(obj, cls):
-        try:
-            key = _typed_values(obj)
-            if key in _PASSED:
-                return obj
-        except TypeError:       # an unhashable value: the check refuses it
-            key = None
-    check(obj, {})
-    if key is not None:
-        if len(_PASSED) >= _PASSED_MAX:
-            _PASSED.clear()
-        _PASSED[key] = True
-    return obj
+_FLOAT_MAX = sys.float_info.max
+_ACCEPTED_TYPES = {"float": (float, int), "int": (int,), "bool": (bool,)}
 
 
-def validate_robot(p: RobotParameters) -> RobotParameters:
-    """Check every field of a :class:`RobotParameters`.
+@lru_cache(maxsize=None)
+def _plan(cls: type) -> tuple:
+    """Per field of the dataclass ``cls``, what :func:`_quick_scan` compares: (name, accepted
+    types, whether a (back, front) pair is, allowed range, plausible range, whether 0 is
+    plausible), the ranges closed, in SI and
+    finite (so the comparison also refuses nan and inf): :func:`closed_range` and the
+    schema's plausible range, read once."""
+    plan = []
+    for name, spec in _fields_of(cls).items():
+        lo, hi = closed_range(name)
+        p = spec.plausible
+        p_lo, p_hi = (-math.inf, math.inf) if p is None else p.bounds
+        plan.append((name, _ACCEPTED_TYPES[spec.kind], name in PER_LEG_FIELDS,
+                     max(lo, -_FLOAT_MAX), min(hi, _FLOAT_MAX), p_lo, p_hi,
+                     p is not None and p.zero))
+    return tuple(plan)
+
+
+def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
+    """The fields' single-field checks by comparison alone: None if a value is not of its
+    field's plain type (``float`` or a subclass, ``int``, ``bool``, or a (back, front) tuple
+    of them) or is outside its allowed range (:func:`_check_fields` then says why), else
+    the implausible values as (name, value, leg)."""
+    implausible = []
+    for name, types, per_leg, lo, hi, p_lo, p_hi, p_zero in plan:
+        v = values[name]
+        if type(v) in types:
+            if not lo <= v <= hi:
+                return None
+            if not p_lo <= v <= p_hi and not (p_zero and v == 0):
+                implausible.append((name, v, None))
+        elif type(v) is tuple and per_leg and len(v) == 2:
+            for leg, x in enumerate(v):
+                if type(x) not in types or not lo <= x <= hi:
+                    return None
+                if not p_lo <= x <= p_hi and not (p_zero and x == 0):
+                    implausible.append((name, x, leg))
+        elif float in types and isinstance(v, float):    # a subclass: NumPy's float64
+            if not lo <= v <= hi:
+                return None
+            if not p_lo <= v <= p_hi and not (p_zero and v == 0):
+                implausible.append((name, v, None))
+        else:
+            return None
+    return implausible
+
+
+def _check(obj, couplings, warn: bool = True) -> None:
+    """Every single-field rule of ``obj``'s fields, then ``couplings(obj, origins)``; then
+    (if ``warn``) a warning for each value outside its plausible range."""
+    cls = type(obj)
+    plan = _plan(cls)
+    origins = _ORIGINS.get()
+    implausible = _quick_scan(obj.__dict__, plan)
+    if implausible is None:
+        # a value the comparison alone does not pass: the full check raises, naming the
+        # field, or the value is valid (e.g. a NumPy number)
+        _check_fields(obj, origins)
+        specs = _fields_of(cls)
+        implausible = _quick_scan({n: coerce_value(specs[n], getattr(obj, n))
+                                   for n in specs}, plan)
+    couplings(obj, origins)
+    for name, value, leg in implausible if warn else ():
+        warn_implausible(_schema()[name], value, origins, leg)
+
+
+def check_robot(p) -> None:
+    """The checks of a robot's parameters (:class:`RobotParameters` runs them when it is
+    constructed): ParameterError naming the field (and the leg) and its allowed range."""
+    _check(p, _check_robot_couplings)
+
+
+def check_controller(c) -> None:
+    """The checks of a controller's parameters (run by :class:`ControllerParameters` when it
+    is constructed)."""
+    _check(c, _check_controller_couplings)
+
+
+@lru_cache(maxsize=None)
+def _sections_of(cls: type) -> tuple | None:
+    """The TOML sections whose fields the dataclass ``cls`` has (None: not a parameter
+    class)."""
+    if not dataclasses.is_dataclass(cls):
+        return None
+    names = set(_fields_of(cls))
+    for sections in (ROBOT_SECTIONS, CONTROLLER_SECTIONS):
+        if names == {n for n, s in _schema().items() if s.section in sections}:
+            return sections
+    return None
+
+
+def _require(obj, sections: tuple, expected: str) -> None:
+    if isinstance(obj, type) or _sections_of(type(obj)) != sections:
+        raise TypeError(f"expected {expected}, got {type(obj).__name__}")
+
+
+def validate_robot(p):
+    """Check every field of a :class:`RobotParameters` (its constructor does; this checks
+    one made otherwise, e.g. unpickled). It raises only: the plausibility warnings are the
+    constructor's.
 
     Parameters
     ----------
@@ -389,14 +486,18 @@ def validate_robot(p: RobotParameters) -> RobotParameters:
     ParameterError
         On a wrong type, a NaN/infinite value or a value outside its allowed range (its
         sign rule, or a physical bound far beyond any legged robot: a mass above 100 t, a
-        length above 100 m, ...; :func:`physical_limit`); the message names the field, the
-        value (in the paper's unit) and the allowed range.
+        length above 100 m, ...; :func:`physical_limit`); the message names the field (and
+        the leg, for a value given per leg), the value (in the paper's unit) and the allowed
+        range.
     """
-    return _checked_once(p, RobotParameters, _validate_robot)
+    _require(p, ROBOT_SECTIONS, "RobotParameters")
+    _check(p, _check_robot_couplings, warn=False)    # (its constructor warned)
+    return p
 
 
-def validate_controller(c: ControllerParameters) -> ControllerParameters:
-    """Check every field of a :class:`ControllerParameters`, and liftoff < touchdown compression.
+def validate_controller(c):
+    """Check every field of a :class:`ControllerParameters`, and liftoff < touchdown
+    compression (its constructor does; this checks one made otherwise).
 
     Parameters
     ----------
@@ -413,10 +514,12 @@ def validate_controller(c: ControllerParameters) -> ControllerParameters:
     ParameterError
         As :func:`validate_robot`.
     """
-    return _checked_once(c, ControllerParameters, _validate_controller)
+    _require(c, CONTROLLER_SECTIONS, "ControllerParameters")
+    _check(c, _check_controller_couplings, warn=False)
+    return c
 
 
-def validate_parameters(robot: RobotParameters, controller: ControllerParameters) -> None:
+def validate_parameters(robot, controller) -> None:
     """Check both parameter sets and the rules that couple them.
 
     Besides :func:`validate_robot` and :func:`validate_controller`, requires
@@ -429,4 +532,4 @@ def validate_parameters(robot: RobotParameters, controller: ControllerParameters
     """
     validate_robot(robot)
     validate_controller(controller)
-    _validate_pair(robot, controller, {})
+    _validate_pair(robot, controller, _ORIGINS.get())
