@@ -79,12 +79,19 @@ def _peak_current(result) -> float | None:
         return None
 
 
-def _scenario_row(task, scenario, robot, ctrl) -> dict:
-    """Run one scenario and score it (module docstring)."""
+def _scenario_row(task, scenario, robot, cparams, params) -> dict:
+    """Run one scenario of the candidate (``robot``, controller parameters ``cparams``, a
+    compiled controller's array ``params``) and score it (module docstring)."""
     from ..control.protocol import ControllerError
     from ..simulation import simulate
     goal = task["goal"]
     duration = task["duration"]
+    try:
+        ctrl = _controller(task["controller"], robot, cparams, params)
+    except Exception as exc:  # noqa: BLE001 - an error of the tuning
+        return {k: None for k in COLUMNS[3:]} | error_fields(exc) | {
+            "score": NOT_RUN_SCORE, "feasible": False, "steady_bounding": False,
+            "violations": "error"}
     try:
         r = simulate(robot, ctrl, scenario["initial_state"], duration,
                      model=scenario["model"], friction_coefficient=scenario["friction"],
@@ -179,15 +186,11 @@ def tune_task(task: dict) -> dict:
         return _not_run(row, {"status": "invalid", "outcome": "invalid_parameters",
                               "error": str(exc)})
     try:
-        ctrl = _controller(task["controller"], robot, cparams, params)
-    except Exception as exc:  # noqa: BLE001 - an error of the tuning
-        return _not_run(row, error_fields(exc))
-    try:
-        rows = [_scenario_row(task, sc, robot, ctrl) for sc in task["scenarios"]]
+        rows = [_scenario_row(task, sc, robot, cparams, params) for sc in task["scenarios"]]
     except Exception as exc:  # noqa: BLE001 - an error of the tuning (scoring a run)
         return _not_run(row, error_fields(exc))
     for status in ("error", "invalid"):        # one scenario not run: the evaluation's
-        bad = [r for r in rows if r["status"] == status]
+        bad = [r for r in rows if r.get("status", "ok") == status]
         if bad:
             return _not_run(row, {k: bad[0][k] for k in ("status", "outcome", "error")})
     scores = [r["score"] for r in rows]
