@@ -43,7 +43,9 @@ lock, a file or a compiled callback, a function of a module that cannot be impor
 name (one loaded from a file path, or ``__main__`` of an interactive session). A local
 pool's spawn workers get this process's ``sys.path``; a Dask worker has its own
 environment, which must have scoutsim (the same version) and the user's modules
-importable (on its ``PYTHONPATH`` or installed), something no trial here can check.
+importable (on its ``PYTHONPATH`` or installed), something no trial here can check. (Dask
+could send some closures by value; the rule is the same for every pool, so a study that
+runs on a cluster runs on local workers too.)
 """
 
 from __future__ import annotations

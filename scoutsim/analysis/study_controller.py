@@ -14,6 +14,11 @@ A study's ``controller`` is
   CompiledController costs one compilation per worker process, not one per point
   (:func:`scoutsim.control.compiled._wrap`).
 
+Runs. Every point's run starts the controller afresh (``reset``, a compiled controller's
+state from its initial state): in one process one object runs every point in turn, in
+worker processes each has its own copy, so a Python controller must keep no memory of an
+earlier run beyond what ``reset`` sets, or the table depends on the number of workers.
+
 Sending. With ``workers`` > 1 or a ``scheduler`` the controller travels to other
 processes by pickle: a controller object must pickle, and its class (a CompiledController:
 its command function) must be defined at the top level of a module the workers can

@@ -5,8 +5,18 @@ the torso-feedback gains of :class:`~scoutsim.control.PitchFeedbackController`),
 ``controller.<field>``; fields of :class:`~scoutsim.parameters.RobotParameters` for design
 studies, ``robot.<field>``; entries of a :class:`~scoutsim.CompiledController`'s parameter
 array, ``controller.params[i]``. A ``_deg`` suffix on an angle field takes degrees at the
-edge (converted here, once); everything inside is SI. Bounds are the field's allowed range
-(:func:`scoutsim.parameters.allowed_range`) or a range the user gives, ``NAME=LOW:HIGH``.
+edge (converted here, once); everything inside is SI. Bounds are a range the user gives,
+``NAME=LOW:HIGH``, or the field's default search range around its base value
+(:data:`~scoutsim.analysis.tune_parameters.DEFAULT_SEARCH`: touchdown angles within 20 deg
+of the base controller's), within the field's allowed range
+(:func:`scoutsim.parameters.allowed_range`).
+
+The controller may be the user's own: a CompiledController (its parameter array tuned), a
+Python controller (robot fields tuned), or a factory ``"MODULE:FACTORY"`` /
+:class:`~scoutsim.control.factory.ControllerSpec`, made in each worker with every
+candidate's robot and controller parameters (:mod:`scoutsim.analysis.study_controller`;
+checked before the first evaluation). An evaluation the tuning could not run is an error
+of the tuning, not a score (:mod:`scoutsim.analysis.study_failures`, ``on_error``).
 
 What is minimised (``objective``), over the steady strides of each run:
 
@@ -147,8 +157,10 @@ class TuneRuns:
     duration : simulated time of every run [s] (default 20).
     robot : base RobotParameters (default Scout II's).
     controller : ControllerParameters (Table I), ``"pitch-feedback"``, a
-        PitchFeedbackController or a CompiledController (its command function must be
-        importable by name to run in worker processes); default Table I.
+        PitchFeedbackController, a user's CompiledController or Python controller (defined
+        at the top level of a module the workers can import), or a user's factory
+        ``"MODULE:FACTORY"`` / ControllerSpec (it gets each candidate's robot and
+        controller parameters); default Table I.
     """
 
     model: str = "II"

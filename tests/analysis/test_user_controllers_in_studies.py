@@ -220,9 +220,30 @@ def test_a_point_the_study_cannot_run_is_an_error_not_a_start_that_did_not_bound
     assert res.fraction("II") is None
     (s,) = res.summary().values()
     assert s["n_errors"] == 2 and s["n_valid"] == 0 and s["fraction_steady_bounding"] is None
+    points = SW.grid_points({"robot.leg_damping": [50.0, 60.0]})
     with pytest.raises(StudyError, match=words):
-        SW.sweep(SW.grid_points({"robot.leg_damping": [50.0, 60.0]}), controller=c,
-                 workers=workers, duration=1.0)
+        SW.sweep(points, controller=c, workers=workers, duration=1.0)
+    with pytest.warns(RuntimeWarning, match="could not be run"):
+        res = SW.sweep(points, controller=c, workers=workers, duration=1.0,
+                       on_error="record")
+    assert [r["status"] for r in res.rows] == ["error", "error"]
+    assert res.settings["n_errors"] == 2 and len(res.errors()) == 2
+
+
+def test_an_evaluation_the_tuning_cannot_run_stops_it_or_is_recorded_apart(user, tmp_path):
+    """A controller whose code raises: StudyError after its generation, nothing of it in
+    the checkpoint; recorded, it scores as infeasible and is counted apart."""
+    pytest.importorskip("cmaes")
+    from scoutsim.analysis.tune import EVALUATIONS, tune
+    kw = dict(controller=f"{USER_MODULE}:make_raises", target=1.3, duration=0.5,
+              population=4, budget=4, workers=1)
+    with pytest.raises(StudyError, match="no_such_reading"):
+        tune(["controller.touchdown_angle_front_deg"], out=tmp_path, **kw)
+    assert (tmp_path / EVALUATIONS).read_text() == ""
+    with pytest.warns(RuntimeWarning, match="could not be run"):
+        res = tune(["controller.touchdown_angle_front_deg"], on_error="record", **kw)
+    assert res.n_errors == 4 and {r["status"] for r in res.rows} == {"error"}
+    assert not any(r["feasible"] for r in res.rows)
 
 
 def test_a_controller_that_gives_up_did_not_bound(user):
