@@ -11,7 +11,6 @@ status "error" counted apart), never a start that did not bound."""
 
 import json
 import sys
-import textwrap
 
 import pytest
 
