@@ -14,11 +14,19 @@ the basin's edges: the Table I controller has no torso feedback, and the starts 
 bounding are those with the nose rising, the motion the robot has after its front legs
 push off (with :class:`~scoutsim.control.PitchFeedbackController` almost all do; README,
 "Torso feedback").
+
+The controller may be the user's own (a controller object, a CompiledController, or a
+factory named ``"MODULE:FACTORY"`` / a ControllerSpec, made in each worker:
+:mod:`scoutsim.analysis.study_controller`); it is checked before the first start runs.
+A start the study could not run (the controller failed to load, or raised) is an error of
+the study, never a start that did not bound (:mod:`scoutsim.analysis.study_failures`:
+``status``, ``on_error``).
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import itertools
 import math
 import os
@@ -26,6 +34,10 @@ from dataclasses import dataclass, field
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, floor_label
 from .parallel import map_tasks
+from .study_controller import (build_controller, check_controller_travels, controller_label,
+                               study_controller)
+from .study_failures import (StudyError, check_on_error, end_of_study, error_fields,
+                             is_error, run_failure)
 
 DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
 DEFAULT_PITCH_RATES = (-150.0, -100.0, -50.0, 0.0, 50.0, 100.0, 150.0, 200.0, 250.0)  # deg/s
@@ -35,7 +47,7 @@ DEFAULT_FLOORS = (DEFAULT_FRICTION_COEFFICIENT, math.inf)
 
 
 BASIN_COLUMNS = ("model", "friction", "speed", "pitch_rate_deg_s", "height", "outcome",
-                 "steady_bounding", "mean_speed_m_s", "n_steady_strides")
+                 "steady_bounding", "mean_speed_m_s", "n_steady_strides", "status", "error")
 
 
 def _start_of(task: dict) -> dict:
@@ -43,57 +55,88 @@ def _start_of(task: dict) -> dict:
     return {k: task[k] for k in ("model", "friction", "speed", "pitch_rate_deg_s", "height")}
 
 
+def _failed(row: dict, fields: dict) -> dict:
+    row.update(steady_bounding=False, mean_speed_m_s=None, n_steady_strides=0, **fields)
+    return row
+
+
 def basin_task(task: dict) -> dict:
-    """Run one start of the basin grid (top level so that worker processes can import it)."""
+    """Run one start of the basin grid (top level so that worker processes can import it).
+    Its row's ``status``: ok (a run: its outcome), invalid (``invalid_start``: the start
+    is not allowed) or error (the study could not run it; :mod:`.study_failures`)."""
     from ..simulation import simulate
     from ..state import InitialState
     row = _start_of(task)
     try:
+        controller = build_controller(task["controller"], task["robot"])
+    except Exception as exc:  # noqa: BLE001 - an error of the study, reported per start
+        return _failed(row, error_fields(exc))
+    try:
         init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),
                             y=task["height"])
-        result = simulate(task["robot"], task["controller"], init, task["duration"],
+        result = simulate(task["robot"], controller, init, task["duration"],
                           model=task["model"], integrator=task["integrator"],
                           friction_coefficient=task["friction"])
-        if result.outcome == "interrupted":
-            # Ctrl-C reached the run (simulate() returns the data so far): this start is
-            # not done and must not be counted as if it were; the map stops
-            raise KeyboardInterrupt
-    except ValueError as exc:
-        row.update(outcome="invalid_start", steady_bounding=False, mean_speed_m_s=None,
-                   n_steady_strides=0, error=str(exc))
-        return row
-    except Exception as exc:  # noqa: BLE001 - reported per start, exit code 1
-        row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
-                   n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
-        return row
+    except Exception as exc:  # noqa: BLE001 - classified and reported per start
+        return _failed(row, run_failure(exc, "invalid_start"))
+    if result.outcome == "interrupted":
+        # Ctrl-C reached the run (simulate() returns the data so far): this start is
+        # not done and must not be counted as if it were; the map stops
+        raise KeyboardInterrupt
     g = result.gait()
     speed = g.mean_speed_m_s
     row.update(outcome=result.outcome, steady_bounding=bool(g.is_steady_bounding()),
                mean_speed_m_s=(float(speed) if speed is not None and math.isfinite(speed)
                                else None),
-               n_steady_strides=int(g.n_steady_strides))
+               n_steady_strides=int(g.n_steady_strides), status="ok", error="")
     return row
 
 
 def _basin_error_row(task: dict, exc: Exception) -> dict:
-    row = _start_of(task)
-    row.update(outcome="error", steady_bounding=False, mean_speed_m_s=None,
-               n_steady_strides=0, error=f"{type(exc).__name__}: {exc}")
-    return row
+    """The row of a start whose task failed in its worker (it could not be loaded there,
+    or the worker died twice): an error of the study."""
+    return _failed(_start_of(task), error_fields(exc))
+
+
+def _where(row: dict) -> str:
+    return (f"model {row['model']}, speed {row['speed']:g} m/s, pitch rate "
+            f"{row['pitch_rate_deg_s']:g} deg/s, height {row['height']:g} m")
 
 
 def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=None,
-                    on_result=None) -> list[dict]:
+                    on_result=None, on_error: str = "record") -> list[dict]:
     """Run the starts (locally in parallel, or on a Dask cluster); rows in task order
-    (``on_result(index, row)`` as each arrives: what an interrupted map keeps)."""
-    return map_tasks(basin_task, tasks, workers=workers, scheduler=scheduler,
+    (``on_result(index, row)`` as each arrives: what an interrupted map keeps). The
+    controller is checked before the first start runs (NotSendableError if it cannot go to
+    the workers). ``on_error`` "record" (the default here) keeps the starts the study
+    could not run as rows with status "error"; "raise" stops at the first and raises
+    :class:`~scoutsim.analysis.study_failures.StudyError`."""
+    check_on_error(on_error)
+    if tasks:
+        check_controller_travels(tasks[0]["controller"], workers, scheduler, len(tasks))
+    rows = map_tasks(basin_task, tasks, workers=workers, scheduler=scheduler,
                      progress=progress, desc="basin", error_row=_basin_error_row,
-                     on_result=on_result)
+                     on_result=on_result,
+                     stop_when=is_error if on_error == "raise" else None)
+    if on_error == "raise":
+        arrived = [r for r in rows if r is not None]
+        end_of_study(rows, on_error, "basin map", _where,
+                     result=BasinResult(rows=arrived))
+    return rows
+
+
+def _status(row: dict) -> str:
+    """A row's status (a row written before statuses existed: from its outcome)."""
+    status = row.get("status")
+    if status:
+        return status
+    return {"invalid_start": "invalid", "error": "error"}.get(row["outcome"], "ok")
 
 
 def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
     """Per model (and floor, keys "MODEL @ FLOOR" when ``floors`` is given): starts,
-    invalid starts, steady starts, fraction, outcomes, median cycle speed [m/s]."""
+    invalid starts, errors of the study, valid starts (the others), steady starts,
+    fraction (steady / valid), outcomes, median cycle speed [m/s]."""
     per = {}
     keys = ([(m, None) for m in models] if floors is None else
             [(m, mu) for mu in floors for m in models])
@@ -101,15 +144,16 @@ def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
         mine = [r for r in rows if r["model"] == m and (mu is None or r["friction"] == mu)]
         speeds = sorted(r["mean_speed_m_s"] for r in mine
                         if r["steady_bounding"] and r["mean_speed_m_s"] is not None)
-        invalid = sum(r["outcome"] == "invalid_start" for r in mine)
-        valid = len(mine) - invalid
-        steady = sum(bool(r["steady_bounding"]) for r in mine if r["outcome"] != "invalid_start")
+        invalid = sum(_status(r) == "invalid" for r in mine)
+        errors = sum(_status(r) == "error" for r in mine)
+        valid = len(mine) - invalid - errors
+        steady = sum(bool(r["steady_bounding"]) for r in mine if _status(r) == "ok")
         outcomes = {}
         for r in mine:
             outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
         key = m if mu is None else f"{m} @ {floor_label(mu)}"
         per[key] = {"model": m, "friction": mu, "n_starts": len(mine),
-                    "n_invalid_start": invalid, "n_valid": valid,
+                    "n_invalid_start": invalid, "n_errors": errors, "n_valid": valid,
                     "n_steady_bounding": steady,
                     "fraction_steady_bounding": (steady / valid) if valid else None,
                     "median_cycle_speed_m_s": (speeds[len(speeds) // 2] if speeds else None),
@@ -127,8 +171,9 @@ class BasinResult:
 
     def fraction(self, model: str, friction: float | None = None):
         """Fraction of valid starts of ``model`` (on floor ``friction``; None = all floors)
-        that reach steady bounding (None if there are none)."""
-        valid = [r for r in self.rows if r["model"] == model and r["outcome"] != "invalid_start"
+        that reach steady bounding (None if there are none). Invalid starts and starts
+        the study could not run (status "error") are not valid starts."""
+        valid = [r for r in self.rows if r["model"] == model and _status(r) == "ok"
                  and (friction is None or r["friction"] == friction)]
         if not valid:
             return None
@@ -139,6 +184,10 @@ class BasinResult:
 
     def floors(self):
         return list(dict.fromkeys(r["friction"] for r in self.rows))
+
+    def errors(self) -> list:
+        """The rows of the starts the study could not run (status "error")."""
+        return [r for r in self.rows if _status(r) == "error"]
 
     def summary(self) -> dict:
         """Per model and floor: starts, invalid starts, steady starts, fraction, outcomes,
@@ -155,7 +204,10 @@ class BasinResult:
 
 def basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, robot=None,
                 controller=None, integrator=None) -> list[dict]:
-    """One task per (floor, model, speed, pitch rate, height), in that nesting order."""
+    """One task per (floor, model, speed, pitch rate, height), in that nesting order (a
+    ``"MODULE:FACTORY"`` controller becomes a ControllerSpec, its factory imported once
+    here: :func:`~scoutsim.analysis.study_controller.study_controller`)."""
+    controller = study_controller(controller, robot)
     return [{"model": m, "speed": float(v), "pitch_rate_deg_s": float(w), "height": float(y),
              "robot": robot, "controller": controller, "duration": duration,
              "integrator": integrator, "friction": float(mu)}
@@ -163,40 +215,85 @@ def basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, ro
                                                     heights)]
 
 
-def basin_of_attraction(models=("ideal", "I", "II"), speeds=DEFAULT_SPEEDS,
-                        pitch_rates_deg_s=DEFAULT_PITCH_RATES, heights=DEFAULT_HEIGHTS,
-                        duration: float = 10.0, robot=None, controller=None,
-                        friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-                        workers: int | None = None, progress: bool = False, integrator=None,
-                        floors=None) -> BasinResult:
-    """Run the grid of starts and classify each (see module docstring).
+@dataclass(frozen=True)
+class BasinGrid:
+    """The starts of a basin map: every combination of
 
-    Parameters
+    Attributes
     ----------
     models : model variants ("ideal", "I", "II").
     speeds : initial forward speeds [m/s].
     pitch_rates_deg_s : initial pitch rates [deg/s] (positive: nose rising).
     heights : initial torso-COM heights [m].
+    floors : toe Coulomb coefficients [-] (e.g. :data:`DEFAULT_FLOORS`; inf = no slip);
+        None: ``friction_coefficient`` alone.
+    friction_coefficient : the floor when ``floors`` is None.
+    """
+
+    models: tuple = ("ideal", "I", "II")
+    speeds: tuple = DEFAULT_SPEEDS
+    pitch_rates_deg_s: tuple = DEFAULT_PITCH_RATES
+    heights: tuple = DEFAULT_HEIGHTS
+    floors: tuple | None = None
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
+
+
+def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0, robot=None,
+                        controller=None, integrator=None, workers: int | None = None,
+                        scheduler=None, progress: bool = False, on_error: str = "raise",
+                        **grid_fields) -> BasinResult:
+    """Run the grid of starts and classify each (see module docstring).
+
+    Parameters
+    ----------
+    grid : :class:`BasinGrid`, the starts; its fields (``models``, ``speeds``,
+        ``pitch_rates_deg_s``, ``heights``, ``floors``, ``friction_coefficient``) may
+        also be given as keywords, which override the bundle's.
     duration : simulated time per start [s].
     robot : RobotParameters (default Scout II).
-    controller : what every start runs: ControllerParameters (None: Table I) or a
-        controller object, e.g. :class:`~scoutsim.control.PitchFeedbackController`; with
-        ``workers`` > 1 it travels to the worker processes, so it must pickle (a
-        PitchFeedbackController does: the worker rebuilds it from its parameters).
-    friction_coefficient : toe Coulomb coefficient (inf = no slip), when ``floors`` is None.
-    floors : several toe Coulomb coefficients (e.g. :data:`DEFAULT_FLOORS`); every start
-        is run on each.
+    controller : what every start runs: ControllerParameters (None: Table I), a
+        controller object (e.g. :class:`~scoutsim.control.PitchFeedbackController`, a
+        user's CompiledController or Python controller), or a user's factory
+        ``"MODULE:FACTORY"`` / :class:`~scoutsim.control.factory.ControllerSpec`, made in
+        each worker for ``robot``. With ``workers`` > 1 or a ``scheduler`` it travels to
+        the workers, so it must pickle and be importable there: checked before the
+        first start (:mod:`scoutsim.analysis.study_controller`).
     workers : processes (default: all cores; 1 = in this process).
+    scheduler : Dask address or Client, or a ``concurrent.futures.Executor``
+        (:func:`~scoutsim.analysis.parallel.map_tasks`); overrides ``workers``.
+    on_error : "raise" (stop at the first start the study could not run and raise
+        :class:`~scoutsim.analysis.study_failures.StudyError`) or "record" (keep it as a
+        row with status "error", left out of the fractions; a RuntimeWarning).
+
+    Raises
+    ------
+    NotSendableError : the controller cannot be sent to the workers (before any start).
+    FactoryError : a ``"MODULE:FACTORY"`` that cannot be imported (before any start).
+    StudyError : a start could not be run (``on_error="raise"``).
     """
-    floors = tuple(floors) if floors is not None else (friction_coefficient,)
-    tasks = basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, robot,
-                        controller, integrator)
+    fields = {f.name for f in dataclasses.fields(BasinGrid)}
+    if unknown := sorted(set(grid_fields) - fields):
+        raise TypeError(f"basin_of_attraction() got an unexpected keyword argument "
+                        f"{unknown[0]!r}")
+    grid = dataclasses.replace(grid or BasinGrid(), **grid_fields)
+    check_on_error(on_error)
+    floors = (tuple(grid.floors) if grid.floors is not None
+              else (grid.friction_coefficient,))
+    tasks = basin_tasks(grid.models, floors, grid.speeds, grid.pitch_rates_deg_s,
+                        grid.heights, duration, robot, controller, integrator)
     workers = workers or os.cpu_count() or 1
-    rows = run_basin_tasks(tasks, workers, progress)
-    return BasinResult(rows=rows, settings={
-        "models": list(models), "speeds_m_s": list(speeds),
-        "pitch_rates_deg_s": list(pitch_rates_deg_s), "heights_m": list(heights),
-        "duration_s": duration,
-        "controller": (None if controller is None or not hasattr(controller, "command")
-                       else getattr(controller, "name", type(controller).__name__)),
-        "floors": [None if math.isinf(mu) else mu for mu in floors]})
+    settings = {
+        "models": list(grid.models), "speeds_m_s": list(grid.speeds),
+        "pitch_rates_deg_s": list(grid.pitch_rates_deg_s), "heights_m": list(grid.heights),
+        "duration_s": duration, "controller": controller_label(tasks[0]["controller"])
+        if tasks else None,
+        "floors": [None if math.isinf(mu) else mu for mu in floors]}
+    try:
+        rows = run_basin_tasks(tasks, workers, progress, scheduler=scheduler,
+                               on_error=on_error)
+    except StudyError as exc:
+        exc.result.settings = settings
+        raise
+    end_of_study(rows, on_error, "basin map", _where)
+    return BasinResult(rows=rows, settings=settings | {
+        "n_errors": sum(is_error(r) for r in rows)})

@@ -32,6 +32,20 @@ of ``tests/analysis/test_sweep_processes.py``):
 - **A killed parent**: each worker watches its parent and exits within
   :data:`PARENT_POLL_S` seconds of the parent's death (plus the rest of the compiled call
   it is in); no worker outlives the sweep.
+
+**What can be sent.** Tasks reach other processes by pickle, so everything in them (a
+user's controller above all) must pickle, and every function and class pickled by
+reference must be importable by name where it lands. Before the first task leaves this
+process, :func:`map_tasks` pickles ``func`` and every task once as a trial
+(:func:`check_sendable`) and refuses with :class:`NotSendableError` what would fail in a
+worker: a closure or a lambda, a class defined inside a function, an object holding a
+lock, a file or a compiled callback, a function of a module that cannot be imported by
+name (one loaded from a file path, or ``__main__`` of an interactive session). A local
+pool's spawn workers get this process's ``sys.path``; a Dask worker has its own
+environment, which must have scoutsim (the same version) and the user's modules
+importable (on its ``PYTHONPATH`` or installed), something no trial here can check. (Dask
+could send some closures by value; the rule is the same for every pool, so a study that
+runs on a cluster runs on local workers too.)
 """
 
 from __future__ import annotations
@@ -39,14 +53,18 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import functools
+import io
 import multiprocessing
 import os
+import pickle
 import signal
 import sys
 import threading
+import types
 
 __all__ = ["map_tasks", "worker_pool", "WorkerDiedError", "SchedulerUnreachableError",
-           "MAX_BATCH", "SCHEDULER_TIMEOUT_S"]
+           "NotSendableError", "check_sendable", "leaves_process", "MAX_BATCH",
+           "SCHEDULER_TIMEOUT_S"]
 
 #: seconds a worker waits between looks at its parent (it exits when the parent is gone)
 PARENT_POLL_S = 0.5
@@ -63,9 +81,101 @@ class SchedulerUnreachableError(ConnectionError):
     """The Dask scheduler given did not answer within :data:`SCHEDULER_TIMEOUT_S`."""
 
 
+class NotSendableError(TypeError):
+    """Something a parallel run must send to its workers (a task, a user's controller) does
+    not pickle, or names a function or class the workers cannot import; raised before the
+    first task runs (the message says what, why, and what to do instead)."""
+
+
+#: what to do with something that cannot be sent (the end of NotSendableError's message)
+SEND_ADVICE = ("define it at the top level of a module the workers can import (a file on "
+               "sys.path / PYTHONPATH, or an installed package), or run with workers=1")
+
+
+def leaves_process(workers: int | None, scheduler, n_tasks: int) -> bool:
+    """Whether :func:`map_tasks` with these arguments sends its tasks to other processes
+    (a local pool or Dask cluster; not: one worker, one task, a thread pool)."""
+    if isinstance(scheduler, cf.ThreadPoolExecutor):
+        return False
+    if scheduler is not None:
+        return True
+    return (workers or os.cpu_count() or 1) > 1 and n_tasks > 1
+
+
+class _RecordingPickler(pickle.Pickler):
+    """A pickler that notes the module of every function and class it pickles."""
+
+    def __init__(self, file):
+        super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
+        self.modules: set = set()
+
+    def reducer_override(self, obj):
+        if isinstance(obj, (type, types.FunctionType)):
+            self.modules.add(getattr(obj, "__module__", None))
+        return NotImplemented
+
+
+def _importable(module: str) -> bool:
+    """Whether a fresh process could import ``module`` by name (its top-level package
+    found by the import system on this ``sys.path``, not only present in ``sys.modules``)."""
+    top = module.partition(".")[0]
+    if top in sys.builtin_module_names:
+        return True
+    for finder in sys.meta_path:
+        find = getattr(finder, "find_spec", None)
+        if find is None:
+            continue
+        try:
+            if find(top, None) is not None:
+                return True
+        except Exception:  # noqa: BLE001 - a finder that cannot answer is no answer
+            continue
+    return False
+
+
+def unsendable_reason(obj) -> str | None:
+    """Why ``obj`` cannot be sent to a worker process (None if it can): the error of a
+    trial pickle, or a module of a function / class in it that a worker cannot import."""
+    pickler = _RecordingPickler(io.BytesIO())
+    try:
+        pickler.dump(obj)
+    except Exception as exc:  # noqa: BLE001 - any failure to pickle is the answer
+        text = str(exc)
+        if "local object" in text or "<locals>" in text:
+            why = "it is, or holds, a function or class defined inside a function"
+        elif "<lambda>" in text:
+            why = "it is, or holds, a lambda"
+        else:
+            why = "it does not pickle"
+        return f"{why} ({type(exc).__name__}: {text})"
+    for module in sorted(m for m in pickler.modules if m):
+        if module == "__main__":
+            main = sys.modules.get("__main__")
+            if getattr(main, "__file__", None) is None:
+                return ("it is, or holds, a function or class defined in an interactive "
+                        "session (__main__ has no file a worker process could import)")
+        elif not _importable(module):
+            return (f"it is, or holds, a function or class of module {module!r}, which a "
+                    "worker process cannot import by name (not found on sys.path)")
+    return None
+
+
+def check_sendable(obj, what: str, advice: str = SEND_ADVICE) -> None:
+    """:class:`NotSendableError` naming ``what`` if ``obj`` cannot be sent to a worker
+    process (:func:`unsendable_reason`), with ``advice`` on what to do instead."""
+    reason = unsendable_reason(obj)
+    if reason is not None:
+        raise NotSendableError(f"{what} cannot be sent to the worker processes: {reason}; "
+                               f"{advice}")
+
+
+class _Stopped(Exception):
+    """Raised inside :func:`map_tasks` when a result asks to stop (``stop_when``)."""
+
+
 def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
               progress: bool = False, desc: str = "runs", on_result=None,
-              error_row=None) -> list:
+              error_row=None, stop_when=None) -> list:
     """Apply ``func`` to every task and return the results in task order.
 
     Parameters
@@ -80,23 +190,38 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
     on_result : callable(index, result), called as each result arrives.
     error_row : callable(task, exception) -> result for a task whose worker failed
         (an exception raised by ``func``, or :class:`WorkerDiedError`; default: re-raise).
+    stop_when : callable(result) -> bool; the first result for which it is true stops the
+        run: the tasks not yet started are cancelled (a local pool's workers stopped),
+        the results that had arrived are kept, and the others are None in the list
+        returned.
 
     Raises
     ------
+    NotSendableError : ``func`` or a task cannot be sent to the workers (checked before
+        the first task runs, when the tasks leave this process; :func:`check_sendable`).
     KeyboardInterrupt : Ctrl-C; the results that had arrived went to ``on_result``.
     SchedulerUnreachableError : a scheduler address that does not answer.
     """
     from tqdm import tqdm
     n = len(tasks)
     out: list = [None] * n
+    if leaves_process(workers, scheduler, n):
+        check_sendable(func, f"the function {getattr(func, '__qualname__', func)!r}")
+        if unsendable_reason(tasks) is not None:
+            for i, task in enumerate(tasks):
+                check_sendable(task, f"task {i} of the {desc}")
     bar = tqdm(total=n, unit="run", desc=desc, file=sys.stderr, disable=not progress,
                leave=False)
+    stopping = []
 
     def done(i, res):
         out[i] = res
         if on_result is not None:
             on_result(i, res)
         bar.update(1)
+        if stop_when is not None and not stopping and stop_when(res):
+            stopping.append(i)
+            raise _Stopped
 
     def failed(i, exc):
         if error_row is None:
@@ -113,6 +238,8 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
                 done(i, func(task))
         else:
             _map_local(func, tasks, min(workers or os.cpu_count() or 1, n), done, failed)
+    except _Stopped:
+        pass
     finally:
         bar.close()
     return out
@@ -181,17 +308,24 @@ def _run_batch(func, batch_id, batch):
 # in the parent
 # -----------------------------------------------------------------------------------------
 def _collect(indices, fut, done, failed):
+    """Hand the results of a finished batch (``fut``, of the tasks ``indices``) to ``done``
+    and its failures to ``failed``; a stop asked by one (``stop_when``) is raised after
+    the whole batch is handed over."""
     try:
         results = fut.result()
     except Exception as exc:  # noqa: BLE001 - the whole batch failed (e.g. a worker died)
-        for i in indices:
-            failed(i, exc)
-        return
+        results = [(False, exc)] * len(indices)
+    stop = None
     for i, (ok, val) in zip(indices, results):
-        if ok:
-            done(i, val)
-        else:
-            failed(i, val)
+        try:
+            if ok:
+                done(i, val)
+            else:
+                failed(i, val)
+        except _Stopped as exc:      # the rest of the batch has arrived: keep it too
+            stop = exc
+    if stop is not None:
+        raise stop
 
 
 def _map_executor(pool, func, tasks, indices, done, failed):

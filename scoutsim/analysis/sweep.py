@@ -14,6 +14,21 @@ line cut by a kill is skipped), and a failing point is recorded with its error w
 stopping the sweep (a point whose worker process dies is retried once, then recorded as
 an error with the reason; see :mod:`scoutsim.analysis.parallel`). The table is written as
 Parquet (``pyarrow``) and CSV.
+
+Names and units: a point's names are ``robot.<field>`` / ``controller.<field>`` in SI
+units, or, for an angle field, ``<name>_deg`` in degrees (converted to SI for the run); the
+table's column of a parameter holds its values as named, so a ``_deg`` column holds
+degrees and every other column its field's SI unit (:func:`axis_label`).
+
+Controllers: the base controller is ControllerParameters (Table I; ``controller.<field>``
+points set its fields), a user's controller object (a CompiledController, a Python
+controller; only ``robot.<field>`` points), or a user's factory, ``"MODULE:FACTORY"`` or
+a :class:`~scoutsim.control.factory.ControllerSpec`, called in the worker with the point's
+robot and controller parameters (``controller.<field>`` points set the parameters the
+factory gets). It is checked before the first point runs
+(:mod:`scoutsim.analysis.study_controller`). Each row's ``status`` says whether the point
+ran (ok), is not allowed (invalid: outcome ``invalid_parameters``) or could not be run by
+the study (error: :mod:`scoutsim.analysis.study_failures`, ``on_error``).
 """
 
 from __future__ import annotations
@@ -28,15 +43,23 @@ from pathlib import Path
 
 import numpy as np
 
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
+from ..control.factory import ControllerSpec
+from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParameters,
+                          RobotParameters, field_dimension, validate_parameters)
 from ..run_directory import RunDirectory
 from ..tables import write_rows_csv, write_rows_parquet
 from .parallel import map_tasks
+from .study_controller import (build_controller, check_controller_travels,
+                               describe_controller, study_controller)
+from .study_failures import (StudyError, check_on_error, end_of_study, error_fields,
+                             is_error, run_failure)
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
                    "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
                    "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
-                   "steady_bounding", "max_friction_ratio", "error")
+                   "steady_bounding", "max_friction_ratio", "status", "error")
+#: suffix of a name that gives an angle field in degrees
+DEG = "_deg"
 
 _SECTIONS = {"robot": RobotParameters, "controller": ControllerParameters}
 
@@ -47,15 +70,47 @@ def parameter_names() -> list[str]:
             for f in dataclasses.fields(cls)]
 
 
+def si_name(name: str) -> tuple[str, float]:
+    """The field a point's ``name`` sets and the SI value per unit of its values:
+    ``(name without _deg, pi / 180)`` for a degrees name, else ``(name, 1)``."""
+    if name.endswith(DEG):
+        return name[:-len(DEG)], math.pi / 180.0
+    return name, 1.0
+
+
+def axis_label(name: str) -> tuple[float, str]:
+    """How a plot shows a sweep column: ``(factor, label)``, the column's values times
+    ``factor`` in the unit the label gives. An angle in SI is shown in degrees, a ``_deg``
+    column as it is, another field in its SI unit ("-" for a pure number); any other
+    column by its name (its unit is in the name: ``mean_speed_m_s``)."""
+    base, scale = si_name(name)
+    dim = field_dimension(base.partition(".")[2]) if base.partition(".")[0] in _SECTIONS \
+        else None
+    if dim is None:
+        return 1.0, name
+    if scale != 1.0:
+        return 1.0, f"{name} [deg]"
+    if dim == "angle":
+        return 180.0 / math.pi, f"{name} [deg]"
+    unit = next(iter(UNITS[dim]))
+    return 1.0, f"{name} [{'-' if unit == '1' else unit}]"
+
+
 def _check_name(name: str):
-    sec, _, fld = name.partition(".")
+    base, scale = si_name(name)
+    sec, _, fld = base.partition(".")
     cls = _SECTIONS.get(sec)
+    if scale != 1.0 and cls is not None and field_dimension(fld) != "angle":
+        raise ValueError(f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
+                         f"degrees for an angle; {base!r} is not an angle (give it in SI "
+                         "units, without the suffix)")
     if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
         import difflib
         near = difflib.get_close_matches(name, parameter_names(), n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
         raise ValueError(f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
-                         f"controller.<field> of RobotParameters / ControllerParameters{hint}")
+                         f"controller.<field> of RobotParameters / ControllerParameters (a "
+                         f"_deg suffix on an angle takes degrees){hint}")
 
 
 def grid_points(grid: dict) -> list[dict]:
@@ -114,26 +169,60 @@ def _orbit_columns(result, robot, ctrl, task) -> dict:
     return out
 
 
+def _point_parameters(task: dict):
+    """The robot and controller parameters of a point ({name: value as named}), SI;
+    ControllerParameters None for a controller object."""
+    rob, ctl = {}, {}
+    for name, v in task["point"].items():
+        base, scale = si_name(name)
+        sec, _, fld = base.partition(".")
+        (rob if sec == "robot" else ctl)[fld] = v * scale
+    if "legs_per_virtual_leg" in rob:
+        rob["legs_per_virtual_leg"] = int(rob["legs_per_virtual_leg"])
+    robot = dataclasses.replace(task["robot"], **rob)
+    c = task["controller"]
+    if isinstance(c, ControllerParameters):
+        return robot, dataclasses.replace(c, **ctl)
+    if isinstance(c, ControllerSpec):
+        return robot, dataclasses.replace(c.params or ControllerParameters(), **ctl)
+    return robot, None
+
+
 def sweep_task(task: dict) -> dict:
-    """Run one point (top level: picklable for worker processes and Dask)."""
+    """Run one point (top level: picklable for worker processes and Dask). Its row's
+    ``status``: ok (a run: its outcome), invalid (``invalid_parameters``: the point's
+    parameters are not allowed) or error (the study could not run it)."""
     from ..simulation import simulate
-    point = task["point"]
-    row = dict(point)
+    row = dict(task["point"])
+    row.update({k: None for k in SUMMARY_COLUMNS})
+    if task.get("orbit"):
+        row.update({k: None for k in ORBIT_COLUMNS})
+    row["steady_bounding"] = False
+    c = task["controller"]
     try:
-        rob_changes = {k.split(".", 1)[1]: v for k, v in point.items() if k.startswith("robot.")}
-        ctl_changes = {k.split(".", 1)[1]: v for k, v in point.items()
-                       if k.startswith("controller.")}
-        if "legs_per_virtual_leg" in rob_changes:
-            rob_changes["legs_per_virtual_leg"] = int(rob_changes["legs_per_virtual_leg"])
-        robot = dataclasses.replace(task["robot"], **rob_changes)
-        ctrl = dataclasses.replace(task["controller"], **ctl_changes)
-        r = simulate(robot, ctrl, task["initial_state"], task["duration"],
-                                model=task["model"],
-                                friction_coefficient=task["friction_coefficient"])
-        if r.outcome == "interrupted":
-            # Ctrl-C reached the run (simulate() returns the data so far): the point is
-            # not done and must not be recorded as if it were; the sweep stops
-            raise KeyboardInterrupt
+        robot, cparams = _point_parameters(task)
+        if isinstance(c, ControllerSpec):    # (the factory gets parameters that are allowed)
+            validate_parameters(robot, cparams)
+    except ValueError as exc:
+        row.update(status="invalid", outcome="invalid_parameters", error=str(exc))
+        return row
+    try:
+        ctrl = (cparams if isinstance(c, ControllerParameters)
+                else build_controller(c, robot, cparams))
+    except Exception as exc:  # noqa: BLE001 - an error of the study, reported per point
+        row.update(error_fields(exc))
+        return row
+    try:
+        r = simulate(robot, ctrl, task["initial_state"], task["duration"], model=task["model"],
+                     friction_coefficient=task["friction_coefficient"])
+    except Exception as exc:  # noqa: BLE001 - classified and reported per point
+        row.update(run_failure(exc, "invalid_parameters"))
+        return row
+    if r.outcome == "interrupted":
+        # Ctrl-C reached the run (simulate() returns the data so far): the point is
+        # not done and must not be recorded as if it were; the sweep stops
+        raise KeyboardInterrupt
+    try:
         s = r.summary()
         row.update({k: s.get(k) for k in SUMMARY_COLUMNS if k in s})
         # whole-run average speed: defined even for runs too short for steady strides
@@ -143,13 +232,11 @@ def sweep_task(task: dict) -> dict:
             if row["steady_bounding"]:
                 row.update(_orbit_columns(r, robot, ctrl, task))
             else:
-                row.update({k: None for k in ORBIT_COLUMNS},
-                           orbit_status="no orbit: not steady bounding")
-        row["error"] = ""
-    except Exception as exc:  # noqa: BLE001 - recorded per point, the sweep goes on
+                row.update(orbit_status="no orbit: not steady bounding")
+        row.update(status="ok", error="")
+    except Exception as exc:  # noqa: BLE001 - an error of the study, reported per point
         row.update({k: None for k in SUMMARY_COLUMNS})
-        row.update(outcome="error", steady_bounding=False,
-                   error=f"{type(exc).__name__}: {exc}")
+        row.update(error_fields(exc), steady_bounding=False)
     return row
 
 
@@ -163,7 +250,16 @@ class SweepResult:
 
     def column(self, name) -> np.ndarray:
         return np.array([np.nan if r.get(name) is None else r.get(name) for r in self.rows],
-                        dtype=float if name not in ("outcome", "error") else object)
+                        dtype=float if name not in ("outcome", "status", "error") else object)
+
+    def errors(self) -> list:
+        """The rows of the points the study could not run (status "error")."""
+        return [r for r in self.rows if is_error(r)]
+
+    @staticmethod
+    def axis_label(name: str) -> tuple[float, str]:
+        """How a plot shows the column ``name``: :func:`axis_label`."""
+        return axis_label(name)
 
     def columns(self) -> dict:
         names = list(self.parameters) + [c for c in SUMMARY_COLUMNS]
@@ -202,16 +298,19 @@ class SweepBase:
 def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
           workers: int | None = None, scheduler=None, progress: bool = False,
           resume: bool = True, orbit: bool = False, command: str = "",
-          **base_fields) -> SweepResult:
+          on_error: str = "raise", **base_fields) -> SweepResult:
     """Run every point (see module docstring).
 
     Parameters
     ----------
-    points : list of {name: value} (see :func:`grid_points`, :func:`random_points`).
+    points : list of {name: value} (see :func:`grid_points`, :func:`random_points`);
+        names ``robot.<field>`` / ``controller.<field>`` in SI, ``..._deg`` for an angle
+        in degrees.
     base : :class:`SweepBase`, the configuration every point modifies; its fields
         (``model``, ``duration``, ``robot``, ``controller``, ``initial_state``,
         ``friction_coefficient``) may also be given as keywords, which override the
-        bundle's.
+        bundle's. ``controller``: ControllerParameters (default Table I), a controller
+        object, or ``"MODULE:FACTORY"`` / a ControllerSpec (module docstring).
     out : directory for ``points.jsonl`` (checkpoint), ``sweep.parquet``, ``sweep.csv`` and
         ``manifest.json`` ("complete" once the tables are written whole; "partial", with no
         table, after an interruption: the same call again resumes).
@@ -223,6 +322,18 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     orbit : also find each steadily bounding point's periodic orbit by Newton from its run's
         last strides and record its period, spectral radius, stability and residual
         (:data:`ORBIT_COLUMNS`; a few seconds per point).
+    on_error : "raise" (stop at the first point the study could not run and raise
+        :class:`~scoutsim.analysis.study_failures.StudyError`; the points that arrived
+        stay in the checkpoint, the failed ones run again on resuming) or "record" (a row
+        with status "error", counted in ``settings["n_errors"]``; a RuntimeWarning).
+
+    Raises
+    ------
+    ValueError : a bad name or setting; ``controller.<field>`` points with a controller
+        object (which does not read ControllerParameters: give a factory instead).
+    NotSendableError : the controller cannot be sent to the workers (before any point).
+    FactoryError : a ``"MODULE:FACTORY"`` that cannot be imported (before any point).
+    StudyError : a point could not be run (``on_error="raise"``).
     """
     fields = {f.name for f in dataclasses.fields(SweepBase)}
     if unknown := sorted(set(base_fields) - fields):
@@ -231,17 +342,35 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     model, duration, robot, controller, initial_state, friction_coefficient = (
         base.model, base.duration, base.robot, base.controller, base.initial_state,
         base.friction_coefficient)
+    check_on_error(on_error)
     if not points:
         raise ValueError("points is empty: nothing to sweep")
     names = list(dict.fromkeys(k for p in points for k in p))
+    fields_set: dict = {}
     for n in names:
         _check_name(n)
+        base_name = si_name(n)[0]
+        if base_name in fields_set:
+            raise ValueError(f"sweep parameters {fields_set[base_name]!r} and {n!r} set the "
+                             "same field: give one")
+        fields_set[base_name] = n
     robot = robot or RobotParameters()
-    controller = controller or ControllerParameters()
+    controller = study_controller(controller, robot) or ControllerParameters()
+    if isinstance(controller, str):
+        raise ValueError(f"controller = {controller!r} is not allowed: give "
+                         "ControllerParameters, a controller object, or MODULE:FACTORY")
+    if not isinstance(controller, (ControllerParameters, ControllerSpec)) and any(
+            n.startswith("controller.") for n in names):
+        raise ValueError(f"sweep parameters {[n for n in names if n.startswith('controller.')]}"
+                         " are not allowed with a controller object, which does not read "
+                         "ControllerParameters: give the controller as 'MODULE:FACTORY' (a "
+                         "factory make(robot, params) gets each point's parameters), or "
+                         "sweep robot.<field> only")
+    check_controller_travels(controller, workers, scheduler, len(points))
     settings = {"model": model, "duration_s": duration,
                 "friction_coefficient": None if math.isinf(friction_coefficient)
                 else friction_coefficient,
-                "robot": dataclasses.asdict(robot), "controller": dataclasses.asdict(controller),
+                "robot": dataclasses.asdict(robot), "controller": describe_controller(controller),
                 "initial_state": None if initial_state is None
                 else dataclasses.asdict(initial_state), "orbit": bool(orbit)}
     keys = [point_key(p, settings) for p in points]
@@ -254,8 +383,8 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         rd = RunDirectory(out, command=command, info={"kind": "sweep", "checkpoint": CHECKPOINT,
                                                       "n_points": len(points)}).open()
         ck = out / CHECKPOINT
-        if resume:
-            done = read_checkpoint(ck)
+        if resume:      # (a point the study could not run is run again)
+            done = {k: r for k, r in read_checkpoint(ck).items() if not _was_error(r)}
         elif ck.exists():
             ck.unlink()
     todo = [i for i, k in enumerate(keys) if k not in done]
@@ -272,7 +401,8 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     try:
         new_rows = map_tasks(sweep_task, tasks, workers=workers, scheduler=scheduler,
                              progress=progress, desc="sweep", on_result=on_result,
-                             error_row=_error_row)
+                             error_row=_error_row,
+                             stop_when=is_error if on_error == "raise" else None)
     except KeyboardInterrupt:
         if rd is not None:      # no table: the same call again goes on from the checkpoint
             rd.finish(outcome="interrupted", partial=True)
@@ -281,11 +411,20 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         if fh is not None:
             fh.close()
     for j, row in zip(todo, new_rows):
-        done[keys[j]] = row
-    rows = [done[k] for k in keys]
+        if row is not None:
+            done[keys[j]] = row
+    rows = [done[k] for k in keys if k in done]
     res = SweepResult(rows=rows, parameters=names,
                       settings=settings | {"n_points": len(points), "n_resumed":
-                                           len(points) - len(todo)})
+                                           len(points) - len(todo),
+                                           "n_errors": sum(is_error(r) for r in rows)})
+    try:
+        end_of_study(rows, on_error, "sweep", lambda r: str({n: r.get(n) for n in names}),
+                     result=res, n_points=len(keys))
+    except StudyError:
+        if rd is not None:      # no table: the same call again runs the failed points
+            rd.finish(outcome="study error", partial=True)
+        raise
     if rd is not None:
         rd.write("sweep.csv", res.to_csv)
         try:
@@ -325,14 +464,21 @@ def read_checkpoint(path) -> dict:
 
 
 def _error_row(task: dict, exc: BaseException) -> dict:
-    """The row of a point whose worker process failed (it died twice, see
-    :func:`scoutsim.analysis.parallel.map_tasks`); ``sweep_task`` records its own errors."""
+    """The row of a point whose task failed in its worker process (it could not be loaded
+    there, or the worker died twice, see :func:`scoutsim.analysis.parallel.map_tasks`);
+    ``sweep_task`` records its own errors."""
     row = dict(task["point"])
     row.update({k: None for k in SUMMARY_COLUMNS})
-    row.update(outcome="error", steady_bounding=False, error=f"{type(exc).__name__}: {exc}")
     if task.get("orbit"):
         row.update({k: None for k in ORBIT_COLUMNS})
+    row.update(error_fields(exc), steady_bounding=False)
     return row
+
+
+def _was_error(row: dict) -> bool:
+    """Whether a checkpoint's row is a point the study could not run (a row written
+    before statuses existed: outcome "error")."""
+    return row.get("status", "error" if row.get("outcome") == "error" else "ok") == "error"
 
 
 def _json(v):

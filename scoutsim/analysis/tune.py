@@ -5,8 +5,18 @@ the torso-feedback gains of :class:`~scoutsim.control.PitchFeedbackController`),
 ``controller.<field>``; fields of :class:`~scoutsim.parameters.RobotParameters` for design
 studies, ``robot.<field>``; entries of a :class:`~scoutsim.CompiledController`'s parameter
 array, ``controller.params[i]``. A ``_deg`` suffix on an angle field takes degrees at the
-edge (converted here, once); everything inside is SI. Bounds are the field's allowed range
-(:func:`scoutsim.parameters.allowed_range`) or a range the user gives, ``NAME=LOW:HIGH``.
+edge (converted here, once); everything inside is SI. Bounds are a range the user gives,
+``NAME=LOW:HIGH``, or the field's default search range around its base value
+(:data:`~scoutsim.analysis.tune_parameters.DEFAULT_SEARCH`: touchdown angles within 20 deg
+of the base controller's), within the field's allowed range
+(:func:`scoutsim.parameters.allowed_range`).
+
+The controller may be the user's own: a CompiledController (its parameter array tuned), a
+Python controller (robot fields tuned), or a factory ``"MODULE:FACTORY"`` /
+:class:`~scoutsim.control.factory.ControllerSpec`, made in each worker with every
+candidate's robot and controller parameters (:mod:`scoutsim.analysis.study_controller`;
+checked before the first evaluation). An evaluation the tuning could not run is an error
+of the tuning, not a score (:mod:`scoutsim.analysis.study_failures`, ``on_error``).
 
 What is minimised (``objective``), over the steady strides of each run:
 
@@ -94,13 +104,17 @@ from tqdm import tqdm
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
 from ..run_directory import RunDirectory, json_safe
 from .parallel import map_tasks, pool_is_broken, worker_pool
+from .study_controller import (build_controller, check_controller_travels,
+                               describe_controller, study_controller)
+from .study_failures import StudyError, check_on_error, is_error
 from .sweep import read_checkpoint
 # the parts of a tuning, re-exported here as its public API
 from .tune_evaluation import (AGGREGATES, COLUMNS, MIN_STEADY_STRIDES, OBJECTIVES, PENALTY,
                               EvaluationNotRunError, _error_row, tune_task)
 from .tune_optimizer import (EVALUATIONS, OPTIMIZER_STATE, MissingDependencyError,
                              _cma_class, _key, _read_state, _write_state)
-from .tune_parameters import TuneParameter, _apply, _base_value, parse_parameter
+from .tune_parameters import (TuneParameter, _apply, _base_value, has_tunable_array,
+                              parse_parameter)
 from .tune_result import TuneResult, _json, _write_outputs
 
 __all__ = ["tune", "TuneGoal", "TuneRuns", "TuneSearch", "TuneParameter", "TuneResult",
@@ -143,8 +157,10 @@ class TuneRuns:
     duration : simulated time of every run [s] (default 20).
     robot : base RobotParameters (default Scout II's).
     controller : ControllerParameters (Table I), ``"pitch-feedback"``, a
-        PitchFeedbackController or a CompiledController (its command function must be
-        importable by name to run in worker processes); default Table I.
+        PitchFeedbackController, a user's CompiledController or Python controller (defined
+        at the top level of a module the workers can import), or a user's factory
+        ``"MODULE:FACTORY"`` / ControllerSpec (it gets each candidate's robot and
+        controller parameters); default Table I.
     """
 
     model: str = "II"
@@ -193,35 +209,55 @@ def _bundles(goal, runs, search, fields: dict) -> list:
     return out
 
 
-def _controller_spec(controller):
-    """(kind, base ControllerParameters, spec for the workers) of the controller given."""
+def _controller_spec(controller, robot):
+    """(kind, base ControllerParameters, spec for the workers) of the controller given:
+    Table I, pitch feedback, a compiled controller (its parameter array can be tuned), a
+    Python controller, or a user's factory (``"MODULE:FACTORY"`` / ControllerSpec: it gets
+    each candidate's robot and controller parameters)."""
     from ..control.compiled import CompiledController
+    from ..control.factory import ControllerSpec
     from ..control.pitch_feedback import PitchFeedbackController
     if controller is None or isinstance(controller, ControllerParameters):
         return "table-i", controller or ControllerParameters(), {"kind": "table-i"}
+    controller = study_controller(controller, robot)
     if isinstance(controller, str):
         if controller not in ("table-i", "pitch-feedback"):
             raise ValueError(f"controller = {controller!r} is not allowed: table-i, "
-                             "pitch-feedback, ControllerParameters, a "
-                             "PitchFeedbackController or a CompiledController")
+                             "pitch-feedback, MODULE:FACTORY, ControllerParameters, a "
+                             "ControllerSpec or a controller object")
         return controller, ControllerParameters(), {"kind": controller}
     if isinstance(controller, PitchFeedbackController):
         return ("pitch-feedback", controller.controller_parameters, {"kind": "pitch-feedback"})
+    if isinstance(controller, ControllerSpec):
+        return "factory", controller.params or ControllerParameters(), {
+            "kind": "factory", "controller": controller}
     if isinstance(controller, CompiledController):
         base = controller.controller_parameters or ControllerParameters()
-        return "compiled", base, {"kind": "compiled", "command": controller.command_function,
-                                  "params": [float(x) for x in controller.params],
-                                  "state": [float(x) for x in controller.initial_state],
-                                  "control_period": controller.control_period,
-                                  "name": controller.name}
+        return "compiled", base, {"kind": "compiled", "controller": controller,
+                                  "params": [float(x) for x in controller.params]}
+    if callable(getattr(controller, "command", None)):
+        return "python", ControllerParameters(), {"kind": "python", "controller": controller}
     raise TypeError(f"controller of type {type(controller).__name__} cannot be tuned: give "
-                    "ControllerParameters, a PitchFeedbackController or a CompiledController")
+                    "ControllerParameters, a controller object, or MODULE:FACTORY")
+
+
+def _check_tuned_fields(kind: str, params: list) -> None:
+    """ValueError for a tuned ``controller.<field>`` that the controller does not read (a
+    compiled or Python controller object: it does not take ControllerParameters)."""
+    if kind in ("compiled", "python"):
+        bad = [p.name for p in params if p.key.startswith("controller.")]
+        if bad:
+            raise ValueError(f"parameter {bad[0]!r} is not allowed with a {kind} controller "
+                             "object, which does not read ControllerParameters: tune its "
+                             "controller.params[i] (a CompiledController), robot.<field>, or "
+                             "give the controller as MODULE:FACTORY (a factory make(robot, "
+                             "params) gets each candidate's parameters)")
 
 
 def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = None,
          search: TuneSearch | None = None, out=None, workers: int | None = None,
          scheduler=None, progress: bool = False, resume: bool = True, command: str = "",
-         **fields) -> TuneResult:
+         on_error: str = "raise", **fields) -> TuneResult:
     """Optimise parameters against an objective with CMA-ES (module docstring).
 
     Parameters
@@ -243,6 +279,12 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     resume : go on from ``out``'s evaluations and optimiser state (default); False starts
         afresh.
     command : the command line, recorded in the manifest.
+    on_error : what an evaluation the tuning could not run does
+        (:mod:`scoutsim.analysis.study_failures`): "raise" (default) ends the tuning after
+        its generation with :class:`~scoutsim.analysis.study_failures.StudyError` (the
+        finished evaluations are kept; a resumed tuning runs the failed ones again);
+        "record" scores it as infeasible (``30 PENALTY``), records it with status "error"
+        and goes on (``TuneResult.n_errors``; a RuntimeWarning).
     **fields : any field of the three bundles by its name, set on the bundle given or
         its default: ``objective``, ``target`` [m/s], ``aggregate``,
         ``max_belt_deflection`` [rad], ``max_current`` [A], ``min_speed`` [m/s];
@@ -257,8 +299,10 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     ValueError : a bad parameter name or range, objective or setting (named).
     MissingDependencyError : the ``cmaes`` library is not installed.
     KeyboardInterrupt : Ctrl-C; every finished evaluation is in ``out/evaluations.jsonl``.
-    EvaluationNotRunError : an evaluation could not be run (its worker died twice, a Dask
-        worker without scoutsim's version); the finished ones are kept likewise.
+    NotSendableError : the controller cannot be sent to the workers (before any run).
+    StudyError : an evaluation could not be run (``on_error="raise"``): the controller
+        raised or could not be made, or (EvaluationNotRunError) its worker died twice or a
+        Dask worker could not load the task; the finished ones are kept likewise.
     """
     goal, runs, search = _bundles(goal, runs, search, fields)
     objective, target, aggregate = goal.objective, goal.target, goal.aggregate
@@ -286,16 +330,27 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     ("max_current", max_current), ("min_speed", min_speed)):
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ValueError(f"{name} = {v!r} is not allowed: must be a number > 0")
-    kind, cparams, spec = _controller_spec(controller)
+    check_on_error(on_error)
+    robot = robot or RobotParameters()
+    kind, cparams, spec = _controller_spec(controller, robot)
     if objective == "stability" and kind != "table-i":
         raise ValueError(f"objective 'stability' is not allowed with the {kind} controller: "
                          "the orbit tools cut the stride map where the controller logs a "
                          "back-leg lift-off, which only the Table I controller logs")
-    robot = robot or RobotParameters()
-    params = [p if isinstance(p, TuneParameter) else parse_parameter(p, controller)
+    probe = spec.get("controller")
+    if kind == "factory" and any("params[" in str(p) for p in parameters):
+        # a factory's parameter array: the controller it makes for the base robot
+        probe = build_controller(probe, robot, cparams)
+        if has_tunable_array(probe):
+            spec["params"] = [float(x) for x in probe.params]
+    params = [p if isinstance(p, TuneParameter) else
+              parse_parameter(p, probe if kind in ("compiled", "factory") else controller,
+                              robot, cparams)
               for p in parameters]
     if not params:
         raise ValueError("no parameter to tune: give at least one")
+    _check_tuned_fields(kind, params)
+    check_controller_travels(spec.get("controller"), workers, scheduler, 2)
     seen = set()
     for p in params:
         if p.key in seen:
@@ -323,10 +378,8 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             "min_speed": min_speed}
     settings = {"parameters": [dataclasses.asdict(p) for p in params], "goal": goal,
                 "controller": kind,
-                # (a user's command function by its importable name, not its address)
-                "controller_spec": {k: (f"{getattr(v, '__module__', '')}."
-                                        f"{getattr(v, '__qualname__', repr(v))}"
-                                        if k == "command" else v)
+                # (a user's controller described by names and numbers, not addresses)
+                "controller_spec": {k: (describe_controller(v) if k == "controller" else v)
                                     for k, v in spec.items()},
                 "scenarios": [{"model": s["model"], "friction": None if math.isinf(s["friction"])
                                else s["friction"], "initial_state": None
@@ -402,7 +455,8 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             tasks, todo = [], []
             for i, (x, k) in enumerate(zip(xs, keys)):
                 values = {p.key: float(p.low + (p.high - p.low) * u) for p, u in zip(params, x)}
-                if k in done and done[k].get("values") == values:
+                if k in done and done[k].get("values") == values and (
+                        on_error == "record" or not is_error(done[k])):
                     record(k, done[k])
                     continue
                 tasks.append(task_base | {"values": values, "evaluation": gen * pop + i,
@@ -410,8 +464,8 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 todo.append(k)
 
             def on_result(j, row, todo=todo):
-                if row.get("not_run"):
-                    not_run.append(row)
+                if on_error == "raise" and is_error(row):
+                    failed.append(row)      # never recorded: a resumed tuning runs it again
                     return
                 if fh is not None:
                     fh.write(json.dumps({"key": todo[j], "row": row}, default=_json) + "\n")
@@ -423,23 +477,29 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     # one pool for every generation (a broken one is replaced)
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
-                not_run: list = []
+                failed: list = []
                 map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
                           progress=False, on_result=on_result, error_row=_error_row)
-                if not_run:
-                    r = not_run[0]
+                if failed:
+                    failed.sort(key=lambda r: r["evaluation"])
+                    r = failed[0]
                     shown = {p.name: p.shown(r["values"][p.key]) for p in params}
-                    raise EvaluationNotRunError(
-                        f"{len(not_run)} evaluation(s) of generation {gen} could not be run; "
-                        f"evaluation {r['evaluation']} at {shown}: {r['error']}"
+                    error = (EvaluationNotRunError if any(f.get("not_run") for f in failed)
+                             else StudyError)
+                    raise error(
+                        f"{len(failed)} evaluation(s) of generation {gen} could not be run "
+                        f"(an error of the tuning, not a score); evaluation "
+                        f"{r['evaluation']} at {shown}: {r['error']}"
                         + (f"; the finished evaluations are kept in {ck}: the same call "
-                           "again goes on from them" if ck is not None else ""))
+                           "again goes on from them" if ck is not None else "")
+                        + "; or pass on_error='record' to score such evaluations as "
+                          "infeasible and go on", failed)
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
             cma = _write_state(state_path, skey, gen, cma)
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
-        if rd is not None and isinstance(exc, (KeyboardInterrupt, EvaluationNotRunError)):
+        if rd is not None and isinstance(exc, (KeyboardInterrupt, StudyError)):
             rd.finish(outcome="interrupted" if isinstance(exc, KeyboardInterrupt)
                       else "evaluation not run", partial=True)
         raise
@@ -462,11 +522,17 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     best_row = rows[b]
     best_values = {p.key: raw[b]["values"][p.key] for p in params}
     b_robot, b_cparams, b_params = _apply(best_values, robot, cparams, spec.get("params"))
+    n_errors = sum(r.get("status") == "error" for r in rows)
     res = TuneResult(rows=rows, parameters=params, best=best_row, best_values=best_values,
                      robot=b_robot, controller_parameters=b_cparams, params=b_params,
                      settings=json_safe(settings) | {"budget": budget,
                                                       "n_resumed": n_resumed},
-                     stopped=stopped)
+                     stopped=stopped, n_errors=n_errors)
+    if n_errors:
+        import warnings
+        warnings.warn(f"the tuning: {n_errors} of its {len(rows)} evaluations could not be "
+                      "run and are recorded with status 'error', scored as infeasible",
+                      RuntimeWarning, stacklevel=2)
     if rd is not None:
         _write_outputs(res, rd, command)
     return res

@@ -11,6 +11,14 @@ broken ones (belt deflection [rad, shown in deg], motor current [A], steady spee
 steady bounding), and ten times :data:`PENALTY` for a fall, less for a later one.
 :func:`tune_task` (run in a worker process or on a Dask worker) scores every scenario and
 keeps the worst, or the mean (``aggregate``).
+
+Each evaluation's ``status`` (:mod:`scoutsim.analysis.study_failures`): "ok" (every
+scenario ran; a controller that stopped its run, returning torques that are not finite,
+scores as a fall at that time), "invalid" (the candidate's parameters are not allowed, or
+a scenario's start is not: outcome ``invalid_parameters`` / ``invalid_start``, scored
+``30 PENALTY``) or "error" (the tuning could not run it: the controller could not be made
+or raised, the task could not be loaded; scored ``30 PENALTY`` when recorded, see
+:func:`scoutsim.analysis.tune.tune`'s ``on_error``).
 """
 
 from __future__ import annotations
@@ -20,6 +28,8 @@ import math
 import numpy as np
 
 from ..parameters import validate_parameters
+from .study_controller import build_controller
+from .study_failures import StudyError, error_fields, run_failure
 from .sweep import _orbit_columns
 from .tune_parameters import _apply
 
@@ -38,29 +48,27 @@ MIN_STEADY_STRIDES = 7
 COLUMNS = ("evaluation", "generation", "score", "objective", "feasible", "violations",
            "outcome", "t_end_s", "mean_speed_m_s", "average_speed_m_s", "n_steady_strides",
            "steady_bounding", "cost_of_transport", "max_belt_deflection_deg",
-           "peak_current_a", "spectral_radius", "scenario", "error")
+           "peak_current_a", "spectral_radius", "scenario", "status", "error")
+#: the score of an evaluation that is not allowed or could not be run
+NOT_RUN_SCORE = 30.0 * PENALTY
 
-#: a worker's compiled user controllers, by their function (compiled once per process)
-_COMPILED: dict = {}
 
-
-def _controller(spec, cparams, params):
-    """The controller of one run: Table I parameters, a PitchFeedbackController, or the
-    user's CompiledController with the parameter array ``params``."""
+def _controller(spec, robot, cparams, params):
+    """The controller of one evaluation: Table I parameters, a PitchFeedbackController,
+    the user's controller object, or the one the user's factory makes for the candidate's
+    ``robot`` and ``cparams``; a compiled controller's parameter array set to ``params``
+    (on a copy: the user's object is not changed)."""
     kind = spec["kind"]
     if kind == "table-i":
         return cparams
     if kind == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
         return PitchFeedbackController(cparams)
-    from ..control.compiled import CompiledController
-    fn = spec["command"]
-    ctrl = _COMPILED.get(fn)
-    if ctrl is None:
-        ctrl = _COMPILED[fn] = CompiledController(fn, params, spec["state"],
-                                                   control_period=spec["control_period"],
-                                                   name=spec["name"])
-    ctrl.params = np.array(params, dtype=np.float64)
+    ctrl = build_controller(spec["controller"], robot, cparams)
+    if params is not None and getattr(ctrl, "command_function", None) is not None:
+        import copy
+        ctrl = copy.copy(ctrl)          # (its compiled callback is shared, not compiled)
+        ctrl.params = np.array(params, dtype=np.float64)
     return ctrl
 
 
@@ -72,13 +80,33 @@ def _peak_current(result) -> float | None:
 
 
 def _scenario_row(task, scenario, robot, cparams, params) -> dict:
-    """Run one scenario and score it (module docstring)."""
+    """Run one scenario of the candidate (``robot``, controller parameters ``cparams``, a
+    compiled controller's array ``params``) and score it (module docstring)."""
+    from ..control.protocol import ControllerError
     from ..simulation import simulate
     goal = task["goal"]
     duration = task["duration"]
-    ctrl = _controller(task["controller"], cparams, params)
-    r = simulate(robot, ctrl, scenario["initial_state"], duration, model=scenario["model"],
-                 friction_coefficient=scenario["friction"], energy=goal["objective"] == "cot")
+    try:
+        ctrl = _controller(task["controller"], robot, cparams, params)
+    except Exception as exc:  # noqa: BLE001 - an error of the tuning
+        return {k: None for k in COLUMNS[3:]} | error_fields(exc) | {
+            "score": NOT_RUN_SCORE, "feasible": False, "steady_bounding": False,
+            "violations": "error"}
+    try:
+        r = simulate(robot, ctrl, scenario["initial_state"], duration,
+                     model=scenario["model"], friction_coefficient=scenario["friction"],
+                     energy=goal["objective"] == "cot")
+    except Exception as exc:  # noqa: BLE001 - classified: the controller's stop, or not
+        failure = run_failure(exc, "invalid_start")
+        if failure["status"] == "ok" and isinstance(exc, ControllerError):
+            # the controller stopped its run: scored as a fall at that time
+            return {k: None for k in COLUMNS[3:]} | failure | {
+                "t_end_s": float(exc.t), "steady_bounding": False, "feasible": False,
+                "score": 10.0 * PENALTY * (2.0 - min(1.0, exc.t / duration)),
+                "violations": "controller_error"}
+        return {k: None for k in COLUMNS[3:]} | failure | {
+            "score": NOT_RUN_SCORE, "feasible": False, "steady_bounding": False,
+            "violations": failure["outcome"]}
     if r.outcome == "interrupted":
         raise KeyboardInterrupt          # a cut run is not an evaluation: never recorded
     s = r.summary()
@@ -92,7 +120,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
            "peak_current_a": _peak_current(r), "spectral_radius": None}
     if r.outcome != "completed":
         row.update(score=10.0 * PENALTY * (2.0 - min(1.0, t_end / duration)), objective=None,
-                   feasible=False, violations=r.outcome)
+                   feasible=False, violations=r.outcome, status="ok", error="")
         return row
     v = s["mean_speed_m_s"] if s["mean_speed_m_s"] is not None else avg
     broken = []                                   # (name, relative excess)
@@ -132,7 +160,15 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     else:
         score = objective
     row.update(score=float(score), objective=objective, feasible=not broken,
-               violations="; ".join(n for n, _ in broken))
+               violations="; ".join(n for n, _ in broken), status="ok", error="")
+    return row
+
+
+def _not_run(row: dict, fields: dict) -> dict:
+    """``row`` as an evaluation that is not allowed or could not be run."""
+    row.update({k: None for k in COLUMNS[2:]})
+    row.update(fields, score=NOT_RUN_SCORE, feasible=False, steady_bounding=False,
+               violations=fields["outcome"])
     return row
 
 
@@ -146,36 +182,41 @@ def tune_task(task: dict) -> dict:
         robot, cparams, params = _apply(task["values"], task["robot"], task["cparams"],
                                         task["controller"].get("params"))
         validate_parameters(robot, cparams)
+    except ValueError as exc:
+        return _not_run(row, {"status": "invalid", "outcome": "invalid_parameters",
+                              "error": str(exc)})
+    try:
         rows = [_scenario_row(task, sc, robot, cparams, params) for sc in task["scenarios"]]
-        scores = [r["score"] for r in rows]
-        worst = int(np.argmax(scores))
-        picked = dict(rows[worst])
-        if task["goal"]["aggregate"] == "mean":
-            picked["score"] = float(np.mean(scores))
-            objs = [r["objective"] for r in rows]
-            picked["objective"] = (float(np.mean(objs)) if all(o is not None for o in objs)
-                                   else None)
-            picked["feasible"] = all(r["feasible"] for r in rows)
-        picked["scenario"] = worst
-        picked["error"] = ""
-        row.update(picked)
-    except KeyboardInterrupt:
-        raise
-    except Exception as exc:  # noqa: BLE001 - recorded per evaluation, the tuning goes on
-        row.update({k: None for k in COLUMNS[2:]})
-        row.update(score=30.0 * PENALTY, feasible=False, outcome="error",
-                   violations="error", error=f"{type(exc).__name__}: {exc}")
+    except Exception as exc:  # noqa: BLE001 - an error of the tuning (scoring a run)
+        return _not_run(row, error_fields(exc))
+    for status in ("error", "invalid"):        # one scenario not run: the evaluation's
+        bad = [r for r in rows if r.get("status", "ok") == status]
+        if bad:
+            return _not_run(row, {k: bad[0][k] for k in ("status", "outcome", "error")})
+    scores = [r["score"] for r in rows]
+    worst = int(np.argmax(scores))
+    picked = dict(rows[worst])
+    if task["goal"]["aggregate"] == "mean":
+        picked["score"] = float(np.mean(scores))
+        objs = [r["objective"] for r in rows]
+        picked["objective"] = (float(np.mean(objs)) if all(o is not None for o in objs)
+                               else None)
+        picked["feasible"] = all(r["feasible"] for r in rows)
+    picked["scenario"] = worst
+    row.update(picked)
     return row
 
 
-class EvaluationNotRunError(RuntimeError):
+class EvaluationNotRunError(StudyError):
     """An evaluation could not be run at all: its worker process died twice, or a Dask
     worker could not load the task (a different environment). The tuning stops, keeping
     every finished evaluation; the same call again goes on once the cause is fixed."""
 
 
 def _error_row(task: dict, exc: BaseException) -> dict:
-    """What map_tasks records for an evaluation that could not be run (not a row: the
-    tuning stops on it, see :class:`EvaluationNotRunError`)."""
-    return {"not_run": True, "evaluation": task["evaluation"], "values": task["values"],
-            "error": f"{type(exc).__name__}: {exc}"}
+    """The row of an evaluation whose task failed in its worker (it died twice, or the
+    task could not be loaded there): an error of the tuning (``not_run``: the tuning
+    raises :class:`EvaluationNotRunError` unless it records errors)."""
+    row = {"evaluation": task["evaluation"], "generation": task["generation"],
+           "values": dict(task["values"])}
+    return _not_run(row, error_fields(exc)) | {"not_run": True}

@@ -8,7 +8,9 @@ field: Table I and the torso-feedback gains), ``robot.<field>`` (a
 ``controller.params[i]`` (entry i of a :class:`~scoutsim.CompiledController`'s parameter
 array). A ``_deg`` suffix on an angle field takes degrees at the edge, converted here,
 once; bounds and values inside are SI (angles in rad). Without a range a parameter is
-searched over its field's allowed range (:func:`scoutsim.parameters.allowed_range`).
+searched over its default search range (:data:`DEFAULT_SEARCH`, around the base robot's
+or controller's value, within the field's allowed range); a field without one needs a
+range.
 """
 
 from __future__ import annotations
@@ -20,10 +22,73 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..parameters import allowed_range, field_dimension, physical_limit
+from ..parameters import (ControllerParameters, RobotParameters, allowed_range,
+                          field_dimension)
 from .sweep import _check_name, parameter_names
 
-__all__ = ["TuneParameter", "parse_parameter"]
+__all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
+
+#: half-width [rad] of the default search of a set-point angle around its base value
+ANGLE_HALF_SPAN = math.radians(20.0)
+
+
+def _around(half: float):
+    return lambda base: (base - half, base + half)
+
+
+def _scaled(low: float, high: float):
+    return lambda base: (base * low, base * high)
+
+
+#: The default search range of a parameter given without one, SI, as a function of its
+#: base value (the base controller's or robot's field; Scout II's by default). A tuning
+#: searches near a working controller: the allowed range of an angle, +-90 deg, puts most
+#: touchdowns where the legs cannot catch the body, so that nearly every early evaluation
+#: falls and CMA-ES has no feasible candidate to learn from.
+#:
+#: - touchdown angles and sweep limits: the base value +-20 deg. Table I's touchdown
+#:   angles (21 and 19 deg) then range over about 0 to 40 deg, from a leg that lands
+#:   vertical to one whose toe lands l0 sin 40 deg = 0.21 m ahead of the hip (Scout II,
+#:   l0 = 0.323 m); the sweep limits (0 deg) over +-20 deg about the vertical;
+#: - torso-feedback gains: k_theta the base +-1 rad/rad, k_omega the base +-0.1 s (the
+#:   ranges scanned for the pitch-feedback controller, docs/model.md "Torso feedback");
+#: - control period: half to twice the base (the paper's loop runs at 1 kHz);
+#: - efficiencies: the base +-0.2 (within (0, 1]); the gearbox's load-dependent loss
+#:   coefficient 0 to 0.2.
+#:
+#: Every other field needs a range (``NAME=LOW:HIGH``): gains, masses and stiffnesses have
+#: no scale a default could guess.
+DEFAULT_SEARCH = {
+    "controller.touchdown_angle_front": _around(ANGLE_HALF_SPAN),
+    "controller.touchdown_angle_back": _around(ANGLE_HALF_SPAN),
+    "controller.sweep_limit_front": _around(ANGLE_HALF_SPAN),
+    "controller.sweep_limit_back": _around(ANGLE_HALF_SPAN),
+    "controller.pitch_gain_front": _around(1.0),
+    "controller.pitch_gain_back": _around(1.0),
+    "controller.pitch_rate_gain_front": _around(0.1),
+    "controller.pitch_rate_gain_back": _around(0.1),
+    "controller.control_period": _scaled(0.5, 2.0),
+    "robot.gearbox_efficiency": _around(0.2),
+    "robot.sprocket_efficiency": _around(0.2),
+    "robot.gearbox_load_loss_coefficient": lambda base: (0.0, 0.2),
+}
+
+
+def default_search_range(key: str, base: float) -> tuple[float, float] | None:
+    """The default search range [SI] of the field ``key`` (``robot.<field>`` /
+    ``controller.<field>``) around its ``base`` value, cut to the field's allowed range
+    (an open end moved inside by one part in 1e9 of the range); None if it has none."""
+    rule = DEFAULT_SEARCH.get(key)
+    if rule is None:
+        return None
+    lo, hi = sorted(rule(base))
+    lo_r, hi_r, lo_closed, hi_closed = allowed_range(key.partition(".")[2])
+    eps = 1e-9 * (hi - lo)
+    if lo_r is not None and (lo < lo_r or (lo == lo_r and not lo_closed)):
+        lo = lo_r if lo_closed else lo_r + eps
+    if hi_r is not None and (hi > hi_r or (hi == hi_r and not hi_closed)):
+        hi = hi_r if hi_closed else hi_r - eps
+    return lo, hi
 
 _PARAMS_NAME = re.compile(r"^controller\.params\[(\d+)\]$")
 
@@ -52,12 +117,14 @@ class TuneParameter:
         return si / self.scale
 
 
-def parse_parameter(text: str, controller=None) -> TuneParameter:
+def parse_parameter(text: str, controller=None, robot: RobotParameters | None = None,
+                    cparams: ControllerParameters | None = None) -> TuneParameter:
     """``NAME`` or ``NAME=LOW:HIGH`` (LOW, HIGH in the name's unit: degrees for a ``_deg``
-    name) as a :class:`TuneParameter`; without a range, the field's allowed range. A
-    ``controller.params[i]`` needs a range and a :class:`~scoutsim.CompiledController`
-    ``controller`` with at least i + 1 parameters. ValueError naming the parameter
-    otherwise."""
+    name) as a :class:`TuneParameter`; without a range, the field's default search range
+    around its value in ``robot`` / ``cparams`` (default: Scout II's;
+    :data:`DEFAULT_SEARCH`). A ``controller.params[i]`` needs a range and a
+    :class:`~scoutsim.CompiledController` ``controller`` with at least i + 1 parameters.
+    ValueError naming the parameter otherwise."""
     name, sep, rng = text.partition("=")
     name = name.strip()
     bounds = None
@@ -78,7 +145,7 @@ def parse_parameter(text: str, controller=None) -> TuneParameter:
     if m:
         i = int(m.group(1))
         n = getattr(controller, "params", None)
-        if n is None or getattr(controller, "controller_parameters", None) is not None:
+        if n is None or not has_tunable_array(controller):
             raise ValueError(f"parameter {name!r} is not allowed: controller.params[i] tunes "
                              "the parameter array of a CompiledController given as the "
                              "controller (Table I and pitch feedback: tune their "
@@ -104,15 +171,14 @@ def parse_parameter(text: str, controller=None) -> TuneParameter:
                          "parameters, and this one is a whole number or a switch")
     lo_r, hi_r, lo_closed, hi_closed = allowed_range(fld)
     if bounds is None:
-        # (an upper end that is only the physical bound, far beyond any robot, is no range
-        # to search)
-        if lo_r is None or hi_r is None or hi_r == physical_limit(fld):
-            raise ValueError(f"parameter {name!r} needs a range: its allowed values are not "
-                             f"a range to search; give {name}=LOW:HIGH")
-        # an open end is moved inside by one part in 1e9 of the range
-        eps = 1e-9 * (hi_r - lo_r)
-        lo = lo_r if lo_closed else lo_r + eps
-        hi = hi_r if hi_closed else hi_r - eps
+        section = base.partition(".")[0]
+        owner = ((robot or RobotParameters()) if section == "robot"
+                 else (cparams or ControllerParameters()))
+        found = default_search_range(base, float(getattr(owner, fld)))
+        if found is None:
+            raise ValueError(f"parameter {name!r} needs a range: it has no default search "
+                             f"range; give {name}=LOW:HIGH")
+        lo, hi = found
     else:
         lo, hi = bounds[0] * scale, bounds[1] * scale
         ok_lo = lo_r is None or lo > lo_r or (lo == lo_r and lo_closed)
@@ -124,6 +190,15 @@ def parse_parameter(text: str, controller=None) -> TuneParameter:
                              f"the field's allowed values, {'[' if lo_closed else '('}"
                              f"{show(lo_r)}, {show(hi_r)}{']' if hi_closed else ')'}")
     return TuneParameter(name, base, lo, hi, scale)
+
+
+def has_tunable_array(controller) -> bool:
+    """Whether ``controller`` is a CompiledController whose parameter array a run uses as
+    it is (not one that packs it again from its parameters for each run's robot, as
+    :class:`~scoutsim.control.PitchFeedbackController` does: tune its fields)."""
+    from ..control.compiled import CompiledController
+    return (isinstance(controller, CompiledController)
+            and type(controller).params_for is CompiledController.params_for)
 
 
 def _check_tuned_name(name: str, base: str) -> None:

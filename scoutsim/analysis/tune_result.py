@@ -39,6 +39,8 @@ class TuneResult:
     params : the best parameter array of a CompiledController (else None).
     settings : what was tuned against (objective, scenarios, budget, seed, ...).
     stopped : why the tuning ended: "budget" or "converged" (CMA-ES's stopping rule).
+    n_errors : evaluations the tuning could not run (status "error", recorded with
+        ``on_error="record"``; scored as infeasible).
     """
 
     rows: list
@@ -50,6 +52,7 @@ class TuneResult:
     params: np.ndarray | None
     settings: dict = field(default_factory=dict)
     stopped: str = "budget"
+    n_errors: int = 0
 
     def columns(self) -> dict:
         names = [p.name for p in self.parameters] + list(COLUMNS)
@@ -90,7 +93,8 @@ class TuneResult:
                 "parameters_si": self.best_values,
                 "params": None if self.params is None else [float(x) for x in self.params],
                 "metrics": {k: self.best.get(k) for k in COLUMNS},
-                "n_evaluations": len(self.rows), "stopped": self.stopped,
+                "n_evaluations": len(self.rows), "n_errors": self.n_errors,
+                "stopped": self.stopped,
                 "settings": self.settings}
 
 

@@ -87,9 +87,30 @@ def call_controller(typingctx, address, t, sensors, params, state, torque, leg_s
     return sig, codegen
 
 
+#: the C callbacks compiled in this process, by their command function: a controller made
+#: again from the same function (a copy sent to a worker process, a controller a factory
+#: makes for every point of a study) does not compile it again
+_CALLBACKS: dict = {}
+
+
 def _wrap(command):
     """The C callback (``numba.cfunc``) of a Numba-compilable ``command(t, y, params, state,
-    torque, leg_states)``: compiles ``command`` and the wrapper, nothing else."""
+    torque, leg_states)``: compiles ``command`` and the wrapper, nothing else; once per
+    process and function (:data:`_CALLBACKS`)."""
+    try:
+        return _CALLBACKS[command]
+    except (KeyError, TypeError):     # (TypeError: an unhashable callable, never cached)
+        pass
+    wrapper = _compile_callback(command)
+    try:
+        _CALLBACKS[command] = wrapper
+    except TypeError:
+        pass
+    return wrapper
+
+
+def _compile_callback(command):
+    """:func:`_wrap` without the cache."""
     from numba import carray, cfunc, njit
     inner = njit(command)
     nsn = L.NSN
@@ -130,6 +151,12 @@ class CompiledController(Controller):
         Wall time [s] it took to compile ``command`` and its C wrapper.
     address : int
         Machine address of the C wrapper (what the run loop calls).
+
+    A compiled controller pickles (so it can run in the worker processes of a parallel
+    study, or on a Dask worker) when ``command`` is defined at the top level of a module
+    the worker can import: the function travels by its module and name, with
+    ``params``, ``state``, ``control_period``, ``name`` and a subclass's own attributes,
+    and the worker wraps it again (compiled once per process and function).
     """
 
     def __init__(self, command, params=None, state=None, *,
@@ -140,16 +167,36 @@ class CompiledController(Controller):
                                       dtype=np.float64).ravel()
         self.control_period = float(control_period)
         self.name = name or getattr(command, "__name__", type(self).__name__)
+        self._compile()
+        self.leg_states = np.zeros(2, dtype=np.int64)
+
+    def _compile(self) -> None:
+        """Wrap ``command_function`` in its C callback (compiled once per process and
+        function) and set ``_cfunc``, ``address`` and ``compile_time_s``."""
         t0 = time.perf_counter()
         try:
-            self._cfunc = _wrap(command)
+            self._cfunc = _wrap(self.command_function)
         except Exception as exc:
             raise TypeError(f"CompiledController({self.name}): the command function does not "
                             f"compile with Numba (nopython mode) for command(t, y, params, "
                             f"state, torque, leg_states): {exc}") from exc
         self.compile_time_s = time.perf_counter() - t0
         self.address = int(self._cfunc.address)
-        self.leg_states = np.zeros(2, dtype=np.int64)
+
+    # Pickling (a copy for a worker process, a Dask worker, copy.copy): everything but the
+    # compiled callback and its address, which belong to this process; the command function
+    # pickles by reference (its module and qualified name), so it must be defined at the
+    # top level of a module the receiving process can import. Unpickling wraps it again
+    # (compiled once per process). A subclass's own attributes travel with the rest of the
+    # instance dictionary; its __init__ is not called again.
+    _NOT_PICKLED = ("_cfunc", "address", "compile_time_s", "_py_state")
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in self._NOT_PICKLED}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._compile()
 
     #: the Table I parameters the controller builds on, if any
     #: (:class:`~scoutsim.parameters.ControllerParameters`): a run then starts its legs at

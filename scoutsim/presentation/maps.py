@@ -86,7 +86,7 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
 def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=None) -> Figure:
     """Map of ``value`` over two swept parameters of a grid sweep
     (:class:`scoutsim.analysis.sweep.SweepResult`); points that do not reach steady bounding
-    are marked x. Angles (names ending in 'angle' / 'limit') are shown in degrees;
+    are marked x. Each axis in its unit (``sweep.axis_label``: an angle in degrees);
     saved by suffix if ``path`` is given."""
     xs = sweep.column(x)
     ys = sweep.column(y)
@@ -100,8 +100,8 @@ def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=No
         steady[i, j] = bool(r.get("steady_bounding"))
 
     def edge(name, vals):
-        deg = name.endswith(("angle_front", "angle_back", "limit_front", "limit_back"))
-        return (np.degrees(vals), f"{name} [deg]") if deg else (vals, name + " [SI]")
+        factor, label = sweep.axis_label(name)
+        return vals * factor, label
     gx, lx = edge(x, ux)
     gy, ly = edge(y, uy)
     fig = Figure(figsize=(6.5, 5), layout="constrained")

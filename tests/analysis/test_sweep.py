@@ -29,10 +29,13 @@ def test_unknown_parameter_is_named_with_suggestion():
 
 
 def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
+    """A point whose parameters are not allowed is recorded as invalid, naming the field
+    (not an error of the study: the sweep goes on)."""
     pts = [{"robot.torso_mass": 20.865}, {"robot.torso_mass": -1.0}]
     res = sweep(pts, model="I", duration=0.4, workers=1, out=tmp_path)
     assert res.rows[0]["outcome"] in ("completed", "fell") and res.rows[0]["error"] == ""
-    assert res.rows[1]["outcome"] == "error" and "torso_mass" in res.rows[1]["error"]
+    assert res.rows[1]["outcome"] == "invalid_parameters" and \
+        res.rows[1]["status"] == "invalid" and "torso_mass" in res.rows[1]["error"]
     assert (tmp_path / "sweep.csv").exists()
 
 
