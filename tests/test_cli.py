@@ -229,7 +229,8 @@ def test_basin_writes_one_row_per_start_and_excludes_invalid_starts(tmp_path, ca
     rows, summary = _read_basin(out)
     assert len(rows) == 2 * 1 * 2 * 2
     assert list(rows[0]) == ["model", "friction", "speed", "pitch_rate_deg_s", "height",
-                             "outcome", "steady_bounding", "mean_speed_m_s", "n_steady_strides"]
+                             "outcome", "steady_bounding", "mean_speed_m_s", "n_steady_strides",
+                             "status", "error"]
     assert sorted({float(r["pitch_rate_deg_s"]) for r in rows}) == [-50.0, 0.0]
     # at 0.30 m a toe starts below the ground (legs at their touchdown angles)
     for r in rows:
@@ -295,9 +296,11 @@ def test_sweep_cli_grid_in_degrees_writes_table_and_map(tmp_path, capsys, monkey
     lines = (out / "sweep.csv").read_text().splitlines()
     assert len(lines) == 1 + 4
     header = lines[0].split(",")
-    assert header[0] == "controller.touchdown_angle_front"
+    # a _deg axis is kept in degrees, under its own name (the runs use its radians)
+    assert header[0] == "controller.touchdown_angle_front_deg"
     first = dict(zip(header, lines[1].split(",")))
-    assert float(first["controller.touchdown_angle_front"]) == pytest.approx(math.radians(19))
+    assert float(first["controller.touchdown_angle_front_deg"]) == 19.0
+    assert "[deg]" in maps[0].axes[0].get_xlabel()
     assert "4 points" in capsys.readouterr().out
     assert len(maps) == 1
     png_draws_each_axes_data(out / "map.png", maps[0])
@@ -368,8 +371,8 @@ def test_sweep_refuses_bad_axes_before_starting(argv, message, tmp_path, capsys)
 def test_sweep_deg_suffix_still_takes_degrees_for_an_angle():
     from scoutsim.cli.sweep import _sweep_axis
     name, vals = _sweep_axis("controller.touchdown_angle_front_deg=15:27:20", 3)
-    assert name == "controller.touchdown_angle_front"
-    assert vals == [math.radians(15.0), math.radians(27.0), 20.0]
+    assert name == "controller.touchdown_angle_front_deg"   # the sweep converts per run
+    assert vals == [15.0, 27.0, 20.0]
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -355,7 +355,7 @@ def test_sweep_no_resume_recomputes_every_point(tmp_path, capsys):
 
 def test_sweep_random_sample_runs_each_drawn_point(tmp_path, capsys):
     """`sweep --random NAME=LOW:HIGH --samples N --seed S`: N points drawn within the
-    bounds (degrees converted to rad), the same for the same seed and different for
+    bounds (kept in degrees in the _deg column; each run converts to rad), the same for the same seed and different for
     another; each row is the run of its point (its average speed is that of a direct
     simulate() with that parameter); no map for a random sample; the directory is
     complete."""
@@ -367,19 +367,19 @@ def test_sweep_random_sample_runs_each_drawn_point(tmp_path, capsys):
 
     out, rows = sample("a", 5)
     assert "scoutsim sweep: 3 points of model I" in capsys.readouterr().out
-    values = [float(r["controller.touchdown_angle_front"]) for r in rows]
+    values = [float(r["controller.touchdown_angle_front_deg"]) for r in rows]
     assert len(set(values)) == 3
-    assert all(math.radians(19) <= v <= math.radians(23) for v in values)
+    assert all(19.0 <= v <= 23.0 for v in values)
     assert all(r["outcome"] == "completed" for r in rows)
     assert not (out / "map.png").exists()
     assert set(check_run_directory(out)["files"]) >= {"sweep.csv"}
     assert check_run_directory(out)["status"] == "complete"
 
-    assert [r["controller.touchdown_angle_front"] for r in sample("b", 5)[1]] == \
-        [r["controller.touchdown_angle_front"] for r in rows]
-    assert [float(r["controller.touchdown_angle_front"]) for r in sample("c", 6)[1]] != values
+    assert [r["controller.touchdown_angle_front_deg"] for r in sample("b", 5)[1]] == \
+        [r["controller.touchdown_angle_front_deg"] for r in rows]
+    assert [float(r["controller.touchdown_angle_front_deg"]) for r in sample("c", 6)[1]] != values
 
-    direct = scoutsim.simulate(None, ControllerParameters(touchdown_angle_front=values[0]),
+    direct = scoutsim.simulate(None, ControllerParameters(touchdown_angle_front=math.radians(values[0])),
                                None, 0.3, model="I")
     assert float(rows[0]["average_speed_m_s"]) == pytest.approx(
         (direct.x[-1] - direct.x[0]) / direct.t[-1], rel=1e-12)

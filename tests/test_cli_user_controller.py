@@ -136,12 +136,12 @@ def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
 def test_tune_runs_a_module_controller(user_dir, tmp_path):
     p = scoutsim(user_dir, "tune", "--controller", "usermod:table_i", "--model", "ideal",
                  "--param", "controller.touchdown_angle_front_deg", "--objective",
-                 "max-speed", "--budget", "2", "--population", "2", "--duration", "1",
+                 "max-speed", "--budget", "4", "--population", "4", "--duration", "1",
                  "--workers", "2", "--out", str(tmp_path / "t"), cwd=tmp_path)
     assert p.returncode == 0, p.stderr
     with open(tmp_path / "t" / "tune.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) == 2
+    assert len(rows) == 4
     assert all("Error" not in (r.get("error") or "") for r in rows), rows
 
 

@@ -23,14 +23,14 @@ import time
 from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_of_attraction,
                               basin_stats, basin_tasks, run_basin_tasks)
+from ..analysis.parallel import NotSendableError
 from ..parameters import floor_label
 from ..run_directory import RunDirectory
 from ._common import (SCOUT_FLOOR_FRICTION, add_controller_option, add_duration_option,
-                      controller_label,
-                      controller_choice,
-                      add_models_option, add_plots_option, check_expected_time, float_list, friction_list,
+                      add_models_option, add_plots_option, check_expected_time,
+                      controller_choice, controller_label, float_list, friction_list,
                       integrator, load_parameters, make_controller, out_dir, positive_int,
-                      show_progress, write_json)
+                      show_progress, usage_errors, write_json)
 
 NAME = "basin"
 
@@ -78,12 +78,12 @@ def register(sub, common) -> None:
 
 def format_basin(per: dict, n_grid: int, duration: float, controller: str = "table-i") -> str:
     """The human-readable basin table (one row per model and floor)."""
-    head = ("model", "floor", "starts", "invalid", "valid", "steady", "fraction", "fell",
-            "other", "cycle m/s")
+    head = ("model", "floor", "starts", "invalid", "errors", "valid", "steady", "fraction",
+            "fell", "other", "cycle m/s")
     lines = [f"scoutsim basin ({controller_label(controller)} controller): {n_grid} starts "
              f"per model and floor, {duration:g} s each; "
-             "fraction = steady bounding / valid starts; cycle m/s = median speed of the "
-             "starts that bound",
+             "fraction = steady bounding / valid starts (errors: starts the study could "
+             "not run, left out); cycle m/s = median speed of the starts that bound",
              "  " + "  ".join(f"{h:>9}" for h in head)]
     for key, s in per.items():
         frac = s["fraction_steady_bounding"]
@@ -92,7 +92,8 @@ def format_basin(per: dict, n_grid: int, duration: float, controller: str = "tab
         v = s.get("median_cycle_speed_m_s")
         mu = s.get("friction")
         vals = (s.get("model", key), "-" if mu is None else floor_label(mu), s["n_starts"],
-                s["n_invalid_start"], s["n_valid"], s["n_steady_bounding"],
+                s["n_invalid_start"], s.get("n_errors", 0), s["n_valid"],
+                s["n_steady_bounding"],
                 "n/a" if frac is None else f"{frac:.3f}", fell, other,
                 "-" if v is None else f"{v:.3f}")
         lines.append("  " + "  ".join(f"{x!s:>9}" for x in vals))
@@ -134,8 +135,9 @@ def execute(args) -> int:
                       info={"kind": "basin", "n_starts": len(tasks),
                             "controller": args.controller})
     try:
-        rows = run_basin_tasks(tasks, workers, progress,
-                               on_result=lambda i, row: finished.__setitem__(i, row))
+        with usage_errors(NotSendableError):   # said before the first start runs
+            rows = run_basin_tasks(tasks, workers, progress,
+                                   on_result=lambda i, row: finished.__setitem__(i, row))
     except KeyboardInterrupt:
         # what was computed is kept: the finished starts, marked partial (no statistics
         # or map of a grid with holes)
@@ -188,9 +190,13 @@ def execute(args) -> int:
               f"height {example['height']:g} m: {example.get('error', '')}")
     print(f"wall time {wall:.1f} s with {min(workers, len(tasks))} worker(s); "
           f"wrote {written} to {out}/")
-    errors = [r for r in rows if r["outcome"] == "error"]
+    errors = [r for r in rows if r.get("status") == "error"]
     for r in errors[:5]:
         print(f"scoutsim basin: start model {r['model']}, speed {r['speed']:g}, pitch rate "
-              f"{r['pitch_rate_deg_s']:g}, height {r['height']:g} crashed: {r['error']}",
+              f"{r['pitch_rate_deg_s']:g}, height {r['height']:g} could not run (an error "
+              f"of the study, not of the robot; left out of the fraction): {r['error']}",
               file=sys.stderr)
+    if len(errors) > 5:
+        print(f"scoutsim basin: ... {len(errors) - 5} more such starts (basin.csv, status "
+              "'error')", file=sys.stderr)
     return 1 if errors else 0

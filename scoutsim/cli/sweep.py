@@ -17,10 +17,12 @@ import math
 import os
 import sys
 import time
+import warnings
 
 from ..analysis.sweep import SweepBase
 from ._common import (CONTROLLED_MODELS, UsageError, add_controller_option,
-                      add_duration_option, check_expected_time, controller_choice,
+                      add_duration_option, add_plots_option, check_expected_time,
+                      controller_choice,
                       load_parameters, make_controller, out_dir, positive_int, show_progress,
                       usage_errors)
 
@@ -47,6 +49,8 @@ def register(sub, common) -> None:
                     "--duration 2")
     add_duration_option(sw, DEFAULT_DURATION_S, "simulated time per point")
     add_controller_option(sw)
+    add_plots_option(sw, True, "map.png (and with --orbit stability.png) of a two-parameter "
+                               "grid")
     sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:NUM",
                     help="grid axis (repeatable): NUM values from START to STOP")
     sw.add_argument("--random", action="append", default=[], metavar="NAME=LOW:HIGH",
@@ -72,7 +76,8 @@ def register(sub, common) -> None:
 
 
 def _sweep_axis(text: str, n_parts: int):
-    """'name=a:b[:n]' -> (SI name, floats); a _deg suffix converts degrees once, here."""
+    """'name=a:b[:n]' -> (name, floats): a _deg name keeps its degrees, which the sweep
+    converts to the field's radians for each run and keeps in the table's _deg column."""
     name, sep, rng = text.partition("=")
     parts = rng.split(":")
     if not sep or len(parts) != n_parts:
@@ -91,8 +96,6 @@ def _sweep_axis(text: str, n_parts: int):
             raise UsageError(f"{text!r} is not allowed: the _deg suffix takes degrees for "
                              f"an angle; {base!r} is not an angle (give it in SI units, "
                              "without the suffix)")
-        name = base
-        vals = [math.radians(v) for v in vals[:2]] + vals[2:]
     return name, vals
 
 
@@ -136,7 +139,7 @@ def _points(args):
 
 
 def execute(args) -> int:
-    from ..analysis.parallel import SchedulerUnreachableError
+    from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.sweep import CHECKPOINT, read_checkpoint, sweep
     from ..run_directory import add_to_manifest, atomic_write
     if bool(args.grid) == bool(args.random):
@@ -153,11 +156,14 @@ def execute(args) -> int:
     progress = show_progress(args)
     wall0 = time.perf_counter()
     try:
-        with usage_errors(SchedulerUnreachableError):
+        with usage_errors(SchedulerUnreachableError, NotSendableError), \
+                warnings.catch_warnings():
+            # the points the sweep could not run are reported below, by point
+            warnings.simplefilter("ignore", RuntimeWarning)
             res = sweep(points, model=args.model, duration=args.duration, robot=robot,
                         controller=controller, friction_coefficient=args.friction, out=out,
                         workers=args.workers, scheduler=args.scheduler, progress=progress,
-                        resume=not args.no_resume, orbit=args.orbit,
+                        resume=not args.no_resume, orbit=args.orbit, on_error="record",
                         command=" ".join(["scoutsim"] + sys.argv[1:]))
     except KeyboardInterrupt:
         n_done = len(read_checkpoint(out / CHECKPOINT))
@@ -175,7 +181,7 @@ def execute(args) -> int:
     print("  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
     print(f"  steady bounding: {steady}")
     print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
-    if args.grid and len(res.parameters) == 2:
+    if args.grid and len(res.parameters) == 2 and args.plots:
         atomic_write(out / "map.png", lambda p: res.plot_map(
             res.parameters[0], res.parameters[1], "average_speed_m_s", path=p))
         add_to_manifest(out, ["map.png"])
@@ -188,8 +194,12 @@ def execute(args) -> int:
     if args.orbit:
         stable = sum(bool(r.get("orbit_stable")) for r in res.rows)
         print(f"  periodic orbits found and stable: {stable} of {steady} bounding points")
-    errors = [r for r in res.rows if r["outcome"] == "error"]
+    errors = res.errors()
     for r in errors[:3]:
-        print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} failed: "
-              f"{r['error']}", file=sys.stderr)
-    return 0
+        print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} could not run (an "
+              f"error of the sweep, not of the robot): {r['error']}", file=sys.stderr)
+    if errors:
+        print(f"scoutsim sweep: {len(errors)} of {len(points)} points could not run (status "
+              f"'error' in the table); the same command again runs them afresh",
+              file=sys.stderr)
+    return 1 if errors else 0

@@ -116,10 +116,10 @@ def _starts(args, robot, model):
 
 
 def execute(args) -> int:
-    from ..analysis.parallel import SchedulerUnreachableError
+    from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.sweep import read_checkpoint
     from ..analysis.tune import TuneGoal, TuneRuns, TuneSearch, tune
-    from ..analysis.tune_evaluation import EvaluationNotRunError
+    from ..analysis.study_failures import StudyError
     from ..analysis.tune_optimizer import EVALUATIONS, MissingDependencyError
     from ..analysis.tune_parameters import parse_parameter
     from ..simulation import warm_up
@@ -136,8 +136,10 @@ def execute(args) -> int:
                          f"model ({', '.join(CONTROLLED_MODELS)})")
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
+    controller = make_controller(law, cparams, robot, on_workers=True)
     with usage_errors():
-        params = [parse_parameter(p) for p in args.param]
+        # a range left out is centred on the robot file's (or controller file's) value
+        params = [parse_parameter(p, controller, robot, cparams) for p in args.param]
     floors = args.floors or [args.friction]
     starts = _starts(args, robot, args.model[0])
     n_scen = len(args.model) * len(floors) * len(starts or [None])
@@ -153,12 +155,12 @@ def execute(args) -> int:
                         workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
                         what=f"the tuning of {args.budget} evaluations")
     out = out_dir(args.out)
-    controller = make_controller(law, cparams, robot, on_workers=True)
     if args.scheduler is None:
         warm_up()        # compiled (or loaded) once here; the workers then load the cache
     wall0 = time.perf_counter()
     try:
-        with usage_errors(ValueError, SchedulerUnreachableError, MissingDependencyError):
+        with usage_errors(ValueError, SchedulerUnreachableError, MissingDependencyError,
+                          NotSendableError):
             goal = TuneGoal(objective=args.objective, target=args.target,
                             aggregate=args.aggregate,
                             max_belt_deflection=(None if args.max_belt_deflection is None
@@ -172,7 +174,7 @@ def execute(args) -> int:
                        out=out, workers=args.workers, scheduler=args.scheduler,
                        progress=show_progress(args), resume=not args.no_resume,
                        command=" ".join(["scoutsim"] + sys.argv[1:]))
-    except EvaluationNotRunError as exc:
+    except StudyError as exc:    # evaluations the tuning could not run (not the robot's)
         print(f"scoutsim tune: error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
