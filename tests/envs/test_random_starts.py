@@ -1,10 +1,11 @@
 """Random starts of scoutsim/Bound-v0 under open-loop torques never end in a numerical
 failure, in any model (ideal, Model I, Model II): the behaviour checked is that every
 contact transition the plant can reach has a consistent continuation the integrator can
-follow. The episodes that failed before the dynamic-jam rule (a sliding toe whose ground
-force turns perpendicular to its leg, docs/model.md "A sliding toe that jams") are
-included, with a spread of other seeds; ``tools/fuzz_random_starts.py`` runs the full 300
-episodes per model and torque regime (docs/testing.md)."""
+follow. 300 episodes per model and torque regime (zero, random, saturated) of the
+environment as configured by default, and, going on while the robot is down, the seeds
+that failed before the dynamic-jam rule (a sliding toe whose ground force turns
+perpendicular to its leg, docs/model.md "A sliding toe that jams") with a spread of
+others. The episodes are ``tools/fuzz_random_starts.py``'s, which prints their counts."""
 
 import importlib.util
 from pathlib import Path
