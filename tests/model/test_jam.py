@@ -67,3 +67,20 @@ def test_share_vanishes_at_the_friction_angle_where_the_leg_normal_is_the_cone_e
             assert abs(abs(normal[0]) / abs(normal[1]) - mu) <= 1e-12
             # away from the angle, towards the vertical, the share grows
             assert slide_axial_share(0.5 * g, direction, P) > 0.1
+
+
+def test_work_energy_balance_closes_through_a_jam():
+    """Every joule is accounted for across a jam: with the reference integrator (DOPRI5,
+    rtol 1e-10) the work-energy balance of a run with a jam (its impact's loss logged like a
+    touchdown's) closes to 1e-7 J, as it does for runs without one (docs/model.md
+    "Work-energy balance")."""
+    from scoutsim.simulation import IntegratorSettings
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
+                         dtheta=2.0582517952283736)
+    r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
+                 friction_coefficient=1.0, energy=True,
+                 integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))
+    jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
+    assert len(jams) >= 1 and jams[0, L.EVR_V3] > 1e-5      # a jam that dissipates
+    b = r.energy_balance()
+    assert abs(b.residual_J) < 1e-7
