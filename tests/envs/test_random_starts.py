@@ -22,7 +22,7 @@ _spec = importlib.util.spec_from_file_location("fuzz_random_starts_for_tests", _
 fuzz = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(fuzz)
 
-#: the issue's demand: this many random-start episodes per model and torque regime
+#: random-start episodes per model and torque regime (seeds 0 .. EPISODES - 1)
 EPISODES = 300
 #: seeds whose Model II episode under zero torques failed numerically before the jam rule
 #: (the sliding front toe reached the friction angle: 13 of seeds 0-59), fuzzed further
