@@ -200,7 +200,7 @@ class HybridEngine:
             if self.energy_start is None and self.n_out:
                 self.energy_start = float(self.out_aux[0, L.A_ENERGY])
             new = self.ev[nev_before:min(self.nev, self.ev.shape[0])]
-            self.impact_loss += float(new[new[:, L.EVR_KIND] == L.EK_TOUCHDOWN,
+            self.impact_loss += float(new[np.isin(new[:, L.EVR_KIND], L.IMPACT_KINDS),
                                           L.EVR_V3].sum())
         if self.nev > self.ev.shape[0]:
             # one control period logged more records than the buffer had left (the loop

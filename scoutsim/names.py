@@ -146,7 +146,8 @@ class EventKind(_Coded):
     """The kind of a record of the event log: the plant's transitions (touchdown, lift-off,
     the toe starting to slide and sticking again, the leg becoming a strut and a spring leg
     again, the motor joint sticking and slipping, the fall) and the controller's detections
-    (touchdown, lift-off, the sweep limit passed)."""
+    (touchdown, lift-off, the sweep limit passed); a jam is a sliding toe stopped by an
+    impact without collision (docs/model.md "A sliding toe that jams")."""
 
     TOUCHDOWN = 1
     LIFTOFF = 2
@@ -160,6 +161,7 @@ class EventKind(_Coded):
     CONTROLLER_TOUCHDOWN = 10
     CONTROLLER_LIFTOFF = 11
     CONTROLLER_SWEEP = 12
+    JAM = 13
 
 
 #: Names of the event kinds by code (the kinds ``result.event_times`` takes).
@@ -167,6 +169,7 @@ EVENT_KIND_NAMES = {
     1: "touchdown", 2: "liftoff", 3: "slide_start", 4: "stick", 5: "strut_start",
     6: "strut_end", 7: "motor_stick", 8: "motor_slip", 9: "fall",
     10: "controller_touchdown", 11: "controller_liftoff", 12: "controller_sweep_limit",
+    13: "jam",
 }
 
 class Violation(IntFlag):

@@ -10,7 +10,7 @@ motion, ...). This module reads those records (``result.event_log()``) and check
 laws every transition must obey:
 
 * **energy**: mechanical energy may only drop, and only by a logged loss with a physical
-  cause: the kinetic energy a touchdown impact dissipates (logged with its impulse). Every
+  cause: the kinetic energy a touchdown impact or a jam dissipates (logged with its impulse). Every
   other transition leaves the energy unchanged (forces change, the state does not jump);
 * **consistency**: after the transition the modes agree with the velocities and forces.
 
@@ -138,7 +138,7 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
     trs = []
     for g in out:
         rows = g["rows"]
-        loss = sum(v3[i] for i in rows if kind[i] == EventKind.TOUCHDOWN)
+        loss = sum(v3[i] for i in rows if kind[i] in (EventKind.TOUCHDOWN, EventKind.JAM))
         bits = 0
         for i in rows:
             bits |= int(violations[i])

@@ -15,6 +15,8 @@ contact mode (docs/specification.md section 3; docs/model.md "Contact").
 
 from __future__ import annotations
 
+import math
+
 from ..jit import kernel
 from .kinematics import hip_offset
 from .kkt import MAX_ROWS, new_row
@@ -36,6 +38,39 @@ def toe_can_slip(P):
     """True on a Coulomb floor (friction coefficient ``P[P_MU]``); False when the toes
     cannot slip (``P_NO_SLIP``: friction_coefficient = inf, a pinned toe holds any force)."""
     return not is_set(P[P_NO_SLIP])
+
+
+#: a sliding toe jams when the share of its ground force along the leg
+#: (:func:`slide_axial_share`) falls to this level: the slide's normal force is then
+#: 1 / JAM_AXIAL_SHARE times the leg force over sqrt(1 + mu^2), and the pinning impulse
+#: along the leg's normal lies on the friction cone's edge to within this fraction
+#: (docs/model.md "A sliding toe that jams")
+JAM_AXIAL_SHARE = 1e-3
+
+
+@kernel(inline="always")
+def slide_axial_share(g, direction, P):
+    """The share of a sliding toe's ground force that acts along its leg [-]: the cosine of
+    the angle between the leg axis and the ground force of the slide, which lies on the
+    edge of the friction cone, (cos g + sigma sin g) / sqrt(1 + sigma^2) with sigma = mu x
+    the slide ``direction`` (+1 forward, -1 backward; ``g``: the leg's absolute angle gamma
+    [rad]). The massless toe's
+    balance along the leg gives the slide's normal force G_n = F / (cos g + sigma sin g):
+    as the share falls to zero the slide needs an unbounded normal force to carry the leg
+    force F (the leg leans at the friction angle against the slide: a dynamic jam, the
+    Painleve singularity of a sliding massless toe). 1 on a frictionless slide at g = 0."""
+    sig = 0.0
+    if toe_can_slip(P):
+        sig = P[P_MU] * direction
+    return (math.cos(g) + sig * math.sin(g)) / math.sqrt(1.0 + sig * sig)
+
+
+@kernel(inline="always")
+def slide_is_jammed(g, direction, P):
+    """True if a slide of a massed leg's toe in ``direction`` at leg angle ``g`` [rad] would
+    be jammed (:func:`slide_axial_share` at or below JAM_AXIAL_SHARE) on a Coulomb floor."""
+    return (toe_can_slip(P) and not is_set(P[P_MASSLESS])
+            and slide_axial_share(g, direction, P) <= JAM_AXIAL_SHARE)
 
 
 @kernel(inline="always")

@@ -202,7 +202,9 @@ EVC_GROUND = 0         # flight: toe height (touchdown); stick, slide, strut: gr
 EVC_STOP_OR_REST = 1   # stick: leg length at its stop (-> strut); slide: toe velocity along
                        # its slide direction (-> stick, Coulomb floor); strut: strut force
                        # (-> stick)
-EVC_CONE = 2           # stick on a Coulomb floor: friction force within mu F_n (-> slide)
+EVC_CONE = 2           # stick on a Coulomb floor: friction force within mu F_n (-> slide);
+                       # slide on a Coulomb floor: the sliding ground force's share along
+                       # the leg above its jam level (-> jam: the toe sticks with an impact)
 EV_MOTOR_B = 6
 EV_MOTOR_F = 7
 EV_FALL_HEIGHT = 8
@@ -227,15 +229,19 @@ SLIDE_CAUSE_STUB = 3            # a leg at its stop whose toe is pressed into th
 EK_CTRL_TOUCHDOWN = 10   # controller detects touchdown
 EK_CTRL_LIFTOFF = 11     # controller detects lift-off
 EK_CTRL_SWEEP = 12       # controller passes the sweep limit
+EK_JAM = 13              # a sliding toe jams: stopped by an impact without collision
 EVENT_KIND_NAMES = {
     EK_TOUCHDOWN: "touchdown", EK_LIFTOFF: "liftoff", EK_SLIDE_START: "slide_start",
     EK_STICK: "stick", EK_STRUT_START: "strut_start", EK_STRUT_END: "strut_end",
     EK_MOTOR_STICK: "motor_stick", EK_MOTOR_SLIP: "motor_slip", EK_FALL: "fall",
     EK_CTRL_TOUCHDOWN: "controller_touchdown", EK_CTRL_LIFTOFF: "controller_liftoff",
-    EK_CTRL_SWEEP: "controller_sweep_limit",
+    EK_CTRL_SWEEP: "controller_sweep_limit", EK_JAM: "jam",
 }
+#: event kinds whose record is an impact: v1, v2 its normal and tangential impulse [N s],
+#: v3 the kinetic energy it dissipated [J] (touchdowns, and the jams of sliding toes)
+IMPACT_KINDS = (EK_TOUCHDOWN, EK_JAM)
 # event record: [t, kind, leg, v1, v2, v3, energy_before, energy_after, violations]
-# touchdown: v1 = normal impulse [N s], v2 = tangential impulse, v3 = kinetic energy lost [J]
+# touchdown, jam: v1 = normal impulse [N s], v2 = tangential impulse, v3 = kinetic energy lost [J]
 # Transition audit (every plant transition, numerics/events.py): the records logged while one
 # transition is processed (an event, the events simultaneous with it and the mode changes
 # they cause) carry the total mechanical energy [J] just before it and after the modes have

@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..jit import kernel
-from ..model.contact import toe_can_slip
+from ..model.contact import JAM_AXIAL_SHARE, slide_axial_share, toe_can_slip
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
@@ -108,6 +108,12 @@ def event_values(s, aux, P, mi, out):
             if coulomb:
                 out[contact_event(leg, EVC_STOP_OR_REST)] = (aux[o + A_SLIP_V]
                                                              * mi[MI_SLIDE_DIR_B + leg])
+                # the slide's ground force turning perpendicular to the leg: a jam
+                if not massless:
+                    out[contact_event(leg, EVC_CONE)] = (
+                        slide_axial_share(s[ITH] + s[IPHB + leg],
+                                          mi[MI_SLIDE_DIR_B + leg], P)
+                        - JAM_AXIAL_SHARE)
         elif mode == STRUT:
             out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             out[contact_event(leg, EVC_STOP_OR_REST)] = aux[o + A_STRUT] / W

@@ -32,7 +32,7 @@ from ..model.roots import illinois_update
 from ..model.flags import is_set
 from ..model.layout import (
     A_ENERGY, A_KKT_OK, EVC_CONE, EVC_GROUND, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B,
-    FLIGHT, MI_CONTACT_B, MI_MOTOR_B, NAUX, NEV, NMI, NS, P_MASSLESS, STICK,
+    FLIGHT, MI_CONTACT_B, MI_MOTOR_B, NAUX, NEV, NMI, NS, P_MASSLESS, SLIDE, STICK,
     ST_FELL, ST_NUMERICAL_FAILURE, ST_RUNNING, V_SINGULAR,
 )
 from . import ark
@@ -130,6 +130,19 @@ def _method_dense(method, s, y_new, h, K, th, out):
             dense(s, h, K, th, out)
         return inline_only(impl)
     return None
+
+
+@kernel(inline="always")
+def arm_jams(mi, e_now, armed):
+    """Arm the jam event of every sliding toe whose slide is already at or beyond its jam
+    level (``e_now``: the event values now; a slide started by a transition or a new
+    command in a jammed direction, moving): it fires at once and the toe is stopped by the
+    jam's impact. (Every other event is armed only once seen positive; this one cannot
+    wait: beyond its jam level the slide's normal force is unbounded.)"""
+    for leg in range(2):
+        kj = contact_event(leg, EVC_CONE)
+        if mi[MI_CONTACT_B + leg] == SLIDE and e_now[kj] <= 0.0:
+            armed[kj] = True
 
 
 @kernel(inline="always")
@@ -308,6 +321,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
     for i in range(NEV):
         if e_old[i] > 0.0:
             armed[i] = True
+    arm_jams(mi, e_old, armed)
     h = hwork[HW_STEP]
     if h >= WHOLE_PERIOD_FRACTION * (t_end - t):
         h = t_end - t
@@ -487,6 +501,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 kc = contact_event(leg, EVC_CONE)
                 if mi[MI_CONTACT_B + leg] == STICK and e_old[kc] > -CONE_ARM_TOL:
                     armed[kc] = True
+            arm_jams(mi, e_old, armed)
             if method >= METHOD_ARK4:
                 # stiff factors at the post-event state (settle() filled K0 and aux)
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)

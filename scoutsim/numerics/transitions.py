@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 
 from ..jit import allocating, kernel
-from ..model.contact import toe_can_slip
+from ..model.contact import slide_is_jammed, toe_can_slip
 from ..model.evaluate import evaluate_command_change, evaluate_ws
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
@@ -18,7 +18,8 @@ from ..model.flags import is_set
 from ..model.layout import (
     A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
     EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
-    EK_STRUT_START, EK_TOUCHDOWN, EVC_GROUND, EVC_STOP_OR_REST, EV_FALL_HEIGHT, EV_MOTOR_B,
+    EK_STRUT_START, EK_TOUCHDOWN, EK_JAM, EVC_CONE, EVC_GROUND, EVC_STOP_OR_REST,
+    EV_FALL_HEIGHT, EV_MOTOR_B,
     FLIGHT, FRONT, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B,
     MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NIMP_LEG, NQ, P_L0,
     P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
@@ -48,9 +49,12 @@ def stance_leg_rate(s, P, leg):
 
 
 @kernel
-def start_stub_slide(t, s, mi, aux, ev, nev, leg):
+def start_stub_slide(t, s, P, mi, mf, aux, ev, nev, leg):
     """A toe pressed into the ground at the leg's stop slides (toe_enters_ground):
-    in the direction the toe moves, or, at rest, away from the force that pinned it."""
+    in the direction the toe moves, or, at rest, away from the force that pinned it. A toe
+    at rest whose slide would be jammed (contact.slide_is_jammed) is pinned instead: pressed
+    into the ground along its leg, the jammed contact locks (docs/model.md "A sliding toe
+    that jams")."""
     o = leg * NAUX_LEG
     mi[MI_CONTACT_B + leg] = SLIDE
     v = aux[o + A_SLIP_V]
@@ -60,6 +64,10 @@ def start_stub_slide(t, s, mi, aux, ev, nev, leg):
         mi[MI_SLIDE_DIR_B + leg] = -1
     else:
         mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
+        if slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P):
+            mi[MI_CONTACT_B + leg] = STICK
+            mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+            return log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
     return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX],
                      SLIDE_CAUSE_STUB)
 
@@ -88,9 +96,13 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
     pull): it slides if its leg still pushes, otherwise it lifts off (the end-of-stance
     rule: releasing a toe its leg still pushes would drive it into the ground). Returns
     the event count."""
-    if aux[leg * NAUX_LEG + A_FAX] > 1e-9 * body_weight(P) and not is_set(P[P_MASSLESS]):
+    o = leg * NAUX_LEG
+    if (aux[o + A_FAX] > 1e-9 * body_weight(P) and not is_set(P[P_MASSLESS])
+            and not slide_is_jammed(s[ITH] + s[IPHB + leg], -1 if aux[o + A_GT] > 0.0 else 1,
+                                    P)):
         stats[S_NEND_SLIDE] += 1
         return slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_LEG_PUSHES)
+    # (a slide that would be jammed cannot carry the leg's push: the toe is released)
     return lift_off(t, s, mi, ev, nev, leg)
 
 
@@ -139,7 +151,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                 if flight_toe_enters_ground(s, ds, aux, P, leg):
                     # a toe stub (a released pinned toe, or one swept down onto the
                     # ground at the stop): slides, its leg compressed as it is swept
-                    nev = start_stub_slide(t, s, mi, aux, ev, nev, leg)
+                    nev = start_stub_slide(t, s, P, mi, mf, aux, ev, nev, leg)
                     stats[S_NSTUB] += 1
                     changed = True
             elif mode == STICK:
@@ -147,8 +159,18 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
                     changed = True
                 elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
-                    nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
-                    changed = True
+                    if not slide_is_jammed(s[ITH] + s[IPHB + leg],
+                                           -1 if aux[o + A_GT] > 0.0 else 1, P):
+                        nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
+                        changed = True
+                    elif aux[o + A_FAX] <= 0.0:
+                        # the slide the cone asks for is jammed (its ground force would be
+                        # perpendicular to the leg) and the leg does not push: the toe is
+                        # released. (A leg that pushes keeps its toe pinned: the jammed
+                        # contact locks, as a toe with mass would be driven into the
+                        # ground along the leg; docs/model.md "A sliding toe that jams")
+                        nev = lift_off(t, s, mi, ev, nev, leg)
+                        changed = True
             elif mode == STRUT:
                 if gn < gn_tol:
                     nev = lift_off(t, s, mi, ev, nev, leg)
@@ -171,6 +193,16 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     # instead would take an impulse that the sliding contact cannot give
                     # (the massless toe on its compliant leg carries none).
                     mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
+                    changed = True
+                elif (slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P)
+                      and abs(aux[o + A_SLIP_V]) <= SLIDE_SPEED_TOL):
+                    # a toe at rest whose slide is jammed (docs/model.md "A sliding toe
+                    # that jams") cannot start it: it is pinned where it is (no impulse:
+                    # it is at rest). A moving one jams through its event (hybrid.arm_jams
+                    # arms it), with the impact that stops it.
+                    mi[MI_CONTACT_B + leg] = STICK
+                    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+                    nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
                     changed = True
             if joint_has_stiction(leg, P):
                 mm = mi[MI_MOTOR_B + leg]
@@ -243,6 +275,26 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     return nev, ok
 
 
+@allocating
+def jam(t, s, P, mi, mf, leg, aux, ev, nev, imp):
+    """A sliding toe jams (its ground force, on the edge of the friction cone, has turned
+    perpendicular to the leg: contact.slide_axial_share at its jam level): the slide cannot
+    go on without an unbounded normal force, so it ends in an impact without collision. The
+    toe is pinned where it is and the impact onto the pinned toe's row is applied
+    (model/impact.py): its impulse acts along the leg's normal, which at the jam lies on
+    the edge of the friction cone (within contact.JAM_AXIAL_SHARE), opposing the slide: the
+    impulse Coulomb friction gives a toe it stops. Logged as EK_JAM with the impulses and
+    the kinetic energy lost; settle() then makes the modes agree with the forces (docs/model.md
+    "A sliding toe that jams"). Returns (event count, ok)."""
+    o = leg * NAUX_LEG
+    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
+    mi[MI_CONTACT_B + leg] = STICK
+    ok = impact(s, P, mi, mf, imp)
+    nev = log_event(ev, nev, t, EK_JAM, leg, imp[leg * NIMP_LEG + IMP_NORMAL],
+                    imp[leg * NIMP_LEG + IMP_TANGENT], imp[IMP_ENERGY_LOST])
+    return nev, ok
+
+
 @kernel
 def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     """Mode transition for event slot k at time t (state s already at the event)."""
@@ -267,6 +319,8 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
         elif mode == SLIDE:
             if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
+            elif slot == EVC_CONE:
+                nev, ok = jam(t, s, P, mi, mf, leg, aux, ev, nev, imp)
             else:
                 # slide velocity reached zero: stick here; settle() slides on (possibly
                 # reversed) if the friction cone cannot hold the toe

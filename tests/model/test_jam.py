@@ -1,0 +1,86 @@
+"""The jam of a sliding toe (model/contact.py: slide_axial_share, JAM_AXIAL_SHARE;
+docs/model.md "A sliding toe that jams"): the share of the slide's ground force along the
+leg is the cosine of the angle between that force and the leg axis, so the slide's force
+law G_n (cos gamma + sigma sin gamma) = F holds on the evaluated forces; it is zero at the
+friction angle, where the leg's normal is the edge of the friction cone."""
+
+import math
+
+import numpy as np
+
+from scoutsim import simulate
+from scoutsim.control.protocol import Controller
+from scoutsim.model import layout as L
+from scoutsim.model.contact import JAM_AXIAL_SHARE, slide_axial_share
+from scoutsim.model.packing import robot_array
+from scoutsim.parameters import RobotParameters
+from scoutsim.state import InitialState
+
+
+class _Zero(Controller):
+    def command(self, t, sensors):
+        return (0.0, 0.0)
+
+
+def test_share_is_the_cosine_between_the_sliding_ground_force_and_the_leg():
+    """On every recorded sample of a sliding toe (Model II, zero torques, a start whose
+    front toe slides towards the friction angle), the share computed from the leg angle and
+    the slide direction equals the cosine of the angle between the evaluated ground force
+    (G_t, G_n) and the leg axis, hip - toe; and G_n share sqrt(1 + mu^2) = F."""
+    mu = 1.0
+    P = robot_array(RobotParameters(), "II", friction_coefficient=mu)
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
+                         dtheta=2.0582517952283736)
+    r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
+                 friction_coefficient=mu)
+    n = 0
+    for k in range(len(r.t)):
+        for leg in range(2):
+            if r.modes[k, L.RECORDED_MODE_NAMES.index("contact_mode_back") + leg] != L.SLIDE:
+                continue
+            o = leg * L.NAUX_LEG
+            gt, gn, f = r.aux[k, o + L.A_GT], r.aux[k, o + L.A_GN], r.aux[k, o + L.A_FAX]
+            if gn < 1.0:
+                continue
+            direction = -1 if gt > 0.0 else 1      # friction opposes the slide
+            g = r.state[k, L.ITH] + r.state[k, L.IPHB + leg]
+            share = slide_axial_share(g, direction, P)
+            axis = np.array([-math.sin(g), math.cos(g)])     # toe -> hip
+            cosine = np.dot([gt, gn], axis) / math.hypot(gt, gn)
+            assert abs(share - cosine) <= 1e-9
+            assert abs(gn * share * math.sqrt(1.0 + mu * mu) - f) <= 1e-9 * max(1.0, abs(f))
+            assert share > JAM_AXIAL_SHARE      # no slide goes on beyond its jam level
+            n += 1
+    assert n > 20
+
+
+def test_share_vanishes_at_the_friction_angle_where_the_leg_normal_is_the_cone_edge():
+    """At tan gamma = 1 / mu against the slide the share is zero, and the leg's normal
+    (cos gamma, sin gamma), the direction of a pinned toe's impulse, lies on the friction
+    cone's edge: |t| / n = mu."""
+    for mu in (0.6, 1.0, 3.0):
+        P = robot_array(RobotParameters(), "II", friction_coefficient=mu)
+        for direction in (1, -1):
+            g = -direction * math.atan(1.0 / mu)
+            assert abs(slide_axial_share(g, direction, P)) <= 1e-12
+            normal = (math.cos(g), math.sin(g))
+            assert abs(abs(normal[0]) / abs(normal[1]) - mu) <= 1e-12
+            # away from the angle, towards the vertical, the share grows
+            assert slide_axial_share(0.5 * g, direction, P) > 0.1
+
+
+def test_work_energy_balance_closes_through_a_jam():
+    """Every joule is accounted for across a jam: with the reference integrator (DOPRI5,
+    rtol 1e-10) the work-energy balance of a run with a jam (its impact's loss logged like a
+    touchdown's) closes to 1e-7 J, as it does for runs without one (docs/model.md
+    "Work-energy balance")."""
+    from scoutsim.simulation import IntegratorSettings
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
+                         dtheta=2.0582517952283736)
+    r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
+                 friction_coefficient=1.0, energy=True,
+                 integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))
+    jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
+    assert len(jams) >= 1 and jams[0, L.EVR_V3] > 1e-5      # a jam that dissipates
+    b = r.energy_balance()
+    assert abs(b.residual_J) < 1e-7
