@@ -6,8 +6,8 @@ Quadrupedal Robot", ICRA 2004. See README.md and docs/.
 
 from ._version import __version__  # noqa: E402
 from .parameters import (  # noqa: E402
-    ControllerParameters, Environment, ParameterError, RobotParameters, load_controller,
-    load_parameters, load_robot,
+    ControllerParameters, Environment, ImplausibleParameterWarning, ParameterError,
+    RobotParameters, load_controller, load_parameters, load_robot,
 )
 from .result import SimulationResult  # noqa: E402
 from .simulation import ControllerError, Recording, Sensors, simulate  # noqa: E402
@@ -24,7 +24,7 @@ from .state import standing_state  # noqa: E402
 __all__ = [
     "simulate", "SimulationResult", "InitialState", "HybridState", "IntegratorSettings", "Sensors",
     "default_initial_state", "RobotParameters", "ControllerParameters", "Environment",
-    "ParameterError", "ControllerError",
+    "ParameterError", "ImplausibleParameterWarning", "ControllerError",
     "load_robot", "load_controller", "load_parameters", "BoundingController", "__version__",
     "Controller", "CompiledController", "PitchFeedbackController", "SensorParameters",
     "SensorChannel", "load_sensors", "StartupParameters", "standing_state", "Recording",

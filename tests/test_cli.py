@@ -461,3 +461,21 @@ def test_summary_table_says_when_its_gait_means_are_not_a_steady_bound():
     bound = format_summary(base | {"n_steady_strides": 60, "steady_bounding": True},
                            duration=20.0, wall_s=0.3, t_end=20.0)
     assert "gait means below" not in bound
+
+
+def test_a_unit_slip_in_a_robot_file_is_warned_of_once_in_one_line(tmp_path, capsys):
+    """A leg stiffness written in N/mm (1000x Scout II's) runs, and stderr says once, as
+    the command's own line, which field, which file and which slip."""
+    import warnings
+    robot = tmp_path / "slip.toml"
+    robot.write_text('[robot]\nleg_stiffness = { value = 3520, unit = "N/mm" }\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        code = main(["run", "--robot", str(robot), "--duration", "0.2", "--out",
+                     str(tmp_path / "o"), "--quiet"])
+    assert code == 0
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if "leg_stiffness" in line]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("scoutsim run: warning: robot.leg_stiffness")
+    assert "N/mm" in lines[0] and "slip.toml" in lines[0]

@@ -97,7 +97,7 @@ def main(argv=None) -> int:
                   flush=True)
             progress = compile_progress(sys.stderr)
     try:
-        with progress:
+        with progress, _parameter_warnings_in_one_line(args.command):
             return args.func(args)
     except UsageError as exc:
         print(f"scoutsim {args.command}: error: {exc}", file=sys.stderr)
@@ -112,6 +112,29 @@ def main(argv=None) -> int:
         except (OSError, ValueError, AttributeError):
             pass
         return 1
+
+
+@contextlib.contextmanager
+def _parameter_warnings_in_one_line(command: str):
+    """While a command runs, print a parameter warning (a value far from a robot of this kind: a likely unit slip,
+    :class:`~scoutsim.parameters.ImplausibleParameterWarning`) as ``scoutsim COMMAND:
+    warning: MESSAGE`` on stderr, as the command's errors are, instead of Python's form with
+    the library's file and source line; other warnings are shown as Python shows them."""
+    import warnings
+
+    from ..parameters import ImplausibleParameterWarning
+    python_shows = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, ImplausibleParameterWarning):
+            print(f"scoutsim {command}: warning: {message}", file=file or sys.stderr)
+        else:
+            python_shows(message, category, filename, lineno, file, line)
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = python_shows
 
 
 #: commands that end their process at once when done (see :func:`console_main`)

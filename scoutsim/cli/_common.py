@@ -145,7 +145,7 @@ def add_no_progress_option(parser):
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bar (it is also off when stderr is not a terminal)")
     parser.add_argument("--quiet", action="store_true",
-                        help="nothing on stderr but errors: no progress bar, no notice of "
+                        help="nothing on stderr but errors and warnings: no progress bar, no notice of "
                              "the first run's compilation")
 
 

@@ -130,9 +130,21 @@ def implausible_message(spec: _Spec, value: float, origins, leg: int | None = No
     return text + where
 
 
+#: (field, leg, value [SI]) of the values already warned of with the file they came from:
+#: the same value when the library makes the parameter set again (from a result's
+#: provenance, per leg, ...) is not warned of again without it
+_WARNED_FROM_A_FILE: set = set()
+
+
 def warn_implausible(spec: _Spec, value: float, origins, leg: int | None = None) -> None:
     """Warn of an implausible value (:func:`implausible_message`). The warning is issued
     from this line for every caller, so the default filter shows each distinct message once
-    per process."""
+    per process; a value warned of with its file is not warned of again without one."""
+    key = (spec.name, leg, float(value))
+    from_a_file = bool(origins.get(spec.name, ("", None))[0])
+    if not from_a_file and key in _WARNED_FROM_A_FILE:
+        return
+    if from_a_file:
+        _WARNED_FROM_A_FILE.add(key)
     message = implausible_message(spec, value, origins, leg)
     warnings.warn(message, ImplausibleParameterWarning, stacklevel=1)
