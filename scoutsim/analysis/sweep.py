@@ -45,7 +45,8 @@ import numpy as np
 
 from ..control.factory import ControllerSpec
 from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParameters,
-                          RobotParameters, field_dimension, validate_parameters)
+                          RobotParameters, field_dimension, plausibility_warnings_off,
+                          validate_parameters)
 from ..run_directory import RunDirectory
 from ..tables import write_rows_csv, write_rows_parquet
 from .parallel import map_tasks
@@ -191,7 +192,28 @@ def _point_parameters(task: dict):
 def sweep_task(task: dict) -> dict:
     """Run one point (top level: picklable for worker processes and Dask). Its row's
     ``status``: ok (a run: its outcome), invalid (``invalid_parameters``: the point's
-    parameters are not allowed) or error (the study could not run it)."""
+    parameters are not allowed) or error (the study could not run it). Values far from a
+    robot of this kind were warned of once, by :func:`sweep`, not here per point."""
+    with plausibility_warnings_off():
+        return _sweep_point(task)
+
+
+def _warn_of_range_ends(points: list[dict], names: list[str], base: dict) -> None:
+    """Make the parameters of the points at each swept parameter's lowest and highest
+    value once, here, so a value far from a robot of this kind is warned of once for the
+    sweep (:class:`~scoutsim.parameters.ImplausibleParameterWarning`); points that are not
+    allowed are the points' own business."""
+    for name in names:
+        held = [p for p in points if name in p]
+        for p in {id(q): q for q in (min(held, key=lambda q: q[name]),
+                                      max(held, key=lambda q: q[name]))}.values():
+            try:
+                _point_parameters(base | {"point": p})
+            except (ValueError, TypeError):
+                pass
+
+
+def _sweep_point(task: dict) -> dict:
     from ..simulation import simulate
     row = dict(task["point"])
     row.update({k: None for k in SUMMARY_COLUMNS})
@@ -391,6 +413,8 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     tasks = [{"point": points[i], "model": model, "duration": duration, "robot": robot,
               "controller": controller, "initial_state": initial_state,
               "friction_coefficient": friction_coefficient, "orbit": orbit} for i in todo]
+    if tasks:
+        _warn_of_range_ends([t["point"] for t in tasks], names, tasks[0])
     fh = open(ck, "a") if ck is not None else None
 
     def on_result(j, row):

@@ -254,6 +254,21 @@ def _check_tuned_fields(kind: str, params: list) -> None:
                              "params) gets each candidate's parameters)")
 
 
+def _warn_of_box_ends(params, robot, cparams) -> None:
+    """Make the parameter sets at each tuned parameter's bounds once, here, so a search box
+    that reaches far from a robot of this kind is warned of once for the tuning
+    (:class:`~scoutsim.parameters.ImplausibleParameterWarning`), not per candidate; bounds
+    that are not allowed are the candidates' own business."""
+    for p in params:
+        if p.key.startswith("params["):
+            continue
+        for v in (p.low, p.high):
+            try:
+                _apply({p.key: v}, robot, cparams, None)
+            except (ValueError, TypeError):
+                pass
+
+
 def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = None,
          search: TuneSearch | None = None, out=None, workers: int | None = None,
          scheduler=None, progress: bool = False, resume: bool = True, command: str = "",
@@ -392,6 +407,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     skey = _key(settings)
     task_base = {"goal": goal, "duration": duration, "robot": robot, "cparams": cparams,
                  "controller": spec, "scenarios": scenarios}
+    _warn_of_box_ends(params, robot, cparams)
 
     done: dict = {}
     rd = ck = state_path = None

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..parameters import validate_parameters
+from ..parameters import plausibility_warnings_off, validate_parameters
 from .study_controller import build_controller
 from .study_failures import StudyError, error_fields, run_failure
 from .sweep import _orbit_columns
@@ -175,7 +175,13 @@ def _not_run(row: dict, fields: dict) -> dict:
 def tune_task(task: dict) -> dict:
     """One evaluation: every scenario at the candidate ``task["values"]`` ({key: SI}), its
     score and the metrics of the scenario that set it (top level: picklable for worker
-    processes and Dask)."""
+    processes and Dask). Values far from a robot of this kind are warned of once, for the
+    search box's ends, by :func:`~scoutsim.analysis.tune.tune`, not per candidate."""
+    with plausibility_warnings_off():
+        return _evaluate(task)
+
+
+def _evaluate(task: dict) -> dict:
     row = {"evaluation": task["evaluation"], "generation": task["generation"],
            "values": dict(task["values"])}
     try:

@@ -11,6 +11,7 @@ turn it into an error or show every occurrence."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import warnings
 
@@ -148,3 +149,13 @@ def warn_implausible(spec: _Spec, value: float, origins, leg: int | None = None)
         _WARNED_FROM_A_FILE.add(key)
     message = implausible_message(spec, value, origins, leg)
     warnings.warn(message, ImplausibleParameterWarning, stacklevel=1)
+
+
+@contextlib.contextmanager
+def plausibility_warnings_off():
+    """No :class:`ImplausibleParameterWarning` inside the block: what the points of a study
+    use, which warns of its range's ends once, before its points run (a worker process
+    would otherwise print one line per value it meets)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImplausibleParameterWarning)
+        yield

@@ -132,3 +132,19 @@ def test_an_interrupted_point_is_not_recorded_and_the_resumed_table_is_the_same(
     resumed = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "cut")
     assert resumed.settings["n_resumed"] == 2
     assert resumed.rows == full.rows
+
+
+def test_a_range_reaching_far_from_scout_ii_is_warned_of_once_not_per_point():
+    """Values far from a robot of this kind warn (ImplausibleParameterWarning), but a sweep
+    says it once, for its range's end, not once per point beyond the plausible range."""
+    import warnings
+
+    from scoutsim.parameters import ImplausibleParameterWarning, plausible_range
+    high = plausible_range("leg_stiffness")[1]
+    pts = [{"robot.leg_stiffness": v} for v in (3000.0, 3520.0, 1.2 * high, 1.5 * high)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sweep(pts, model="ideal", duration=0.05, workers=1)
+    said = [str(w.message) for w in caught if issubclass(w.category, ImplausibleParameterWarning)]
+    assert len(said) == 1, said
+    assert f"{1.5 * high:.6g}" in said[0] and "leg_stiffness" in said[0]
