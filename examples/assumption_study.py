@@ -35,10 +35,11 @@ from scoutsim.analysis.basin import (
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 MODELS = ("ideal", "I", "II")
-GRID = dict(speeds=DEFAULT_SPEEDS, pitch_rates_deg_s=DEFAULT_PITCH_RATES,
+GRID = dict(speeds=DEFAULT_SPEEDS, pitch_rates=DEFAULT_PITCH_RATES,
             heights=DEFAULT_HEIGHTS, duration=10.0)
 #: --quick: the default flight start alone (1.2 m/s, 150 deg/s, 0.33 m), 5 s
-QUICK_GRID = dict(speeds=(1.2,), pitch_rates_deg_s=(150.0,), heights=(0.33,), duration=5.0)
+QUICK_GRID = dict(speeds=(1.2,), pitch_rates=(math.radians(150.0),), heights=(0.33,),
+                  duration=5.0)
 FRICTIONS = (0.6, 0.8, 1.0, 1.5, math.inf)
 THRESHOLDS = ((4e-3, 3e-3), (5e-3, 4e-3), (10e-3, 8e-3))   # touchdown, lift-off [m]
 
@@ -66,7 +67,7 @@ def main(argv=None):
     robot, controller = load_parameters(args.robot)
     grid = QUICK_GRID if args.quick else GRID
     workers = args.workers if args.workers is not None else (1 if args.quick else None)
-    n = len(grid["speeds"]) * len(grid["pitch_rates_deg_s"]) * len(grid["heights"])
+    n = len(grid["speeds"]) * len(grid["pitch_rates"]) * len(grid["heights"])
 
     def basin(models=MODELS, rob=robot, ctrl=controller, **kw):
         return basin_of_attraction(models=models, robot=rob, controller=ctrl,

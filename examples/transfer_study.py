@@ -76,14 +76,14 @@ class StudySettings:
     train_duration: float = 12.0
     eval_duration: float = 20.0
     basin_grid: dict = field(default_factory=lambda: dict(
-        speeds=(0.6, 1.0, 1.4), pitch_rates_deg_s=(-50.0, 50.0, 150.0), heights=(0.33,)))
+        speeds=(0.6, 1.0, 1.4), pitch_rates=tuple(math.radians(w) for w in (-50.0, 50.0, 150.0)), heights=(0.33,)))
     basin_duration: float = 10.0
     train: tuple = ("ideal", "I", "II", "virtual")
 
 
 #: --quick: one generation of 4 on Model II, short runs, the default start for the basin
 QUICK = StudySettings(budget=4, population=4, train_duration=3.0, eval_duration=5.0,
-                      basin_grid=dict(speeds=(1.2,), pitch_rates_deg_s=(150.0,),
+                      basin_grid=dict(speeds=(1.2,), pitch_rates=(math.radians(150.0),),
                                       heights=(0.33,)),
                       basin_duration=5.0, train=("II",))
 

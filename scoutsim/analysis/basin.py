@@ -29,6 +29,7 @@ import csv
 import dataclasses
 import itertools
 import math
+import warnings
 import os
 from dataclasses import dataclass, field
 
@@ -40,7 +41,8 @@ from .study_failures import (StudyError, check_on_error, end_of_study, error_fie
                              is_error, run_failure)
 
 DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
-DEFAULT_PITCH_RATES = (-150.0, -100.0, -50.0, 0.0, 50.0, 100.0, 150.0, 200.0, 250.0)  # deg/s
+#: initial pitch rates [rad/s]: -150 to 250 deg/s in steps of 50 deg/s
+DEFAULT_PITCH_RATES = tuple(math.radians(w) for w in range(-150, 251, 50))
 DEFAULT_HEIGHTS = (0.33, 0.38)                                                     # m
 #: floors of the default map: the package's default floor and the no-slip idealisation
 DEFAULT_FLOORS = (DEFAULT_FRICTION_COEFFICIENT, math.inf)
@@ -53,6 +55,12 @@ BASIN_COLUMNS = ("model", "friction", "speed", "pitch_rate_deg_s", "height", "ou
 def _start_of(task: dict) -> dict:
     """The identifying columns of one start's row."""
     return {k: task[k] for k in ("model", "friction", "speed", "pitch_rate_deg_s", "height")}
+
+
+def pitch_rate_deg_s(pitch_rate: float) -> float:
+    """A start's pitch rate [rad/s] as its row gives it [deg/s] (rounded to 1e-9 deg/s, so
+    a rate given in whole degrees per second reads back as that number)."""
+    return round(math.degrees(pitch_rate), 9)
 
 
 def _failed(row: dict, fields: dict) -> dict:
@@ -72,8 +80,7 @@ def basin_task(task: dict) -> dict:
     except Exception as exc:  # noqa: BLE001 - an error of the study, reported per start
         return _failed(row, error_fields(exc))
     try:
-        init = InitialState(dx=task["speed"], dtheta=math.radians(task["pitch_rate_deg_s"]),
-                            y=task["height"])
+        init = InitialState(dx=task["speed"], dtheta=task["pitch_rate"], y=task["height"])
         result = simulate(task["robot"], controller, init, task["duration"],
                           model=task["model"], integrator=task["integrator"],
                           friction_coefficient=task["friction"])
@@ -202,16 +209,18 @@ class BasinResult:
                 w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
 
 
-def basin_tasks(models, floors, speeds, pitch_rates_deg_s, heights, duration, robot=None,
+def basin_tasks(models, floors, speeds, pitch_rates, heights, duration, robot=None,
                 controller=None, integrator=None) -> list[dict]:
-    """One task per (floor, model, speed, pitch rate, height), in that nesting order (a
-    ``"MODULE:FACTORY"`` controller becomes a ControllerSpec, its factory imported once
-    here: :func:`~scoutsim.analysis.study_controller.study_controller`)."""
+    """One task per (floor, model, speed [m/s], pitch rate [rad/s], height [m]), in that
+    nesting order (a ``"MODULE:FACTORY"`` controller becomes a ControllerSpec, its factory
+    imported once here: :func:`~scoutsim.analysis.study_controller.study_controller`).
+    The rows give the pitch rate in deg/s (``pitch_rate_deg_s``)."""
     controller = study_controller(controller, robot)
-    return [{"model": m, "speed": float(v), "pitch_rate_deg_s": float(w), "height": float(y),
+    return [{"model": m, "speed": float(v), "pitch_rate": float(w),
+             "pitch_rate_deg_s": pitch_rate_deg_s(w), "height": float(y),
              "robot": robot, "controller": controller, "duration": duration,
              "integrator": integrator, "friction": float(mu)}
-            for mu, m, v, w, y in itertools.product(floors, models, speeds, pitch_rates_deg_s,
+            for mu, m, v, w, y in itertools.product(floors, models, speeds, pitch_rates,
                                                     heights)]
 
 
@@ -223,7 +232,8 @@ class BasinGrid:
     ----------
     models : model variants ("ideal", "I", "II").
     speeds : initial forward speeds [m/s].
-    pitch_rates_deg_s : initial pitch rates [deg/s] (positive: nose rising).
+    pitch_rates : initial pitch rates [rad/s] (positive: nose rising); the rows give them
+        in deg/s (``pitch_rate_deg_s``).
     heights : initial torso-COM heights [m].
     floors : toe Coulomb coefficients [-] (e.g. :data:`DEFAULT_FLOORS`; inf = no slip);
         None: ``friction_coefficient`` alone.
@@ -232,7 +242,7 @@ class BasinGrid:
 
     models: tuple = ("ideal", "I", "II")
     speeds: tuple = DEFAULT_SPEEDS
-    pitch_rates_deg_s: tuple = DEFAULT_PITCH_RATES
+    pitch_rates: tuple = DEFAULT_PITCH_RATES
     heights: tuple = DEFAULT_HEIGHTS
     floors: tuple | None = None
     friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
@@ -247,8 +257,9 @@ def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0
     Parameters
     ----------
     grid : :class:`BasinGrid`, the starts; its fields (``models``, ``speeds``,
-        ``pitch_rates_deg_s``, ``heights``, ``floors``, ``friction_coefficient``) may
-        also be given as keywords, which override the bundle's.
+        ``pitch_rates`` [rad/s], ``heights``, ``floors``, ``friction_coefficient``) may
+        also be given as keywords, which override the bundle's (``pitch_rates_deg_s``, the
+        pitch rates in deg/s, is still taken, with a DeprecationWarning).
     duration : simulated time per start [s].
     robot : RobotParameters (default Scout II).
     controller : what every start runs: ControllerParameters (None: Table I), a
@@ -271,6 +282,15 @@ def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0
     FactoryError : a ``"MODULE:FACTORY"`` that cannot be imported (before any start).
     StudyError : a start could not be run (``on_error="raise"``).
     """
+    if "pitch_rates_deg_s" in grid_fields:
+        if "pitch_rates" in grid_fields:
+            raise TypeError("basin_of_attraction() takes pitch_rates [rad/s] or the older "
+                            "pitch_rates_deg_s [deg/s], not both")
+        warnings.warn("basin_of_attraction(pitch_rates_deg_s=...) is deprecated: give "
+                      "pitch_rates in rad/s (e.g. numpy.radians(rates_deg_s))",
+                      DeprecationWarning, stacklevel=2)
+        grid_fields["pitch_rates"] = tuple(math.radians(w)
+                                           for w in grid_fields.pop("pitch_rates_deg_s"))
     fields = {f.name for f in dataclasses.fields(BasinGrid)}
     if unknown := sorted(set(grid_fields) - fields):
         raise TypeError(f"basin_of_attraction() got an unexpected keyword argument "
@@ -279,12 +299,13 @@ def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0
     check_on_error(on_error)
     floors = (tuple(grid.floors) if grid.floors is not None
               else (grid.friction_coefficient,))
-    tasks = basin_tasks(grid.models, floors, grid.speeds, grid.pitch_rates_deg_s,
+    tasks = basin_tasks(grid.models, floors, grid.speeds, grid.pitch_rates,
                         grid.heights, duration, robot, controller, integrator)
     workers = workers or os.cpu_count() or 1
     settings = {
         "models": list(grid.models), "speeds_m_s": list(grid.speeds),
-        "pitch_rates_deg_s": list(grid.pitch_rates_deg_s), "heights_m": list(grid.heights),
+        "pitch_rates_deg_s": [pitch_rate_deg_s(w) for w in grid.pitch_rates],
+        "heights_m": list(grid.heights),
         "duration_s": duration, "controller": controller_label(tasks[0]["controller"])
         if tasks else None,
         "floors": [None if math.isinf(mu) else mu for mu in floors]}

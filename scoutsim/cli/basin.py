@@ -22,6 +22,7 @@ import time
 
 from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_of_attraction,
+                              pitch_rate_deg_s,
                               basin_stats, basin_tasks, run_basin_tasks)
 from ..analysis.parallel import NotSendableError
 from ..parameters import floor_label
@@ -63,9 +64,10 @@ def register(sub, common) -> None:
     basin.add_argument("--speeds", type=float_list(), default=list(DEFAULT_SPEEDS),
                        metavar="LIST", help="initial forward speeds [m/s] (default: "
                        + _defaults(DEFAULT_SPEEDS) + ")")
-    basin.add_argument("--pitch-rates", type=float_list(), default=list(DEFAULT_PITCH_RATES),
+    rates_deg_s = [pitch_rate_deg_s(w) for w in DEFAULT_PITCH_RATES]   # the edge: deg/s
+    basin.add_argument("--pitch-rates", type=float_list(), default=rates_deg_s,
                        metavar="LIST", help="initial pitch rates [deg/s], positive = nose "
-                       "rising (default: " + _defaults(DEFAULT_PITCH_RATES) + ")")
+                       "rising (default: " + _defaults(rates_deg_s) + ")")
     basin.add_argument("--heights", type=float_list(positive=True), default=list(DEFAULT_HEIGHTS),
                        metavar="LIST", help="initial torso COM heights [m] (default: "
                        + _defaults(DEFAULT_HEIGHTS) + ")")
@@ -122,8 +124,9 @@ def execute(args) -> int:
               [args.friction] if getattr(args, "friction_given", False) else list(DEFAULT_FLOORS))
     check_expected_time(args, {m: len(grid) * len(floors) * args.duration for m in models},
                         workers=workers, what=f"the basin map of {len(grid)} starts")
-    tasks = basin_tasks(models, floors, args.speeds, args.pitch_rates, args.heights,
-                        args.duration, robot, controller, integ)
+    tasks = basin_tasks(models, floors, args.speeds,
+                        [math.radians(w) for w in args.pitch_rates],   # deg/s -> rad/s, once
+                        args.heights, args.duration, robot, controller, integ)
     if args.duration < 5.0:
         print(f"scoutsim basin: note: --duration {args.duration:g} s is short; steady bounding "
               "needs >= 7 strides after the 2 s transient, so (almost) no start can qualify",

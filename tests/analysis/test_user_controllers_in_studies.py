@@ -10,6 +10,7 @@ a point the study could not run is an error of the study (StudyError, or a row w
 status "error" counted apart), never a start that did not bound."""
 
 import json
+import math
 import sys
 
 import pytest
@@ -26,7 +27,7 @@ USER_MODULE = "scoutsim_user_controllers"
 USER_SOURCE = '"""A user\'s controllers, in a module of their own (written by the test)."""\nimport numpy as np\n\nfrom scoutsim.control import CompiledController\nfrom scoutsim.control import sensors as S\n\nTD, SWEEP = 0, 2                      # touchdown angles, sweep limits [rad] (back, front)\nKP, KD, KPB, KDB, TDC, LOC, L0, STALL, SLOPE, TMAX = range(4, 14)\nN = 14\nFLIGHT, RETRACTION, BRAKE = 0, 1, 2\n\n\ndef bound(t, y, p, state, torque, leg_states):\n    """Table I\'s structure written by a user: flight servo, retraction, brake."""\n    for leg in range(2):\n        angle = y[S.HIP_ANGLE + leg]\n        rate = y[S.HIP_RATE + leg]\n        compression = p[L0] - y[S.LEG_LENGTH + leg]\n        st = leg_states[leg]\n        if st == FLIGHT and compression > p[TDC]:\n            st = RETRACTION\n        elif st != FLIGHT and compression < p[LOC]:\n            st = FLIGHT\n        if st == RETRACTION and angle < p[SWEEP + leg]:\n            st = BRAKE\n        leg_states[leg] = st\n        if st == FLIGHT:\n            torque[leg] = p[KP] * (p[TD + leg] - angle) - p[KD] * rate\n        elif st == RETRACTION:\n            torque[leg] = min(0.0, max(-p[STALL] + p[SLOPE] * rate, -p[TMAX]))\n        else:\n            torque[leg] = p[KPB] * (p[SWEEP + leg] - angle) - p[KDB] * rate\n    return 0\n\n\ndef params_of(robot, c):\n    p = np.zeros(N)\n    p[TD:TD + 2] = c.touchdown_angle_back, c.touchdown_angle_front\n    p[SWEEP:SWEEP + 2] = c.sweep_limit_back, c.sweep_limit_front\n    p[KP], p[KD], p[KPB], p[KDB] = c.flight_kp_back, c.flight_kd_back, c.brake_kp_back, c.brake_kd_back\n    p[TDC], p[LOC] = c.touchdown_compression, c.liftoff_compression\n    p[L0], p[STALL], p[SLOPE], p[TMAX] = (robot.leg_rest_length, robot.stall_torque,\n                                          -robot.torque_speed_slope, robot.max_leg_torque)\n    return p\n\n\nclass PyBound:\n    """The same law as a Python controller (command(t, sensors))."""\n\n    control_period = 1e-3\n\n    def __init__(self, p, controller_parameters=None):\n        self.p = np.array(p, dtype=float)\n        self.controller_parameters = controller_parameters\n        self.leg_states = np.zeros(2, dtype=np.int64)\n\n    def reset(self, robot, sensors):\n        self.leg_states[:] = 0\n\n    def command(self, t, sensors):\n        torque = np.zeros(2)\n        bound(t, sensors.vector, self.p, None, torque, self.leg_states)\n        return float(torque[0]), float(torque[1])\n\n\ndef make_compiled(robot, params):\n    c = CompiledController(bound, params=params_of(robot, params), name="user_bound")\n    c.controller_parameters = params    # (legs start at the touchdown angles)\n    return c\n\n\ndef make_python(robot, params):\n    return PyBound(params_of(robot, params), params)\n\n\ndef make_broken(robot, params):\n    """A factory with a bug."""\n    raise RuntimeError("the factory\'s own bug")\n\n\nclass Raises(PyBound):\n    """A Python controller whose command has a bug (an AttributeError)."""\n\n    def command(self, t, sensors):\n        return sensors.no_such_reading, 0.0\n\n\nclass GivesUp(PyBound):\n    """A Python controller that returns torques that are not finite after 0.2 s."""\n\n    def command(self, t, sensors):\n        tau = super().command(t, sensors)\n        return (float("nan"), tau[1]) if t >= 0.2 else tau\n\n\ndef make_raises(robot, params):\n    return Raises(params_of(robot, params), params)\n\n\ndef make_gives_up(robot, params):\n    return GivesUp(params_of(robot, params), params)\n'
 
 #: two starts from which the Table I law bounds steadily within 6 s
-GRID = dict(models=("II",), speeds=(1.0, 1.3), pitch_rates_deg_s=(100.0,), heights=(0.36,),
+GRID = dict(models=("II",), speeds=(1.0, 1.3), pitch_rates=(math.radians(100.0),), heights=(0.36,),
             duration=6.0)
 KINDS = ["compiled", "python", "factory:make_compiled", "factory:make_python"]
 
@@ -260,3 +261,16 @@ def test_a_factory_that_cannot_be_imported_is_refused_before_any_point(no_point_
     with pytest.raises(FactoryError, match="no_such_module_here"):
         B.basin_of_attraction(controller="no_such_module_here:make", workers=2, **GRID)
     assert no_point_runs == []
+
+
+def test_basin_pitch_rates_are_si_and_the_older_degree_keyword_still_works():
+    """basin_of_attraction takes pitch_rates [rad/s] (the command line's --pitch-rates is in
+    deg/s, converted once at the edge); the older pitch_rates_deg_s gives the same rows,
+    with a DeprecationWarning; the rows give the rate in deg/s."""
+    from scoutsim.analysis.basin import basin_of_attraction
+    kw = dict(models=("ideal",), speeds=(1.2,), heights=(0.33,), duration=0.3, workers=1)
+    si = basin_of_attraction(pitch_rates=(math.radians(150.0),), **kw)
+    with pytest.warns(DeprecationWarning, match="pitch_rates"):
+        old = basin_of_attraction(pitch_rates_deg_s=(150.0,), **kw)
+    assert si.rows == old.rows
+    assert si.rows[0]["pitch_rate_deg_s"] == 150.0
