@@ -28,8 +28,8 @@ from ..model.layout import (
 )
 from .dopri5 import eval_workspace
 from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, event_leg, event_slot,
-                     jammed_slide_moving,
-                     flight_toe_enters_ground, is_contact_event, log_event, slide_toe_pressed)
+                     flight_toe_enters_ground, is_contact_event, jammed_slide_moving,
+                     log_event, slide_toe_pressed)
 from .work import EventLog
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
 
