@@ -5,7 +5,8 @@ follow. 300 episodes per model and torque regime (zero, random, saturated) of th
 environment as configured by default, and, going on while the robot is down, the seeds
 that failed before the dynamic-jam rule (a sliding toe whose ground force turns
 perpendicular to its leg, docs/model.md "A sliding toe that jams") and the one whose toe
-was pressed into the ground at the friction angle, with a spread of others. The episodes are ``tools/fuzz_random_starts.py``'s, which prints their counts."""
+was pressed into the ground at the friction angle, with a spread of others. The episodes
+are ``tools/fuzz_random_starts.py``'s, which prints their counts."""
 
 import importlib.util
 from pathlib import Path
