@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ..jit import kernel
-from ..model.contact import JAM_AXIAL_SHARE, slide_axial_share, toe_can_slip
+from ..model.contact import JAM_AXIAL_SHARE, slide_axial_share, slide_is_jammed, toe_can_slip
 from ..model.kinematics import hip_offset
 from ..model.leg import leg_damping
 from ..model.transmission import joint_has_stiction
@@ -181,6 +181,19 @@ def record_step(steps, stepc, t, s, mi):
 
 
 @kernel
+def jammed_slide_moving(s, P, mi, aux, leg):
+    """True if the toe of ``leg`` slides, moving (beyond SLIDE_SPEED_TOL) in its recorded
+    slide direction, and that slide is jammed (contact.slide_is_jammed): its jam event
+    (armed below zero) ends the slide at this instant with the jam's impact (docs/model.md
+    "A sliding toe that jams")."""
+    if mi[MI_CONTACT_B + leg] != SLIDE:
+        return False
+    d = mi[MI_SLIDE_DIR_B + leg]
+    return (aux[leg * NAUX_LEG + A_SLIP_V] * d > SLIDE_SPEED_TOL
+            and slide_is_jammed(s[ITH] + s[IPHB + leg], d, P))
+
+
+@kernel
 def mode_violations(s, ds, aux, P, mi):
     """Bit mask (layout.V_*) of the mode invariants that the state ``s``, its derivative
     ``ds`` and outputs ``aux`` (an evaluation of ``s`` in modes ``mi``) and the modes
@@ -214,7 +227,10 @@ def mode_violations(s, ds, aux, P, mi):
             if coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
                 bits |= V_SLIDE_DIRECTION
             if ((aux[o + A_FAX] < -ftol or gn < -ftol)
-                    and not slide_toe_pressed(s, ds, aux, P, leg)):
+                    and not slide_toe_pressed(s, ds, aux, P, leg)
+                    and not jammed_slide_moving(s, P, mi, aux, leg)):
+                # (a moving toe whose slide is jammed jams at this instant: its slide's
+                # forces mean nothing)
                 bits |= V_SLIDE_NOT_PUSHING
         elif not is_set(P[P_MASSLESS]):
             # (a massless leg is placed kinematically at its touchdown angle in flight, which

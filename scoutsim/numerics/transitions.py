@@ -28,7 +28,8 @@ from ..model.layout import (
 )
 from .dopri5 import eval_workspace
 from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, event_leg, event_slot,
-                     flight_toe_enters_ground, is_contact_event, log_event, slide_toe_pressed)
+                     flight_toe_enters_ground, is_contact_event, jammed_slide_moving,
+                     log_event, slide_toe_pressed)
 from .work import EventLog
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
 
@@ -106,6 +107,33 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
     return lift_off(t, s, mi, ev, nev, leg)
 
 
+@kernel
+def released_toe_pressed(s, P, mi, mf, cmd, ds, aux, ew, leg):
+    """Whether the pinned toe of ``leg``, released to flight, would be pressed into the
+    ground or move into it (events.flight_toe_enters_ground): the motion of the body and
+    the leg, not the leg force, drives it into the floor. Evaluates the state with the toe
+    free into ``ds``, ``aux`` (workspace ``ew``), then again in the modes ``mi`` as they
+    were, which leaves ``ds`` and ``aux`` as they came (the same evaluation).
+
+    The rule it serves (settle_ws): a pinned toe whose cone asks for a jammed slide
+    (contact.slide_is_jammed) has no slide to go to; released, it must not move into the
+    ground. If it would (seen on a leg at its rest length, carrying a few 0.01 N, whose hip
+    moves away along it while the leg swings forward beyond the friction angle: the free
+    toe accelerates into the floor at about g), no contact mode is free of contradiction
+    but the pin: pressed into the ground by the motion, the jammed contact locks, as it
+    does when the leg pushes (docs/model.md "A sliding toe that jams"). Releasing it
+    instead gives a hop of a nanometre, a touchdown and a pin impulse 30-70 us later, again
+    and again, until the hop is shorter than events.TOE_HOP_TOL and the toe stub's slide,
+    jammed, sends it back: the settling rules then go round without end."""
+    mode = mi[MI_CONTACT_B + leg]
+    mi[MI_CONTACT_B + leg] = FLIGHT
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
+    pressed = flight_toe_enters_ground(s, ds, aux, P, leg)
+    mi[MI_CONTACT_B + leg] = mode
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
+    return pressed
+
+
 @allocating
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
@@ -163,12 +191,13 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                                            -1 if aux[o + A_GT] > 0.0 else 1, P):
                         nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
                         changed = True
-                    elif aux[o + A_FAX] <= 0.0:
+                    elif (aux[o + A_FAX] <= 0.0
+                          and not released_toe_pressed(s, P, mi, mf, cmd, ds, aux, ew, leg)):
                         # the slide the cone asks for is jammed (its ground force would be
-                        # perpendicular to the leg) and the leg does not push: the toe is
-                        # released. (A leg that pushes keeps its toe pinned: the jammed
-                        # contact locks, as a toe with mass would be driven into the
-                        # ground along the leg; docs/model.md "A sliding toe that jams")
+                        # perpendicular to the leg) and the toe is not pressed into the
+                        # ground, neither by its leg nor by the motion: it is released.
+                        # (A toe that is pressed stays pinned: the jammed contact locks,
+                        # docs/model.md "A sliding toe that jams"; released_toe_pressed)
                         nev = lift_off(t, s, mi, ev, nev, leg)
                         changed = True
             elif mode == STRUT:
@@ -180,7 +209,16 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     nev = log_event(ev, nev, t, EK_STRUT_END, leg, 0.0, 0.0, 0.0)
                     changed = True
             elif mode == SLIDE:
-                if ((gn < gn_tol or aux[o + A_FAX] <= 0.0)
+                if jammed_slide_moving(s, P, mi, aux, leg):
+                    # a moving toe whose slide is jammed (a touchdown or a toe stub that
+                    # lands sliding beyond the friction angle of its slide): no rule of the
+                    # slide applies (its forces, G_n = F / share, mean nothing there). Its
+                    # jam event, armed below zero (hybrid.arm_jams), fires at this instant
+                    # and stops it with the jam's impact (docs/model.md "A sliding toe
+                    # that jams"); lifting it off instead sends a toe that moves into the
+                    # ground back to a stub slide, round and round
+                    pass
+                elif ((gn < gn_tol or aux[o + A_FAX] <= 0.0)
                         and not slide_toe_pressed(s, ds, aux, P, leg)):
                     # (a slide at the stop whose toe is pressed into the ground starts with
                     # its leg force at zero, to rounding, and loads as the leg is swept on)

@@ -84,3 +84,57 @@ def test_work_energy_balance_closes_through_a_jam():
     assert len(jams) >= 1 and jams[0, L.EVR_V3] > 1e-5      # a jam that dissipates
     b = r.energy_balance()
     assert abs(b.residual_J) < 1e-7
+
+
+#: the random start of the learning environment's reset(seed=107) (Model II): its front
+#: toe passes the friction angle while its leg, 0.2 mm short of the stop, carries no force
+_PRESSED_START = dict(y=0.3293306570796559, dx=1.2010949527676986, dtheta=3.027769061022595)
+
+
+def test_toe_pressed_into_the_ground_at_the_friction_angle_stays_pinned():
+    """A pinned toe whose friction cone asks for a jammed slide, and which released would
+    be pressed into the ground by the motion (its leg carrying no force), stays pinned: the
+    jammed contact locks (docs/model.md "A toe pressed into the ground at the friction
+    angle"). The lock is the consistent mode, not a stuck one: on every recorded sample
+    after it, the pinned front toe's ground force lies inside the friction cone and pushes;
+    no transition leaves a mode inconsistent with its forces other than the lock's instant
+    itself (the force it needs there lies outside the cone: the rigid idealisation the
+    audit names); every jam's impulse dissipates and lies within the cone (to the jam
+    level); and the run goes on to the robot's fall instead of a numerical failure."""
+    from scoutsim.analysis.transitions import audit_transitions
+    mu = 1.0
+    r = simulate(controller=_Zero(), initial_state=InitialState(**_PRESSED_START),
+                 duration=1.0, model="II", friction_coefficient=mu)
+    assert r.outcome == "fell"
+    problems = audit_transitions(r).problems()
+    assert all(p.endswith("pinned toe outside the friction cone") for p in problems), problems
+    assert len(problems) <= 1
+    jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
+    assert len(jams) >= 1
+    tol = 2.0 * math.sqrt(1.0 + mu * mu) * JAM_AXIAL_SHARE
+    assert np.all(jams[:, L.EVR_V1] > 0.0)
+    assert np.all(np.abs(jams[:, L.EVR_V2]) <= mu * jams[:, L.EVR_V1] * (1.0 + tol))
+    assert np.all(jams[:, L.EVR_V3] >= 0.0)
+    # the pinned stretch after the lock: the front toe pinned on consecutive samples
+    front = L.RECORDED_MODE_NAMES.index("contact_mode_back") + L.FRONT
+    o = L.FRONT * L.NAUX_LEG
+    pinned = [k for k in range(len(r.t)) if r.modes[k, front] == L.STICK and r.t[k] > 0.45]
+    assert len(pinned) >= 10
+    for k in pinned:
+        gt, gn = r.aux[k, o + L.A_GT], r.aux[k, o + L.A_GN]
+        assert gn > 0.0
+        assert abs(gt) <= mu * gn
+
+
+def test_work_energy_balance_closes_through_a_locked_jam():
+    """Every joule is accounted for through the lock and the jams that follow it (the
+    start above; DOPRI5 at rtol 1e-10): the residual of the work-energy balance stays below
+    1e-7 J, as for runs without a jam."""
+    from scoutsim.simulation import IntegratorSettings
+    r = simulate(controller=_Zero(), initial_state=InitialState(**_PRESSED_START),
+                 duration=1.0, model="II", friction_coefficient=1.0, energy=True,
+                 integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))
+    assert r.outcome == "fell"
+    jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
+    assert len(jams) >= 2 and jams[:, L.EVR_V3].sum() > 1e-2
+    assert abs(r.energy_balance().residual_J) < 1e-7
