@@ -143,6 +143,12 @@ def test_tune_runs_a_module_controller(user_dir, tmp_path):
         rows = list(csv.DictReader(fh))
     assert len(rows) == 4
     assert all("Error" not in (r.get("error") or "") for r in rows), rows
+    # a factory's tuned values are the parameters it was called with: best.json has them,
+    # and the command says how to run them, not a controller file of the Table I law
+    assert (tmp_path / "t" / "best.json").is_file()
+    assert not (tmp_path / "t" / "best.toml").exists()
+    assert "best.toml" not in p.stdout
+    assert "--controller usermod:table_i --robot FILE" in p.stdout
 
 
 def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):

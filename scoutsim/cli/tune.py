@@ -200,11 +200,19 @@ def execute(args) -> int:
           + f", {b['n_steady_strides']} steady strides, steady bounding "
           + ("yes" if b["steady_bounding"] else "no"))
     tuned_robot = any(p.key.startswith("robot.") for p in res.parameters)
-    print(f"  wall time {wall:.1f} s; wrote tune.csv, tune.parquet, convergence.png, "
-          f"best.toml, best.json to {out}/")
-    print(f"  run it: scoutsim run --controller {out}/best.toml"
-          + (f" --robot {out}/best.toml" if tuned_robot else
-             (f" --robot {args.robot}" if args.robot else ""))
-          + (f" --model {args.model[0]}" if args.model[0] != "II" else "")
-          + f" --duration {args.duration:g}")
+    written = [name for name in ("tune.csv", "tune.parquet", "convergence.png", "best.toml",
+                                 "best.json") if (out / name).is_file()]
+    print(f"  wall time {wall:.1f} s; wrote {', '.join(written)} to {out}/")
+    tail = ((f" --model {args.model[0]}" if args.model[0] != "II" else "")
+            + f" --duration {args.duration:g}")
+    if "best.toml" in written:
+        print(f"  run it: scoutsim run --controller {out}/best.toml"
+              + (f" --robot {out}/best.toml" if tuned_robot else
+                 (f" --robot {args.robot}" if args.robot else "")) + tail)
+    else:
+        # a user's controller (MODULE:FACTORY): the tuned values are the parameters its
+        # factory was called with, which a controller file of the Table I law cannot carry
+        print(f"  run it: put the tuned values of {out}/best.json in the [controller] section "
+              f"of a robot file and run scoutsim run --controller {args.controller} --robot "
+              "FILE" + tail)
     return 0
