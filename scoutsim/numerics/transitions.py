@@ -66,9 +66,7 @@ def start_stub_slide(t, s, P, mi, mf, aux, ev, nev, leg):
     else:
         mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
         if slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P):
-            mi[MI_CONTACT_B + leg] = STICK
-            mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
-            return log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+            return stick_toe(t, mi, mf, aux, ev, nev, leg)
     return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX],
                      SLIDE_CAUSE_STUB)
 
@@ -79,6 +77,16 @@ def lift_off(t, s, mi, ev, nev, leg):
     state); logged. Returns the event count."""
     mi[MI_CONTACT_B + leg] = FLIGHT
     return log_event(ev, nev, t, EK_LIFTOFF, leg, s[IL_B + leg], 0.0, 0.0)
+
+
+@kernel
+def stick_toe(t, mi, mf, aux, ev, nev, leg):
+    """The toe of ``leg`` sticks where it is (its anchor: the toe's x now); logged.
+    Returns the event count."""
+    x = aux[leg * NAUX_LEG + A_TOE_X]
+    mi[MI_CONTACT_B + leg] = STICK
+    mf[MF_ANCHOR_B + leg] = x
+    return log_event(ev, nev, t, EK_STICK, leg, x, 0.0, 0.0)
 
 
 @kernel
@@ -238,9 +246,7 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     # that jams") cannot start it: it is pinned where it is (no impulse:
                     # it is at rest). A moving one jams through its event (hybrid.arm_jams
                     # arms it), with the impact that stops it.
-                    mi[MI_CONTACT_B + leg] = STICK
-                    mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
-                    nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+                    nev = stick_toe(t, mi, mf, aux, ev, nev, leg)
                     changed = True
             if joint_has_stiction(leg, P):
                 mm = mi[MI_MOTOR_B + leg]
@@ -362,9 +368,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
             else:
                 # slide velocity reached zero: stick here; settle() slides on (possibly
                 # reversed) if the friction cone cannot hold the toe
-                mi[MI_CONTACT_B + leg] = STICK
-                mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
-                nev = log_event(ev, nev, t, EK_STICK, leg, aux[o + A_TOE_X], 0.0, 0.0)
+                nev = stick_toe(t, mi, mf, aux, ev, nev, leg)
         elif mode == STRUT:
             if slot == EVC_GROUND:
                 nev = lift_off(t, s, mi, ev, nev, leg)
