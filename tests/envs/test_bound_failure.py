@@ -18,6 +18,24 @@ ID = "scoutsim/Bound-v0"
 TABLE_I_SETPOINTS = np.radians([19.0, 21.0, 0.0, 0.0])
 
 
+def stopping_env(monkeypatch, status, torso_height=None):
+    """An ideal-model environment whose next step ends with the run loop's ``status``
+    after an ordinary advance (and, with ``torso_height`` [m], the torso COM put there)."""
+    env = BoundEnv(model="ideal", action_type="setpoints")
+    env.reset(seed=0)
+    eng = env.engine
+    advance = eng.advance
+
+    def stopping_advance(k_stop):
+        advance(k_stop)
+        if torso_height is not None:
+            eng.s[L.IY] = torso_height
+        eng.status = status
+
+    monkeypatch.setattr(eng, "advance", stopping_advance)
+    return env
+
+
 def test_a_numerical_failure_is_a_truncation_without_healthy_reward():
     """A torso inertia 1e6 x Scout II's makes the constrained dynamics unsolvable at the
     start (the run loop stops with "numerical_failure") while the robot stands at its
@@ -57,16 +75,7 @@ def test_a_controller_error_is_a_truncation_without_healthy_reward(monkeypatch):
     """The run loop's other non-physical stop (forced here: the engine reports a controller
     error after an ordinary step) ends the same way, and is not called a numerical
     failure."""
-    env = BoundEnv(model="ideal", action_type="setpoints")
-    env.reset(seed=0)
-    eng = env.engine
-    advance = eng.advance
-
-    def failing_advance(k_stop):
-        advance(k_stop)
-        eng.status = L.ST_CONTROLLER_ERROR
-
-    monkeypatch.setattr(eng, "advance", failing_advance)
+    env = stopping_env(monkeypatch, L.ST_CONTROLLER_ERROR)
     _, reward, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
     assert (terminated, truncated) == (False, True)
     assert info["outcome"] == "controller_error" and info["numerical_failure"] is False
@@ -114,17 +123,8 @@ def test_a_failure_with_the_robot_already_down_is_a_termination(monkeypatch):
     """The task's rule comes first: a step that ends with the robot down (COM below the
     healthy height) is terminated, whatever stopped the simulator; info still names the
     numerical failure."""
-    env = BoundEnv(model="ideal", action_type="setpoints")
-    env.reset(seed=0)
-    eng = env.engine
-    advance = eng.advance
-
-    def failing_low(k_stop):
-        advance(k_stop)
-        eng.s[L.IY] = 0.1           # below the healthy range's 0.2 m
-        eng.status = L.ST_NUMERICAL_FAILURE
-
-    monkeypatch.setattr(eng, "advance", failing_low)
+    env = stopping_env(monkeypatch, L.ST_NUMERICAL_FAILURE,
+                       torso_height=0.1)     # below the healthy range's 0.2 m
     _, _, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
     assert (terminated, truncated) == (True, False)
     assert info["numerical_failure"] and info["reward_healthy"] == 0.0
