@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from ..parameters import plausibility_warnings_off, validate_parameters
+from .strides import MIN_STEADY_STRIDES  # steady strides a steady bound needs
 from .study_controller import build_controller
 from .study_failures import StudyError, error_fields, run_failure
 from .sweep import _orbit_columns
@@ -42,8 +43,6 @@ OBJECTIVES = ("speed", "max-speed", "cot", "stability")
 AGGREGATES = ("worst", "mean")
 #: score of a broken constraint (module docstring); larger than any objective value
 PENALTY = 1000.0
-#: steady strides a steady bound needs (GaitMetrics.is_steady_bounding)
-MIN_STEADY_STRIDES = 7
 #: the table's columns after the parameters
 COLUMNS = ("evaluation", "generation", "score", "objective", "feasible", "violations",
            "outcome", "t_end_s", "mean_speed_m_s", "average_speed_m_s", "n_steady_strides",
