@@ -53,7 +53,7 @@ def speeds(runs: int, duration: float):
     import scoutsim
     from compiled_controller import make_controller
 
-    scoutsim.simulation.warm_up()
+    scoutsim.simulation.simulator.warm_up()
     example = make_controller()
     kinds = {"built-in Table I (compiled)": None, "compiled user example": example,
              "trivial Python PD": PythonPD()}
@@ -84,7 +84,7 @@ EDIT = textwrap.dedent('''
     import time, sys
     sys.path.insert(0, {examples!r})
     import scoutsim
-    scoutsim.simulation.warm_up()
+    scoutsim.simulation.simulator.warm_up()
     import compiled_controller as ex
     src = open(ex.__file__).read().replace("return 0\\n", "return 0  # edited {stamp}\\n", 1)
     ns = {{"__name__": "edited_{stamp}"}}
@@ -101,10 +101,10 @@ CORE = textwrap.dedent('''
     import time
     t0 = time.perf_counter()
     import scoutsim
-    from scoutsim.jit import core_is_compiled
+    from scoutsim._numba.jit import core_is_compiled
     assert not core_is_compiled()
     t1 = time.perf_counter()
-    scoutsim.simulation.warm_up()
+    scoutsim.simulation.simulator.warm_up()
     print(t1 - t0, time.perf_counter() - t1)
 ''')
 

@@ -136,7 +136,7 @@ def main(argv=None):
     import scoutsim
     import scoutsim.envs  # noqa: F401 (registers)
 
-    scoutsim.simulation.warm_up()
+    scoutsim.simulation.simulator.warm_up()
     print(f"load average (1, 5, 15 min) at the start: {os.getloadavg()}")
     print(f"machine: {machine()}; Python {platform.python_version()}, gymnasium "
           f"{gymnasium.__version__}, scoutsim {scoutsim.__version__}")

@@ -20,15 +20,15 @@ from scipy.integrate import solve_ivp
 
 from scoutsim import ControllerParameters, RobotParameters, default_initial_state
 from scoutsim.control.bounding import C_SENSE_ALPHA, bounding_step, controller_array
-from scoutsim.model import layout as L
-from scoutsim.model.evaluate import evaluate
-from scoutsim.model.kinematics import project_state
-from scoutsim.model.packing import robot_array
-from scoutsim.model.sensors import read_encoders
-from scoutsim.numerics.events import event_values
-from scoutsim.numerics.stats import NSTAT
-from scoutsim.numerics.transitions import apply_event, settle
-from scoutsim.starts import _state_vector
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.evaluate import evaluate
+from scoutsim._core.model.kinematics import project_state
+from scoutsim._core.model.packing import robot_array
+from scoutsim._core.model.sensor_readings import read_encoders
+from scoutsim._core.numerics.events import event_values
+from scoutsim._core.numerics.stats import NSTAT
+from scoutsim._core.numerics.transitions import apply_event, settle
+from scoutsim.simulation.simulator.initial_conditions import _state_vector
 
 
 def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):

@@ -155,7 +155,7 @@ def main(argv=None):
                 else QUICK_DURATION if args.quick else 10.0)
     robot, table = scoutsim.load_parameters(args.robot)
     sensors = scoutsim.load_sensors(args.robot, robot)    # the file's [sensors], else ideal
-    scoutsim.simulation.warm_up()
+    scoutsim.simulation.simulator.warm_up()
     ctrl = make_controller(robot, args.pitch_rate_gain, table)   # deg/deg-s = rad/rad-s
     print(f"compiled the controller in {ctrl.compile_time_s:.2f} s")
     runs = {}

@@ -76,8 +76,8 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from scoutsim import load_parameters, simulate
-    from scoutsim.model import actuator
-    from scoutsim.model.packing import robot_array
+    from scoutsim._core.model import actuator
+    from scoutsim._core.model.packing import robot_array
     from scoutsim.names import LEG_NAMES
     from scoutsim.parameters import DEFAULT_FRICTION_COEFFICIENT
 

@@ -9,10 +9,10 @@ from .parameters import (  # noqa: E402
     ControllerParameters, Environment, ImplausibleParameterWarning, ParameterError,
     RobotParameters, load_controller, load_parameters, load_robot,
 )
-from .result import SimulationResult  # noqa: E402
-from .simulation import ControllerError, Recording, Sensors, simulate  # noqa: E402
-from .integrator import IntegratorSettings  # noqa: E402
-from .starts import default_initial_state  # noqa: E402
+from .result.simulation_result import SimulationResult  # noqa: E402
+from .simulation.simulator import ControllerError, Recording, Sensors, simulate  # noqa: E402
+from .simulation.integrator import IntegratorSettings  # noqa: E402
+from .simulation.initial_conditions import default_initial_state  # noqa: E402
 from .state import HybridState, InitialState  # noqa: E402
 from .control import (  # noqa: E402
     BoundingController, CompiledController, Controller, PitchFeedbackController,

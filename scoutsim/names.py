@@ -1,7 +1,7 @@
 """Names of the codes a run records, for the layers above the compiled core.
 
 The compiled core (Numba) works on plain integer codes whose slots and values
-:mod:`scoutsim.model.layout` names; a result carries the same codes (``result.leg_state``,
+:mod:`scoutsim._core.model.layout` names; a result carries the same codes (``result.leg_state``,
 ``result.contact_mode``, the event log). This module gives each family of codes an
 :class:`~enum.IntEnum` with the same values, so that analysis, validation, presentation,
 the command line and the environments compare a code with a name (``LegState.FLIGHT``)
@@ -20,7 +20,7 @@ is an integer array. ``tests/test_names.py`` checks that every value agrees with
   their display names (:data:`MODEL_LABELS`).
 * :class:`EventKind`: the kinds of the event log (:meth:`SimulationResult.event_times`).
 * :class:`Violation`: the bits of the mode invariants a transition may violate (the
-  transition audit, :mod:`scoutsim.analysis.transitions`), described by
+  transition audit, :mod:`scoutsim.analysis.transition_audit`), described by
   :data:`VIOLATION_NAMES`.
 
 Every enum has :attr:`label`, the name a table or a user writes for a member ("back",

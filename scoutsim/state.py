@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import layout as L
+from ._core.model import layout as L
 from .parameters import ControllerParameters, RobotParameters
 
 __all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression",

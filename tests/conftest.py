@@ -10,25 +10,25 @@ import scoutsim
 
 @pytest.fixture
 def force_outcome(monkeypatch):
-    """``force_outcome("fell")``: every ``scoutsim.simulation.simulate`` call of the test
+    """``force_outcome("fell")``: every ``scoutsim.simulation.simulator.simulate`` call of the test
     runs as usual and then reports that outcome (to test what a command does with it)."""
-    real = scoutsim.simulation.simulate
+    real = scoutsim.simulation.simulator.simulate
 
     def force(outcome: str) -> None:
         def simulate(*args, **kwargs):
             r = real(*args, **kwargs)
             r.outcome = outcome
             return r
-        monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
+        monkeypatch.setattr(scoutsim.simulation.simulator, "simulate", simulate)
     return force
 
 
 @pytest.fixture
 def interrupt_run(monkeypatch):
-    """``interrupt_run(n)``: the n-th ``scoutsim.simulation.simulate`` call of the test
+    """``interrupt_run(n)``: the n-th ``scoutsim.simulation.simulator.simulate`` call of the test
     returns as if Ctrl-C had reached it (outcome "interrupted", the data so far); the
     others run as usual."""
-    real = scoutsim.simulation.simulate
+    real = scoutsim.simulation.simulator.simulate
     calls = []
 
     def interrupt(n: int) -> None:
@@ -38,7 +38,7 @@ def interrupt_run(monkeypatch):
             if len(calls) == n:
                 r.outcome = "interrupted"
             return r
-        monkeypatch.setattr(scoutsim.simulation, "simulate", simulate)
+        monkeypatch.setattr(scoutsim.simulation.simulator, "simulate", simulate)
     return interrupt
 
 
@@ -60,7 +60,7 @@ def dask_client_timeouts(monkeypatch):
 @pytest.fixture(scope="session")
 def symbolic_model():
     """``tools/derive_eom.py``: the equations of motion derived with SymPy from the kinetic
-    and potential energies, independently of ``scoutsim.model`` (``mass_matrix(q,
+    and potential energies, independently of ``scoutsim._core.model`` (``mass_matrix(q,
     params)``, ``params_from_robot(robot)``, energies, toe kinematics)."""
     path = Path(__file__).resolve().parents[1] / "tools" / "derive_eom.py"
     spec = importlib.util.spec_from_file_location("derive_eom_for_tests", path)

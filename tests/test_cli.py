@@ -268,7 +268,7 @@ def test_basin_start_that_crashes_is_reported_with_exit_1(tmp_path, monkeypatch,
     def broken(*args, **kwargs):
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(scoutsim.simulation, "simulate", broken)
+    monkeypatch.setattr(scoutsim.simulation.simulator, "simulate", broken)
     code = main(["basin", "--model", "I", "--speeds", "1.1", "--pitch-rates", "0",
                  "--heights", "0.36", "--duration", "0.3", "--out", str(tmp_path),
                  "--workers", "1", "--no-progress", "--floors", "inf"])
@@ -318,8 +318,8 @@ def test_a_simulating_command_says_it_compiles_unless_quiet(tmp_path, monkeypatc
                                                               quiet):
     """Before the first compilation a simulating command says what it is doing (on stderr,
     so a --json stdout stays clean); --quiet silences it."""
-    import scoutsim.jit
-    monkeypatch.setattr(scoutsim.jit, "core_is_compiled", lambda: False)
+    import scoutsim._numba.jit
+    monkeypatch.setattr(scoutsim._numba.jit, "core_is_compiled", lambda: False)
     argv = ["run", "--duration", "0.01", "--no-plots", "--out", str(tmp_path)]
     assert main(argv + (["--quiet"] if quiet else [])) == 0
     err = capsys.readouterr().err
@@ -327,8 +327,8 @@ def test_a_simulating_command_says_it_compiles_unless_quiet(tmp_path, monkeypatc
 
 
 def test_no_compile_notice_when_the_core_is_cached(tmp_path, monkeypatch, capsys):
-    import scoutsim.jit
-    monkeypatch.setattr(scoutsim.jit, "core_is_compiled", lambda: True)
+    import scoutsim._numba.jit
+    monkeypatch.setattr(scoutsim._numba.jit, "core_is_compiled", lambda: True)
     assert main(["run", "--duration", "0.01", "--no-plots", "--out", str(tmp_path)]) == 0
     assert "compiling" not in capsys.readouterr().err
 
@@ -410,7 +410,7 @@ def test_sweep_with_an_unreachable_scheduler_is_a_usage_error_naming_the_timeout
 def test_ctrl_c_in_a_basin_map_keeps_the_finished_starts(tmp_path, interrupt_run, capsys):
     """Ctrl-C at the third start (simulate() returns it as interrupted): the two finished
     starts are written to basin.csv, marked partial, exit 130; the cut start is not a row."""
-    from scoutsim.run_directory import check_run_directory
+    from scoutsim.io.run_directory import check_run_directory
     interrupt_run(3)
     out = tmp_path / "basin"
     code = main(["basin", "--model", "I", "--speeds", "1.1,1.2", "--pitch-rates", "100,150",

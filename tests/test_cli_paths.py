@@ -16,8 +16,8 @@ import pytest
 import scoutsim
 from scoutsim import ControllerParameters, HybridState, IntegratorSettings, RobotParameters
 from scoutsim.cli import main
-from scoutsim.model import layout as L
-from scoutsim.run_directory import check_run_directory
+from scoutsim._core.model import layout as L
+from scoutsim.io.run_directory import check_run_directory
 from scoutsim.validation.log_reading import load_log
 
 DT = 1e-3   # the Table I control period [s]: the rigs sample at it

@@ -1,4 +1,4 @@
-"""The compile-time replacements of Numba's compiler steps (scoutsim.compile_steps): on the
+"""The compile-time replacements of Numba's compiler steps (scoutsim._numba.compile_steps): on the
 Numba the package pins, each is applied (a Numba release that moved the replaced code
 would silently cost compile time: this says so), and the core compiled without any of them
 runs bit for bit as with them (they change no compiled code)."""
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-import scoutsim.jit  # noqa: F401 - applies the replacements (unless SCOUTSIM_NUMBA_AS_IS)
+import scoutsim._numba.jit  # noqa: F401 - applies the replacements (unless SCOUTSIM_NUMBA_AS_IS)
 
 AS_IS = bool(os.environ.get("SCOUTSIM_NUMBA_AS_IS"))
 

@@ -1,4 +1,4 @@
-"""Failure reasons that point at the cause ("nothing silently wrong": scoutsim/failure.py).
+"""Failure reasons that point at the cause ("nothing silently wrong": scoutsim/result/failure.py).
 
 * Parameter values no legged robot has (1e308 kg, lengths in kilometres, ...) are refused
   before a run, naming the field and its allowed range.
@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 from scoutsim import RobotParameters, SimulationResult, simulate
-from scoutsim.analysis.transitions import audit_transitions
+from scoutsim.analysis.transition_audit import audit_transitions
 from scoutsim.cli import main
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.parameters import ParameterError, load_robot, physical_limit
-from scoutsim.starts import default_initial_state
+from scoutsim.simulation.simulator.initial_conditions import default_initial_state
 
 
 def _write(tmp_path, text, name="robot.toml"):

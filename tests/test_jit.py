@@ -1,4 +1,4 @@
-"""The compiled core's declarations (scoutsim/jit.py): every compiled function says whether
+"""The compiled core's declarations (scoutsim/_numba/jit.py): every compiled function says whether
 it runs with reference counting, and the non-allocating kernels really run without it."""
 
 import numpy as np
@@ -8,12 +8,13 @@ from numba.core.caching import NullCache
 from numba.core.errors import TypingError
 from numba.core.registry import CPUDispatcher
 
-from scoutsim import jit, loop
+from scoutsim._core import loop
+from scoutsim._numba import jit
 from scoutsim.control import bounding
-from scoutsim.model import (
+from scoutsim._core.model import (
     actuator, contact, evaluate, impact, kinematics, kkt, leg, rigid_body, transmission, workspace,
 )
-from scoutsim.numerics import ark, dopri5, events, hybrid, transitions
+from scoutsim._core.numerics import ark, dopri5, events, hybrid, transitions
 
 MODULES = (kinematics, rigid_body, leg, actuator, transmission, contact, kkt, workspace,
            impact, evaluate, ark, dopri5, events, transitions, hybrid, loop, bounding)
@@ -143,7 +144,7 @@ def pathlib_path(f):
 #: run in a new process with NUMBA_CACHE_DIR set: import the package's jit module only (no
 #: compilation) and report where Numba will cache and the digest of the core's sources
 _REPORT_CACHE_DIR = """
-import json, numba, scoutsim.jit as jit
+import json, numba, scoutsim._numba.jit as jit
 print(json.dumps({"numba_cache_dir": numba.config.CACHE_DIR, "root": str(jit.cache_directory()),
                   "loop": str(jit._MODULE_DIRS[str(jit._PACKAGE / "loop.py")]),
                   "digests": jit.module_digests()}))

@@ -1,7 +1,8 @@
 """The package's import graph: no cycles, and imports go one way through the layers
-(README "Layout"): presentation -> analysis / validation / identification -> simulation ->
-numerics / control -> model -> parameters, names; and nothing from the analysis layer up
-imports the model itself (``test_upper_layers_do_not_import_the_model``).
+(README "Layout"): presentation, cli -> analysis / validation / identification / envs ->
+simulation, result, state, the run loop -> numerics / control -> model, names ->
+parameters, io, the Numba glue; and nothing from the analysis layer up imports the compiled
+core (``scoutsim._core``) itself (``test_upper_layers_do_not_import_the_core``).
 
 The graph is read from the source (module-level and deferred imports alike, by AST), so
 the test needs no import of the package. An import of the package that names no module of
@@ -17,17 +18,15 @@ import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
 
-#: layer of each module, by prefix (longest prefix wins); higher imports lower only
+#: layer of each package (or root module), by prefix (longest prefix wins); higher imports
+#: lower only. Every module belongs to its package's layer: a new module needs no entry.
 LAYERS = {
-    "scoutsim._version": 0, "scoutsim.jit": 0, "scoutsim.compile_steps": 0, "scoutsim.parameters": 0, "scoutsim.tables": 0, "scoutsim.run_directory": 0,
-    "scoutsim.names": 0,
-    "scoutsim.model": 1,
-    "scoutsim.numerics": 2, "scoutsim.control": 2,
-    "scoutsim.state": 3, "scoutsim.loop": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
-    "scoutsim.result_series": 3, "scoutsim.result_events": 3, "scoutsim.result_energy": 3,
-    "scoutsim.result_columns": 3, "scoutsim.result_files": 3,
-    "scoutsim.failure": 3, "scoutsim.streaming": 3, "scoutsim.integrator": 3,
-    "scoutsim.starts": 3, "scoutsim.engine": 3, "scoutsim.bench": 3, "scoutsim.budgets": 3,
+    "scoutsim._version": 0, "scoutsim._numba": 0, "scoutsim.parameters": 0, "scoutsim.io": 0,
+    # the core's table of slots and codes imports nothing: scoutsim.names reads it
+    "scoutsim._core.model.layout": 0, "scoutsim.names": 0,
+    "scoutsim._core.model": 1,
+    "scoutsim._core.numerics": 2, "scoutsim.control": 2,
+    "scoutsim._core.loop": 3, "scoutsim.state": 3, "scoutsim.simulation": 3, "scoutsim.result": 3,
     "scoutsim.analysis": 4, "scoutsim.validation": 4, "scoutsim.identification": 4,
     "scoutsim.envs": 4,
     "scoutsim.presentation": 5, "scoutsim.cli": 5,
@@ -37,9 +36,9 @@ LAYERS = {
 
 #: (importer, imported) pairs against the layers: convenience accessors, deferred imports
 CONVENIENCE_ACCESSORS = {
-    ("scoutsim.result", "scoutsim.analysis.gait"),                     # result.gait()
-    ("scoutsim.result_energy", "scoutsim.analysis.energy"),   # result.energy_balance()
-    ("scoutsim.result", "scoutsim.presentation.plots"),                # result.plot()
+    ("scoutsim.result.simulation_result", "scoutsim.analysis.gait"),                     # result.gait()
+    ("scoutsim.result.energy_accounts", "scoutsim.analysis.energy"),   # result.energy_balance()
+    ("scoutsim.result.simulation_result", "scoutsim.presentation.plots"),                # result.plot()
     ("scoutsim.analysis.sweep", "scoutsim.presentation.plots"),        # sweep.plot_map()
     ("scoutsim.analysis.tune_result", "scoutsim.presentation.plots"),  # tuning.plot_convergence()
     ("scoutsim.identification.fit_result",
@@ -181,24 +180,24 @@ def test_convenience_accessors_import_the_upper_layer_only_when_called():
 
 
 #: the first layer that reads the model only through the layers below it (the result's
-#: accessors, ``scoutsim.state``, ``scoutsim.names``), never ``scoutsim.model`` itself
+#: accessors, ``scoutsim.state``, ``scoutsim.names``), never ``scoutsim._core.model`` itself
 MODEL_FREE_LAYER = 4
-#: importer -> reason, for a module of those layers that still imports scoutsim.model
+#: importer -> reason, for a module of those layers that still imports scoutsim._core.model
 #: (none: the list must match exactly, so a new import fails and so does a stale entry)
 MODEL_IMPORT_EXCEPTIONS = {}
 
 
-def test_upper_layers_do_not_import_the_model():
+def test_upper_layers_do_not_import_the_core():
     """Analysis, validation, identification, the environments, presentation and the
-    command line read a run through :class:`~scoutsim.result.SimulationResult`'s accessors,
+    command line read a run through :class:`~scoutsim.result.simulation_result.SimulationResult`'s accessors,
     build states with :mod:`scoutsim.state` and compare codes with :mod:`scoutsim.names`:
-    no module of theirs imports ``scoutsim.model`` (any submodule, deferred or not), so the
+    no module of theirs imports ``scoutsim._core`` (any submodule, deferred or not), so the
     compiled core's array layout can change under them."""
     edges = _graph()
     found = {a for a, ts in edges.items() if _layer(a) >= MODEL_FREE_LAYER
-             for b in ts if b == "scoutsim.model" or b.startswith("scoutsim.model.")}
+             for b in ts if b == "scoutsim._core" or b.startswith("scoutsim._core.")}
     assert found == set(MODEL_IMPORT_EXCEPTIONS), (
-        "modules above the simulation layer that import scoutsim.model: "
+        "modules above the simulation layer that import scoutsim._core: "
         + ", ".join(sorted(found - set(MODEL_IMPORT_EXCEPTIONS))))
 
 

@@ -1,10 +1,10 @@
 """The named codes of scoutsim.names agree with the compiled core's plain integers
-(scoutsim.model.layout): every value, every label, and nothing missing on either side."""
+(scoutsim._core.model.layout): every value, every label, and nothing missing on either side."""
 
 import pytest
 
 from scoutsim import names as N
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 
 
 def test_legs_agree_with_the_layout():

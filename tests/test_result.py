@@ -1,11 +1,11 @@
-"""Tests of scoutsim.result: the table and figure views of a run."""
+"""Tests of scoutsim.result.simulation_result: the table and figure views of a run."""
 
 import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import layout as L
-from scoutsim.result_columns import column_unit
+from scoutsim._core.model import layout as L
+from scoutsim.result.simulation_result.columns import column_unit
 
 
 @pytest.fixture(scope="module")

@@ -11,9 +11,9 @@ from scipy.integrate import cumulative_trapezoid
 
 import scoutsim
 from scoutsim import Environment, InitialState, RobotParameters, SimulationResult
-from scoutsim.model import layout as L
-from scoutsim.run_directory import check_run_directory
-from scoutsim.simulation import ControllerError
+from scoutsim._core.model import layout as L
+from scoutsim.io.run_directory import check_run_directory
+from scoutsim.simulation.simulator.simulator import ControllerError
 
 MODELS = ("II", "I", "ideal")
 LEGS = (("back", -1.0), ("front", 1.0))    # leg, side of the hip (behind / ahead of the COM)

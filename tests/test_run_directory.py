@@ -1,5 +1,5 @@
 """A run's output directory: one run per directory, files written whole or not at all, a
-manifest that says whether the run's files are all there (scoutsim/run_directory.py)."""
+manifest that says whether the run's files are all there (scoutsim/io/run_directory.py)."""
 
 import json
 import signal
@@ -14,7 +14,7 @@ import pytest
 import scoutsim
 from scoutsim import SimulationResult
 from scoutsim.cli import main
-from scoutsim.run_directory import (MANIFEST, IncompleteRunError, RunDirectory, atomic_write,
+from scoutsim.io.run_directory import (MANIFEST, IncompleteRunError, RunDirectory, atomic_write,
                                     check_run_directory, read_manifest)
 
 
@@ -104,7 +104,7 @@ def hold():
 
 
 if moment == "simulating":
-    from scoutsim.engine import HybridEngine
+    from scoutsim.simulation.engine import HybridEngine
     advance = HybridEngine.advance
 
     def advance_then_hold(self, *args, **kwargs):
@@ -236,7 +236,7 @@ def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
     import re
     import tempfile
 
-    import scoutsim.tables
+    import scoutsim.io.tables
     from scoutsim.cli import main
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     (tmp_path / "tmp").mkdir()
@@ -246,7 +246,7 @@ def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
     else:
         def full(*args, **kwargs):
             raise OSError(errno.ENOSPC, "No space left on device", str(out / "x"))
-        monkeypatch.setattr(scoutsim.tables, "write_table", full)
+        monkeypatch.setattr(scoutsim.io.tables, "write_table", full)
     assert main(["run", "--duration", "0.5", "--no-progress", "--out", str(out)]) == 74
     err = capsys.readouterr().err
     assert "could not write the run's files" in err and "Traceback" not in err

@@ -10,9 +10,9 @@ import pytest
 
 import scoutsim
 from scoutsim import RobotParameters, standing_state
-from scoutsim.model import layout as L
-from scoutsim.model.evaluate import evaluate
-from scoutsim.model.packing import robot_array
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.evaluate import evaluate
+from scoutsim._core.model.packing import robot_array
 from scoutsim.state import standing_leg_compression
 
 MODELS = ("ideal", "I", "II")

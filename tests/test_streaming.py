@@ -1,4 +1,4 @@
-"""Runs streamed to disk (scoutsim.streaming): the same tables as the run held in memory,
+"""Runs streamed to disk (scoutsim.simulation.streaming): the same tables as the run held in memory,
 bit for bit; the returned result is the run's kept end; interrupts and falls write what
 was computed; memory does not grow with the duration; disk space is checked first."""
 
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.result import SimulationResult
-from scoutsim.run_directory import check_run_directory
-from scoutsim.budgets import check_stream_disk
-from scoutsim.engine import HybridEngine
-from scoutsim.simulation import simulate
-from scoutsim.tables import FORMATS, read_table
+from scoutsim.result.simulation_result.simulation_result import SimulationResult
+from scoutsim.io.run_directory import check_run_directory
+from scoutsim.simulation.simulator.budgets import check_stream_disk
+from scoutsim.simulation.simulator.engine import HybridEngine
+from scoutsim.simulation.simulator.simulator import simulate
+from scoutsim.io.tables import FORMATS, read_table
 
 pytest.importorskip("pyarrow")
 
@@ -175,7 +175,7 @@ def _disk_full_at_the_second_piece(monkeypatch):
     """TableWriter.append fails as a full disk does at the time series' second piece."""
     import errno
 
-    from scoutsim.tables import TableWriter
+    from scoutsim.io.tables import TableWriter
     real = TableWriter.append
     calls = {"timeseries": 0}
 

@@ -1,13 +1,14 @@
 """The package's shape: no module over 600 lines, no function over 12 parameters (kernel
 arguments travel in named bundles, public entry points take bundles and their fields as
 keywords), and the integrators and the run loop free of the model variants (they reach
-the hip unit through scoutsim.model.hip_unit). Read from the source, no import."""
+the hip unit through scoutsim._core.model.hip_unit). Read from the source, no import."""
 
 import ast
 import pathlib
 import re
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
+CORE = ROOT / "_core"
 MAX_LINES = 600
 MAX_PARAMETERS = 12
 
@@ -38,8 +39,8 @@ def test_no_function_over_12_parameters():
 
 
 def test_integrators_and_run_loop_know_no_model_variant():
-    found = [f"{p.relative_to(ROOT)}:{i}" for p in [*sorted((ROOT / "numerics").glob("*.py")),
-                                                    ROOT / "loop.py"]
+    found = [f"{p.relative_to(ROOT)}:{i}" for p in [*sorted((CORE / "numerics").glob("*.py")),
+                                                    CORE / "loop.py"]
              for i, line in enumerate(p.read_text().splitlines(), 1)
              if re.search(r"\bMODEL_(II|I|IDEAL|PASSIVE)\b|\bP_MODEL\b", line)]
     assert not found, found
@@ -49,7 +50,7 @@ def test_hip_units_are_reached_only_through_their_registry():
     """Every hip-unit module (a module of scoutsim/model that declares ``GEARED``) is
     imported by model/hip_unit.py alone: the rest of the package reaches a unit through the
     registry's hooks, so adding a unit is its module and its entry in the registry."""
-    model = ROOT / "model"
+    model = CORE / "model"
     units = sorted(p.stem for p in model.glob("*.py")
                    if re.search(r"^GEARED\s*=", p.read_text(), re.M))
     assert {"rigid_hip", "belt", "backlash"} <= set(units), units
@@ -75,18 +76,18 @@ MAGIC_FORMS = (
      re.compile(r"\b(P|meta|hwork|aux|C|geom)\[(-1,\s*)?(L\.)?[A-Z_]+\]\s*[<>]=?\s*0\.5\b"),
      ("**/*.py",)),
     ("a controller transition bit by its value (layout TR_*)",
-     re.compile(r"(&|\|=)\s*[124]\b"), ("loop.py", "control/bounding.py")),
+     re.compile(r"(&|\|=)\s*[124]\b"), ("_core/loop.py", "control/bounding.py")),
     ("contact-event slot arithmetic by hand (numerics/events.py contact_event, event_leg, "
      "event_slot)", re.compile(r"(//|%)\s*NEV_CONTACT\b|NEV_CONTACT\s*\+\s*[0-9]"),
-     ("loop.py", "numerics/hybrid.py", "numerics/transitions.py")),
+     ("_core/loop.py", "_core/numerics/hybrid.py", "_core/numerics/transitions.py")),
     ("an impact output by number (layout IMP_*)",
-     re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"), ("model/impact.py", "numerics/transitions.py")),
+     re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"), ("_core/model/impact.py", "_core/numerics/transitions.py")),
 )
 
 
 def test_core_arrays_are_read_by_their_names():
     """The slots of the compiled core's arrays are read through the names of
-    scoutsim/model/layout.py and the helpers beside it, not by number (comments aside)."""
+    scoutsim/_core/model/layout.py and the helpers beside it, not by number (comments aside)."""
     found = []
     for what, pattern, globs in MAGIC_FORMS:
         files = sorted({p for g in globs for p in ROOT.glob(g) if "__pycache__" not in p.parts})
@@ -96,3 +97,33 @@ def test_core_arrays_are_read_by_their_names():
                 if pattern.search(line.split("#", 1)[0]):
                     found.append(f"{p.relative_to(ROOT)}:{i}: {what}: {line.strip()}")
     assert not found, "\n".join(found)
+
+
+#: at most this many modules at the package root besides ``__init__``, ``__main__`` and
+#: ``_version``: the rest of the package lives in sub-packages named for what they hold
+MAX_ROOT_MODULES = 8
+#: packages whose modules may share a base name with a module elsewhere, and why
+SHARED_BASE_NAMES = {
+    "cli": "each module of the command line is named after its command (scoutsim basin, "
+           "sweep, tune), which runs the study of the same name in scoutsim.analysis",
+}
+
+
+def test_the_package_root_holds_few_modules():
+    root = sorted(p.stem for p in ROOT.glob("*.py")
+                  if p.stem not in ("__init__", "__main__", "_version"))
+    assert len(root) <= MAX_ROOT_MODULES, root
+
+
+def test_no_two_modules_share_a_base_name():
+    """A module's base name says what it holds, once: ``sensors.py`` in two packages would
+    make a reader (and a traceback) ask which. The command line's modules are the reasoned
+    exception (:data:`SHARED_BASE_NAMES`)."""
+    where = {}
+    for p in _sources():
+        rel = p.relative_to(ROOT)
+        if p.stem == "__init__" or (rel.parts[0] in SHARED_BASE_NAMES and len(rel.parts) > 1):
+            continue
+        where.setdefault(p.stem, []).append(str(rel))
+    shared = {k: v for k, v in where.items() if len(v) > 1}
+    assert not shared, shared

@@ -1,4 +1,4 @@
-"""scoutsim.tables: named columns on disk, read back bit for bit in both formats."""
+"""scoutsim.io.tables: named columns on disk, read back bit for bit in both formats."""
 
 import gzip
 import math
@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from scoutsim.tables import (FORMATS, TableError, TableWriter, read_metadata, read_table,
+from scoutsim.io.tables import (FORMATS, TableError, TableWriter, read_metadata, read_table,
                              write_table)
 
 pytest.importorskip("pyarrow")

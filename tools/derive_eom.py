@@ -2,7 +2,7 @@
 
 This script derives the Lagrangian dynamics from scratch, from the kinetic and potential
 energies written down directly from docs/specification.md sections 1, 2 and 5 -- it shares no code with
-``scoutsim.model.rigid_body`` and is used by ``tests/model/test_eom_independent.py`` to
+``scoutsim._core.model.rigid_body`` and is used by ``tests/model/test_eom_independent.py`` to
 cross-check the compiled implementation.
 
 Model (docs/specification.md section 1, 2, 5)
@@ -246,7 +246,7 @@ def _pair(value):
 
 def params_from_robot(robot, gears=True):
     """Named parameter dict from a ``scoutsim.RobotParameters`` (read field by field,
-    independently of ``scoutsim.model.packing``; a per-leg field given as a (back, front)
+    independently of ``scoutsim._core.model.packing``; a per-leg field given as a (back, front)
     pair gives each leg its value). ``gears=False`` zeroes J1, J2 and k_b."""
     out = {"m_t": robot.torso_mass, "I_t": robot.torso_inertia,
            "n_p": float(robot.legs_per_virtual_leg), "L": robot.hip_spacing / 2.0,

@@ -72,7 +72,7 @@ def basin_task(task: dict) -> dict:
     """Run one start of the basin grid (top level so that worker processes can import it).
     Its row's ``status``: ok (a run: its outcome), invalid (``invalid_start``: the start
     is not allowed) or error (the study could not run it; :mod:`.study_failures`)."""
-    from ..simulation import simulate
+    from ..simulation.simulator import simulate
     from ..state import InitialState
     row = _start_of(task)
     try:

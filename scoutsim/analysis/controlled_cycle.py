@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..integrator import IntegratorSettings
+from ..simulation.integrator import IntegratorSettings
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from ..simulation import simulate
+from ..simulation.simulator import simulate
 from ..state import InitialState
 from .poincare import MapError, floquet_multipliers
 

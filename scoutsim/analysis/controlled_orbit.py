@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..integrator import IntegratorSettings
+from ..simulation.integrator import IntegratorSettings
 from ..names import LEG_NAMES
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from ..simulation import simulate
+from ..simulation.simulator import simulate
 from ..state import HybridState
 from .poincare import MapError, floquet_multipliers
 from .stride_map import (CONTROLLED_Z_NAMES, _discrete, _hs_of, controlled_stride_map,

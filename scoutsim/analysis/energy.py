@@ -1,7 +1,7 @@
 """The work-energy balance of a run: where the energy the motors draw goes.
 
 A run made with ``simulate(energy=True)`` integrates every power flow of the model over each
-integrator step (``scoutsim.model.energy``) and logs the kinetic energy each touchdown impact
+integrator step (``scoutsim._core.model.power_flows``) and logs the kinetic energy each touchdown impact
 dissipates. The balance (docs/model.md "Work-energy balance"):
 
     electrical energy into the motors

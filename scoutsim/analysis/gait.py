@@ -323,7 +323,7 @@ class GaitMetrics:
         (every friction and damper of the mechanism), ``impact_loss_j`` (touchdown
         impacts), ``mechanical_energy_change_j`` and the balance's ``energy_residual_j``
         (input less every term; ``energy_relative_residual``: relative to the input), as
-        :meth:`~scoutsim.result.SimulationResult.energy_balance` gives them.
+        :meth:`~scoutsim.result.simulation_result.SimulationResult.energy_balance` gives them.
 
         Over the steady strides (from the first steady stride's start to the last one's
         end, the samples nearest to the back-leg lift-offs): ``mean_electrical_power_w``

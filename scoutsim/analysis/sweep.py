@@ -47,8 +47,8 @@ from ..control.factory import ControllerSpec
 from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParameters,
                           RobotParameters, field_dimension, plausibility_warnings_off,
                           validate_parameters)
-from ..run_directory import RunDirectory
-from ..tables import write_rows_csv, write_rows_parquet
+from ..io.run_directory import RunDirectory
+from ..io.tables import write_rows_csv, write_rows_parquet
 from .parallel import map_tasks
 from .study_controller import (build_controller, check_controller_travels,
                                describe_controller, study_controller)
@@ -152,7 +152,7 @@ ORBIT_TOL = 1e-7
 
 
 def _orbit_columns(result, robot, ctrl, task) -> dict:
-    from ..integrator import IntegratorSettings
+    from ..simulation.integrator import IntegratorSettings
     from .controlled_orbit import controlled_fixed_point
     from .poincare import MapError
     out = {k: None for k in ORBIT_COLUMNS}
@@ -214,7 +214,7 @@ def _warn_of_range_ends(points: list[dict], names: list[str], base: dict) -> Non
 
 
 def _sweep_point(task: dict) -> dict:
-    from ..simulation import simulate
+    from ..simulation.simulator import simulate
     row = dict(task["point"])
     row.update({k: None for k in SUMMARY_COLUMNS})
     if task.get("orbit"):

@@ -102,7 +102,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
-from ..run_directory import RunDirectory, json_safe
+from ..io.run_directory import RunDirectory, json_safe
 from .parallel import map_tasks, pool_is_broken, worker_pool
 from .study_controller import (build_controller, check_controller_travels,
                                describe_controller, study_controller)

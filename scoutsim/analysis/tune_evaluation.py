@@ -82,7 +82,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     """Run one scenario of the candidate (``robot``, controller parameters ``cparams``, a
     compiled controller's array ``params``) and score it (module docstring)."""
     from ..control.protocol import ControllerError
-    from ..simulation import simulate
+    from ..simulation.simulator import simulate
     goal = task["goal"]
     duration = task["duration"]
     try:

@@ -17,7 +17,7 @@ import json
 import pickle
 from pathlib import Path
 
-from ..run_directory import atomic_write
+from ..io.run_directory import atomic_write
 
 __all__ = ["MissingDependencyError", "EVALUATIONS", "OPTIMIZER_STATE"]
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters
-from ..run_directory import RunDirectory, json_safe
-from ..tables import write_rows_csv, write_rows_parquet
+from ..io.run_directory import RunDirectory, json_safe
+from ..io.tables import write_rows_csv, write_rows_parquet
 from .tune_evaluation import COLUMNS
 
 __all__ = ["TuneResult"]
@@ -127,7 +127,7 @@ def _write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
 
 
 def _json(v):
-    """JSON's fallback (``default=``) for what :func:`~scoutsim.run_directory.json_safe`
+    """JSON's fallback (``default=``) for what :func:`~scoutsim.io.run_directory.json_safe`
     leaves: a NumPy scalar as its number, anything else as its repr."""
     if isinstance(v, (np.floating, np.integer)):
         return v.item()

@@ -91,7 +91,7 @@ def main(argv=None) -> int:
         return 0
     progress = contextlib.nullcontext()
     if args.command in COMPILING_COMMANDS and not getattr(args, "quiet", False):
-        from ..jit import FIRST_COMPILE_NOTICE, compile_progress, core_is_compiled
+        from .._numba.jit import FIRST_COMPILE_NOTICE, compile_progress, core_is_compiled
         if not core_is_compiled():
             print(f"scoutsim {args.command}: {FIRST_COMPILE_NOTICE} ...", file=sys.stderr,
                   flush=True)

@@ -18,7 +18,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from ..run_directory import json_safe
+from ..io.run_directory import json_safe
 
 _IMPORTED_AT = time.perf_counter()
 
@@ -287,7 +287,7 @@ def check_expected_time(args, simulated_s: dict, *, workers: int = 1,
     """UsageError if a job of ``simulated_s`` ({model: simulated seconds}; plus
     ``per_run_s`` for each of ``runs`` runs), spread over ``workers`` processes, is expected
     to take longer than ``args.max_hours``."""
-    from ..budgets import expected_wall_time
+    from ..simulation.budgets import expected_wall_time
     wall = sum(expected_wall_time(sim_s, model) for model, sim_s in simulated_s.items())
     hours = (wall + per_run_s * runs) / max(1, workers) / 3600.0
     if hours > args.max_hours:
@@ -398,7 +398,7 @@ def load_robot(path):
 
 def integrator(args):
     """IntegratorSettings from --rtol / --atol (unset: the defaults)."""
-    from ..integrator import IntegratorSettings
+    from ..simulation.integrator import IntegratorSettings
     kw = {}
     if args.rtol is not None:
         kw["rtol"] = args.rtol
@@ -422,8 +422,8 @@ def input_file(path: str, *, directory_ok: bool = False) -> Path:
 def is_saved_run(p: Path) -> bool:
     """True if ``p`` is a run saved by ``scoutsim run``: its output directory, its
     timeseries table or a result.npz (an experiment log is not)."""
-    from ..result_files import TABLES_FORMAT
-    from ..tables import TableError, read_metadata
+    from ..result.run_files import TABLES_FORMAT
+    from ..io.tables import TableError, read_metadata
     if p.is_dir() or p.name.lower().endswith(".npz"):
         return True
     try:
@@ -435,8 +435,8 @@ def is_saved_run(p: Path) -> bool:
 def load_result(p: Path, t_range: tuple[float, float] | None = None):
     """A run saved by ``scoutsim run``: its output directory (or timeseries table) or a
     result.npz (``t_range``: only that window [s], SimulationResult.load)."""
-    from ..result import SimulationResult
-    from ..tables import TableError
+    from ..result.simulation_result import SimulationResult
+    from ..io.tables import TableError
     if not is_saved_run(p):
         raise UsageError(f"input '{p}' is not a saved run: expected the output directory of "
                          "`scoutsim run`, its timeseries table or a result.npz")

@@ -26,7 +26,7 @@ from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
                               basin_stats, basin_tasks, run_basin_tasks)
 from ..analysis.parallel import NotSendableError
 from ..parameters import floor_label
-from ..run_directory import RunDirectory
+from ..io.run_directory import RunDirectory
 from ._common import (SCOUT_FLOOR_FRICTION, add_controller_option, add_duration_option,
                       add_models_option, add_plots_option, check_expected_time,
                       controller_choice, controller_label, float_list, friction_list,

@@ -40,9 +40,9 @@ def _run_extent(p: Path):
     """(first sample time, last sample time [s], kept seconds if the run was streamed to disk
     else None, the run if it had to be loaded whole for this) of a saved run, from its
     metadata where it has some (the tables of a long streamed run are not read whole)."""
-    from ..result import SimulationResult
-    from ..run_directory import IncompleteRunError
-    from ..tables import TableError
+    from ..result.simulation_result import SimulationResult
+    from ..io.run_directory import IncompleteRunError
+    from ..io.tables import TableError
     if not p.name.lower().endswith(".npz"):
         try:
             meta = SimulationResult.load_metadata(p)

@@ -35,10 +35,10 @@ from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
-from ..result_columns import COLUMN_UNITS, column_unit
-from ..run_directory import MANIFEST, RunDirectory
+from ..result.columns import COLUMN_UNITS, column_unit
+from ..io.run_directory import MANIFEST, RunDirectory
 from ..state import InitialState
-from ..streaming import DEFAULT_KEEP_SECONDS
+from ..simulation.streaming import DEFAULT_KEEP_SECONDS
 from ._common import (MODELS, UsageError, add_controller_option, add_duration_option,
                       add_plots_option,
                       check_expected_time,
@@ -50,7 +50,7 @@ from ._common import (MODELS, UsageError, add_controller_option, add_duration_op
 NAME = "run"
 
 #: Unit of each ``result.columns()`` name (one home:
-#: :data:`scoutsim.result_columns.COLUMN_UNITS`), written into the header of
+#: :data:`scoutsim.result.columns.COLUMN_UNITS`), written into the header of
 #: ``timeseries.csv`` as ``name [unit]``.
 TIMESERIES_UNITS = COLUMN_UNITS
 
@@ -61,7 +61,7 @@ _DEFAULT_START = InitialState()
 def _simulate_default(name: str):
     """The default of :func:`scoutsim.simulate`'s argument ``name`` (its one home)."""
     import inspect
-    from ..simulation import simulate
+    from ..simulation.simulator import simulate
     return inspect.signature(simulate).parameters[name].default
 
 
@@ -70,7 +70,7 @@ DEFAULT_DURATION_S = _simulate_default("duration")
 
 
 def register(sub, common) -> None:
-    from ..tables import FORMATS
+    from ..io.tables import FORMATS
     run = sub.add_parser(
         NAME, parents=[common], help="simulate one run, print a summary, write its tables",
         description="Simulate one bounding run and write to DIR: timeseries and events tables "
@@ -88,7 +88,7 @@ def register(sub, common) -> None:
     add_controller_option(run)
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
-                          "passive model: scoutsim.simulation.default_initial_state)")
+                          "passive model: scoutsim.simulation.simulator.default_initial_state)")
     run.add_argument("--height", type=positive_float, default=None, metavar="Y",
                      help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g}; "
                           "passive model: higher, so that its hanging legs clear the ground "
@@ -229,7 +229,7 @@ def _rescue(result, what: str = "the run's data") -> str:
 def _stream_choice(args) -> bool:
     """Whether the run streams its tables to disk: asked with --stream, or chosen because
     the run would not fit in memory (said on stderr)."""
-    from ..budgets import check_run_memory
+    from ..simulation.budgets import check_run_memory
     if args.keep is not None and not args.stream:
         raise UsageError("--keep is only allowed with --stream")
     try:
@@ -373,8 +373,8 @@ def format_energy(summary: dict) -> str:
 
 
 def execute(args) -> int:
-    from ..simulation import simulate, warm_up
-    from ..starts import default_initial_state
+    from ..simulation.simulator import simulate, warm_up
+    from ..simulation.initial_conditions import default_initial_state
     robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
     law, cparams = controller_choice(args.controller, cparams)

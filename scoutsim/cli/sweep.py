@@ -141,7 +141,7 @@ def _points(args):
 def execute(args) -> int:
     from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.sweep import CHECKPOINT, read_checkpoint, sweep
-    from ..run_directory import add_to_manifest, atomic_write
+    from ..io.run_directory import add_to_manifest, atomic_write
     if bool(args.grid) == bool(args.random):
         raise UsageError("give either --grid axes or --random parameters")
     points = _points(args)

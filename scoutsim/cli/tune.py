@@ -101,7 +101,7 @@ def _starts(args, robot, model):
     --pitch-rates (None: the default start alone)."""
     if args.speeds is None and args.pitch_rates is None:
         return None
-    from ..starts import default_initial_state
+    from ..simulation.initial_conditions import default_initial_state
     base = default_initial_state(model, robot)
     out = []
     for v in args.speeds or [None]:
@@ -122,7 +122,7 @@ def execute(args) -> int:
     from ..analysis.study_failures import StudyError
     from ..analysis.tune_optimizer import EVALUATIONS, MissingDependencyError
     from ..analysis.tune_parameters import parse_parameter
-    from ..simulation import warm_up
+    from ..simulation.simulator import warm_up
     if not args.param:
         raise UsageError("give at least one --param NAME[=LOW:HIGH] to tune")
     if args.objective == "speed" and args.target is None:

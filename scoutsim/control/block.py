@@ -9,7 +9,7 @@ ints : int64 (``layout.NCB``)
     which controller runs (``CB_KIND``: ``layout.CTRL_*``), the address of a compiled
     controller function (``CB_ADDRESS``), the seed of the sensor noise (``CB_SEED``).
 spec : (``layout.NSPEC``, ``layout.NSN``)
-    each sensor slot's noise, bias, resolution and delay (:mod:`scoutsim.model.sensors`).
+    each sensor slot's noise, bias, resolution and delay (:mod:`scoutsim._core.model.sensor_readings`).
 geom : (``layout.NSG``)
     the sensors' geometry and flags.
 hist : (delay + 1, ``layout.NSN``)
@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from ..model import layout as L
+from .._core.model import layout as L
 
 __all__ = ["ControlBlock", "control_block"]
 

@@ -2,7 +2,7 @@
 docs/specification.md section 6).
 
 Per virtual leg, no torso feedback, sampled at 1 kHz with zero-order hold. The controller
-sees only its sensor readings (``layout.SN_*``, read by :mod:`scoutsim.model.sensors`: hip
+sees only its sensor readings (``layout.SN_*``, read by :mod:`scoutsim._core.model.sensor_readings`: hip
 angle and rate relative to the torso, the motor-side angle alpha in Model II by default,
 and leg length) and its own parameters (:func:`controller_array`: Table I, plus the motor
 constants of eqs. 2-4 and the leg rest length, packed once from the robot); never the
@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..jit import kernel
-from ..model.flags import FLAG_ON, is_set
-from ..model.layout import (
+from .._numba.jit import kernel
+from .._core.model.flags import FLAG_ON, is_set
+from .._core.model.layout import (
     LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B, TR_LIFTOFF,
     TR_SWEEP, TR_TOUCHDOWN,
 )

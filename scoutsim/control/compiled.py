@@ -1,6 +1,6 @@
 """Controllers that run inside the compiled loop, called through a function pointer.
 
-The run loop (:mod:`scoutsim.loop`) is compiled once; it calls a controller that is not the
+The run loop (:mod:`scoutsim._core.loop`) is compiled once; it calls a controller that is not the
 built-in Table I law through the controller function's machine address, with one fixed C
 signature (:data:`CONTROLLER_SIGNATURE`)::
 
@@ -47,7 +47,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from ..model import layout as L
+from .._core.model import layout as L
 from .protocol import DEFAULT_CONTROL_PERIOD, Controller
 
 __all__ = ["CompiledController", "CONTROLLER_SIGNATURE", "call_controller"]

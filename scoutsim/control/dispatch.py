@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import layout as L
+from .._core.model import layout as L
 from ..parameters import ControllerParameters, RobotParameters
 from .block import ControlBlock, control_block
 from .bounding import BoundingController, controller_array

@@ -37,7 +37,7 @@ import functools
 
 import numpy as np
 
-from ..model import layout as L
+from .._core.model import layout as L
 from ..parameters import ControllerParameters, RobotParameters, validate_controller
 from .bounding import C_TD_B, NC, bounding_step, controller_array
 from .compiled import CompiledController, _wrap

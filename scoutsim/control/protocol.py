@@ -69,7 +69,7 @@ class ControllerError(RuntimeError):
     sample : index of the control sample.
     returned : what ``command`` returned (None if it raised; a compiled controller: its
         torques, or its status if that was not 0).
-    result : the run up to the sample before (a :class:`~scoutsim.result.SimulationResult`
+    result : the run up to the sample before (a :class:`~scoutsim.result.simulation_result.SimulationResult`
         with ``outcome = "controller_error"`` and the message in
         ``provenance["controller_error"]``; a streamed run: its kept end, the tables hold
         all of it).

@@ -2,7 +2,7 @@
 each channel measures (:class:`SensorParameters`: noise, bias, resolution, delay).
 
 Channels (SI units; leg channels are (back, front) pairs; the compiled model computes them,
-:mod:`scoutsim.model.sensors`):
+:mod:`scoutsim._core.model.sensor_readings`):
 
 =================  ======  ===========================================================
 channel            unit    what reads it
@@ -53,8 +53,8 @@ from os import PathLike
 
 import numpy as np
 
-from ..model import layout as L
-from ..model.flags import FLAG_OFF, FLAG_ON
+from .._core.model import layout as L
+from .._core.model.flags import FLAG_OFF, FLAG_ON
 from ..parameters import ParameterError, RobotParameters, quantity_to_si
 
 __all__ = ["Sensors", "SensorChannel", "SensorParameters", "load_sensors", "CHANNELS",

@@ -44,7 +44,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from ..model.layout import IPHB, LS_FLIGHT, LS_RETRACTION
+from .._core.model.layout import IPHB, LS_FLIGHT, LS_RETRACTION
 from ..parameters import ControllerParameters
 from .bounding import C_KDB_B, C_KPB_B, C_SW_B
 
@@ -179,7 +179,7 @@ def run_startup(engine, params: StartupParameters,
     """Drive ``engine`` through the start-up from standing, up to the hand-over.
 
     ``engine`` runs the compiled Table I controller over the plant
-    (:class:`scoutsim.engine.HybridEngine`: its controller array ``C``, leg states
+    (:class:`scoutsim.simulation.engine.HybridEngine`: its controller array ``C``, leg states
     ``ls``, sample index ``k``, period ``dt``, ``running`` and ``advance(k_stop)``),
     starting from :func:`scoutsim.state.standing_state` at sample 0. The
     start-up changes the sweep limits and stance-brake gains in ``C`` and puts the front

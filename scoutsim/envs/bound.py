@@ -6,7 +6,7 @@ keyword, the simulator's own options (model, robot file, sensors, floor) pass st
 through, and ``step`` reports each reward term in ``info``.
 
 A policy step is ``policy_period / control_period`` samples of the compiled run loop
-(:class:`~scoutsim.engine.HybridEngine`, one engine per episode): the policy's action
+(:class:`~scoutsim.simulation.engine.HybridEngine`, one engine per episode): the policy's action
 is held over them, as the 1 kHz controller's command is held over a control period.
 """
 
@@ -26,10 +26,10 @@ from ..control.factory import FactoryError, controller_from_spec, is_factory_spe
 from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
-from ..engine import start_engine
-from ..failure import diagnose_failure
+from ..simulation.engine import start_engine
+from ..result.failure import diagnose_failure
 from ..names import ContactMode
-from ..simulation import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
+from ..simulation.simulator import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
 from ..state import HybridState, InitialState, standing_state
 
 __all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
@@ -98,7 +98,7 @@ class BoundEnv(gymnasium.Env):
       -``forward_reward_weight`` x |v - v*|;
     * ``reward_energy``: -``energy_cost_weight`` [1/J] x the electrical energy into the
       motor terminals over the step [J] (``info["electrical_energy"]``, from the model's
-      energy balance, :meth:`~scoutsim.result.SimulationResult.energy_balance`; negative
+      energy balance, :meth:`~scoutsim.result.simulation_result.SimulationResult.energy_balance`; negative
       while the motors regenerate more than they draw). The accounting runs only when
       ``energy_cost_weight`` is not 0 (it costs time); otherwise the energy is NaN and the
       term 0;
@@ -130,7 +130,7 @@ class BoundEnv(gymnasium.Env):
       what it was, so it is not mistaken for the time limit: ``info["outcome"]``,
       ``info["numerical_failure"]`` (False at every other step) and
       ``info["failure_message"]``, the simulator's diagnosis
-      (:meth:`~scoutsim.failure.FailureDiagnosis.message`). A learner that would rather
+      (:meth:`~scoutsim.result.failure.FailureDiagnosis.message`). A learner that would rather
       count such an episode as lost tests ``info["numerical_failure"]``.
 
     **Start** (``start``): "flight" (:class:`~scoutsim.state.InitialState`: released in
@@ -333,7 +333,7 @@ class BoundEnv(gymnasium.Env):
 
     @property
     def engine(self):
-        """The episode's :class:`~scoutsim.engine.HybridEngine` (its state ``s``, modes,
+        """The episode's :class:`~scoutsim.simulation.engine.HybridEngine` (its state ``s``, modes,
         energy accumulator), read-only by convention."""
         return self._engine
 
@@ -469,7 +469,7 @@ class BoundEnv(gymnasium.Env):
     def _failure_message(self) -> str:
         """What stopped the simulator in the step just run (its records still in the
         engine): the diagnosis of a numerical failure
-        (:func:`~scoutsim.failure.diagnose_failure`), or the controller's failure."""
+        (:func:`~scoutsim.result.failure.diagnose_failure`), or the controller's failure."""
         eng = self._engine
         if eng.status_name != "numerical_failure":
             return (f"the controller failed at t = {eng.t_now:.6g} s (outcome "

@@ -42,7 +42,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from ..integrator import IntegratorSettings
+from ..simulation.integrator import IntegratorSettings
 from ..parameters import RobotParameters, validate_robot
 from .example import EXAMPLE_FACTORS, example_logs, example_robot
 from .fit_result import FittedParameter, IdentificationResult

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..integrator import IntegratorSettings
+from ..simulation.integrator import IntegratorSettings
 from ..parameters import RobotParameters
 from ..validation.log_format import LogError
 from .parameter_vector import robot_with

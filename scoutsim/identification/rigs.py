@@ -39,10 +39,10 @@ import numpy as np
 from .._version import __version__
 from ..names import LEG_NAMES
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
-from ..result import SimulationResult
+from ..result.simulation_result import SimulationResult
 from ..state import state_vector
-from ..bench import Bench, run_bench
-from ..integrator import IntegratorSettings
+from ..simulation.bench import Bench, run_bench
+from ..simulation.integrator import IntegratorSettings
 from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp
 

@@ -8,7 +8,7 @@ values far outside what a robot of Scout II's kind has).
 
 Mass and hip-unit quantities are per *physical* leg. A virtual leg lumps
 ``legs_per_virtual_leg`` physical legs (docs/specification.md section 1); the compiled model multiplies
-per-leg quantities by that number in exactly one place (the compiled model, ``scoutsim.model``).
+per-leg quantities by that number in exactly one place (the compiled model, ``scoutsim._core.model``).
 
 Modules (each imports only those above it):
 
@@ -36,7 +36,7 @@ Modules (each imports only those above it):
 
 from .controller import ControllerParameters
 from .environment import DEFAULT_FRICTION_COEFFICIENT, Environment, floor_label
-from .errors import ParameterError
+from .parameter_error import ParameterError
 from .files import (SECTIONS, SEPARATE_SECTIONS, from_dict, load_controller, load_parameters,
                     load_robot, parameter_table, to_dict)
 from .plausibility import ImplausibleParameterWarning, plausibility_warnings_off

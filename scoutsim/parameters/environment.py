@@ -7,7 +7,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .errors import ParameterError
+from .parameter_error import ParameterError
 from .robot import RobotParameters
 
 

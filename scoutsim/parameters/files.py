@@ -10,7 +10,7 @@ import typing
 from os import PathLike
 
 from .controller import ControllerParameters
-from .errors import ParameterError, _fmt, _unknown
+from .parameter_error import ParameterError, _fmt, _unknown
 from .robot import RobotParameters
 from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema, _Spec
 from .units import _UNIT_INDEX, UNITS

@@ -16,7 +16,7 @@ import math
 import warnings
 
 from ..names import LEG_NAMES
-from .errors import _fmt, _fmt_bound
+from .parameter_error import _fmt, _fmt_bound
 from .schema import _Spec
 from .units import UNITS
 

@@ -9,7 +9,7 @@ import dataclasses
 from dataclasses import dataclass
 
 from ..names import LEG_NAMES, leg_index
-from .errors import ParameterError
+from .parameter_error import ParameterError
 from .packaged import _packaged_defaults
 from .schema import PER_LEG_FIELDS, ROBOT_SECTIONS, given_per_leg
 from .validation import check_robot
@@ -248,14 +248,14 @@ class RobotParameters:
     def hip_offset(self, leg) -> float:
         """Position [m] of leg ``leg``'s hip along the torso axis from the torso COM:
         -L - com_offset (back), L - com_offset (front); the compiled model's counterpart is
-        ``scoutsim.model.kinematics.hip_offset``."""
+        ``scoutsim._core.model.kinematics.hip_offset``."""
         sign = (-1.0, 1.0)[leg_index(leg)]
         return sign * self.half_hip_spacing - self.com_offset
 
     @property
     def torque_per_amp(self) -> float:
         """Hip torque per ampere of motor current, N eta K_T [N m/A] (the compiled model's
-        counterpart is ``scoutsim.model.actuator.torque_per_amp``)."""
+        counterpart is ``scoutsim._core.model.actuator.torque_per_amp``)."""
         return self.gear_ratio * self.efficiency * self._same("torque_per_amp",
                                                               "torque_constant")[0]
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import numbers
 
-from .errors import ParameterError
+from .parameter_error import ParameterError
 
 
 #: Allowed unit strings and their SI factors (SI value = value * factor), grouped by

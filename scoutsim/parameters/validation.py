@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from ..names import LEG_NAMES
-from .errors import ParameterError, _fmt, _fmt_bound
+from .parameter_error import ParameterError, _fmt, _fmt_bound
 from .plausibility import slip_hint, warn_implausible
 from .schema import (CONTROLLER_SECTIONS, PER_LEG_FIELDS, ROBOT_SECTIONS, _fields_of, _schema,
                      _Spec, given_per_leg)
@@ -110,7 +110,7 @@ class _Limit:
 #: 25 kg, 0.55 m, 1 g), so they refuse only values no robot has (1e308 kg, lengths in
 #: kilometres, ...), which would otherwise overflow or make the equations of motion
 #: numerically singular. Values inside them can still make a run fail; such a failure is
-#: diagnosed after the run (:mod:`scoutsim.failure`).
+#: diagnosed after the run (:mod:`scoutsim.result.failure`).
 _MASS_MAX = 1.0e5        # kg: 100 t
 _LENGTH_MAX = 100.0      # m
 _GRAVITY_MAX = 1.0e3     # m/s^2: about 100 g (Jupiter's surface gravity is 24.8 m/s^2)

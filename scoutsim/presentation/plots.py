@@ -70,7 +70,7 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
     overview.
 
     The title says what the run did (:meth:`SimulationResult.behaviour
-    <scoutsim.result.SimulationResult.behaviour>`: steady bounding at its speed, or what
+    <scoutsim.result.simulation_result.SimulationResult.behaviour>`: steady bounding at its speed, or what
     instead); the legends sit above their panels, off the traces.
 
     Parameters

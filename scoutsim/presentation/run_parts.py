@@ -21,7 +21,7 @@ def _model_label(result) -> str:
 
 def is_part_of_run(result) -> bool:
     """Whether ``result`` holds only a window of its run (:meth:`SimulationResult.window
-    <scoutsim.result.SimulationResult.window>`, a window loaded from a saved run): its
+    <scoutsim.result.simulation_result.SimulationResult.window>`, a window loaded from a saved run): its
     samples end before the run's end, or start after t = 0 (a streamed run's kept end, whose
     summary covers the kept end, is taken whole)."""
     t = np.asarray(result.t, dtype=float)
@@ -33,7 +33,7 @@ def is_part_of_run(result) -> bool:
 
 def behaviour_text(result, behaviour: str | None = None) -> str:
     """What the run did (:meth:`SimulationResult.behaviour
-    <scoutsim.result.SimulationResult.behaviour>`: "steady bounding at 1.39 m/s, ...",
+    <scoutsim.result.simulation_result.SimulationResult.behaviour>`: "steady bounding at 1.39 m/s, ...",
     "fell at t = 0.66 s: ..."), or ``behaviour`` if given (e.g. a saved run's summary). A
     window of a run says its outcome and the window shown instead, as its strides are not
     the run's; a run whose strides cannot be analysed, its outcome (with the time [s] of a

@@ -6,7 +6,7 @@
 Procedure (paper Sec. IV.C; docs/specification.md section 8):
 
 1. Every experiment log is split into strides
-   (:func:`~scoutsim.validation.strides.experiment_strides`: a log too short to hold one
+   (:func:`~scoutsim.validation.log_strides.experiment_strides`: a log too short to hold one
    steady stride, or with no stride detected, is refused with a LogError); its steady
    strides, pooled over all runs, are the experimental strides. If no log has a steady
    stride, :func:`compare` raises LogError (the table would be empty).
@@ -51,8 +51,8 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from .sensors import EDGE_S
-from .strides import LogGait, experiment_strides, log_strides
+from .torso_sensors import EDGE_S
+from .log_strides import LogGait, experiment_strides, log_strides
 
 __all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
            "percent_errors", "rank_paired_model_values", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]
@@ -269,7 +269,7 @@ def simulate_model(model: str, duration: float, robot=None, controller=None,
                    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, initial_state=None, integrator=None,
                    like=None, transient_s: float = 2.0, progress: bool = False) -> ModelRun:
     """Simulate one model and measure it like the log ``like`` (noise-free)."""
-    from ..simulation import simulate
+    from ..simulation.simulator import simulate
     from .measurement import to_log_like
     res = simulate(robot, controller, initial_state, duration, model=model,
                    integrator=integrator, friction_coefficient=friction_coefficient,
@@ -304,7 +304,7 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
     ------
     LogError
         For a log too short to hold one steady stride or with no stride detected
-        (:func:`~scoutsim.validation.strides.experiment_strides`), and when no log has a
+        (:func:`~scoutsim.validation.log_strides.experiment_strides`), and when no log has a
         steady stride; before any model is simulated.
     """
     from .experiment_log import ExperimentLog

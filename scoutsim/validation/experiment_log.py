@@ -16,7 +16,7 @@ import numpy as np
 from ..names import LEG_NAMES, LegState, leg_index
 from .log_format import DEFAULT_META
 from .log_writing import save_log
-from .sensors import LaserGeometry, fft_lowpass, pitch_height_from_lasers
+from .torso_sensors import LaserGeometry, fft_lowpass, pitch_height_from_lasers
 
 __all__ = ["ExperimentLog", "LEGS"]
 

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-from ..simulation import simulate
+from ..simulation.simulator import simulate
 from ..state import InitialState
 from .log_writing import save_log
 from .measurement import LaserGeometry, SensorNoise, to_log

@@ -32,7 +32,7 @@ import numpy as np
 from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from .experiment_log import ExperimentLog
-from .sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
+from .torso_sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
                       pitch_height_from_lasers)
 
 __all__ = ["LaserGeometry", "SensorNoise", "laser_ranges", "pitch_height_from_lasers",

@@ -5,7 +5,7 @@ experiment drift out of phase, and falls back to per-stride gait parameters (Fig
 finer comparison that still avoids the phase problem puts every stride on its *own* phase:
 
 1. A stride runs from one back-leg lift-off to the next (as in
-   :mod:`~scoutsim.validation.strides`); its phase is ``s = (t - t_start) / period``, 0 at
+   :mod:`~scoutsim.validation.log_strides`); its phase is ``s = (t - t_start) / period``, 0 at
    the first lift-off, 1 at the next.
 2. Every signal of every steady stride is resampled (linear interpolation) on a common
    phase grid of ``n_phase`` points from 0 to 1 inclusive.
@@ -46,7 +46,7 @@ import numpy as np
 from ..names import MODEL_LABELS
 from .experiment_log import ExperimentLog
 from .measurement import to_log_like
-from .strides import LogGait, log_strides
+from .log_strides import LogGait, log_strides
 
 __all__ = ["SIGNALS", "Source", "as_source", "as_sources", "resample_strides",
            "PhaseComparison", "phase_compare"]
@@ -138,7 +138,7 @@ def as_source(obj, name: str | None = None, like: ExperimentLog | None = None,
               transient_s: float = 2.0) -> Source:
     """A :class:`Source` from experiment logs (an ExperimentLog or a list of them), a
     SimulationResult, a ModelRun or a Source. Simulations are measured like ``like``."""
-    from ..result import SimulationResult
+    from ..result.simulation_result import SimulationResult
     from .errors import ModelRun
     if isinstance(obj, Source):
         return obj

@@ -26,7 +26,7 @@ from scoutsim.analysis.behaviour import (BEHAVIOUR_KINDS, IN_PLACE_SPEED_M_S, RE
                                          RUN_LONGER, SLIDE_PER_METRE, classify_behaviour,
                                          toe_slide_distance)
 from scoutsim.cli.run import format_summary
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.names import ContactMode
 from scoutsim.parameters import load_controller
 

@@ -1,4 +1,4 @@
-"""The work-energy balance (scoutsim.analysis.energy, scoutsim.model.energy).
+"""The work-energy balance (scoutsim.analysis.energy, scoutsim._core.model.power_flows).
 
 Law checked: the energy the motors draw equals the change of mechanical energy plus every
 loss (docs/model.md "Work-energy balance"). The energies are integrated alongside the
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import layout as L
-from scoutsim.integrator import IntegratorSettings
+from scoutsim._core.model import layout as L
+from scoutsim.simulation.simulator.integrator import IntegratorSettings
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 #: every option beyond the paper's models switched on, and a battery with internal
@@ -177,7 +177,7 @@ def test_transition_audit_reports_the_balance():
     run's balance, and reports a balance that does not close."""
     import dataclasses
 
-    from scoutsim.analysis.transitions import audit_transitions
+    from scoutsim.analysis.transition_audit import audit_transitions
     r = scoutsim.simulate(duration=2.0, energy=True)
     audit = audit_transitions(r)
     assert audit.balance is not None and audit.ok, audit.problems()

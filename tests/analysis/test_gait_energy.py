@@ -1,5 +1,5 @@
 """What a gait costs (scoutsim.analysis.stride_energy per stride, the gait summary, the energy
-accessors of scoutsim.result): the cumulative energy of every flow at every sample, the power
+accessors of scoutsim.result.simulation_result): the cumulative energy of every flow at every sample, the power
 series, the energy of each stride and the cost of transport.
 
 Laws checked: the accumulator recorded at the samples ends at the run's totals and never
@@ -18,7 +18,7 @@ import pytest
 
 import scoutsim
 from scoutsim import IntegratorSettings, RobotParameters
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 
 #: flows that only ever take energy out (each a square or a friction force against its
 #: sliding velocity: R_A i^2, b w^2, c l'^2, -F_t v_toe)

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 import scoutsim
-from scoutsim.run_directory import IncompleteRunError, check_run_directory
+from scoutsim.io.run_directory import IncompleteRunError, check_run_directory
 
 # 20 points of 40 s (about 0.2 s of computing each): long enough to stop between points,
 # short enough for the test suite

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from scoutsim import BoundingController, ControllerParameters, RobotParameters
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.control.sensors import Sensors
 
 ROBOT = RobotParameters()
@@ -133,7 +133,7 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
     import scoutsim
     from scoutsim.control.bounding import bounding_step, controller_array
     from scoutsim.control.sensors import SensorParameters
-    from scoutsim.model.sensors import true_readings
+    from scoutsim._core.model.sensor_readings import true_readings
     r = scoutsim.simulate(duration=1.0, model="II")
     geom = SensorParameters().geometry_array(ROBOT, sense_motor_angle)
     ds, aux = np.zeros(L.NS), np.zeros(L.NAUX)
@@ -188,7 +188,7 @@ def test_a_command_before_reset_is_refused():
 
 @pytest.mark.parametrize("motor_side", [True, False])
 def test_the_sensors_read_the_motor_or_the_leg_side(motor_side):
-    from scoutsim.model.sensors import read_encoders
+    from scoutsim._core.model.sensor_readings import read_encoders
     s = np.arange(L.NS, dtype=float) + 1.0
     y = np.zeros(L.NSN)
     read_encoders(s, motor_side, y)

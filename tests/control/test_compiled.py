@@ -13,8 +13,8 @@ import scoutsim
 from scoutsim import InitialState
 from scoutsim.control import CompiledController, Controller, ControllerError
 from scoutsim.control import sensors as S
-from scoutsim.jit import cache_directory
-from scoutsim.model import layout as L
+from scoutsim._numba.jit import cache_directory
+from scoutsim._core.model import layout as L
 
 AIR = InitialState(y=1.0, dx=0.0, dtheta=0.0)    # in the air: a short, simple run
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from scoutsim.control.bounding import bounding_step, controller_array
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.parameters import ControllerParameters, RobotParameters
 
 PARAMS = ControllerParameters().replace(

@@ -18,7 +18,7 @@ import scoutsim
 from scoutsim import InitialState
 from scoutsim.cli import main
 from scoutsim.control import PitchFeedbackController
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.parameters import ControllerParameters, ParameterError, load_controller
 
 MODELS = ("ideal", "I", "II")

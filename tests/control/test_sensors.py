@@ -1,4 +1,4 @@
-"""The sensors a controller sees (scoutsim.control.sensors, scoutsim.model.sensors): ideal
+"""The sensors a controller sees (scoutsim.control.sensors, scoutsim._core.model.sensor_readings): ideal
 readings against the plant's state and independent formulations (the validation chain's
 laser geometry, free fall of the massless-leg model, the velocity's difference quotient),
 and each measurement effect (bias, noise, resolution, delay) as specified, reproducible
@@ -14,9 +14,9 @@ from scoutsim import BoundingController, InitialState, RobotParameters
 from scoutsim.control.sensors import (
     CHANNELS, SensorChannel, SensorParameters, Sensors, load_sensors,
 )
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.parameters import ParameterError
-from scoutsim.validation.sensors import LaserGeometry, laser_ranges
+from scoutsim.validation.torso_sensors import LaserGeometry, laser_ranges
 
 ROBOT = RobotParameters()
 
@@ -64,7 +64,7 @@ def test_ideal_sensors_read_the_state_at_the_sample_instants(ideal):
 
 def test_the_lasers_read_the_validation_chains_geometry(ideal):
     """The torso lasers against the validation chain's own inverse geometry
-    (scoutsim.validation.sensors.laser_ranges), at the torso ends (torso_length / 2)."""
+    (scoutsim.validation.torso_sensors.laser_ranges), at the torso ends (torso_length / 2)."""
     r, _, y = ideal
     front, back = laser_ranges(r.height, r.pitch, LaserGeometry(0.5 * ROBOT.torso_length))
     np.testing.assert_allclose(y[:, L.SN_RANGE_B], back, rtol=0, atol=1e-15)

@@ -9,7 +9,7 @@ import pytest
 
 import scoutsim
 from scoutsim import ControllerParameters, StartupParameters
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 
 MODELS = ("ideal", "I", "II")
 

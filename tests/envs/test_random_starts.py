@@ -16,7 +16,7 @@ import pytest
 
 pytest.importorskip("gymnasium", reason="the learning environment needs gymnasium")
 
-from scoutsim.model import layout as L  # noqa: E402
+from scoutsim._core.model import layout as L  # noqa: E402
 
 _TOOL = Path(__file__).resolve().parents[2] / "tools" / "fuzz_random_starts.py"
 _spec = importlib.util.spec_from_file_location("fuzz_random_starts_for_tests", _TOOL)
@@ -81,9 +81,9 @@ def test_jammed_slide_ends_in_an_impact_on_the_friction_cone_edge():
     (energy drops only by the logged impact losses, modes consistent after every
     transition) finds nothing, and the run ends in a fall, not a numerical failure."""
     from scoutsim import simulate
-    from scoutsim.analysis.transitions import audit_transitions
+    from scoutsim.analysis.transition_audit import audit_transitions
     from scoutsim.control.protocol import Controller
-    from scoutsim.model.contact import JAM_AXIAL_SHARE
+    from scoutsim._core.model.contact import JAM_AXIAL_SHARE
     from scoutsim.state import InitialState
 
     class Zero(Controller):

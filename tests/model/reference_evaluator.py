@@ -1,6 +1,6 @@
 """The reference evaluator: a second, allocating implementation of the model's right-hand
 side (dense KKT solve, its own assembly of the forces and rows), the test oracle of the
-optimized :func:`scoutsim.model.evaluate.evaluate_ws` (tests/model/test_evaluate.py).
+optimized :func:`scoutsim._core.model.evaluate.evaluate_ws` (tests/model/test_evaluate.py).
 Not part of the package: it exists only to be compared against.
 
 To be an oracle of the model's laws and not a copy of them, it writes every law itself, from
@@ -39,8 +39,8 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from scoutsim.model.kkt import MAX_ROWS, add_clamp_rows, solve_dense
-from scoutsim.model.layout import (
+from scoutsim._core.model.kkt import MAX_ROWS, add_clamp_rows, solve_dense
+from scoutsim._core.model.layout import (
     A_BELT, A_CURRENT, A_ENERGY, A_FAX, A_GN, A_GT, A_HOLD, A_KKT_OK, A_OMEGA_M, A_SLIP_V,
     A_STRUT, A_TAU_APP, A_TAU_BELT, A_TAU_CMD, A_TOE_X, A_TOE_Y, A_VBATT, CIRCUIT_OPEN,
     CIRCUIT_SHORT, HIP_SIGN, IL_B, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B,
@@ -341,7 +341,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     """Reference implementation of :func:`evaluate` (allocating, dense KKT solve); kept
     for cross-checks of the optimized ``evaluate_ws``.
 
-    Same arguments, outputs and return value as :func:`scoutsim.model.evaluate.evaluate`
+    Same arguments, outputs and return value as :func:`scoutsim._core.model.evaluate.evaluate`
     (state ``s`` [SI], parameters ``P``, modes ``mi``/``mf``, command ``cmd`` [N m]; fills
     ``ds`` and ``aux``; False if the constrained dynamics are singular).
     """

@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scoutsim.model import actuator
-from scoutsim.model.packing import robot_array
+from scoutsim._core.model import actuator
+from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import ParameterError, RobotParameters, load_robot
-from scoutsim.simulation import simulate
+from scoutsim.simulation.simulator.simulator import simulate
 
 IDLE = 0.5
 CLOAD = 0.05

@@ -1,4 +1,4 @@
-"""The belt with backlash (scoutsim.model.backlash): which robots run on it, and its
+"""The belt with backlash (scoutsim._core.model.backlash): which robots run on it, and its
 consistency.
 
 Laws checked: a robot's hip unit follows its model and play (the belt with backlash for
@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.integrator import IntegratorSettings
-from scoutsim.model import evaluate as D
-from scoutsim.model import hip_unit
-from scoutsim.model import layout as L
-from scoutsim.model import workspace as W
-from scoutsim.model.packing import robot_array
+from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim._core.model import evaluate as D
+from scoutsim._core.model import hip_unit
+from scoutsim._core.model import layout as L
+from scoutsim._core.model import workspace as W
+from scoutsim._core.model.packing import robot_array
 
 PLAY = math.radians(2.0)
 BACKLASH_ROBOT = scoutsim.RobotParameters(belt_backlash=PLAY)

@@ -3,7 +3,7 @@
 ``tools/derive_eom.py`` derives M(q), h(q, dq), the gravity force, the energies and the toe
 kinematics from the kinetic and potential energy written down directly from docs/specification.md section 1, 2, 5
 (Lagrange's equations, no shared code). These tests compare them with
-``scoutsim.model`` (rigid_body, evaluate) for random states (fixed seed), for Model II (gear inertias) and
+``scoutsim._core.model`` (rigid_body, evaluate) for random states (fixed seed), for Model II (gear inertias) and
 Model I (no gears), for the default robot, for a variant with one physical leg per
 virtual leg and a different leg COM distance, and for a robot whose back and front legs
 differ in every leg, hip-unit and motor quantity and whose torso COM is ahead of the
@@ -23,10 +23,10 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import evaluate as ev
-from scoutsim.model import kinematics, rigid_body
-from scoutsim.model import layout as L
-from scoutsim.model.packing import robot_array
+from scoutsim._core.model import evaluate as ev
+from scoutsim._core.model import kinematics, rigid_body
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.packing import robot_array
 
 _TOOL = Path(__file__).resolve().parents[2] / "tools" / "derive_eom.py"
 

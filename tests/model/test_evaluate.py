@@ -12,10 +12,10 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState, RobotParameters
-from scoutsim.model import evaluate as D
-from scoutsim.model import workspace as W
-from scoutsim.model import layout as L
-from scoutsim.model.packing import robot_array
+from scoutsim._core.model import evaluate as D
+from scoutsim._core.model import workspace as W
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.packing import robot_array
 
 from . import reference_evaluator as ref
 from .reference_evaluator import evaluate_reference

@@ -1,4 +1,4 @@
-"""The hip units (scoutsim.model.hip_unit): the registry and the compiled hooks written
+"""The hip units (scoutsim._core.model.hip_unit): the registry and the compiled hooks written
 from it.
 
 Laws checked: every registered unit declares what a unit must (name, whether it is geared,
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import hip_unit, layout as L
-from scoutsim.model.packing import robot_array
+from scoutsim._core.model import hip_unit, layout as L
+from scoutsim._core.model.packing import robot_array
 
 
 def test_every_unit_declares_its_hooks():

@@ -34,7 +34,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.parameters import DEFAULT_FRICTION_COEFFICIENT
 
 #: the robot the runs use; every mass property below is read from its fields

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 
 ROBOT = scoutsim.RobotParameters()
 N = ROBOT.planetary_ratio * ROBOT.sprocket_ratio
@@ -141,8 +141,8 @@ def test_motor_current_is_odd_beyond_both_limits():
     carries the torque-speed line's current even beyond i_max (the amplifier applies at
     most the battery voltage against it), in either direction: the law is odd in
     (command, speed), i(-tau, -w) = -i(tau, w), at every command and speed."""
-    from scoutsim.model.actuator import motor_current
-    from scoutsim.model.packing import robot_array
+    from scoutsim._core.model.actuator import motor_current
+    from scoutsim._core.model.packing import robot_array
     P = robot_array(ROBOT, "I")
     vb = ROBOT.battery_voltage
     w_edge = (vb + ROBOT.armature_resistance * ROBOT.current_limit) / ROBOT.speed_constant

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 #: Table III plus every effect beyond the paper's models

@@ -12,7 +12,7 @@ import pytest
 
 import scoutsim
 from scoutsim.identification.rigs import Stall, stall_deflection
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 
 ROBOT = scoutsim.RobotParameters()
 N = ROBOT.planetary_ratio * ROBOT.sprocket_ratio

@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.integrator import IntegratorSettings
-from scoutsim.model import evaluate as ev
-from scoutsim.model import layout as L
-from scoutsim.model.packing import robot_array
+from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim._core.model import evaluate as ev
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import PER_LEG_FIELDS, ParameterError, load_robot
 from scoutsim.state import InitialState, standing_leg_compressions, standing_state
 

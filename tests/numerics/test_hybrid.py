@@ -1,4 +1,4 @@
-"""Physics and numerics tests of the compiled hybrid integrator (scoutsim/numerics/hybrid.py)."""
+"""Physics and numerics tests of the compiled hybrid integrator (scoutsim/_core/numerics/hybrid.py)."""
 
 import math
 

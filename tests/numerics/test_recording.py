@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 
 import scoutsim
-import scoutsim.engine
-from scoutsim.model import layout as L
-from scoutsim.model.packing import robot_array
+import scoutsim.simulation.simulator.engine
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.packing import robot_array
 
 _TOOL = Path(__file__).resolve().parents[2] / "tools" / "derive_eom.py"
 
@@ -138,7 +138,7 @@ def test_step_recording_survives_chunking_and_buffer_growth(monkeypatch):
     np.testing.assert_array_equal(whole.steps, chunked.steps)
     np.testing.assert_array_equal(whole.state, chunked.state)
     # a buffer with room for 16 steps beyond the headroom grows after the first periods
-    monkeypatch.setattr(scoutsim.engine.HybridEngine, "STEP_ROWS", 16)
+    monkeypatch.setattr(scoutsim.simulation.engine.HybridEngine, "STEP_ROWS", 16)
     grown = scoutsim.simulate(duration=1.5, model="I", record_steps=True)
     assert len(grown.steps) > 16
     np.testing.assert_array_equal(grown.steps, whole.steps)

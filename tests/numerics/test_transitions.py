@@ -6,7 +6,7 @@ Laws checked (docs/model.md, "Events and transitions"):
   before (stiction carries no impulse);
 * mechanical energy drops only at touchdown impacts, by exactly the logged impact losses;
 * after every transition the modes agree with the velocities and forces (the transition
-  audit of scoutsim.analysis.transitions finds nothing), over many starts, every model and
+  audit of scoutsim.analysis.transition_audit finds nothing), over many starts, every model and
   both kinds of floor;
 * a stale mode (a resumed state whose joint slips against its motion) is reconciled
   without an impulse;
@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.analysis.transitions import audit_transitions
-from scoutsim.model import layout as L
-from scoutsim.model.impact import impact
-from scoutsim.model.rigid_body import kinetic_energy
-from scoutsim.model.packing import robot_array
+from scoutsim.analysis.transition_audit import audit_transitions
+from scoutsim._core.model import layout as L
+from scoutsim._core.model.impact import impact
+from scoutsim._core.model.rigid_body import kinetic_energy
+from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.state import HybridState, InitialState
 

@@ -14,7 +14,7 @@ from scoutsim import RobotParameters, simulate
 from scoutsim.validation import SensorNoise, save_log, to_log
 from scoutsim.presentation import paper_figures as figures
 from scoutsim.validation.errors import ModelRun, assess_errors
-from scoutsim.validation.strides import log_strides
+from scoutsim.validation.log_strides import log_strides
 from scoutsim.state import InitialState
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the

@@ -3,7 +3,7 @@
 import pytest
 from matplotlib.figure import Figure
 
-from scoutsim.model import layout as L
+from scoutsim._core.model import layout as L
 from scoutsim.presentation import style
 from scoutsim.presentation.animation import LEG_STATE_COLORS as ANIMATION_STATE_COLORS
 

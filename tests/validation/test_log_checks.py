@@ -1,6 +1,6 @@
 """Tests of the experiment-log input checks that keep `scoutsim compare` from being silently
 wrong: isolated spikes in the position-like signals (a Hampel test in
-scoutsim.validation.log_spikes) and logs that hold no stride (scoutsim.validation.strides /
+scoutsim.validation.log_spikes) and logs that hold no stride (scoutsim.validation.log_strides /
 errors.compare and the CLI)."""
 
 import re
@@ -233,7 +233,7 @@ def test_a_log_with_strides_but_too_short_for_a_steady_one(example):
 
 
 def test_a_smaller_transient_accepts_a_short_log(example):
-    from scoutsim.validation.strides import experiment_strides
+    from scoutsim.validation.log_strides import experiment_strides
     log = _with(example, rows=slice(4000, 5501))     # 1.5 s from the steady part
     assert experiment_strides(log, transient_s=0.0).n_steady_strides >= 3
     with pytest.raises(LogError, match="lasts 1.500 s"):
@@ -268,7 +268,7 @@ def test_no_steady_stride_in_any_log_is_refused():
 
 
 def test_a_steady_synthetic_log_passes_the_stride_checks():
-    from scoutsim.validation.strides import experiment_strides
+    from scoutsim.validation.log_strides import experiment_strides
     g = experiment_strides(_bounding_log([0.25] * 30))
     assert g.n_steady_strides >= 20
 

@@ -141,7 +141,7 @@ def test_steady_model_is_compared_with_every_experimental_stride(sim, sim_log):
     # about the model value
     run = _run("II", sim, sim_log)
     from scoutsim.analysis.strides import Stride
-    from scoutsim.validation.strides import LogGait
+    from scoutsim.validation.log_strides import LogGait
     exp = log_strides(sim_log).steady_strides
     for metric in ERROR_METRICS:
         x = np.array([s[metric] for s in exp])

@@ -1,0 +1,490 @@
+"""Compilation options of the compiled core (Numba), in one place.
+
+Every compiled function of the model, the integrators and the built-in controller is
+declared with one of two decorators:
+
+``kernel``
+    Functions that only read and write arrays they are given (no allocation, no array
+    returned). They are compiled without Numba's reference counting (``_nrt=False``): with
+    it, every array argument, every view (``wk[a:b]``, ``K[0]``) and every tuple item is
+    an atomic increment on entry and an atomic decrement on exit, and on the hot loop these
+    were a third of the run time (measured with ``perf`` on 10 s of Model II: 17 % of all
+    samples in ``NRT_incref`` / ``NRT_decref``; without them the run went from 45 to
+    30 ms, bit-identical). Numba refuses to compile a kernel that allocates, so the
+    property is checked, not assumed. Arrays a kernel receives stay owned by its caller,
+    which holds them for the duration of the call.
+``allocating``
+    Functions that create arrays (``np.zeros``, ``.copy()``): reference counting on. It
+    is set explicitly because Numba otherwise lets a callee inherit the setting of the
+    function that first compiles it.
+
+Both cache their machine code on disk and use NumPy's error model (a division by zero
+gives inf / nan, it does not raise).
+
+The on-disk cache is kept per module of the compiled core, in a directory named by a
+digest of that module's source and of every core module it imports, directly or through
+others (:func:`module_digests`): Numba by itself checks only the timestamp of a function's
+own file, so a cached function that inlines or links a callee from another module would
+keep the old callee after that module is edited (a stale result, silently). With the
+digest, an edit of a module compiles afresh that module and the modules that import it,
+and loads the rest from the cache (an edit of ``loop.py`` recompiles the run loop alone,
+an edit of ``model/evaluate.py`` nearly everything); directories of other digests are
+removed. The directories are ``scoutsim/__pycache__/numba/<module>-<digest>``, or, where
+the package is not writable, under ``~/.cache/scoutsim/numba``. The function's cache
+locator (:class:`_CoreCacheLocator`) puts them there, whatever Numba's own cache directory
+setting is, which is left alone (it is the user's, for their own functions).
+
+A ``NUMBA_CACHE_DIR`` set by the user is where the cache goes, in
+``$NUMBA_CACHE_DIR/scoutsim-numba/<module>-<digest>`` (:func:`user_cache_dir`). Such a
+directory may be shared (by other programs, or by checkouts of other scoutsim versions
+running at the same time), so only directories of ours (``<module>-<digest>`` of a core
+module, and the ``scoutsim-numba-<digest>`` of older versions) are ever removed there, and
+only those of other digests that nothing has written to for a day
+(:data:`STALE_USER_CACHE_S`); everything else in it is left alone.
+
+Compile time (docs/model.md "Compile time"): four of Numba's compiler steps repeat work
+and are replaced here by equivalent ones (:func:`_speed_up_numba`): the IR inliner's
+copies and re-translations of the callee (numba#8989, numba#9204), the hash of the compiler
+flags on every overload lookup, and the full compilation of an always-inlined overload's
+implementation that is then thrown away (numba#6856, :func:`inline_only`). They change no
+compiled code (the results are bit for bit those without them); each checks that Numba's
+code is the one it replaces and otherwise leaves it alone; ``SCOUTSIM_NUMBA_AS_IS=1`` in the
+environment leaves all four as Numba has them (to compare).
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import os
+import re
+import shutil
+import time
+from pathlib import Path
+
+from numba import njit
+
+_PACKAGE = Path(__file__).resolve().parents[1]
+#: the sources of the compiled core (a change in any of them invalidates the cache of the
+#: modules that import it)
+CORE_SOURCES = ("_core/model/*.py", "_core/numerics/*.py", "_core/loop.py", "control/*.py",
+                "_numba/*.py")
+
+
+def _core_files(package: Path) -> list[Path]:
+    return sorted({f for pattern in CORE_SOURCES for f in package.glob(pattern)})
+
+
+def core_digest(package: Path = _PACKAGE) -> str:
+    """Digest of the compiled core's sources (names and contents) under ``package``."""
+    h = hashlib.sha256()
+    for f in _core_files(package):
+        h.update(f.relative_to(package).as_posix().encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _module_name(rel: str) -> str:
+    """``model/evaluate.py`` -> ``model.evaluate``, ``control/__init__.py`` -> ``control``."""
+    parts = rel[:-3].split("/")
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts) or "__init__"
+
+
+def _imported(rel: str, source: bytes, known: set[str]) -> set[str]:
+    """The core modules (relative paths in ``known``) that the module ``rel`` imports
+    anywhere in its source, read statically: ``from .x import y`` names ``x`` and, if it is
+    a module, ``x/y``; a package import names its ``__init__``."""
+    pkg = rel.split("/")[:-1]
+    out = set()
+
+    def add(parts):
+        for cand in ("/".join(parts) + ".py", "/".join(parts + ["__init__"]) + ".py"):
+            if cand in known:
+                out.add(cand)
+
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                if node.level - 1 > len(pkg):
+                    continue
+                base = pkg[:len(pkg) - (node.level - 1)]
+            elif node.module and node.module.split(".")[0] == _PACKAGE.name:
+                base = []
+            else:
+                continue
+            mod = base + (node.module.split(".") if node.module else [])
+            if not node.level:
+                mod = mod[1:]
+            for i in range(1, len(mod) + 1):
+                add(mod[:i])
+            for alias in node.names:
+                add(mod + [alias.name])
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                mod = alias.name.split(".")
+                if mod[0] == _PACKAGE.name:
+                    for i in range(2, len(mod) + 1):
+                        add(mod[1:i])
+    out.discard(rel)
+    return out
+
+
+def _import_graph(sources: dict[str, bytes], memo: Path | None) -> dict[str, set[str]]:
+    """The core modules each core module imports (:func:`_imported`), reading the sources'
+    syntax only for those not in ``memo`` (a file of earlier answers, by source digest:
+    parsing every module takes about 0.1 s, too long for every start)."""
+    import json
+    known = sorted(sources)
+    layout = hashlib.sha256("\n".join(known).encode()).hexdigest()[:16]
+    shas = {rel: hashlib.sha256(src).hexdigest()[:32] for rel, src in sources.items()}
+    old = {}
+    if memo is not None:
+        try:
+            data = json.loads(memo.read_text())
+            if data.get("layout") == layout:
+                old = data.get("modules", {})
+        except (OSError, ValueError, AttributeError):
+            old = {}
+    deps, changed = {}, False
+    for rel, src in sources.items():
+        entry = old.get(rel)
+        if isinstance(entry, dict) and entry.get("sha") == shas[rel]:
+            deps[rel] = set(entry.get("imports", ())) & set(known)
+        else:
+            deps[rel] = _imported(rel, src, set(known))
+            changed = True
+    if memo is not None and (changed or set(old) != set(sources)):
+        try:
+            memo.parent.mkdir(parents=True, exist_ok=True)
+            tmp = memo.with_name(f"{memo.name}.{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"layout": layout, "modules": {
+                rel: {"sha": shas[rel], "imports": sorted(deps[rel])} for rel in known}}))
+            os.replace(tmp, memo)
+        except OSError:
+            pass
+    return deps
+
+
+def module_digests(package: Path = _PACKAGE, memo: Path | None = None) -> dict[str, str]:
+    """For every module of the compiled core (its path relative to ``package``), a digest of
+    its source and of the sources of every core module it imports, directly or through
+    others: what its compiled functions can depend on (the constants they read, the
+    functions they inline or link). ``memo``: a file that keeps the import graph between
+    processes (:func:`_import_graph`)."""
+    sources = {f.relative_to(package).as_posix(): f.read_bytes()
+               for f in _core_files(package)}
+    deps = _import_graph(sources, memo)
+    out = {}
+    for rel in sources:
+        seen, stack = {rel}, [rel]
+        while stack:
+            for d in deps[stack.pop()]:
+                if d not in seen:
+                    seen.add(d)
+                    stack.append(d)
+        h = hashlib.sha256()
+        for d in sorted(seen):
+            h.update(d.encode())
+            h.update(b"\0")
+            h.update(sources[d])
+        out[rel] = h.hexdigest()[:16]
+    return out
+
+
+#: name of this package's cache directory inside a ``NUMBA_CACHE_DIR`` set by the user
+USER_CACHE_NAME = "scoutsim-numba"
+#: name of the cache directories of older versions (one digest of the whole core)
+USER_CACHE_PREFIX = USER_CACHE_NAME + "-"
+_OLD_USER_CACHE_NAME = re.compile(re.escape(USER_CACHE_PREFIX) + r"[0-9a-f]{16}")
+#: another digest's directory in the user's ``NUMBA_CACHE_DIR`` is removed once nothing in
+#: it has been written for this long [s] (a process of another version may be using it)
+STALE_USER_CACHE_S = 86400.0
+_MODULE_DIR = re.compile(r"(?P<module>[A-Za-z_][\w.]*)-(?P<digest>[0-9a-f]{16})")
+
+
+def user_cache_dir(base) -> Path:
+    """This package's cache directory inside ``base``, a ``NUMBA_CACHE_DIR`` set by the
+    user (one subdirectory per module and digest in it)."""
+    return Path(base) / USER_CACHE_NAME
+
+
+def module_cache_dir(root: Path, rel: str, digest: str) -> Path:
+    """The cache directory of the core module ``rel`` (relative path) at ``digest``."""
+    return Path(root) / f"{_module_name(rel)}-{digest}"
+
+
+def _last_written(directory: Path) -> float:
+    """Newest modification time [s since the epoch] of ``directory`` and everything in it."""
+    newest = directory.stat().st_mtime
+    for root, dirs, files in os.walk(directory):
+        for name in dirs + files:
+            try:
+                newest = max(newest, os.lstat(os.path.join(root, name)).st_mtime)
+            except OSError:
+                pass
+    return newest
+
+
+def _remove_other_digests(root: Path, digests: dict[str, str], stale_after: float | None):
+    """Remove the module directories in ``root`` of a core module at another digest than
+    ``digests``; with ``stale_after`` [s], only those nothing has written to for that
+    long. Anything else in ``root`` is left alone."""
+    current = {_module_name(rel): d for rel, d in digests.items()}
+    try:
+        entries = list(root.iterdir())
+    except OSError:
+        return
+    now = time.time()
+    for old in entries:
+        m = _MODULE_DIR.fullmatch(old.name)
+        if m is None or m["module"] not in current or m["digest"] == current[m["module"]]:
+            continue
+        try:
+            if old.is_symlink() or not old.is_dir():
+                continue
+            if stale_after is not None and now - _last_written(old) < stale_after:
+                continue
+        except OSError:
+            continue
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def _writable(base: Path) -> bool:
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        probe = base / f".write-test-{os.getpid()}"
+        probe.touch()
+        probe.unlink()
+        return True
+    except OSError:
+        return False
+
+
+def _cache_root() -> tuple[Path, float | None]:
+    """The root of the core's cache (module directories in it) and after how long another
+    digest's directory there may be removed (None: at once)."""
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        return user_cache_dir(user), STALE_USER_CACHE_S
+    for base in (_PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
+        if _writable(base):
+            return base / "numba", None
+    return _PACKAGE / "__pycache__" / "numba", None
+
+
+def _remove_old_layout(root: Path, stale_after: float | None):
+    """Remove the whole-core cache directories of older versions (``numba-<digest>`` next
+    to ``root``, or ``scoutsim-numba-<digest>`` in the user's directory once stale)."""
+    base = root.parent
+    pattern = _OLD_USER_CACHE_NAME if stale_after is not None else \
+        re.compile(r"numba-[0-9a-f]{16}")
+    try:
+        olds = [p for p in base.iterdir() if pattern.fullmatch(p.name)]
+    except OSError:
+        return
+    now = time.time()
+    for old in olds:
+        try:
+            if old.is_symlink() or not old.is_dir():
+                continue
+            if stale_after is not None and now - _last_written(old) < stale_after:
+                continue
+        except OSError:
+            continue
+        shutil.rmtree(old, ignore_errors=True)
+
+
+_ROOT, _STALE_AFTER = _cache_root()
+_DIGESTS = module_digests(memo=_ROOT / "imports.json")
+_remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER)
+_remove_old_layout(_ROOT, _STALE_AFTER)
+#: cache directory of each core source file (resolved path) of this package
+_MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d)
+                for rel, d in _DIGESTS.items()}
+
+
+def _install_cache_locator():
+    """Put the cache of every function of a core module into that module's directory
+    (:data:`_MODULE_DIRS`), with the module's digest as Numba's source stamp."""
+    from numba.core import caching
+
+    class _CoreCacheLocator(caching._CacheLocator):
+        def __init__(self, py_func, path: Path, digest: str):
+            self._lineno = py_func.__code__.co_firstlineno
+            self._path = str(path)
+            self._digest = digest
+
+        def get_cache_path(self):
+            return self._path
+
+        def get_source_stamp(self):
+            return self._digest
+
+        def get_disambiguator(self):
+            return str(self._lineno)
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            path = _MODULE_DIRS.get(os.path.realpath(py_file))
+            if path is None:
+                return None
+            self = cls(py_func, path, path.name.rsplit("-", 1)[1])
+            try:
+                self.ensure_cache_path()
+            except OSError:
+                return None
+            return self
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")
+    classes = impl._locator_classes
+    if not any(c.__name__ == "_CoreCacheLocator" for c in classes):
+        classes.insert(0, _CoreCacheLocator)
+
+
+_install_cache_locator()
+
+
+# --- compile time: Numba's compiler steps that repeat work, replaced (compile_steps.py) ---
+from .compile_steps import speed_up_numba  # noqa: E402
+
+if not os.environ.get("SCOUTSIM_NUMBA_AS_IS"):
+    speed_up_numba()
+
+_COMMON = dict(cache=True, error_model="numpy")
+
+
+def cache_directory() -> Path:
+    """Root of the on-disk cache of the compiled core (one directory per module and digest
+    in it)."""
+    return _ROOT
+
+
+def core_is_compiled() -> bool:
+    """True if the compiled run loop (and with it the whole core it calls) is in the cache,
+    i.e. a simulation will not have to compile first (this process may still load it)."""
+    d = _MODULE_DIRS[str(_PACKAGE / "_core" / "loop.py")]
+    return d.is_dir() and any(d.glob("loop.run-*.nbi"))
+
+
+#: What a simulation compiles on its first call, and about how long it takes (the first
+#: call of ``loop.run``; measured on a 2-core machine, docs/model.md "Compile time").
+FIRST_COMPILE_NOTICE = ("compiling the simulator core with Numba (first run after an "
+                        "install or an update; about 1 min on a 2-core machine, then cached)")
+
+
+class compile_progress:
+    """Context manager: while it is open, say on ``stream`` what the compiled core is
+    compiling. On a terminal one line is rewritten as each function of the core is done
+    (how many, the time so far, the last one); elsewhere (a log) one line is printed at the
+    end. Nothing is printed if nothing of the core was compiled."""
+
+    def __init__(self, stream, prefix: str = "  "):
+        self.stream = stream
+        self.prefix = prefix
+        self.done = 0
+        self.t0 = None
+        try:
+            self.tty = stream.isatty()
+        except (AttributeError, ValueError):
+            self.tty = False
+
+    def __enter__(self):
+        from numba.core import event
+
+        progress = self
+
+        class _Listener(event.Listener):
+            def on_start(self, ev):
+                pass
+
+            def on_end(self, ev):
+                try:
+                    progress._compiled(ev.data["dispatcher"].py_func)
+                except Exception:   # never let a message break a compile
+                    pass
+
+        self.t0 = time.perf_counter()
+        self._listener = _Listener()
+        event.register("numba:compile", self._listener)
+        return self
+
+    def _compiled(self, py_func):
+        module = py_func.__module__ or ""
+        if not module.startswith(_PACKAGE.name + "."):
+            return
+        self.done += 1
+        if self.tty:
+            name = f"{module[len(_PACKAGE.name) + 1:]}.{py_func.__qualname__}"
+            self.stream.write(f"\r\033[K{self.prefix}compiled {self.done} functions in "
+                              f"{time.perf_counter() - self.t0:.0f} s (last: {name})")
+            self.stream.flush()
+
+    def __exit__(self, *exc):
+        from numba.core import event
+        event.unregister("numba:compile", self._listener)
+        if self.done:
+            end = "\r\033[K" if self.tty else ""
+            self.stream.write(f"{end}{self.prefix}compiled {self.done} function"
+                              f"{'s' if self.done != 1 else ''} of the core in "
+                              f"{time.perf_counter() - self.t0:.1f} s (cached now)\n")
+            self.stream.flush()
+        return False
+
+
+#: parameters whose integer constants compile their own specializations (branch pruning)
+SPECIALIZING_PARAMETERS = ("method",)
+
+
+def _typed_by_kind(dispatcher):
+    """Make calls from compiled code to ``dispatcher`` compile one specialization per
+    argument *kind*, not one per constant value.
+
+    Numba types a constant argument of a call (``evaluate_ws(..., True)``, a leg index
+    ``0``) as a literal (``Literal[bool](True)``) and compiles the callee again for each
+    literal it meets. The right-hand side was compiled five times that way (20-40 s each,
+    two thirds of the first run's compilation). Here the argument types are widened to
+    their non-literal kind before the callee is compiled or looked up; the caller then
+    converts its constants to that kind.
+
+    The one exception is a parameter named ``method`` (:data:`SPECIALIZING_PARAMETERS`):
+    the integration method stays a literal, so each method compiles its own specialization
+    of the integrator with the other methods' branches pruned, and a run compiles only the
+    method it uses (:func:`scoutsim._core.loop.run_entry`)."""
+    from numba.core import types
+
+    resolve = dispatcher.get_call_template
+    code = dispatcher.py_func.__code__
+    names = code.co_varnames[:code.co_argcount]
+    keep = {i for i, n in enumerate(names) if n in SPECIALIZING_PARAMETERS}
+
+    def widen(a, literal_ok):
+        return a if literal_ok and isinstance(a, types.IntegerLiteral) else types.unliteral(a)
+
+    def get_call_template(args, kws):
+        return resolve(tuple(widen(a, i in keep) for i, a in enumerate(args)),
+                       {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
+
+
+def _compile(func, nrt: bool, inline: str):
+    deco = njit(**_COMMON, _nrt=nrt, inline=inline)
+    if inline != "never":   # inlined at the IR level: there is no callee to specialize
+        return deco if func is None else deco(func)
+    if func is None:
+        return lambda f: _typed_by_kind(deco(f))
+    return _typed_by_kind(deco(func))
+
+
+def kernel(func=None, *, inline: str = "never"):
+    """Compile ``func`` as a non-allocating kernel (no reference counting);
+    ``inline="always"`` inlines it into its callers at the Numba IR level."""
+    return _compile(func, False, inline)
+
+
+def allocating(func=None, *, inline: str = "never"):
+    """Compile ``func`` with reference counting (it allocates arrays)."""
+    return _compile(func, True, inline)

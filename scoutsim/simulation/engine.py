@@ -1,0 +1,327 @@
+"""The engine of a run: :class:`HybridEngine` drives the compiled hybrid model
+(:func:`scoutsim._core.loop.run`) in chunks of control samples and turns its buffers into a
+result; :func:`start_engine` puts one together for a caller that drives it itself."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..control.dispatch import plan_controller
+from ..control.sensors import SensorParameters, Sensors
+from .._core.loop import Carry, Control, Records, Span, effective_method, readings_at, run_entry
+from .._core.numerics.work import Plant
+from .._core.model import layout as L
+from .._core.model.evaluate import NSTIFF
+from .._core.model.flags import flag_is_set
+from .._core.model.packing import robot_array
+from .._core.model.rigid_body import state_energy
+from .._core.numerics.dopri5 import eval_workspace
+from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, METHOD_AUTO, NHW, STEP_HEADROOM
+from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
+from ..parameters import (ControllerParameters, Environment, RobotParameters,
+                         validate_parameters, validate_robot)
+from ..result.simulation_result import SimulationResult
+from .budgets import EVENT_ROWS_PER_S
+from .integrator import _METHODS, IntegratorSettings
+from .initial_conditions import _resumed_modes, _state_vector, default_initial_state, fresh_modes
+from ..state import HybridState, InitialState
+
+__all__ = ["HybridEngine", "start_engine"]
+
+
+class HybridEngine:
+    """One run of the compiled hybrid model (:func:`scoutsim._core.loop.run`): its
+    time-series buffers and everything carried from one call to the next (state, modes,
+    controller states, step-size guess, ARK splitting, armed events). :func:`~scoutsim.simulation.simulator.simulate` and
+    the bench rigs (:mod:`scoutsim.identification.rigs`) drive it in chunks of control
+    samples; cutting a run into chunks does not change it."""
+
+    #: integrator steps the step buffer holds at first (about 6 s of a Model II run at the
+    #: default tolerance: 1.3 steps per control period)
+    STEP_ROWS = 8192
+
+    def __init__(self, P, C, start, duration: float, dt: float,
+                 integrator: IntegratorSettings, record_steps: bool = False,
+                 rows: int | None = None, energy: bool = False, *, block):
+        """``P``, ``C``: the packed robot and Table I parameters; ``start`` = (s, mi, mf,
+        ls): the state, the modes and the leg states the run starts from (kept and
+        advanced in place)."""
+        s, mi, mf, ls = start
+        self.P, self.C, self.s, self.mi, self.mf, self.ls = P, C, s, mi, mf, ls
+        # the controller and the sensors (control/block.py, control/dispatch.py)
+        self.block = block
+        self.dt = dt
+        self.integ = integrator
+        n_total = int(round(duration / dt)) + 1
+        self.k_last = n_total - 1
+        # rows: the samples one call may record when a RunStream empties the buffers after
+        # each call (memory bounded); None: the whole run
+        if rows is not None:
+            n_total = min(n_total, rows + 1)
+            duration = min(duration, rows * dt)
+        self.cmd = np.zeros(2)
+        # [step-size guess, ARK factors valid, evaluation workspace valid] (loop.run)
+        self.hwork = np.zeros(NHW)
+        self.hwork[HW_STEP] = integrator.initial_step
+        self.ew = eval_workspace()
+        self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
+        self.out_t = np.zeros(n_total + 1)
+        self.out_s = np.zeros((n_total + 1, L.NS))
+        self.out_aux = np.zeros((n_total + 1, L.NAUX))
+        self.out_ls = np.zeros((n_total + 1, L.NRM), dtype=np.int8)
+        self.ev = np.zeros((max(1024, int(EVENT_ROWS_PER_S * duration) + 256), L.NEVBUF))
+        # every integrator step if record_steps (numerics.events.record_step): room for
+        # STEP_ROWS steps beyond the headroom one control period may need (np.zeros:
+        # pages a run does not reach are never touched); doubled when it runs low
+        self.steps = np.zeros((STEP_HEADROOM + self.STEP_ROWS if record_steps else 0,
+                               L.NSTEPREC))
+        self.stepc = np.array([0, 1 if record_steps else 0], dtype=np.int64)
+        # the work-energy accounting (layout EN_*; empty: off), the touchdown impacts'
+        # losses [J] and the mechanical energy [J] at the first sample
+        self.energy = np.zeros(L.NEN if energy else 0)
+        # the accumulator at every recorded sample (rows as out_t; (0, NEN): off)
+        self.out_energy = np.zeros((n_total + 1 if energy else 0, L.NEN))
+        self.impact_loss = 0.0
+        self.energy_start = None
+        self.stats = np.zeros(NSTAT)
+        self.stats[S_HMIN] = np.inf
+        self.armed = np.zeros(L.NEV, dtype=np.bool_)
+        self.n_out = self.nev = self.k = 0
+        self.event_records_lost = 0
+        self.status = L.ST_RUNNING
+        self._entry = None        # the compiled run loop for this engine's method
+        self.t_now = 0.0
+
+    def __getstate__(self):
+        # the compiled run loop does not pickle: the next advance() looks it up again
+        return self.__dict__ | {"_entry": None}
+
+    @property
+    def running(self) -> bool:
+        return self.k <= self.k_last and self.status == L.ST_RUNNING
+
+    # -- the current state by name (for a caller that drives the engine itself) -----------
+    @property
+    def x(self) -> float:
+        """Torso COM forward position now [m]."""
+        return float(self.s[L.IX])
+
+    @property
+    def height(self) -> float:
+        """Torso COM height now [m]."""
+        return float(self.s[L.IY])
+
+    @property
+    def pitch(self) -> float:
+        """Torso pitch now [rad], nose up positive."""
+        return float(self.s[L.ITH])
+
+    @property
+    def stopped(self) -> bool:
+        """True once the run loop has stopped the run: it fell, failed numerically or its
+        controller failed (reaching the end of the run does not count)."""
+        return self.status != L.ST_RUNNING
+
+    @property
+    def fell(self) -> bool:
+        """True if the run stopped because the robot fell (height or pitch limit)."""
+        return self.status == L.ST_FELL
+
+    @property
+    def status_name(self) -> str:
+        """The run loop's status by name: "running" until it stops the run, then "fell",
+        "numerical_failure" or "controller_error"."""
+        return L.STATUS_NAMES[self.status]
+
+    def toe_position(self, leg) -> tuple[float, float]:
+        """(x, y) of virtual leg ``leg``'s toe [m] (0 back, 1 front), from the model's
+        evaluation at the state of the last :meth:`read_sensors` (what
+        ``SimulationResult.toe_position`` records at a sample)."""
+        o = int(leg) * L.NAUX_LEG
+        aux = self.block.last[L.NS:]
+        return float(aux[o + L.A_TOE_X]), float(aux[o + L.A_TOE_Y])
+
+    def contact_mode(self, leg) -> int:
+        """Plant contact mode of leg ``leg`` now, a code of
+        :class:`~scoutsim.names.ContactMode` (0 flight, 1 stick, 2 slide, 3 strut)."""
+        return int(self.mi[L.MI_CONTACT_B + int(leg)])
+
+    def electrical_energy(self) -> float:
+        """Electrical energy into both legs' motor terminals since the start [J] (NaN
+        without the energy accounting)."""
+        e = self.energy
+        if not e.size:
+            return math.nan
+        return float(e[L.EN_ELECTRICAL] + e[L.NEN_LEG + L.EN_ELECTRICAL])
+
+    def read_first_sensors(self) -> Sensors:
+        """The readings of the run's first sample (what a controller's ``reset`` sees)."""
+        return Sensors.from_vector(self.read_sensors())
+
+    def read_sensors(self) -> np.ndarray:
+        """The sensor readings (``layout.SN_*``, SI) of the next control sample ``k`` at the
+        current state, into ``block.y`` and returned (that array): between two calls of
+        :meth:`advance`, what the loop reads at the start of the next one, bit for bit
+        (measurement model included); after a run that ended (a fall), the readings at
+        its final state."""
+        readings_at(self.k, self.s, self.P, self.mi, self.mf, self.cmd,
+                    self.status == L.ST_RUNNING and flag_is_set(self.hwork[HW_EVAL_KEPT]),
+                    self.block)
+        return self.block.y
+
+    def discard_records(self):
+        """Forget the samples, events and steps recorded so far (the state, modes and
+        energy accumulator stay): for a caller that reads the engine's state itself
+        between calls, so that the buffers of ``rows`` samples suffice however long it
+        runs."""
+        self.n_out = self.nev = 0
+        self.stepc[0] = 0
+
+    def advance(self, k_stop: int):
+        """Run control samples k .. k_stop - 1 under the control block's controller."""
+        args = (Plant(self.s, self.P, self.mi, self.mf, self.cmd),
+                Control(self.C, self.ls, self.block),
+                Span(self.k, min(k_stop, self.k_last + 1), self.k_last, float(self.dt),
+                     float(self.integ.rtol), float(self.integ.atol)),
+                Records(self.out_t, self.out_s, self.out_aux, self.out_ls, self.ev,
+                        self.stats, self.steps, self.stepc, self.energy, self.out_energy),
+                Carry(self.hwork, self.armed, self.sfwork, self.ew),
+                self.n_out, self.nev)
+        if self._entry is None:   # the argument types stay those of the first call
+            self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
+                                            int(self.P[L.P_HIP_UNIT]))
+            self._entry = run_entry(self._method, args)
+        nev_before = self.nev
+        self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,
+                                                                            self._method)
+        if self.energy.size:
+            if self.energy_start is None and self.n_out:
+                self.energy_start = float(self.out_aux[0, L.A_ENERGY])
+            new = self.ev[nev_before:min(self.nev, self.ev.shape[0])]
+            self.impact_loss += float(new[np.isin(new[:, L.EVR_KIND], L.IMPACT_KINDS),
+                                          L.EVR_V3].sum())
+        if self.nev > self.ev.shape[0]:
+            # one control period logged more records than the buffer had left (the loop
+            # makes room between periods, 64 rows at least): log_event dropped them but
+            # counted them. Count them as lost, and go on writing right after the last row
+            # kept (no empty rows in the table)
+            self.event_records_lost += self.nev - self.ev.shape[0]
+            self.nev = self.ev.shape[0]
+        if self.nev > self.ev.shape[0] - 64:
+            self.ev = np.concatenate([self.ev, np.zeros_like(self.ev)])
+        if self.stepc[1] and self.stepc[0] > self.steps.shape[0] - STEP_HEADROOM:
+            self.steps = np.concatenate([self.steps, np.zeros_like(self.steps)])
+
+    def energy_flows(self) -> dict | None:
+        """The run's accumulated energies [J] by name (``SimulationResult.energy_flows``),
+        or None if the run did not account for them."""
+        if not self.energy.size:
+            return None
+        out = {f"{name}_{leg}": float(self.energy[i * L.NEN_LEG + j])
+               for i, leg in enumerate(L.LEG_NAMES) for j, name in enumerate(L.EN_LEG_NAMES)}
+        out["battery_loss"] = float(self.energy[L.EN_BATTERY_LOSS])
+        out["impacts"] = self.impact_loss
+        out["mechanical_start"] = (self.energy_start if self.energy_start is not None else
+                                   float(state_energy(self.s, self.P)))
+        out["mechanical_end"] = float(state_energy(self.s, self.P))
+        return out
+
+    def outcome(self, interrupted: bool = False) -> str:
+        if interrupted:
+            return "interrupted"
+        return "completed" if self.status == L.ST_RUNNING else L.STATUS_NAMES[self.status]
+
+    def result(self, provenance: dict, interrupted: bool = False,
+               extra_stats: dict | None = None,
+               last_sample_t: float | None = None) -> SimulationResult:
+        """The run as a result (``last_sample_t``: the time of the last sample when a
+        RunStream has taken the samples out of the buffers)."""
+        n = self.n_out
+        m = min(self.nev, self.ev.shape[0])
+        return SimulationResult(
+            t=_kept(self.out_t, n), state=_kept(self.out_s, n),
+            aux=_kept(self.out_aux, n), modes=_kept(self.out_ls, n),
+            events=self.ev[:m, :L.NEVREC].copy(),      # (contiguous: a few hundred kB)
+            event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
+            steps=(_kept(self.steps, int(self.stepc[0])) if self.stepc[1] else None),
+            outcome=self.outcome(interrupted),
+            # (a run stopped before its first sample, e.g. by Ctrl-C: where it started)
+            t_end=float(self.t_now if self.status not in (L.ST_RUNNING,
+                                                          L.ST_CONTROLLER_ERROR) else
+                        self.out_t[n - 1] if n else
+                        last_sample_t if last_sample_t is not None else self.t_now),
+            stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
+            | ({"event_records_lost": float(self.event_records_lost)}
+               if self.event_records_lost else {})
+            | (extra_stats or {}),
+            provenance=provenance, energy_flows=self.energy_flows(),
+            energy_series=(_kept(self.out_energy, n) if self.energy.size else None))
+
+
+def start_engine(start: InitialState | HybridState | None, duration: float, *,
+                 robot: RobotParameters | None = None, model: str = "II",
+                 controller: ControllerParameters | None = None, hold_commands: bool = False,
+                 sensors: SensorParameters | None = None,
+                 friction_coefficient: float | None = None, pitch_limit_deg: float = 60.0,
+                 integrator: IntegratorSettings | None = None, energy: bool = False,
+                 rows: int | None = None) -> HybridEngine:
+    """An engine at sample 0 of a run from ``start``, put together as :func:`~scoutsim.simulation.simulator.simulate` does
+    it, for a caller that drives it sample by sample itself (``engine.advance(k)``, the
+    commands in ``engine.cmd`` or the Table I set-points in ``engine.C``, the readings from
+    ``engine.read_sensors()``): a learning environment (:mod:`scoutsim.envs`).
+
+    Parameters
+    ----------
+    start : InitialState (in flight), HybridState (e.g. :func:`~scoutsim.state.standing_state`
+        or ``result.hybrid_state(k)``), or None: the model's default start.
+    duration : longest run [s] (the engine stops at it).
+    robot, model, sensors, friction_coefficient, pitch_limit_deg, integrator, energy : as for
+        :func:`~scoutsim.simulation.simulator.simulate` (``model`` "ideal", "I" or "II"; ``energy``: the accumulator
+        ``engine.energy``, layout ``EN_*`` [J]).
+    controller : ControllerParameters of the built-in Table I law (default Table I); with
+        ``hold_commands`` they set only the leg angles of a start in flight and what the
+        hip encoders read (``sense_motor_angle``).
+    hold_commands : no controller runs: the hip torques ``engine.cmd`` [N m per physical
+        leg] are held as the caller sets them (zero at first).
+    rows : samples the time-series buffers hold (None: the whole run); a caller that calls
+        :meth:`HybridEngine.discard_records` after every call of at most ``rows - 1``
+        samples runs for as long as it likes in that memory.
+    """
+    if model not in ("ideal", "I", "II"):
+        raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
+    robot = validate_robot(robot if robot is not None else RobotParameters())
+    cparams = controller if controller is not None else ControllerParameters()
+    validate_parameters(robot, cparams)
+    mu = Environment(friction_coefficient=friction_coefficient).friction_for(robot)
+    if not (0.0 < pitch_limit_deg < 90.0):
+        raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+    plan = plan_controller(cparams, model, robot, sensors)
+    if hold_commands:
+        plan.block.ints[L.CB_KIND] = L.CTRL_HELD
+    P = robot_array(robot, model, friction_coefficient=mu,
+                    pitch_limit=math.radians(pitch_limit_deg))
+    init = start if start is not None else default_initial_state(model, robot)
+    if isinstance(init, HybridState):
+        s = np.array(init.state)
+        mi, mf, ls = _resumed_modes(init)
+    elif isinstance(init, InitialState):
+        s = _state_vector(init, robot, cparams, (0.0, 0.0), True)
+        ls = np.zeros(2, dtype=np.int64)
+        mi, mf = fresh_modes(s, P)
+    else:
+        raise TypeError("start must be an InitialState, a HybridState or None, not "
+                        f"{type(init).__name__}")
+    integ = (integrator or IntegratorSettings()).resolve(model)
+    return HybridEngine(P, plan.C, (s, mi, mf, ls), duration, plan.control_period, integ,
+                        rows=rows, energy=energy, block=plan.block)
+
+
+def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` rows of an engine buffer for a result: a view when the run filled
+    most of the buffer (the engine is dropped after the run: copying 10 s of samples
+    took 2.4 ms of a 42 ms run), a copy when it ended early (a run that fell at 1 s of
+    10 s would otherwise keep the whole buffer alive)."""
+    return buffer[:n] if 2 * n >= buffer.shape[0] else buffer[:n].copy()
+
