@@ -28,7 +28,7 @@ from scoutsim._core.model.sensor_readings import read_encoders
 from scoutsim._core.numerics.events import event_values
 from scoutsim._core.numerics.stats import NSTAT
 from scoutsim._core.numerics.transitions import apply_event, settle
-from scoutsim.simulation.simulator.initial_conditions import _state_vector
+from scoutsim.simulation.initial_conditions import _state_vector
 
 
 def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):

@@ -10,7 +10,7 @@ import json
 import pytest
 
 from scoutsim.cli import main
-from scoutsim.result.simulation_result.simulation_result import SimulationResult
+from scoutsim.result.simulation_result import SimulationResult
 
 ROBOT_FILE = """\
 [robot]

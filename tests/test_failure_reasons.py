@@ -21,7 +21,7 @@ from scoutsim.analysis.transition_audit import audit_transitions
 from scoutsim.cli import main
 from scoutsim._core.model import layout as L
 from scoutsim.parameters import ParameterError, load_robot, physical_limit
-from scoutsim.simulation.simulator.initial_conditions import default_initial_state
+from scoutsim.simulation.initial_conditions import default_initial_state
 
 
 def _write(tmp_path, text, name="robot.toml"):

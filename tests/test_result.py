@@ -5,7 +5,7 @@ import pytest
 
 import scoutsim
 from scoutsim._core.model import layout as L
-from scoutsim.result.simulation_result.columns import column_unit
+from scoutsim.result.columns import column_unit
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import scoutsim
 from scoutsim import Environment, InitialState, RobotParameters, SimulationResult
 from scoutsim._core.model import layout as L
 from scoutsim.io.run_directory import check_run_directory
-from scoutsim.simulation.simulator.simulator import ControllerError
+from scoutsim.simulation.simulator import ControllerError
 
 MODELS = ("II", "I", "ideal")
 LEGS = (("back", -1.0), ("front", 1.0))    # leg, side of the hip (behind / ahead of the COM)

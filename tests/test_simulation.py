@@ -254,7 +254,7 @@ def test_resuming_at_a_sample_continues_the_run_to_the_tolerance(method, bound_s
 
 
 def test_a_run_too_long_for_memory_is_refused_before_anything_is_allocated():
-    from scoutsim.simulation.simulator.budgets import check_run_memory
+    from scoutsim.simulation.budgets import check_run_memory
     # per control sample: time, state (16), outputs (31) as float64 and 6 mode bytes = 390
     # bytes, plus the event buffer's 0.2 rows of 41 float64 = 65.6 bytes: 455.6 bytes;
     # 60 s = 60 002 rows: 27 336 911 bytes; half of 100 MB holds 109 745 samples, 109.7 s

@@ -12,7 +12,7 @@ import argparse
 import math
 
 import scoutsim
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 REFERENCE = IntegratorSettings(method="dopri5")

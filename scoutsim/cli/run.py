@@ -88,7 +88,7 @@ def register(sub, common) -> None:
     add_controller_option(run)
     run.add_argument("--speed", type=finite_float, default=None, metavar="V",
                      help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
-                          "passive model: scoutsim.simulation.simulator.default_initial_state)")
+                          "passive model: scoutsim.default_initial_state)")
     run.add_argument("--height", type=positive_float, default=None, metavar="Y",
                      help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g}; "
                           "passive model: higher, so that its hanging legs clear the ground "

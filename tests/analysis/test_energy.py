@@ -16,7 +16,7 @@ import pytest
 
 import scoutsim
 from scoutsim._core.model import layout as L
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 #: every option beyond the paper's models switched on, and a battery with internal

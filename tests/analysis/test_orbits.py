@@ -11,7 +11,7 @@ import scoutsim
 from scoutsim.analysis import orbits as O
 from scoutsim.analysis import passive_reference, stride_map
 from scoutsim.cli import main
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.state import InitialState
 
 

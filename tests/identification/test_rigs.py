@@ -13,10 +13,10 @@ from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stal
                                           run_rig, stall_deflection)
 from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
-from scoutsim.simulation.simulator.bench import run_bench
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
-from scoutsim.simulation.simulator.simulator import simulate
-from scoutsim.simulation.simulator.initial_conditions import _state_vector, default_initial_state
+from scoutsim.simulation.bench import run_bench
+from scoutsim.simulation.integrator import IntegratorSettings
+from scoutsim.simulation.simulator import simulate
+from scoutsim.simulation.initial_conditions import _state_vector, default_initial_state
 
 
 def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():

@@ -13,7 +13,7 @@ import pytest
 from scoutsim._core.model import actuator
 from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import ParameterError, RobotParameters, load_robot
-from scoutsim.simulation.simulator.simulator import simulate
+from scoutsim.simulation.simulator import simulate
 
 IDLE = 0.5
 CLOAD = 0.05

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim._core.model import evaluate as D
 from scoutsim._core.model import hip_unit
 from scoutsim._core.model import layout as L

@@ -74,7 +74,7 @@ def test_work_energy_balance_closes_through_a_jam():
     rtol 1e-10) the work-energy balance of a run with a jam (its impact's loss logged like a
     touchdown's) closes to 1e-7 J, as it does for runs without one (docs/model.md
     "Work-energy balance")."""
-    from scoutsim.simulation.simulator.simulator import IntegratorSettings
+    from scoutsim.simulation.simulator import IntegratorSettings
     start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
                          dtheta=2.0582517952283736)
     r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
@@ -130,7 +130,7 @@ def test_work_energy_balance_closes_through_a_locked_jam():
     """Every joule is accounted for through the lock and the jams that follow it (the
     start above; DOPRI5 at rtol 1e-10): the residual of the work-energy balance stays below
     1e-7 J, as for runs without a jam."""
-    from scoutsim.simulation.simulator.simulator import IntegratorSettings
+    from scoutsim.simulation.simulator import IntegratorSettings
     r = simulate(controller=_Zero(), initial_state=InitialState(**_PRESSED_START),
                  duration=1.0, model="II", friction_coefficient=1.0, energy=True,
                  integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))

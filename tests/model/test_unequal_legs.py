@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.simulation.simulator.integrator import IntegratorSettings
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim._core.model import evaluate as ev
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.packing import robot_array

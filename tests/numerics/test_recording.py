@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-import scoutsim.simulation.simulator.engine
+import scoutsim.simulation.engine
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.packing import robot_array
 
