@@ -181,7 +181,7 @@ class BoundingController(Controller):
         self._C = None
 
     @property
-    def control_period(self) -> float:
+    def control_period(self) -> float:  # type: ignore[override]  # (the parameters' period)
         return self.params.control_period
 
     def reset(self, robot, sensors=None):

@@ -41,6 +41,7 @@ torques that are not finite.
 from __future__ import annotations
 
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 from llvmlite import ir
@@ -49,6 +50,9 @@ from numba.extending import intrinsic
 
 from .._core.model import layout as L
 from .protocol import DEFAULT_CONTROL_PERIOD, Controller
+
+if TYPE_CHECKING:
+    from ..parameters import ControllerParameters
 
 __all__ = ["CompiledController", "CONTROLLER_SIGNATURE", "call_controller"]
 
@@ -202,7 +206,7 @@ class CompiledController(Controller):
     #: (:class:`~scoutsim.parameters.ControllerParameters`): a run then starts its legs at
     #: their touchdown angles and reads the hip encoders on the side they say, as for the
     #: Table I controller, and records them in its provenance
-    controller_parameters = None
+    controller_parameters: ControllerParameters | None = None
 
     def params_for(self, robot):
         """The parameter array a run of ``robot`` (a

@@ -79,7 +79,7 @@ def _period(controller) -> float:
         dt = (params.control_period if isinstance(params, ControllerParameters)
               else DEFAULT_CONTROL_PERIOD)
     if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or \
-            not (math.isfinite(dt) and 1e-6 <= dt <= 1.0):
+            not (math.isfinite(dt) and 1e-6 <= float(dt) <= 1.0):
         raise ValueError(f"controller.control_period = {dt!r} s is not allowed: must be in "
                          f"[1e-6, 1] s ({controller_name(controller)})")
     return float(dt)

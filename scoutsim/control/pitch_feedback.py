@@ -130,6 +130,7 @@ class PitchFeedbackController(CompiledController):
     def params_for(self, robot: RobotParameters) -> np.ndarray:
         """The parameter array for a run of ``robot`` (its leg rest length and motor
         constants, as the Table I controller packs them)."""
+        assert self.controller_parameters is not None
         return pitch_feedback_array(self.controller_parameters, robot)
 
     def __reduce__(self):

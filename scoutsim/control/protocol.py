@@ -30,6 +30,10 @@ the run with :class:`ControllerError`.
 from __future__ import annotations
 
 import reprlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = ["Controller", "ControllerError", "DEFAULT_CONTROL_PERIOD", "failure_message"]
 
@@ -46,7 +50,7 @@ class Controller:
     #: sample-and-hold period [s]
     control_period: float = DEFAULT_CONTROL_PERIOD
     #: leg states to log (None: not logged)
-    leg_states = None
+    leg_states: np.ndarray | None = None
 
     def reset(self, robot, sensors) -> None:
         """Prepare for a run of ``robot`` whose first readings are ``sensors``."""

@@ -45,6 +45,8 @@ every sensor is ideal)::
 
 from __future__ import annotations
 
+import typing
+
 import dataclasses
 import math
 import tomllib
@@ -161,7 +163,7 @@ class Sensors:
     def __eq__(self, other):
         return isinstance(other, Sensors) and np.array_equal(self._v, other._v, equal_nan=True)
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # (mutable readings: not hashable)
 
 
 @dataclass(frozen=True)
@@ -295,7 +297,7 @@ class SensorParameters:
 
     def as_dict(self) -> dict:
         """JSON-safe form (provenance)."""
-        out = {"seed": int(self.seed), "laser_half_spacing": self.laser_half_spacing,
+        out: dict[str, typing.Any] = {"seed": int(self.seed), "laser_half_spacing": self.laser_half_spacing,
                "laser_mount_offset": self.laser_mount_offset}
         for name in CHANNELS:
             ch = getattr(self, name)

@@ -158,8 +158,8 @@ class RunDirectory:
         self._write_manifest("writing")
         return self
 
-    def __exit__(self, *exc) -> bool:
-        return False   # the manifest keeps saying "writing" unless finish() was reached
+    def __exit__(self, *exc) -> None:
+        return None   # the manifest keeps saying "writing" unless finish() was reached
 
     def write(self, name: str, write) -> Path:
         """Write the run's file ``name`` atomically with ``write(tmp_path)``."""

@@ -19,6 +19,7 @@ import importlib.util
 import json
 import os
 import shutil
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -197,8 +198,8 @@ class TableWriter:
         self._columns: dict | None = None        # name -> {"dtype", "unit"}
         self._pending: list[dict] = []
         self._n_pending = 0
-        self._writer = None
-        self._file = None
+        self._writer: Any = None    # pyarrow.parquet.ParquetWriter while writing Parquet
+        self._file: Any = None      # the gzip text stream while writing CSV
         self.n_rows = 0
 
     def append(self, columns: dict) -> None:
@@ -229,7 +230,7 @@ class TableWriter:
         if not self._pending:
             return
         import pyarrow.parquet as pq
-        cols = {n: np.concatenate([p[n] for p in self._pending]) for n in self._columns}
+        cols = {n: np.concatenate([p[n] for p in self._pending]) for n in self._columns or {}}
         table = _arrow_table(cols)
         if self._writer is None:
             self._writer = pq.ParquetWriter(self._tmp, table.schema, **_PARQUET_OPTIONS)

@@ -5,13 +5,13 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from .packaged import _packaged_defaults
+from .packaged import PACKAGED, packaged_defaults
 from .schema import CONTROLLER_SECTIONS
 from .validation import check_controller
 
 
 @dataclass(frozen=True)
-@_packaged_defaults(*CONTROLLER_SECTIONS)
+@packaged_defaults(*CONTROLLER_SECTIONS)
 class ControllerParameters:
     """Bounding controller settings (paper Sec. II, Table I; docs/specification.md section 6), SI units.
 
@@ -49,26 +49,26 @@ class ControllerParameters:
         (given in deg/(deg/s)).
     """
 
-    touchdown_angle_front: float
-    touchdown_angle_back: float
-    sweep_limit_front: float
-    sweep_limit_back: float
-    flight_kp_front: float
-    flight_kd_front: float
-    flight_kp_back: float
-    flight_kd_back: float
-    brake_kp_front: float
-    brake_kd_front: float
-    brake_kp_back: float
-    brake_kd_back: float
-    control_period: float
-    touchdown_compression: float
-    liftoff_compression: float
-    sense_motor_angle: bool
-    pitch_gain_front: float
-    pitch_gain_back: float
-    pitch_rate_gain_front: float
-    pitch_rate_gain_back: float
+    touchdown_angle_front: float = PACKAGED
+    touchdown_angle_back: float = PACKAGED
+    sweep_limit_front: float = PACKAGED
+    sweep_limit_back: float = PACKAGED
+    flight_kp_front: float = PACKAGED
+    flight_kd_front: float = PACKAGED
+    flight_kp_back: float = PACKAGED
+    flight_kd_back: float = PACKAGED
+    brake_kp_front: float = PACKAGED
+    brake_kd_front: float = PACKAGED
+    brake_kp_back: float = PACKAGED
+    brake_kd_back: float = PACKAGED
+    control_period: float = PACKAGED
+    touchdown_compression: float = PACKAGED
+    liftoff_compression: float = PACKAGED
+    sense_motor_angle: bool = PACKAGED
+    pitch_gain_front: float = PACKAGED
+    pitch_gain_back: float = PACKAGED
+    pitch_rate_gain_front: float = PACKAGED
+    pitch_rate_gain_back: float = PACKAGED
 
     def __post_init__(self):
         check_controller(self)

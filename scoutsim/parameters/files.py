@@ -106,7 +106,7 @@ def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | N
     """Defaults -> user file -> overrides; return the instance (checked by its constructor,
     whose messages name the values' origins) and the origins."""
     specs = _fields_of(cls)
-    values = {name: _default_si(spec) for name, spec in specs.items()}
+    values: dict[str, typing.Any] = {name: _default_si(spec) for name, spec in specs.items()}
     origins: dict[str, tuple[str, str | None]] = {}
     if path is not None:
         file_values, file_origins = _read_file(path)

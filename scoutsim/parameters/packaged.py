@@ -8,6 +8,7 @@ import tomllib
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from .units import _UNIT_INDEX
 
@@ -29,11 +30,25 @@ def _packaged() -> dict:
     return tomllib.loads(text)
 
 
-def _packaged_defaults(*sections: str):
-    """Class decorator: every annotated field of the class gets, as its default, the SI value
-    of its entry in the packaged ``scout2.toml`` (in one of ``sections``), converted with the
-    entry's unit. The dataclass field list and the file must name the same parameters, and
-    each value must be written with its field's type (``2``, ``2.0``, ``true``)."""
+class _Packaged:
+    """The placeholder default of a field whose default is read from the packaged file."""
+
+    def __repr__(self) -> str:
+        return "<default from the packaged scout2.toml>"
+
+
+#: what a parameter dataclass writes as each field's default (``torso_mass: float =
+#: PACKAGED``): :func:`packaged_defaults` replaces it by the file's value, and a type
+#: checker sees that the field has a default
+PACKAGED: Any = _Packaged()
+
+
+def packaged_defaults(*sections: str):
+    """Class decorator: every annotated field of the class (declared ``= PACKAGED``) gets,
+    as its default, the SI value of its entry in the packaged ``scout2.toml`` (in one of
+    ``sections``), converted with the entry's unit. The dataclass field list and the file
+    must name the same parameters, and each value must be written with its field's type
+    (``2``, ``2.0``, ``true``)."""
     def fill(cls):
         data = _packaged()
         entries = {n: e for sec in sections for n, e in data[sec].items()}
@@ -42,6 +57,9 @@ def _packaged_defaults(*sections: str):
         for name, kind in cls.__annotations__.items():
             if name not in entries:
                 raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
+            if cls.__dict__.get(name) is not PACKAGED:
+                raise RuntimeError(f"{cls.__name__}.{name} must be declared with the default "
+                                   f"PACKAGED (its value is read from {_PACKAGED_NAME})")
             entry = entries[name]
             value = entry["value"]
             if type(value).__name__ != kind:  # the schema reads each field's type from the file

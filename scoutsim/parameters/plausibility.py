@@ -115,6 +115,7 @@ def implausible_message(spec: _Spec, value: float, origins, leg: int | None = No
     label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
     shown = f"{label} = {_fmt(value / scale)}{unit}{f' ({note})' if note else ''}"
     p = spec.plausible
+    assert p is not None, "only a field with a plausible range warns"
     span = f"{p.low / scale:.6g} to {p.high / scale:.6g}{unit}"
     if p.zero and p.low > 0.0:
         span += ", or 0"

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 from ..names import LEG_NAMES, leg_index
 from .parameter_error import ParameterError
-from .packaged import _packaged_defaults
+from .packaged import PACKAGED, packaged_defaults
 from .schema import PER_LEG_FIELDS, ROBOT_SECTIONS, given_per_leg
 from .validation import check_robot
 
@@ -35,7 +35,7 @@ def _per_leg_value(name: str, value):
 
 
 @dataclass(frozen=True)
-@_packaged_defaults(*ROBOT_SECTIONS)
+@packaged_defaults(*ROBOT_SECTIONS)
 class RobotParameters:
     """Physical parameters of the planar Scout II model (SI units).
 
@@ -139,42 +139,42 @@ class RobotParameters:
         Internal resistance shared by all motors [ohm]; 0 = ideal source (assumed).
     """
 
-    torso_mass: float
-    torso_inertia: float
-    leg_mass: float
-    leg_inertia: float
-    leg_stiffness: float
-    leg_damping: float
-    hip_spacing: float
-    com_offset: float
-    leg_rest_length: float
-    leg_com_distance: float
-    legs_per_virtual_leg: int
-    gravity: float
-    torso_length: float
-    torso_height: float
-    planetary_ratio: float
-    sprocket_ratio: float
-    gearbox_efficiency: float
-    sprocket_efficiency: float
-    gearbox_idle_loss_torque: float
-    gearbox_load_loss_coefficient: float
-    drive_gear_inertia: float
-    driven_gear_inertia: float
-    joint_stiction: float
-    joint_damping: float
-    belt_stiffness: float
-    belt_damping: float
-    belt_backlash: float
-    leg_friction_force: float
-    leg_friction_side_load_coefficient: float
-    leg_damping_angle_coefficient: float
-    torque_constant: float
-    speed_constant: float
-    armature_resistance: float
-    current_limit: float
-    battery_voltage: float
-    battery_resistance: float
+    torso_mass: float = PACKAGED
+    torso_inertia: float = PACKAGED
+    leg_mass: float = PACKAGED
+    leg_inertia: float = PACKAGED
+    leg_stiffness: float = PACKAGED
+    leg_damping: float = PACKAGED
+    hip_spacing: float = PACKAGED
+    com_offset: float = PACKAGED
+    leg_rest_length: float = PACKAGED
+    leg_com_distance: float = PACKAGED
+    legs_per_virtual_leg: int = PACKAGED
+    gravity: float = PACKAGED
+    torso_length: float = PACKAGED
+    torso_height: float = PACKAGED
+    planetary_ratio: float = PACKAGED
+    sprocket_ratio: float = PACKAGED
+    gearbox_efficiency: float = PACKAGED
+    sprocket_efficiency: float = PACKAGED
+    gearbox_idle_loss_torque: float = PACKAGED
+    gearbox_load_loss_coefficient: float = PACKAGED
+    drive_gear_inertia: float = PACKAGED
+    driven_gear_inertia: float = PACKAGED
+    joint_stiction: float = PACKAGED
+    joint_damping: float = PACKAGED
+    belt_stiffness: float = PACKAGED
+    belt_damping: float = PACKAGED
+    belt_backlash: float = PACKAGED
+    leg_friction_force: float = PACKAGED
+    leg_friction_side_load_coefficient: float = PACKAGED
+    leg_damping_angle_coefficient: float = PACKAGED
+    torque_constant: float = PACKAGED
+    speed_constant: float = PACKAGED
+    armature_resistance: float = PACKAGED
+    current_limit: float = PACKAGED
+    battery_voltage: float = PACKAGED
+    battery_resistance: float = PACKAGED
 
     def __post_init__(self):
         for name in PER_LEG_FIELDS:

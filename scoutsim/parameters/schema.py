@@ -3,9 +3,11 @@ source and plausible range, taken from the packaged ``scout2.toml``; and which f
 differ between the back and the front legs (:data:`PER_LEG_FIELDS`).
 
 The dataclasses (:mod:`.robot`, :mod:`.controller`) are built on this schema and validated
-against it (:func:`.packaged._packaged_defaults`), so it is read from the file alone."""
+against it (:func:`.packaged.packaged_defaults`), so it is read from the file alone."""
 
 from __future__ import annotations
+
+import typing
 
 import dataclasses
 from dataclasses import dataclass
@@ -114,7 +116,7 @@ class _Spec:
     unit: str  # unit as written in scout2.toml
     dimension: str
     factor: float
-    written: object  # value as written in scout2.toml
+    written: typing.Any  # value as written in scout2.toml (float, int or bool)
     source: str
     plausible: Plausible | None = None  # None: every allowed value is plausible
 

@@ -215,7 +215,7 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
         except OverflowError:   # an integer beyond the float range (Python API only)
             rule = _RULES.get(spec.name)
             text = rule.describe(spec.factor, spec.unit) if rule else "a real number"
-            digits = len(str(abs(int(value))))
+            digits = len(str(abs(typing.cast(int, value))))
             raise ParameterError(f"{spec.label} = an integer of {digits} digits is not allowed: "
                                  f"must be finite and {text}{where}", spec.name) from None
         if spec.kind == "float":
@@ -234,7 +234,7 @@ def coerce_value(spec: _Spec, value: object, where: str = ""):
     """:func:`_coerce` for any field: a per-leg field (:data:`PER_LEG_FIELDS`) also takes a
     (back, front) pair (list, tuple or 1-d array of two), returned as a tuple."""
     if given_per_leg(value):
-        pair = list(value)
+        pair = list(typing.cast(typing.Iterable, value))
         if spec.name not in PER_LEG_FIELDS:
             raise ParameterError(
                 f"{spec.label} = {pair!r} is not allowed: one value for the whole robot (only "
@@ -247,7 +247,7 @@ def coerce_value(spec: _Spec, value: object, where: str = ""):
     return _coerce(spec, value, where)
 
 
-def _fail(spec: _Spec, value: object, rule: str, origins, leg: int | None = None) -> typing.NoReturn:
+def _fail(spec: _Spec, value: typing.Any, rule: str, origins, leg: int | None = None) -> typing.NoReturn:
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     shown = _fmt(value / spec.factor) if spec.kind == "float" else _fmt(value)
@@ -259,15 +259,16 @@ def _fail(spec: _Spec, value: object, rule: str, origins, leg: int | None = None
                          spec.name)
 
 
-def _check_fields(obj: object, origins) -> None:
+def _check_fields(obj: typing.Any, origins) -> None:
     """Type, finiteness and single-field range of every field of ``obj``."""
-    for name, spec in _fields_of(type(obj)).items():
+    cls: typing.Any = type(obj)
+    for name, spec in _fields_of(cls).items():
         where = origins.get(name, ("", None))[0]
         given = getattr(obj, name)
         coerce_value(spec, given, where)  # raises on a wrong type or a pair not allowed
         pair = isinstance(given, tuple)
-        for leg, value in enumerate(given if pair else (given,)):
-            leg = leg if pair else None
+        for index, value in enumerate(given if pair else (given,)):
+            leg = index if pair else None
             if spec.kind == "int" and not isinstance(value, numbers.Integral):
                 raise ParameterError(f"{spec.label} = {value!r} has the wrong type "
                                      f"({type(value).__name__}): expected an integer{where}", name)
@@ -287,8 +288,9 @@ def _check_fields(obj: object, origins) -> None:
                       origins, leg)
 
 
-def _describe_limit(rule: _Range, limit: _Limit, spec: _Spec) -> str:
+def _describe_limit(rule: _Range | None, limit: _Limit, spec: _Spec) -> str:
     """The whole allowed interval of a field with a physical bound, in its display unit."""
+    assert rule is not None and rule.lo is not None, "a field with a physical bound has a range"
     lo = _fmt_bound(rule.lo / spec.factor)
     hi = f"{limit.hi / spec.factor:.9g}"
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
@@ -393,7 +395,7 @@ def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
     field's plain type (``float`` or a subclass, ``int``, ``bool``, or a (back, front) tuple
     of them) or is outside its allowed range (:func:`_check_fields` then says why), else
     the implausible values as (name, value, leg)."""
-    implausible = []
+    implausible: list[tuple[str, typing.Any, int | None]] = []
     for name, types, per_leg, lo, hi, p_lo, p_hi, p_zero in plan:
         v = values[name]
         if type(v) in types:
@@ -420,7 +422,7 @@ def _quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
 def _check(obj, couplings, warn: bool = True) -> None:
     """Every single-field rule of ``obj``'s fields, then ``couplings(obj, origins)``; then
     (if ``warn``) a warning for each value outside its plausible range."""
-    cls = type(obj)
+    cls: typing.Any = type(obj)
     plan = _plan(cls)
     origins = _ORIGINS.get()
     implausible = _quick_scan(obj.__dict__, plan)
@@ -432,7 +434,7 @@ def _check(obj, couplings, warn: bool = True) -> None:
         implausible = _quick_scan({n: coerce_value(specs[n], getattr(obj, n))
                                    for n in specs}, plan)
     couplings(obj, origins)
-    for name, value, leg in implausible if warn else ():
+    for name, value, leg in (implausible or []) if warn else ():
         warn_implausible(_schema()[name], value, origins, leg)
 
 
@@ -462,7 +464,8 @@ def _sections_of(cls: type) -> tuple | None:
 
 
 def _require(obj, sections: tuple, expected: str) -> None:
-    if isinstance(obj, type) or _sections_of(type(obj)) != sections:
+    cls: typing.Any = type(obj)
+    if isinstance(obj, type) or _sections_of(cls) != sections:
         raise TypeError(f"expected {expected}, got {type(obj).__name__}")
 
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from .._core.model import layout as L
 from .energy_accounts import ENERGY_COLUMNS
+from .run_data import RunData
 
 __all__ = ["ColumnViews", "COLUMN_UNITS", "column_unit"]
 
@@ -40,7 +41,7 @@ def column_unit(name: str) -> str | None:
     return None
 
 
-class ColumnViews:
+class ColumnViews(RunData):
     """A run's arrays as named columns and tables."""
 
     def columns(self) -> dict:
@@ -110,7 +111,7 @@ class ColumnViews:
                 series[n] = series[n].astype(np.int8)
         out = {"timeseries": (series, {n: column_unit(n) for n in series})}
         ev = self.event_columns()
-        ev_units = {"t": "s", "energy_before": "J", "energy_after": "J"}
+        ev_units: dict[str, str | None] = {"t": "s", "energy_before": "J", "energy_after": "J"}
         for n in ev:
             for when in ("_before", "_after"):
                 if n.endswith(when) and not n.startswith("energy"):

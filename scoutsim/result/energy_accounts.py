@@ -8,11 +8,14 @@ mixin of :class:`~scoutsim.result.simulation_result.SimulationResult`, which hol
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .._core.model import layout as L
 from ..names import leg_index
 from ..parameters import RobotParameters
+from .run_data import RunData
 
 __all__ = ["EnergyAccessors", "ENERGY_GROUPS", "ENERGY_WHOLE_ROBOT", "ENERGY_COLUMNS"]
 
@@ -38,8 +41,12 @@ ENERGY_COLUMNS = tuple(f"cumulative_energy_{f}_{leg}" for leg in L.LEG_NAMES
                        for f in L.EN_LEG_NAMES) + ("cumulative_energy_battery_loss",)
 
 
-class EnergyAccessors:
+class EnergyAccessors(RunData):
     """Named accessors of a run's energy accounting."""
+
+    if TYPE_CHECKING:   # the time series' accessors (series.py), for the type checker
+        def motor_current(self, leg) -> np.ndarray: ...
+        def motor_speed(self, leg) -> np.ndarray: ...
 
     def _energy_columns(self, name: str, leg) -> list[int]:
         """Columns of :attr:`energy_series` that make up destination ``name`` of ``leg``
@@ -82,7 +89,9 @@ class EnergyAccessors:
         (n,) array [J], aligned with :attr:`t`. The touchdown impacts' losses are not in
         it (they happen at instants: :meth:`impacts`).
         """
-        return self.energy_series[:, self._energy_columns(name, leg)].sum(axis=1)
+        columns = self._energy_columns(name, leg)   # (raises if the run has no accounting)
+        assert self.energy_series is not None
+        return self.energy_series[:, columns].sum(axis=1)
 
     def power(self, name: str, leg=None) -> np.ndarray:
         """Mean power [W] into destination ``name`` (as :meth:`cumulative_energy`) over

@@ -11,6 +11,7 @@ import numpy as np
 
 from .._core.model import layout as L
 from ..names import leg_index
+from .run_data import RunData
 
 __all__ = ["EventAccessors", "EVENT_LOG_COLUMNS", "IMPACT_LOG_COLUMNS"]
 
@@ -21,7 +22,7 @@ EVENT_LOG_COLUMNS = ("t", "kind", "leg", "v1", "v2", "v3", "energy_before", "ene
 IMPACT_LOG_COLUMNS = ("t", "leg", "normal_impulse", "tangential_impulse", "energy_lost")
 
 
-class EventAccessors:
+class EventAccessors(RunData):
     """Named accessors of a run's event records."""
 
     def event_times(self, kind: str, leg=None) -> np.ndarray:

@@ -151,7 +151,9 @@ def _sections() -> dict:
 
 
 def _si_unit(name: str) -> str:
-    unit = next(iter(UNITS[field_dimension(name)]))
+    dimension = field_dimension(name)
+    assert dimension is not None, f"{name} is a parameter with a unit"
+    unit = next(iter(UNITS[dimension]))
     return "" if unit in ("1", "bool") else unit
 
 

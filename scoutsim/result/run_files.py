@@ -10,12 +10,13 @@ from __future__ import annotations
 import json
 import zipfile
 from pathlib import Path
-from typing import Self
+from typing import TYPE_CHECKING, Any, Self
 
 import numpy as np
 
 from .._core.model import layout as L
 from .energy_accounts import ENERGY_COLUMNS
+from .run_data import RunData
 
 __all__ = ["ResultFiles", "TABLES_FORMAT"]
 
@@ -23,16 +24,20 @@ __all__ = ["ResultFiles", "TABLES_FORMAT"]
 TABLES_FORMAT = "scoutsim.run/1"
 
 
-class ResultFiles:
+class ResultFiles(RunData):
     """Saving and loading a run (``.npz`` or tables)."""
+
+    if TYPE_CHECKING:   # the class's own window and the column views' tables, for the checker
+        def window(self, t0: float, t1: float) -> Self: ...
+        def tables(self) -> dict: ...
 
     def save(self, path) -> Path:
         """Save losslessly to ``path`` (.npz)."""
         path = Path(path)
         meta = {"outcome": self.outcome, "t_end": self.t_end, "stats": self.stats,
-                "provenance": self.provenance, "format": "scoutsim.result.simulation_result/1",
+                "provenance": self.provenance, "format": "scoutsim.result/1",
                 "energy_flows": self.energy_flows}
-        extra = {name: a for name, a in (("event_states", self.event_states),
+        extra: dict[str, Any] = {name: a for name, a in (("event_states", self.event_states),
                                          ("steps", self.steps),
                                          ("energy_series", self.energy_series))
                  if a is not None}
@@ -66,7 +71,7 @@ class ResultFiles:
     def _load_npz(cls, path: Path) -> Self:
         with np.load(path, allow_pickle=False) as z:
             meta = json.loads(str(z["meta"]))
-            if meta.get("format") != "scoutsim.result.simulation_result/1":
+            if meta.get("format") != "scoutsim.result/1":
                 raise ValueError(f"{path}: not a scoutsim result file")
             events = z["events"]
             if events.shape[1] < L.NEVREC:

@@ -14,11 +14,12 @@ import numpy as np
 from .._core.model import layout as L
 from ..names import leg_index
 from ..state import HybridState
+from .run_data import RunData
 
 __all__ = ["SeriesAccessors"]
 
 
-class SeriesAccessors:
+class SeriesAccessors(RunData):
     """Named accessors of a run's time series (sampled at :attr:`t`)."""
 
     # -- torso -----------------------------------------------------------------------

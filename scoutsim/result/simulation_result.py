@@ -5,18 +5,19 @@ or fails ends with one extra off-grid sample at that moment). Events are located
 continuous time. Saved losslessly as a single ``.npz`` file (arrays bit-exact, metadata as
 JSON).
 
-:class:`SimulationResult` is one class; its accessors are grouped by concept in mixins,
-one module each: ``result_series`` (the time series by name [SI]), ``result_events`` (the
-event log), ``result_energy`` (the energy accounting [J, W]), ``result_columns`` (named
-columns with units, tables, DataFrame) and ``result_files`` (saving and loading). This
-module holds the class (its arrays, the analysis computed on demand, windows) and
-re-exports the mixin modules' constants.
+:class:`SimulationResult` is one class: its arrays and records are the fields of
+:class:`~.run_data.RunData`, and its accessors are grouped by concept in mixins (each a
+:class:`~.run_data.RunData`), one module each: :mod:`.series` (the time series by name
+[SI]), :mod:`.event_log` (the event log), :mod:`.energy_accounts` (the energy accounting
+[J, W]), :mod:`.columns` (named columns with units, tables, DataFrame) and
+:mod:`.run_files` (saving and loading). This module holds the class (the analysis
+computed on demand, windows) and re-exports the mixin modules' constants.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -74,20 +75,6 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         (:meth:`window`, a streamed run's kept end) keeps the values since the run's start.
     """
 
-    t: np.ndarray
-    state: np.ndarray
-    aux: np.ndarray
-    modes: np.ndarray
-    events: np.ndarray
-    outcome: str
-    t_end: float
-    stats: dict
-    provenance: dict
-    event_states: np.ndarray | None = None
-    steps: np.ndarray | None = None
-    energy_flows: dict | None = None
-    energy_series: np.ndarray | None = None
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # -- analysis (computed on demand) -----------------------------------------------------
     def gait(self, **kwargs):
