@@ -25,8 +25,9 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
               held_torques=None, schedule=None, dt: float = 1e-3,
               integrator: IntegratorSettings | None = None,
               provenance: dict | None = None) -> SimulationResult:
-    """Run the hybrid model on a bench: the engine of :func:`~scoutsim.simulation.simulator.simulate` with the rig options
-    a hip-unit identification needs (:mod:`scoutsim.identification.rigs`).
+    """Run the hybrid model on a bench: the engine of
+    :func:`~scoutsim.simulation.simulator.simulate` with the rig options a hip-unit
+    identification needs (:mod:`scoutsim.identification.rigs`).
 
     Parameters
     ----------

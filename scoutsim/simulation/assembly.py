@@ -165,7 +165,8 @@ def assemble(robot: RobotParameters, model: str, start, plan: ControllerPlan, *,
     start : InitialState (a start in flight, the legs at ``plan``'s touchdown angles unless
         it sets them), HybridState (a run resumed with its modes), a state vector (layout
         ``STATE_NAMES``, SI; a start in flight, the modes derived from it) or None (the
-        model's default start, :func:`~scoutsim.simulation.initial_conditions.default_initial_state`).
+        model's default start,
+        :func:`~scoutsim.simulation.initial_conditions.default_initial_state`).
     plan : how the run is controlled (:func:`~scoutsim.control.dispatch.plan_controller`,
         :func:`bench_plan`).
     plant : the floor, the fall limit, the massless legs' placement, the bench rig.

@@ -301,10 +301,12 @@ def start_engine(start: InitialState | HybridState | None, duration: float, *,
                  pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
                  integrator: IntegratorSettings | None = None, energy: bool = False,
                  rows: int | None = None) -> HybridEngine:
-    """An engine at sample 0 of a run from ``start``, put together as :func:`~scoutsim.simulation.simulator.simulate` does
-    it, for a caller that drives it sample by sample itself (``engine.advance(k)``, the
-    commands in ``engine.cmd`` or the Table I set-points by :meth:`HybridEngine.retune`, the readings from
-    ``engine.read_sensors()``): a learning environment (:mod:`scoutsim.envs`).
+    """An engine at sample 0 of a run from ``start``, put together as
+    :func:`~scoutsim.simulation.simulator.simulate` does it
+    (:func:`~scoutsim.simulation.assembly.assemble`), for a caller that drives it sample by
+    sample itself (``engine.advance(k)``, the commands in ``engine.cmd`` or the Table I
+    set-points by :meth:`HybridEngine.retune`, the readings from ``engine.read_sensors()``):
+    a learning environment (:mod:`scoutsim.envs`).
 
     Parameters
     ----------
