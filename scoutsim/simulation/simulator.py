@@ -60,7 +60,8 @@ def warm_up() -> float:
 @dataclass(frozen=True)
 class Recording:
     """What :func:`simulate` records and how it runs (each field is also a keyword of
-    :func:`simulate`, which overrides the bundle's): ``progress``, ``chunk_seconds`` [s],
+    :func:`simulate`, which, given and not None, overrides the bundle's): ``progress``,
+    ``chunk_seconds`` [s],
     ``record_steps``, ``check_memory``, ``stream_to``, ``keep_seconds`` [s],
     ``table_format``, ``energy`` (see :func:`simulate`)."""
 
@@ -68,7 +69,7 @@ class Recording:
     chunk_seconds: float = 1.0
     record_steps: bool = False
     check_memory: bool = True
-    stream_to: object = None
+    stream_to: str | os.PathLike | None = None
     keep_seconds: float | None = None
     table_format: str | None = None
     energy: bool = False
