@@ -291,7 +291,7 @@ def run_mujoco(model: str, o: MjOptions, duration: float, robot: RobotParameters
     qa = {k: m.jnt_qposadr[v] for k, v in jid.items()}
     va = {k: m.jnt_dofadr[v] for k, v in jid.items()}
     init = init or default_initial_state(model)
-    # the same start as scoutsim's _state_vector: legs at the given (default: touchdown)
+    # the same start as scoutsim's initial_state_vector: legs at the given (default: touchdown)
     # angles, motor angles = leg angles (no belt deflection), flight leg lengths with the
     # massless toe's rate k (l0 - l) / c
     phi0 = (ctrl_params.touchdown_angle_back if init.phi_back is None else init.phi_back,

@@ -28,14 +28,14 @@ from scoutsim._core.model.sensor_readings import read_encoders
 from scoutsim._core.numerics.events import event_values
 from scoutsim._core.numerics.stats import NSTAT
 from scoutsim._core.numerics.transitions import apply_event, settle
-from scoutsim.simulation.initial_conditions import _state_vector
+from scoutsim.simulation.initial_conditions import initial_state_vector
 
 
 def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.inf):
     robot, ctrl = RobotParameters(), ControllerParameters()
     P = robot_array(robot, model, friction_coefficient=friction_coefficient)
     C = controller_array(ctrl, robot)
-    s = _state_vector(default_initial_state(), robot, ctrl, (0, 0), True)
+    s = initial_state_vector(default_initial_state(), robot, ctrl, (0, 0), True)
     mi = np.zeros(L.NMI, dtype=np.int64)
     mi[L.MI_MOTOR_B:L.MI_MOTOR_B + 2] = L.STUCK
     mi[L.MI_SLIDE_DIR_B:L.MI_SLIDE_DIR_B + 2] = 1

@@ -1,7 +1,9 @@
 """Tests of the simulate() entry point: equivalences, limits, stiction, outcomes, persistence."""
 
 import dataclasses
+import inspect
 import math
+import re
 
 import numpy as np
 import pytest
@@ -10,6 +12,8 @@ import scoutsim
 from scoutsim import (BoundingController, ControllerParameters, InitialState,
                       IntegratorSettings, RobotParameters, SimulationResult)
 from scoutsim._core.model import layout as L
+from scoutsim.simulation.engine import RETUNABLE, start_engine
+from scoutsim.simulation.simulator import PLANT_OPTIONS
 
 TIGHT = IntegratorSettings(rtol=1e-10, atol=1e-10)
 
@@ -315,3 +319,71 @@ def test_provenance_names_the_hip_unit_the_run_had(model, play, unit):
     r = scoutsim.simulate(scoutsim.RobotParameters(belt_backlash=play), duration=0.01,
                           model=model)
     assert r.provenance["hip_unit"] == unit
+
+
+def _documented_keywords(func) -> list[str]:
+    """The parameter names of a numpydoc "Parameters" section (``name : type`` lines)."""
+    doc = inspect.getdoc(func)
+    section = doc.split("Parameters\n----------\n", 1)[1].split("\n\n", 1)[0]
+    section = re.split(r"\n(?=Returns\n|Raises\n)", section)[0]
+    return [m.group(1) for m in re.finditer(r"^([a-z_]+) : ", section, re.M)]
+
+
+def test_every_documented_keyword_is_in_the_signature_and_back():
+    """simulate() spells out its keywords: what its docstring documents is what
+    inspect.signature shows (no ``**options``), each beyond the four positional ones
+    keyword-only, with a default and a type annotation."""
+    params = inspect.signature(scoutsim.simulate).parameters
+    documented = _documented_keywords(scoutsim.simulate)
+    assert len(documented) == len(set(documented))
+    assert set(documented) == set(params)
+    assert all(p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL) for p in params.values())
+    for name, p in list(params.items())[4:]:
+        assert p.kind is p.KEYWORD_ONLY, name
+    for name, p in params.items():
+        assert p.default is not p.empty and p.annotation is not p.empty, name
+    # the plant keywords' defaults are those the assembly applies
+    assert {k: params[k].default for k in PLANT_OPTIONS} == PLANT_OPTIONS
+
+
+def test_an_unknown_keyword_is_refused_by_name():
+    with pytest.raises(TypeError, match="pitch_limit_degrees"):
+        scoutsim.simulate(duration=0.01, pitch_limit_degrees=30.0)
+
+
+@pytest.mark.parametrize("bad", [0.0, 90.0, -10.0, math.nan, "60"])
+def test_a_bad_pitch_limit_is_refused_naming_the_keyword_and_its_range(bad):
+    for run in (lambda: scoutsim.simulate(duration=0.01, pitch_limit_deg=bad),
+                lambda: start_engine(None, 0.01, pitch_limit_deg=bad)):
+        with pytest.raises(ValueError, match=r"pitch_limit_deg = .* must be .* \(0, 90\)"):
+            run()
+
+
+def test_a_recording_keyword_overrides_its_field_of_the_bundle():
+    """``recording=`` sets what a run records; a keyword given as well wins over the
+    bundle's field, and a keyword not given (None) leaves it."""
+    bundle = scoutsim.Recording(record_steps=True)
+    assert scoutsim.simulate(duration=0.01, recording=bundle).steps is not None
+    assert scoutsim.simulate(duration=0.01, recording=bundle, record_steps=False).steps is None
+    assert scoutsim.simulate(duration=0.01, record_steps=True).steps is not None
+    assert scoutsim.simulate(duration=0.01).steps is None
+
+
+def test_retuning_the_engine_at_the_start_is_starting_with_those_parameters():
+    """HybridEngine.retune writes each retunable Table I field into its own slot: an
+    engine started with the default parameters and retuned at sample 0 to another set runs
+    bit for bit as one started with that set (the start's leg angles given, so the set
+    does not place the legs)."""
+    other = ControllerParameters().replace(**{
+        name: 0.9 * getattr(ControllerParameters(), name) - 0.01 for name in RETUNABLE})
+    start = InitialState(phi_back=0.3, phi_front=0.35)
+    ref = start_engine(start, 0.6, controller=other)
+    eng = start_engine(start, 0.6)
+    eng.retune(**{name: getattr(other, name) for name in RETUNABLE})
+    assert np.array_equal(eng.C, ref.C)
+    for e in (ref, eng):
+        e.advance(e.k_last + 1)
+    assert eng.n_out == ref.n_out == ref.k_last + 1      # (the whole run: no fall)
+    assert np.array_equal(eng.out_s[:eng.n_out], ref.out_s[:ref.n_out])
+    with pytest.raises(ValueError, match="flight_kp_back.*not allowed"):
+        eng.retune(flight_kp_back=1.0)

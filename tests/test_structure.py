@@ -11,6 +11,12 @@ ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
 CORE = ROOT / "_core"
 MAX_LINES = 600
 MAX_PARAMETERS = 12
+#: functions allowed more than MAX_PARAMETERS parameters ("path relative to the package:name"),
+#: and why; matched exactly, so an entry that no longer names a wide function fails too
+WIDE_BY_DESIGN = {
+    "simulation/simulator.py:simulate": "the public entry point spells out every keyword "
+                                        "for IDEs, inspect.signature and type checkers",
+}
 
 
 def _sources():
@@ -24,7 +30,9 @@ def test_no_module_over_600_lines():
 
 
 def test_no_function_over_12_parameters():
-    wide = []
+    """No function takes more than 12 parameters but those of :data:`WIDE_BY_DESIGN`, and
+    each of those does."""
+    wide, excepted = [], set()
     for p in _sources():
         for node in ast.walk(ast.parse(p.read_text())):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -34,8 +42,14 @@ def test_no_function_over_12_parameters():
                 if a.args and a.args[0].arg in ("self", "cls"):
                     n -= 1
                 if n > MAX_PARAMETERS:
-                    wide.append(f"{p.relative_to(ROOT)}:{node.lineno} {node.name} ({n})")
+                    key = f"{p.relative_to(ROOT).as_posix()}:{node.name}"
+                    if key in WIDE_BY_DESIGN:
+                        excepted.add(key)
+                    else:
+                        wide.append(f"{p.relative_to(ROOT)}:{node.lineno} {node.name} ({n})")
     assert not wide, wide
+    stale = set(WIDE_BY_DESIGN) - excepted
+    assert not stale, f"listed as wide by design but not wide (or gone): {sorted(stale)}"
 
 
 def test_integrators_and_run_loop_know_no_model_variant():

@@ -44,9 +44,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from .._core.model.layout import IPHB, LS_FLIGHT, LS_RETRACTION
+from .._core.model.layout import IPHB, LEG_NAMES, LS_FLIGHT, LS_RETRACTION
 from ..parameters import ControllerParameters
-from .bounding import C_KDB_B, C_KPB_B, C_SW_B
 
 __all__ = ["StartupParameters", "StartupRecord", "run_startup"]
 
@@ -166,12 +165,12 @@ class StartupRecord:
                 "completed": self.completed, "parameters": asdict(self.parameters)}
 
 
-def _set_brake(C, leg: int, angle: float, kp: float, kd: float) -> None:
+def _set_brake(engine, leg: int, angle: float, kp: float, kd: float) -> None:
     """Set leg ``leg``'s sweep limit (the stance-brake set-point) [rad] and stance-brake
-    gains in the controller array."""
-    C[C_SW_B + leg] = angle
-    C[C_KPB_B + 2 * leg] = kp
-    C[C_KDB_B + 2 * leg] = kd
+    gains [N m/rad], [N m s/rad] of the engine's Table I controller."""
+    name = LEG_NAMES[leg]
+    engine.retune(**{f"sweep_limit_{name}": angle, f"brake_kp_{name}": kp,
+                     f"brake_kd_{name}": kd})
 
 
 def run_startup(engine, params: StartupParameters,
@@ -179,21 +178,22 @@ def run_startup(engine, params: StartupParameters,
     """Drive ``engine`` through the start-up from standing, up to the hand-over.
 
     ``engine`` runs the compiled Table I controller over the plant
-    (:class:`scoutsim.simulation.engine.HybridEngine`: its controller array ``C``, leg states
-    ``ls``, sample index ``k``, period ``dt``, ``running`` and ``advance(k_stop)``),
-    starting from :func:`scoutsim.state.standing_state` at sample 0. The
-    start-up changes the sweep limits and stance-brake gains in ``C`` and puts the front
-    legs into stance-retraction once (the push); each leg's values return to
+    (:class:`scoutsim.simulation.engine.HybridEngine`: its state ``s``, leg states ``ls``,
+    sample index ``k``, period ``dt``, ``running``, ``advance(k_stop)``, and the
+    controller's set-points and gains changed by ``retune(**fields)`` and its leg states by
+    ``set_leg_state(leg, state)``), starting from :func:`scoutsim.state.standing_state` at
+    sample 0. The start-up changes the sweep limits and stance-brake gains and puts the
+    front legs into stance-retraction once (the push); each leg's values return to
     ``controller``'s at its first lift-off. Returns when both legs are handed over (or
     the run ended); the caller continues the run.
     """
     p = params.resolved(controller)
-    C, dt = engine.C, engine.dt
+    dt = engine.dt
     table = [(controller.sweep_limit_back, controller.brake_kp_back, controller.brake_kd_back),
              (controller.sweep_limit_front, controller.brake_kp_front,
               controller.brake_kd_front)]
     for leg in range(2):     # stand: hold the standing angle with the stance-brake law
-        _set_brake(C, leg, standing_leg_angle(engine.s, leg), table[leg][1], table[leg][2])
+        _set_brake(engine, leg, standing_leg_angle(engine.s, leg), table[leg][1], table[leg][2])
     k_step = int(round(p.stand_duration / dt))
     k_timeout = k_step + int(round(p.handover_timeout / dt))
     liftoff = [None, None]
@@ -203,7 +203,7 @@ def run_startup(engine, params: StartupParameters,
     while engine.running and not all(handed):
         if not stepped and engine.k >= k_step:
             stepped = True
-            _set_brake(C, BACK, p.step_angle_back, p.step_kp, p.step_kd)
+            _set_brake(engine, BACK, p.step_angle_back, p.step_kp, p.step_kd)
         if engine.k > k_step and engine.k >= k_timeout:
             break
         engine.advance(engine.k + 1)
@@ -212,18 +212,18 @@ def run_startup(engine, params: StartupParameters,
                 and p.front_pushoff_angle is not None and engine.ls[BACK] == LS_RETRACTION):
             # the stepped back legs touched down and thrust: the front legs push with them
             push = round((engine.k - 1) * dt, 9)
-            C[C_SW_B + FRONT] = p.front_pushoff_angle
-            engine.ls[FRONT] = LS_RETRACTION
+            engine.retune(sweep_limit_front=p.front_pushoff_angle)
+            engine.set_leg_state(FRONT, LS_RETRACTION)
         for leg in range(2):
             # this leg's lift-off detected: from the next sample on it runs Table I
             if not handed[leg] and engine.ls[leg] == LS_FLIGHT:
                 handed[leg] = True
                 liftoff[leg] = round((engine.k - 1) * dt, 9)
-                _set_brake(C, leg, *table[leg])
+                _set_brake(engine, leg, *table[leg])
     completed = all(handed)
     for leg in range(2):     # timeout or end of the run: every leg back to Table I
         if not handed[leg]:
-            _set_brake(C, leg, *table[leg])
+            _set_brake(engine, leg, *table[leg])
     return StartupRecord(step_s=round(k_step * dt, 9), push_s=push, liftoff_s=tuple(liftoff),
                          handover_s=round(engine.k * dt, 9) if completed else None,
                          completed=completed, parameters=p)

@@ -41,7 +41,7 @@ from ..names import LEG_NAMES
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result.simulation_result import SimulationResult
 from ..state import state_vector
-from ..simulation.bench import Bench, run_bench
+from .bench import Bench, run_bench
 from ..simulation.integrator import IntegratorSettings
 from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp

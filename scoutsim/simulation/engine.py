@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
 from ..control.dispatch import plan_controller
 from ..control.sensors import SensorParameters, Sensors
 from .._core.loop import Carry, Control, Records, Span, effective_method, readings_at, run_entry
@@ -15,20 +16,25 @@ from .._core.numerics.work import Plant
 from .._core.model import layout as L
 from .._core.model.evaluate import NSTIFF
 from .._core.model.flags import flag_is_set
-from .._core.model.packing import robot_array
 from .._core.model.rigid_body import state_energy
 from .._core.numerics.dopri5 import eval_workspace
 from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, METHOD_AUTO, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
-from ..parameters import (ControllerParameters, Environment, RobotParameters,
-                         validate_parameters, validate_robot)
+from ..parameters import ControllerParameters, RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
+from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, RunSetup, assemble
 from .budgets import EVENT_ROWS_PER_S
-from .integrator import _METHODS, IntegratorSettings
-from .initial_conditions import _resumed_modes, _state_vector, default_initial_state, fresh_modes
+from .integrator import METHOD_CODES, IntegratorSettings
 from ..state import HybridState, InitialState
 
-__all__ = ["HybridEngine", "start_engine"]
+__all__ = ["HybridEngine", "start_engine", "RETUNABLE"]
+
+#: ControllerParameters field -> slot of the built-in Table I controller's array, for the
+#: fields a caller may change while the engine runs (:meth:`HybridEngine.retune`): the
+#: set-points a schedule may change (``control.bounding.SCHEDULABLE``) and the
+#: stance-brake gains (the start-up from standing, :mod:`scoutsim.control.startup`)
+RETUNABLE = {**SCHEDULABLE, "brake_kp_back": C_KPB_B, "brake_kd_back": C_KDB_B,
+             "brake_kp_front": C_KPB_F, "brake_kd_front": C_KDB_F}
 
 
 class HybridEngine:
@@ -94,6 +100,15 @@ class HybridEngine:
         self._entry = None        # the compiled run loop for this engine's method
         self.t_now = 0.0
 
+    @classmethod
+    def assembled(cls, setup: RunSetup, duration: float, *, record_steps: bool = False,
+                  rows: int | None = None, energy: bool = False) -> "HybridEngine":
+        """An engine at sample 0 of the assembled run ``setup``
+        (:func:`~scoutsim.simulation.assembly.assemble`), ``duration`` [s] long."""
+        return cls(setup.P, setup.plan.C, setup.start, duration, setup.control_period,
+                   setup.integrator, record_steps, rows=rows, energy=energy,
+                   block=setup.plan.block)
+
     def __getstate__(self):
         # the compiled run loop does not pickle: the next advance() looks it up again
         return self.__dict__ | {"_entry": None}
@@ -156,6 +171,24 @@ class HybridEngine:
             return math.nan
         return float(e[L.EN_ELECTRICAL] + e[L.NEN_LEG + L.EN_ELECTRICAL])
 
+    def retune(self, **values: float) -> None:
+        """Change the built-in Table I controller's set-points and gains from the next
+        sample on: ``field=value`` for fields of
+        :class:`~scoutsim.parameters.ControllerParameters` in :data:`RETUNABLE` (SI: rad,
+        N m/rad, N m s/rad)."""
+        for name, value in values.items():
+            slot = RETUNABLE.get(name)
+            if slot is None:
+                raise ValueError(f"retune: {name!r} is not allowed: must be one of "
+                                 f"{sorted(RETUNABLE)}")
+            self.C[slot] = value
+
+    def set_leg_state(self, leg: int, state: int) -> None:
+        """Put the built-in Table I controller's leg ``leg`` (0 back, 1 front) into leg
+        state ``state`` (a code of :class:`~scoutsim.names.LegState`) for the next
+        sample."""
+        self.ls[int(leg)] = state
+
     def read_first_sensors(self) -> Sensors:
         """The readings of the run's first sample (what a controller's ``reset`` sees)."""
         return Sensors.from_vector(self.read_sensors())
@@ -190,7 +223,7 @@ class HybridEngine:
                 Carry(self.hwork, self.armed, self.sfwork, self.ew),
                 self.n_out, self.nev)
         if self._entry is None:   # the argument types stay those of the first call
-            self._method = effective_method(_METHODS.get(self.integ.method, METHOD_AUTO),
+            self._method = effective_method(METHOD_CODES.get(self.integ.method, METHOD_AUTO),
                                             int(self.P[L.P_HIP_UNIT]))
             self._entry = run_entry(self._method, args)
         nev_before = self.nev
@@ -264,13 +297,16 @@ def start_engine(start: InitialState | HybridState | None, duration: float, *,
                  robot: RobotParameters | None = None, model: str = "II",
                  controller: ControllerParameters | None = None, hold_commands: bool = False,
                  sensors: SensorParameters | None = None,
-                 friction_coefficient: float | None = None, pitch_limit_deg: float = 60.0,
+                 friction_coefficient: float | None = None,
+                 pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
                  integrator: IntegratorSettings | None = None, energy: bool = False,
                  rows: int | None = None) -> HybridEngine:
-    """An engine at sample 0 of a run from ``start``, put together as :func:`~scoutsim.simulation.simulator.simulate` does
-    it, for a caller that drives it sample by sample itself (``engine.advance(k)``, the
-    commands in ``engine.cmd`` or the Table I set-points in ``engine.C``, the readings from
-    ``engine.read_sensors()``): a learning environment (:mod:`scoutsim.envs`).
+    """An engine at sample 0 of a run from ``start``, put together as
+    :func:`~scoutsim.simulation.simulator.simulate` does it
+    (:func:`~scoutsim.simulation.assembly.assemble`), for a caller that drives it sample by
+    sample itself (``engine.advance(k)``, the commands in ``engine.cmd`` or the Table I
+    set-points by :meth:`HybridEngine.retune`, the readings from ``engine.read_sensors()``):
+    a learning environment (:mod:`scoutsim.envs`).
 
     Parameters
     ----------
@@ -294,28 +330,15 @@ def start_engine(start: InitialState | HybridState | None, duration: float, *,
     robot = validate_robot(robot if robot is not None else RobotParameters())
     cparams = controller if controller is not None else ControllerParameters()
     validate_parameters(robot, cparams)
-    mu = Environment(friction_coefficient=friction_coefficient).friction_for(robot)
-    if not (0.0 < pitch_limit_deg < 90.0):
-        raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+    plant = PlantOptions(friction_coefficient=friction_coefficient,
+                         pitch_limit_deg=pitch_limit_deg)
     plan = plan_controller(cparams, model, robot, sensors)
-    if hold_commands:
-        plan.block.ints[L.CB_KIND] = L.CTRL_HELD
-    P = robot_array(robot, model, friction_coefficient=mu,
-                    pitch_limit=math.radians(pitch_limit_deg))
-    init = start if start is not None else default_initial_state(model, robot)
-    if isinstance(init, HybridState):
-        s = np.array(init.state)
-        mi, mf, ls = _resumed_modes(init)
-    elif isinstance(init, InitialState):
-        s = _state_vector(init, robot, cparams, (0.0, 0.0), True)
-        ls = np.zeros(2, dtype=np.int64)
-        mi, mf = fresh_modes(s, P)
-    else:
+    if start is not None and not isinstance(start, (InitialState, HybridState)):
         raise TypeError("start must be an InitialState, a HybridState or None, not "
-                        f"{type(init).__name__}")
-    integ = (integrator or IntegratorSettings()).resolve(model)
-    return HybridEngine(P, plan.C, (s, mi, mf, ls), duration, plan.control_period, integ,
-                        rows=rows, energy=energy, block=plan.block)
+                        f"{type(start).__name__}")
+    setup = assemble(robot, model, start, plan, plant=plant, integrator=integrator,
+                     hold_commands=hold_commands)
+    return HybridEngine.assembled(setup, duration, rows=rows, energy=energy)
 
 
 def _kept(buffer: np.ndarray, n: int) -> np.ndarray:

@@ -16,11 +16,18 @@ from .._core.model.transmission import motor_mode_from_rate
 from ..parameters import ControllerParameters, RobotParameters
 from ..state import HybridState, InitialState, standing_state
 
-__all__ = ["default_initial_state", "fresh_modes", "NAMED_STARTS"]
+__all__ = ["default_initial_state", "fresh_modes", "resumed_modes", "initial_state_vector",
+           "named_start", "NAMED_STARTS"]
 
 
-def _state_vector(init: InitialState, robot: RobotParameters,
-                  ctrl: ControllerParameters | None, passive_angles, passive_world) -> np.ndarray:
+def initial_state_vector(init: InitialState, robot: RobotParameters,
+                         ctrl: ControllerParameters | None, passive_angles,
+                         passive_world) -> np.ndarray:
+    """The state vector (layout ``STATE_NAMES``, SI) of a start in flight ``init``, checked:
+    finite values, |pitch| < 90 deg, leg lengths in (0, l0], both toes above the ground.
+    Leg angles ``init`` leaves open are the touchdown angles of the Table I controller
+    ``ctrl``, or (``ctrl`` None: massless legs without one) ``passive_angles`` (back,
+    front) [rad], from the world vertical if ``passive_world`` else relative to the torso."""
     s = np.zeros(L.NS)
     vals = {f.name: getattr(init, f.name) for f in fields(init)}
     for name, v in vals.items():
@@ -118,7 +125,7 @@ def fresh_modes(s: np.ndarray, P: np.ndarray):
     return mi, mf
 
 
-def _resumed_modes(init: HybridState):
+def resumed_modes(init: HybridState):
     """Mode arrays (mi, mf) and controller leg states of a run resumed at ``init``."""
     mi, mf = init.mode_arrays()
     return mi, mf, np.array(init.leg_states, dtype=np.int64)
@@ -128,7 +135,7 @@ def _resumed_modes(init: HybridState):
 NAMED_STARTS = ("flight", "standing")
 
 
-def _named_start(initial_state, startup, model, robot, cparams, user_ctrl):
+def named_start(initial_state, startup, model, robot, cparams, user_ctrl):
     """Resolve a start given by name: (initial state or None for the default, start-up
     parameters or None). "flight": the default start; "standing": the robot at rest
     (:func:`~scoutsim.state.standing_state`) and the start-up of

@@ -8,9 +8,10 @@ from dataclasses import dataclass
 
 from .._core.numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5
 
-__all__ = ["IntegratorSettings", "DEFAULT_TOLERANCES", "AUTO_ARK_MIN_RTOL"]
+__all__ = ["IntegratorSettings", "DEFAULT_TOLERANCES", "AUTO_ARK_MIN_RTOL", "METHOD_CODES"]
 
-_METHODS = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
+#: the compiled run loop's code of each method by name
+METHOD_CODES = {"dopri5": METHOD_DOPRI5, "ark3": METHOD_ARK3, "ark4": METHOD_ARK4}
 
 
 #: default (rtol, atol) of each method when the settings leave them open
@@ -50,9 +51,9 @@ class IntegratorSettings:
     method: str = "auto"
 
     def __post_init__(self):
-        if self.method not in _METHODS and self.method != "auto":
+        if self.method not in METHOD_CODES and self.method != "auto":
             raise ValueError(f"integrator.method = {self.method!r} is not allowed: must be one "
-                             f"of {sorted(_METHODS) + ['auto']}")
+                             f"of {sorted(METHOD_CODES) + ['auto']}")
         for name in ("rtol", "atol", "initial_step"):
             v = getattr(self, name)
             if v is None and name != "initial_step":

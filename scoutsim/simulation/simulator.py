@@ -10,19 +10,19 @@ the integrator settings (:class:`IntegratorSettings`).
 The parts it composes have their own modules: :mod:`scoutsim.simulation.integrator` (the settings),
 :mod:`scoutsim.simulation.initial_conditions` (the start as the loop takes it), :mod:`scoutsim.simulation.engine` (the
 engine that runs the compiled loop in chunks), :mod:`scoutsim.simulation.budgets` (memory, disk and
-wall time checked before a run) and :mod:`scoutsim.simulation.bench` (the engine on a bench rig);
-the names other code uses are re-exported here.
+wall time checked before a run) and :mod:`scoutsim.simulation.assembly` (the run put together,
+as every caller of the engine does); the names other code uses are re-exported here.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 import warnings
 from dataclasses import asdict, dataclass, fields
 
-import numpy as np
 
 from .._version import __version__
 from ..control.dispatch import PythonBridge, plan_controller
@@ -30,22 +30,19 @@ from ..control.protocol import ControllerError, failure_message
 from ..control.sensors import SensorParameters, Sensors
 from ..control.startup import StartupParameters, run_startup
 from .._core.model import layout as L
-from .._core.model.hip_unit import NAMES as HIP_UNIT_NAMES
-from .._core.model.packing import robot_array
-from ..parameters import (ControllerParameters, Environment, RobotParameters,
-                         validate_parameters, validate_robot)
+from ..parameters import Environment, RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
 from ..state import HybridState, InitialState
 # the parts simulate() composes, re-exported here as the public API of a run
-from .bench import run_bench
+from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, assemble
 from .budgets import (STREAM_CHUNK_SECONDS, check_run_memory, check_stream_disk,
                       expected_wall_time, physical_memory_bytes)
 from .engine import HybridEngine, start_engine
 from .integrator import IntegratorSettings
-from .initial_conditions import _named_start, _resumed_modes, _state_vector, default_initial_state, fresh_modes
+from .initial_conditions import default_initial_state, named_start
 
 __all__ = ["simulate", "Recording", "PLANT_OPTIONS", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
-           "default_initial_state", "run_bench", "warm_up", "start_engine",
+           "default_initial_state", "warm_up", "start_engine",
            "check_run_memory", "check_stream_disk", "expected_wall_time",
            "physical_memory_bytes"]
 
@@ -63,7 +60,8 @@ def warm_up() -> float:
 @dataclass(frozen=True)
 class Recording:
     """What :func:`simulate` records and how it runs (each field is also a keyword of
-    :func:`simulate`, which overrides the bundle's): ``progress``, ``chunk_seconds`` [s],
+    :func:`simulate`, which, given and not None, overrides the bundle's): ``progress``,
+    ``chunk_seconds`` [s],
     ``record_steps``, ``check_memory``, ``stream_to``, ``keep_seconds`` [s],
     ``table_format``, ``energy`` (see :func:`simulate`)."""
 
@@ -71,27 +69,27 @@ class Recording:
     chunk_seconds: float = 1.0
     record_steps: bool = False
     check_memory: bool = True
-    stream_to: object = None
+    stream_to: str | os.PathLike | None = None
     keep_seconds: float | None = None
     table_format: str | None = None
     energy: bool = False
 
 
-#: :func:`simulate`'s keywords for the plant beyond the robot, with their defaults
-PLANT_OPTIONS = {"friction_coefficient": None, "pitch_limit_deg": 60.0,
-                 "passive_touchdown_angles": (0.0, 0.0), "passive_touchdown_world": True}
+#: :func:`simulate`'s keywords for the plant beyond the robot, with their defaults (those of
+#: :class:`~scoutsim.simulation.assembly.PlantOptions`)
+PLANT_OPTIONS = {f.name: f.default for f in dataclasses.fields(PlantOptions) if f.name != "bench"}
 
 
-def _options(recording: Recording | None, options: dict) -> tuple[Recording, dict]:
-    """The run's :class:`Recording` (the bundle with the keywords of its fields applied)
-    and its plant options (:data:`PLANT_OPTIONS`) from :func:`simulate`'s keywords; a
-    keyword of neither is refused as Python refuses one."""
-    fields = {f.name for f in dataclasses.fields(Recording)}
-    rec = {k: options.pop(k) for k in list(options) if k in fields}
-    plant = {k: options.pop(k, default) for k, default in PLANT_OPTIONS.items()}
-    if options:
-        raise TypeError(f"simulate() got an unexpected keyword argument {next(iter(options))!r}")
-    return dataclasses.replace(recording or Recording(), **rec), plant
+_DEFAULT_RECORDING = Recording()
+
+
+def _recording(recording: Recording | None, given: dict) -> Recording:
+    """The run's :class:`Recording`: the bundle (default ``Recording()``) with the
+    recording keywords of :func:`simulate` that were given (not None) applied."""
+    changes = {k: v for k, v in given.items() if v is not None}
+    if recording is None and not changes:
+        return _DEFAULT_RECORDING
+    return dataclasses.replace(recording or _DEFAULT_RECORDING, **changes)
 
 
 def _fields_dict(obj) -> dict:
@@ -106,13 +104,23 @@ def _fields_dict(obj) -> dict:
     return out
 
 
-def simulate(robot: RobotParameters | None = None, controller=None,
-             initial_state: InitialState | None = None, duration: float = 10.0, *,
+def simulate(robot: RobotParameters | None = None, controller: object | None = None,
+             initial_state: InitialState | HybridState | str | None = None,
+             duration: float = 10.0, *,
              model: str = "II", environment: Environment | None = None,
              integrator: IntegratorSettings | None = None,
              sensors: SensorParameters | None = None,
              startup: StartupParameters | None = None,
-             recording: Recording | None = None, **options) -> SimulationResult:
+             friction_coefficient: float | None = None,
+             pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
+             passive_touchdown_angles: tuple[float, float] = (0.0, 0.0),
+             passive_touchdown_world: bool = True,
+             recording: Recording | None = None,
+             progress: bool | None = None, chunk_seconds: float | None = None,
+             record_steps: bool | None = None, check_memory: bool | None = None,
+             stream_to: str | os.PathLike | None = None, keep_seconds: float | None = None,
+             table_format: str | None = None,
+             energy: bool | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -148,48 +156,19 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         slip for massless legs (their ground force lies along the leg).
     integrator : IntegratorSettings, optional
         Tolerances of the reference integrator.
-    friction_coefficient : float, optional
+    friction_coefficient : float or None
         Shortcut for ``environment=Environment(friction_coefficient=...)``: Coulomb
-        coefficient of the toe, ``inf`` = no slip (not together with ``environment``).
+        coefficient of the toe, ``inf`` = no slip (not together with ``environment``);
+        None (default): the environment's.
     pitch_limit_deg : float
-        |pitch| [deg] that counts as a fall (docs/specification.md section 3).
+        |pitch| [deg] that counts as a fall, in (0, 90) (default 60;
+        docs/specification.md section 3).
     passive_touchdown_angles : (back, front) [rad]
-        Massless-leg configuration only: where the legs are placed in flight.
+        Massless-leg configuration only: where the legs are placed in flight (default
+        (0, 0)).
     passive_touchdown_world : bool
-        Massless-leg configuration only: angles from the world vertical (True) or relative
-        to the torso (False).
-    progress : bool
-        Show a progress bar (tqdm) on stderr.
-    chunk_seconds : float
-        Simulated time [s] per call of the compiled loop (progress updates, interrupts);
-        the result does not depend on it.
-    record_steps : bool
-        Also record every integrator step (``result.steps``: time, state and plant modes at
-        the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
-        about 50 000 steps).
-    check_memory : bool
-        Refuse (ValueError) a run whose time series would not fit in this machine's memory
-        (:func:`~scoutsim.simulation.budgets.check_run_memory`) before allocating anything; False to try anyway.
-        A streamed run is checked against the free disk space instead
-        (:func:`~scoutsim.simulation.budgets.check_stream_disk`).
-    stream_to : directory, optional
-        Stream the run to this directory as it is computed (:mod:`scoutsim.simulation.streaming`):
-        the ``timeseries``, ``events`` (and ``steps``) tables and a manifest, written chunk
-        by chunk, so the memory a run needs does not grow with its duration. The returned
-        result then holds only the last ``keep_seconds`` of the run (outcome, end time and
-        statistics are the whole run's); ``SimulationResult.load(stream_to)`` reads all.
-    keep_seconds : float, optional
-        With ``stream_to``: seconds at the end of the run kept in memory and returned
-        (default :data:`scoutsim.simulation.streaming.DEFAULT_KEEP_SECONDS`, 60 s).
-    table_format : {"parquet", "csv"}, optional
-        With ``stream_to``: the tables' format (default Parquet if pyarrow is installed).
-    energy : bool
-        Account for every power flow of the model over the whole run (electrical energy,
-        copper and transmission losses, hip work, joint, belt, leg and toe friction and
-        damping, constraint work; docs/model.md "Work-energy balance"), integrated on every
-        integrator step: ``result.energy_flows``, ``result.energy_balance()``. The motion is
-        the same bit for bit; the run takes longer (three more evaluations per step:
-        10 s of Model II 1.65x, of Model I 1.28x).
+        Massless-leg configuration only: angles from the world vertical (True, default) or
+        relative to the torso (False).
     sensors : SensorParameters, optional
         How the robot's sensors measure (:class:`~scoutsim.control.sensors.SensorParameters`:
         noise, bias, resolution and delay per channel, seeded; a robot file's
@@ -199,12 +178,43 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         With ``initial_state="standing"`` only: the start-up's parameters (default
         ``StartupParameters()``).
     recording : Recording, optional
-        The recording keywords below as one bundle (``progress`` ... ``energy``); a
-        keyword given as well overrides its field.
-    **options
-        The keywords above from ``friction_coefficient`` to ``passive_touchdown_world``
-        (:data:`PLANT_OPTIONS`, with their defaults) and from ``progress`` to ``energy``
-        (the fields of :class:`Recording`).
+        The recording keywords below (``progress`` ... ``energy``) as one bundle (default
+        ``Recording()``); a keyword given as well (not None) overrides its field. Each
+        keyword's None means "not given": the bundle's field, whose default is the one
+        named below.
+    progress : bool or None
+        Show a progress bar (tqdm) on stderr (default False).
+    chunk_seconds : float or None
+        Simulated time [s] per call of the compiled loop (progress updates, interrupts;
+        default 1 s); the result does not depend on it.
+    record_steps : bool or None
+        Also record every integrator step (``result.steps``: time, state and plant modes at
+        the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
+        about 50 000 steps).
+    check_memory : bool or None
+        Refuse (ValueError) a run whose time series would not fit in this machine's memory
+        (:func:`~scoutsim.simulation.budgets.check_run_memory`) before allocating anything
+        (default True); False to try anyway. A streamed run is checked against the free
+        disk space instead (:func:`~scoutsim.simulation.budgets.check_stream_disk`).
+    stream_to : directory or None
+        Stream the run to this directory as it is computed (:mod:`scoutsim.simulation.streaming`):
+        the ``timeseries``, ``events`` (and ``steps``) tables and a manifest, written chunk
+        by chunk, so the memory a run needs does not grow with its duration. The returned
+        result then holds only the last ``keep_seconds`` of the run (outcome, end time and
+        statistics are the whole run's); ``SimulationResult.load(stream_to)`` reads all.
+        Default None: the run is kept in memory.
+    keep_seconds : float or None
+        With ``stream_to``: seconds at the end of the run kept in memory and returned
+        (default :data:`scoutsim.simulation.streaming.DEFAULT_KEEP_SECONDS`, 60 s).
+    table_format : {"parquet", "csv"} or None
+        With ``stream_to``: the tables' format (default Parquet if pyarrow is installed).
+    energy : bool or None
+        Account for every power flow of the model over the whole run (electrical energy,
+        copper and transmission losses, hip work, joint, belt, leg and toe friction and
+        damping, constraint work; docs/model.md "Work-energy balance"), integrated on every
+        integrator step: ``result.energy_flows``, ``result.energy_balance()`` (default
+        off). The motion is the same bit for bit; the run takes longer (three more
+        evaluations per step: 10 s of Model II 1.65x, of Model I 1.28x).
 
     Returns
     -------
@@ -227,17 +237,15 @@ def simulate(robot: RobotParameters | None = None, controller=None,
         before, with ``outcome = "controller_error"`` (a streamed run's tables hold it
         too, marked partial).
     """
-    rec, plant = _options(recording, options)
+    rec = _recording(recording, dict(
+        progress=progress, chunk_seconds=chunk_seconds, record_steps=record_steps,
+        check_memory=check_memory, stream_to=stream_to, keep_seconds=keep_seconds,
+        table_format=table_format, energy=energy))
     progress, chunk_seconds, record_steps, check_memory = (rec.progress, rec.chunk_seconds,
                                                            rec.record_steps, rec.check_memory)
     stream_to, keep_seconds, table_format, energy = (rec.stream_to, rec.keep_seconds,
                                                      rec.table_format, rec.energy)
-    friction_coefficient = plant["friction_coefficient"]
-    pitch_limit_deg = plant["pitch_limit_deg"]
-    passive_touchdown_angles = plant["passive_touchdown_angles"]
-    passive_touchdown_world = plant["passive_touchdown_world"]
     robot = validate_robot(robot if robot is not None else RobotParameters())
-    integ = (integrator or IntegratorSettings()).resolve(model)
     if environment is not None and friction_coefficient is not None:
         raise ValueError("friction_coefficient and environment are not allowed together: "
                          "give the floor's friction in environment=Environment(...)")
@@ -246,8 +254,10 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     friction_coefficient = environment.friction_for(robot)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
-    if not (0.0 < pitch_limit_deg < 90.0):
-        raise ValueError(f"pitch_limit_deg = {pitch_limit_deg} is not allowed: must be in (0, 90)")
+    plant = PlantOptions(friction_coefficient=friction_coefficient,
+                         pitch_limit_deg=pitch_limit_deg,
+                         passive_touchdown_angles=passive_touchdown_angles,
+                         passive_touchdown_world=passive_touchdown_world)
     if stream_to is None and (keep_seconds is not None or table_format is not None):
         raise ValueError("keep_seconds and table_format are only allowed with stream_to")
     if check_memory and stream_to is None:
@@ -257,31 +267,16 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     cparams = plan.parameters
     if plan.kind == "builtin":
         validate_parameters(robot, cparams)
-
-    P = robot_array(robot, model, friction_coefficient=friction_coefficient,
-                    passive_touchdown_angles=passive_touchdown_angles,
-                    passive_touchdown_world=passive_touchdown_world,
-                    pitch_limit=math.radians(pitch_limit_deg))
     dt = plan.control_period
-    initial_state, startup = _named_start(initial_state, startup, model, robot, cparams,
-                                          plan.controller)
+    initial_state, startup = named_start(initial_state, startup, model, robot, cparams,
+                                         plan.controller)
     init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
-    if resume:
-        s = np.array(init.state)
-    elif isinstance(init, InitialState):
-        s = _state_vector(init, robot, None if model == "passive" else
-                          (cparams or ControllerParameters()),
-                          passive_touchdown_angles, passive_touchdown_world)
-    else:
+    if not isinstance(init, (HybridState, InitialState)):
         raise TypeError("initial_state must be an InitialState, a HybridState, 'flight' "
                         f"or 'standing', not {type(init).__name__}")
-
-    if resume:
-        mi, mf, ls = _resumed_modes(init)
-    else:
-        ls = np.zeros(2, dtype=np.int64)
-        mi, mf = fresh_modes(s, P)
+    setup = assemble(robot, model, init, plan, plant=plant, integrator=integrator)
+    integ = setup.integrator
     chunk = max(1, int(round(chunk_seconds / dt)))
     stream = None
     if stream_to is not None:
@@ -292,13 +287,12 @@ def simulate(robot: RobotParameters | None = None, controller=None,
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
         # fewer, larger pieces: each costs ~5 ms of table writing
         chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
-    eng = HybridEngine(P, plan.C, (s, mi, mf, ls), duration, dt, integ, record_steps,
-                       rows=None if stream is None else chunk + 2, energy=energy,
-                       block=plan.block)
+    eng = HybridEngine.assembled(setup, duration, record_steps=record_steps,
+                                 rows=None if stream is None else chunk + 2, energy=energy)
     user_ctrl = plan.controller
     bridge = None
     if plan.kind == "python":
-        bridge = PythonBridge(user_ctrl, plan.block, eng.cmd, ls, dt)
+        bridge = PythonBridge(user_ctrl, plan.block, eng.cmd, eng.ls, dt)
     if user_ctrl is not None and callable(getattr(user_ctrl, "reset", None)):
         user_ctrl.reset(robot, eng.read_first_sensors())
         if plan.kind == "compiled":    # a reset may set the controller's initial state
@@ -340,7 +334,7 @@ def simulate(robot: RobotParameters | None = None, controller=None,
     provenance = {
         "scoutsim_version": __version__,
         "model": model,
-        "hip_unit": HIP_UNIT_NAMES[int(P[L.P_HIP_UNIT])],
+        "hip_unit": setup.hip_unit,
         "robot": _fields_dict(robot),
         "controller": (_fields_dict(cparams) if cparams is not None else None),
         "controller_kind": plan.label,

@@ -13,10 +13,10 @@ from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stal
                                           run_rig, stall_deflection)
 from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
-from scoutsim.simulation.bench import run_bench
+from scoutsim.identification.bench import run_bench
 from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.simulation.simulator import simulate
-from scoutsim.simulation.initial_conditions import _state_vector, default_initial_state
+from scoutsim.simulation.initial_conditions import default_initial_state, initial_state_vector
 
 
 def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():
@@ -24,7 +24,7 @@ def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():
     robot = RobotParameters()
     ctrl = ControllerParameters()
     ref = simulate(robot, ctrl, duration=0.4, model="II")
-    s0 = _state_vector(default_initial_state("II"), robot, ctrl, (0.0, 0.0), True)
+    s0 = initial_state_vector(default_initial_state("II"), robot, ctrl, (0.0, 0.0), True)
     res = run_bench(robot, "II", s0, 0.4, controller=ctrl, dt=ctrl.control_period,
                     integrator=IntegratorSettings())
     assert np.array_equal(res.t, ref.t)

@@ -1,41 +1,23 @@
-"""The hybrid model on a bench: :func:`run_bench` runs the engine with the rig options a
-hip-unit identification needs (:mod:`scoutsim.identification.rigs`)."""
+"""The hybrid model on a bench: :func:`run_bench` runs the engine of a run
+(:func:`scoutsim.simulation.assembly.assemble`) with the rig options a hip-unit
+identification needs (:mod:`scoutsim.identification.rigs`): the clamps and the motor
+circuit (:class:`Bench`), held torques or a schedule of the Table I set-points."""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 
 import numpy as np
 
 from .._version import __version__
-from ..control.block import control_block
-from ..control.bounding import SCHEDULABLE, controller_array
-from ..control.sensors import SensorParameters
-from .._core.model import layout as L
-from .._core.model.packing import robot_array
+from ..control.bounding import SCHEDULABLE
 from ..parameters import ControllerParameters, RobotParameters
 from ..result.simulation_result import SimulationResult
-from .engine import HybridEngine
-from .integrator import IntegratorSettings
-from .initial_conditions import fresh_modes
+from ..simulation.assembly import Bench, PlantOptions, assemble, bench_plan
+from ..simulation.engine import HybridEngine
+from ..simulation.integrator import IntegratorSettings
 
 __all__ = ["run_bench", "Bench"]
-
-
-@dataclass(frozen=True)
-class Bench:
-    """How the robot is mounted and wired on the bench (:func:`run_bench`).
-
-    clamp_torso : the torso is held at rest (extra constraint rows of the KKT system).
-    clamp_legs : the legs are held at their angles relative to the torso too (a stall
-        test; needs ``clamp_torso``).
-    motor_circuit : "amplifier" (the current amplifier), "open" or "short" (the motor
-        leads open or shorted: no amplifier).
-    """
-
-    clamp_torso: bool = False
-    clamp_legs: bool = False
-    motor_circuit: str = "amplifier"
 
 
 def run_bench(robot: RobotParameters, model: str, start_state, duration: float, *,
@@ -43,8 +25,9 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
               held_torques=None, schedule=None, dt: float = 1e-3,
               integrator: IntegratorSettings | None = None,
               provenance: dict | None = None) -> SimulationResult:
-    """Run the hybrid model on a bench: the engine of :func:`~scoutsim.simulation.simulator.simulate` with the rig options
-    a hip-unit identification needs (:mod:`scoutsim.identification.rigs`).
+    """Run the hybrid model on a bench: the engine of
+    :func:`~scoutsim.simulation.simulator.simulate` with the rig options a hip-unit
+    identification needs (:mod:`scoutsim.identification.rigs`).
 
     Parameters
     ----------
@@ -61,17 +44,12 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
         touchdown angles, sweep limits) [rad] take these values.
     integrator : IntegratorSettings (default: the reference, DOPRI5).
     """
-    P = robot_array(robot, model, clamp_torso=bench.clamp_torso, clamp_legs=bench.clamp_legs,
-                    motor_circuit=bench.motor_circuit)
-    C = controller_array(controller, robot)
-    s = np.array(start_state, dtype=float)
-    mi, mf = fresh_modes(s, P)
-    integrator = (integrator or IntegratorSettings(method="dopri5")).resolve(model)
-    eng = HybridEngine(P, C, (s, mi, mf, np.zeros(2, dtype=np.int64)), duration, dt,
-                       integrator, block=control_block(
-                           L.CTRL_BUILTIN if controller is not None else L.CTRL_HELD,
-                           geom=SensorParameters().geometry_array(
-                               robot, controller is not None and controller.sense_motor_angle)))
+    integrator = integrator or IntegratorSettings(method="dopri5")
+    setup = assemble(robot, model, np.asarray(start_state, dtype=float),
+                     bench_plan(robot, model, controller), plant=PlantOptions(bench=bench),
+                     integrator=integrator, control_period=dt)
+    integrator = setup.integrator
+    eng = HybridEngine.assembled(setup, duration)
     if held_torques is not None:
         eng.cmd[:] = held_torques
     chunk = max(1, int(round(1.0 / dt)))
@@ -84,8 +62,7 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     si = 0
     while eng.running:
         while si < len(sched) and sched[si][0] <= eng.k:
-            for field, value in sched[si][1].items():
-                eng.C[SCHEDULABLE[field]] = value
+            eng.retune(**sched[si][1])
             si += 1
         k_stop = eng.k + chunk
         if si < len(sched):
