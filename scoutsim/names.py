@@ -1,14 +1,15 @@
 """Names of the codes a run records, for the layers above the compiled core.
 
-The compiled core (Numba) works on plain integer codes whose slots and values
-:mod:`scoutsim._core.model.layout` names; a result carries the same codes (``result.leg_state``,
-``result.contact_mode``, the event log). This module gives each family of codes an
-:class:`~enum.IntEnum` with the same values, so that analysis, validation, presentation,
-the command line and the environments compare a code with a name (``LegState.FLIGHT``)
-instead of a bare integer, and read the back / front legs' names from one place. A member
-is an ``int``: it compares, indexes and hashes as its code, and ``np.asarray`` of members
-is an integer array. ``tests/test_names.py`` checks that every value agrees with
-``layout``'s constant.
+The compiled core (Numba) works on plain integer codes whose slots, values and names
+:mod:`scoutsim._core.model.layout` holds, the one table of them; a result carries the same
+codes (``result.leg_state``, ``result.contact_mode``, the event log). This module gives each
+family of codes an :class:`~enum.IntEnum` whose members take their values from that table
+(``LegState.FLIGHT = layout.LS_FLIGHT``) and whose labels are the table's names, so no code
+or name is written twice, and analysis, validation, presentation, the command line and the
+environments compare a code with a name (``LegState.FLIGHT``) instead of a bare integer. A
+member is an ``int``: it compares, indexes and hashes as its code, and ``np.asarray`` of
+members is an integer array. ``tests/test_names.py`` checks that every code of the table has
+a member, and that the labels are unique and round-trip.
 
 * :class:`Leg` (``BACK`` 0, ``FRONT`` 1), :data:`LEG_NAMES` and :func:`leg_index`: the
   virtual legs, in the order of every (back, front) pair (the back hip at -L, the front
@@ -23,16 +24,20 @@ is an integer array. ``tests/test_names.py`` checks that every value agrees with
   transition audit, :mod:`scoutsim.analysis.transition_audit`), described by
   :data:`VIOLATION_NAMES`.
 
-Every enum has :attr:`label`, the name a table or a user writes for a member ("back",
-"stance-retraction", "stick", "II", "touchdown"), and :meth:`from_label`, its inverse.
+Every enum but :class:`Violation` has :attr:`label`, the name a table or a user writes for
+a member ("back", "stance-retraction", "stick", "II", "touchdown"), and :meth:`from_label`,
+its inverse.
 
-This module imports nothing of the package, so every layer may use it.
+This module imports only the table (:mod:`scoutsim._core.model.layout`, which imports
+nothing), so every layer may use it.
 """
 
 from __future__ import annotations
 
 import numbers
 from enum import IntEnum, IntFlag
+
+from ._core.model import layout as _layout
 
 __all__ = ["Leg", "LEG_NAMES", "leg_index", "LegState", "LEG_STATE_NAMES", "ContactMode",
            "CONTACT_NAMES", "MotorJointMode", "MOTOR_JOINT_NAMES", "Model", "MODEL_LABELS",
@@ -60,12 +65,12 @@ class _Coded(IntEnum):
 class Leg(_Coded):
     """A virtual leg: its index in every (back, front) pair and in the compiled arrays."""
 
-    BACK = 0
-    FRONT = 1
+    BACK = _layout.BACK
+    FRONT = _layout.FRONT
 
 
 #: The legs' names, in the order of a (back, front) pair.
-LEG_NAMES = ("back", "front")
+LEG_NAMES = _layout.LEG_NAMES
 
 
 def leg_index(leg) -> int:
@@ -82,13 +87,13 @@ class LegState(_Coded):
     """The controller's state of a leg (paper Sec. II, Table I): flight, stance with the
     leg driven backwards (retraction, eqs. 2-5), stance past the sweep limit (brake)."""
 
-    FLIGHT = 0
-    RETRACTION = 1
-    BRAKE = 2
+    FLIGHT = _layout.LS_FLIGHT
+    RETRACTION = _layout.LS_RETRACTION
+    BRAKE = _layout.LS_BRAKE
 
 
 #: Display names of the leg states, indexed by the code.
-LEG_STATE_NAMES = ("flight", "stance-retraction", "stance-brake")
+LEG_STATE_NAMES = _layout.LEG_STATE_NAMES
 
 
 class ContactMode(_Coded):
@@ -96,27 +101,27 @@ class ContactMode(_Coded):
     spring and damper acting (stick); sliding on the floor; pinned with the leg at its stop
     l0, a rigid strut."""
 
-    FLIGHT = 0
-    STICK = 1
-    SLIDE = 2
-    STRUT = 3
+    FLIGHT = _layout.FLIGHT
+    STICK = _layout.STICK
+    SLIDE = _layout.SLIDE
+    STRUT = _layout.STRUT
 
 
 #: Names of the contact modes, indexed by the code.
-CONTACT_NAMES = ("flight", "stick", "slide", "strut")
+CONTACT_NAMES = _layout.CONTACT_NAMES
 
 
 class MotorJointMode(_Coded):
     """The stiction mode of a Model II motor joint: slipping in the negative direction,
     held by its stiction, slipping in the positive direction (0 in the other variants)."""
 
-    SLIP_NEG = -1
-    STUCK = 0
-    SLIP_POS = 1
+    SLIP_NEG = _layout.SLIP_NEG
+    STUCK = _layout.STUCK
+    SLIP_POS = _layout.SLIP_POS
 
 
 #: Names of the motor-joint modes by code.
-MOTOR_JOINT_NAMES = {-1: "slip_neg", 0: "stuck", 1: "slip_pos"}
+MOTOR_JOINT_NAMES = _layout.MOTOR_JOINT_NAMES
 
 
 class Model(_Coded):
@@ -126,10 +131,10 @@ class Model(_Coded):
     name a user gives (``simulate(..., model="II")``), :attr:`display_name` the one a table
     or legend shows."""
 
-    IDEAL = 0
-    I = 1  # noqa: E741 (the paper's name of the variant)
-    II = 2
-    PASSIVE = 3
+    IDEAL = _layout.MODEL_IDEAL
+    I = _layout.MODEL_I  # noqa: E741 (the paper's name of the variant)
+    II = _layout.MODEL_II
+    PASSIVE = _layout.MODEL_PASSIVE
 
     @property
     def display_name(self) -> str:
@@ -138,8 +143,7 @@ class Model(_Coded):
 
 
 #: Display name of each model variant by its name (tables, legends, titles).
-MODEL_LABELS = {"ideal": "ideal actuator", "I": "Model I", "II": "Model II",
-                "passive": "passive (no controller)"}
+MODEL_LABELS = _layout.MODEL_LABELS
 
 
 class EventKind(_Coded):
@@ -149,61 +153,53 @@ class EventKind(_Coded):
     (touchdown, lift-off, the sweep limit passed); a jam is a sliding toe stopped by an
     impact without collision (docs/model.md "A sliding toe that jams")."""
 
-    TOUCHDOWN = 1
-    LIFTOFF = 2
-    SLIDE_START = 3
-    STICK = 4
-    STRUT_START = 5
-    STRUT_END = 6
-    MOTOR_STICK = 7
-    MOTOR_SLIP = 8
-    FALL = 9
-    CONTROLLER_TOUCHDOWN = 10
-    CONTROLLER_LIFTOFF = 11
-    CONTROLLER_SWEEP = 12
-    JAM = 13
+    TOUCHDOWN = _layout.EK_TOUCHDOWN
+    LIFTOFF = _layout.EK_LIFTOFF
+    SLIDE_START = _layout.EK_SLIDE_START
+    STICK = _layout.EK_STICK
+    STRUT_START = _layout.EK_STRUT_START
+    STRUT_END = _layout.EK_STRUT_END
+    MOTOR_STICK = _layout.EK_MOTOR_STICK
+    MOTOR_SLIP = _layout.EK_MOTOR_SLIP
+    FALL = _layout.EK_FALL
+    CONTROLLER_TOUCHDOWN = _layout.EK_CTRL_TOUCHDOWN
+    CONTROLLER_LIFTOFF = _layout.EK_CTRL_LIFTOFF
+    CONTROLLER_SWEEP = _layout.EK_CTRL_SWEEP
+    JAM = _layout.EK_JAM
 
 
 #: Names of the event kinds by code (the kinds ``result.event_times`` takes).
-EVENT_KIND_NAMES = {
-    1: "touchdown", 2: "liftoff", 3: "slide_start", 4: "stick", 5: "strut_start",
-    6: "strut_end", 7: "motor_stick", 8: "motor_slip", 9: "fall",
-    10: "controller_touchdown", 11: "controller_liftoff", 12: "controller_sweep_limit",
-    13: "jam",
-}
+EVENT_KIND_NAMES = _layout.EVENT_KIND_NAMES
+
 
 class Violation(IntFlag):
     """A mode invariant violated after a transition: one bit of an event record's
-    ``violations`` mask (:meth:`SimulationResult.event_log`; 0: none)."""
+    ``violations`` mask (:meth:`SimulationResult.event_log`; 0: none); what each bit means:
+    :data:`VIOLATION_NAMES`."""
 
-    GROUND_PULLS = 1          # a pinned toe or strut whose ground normal force pulls
-    OUTSIDE_CONE = 2          # a pinned toe (Coulomb floor) needing more than mu |F_n|
-    SLIDE_DIRECTION = 4       # a sliding toe moving against its recorded slide direction
-    SLIDE_NOT_PUSHING = 8     # a sliding toe whose leg no longer pushes
-    TOE_BELOW_GROUND = 16     # a toe in flight below the ground
-    STICTION_EXCEEDED = 32    # a stuck motor joint held by more than its stiction
-    SLIP_DIRECTION = 64       # a slipping motor joint moving against its slip direction
-    STRUT_COMPRESSED = 128    # a rigid strut in compression
-    SINGULAR = 256            # the constrained dynamics could not be solved
-    BEYOND_STOP = 512         # a spring leg with its pinned toe beyond the stop l0
-    TOE_ENTERS_GROUND = 1024  # a toe in flight at ground level moving into it
+    GROUND_PULLS = _layout.V_GROUND_PULLS
+    OUTSIDE_CONE = _layout.V_OUTSIDE_CONE
+    SLIDE_DIRECTION = _layout.V_SLIDE_DIRECTION
+    SLIDE_NOT_PUSHING = _layout.V_SLIDE_NOT_PUSHING
+    TOE_BELOW_GROUND = _layout.V_TOE_BELOW_GROUND
+    STICTION_EXCEEDED = _layout.V_STICTION_EXCEEDED
+    SLIP_DIRECTION = _layout.V_SLIP_DIRECTION
+    STRUT_COMPRESSED = _layout.V_STRUT_COMPRESSED
+    SINGULAR = _layout.V_SINGULAR
+    BEYOND_STOP = _layout.V_BEYOND_STOP
+    TOE_ENTERS_GROUND = _layout.V_TOE_ENTERS_GROUND
 
 
 #: What each bit of a violations mask means, in the order of the bits.
-VIOLATION_NAMES = {
-    1: "ground pulls a pinned toe", 2: "pinned toe outside the friction cone",
-    4: "toe slides against its slide direction", 8: "sliding leg does not push",
-    16: "toe in flight below the ground", 32: "stuck motor joint beyond breakaway",
-    64: "motor joint slips against its slip direction", 128: "strut in compression",
-    256: "constrained dynamics singular", 512: "pinned leg extended beyond its stop",
-    1024: "toe in flight at the ground moving into it",
-}
+VIOLATION_NAMES = _layout.VIOLATION_NAMES
 
+#: Each labelled enum's label by code: the table's names (a model's label is the name a
+#: user gives, the key of ``layout.MODEL_NAMES``).
 _LABELS = {
     Leg: dict(enumerate(LEG_NAMES)),
     LegState: dict(enumerate(LEG_STATE_NAMES)),
     ContactMode: dict(enumerate(CONTACT_NAMES)),
     MotorJointMode: MOTOR_JOINT_NAMES,
-    Model: dict(enumerate(("ideal", "I", "II", "passive"))),
+    Model: {code: name for name, code in _layout.MODEL_NAMES.items()},
     EventKind: EVENT_KIND_NAMES,
 }

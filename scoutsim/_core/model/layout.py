@@ -3,6 +3,11 @@
 The compiled core (Numba) works on flat float64/int64 arrays; this module is the one place
 that names their slots. Leg index 0 is the back virtual leg, 1 the front (docs/specification.md section 1:
 back hip at -L, front hip at +L along the torso axis).
+
+It is also the one table of the integer codes a run records (leg states ``LS_*``, contact
+modes, motor-joint modes, model variants ``MODEL_*``, event kinds ``EK_*``, violation bits
+``V_*``) and of their names (``*_NAMES``, ``MODEL_LABELS``): plain module-level ints, which
+Numba reads as compile-time constants. :mod:`scoutsim.names` builds its enums from them.
 """
 
 # --- legs -------------------------------------------------------------------------------
@@ -57,6 +62,7 @@ ROW_CLAMP_LEG = 6    # bench rig: leg angle phi held
 SLIP_NEG = -1
 STUCK = 0
 SLIP_POS = 1
+MOTOR_JOINT_NAMES = {SLIP_NEG: "slip_neg", STUCK: "stuck", SLIP_POS: "slip_pos"}
 
 # --- integer mode array mi ------------------------------------------------------------
 MI_CONTACT_B = 0
