@@ -34,7 +34,7 @@ class IntegratorSettings:
         for the stiff Model II. "auto": Model II with ``rtol`` unset or >= 1e-7 -> "ark3"
         (default rtol 1e-5 / atol 1e-6, velocities 1e-5: about 10x faster than the
         reference, 10 s gait metrics within 3e-5 of the rtol 1e-10 reference,
-        tests/test_simulation.py); every other case -> "dopri5".
+        tests/simulation/test_simulate.py); every other case -> "dopri5".
     rtol, atol : relative / absolute local error tolerance (SI units of each state
         component); None = the method's default (:data:`DEFAULT_TOLERANCES`). The ARK
         methods apply ``atol`` to positions, angles and leg lengths and 10 x ``atol`` to

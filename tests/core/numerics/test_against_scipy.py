@@ -9,7 +9,7 @@ import numpy as np
 import scoutsim
 import scoutsim.parameters
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _baseline():

@@ -26,7 +26,7 @@ import scoutsim.simulation.engine
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.packing import robot_array
 
-_TOOL = Path(__file__).resolve().parents[2] / "tools" / "derive_eom.py"
+_TOOL = Path(__file__).resolve().parents[3] / "tools" / "derive_eom.py"
 
 
 def _sym():

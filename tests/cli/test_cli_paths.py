@@ -1,4 +1,4 @@
-"""Tests of command-line paths that tests/test_cli.py does not cover: `scoutsim rig` with
+"""Tests of command-line paths that tests/cli/test_cli.py does not cover: `scoutsim rig` with
 each of its options, `--version`, `identify --example` and `identify --rig flight-steps`,
 `sweep --orbit`, `sweep --no-resume`, a `sweep --random` sample, `orbit --model I` and
 `run --model ideal`. Each checks what the command says it does: exit code, the files it

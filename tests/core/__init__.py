@@ -1,0 +1,1 @@
+"""Tests of the compiled core (scoutsim._core): the model and the numerics."""
