@@ -258,7 +258,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
 
 #: compiled entry points of :func:`run`, by (method, argument types) and by (method,
 #: argument fingerprints)
-_ENTRIES = {}
+_ENTRIES: dict[tuple, object] = {}
 
 
 def effective_method(method: int, hip_unit: int) -> int:

@@ -18,6 +18,8 @@ same for every kind.
 
 from __future__ import annotations
 
+from typing import Any
+
 import ctypes
 import math
 import numbers
@@ -55,7 +57,7 @@ class ControllerPlan:
     """
 
     kind: str
-    controller: object
+    controller: Any
     parameters: ControllerParameters | None
     control_period: float
     C: np.ndarray

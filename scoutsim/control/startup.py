@@ -135,6 +135,13 @@ class StartupParameters:
             step_kp=controller.brake_kp_back if self.step_kp is None else self.step_kp,
             step_kd=controller.brake_kd_back if self.step_kd is None else self.step_kd)
 
+    def back_step(self, controller: ControllerParameters) -> tuple[float, float, float]:
+        """The back legs' step: (sweep limit [rad], stance-brake gains [N m/rad],
+        [N m s/rad]), each None filled in from ``controller``."""
+        p = self.resolved(controller)
+        assert p.step_angle_back is not None and p.step_kp is not None and p.step_kd is not None
+        return p.step_angle_back, p.step_kp, p.step_kd
+
 
 @dataclass(frozen=True)
 class StartupRecord:
@@ -203,7 +210,7 @@ def run_startup(engine, params: StartupParameters,
     while engine.running and not all(handed):
         if not stepped and engine.k >= k_step:
             stepped = True
-            _set_brake(engine, BACK, p.step_angle_back, p.step_kp, p.step_kd)
+            _set_brake(engine, BACK, *params.back_step(controller))
         if engine.k > k_step and engine.k >= k_timeout:
             break
         engine.advance(engine.k + 1)

@@ -5,6 +5,7 @@ result; :func:`start_engine` puts one together for a caller that drives it itsel
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -60,6 +61,10 @@ class HybridEngine:
         self.block = block
         self.dt = dt
         self.integ = integrator
+        if integrator.rtol is None or integrator.atol is None:
+            raise ValueError("the engine runs resolved integrator settings "
+                             "(IntegratorSettings.resolved: rtol and atol set)")
+        self.rtol, self.atol = float(integrator.rtol), float(integrator.atol)
         n_total = int(round(duration / dt)) + 1
         self.k_last = n_total - 1
         # rows: the samples one call may record when a RunStream empties the buffers after
@@ -90,14 +95,14 @@ class HybridEngine:
         # the accumulator at every recorded sample (rows as out_t; (0, NEN): off)
         self.out_energy = np.zeros((n_total + 1 if energy else 0, L.NEN))
         self.impact_loss = 0.0
-        self.energy_start = None
+        self.energy_start: float | None = None
         self.stats = np.zeros(NSTAT)
         self.stats[S_HMIN] = np.inf
         self.armed = np.zeros(L.NEV, dtype=np.bool_)
         self.n_out = self.nev = self.k = 0
         self.event_records_lost = 0
         self.status = L.ST_RUNNING
-        self._entry = None        # the compiled run loop for this engine's method
+        self._entry: Callable | None = None   # the compiled run loop for this engine's method
         self.t_now = 0.0
 
     @classmethod
@@ -217,7 +222,7 @@ class HybridEngine:
         args = (Plant(self.s, self.P, self.mi, self.mf, self.cmd),
                 Control(self.C, self.ls, self.block),
                 Span(self.k, min(k_stop, self.k_last + 1), self.k_last, float(self.dt),
-                     float(self.integ.rtol), float(self.integ.atol)),
+                     self.rtol, self.atol),
                 Records(self.out_t, self.out_s, self.out_aux, self.out_ls, self.ev,
                         self.stats, self.steps, self.stepc, self.energy, self.out_energy),
                 Carry(self.hwork, self.armed, self.sfwork, self.ew),

@@ -308,6 +308,7 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
     written = True       # a streamed run's tables took every piece so far
     try:
         if startup is not None:
+            assert cparams is not None, "a start-up hands over to the built-in controller"
             started = run_startup(eng, startup, cparams)
             if bar is not None:
                 bar.update(round(eng.k * dt, 6))
@@ -349,11 +350,13 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         "control_period_s": dt,
     }
     if startup is not None:
+        assert cparams is not None, "a start-up hands over to the built-in controller"
         provenance["startup"] = (started.to_dict() if started is not None else
                                  {"parameters": asdict(startup.resolved(cparams))})
     if sensors is not None and not sensors.is_ideal():
         provenance["sensors"] = sensors.as_dict()
-    error = failure = None
+    error: ControllerError | None = None
+    failure: tuple | None = None    # (sample, returned, exception) of a controller's failure
     if eng.status == L.ST_CONTROLLER_ERROR and not interrupted:
         status = 0
         if bridge is not None and bridge.failure is not None:
@@ -370,7 +373,7 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         result = eng.result(provenance, interrupted, {"wall_time_s": wall})
         if error is not None:
             error.result = result
-            raise error from failure[2]
+            raise error from (failure[2] if failure is not None else None)
         return result
     try:
         if stream.write_error is None:
@@ -391,5 +394,5 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
                          or error is not None)
     if error is not None:
         error.result = kept
-        raise error from failure[2]
+        raise error from (failure[2] if failure is not None else None)
     return kept

@@ -58,7 +58,7 @@ class RunStream:
                              "finite number >= 0")
         self._own = not isinstance(directory, RunDirectory)
         self._opened = False
-        self._rd = None if self._own else directory
+        self._rd: RunDirectory | None = None if self._own else directory
         self.dir = Path(directory) if self._own else directory.dir
         self.fmt = fmt
         self.keep_seconds = float(keep_seconds)
@@ -80,8 +80,15 @@ class RunStream:
         if self._own:
             self._rd = RunDirectory(self.dir, command=self.command,
                                     info={"kind": "run", "streamed": True})
-        self._rd.open()
+        self._run_dir.open()
         self._opened = True
+
+    @property
+    def _run_dir(self) -> RunDirectory:
+        """The run directory (this stream's own is made when the first rows arrive)."""
+        if self._rd is None:
+            raise RuntimeError("the stream's run directory is opened by its first take()")
+        return self._rd
 
     def take(self, eng) -> bool:
         """Write what the engine computed since the last call and empty its buffers; False
@@ -153,12 +160,12 @@ class RunStream:
                 meta = whole.series_metadata() if name == "timeseries" else \
                     {"format": TABLES_FORMAT}
                 w.close(metadata=meta)
-                self._rd.add(w.path.name)
+                self._run_dir.add(w.path.name)
         except BaseException:
             self.abort()
             raise
         if self._own:
-            self._rd.finish(outcome=whole.outcome, partial=partial)
+            self._run_dir.finish(outcome=whole.outcome, partial=partial)
         return self._kept_result(whole)
 
     def _salvage(self, whole: SimulationResult) -> None:
@@ -167,7 +174,9 @@ class RunStream:
         removed), and mark the directory partial; what happened goes into the provenance.
         Nothing here raises: the caller still gets the kept end of the run."""
         info = whole.provenance["stream"]
-        info["write_error"] = f"{self.write_error.strerror or self.write_error}"
+        error = self.write_error
+        assert error is not None, "salvaged only after a write error"
+        info["write_error"] = f"{error.strerror or error}"
         info["written_until_s"] = self.written_until_s
         info["tables_kept"] = []
         for name, w in self._writers.items():
@@ -178,11 +187,11 @@ class RunStream:
                 w.close(metadata=meta)
             except Exception:  # noqa: BLE001 - the disk's or pyarrow's error: close() removed
                 continue       # the table's files, the others may still be kept
-            self._rd.add(w.path.name)
+            self._run_dir.add(w.path.name)
             info["tables_kept"].append(w.path.name)
         if self._own:
             try:
-                self._rd.finish(outcome=whole.outcome, partial=True)
+                self._run_dir.finish(outcome=whole.outcome, partial=True)
             except OSError:
                 pass                                    # the manifest keeps saying "writing"
 
