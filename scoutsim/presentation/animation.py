@@ -48,8 +48,8 @@ from ..names import ContactMode, Leg, LegState
 from .run_parts import _model_label, behaviour_text
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
-__all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS", "TOE_MARKERS",
-           "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
+__all__ = ["animate", "RunAnimation", "save_animation", "frame_times", "LEG_STATE_COLORS",
+           "TOE_MARKERS", "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
 LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
