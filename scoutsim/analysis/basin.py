@@ -155,7 +155,7 @@ def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
         errors = sum(_status(r) == "error" for r in mine)
         valid = len(mine) - invalid - errors
         steady = sum(bool(r["steady_bounding"]) for r in mine if _status(r) == "ok")
-        outcomes = {}
+        outcomes: dict[str, int] = {}
         for r in mine:
             outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
         key = m if mu is None else f"{m} @ {floor_label(mu)}"

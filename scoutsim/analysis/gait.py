@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -289,7 +290,7 @@ class GaitMetrics:
         """
         stats = result.stats or {}
         prov = result.provenance or {}
-        out = {"outcome": self.outcome}
+        out: dict[str, Any] = {"outcome": self.outcome}
         for k in SUMMARY_KEYS[1:9]:
             out[k] = _json_float(self.means[k])
         out["max_friction_ratio"] = _json_float(stats.get("max_friction_ratio"))

@@ -212,7 +212,7 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
                 check_sendable(task, f"task {i} of the {desc}")
     bar = tqdm(total=n, unit="run", desc=desc, file=sys.stderr, disable=not progress,
                leave=False)
-    stopping = []
+    stopping: list[int] = []
 
     def done(i, res):
         out[i] = res

@@ -175,7 +175,7 @@ def passive_bounding_orbit(speed: float, apex_height: float, pitch_rate: float, 
             gam, r, n = _solve_angles(z, (g0, g0), rob, integ, tol, max_iter)
         except MapError:
             gam = None
-        if gam is None or np.max(np.abs(r)) > 1e-9:
+        if gam is None or r is None or np.max(np.abs(r)) > 1e-9:
             fam = continue_passive_family(speed, apex_height,
                                           np.linspace(0.0, pitch_rate, 6), robot=rob,
                                           rtol=rtol, tol=tol, linearise=False)

@@ -40,6 +40,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,6 +50,7 @@ from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParamet
                           validate_parameters)
 from ..io.run_directory import RunDirectory
 from ..io.tables import write_rows_csv, write_rows_parquet
+from ..state import HybridState, InitialState
 from .parallel import map_tasks
 from .study_controller import (build_controller, check_controller_travels,
                                describe_controller, study_controller)
@@ -155,7 +157,7 @@ def _orbit_columns(result, robot, ctrl, task) -> dict:
     from ..simulation.integrator import IntegratorSettings
     from .controlled_orbit import controlled_fixed_point
     from .poincare import MapError
-    out = {k: None for k in ORBIT_COLUMNS}
+    out: dict[str, Any] = {k: None for k in ORBIT_COLUMNS}
     try:
         o = controlled_fixed_point(result, model=task["model"],
                                    friction_coefficient=task["friction_coefficient"],
@@ -173,7 +175,8 @@ def _orbit_columns(result, robot, ctrl, task) -> dict:
 def _point_parameters(task: dict):
     """The robot and controller parameters of a point ({name: value as named}), SI;
     ControllerParameters None for a controller object."""
-    rob, ctl = {}, {}
+    rob: dict[str, Any] = {}
+    ctl: dict[str, Any] = {}
     for name, v in task["point"].items():
         base, scale = si_name(name)
         sec, _, fld = base.partition(".")
@@ -311,9 +314,9 @@ class SweepBase:
 
     model: str = "II"
     duration: float = 10.0
-    robot: object = None
+    robot: RobotParameters | None = None
     controller: object = None
-    initial_state: object = None
+    initial_state: InitialState | HybridState | None = None
     friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
 
 
@@ -410,9 +413,10 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         elif ck.exists():
             ck.unlink()
     todo = [i for i, k in enumerate(keys) if k not in done]
-    tasks = [{"point": points[i], "model": model, "duration": duration, "robot": robot,
-              "controller": controller, "initial_state": initial_state,
-              "friction_coefficient": friction_coefficient, "orbit": orbit} for i in todo]
+    tasks: list[dict[str, Any]] = [
+        {"point": points[i], "model": model, "duration": duration, "robot": robot,
+         "controller": controller, "initial_state": initial_state,
+         "friction_coefficient": friction_coefficient, "orbit": orbit} for i in todo]
     if tasks:
         _warn_of_range_ends([t["point"] for t in tasks], names, tasks[0])
     fh = open(ck, "a") if ck is not None else None

@@ -24,10 +24,12 @@ meant for tests and for users who change the model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..names import EVENT_KIND_NAMES, VIOLATION_NAMES, EventKind
+from .energy import EnergyBalance
 
 #: default tolerance of the energy balance of one transition, relative to the larger of the
 #: energies before and after it and 1 J (Scout II holds about 80 J of mechanical energy)
@@ -65,7 +67,7 @@ class TransitionAudit:
     rel_tol: float = ENERGY_REL_TOL
     #: the run's work-energy balance (:class:`~scoutsim.analysis.energy.EnergyBalance`) if
     #: it accounted for its energy (``simulate(energy=True)``), else None
-    balance: object = None
+    balance: EnergyBalance | None = None
     #: tolerance of the balance's relative residual
     balance_tol: float = 1e-6
 
@@ -123,8 +125,8 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
     log = result.event_log()
     t, kind, leg, v3 = log["t"], log["kind"], log["leg"], log["v3"]
     e_before, e_after, violations = log["energy_before"], log["energy_after"], log["violations"]
-    out = []
-    cur = None
+    out: list[dict[str, Any]] = []
+    cur: dict[str, Any] | None = None
     for i in range(len(t)):
         eb, ea = e_before[i], e_after[i]
         if np.isnan(eb):

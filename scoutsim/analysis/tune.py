@@ -388,10 +388,10 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     hi = np.array([p.high for p in params])
     base = np.array([_base_value(p, robot, cparams, spec) for p in params])
     mean0 = np.clip((base - lo) / (hi - lo), 0.0, 1.0)
-    goal = {"objective": objective, "target": target, "aggregate": aggregate,
-            "max_belt_deflection": max_belt_deflection, "max_current": max_current,
-            "min_speed": min_speed}
-    settings = {"parameters": [dataclasses.asdict(p) for p in params], "goal": goal,
+    goal_settings = {"objective": objective, "target": target, "aggregate": aggregate,
+                     "max_belt_deflection": max_belt_deflection, "max_current": max_current,
+                     "min_speed": min_speed}
+    settings = {"parameters": [dataclasses.asdict(p) for p in params], "goal": goal_settings,
                 "controller": kind,
                 # (a user's controller described by names and numbers, not addresses)
                 "controller_spec": {k: (describe_controller(v) if k == "controller" else v)
@@ -405,7 +405,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 "controller_parameters": dataclasses.asdict(cparams), "seed": seed,
                 "sigma": sigma, "population": pop}
     skey = _key(settings)
-    task_base = {"goal": goal, "duration": duration, "robot": robot, "cparams": cparams,
+    task_base = {"goal": goal_settings, "duration": duration, "robot": robot, "cparams": cparams,
                  "controller": spec, "scenarios": scenarios}
     _warn_of_box_ends(params, robot, cparams)
 

@@ -157,6 +157,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
         score = PENALTY * (1 + len(broken) + sum(min(1.0, e) for _, e in broken)) \
             + (objective if objective is not None else 0.0)
     else:
+        assert objective is not None    # (a missing objective is a broken constraint)
         score = objective
     row.update(score=float(score), objective=objective, feasible=not broken,
                violations="; ".join(n for n, _ in broken), status="ok", error="")

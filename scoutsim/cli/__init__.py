@@ -89,7 +89,7 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    progress = contextlib.nullcontext()
+    progress: contextlib.AbstractContextManager = contextlib.nullcontext()
     if args.command in COMPILING_COMMANDS and not getattr(args, "quiet", False):
         from .._numba.jit import FIRST_COMPILE_NOTICE, compile_progress, core_is_compiled
         if not core_is_compiled():

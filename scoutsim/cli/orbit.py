@@ -59,8 +59,8 @@ def register(sub, common) -> None:
 
 
 def execute(args) -> int:
-    from ..analysis.controlled_orbit import controlled_fixed_point
-    from ..analysis.passive_orbits import passive_bounding_orbit
+    from ..analysis.controlled_orbit import ControlledOrbit, controlled_fixed_point
+    from ..analysis.passive_orbits import PassiveOrbit, passive_bounding_orbit
     from ..analysis.poincare import MapError
     from ..parameters import ControllerParameters
     robot, cparams = load_parameters(args.robot)
@@ -80,6 +80,7 @@ def execute(args) -> int:
                 f"{type(controller).__name__}, whose own state a restarted stride would "
                 "lose. Give the Table I law your parameters instead: a controller file, or "
                 "a MODULE:FACTORY that returns ControllerParameters")
+    orb: PassiveOrbit | ControlledOrbit
     try:
         if args.passive:
             orb = passive_bounding_orbit(args.speed, args.apex_height,

@@ -320,7 +320,8 @@ def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: floa
         ("largest friction ratio |F_t|/F_n", _fmt(summary.get("max_friction_ratio"), ".3f")),
         ("steady strides", _fmt(summary.get("n_steady_strides"), "d")
          + (f" (of {summary['n_strides']})" if summary.get("n_strides") is not None else "")),
-        ("steady bounding", {True: "yes", False: "no"}.get(summary.get("steady_bounding"), "n/a")),
+        ("steady bounding", {True: "yes", False: "no", None: "n/a"}.get(
+            summary.get("steady_bounding"), "n/a")),
     ]
     if "startup_duration_s" in summary:
         rows.append(("start-up (standing to bounding)",
@@ -392,7 +393,7 @@ def execute(args) -> int:
         changes["dtheta"] = math.radians(args.pitch_rate)
     # the model's default start (the passive model's is higher: its legs hang at the
     # passive touchdown angles), with the options given
-    init = default_initial_state(args.model, robot).replace(**changes)
+    init: InitialState | str = default_initial_state(args.model, robot).replace(**changes)
     if args.start == "standing":
         if changes:
             raise UsageError("--speed, --height and --pitch-rate are only allowed with "

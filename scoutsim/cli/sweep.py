@@ -172,7 +172,7 @@ def execute(args) -> int:
               "to finish the rest", file=sys.stderr)
         return 130
     wall = time.perf_counter() - wall0
-    outcomes = {}
+    outcomes: dict[str, int] = {}
     for r in res.rows:
         outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
     steady = sum(bool(r.get("steady_bounding")) for r in res.rows)

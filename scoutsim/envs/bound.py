@@ -26,7 +26,7 @@ from ..control.factory import FactoryError, controller_from_spec, is_factory_spe
 from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
 from ..parameters import (ControllerParameters, RobotParameters, closed_range,
                           load_parameters, validate_parameters, validate_robot)
-from ..simulation.engine import start_engine
+from ..simulation.engine import HybridEngine, start_engine
 from ..result.failure import diagnose_failure
 from ..names import ContactMode
 from ..simulation.simulator import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
@@ -317,7 +317,7 @@ class BoundEnv(gymnasium.Env):
                                            np.float64)
         #: the set-points' slots in the engine's controller array ``engine.C``
         self.setpoint_slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
-        self._engine = None
+        self._engine: HybridEngine | None = None
         # an engine from the first start, to check the options now (reset makes the
         # episode's)
         self._new_engine(self._start_state(None), 0)
@@ -337,6 +337,13 @@ class BoundEnv(gymnasium.Env):
         energy accumulator), read-only by convention."""
         return self._engine
 
+    @property
+    def _live_engine(self) -> HybridEngine:
+        """The engine, for the pieces below (the constructor makes one, reset() the
+        episode's)."""
+        assert self._engine is not None     # (made in __init__, never cleared)
+        return self._engine
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode (see the class docstring); returns (observation, info)."""
         super().reset(seed=seed)
@@ -346,7 +353,7 @@ class BoundEnv(gymnasium.Env):
         # before their first command (with torque actions the loop reads sample 0 again
         # under the first action: the accelerometer, currents and battery of that reading
         # are what a channel delayed past sample 0 reports at first)
-        obs = self._engine.read_sensors().copy()
+        obs = self._live_engine.read_sensors().copy()
         self._reset_done = True
         return obs, self._info_now()
 
@@ -464,13 +471,13 @@ class BoundEnv(gymnasium.Env):
     def _electrical(self) -> float:
         """Electrical energy into both legs' motor terminals since the start [J] (NaN
         without the accounting)."""
-        return self._engine.electrical_energy()
+        return self._live_engine.electrical_energy()
 
     def _failure_message(self) -> str:
         """What stopped the simulator in the step just run (its records still in the
         engine): the diagnosis of a numerical failure
         (:func:`~scoutsim.result.failure.diagnose_failure`), or the controller's failure."""
-        eng = self._engine
+        eng = self._live_engine
         if eng.status_name != "numerical_failure":
             return (f"the controller failed at t = {eng.t_now:.6g} s (outcome "
                     f"{eng.status_name!r})")
@@ -478,18 +485,19 @@ class BoundEnv(gymnasium.Env):
                       "controller": dataclasses.asdict(self.controller),
                       "integrator": dataclasses.asdict(eng.integ)}
         diagnosis = diagnose_failure(eng.result(provenance))
+        assert diagnosis is not None    # (the run's outcome is "numerical_failure")
         return diagnosis.message()
 
     def _state_finite(self) -> bool:
-        return bool(np.all(np.isfinite(self._engine.s)))
+        return bool(np.all(np.isfinite(self._live_engine.s)))
 
     def _is_up(self) -> bool:
-        eng = self._engine
+        eng = self._live_engine
         (h0, h1), (p0, p1) = self.healthy_height_range, self.healthy_pitch_range
         return bool(h0 <= eng.height <= h1 and p0 <= eng.pitch <= p1)
 
     def _info_now(self) -> dict:
-        eng = self._engine
+        eng = self._live_engine
         return {"t": eng.t_now, "x_position": eng.x, "height": eng.height,
                 "pitch": eng.pitch, "outcome": eng.status_name}
 
@@ -585,4 +593,5 @@ def _from_factory(spec: str, robot: RobotParameters, params: ControllerParameter
                            "agent sets its set-points) or the agent's hip torques, so its "
                            "factory must return ControllerParameters (or a "
                            "BoundingController with the built-in law)")
+    assert plan.parameters is not None      # (the built-in law runs with parameters)
     return plan.parameters

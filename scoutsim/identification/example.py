@@ -37,6 +37,7 @@ def example_logs(rigs=("free-swing", "flight-steps"), seed: int = 0, noise: RigN
     noise = noise or RigNoise()
     logs = []
     for i, name in enumerate(rigs):
+        rig: FreeSwing | FlightSteps
         if name == "free-swing":
             rig = FreeSwing()
         elif name == "flight-steps":

@@ -78,6 +78,8 @@ def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings,
             progress(f"refined {label}: cost {c0:.4g} -> {sol.cost:.4g} ({sol.nfev} evaluations)")
         if best is None or sol.cost < best.cost:
             best = sol
+    if best is None:
+        raise ValueError("scored is empty: refine needs at least one start")
     # polish: one more local fit from the best optimum with a fresh trust region (a
     # stick/slip kink can stall trf's trust region before the minimum)
     sol = optimize.least_squares(residuals, best.x, bounds=(xlo, xhi), method="trf",

@@ -112,6 +112,7 @@ def prepare_log(log: ExperimentLog | str | Path, rig: str | None = None,
     angle = np.column_stack([log.leg_angle(0), log.leg_angle(1)])
     sa, sc = _meta_noise(log, robot)
     td = None
+    rcfg: FreeSwing | FlightSteps
     try:
         if rig == "free-swing":
             rcfg = FreeSwing(

@@ -237,7 +237,7 @@ def with_toe_mass(robot: RobotParameters, toe_mass: float) -> RobotParameters:
     m' = m + m_t, d' = (m d + m_t l0) / m', I' = I + m (d - d')^2 + m_t (l0 - d')^2."""
     if toe_mass == 0.0:
         return robot
-    new = {"leg_mass": [], "leg_com_distance": [], "leg_inertia": []}
+    new: dict[str, list[float]] = {"leg_mass": [], "leg_com_distance": [], "leg_inertia": []}
     for leg in (0, 1):
         one = robot.leg(leg)
         m, d, i0, l0 = one.leg_mass, one.leg_com_distance, one.leg_inertia, one.leg_rest_length

@@ -48,8 +48,8 @@ from ..names import ContactMode, Leg, LegState
 from .run_parts import _model_label, behaviour_text
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
-__all__ = ["animate", "save_animation", "frame_times", "LEG_STATE_COLORS", "TOE_MARKERS",
-           "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
+__all__ = ["animate", "RunAnimation", "save_animation", "frame_times", "LEG_STATE_COLORS",
+           "TOE_MARKERS", "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
 LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
@@ -65,6 +65,14 @@ FORCE_SCALE_M_PER_N = 1.0e-3
 ANIMATION_SUFFIXES = (".gif", ".mp4")
 _VIEW_HALF_WIDTH_M = 0.75
 _TICK_SPACING_M = 0.25
+
+
+class RunAnimation(FuncAnimation):
+    """The :class:`~matplotlib.animation.FuncAnimation` of a run (:func:`animate`), with the
+    frames' times and the parts it draws."""
+
+    frame_times: np.ndarray     #: the frames' times [s]
+    artists: dict               #: the drawn parts by name (:func:`animate`)
 
 
 def frame_times(result, fps: float = 25.0, t0: float | None = None,
@@ -114,7 +122,7 @@ def _geometry(result) -> tuple[tuple[float, float], float, float]:
 
 
 def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None = None,
-            figsize=(8.0, 4.0), dpi: int = 80) -> FuncAnimation:
+            figsize=(8.0, 4.0), dpi: int = 80) -> RunAnimation:
     """A :class:`~matplotlib.animation.FuncAnimation` of ``result`` (module docstring).
 
     Parameters
@@ -217,8 +225,8 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
         stamp.set_text(f"t = {times[i]:7.3f} s")
         return [torso, floor, ticks, stamp, status, *legs, *toes, *forces]
 
-    anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
-                         repeat=False)
+    anim = RunAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
+                        repeat=False)
     anim.frame_times = times
     # the drawn parts by name, each updated by every frame
     anim.artists = {"torso": torso, "legs": legs, "toes": toes, "forces": forces,
@@ -268,7 +276,8 @@ def save_animation(result, path, fps: float = 25.0, t0: float | None = None,
                            "ffmpeg`) or write a .gif instead")
     anim = animate(result, fps=fps, t0=t0, t1=t1, dpi=dpi)
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = PillowWriter(fps=fps) if suffix == ".gif" else FFMpegWriter(fps=fps)
+    writer = (PillowWriter(fps=fps)  # type: ignore[arg-type]  # stubs: int; a float fps works
+              if suffix == ".gif" else FFMpegWriter(fps=fps))  # type: ignore[arg-type]  # (same)
     cb = None if progress is None else (lambda i, n: progress(i, n))
     anim.save(str(path), writer=writer, dpi=dpi, progress_callback=cb)
     return path

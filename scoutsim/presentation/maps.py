@@ -37,7 +37,7 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
         for j, mu in enumerate(floors):
             ax = axes[i, j]
             share = np.full((len(rates), len(speeds)), np.nan)
-            vel = [[[] for _ in speeds] for _ in rates]
+            vel: list[list[list[float]]] = [[[] for _ in speeds] for _ in rates]
             cnt = np.zeros_like(share)
             for r in rows:
                 if r["model"] != m or float(r["friction"]) != mu or r["outcome"] == "invalid_start":

@@ -121,7 +121,7 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
 
     if overview:
         fig = Figure(figsize=(11, 13.5), layout="constrained")
-        top, bottom = fig.subfigures(2, 1, height_ratios=[3.0, 10.0])
+        top, bottom = fig.subfigures(2, 1, squeeze=False, height_ratios=[3.0, 10.0])[:, 0]
         draw_overview(top, result, t0, t1)
         axes = bottom.subplots(4, 1, sharex=True)
         bottom.suptitle(f"detail: t = {t0:.2f} - {t1:.2f} s ({detail})", fontsize=10)

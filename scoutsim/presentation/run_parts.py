@@ -87,7 +87,7 @@ def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) ->
 
     A sample's state holds from its time until the next sample (zero-order hold, as the
     1 kHz controller does)."""
-    verts = {state: [] for state in LegState}
+    verts: dict[int, list] = {state: [] for state in LegState}
     for a, b, k in _runs(states):
         ta = t[a]
         tb = t[b] if b < t.size else t[-1]

@@ -129,7 +129,7 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     matplotlib.figure.Figure
     """
     if isinstance(leg, str) and leg == "both":
-        legs = list(Leg)
+        legs: list[int] = list(Leg)
     elif isinstance(leg, (list, tuple)):
         legs = [leg_index(x) for x in leg]
         if not legs:

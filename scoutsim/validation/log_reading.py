@@ -138,7 +138,7 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
     else:
         raise LogError(f"{path}: unknown log format '{suffix or path.name}'; use "
                        f"{', '.join(LOG_SUFFIXES)}", path)
-    repairs = [] if repair_spikes else None
+    repairs: list | None = [] if repair_spikes else None
     _validate(path, cols, header_line, repairs)
     return ExperimentLog(columns=cols, meta=meta, path=str(path), repairs=tuple(repairs or ()))
 

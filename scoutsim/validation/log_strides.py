@@ -52,8 +52,8 @@ def stance_intervals_log(log, leg) -> np.ndarray:
     t = log.t
     stance = s != LegState.FLIGHT
     edges = np.diff(stance.astype(int))
-    starts = list(np.flatnonzero(edges == 1) + 1)
-    ends = list(np.flatnonzero(edges == -1) + 1)
+    starts: list[int] = (np.flatnonzero(edges == 1) + 1).tolist()
+    ends: list[int] = (np.flatnonzero(edges == -1) + 1).tolist()
     if stance[0]:
         starts.insert(0, 0)
     if stance[-1]:
@@ -103,7 +103,7 @@ def log_strides(log, transient_s: float = 2.0, period_tolerance: float = 0.05) -
     th = np.asarray(log.pitch)
     y = np.asarray(log.height)
     t0, t1 = float(t[0]), float(t[-1])
-    out = []
+    out: list[Stride] = []
     for k in range(len(lo) - 1):
         a, b = float(lo[k]), float(lo[k + 1])
         period = b - a

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -53,8 +54,8 @@ VIRTUAL_SCOUT_EFFECTS = {
     "gearbox_idle_loss_torque": 0.3,
     "gearbox_load_loss_coefficient": 0.05,
 }
-RUNS = ({"name": "example_run1", "speed": 1.2, "seed": 101},
-        {"name": "example_run2", "speed": 1.35, "seed": 202})
+RUNS: tuple[dict[str, Any], ...] = ({"name": "example_run1", "speed": 1.2, "seed": 101},
+                                    {"name": "example_run2", "speed": 1.35, "seed": 202})
 GEOMETRY = LaserGeometry(half_spacing_m=0.34, mount_offset_m=0.015)
 DURATION_S = 10.0
 FRICTION = DEFAULT_FRICTION_COEFFICIENT

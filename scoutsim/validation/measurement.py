@@ -26,6 +26,7 @@ is affected by the unknown signal outside the record; stride analysis ignores st
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -159,7 +160,7 @@ def to_log_like(result, like: ExperimentLog | None = None) -> ExperimentLog:
     """:func:`to_log` (noise-free) with the laser geometry and filter of the log ``like``
     (its metadata), or the defaults without one: a simulation measured the way an
     experiment was."""
-    kw = {}
+    kw: dict[str, Any] = {}
     if like is not None:
         kw = dict(geometry=LaserGeometry(float(like.meta["laser_half_spacing_m"]),
                                          float(like.meta["laser_mount_offset_m"])),

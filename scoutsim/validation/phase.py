@@ -318,6 +318,8 @@ def phase_compare(experiment, models, n_phase: int = 101, transient_s: float = 2
             raise ValueError("a model may not be called 'experiment'")
         srcs[k] = v
     phase = np.linspace(0.0, 1.0, n_phase)
+    mean: dict[str, dict[str, np.ndarray]]
+    std: dict[str, dict[str, np.ndarray]]
     mean, std, nstr, status = {}, {}, {}, {}
     for k, src in srcs.items():
         pairs = src.steady
@@ -330,6 +332,9 @@ def phase_compare(experiment, models, n_phase: int = 101, transient_s: float = 2
                 v = resample_strides(pairs, sig, n_phase)
                 mean[k][sig] = v.mean(axis=0)
                 std[k][sig] = v.std(axis=0)
+    error: dict[str, dict[str, np.ndarray]]
+    rms: dict[str, dict[str, float]]
+    rmsp: dict[str, dict[str, float]]
     error, rms, rmsp = {}, {}, {}
     for k in srcs:
         if k == "experiment":
