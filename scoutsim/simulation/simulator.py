@@ -29,6 +29,7 @@ from ..control.dispatch import PythonBridge, plan_controller
 from ..control.protocol import ControllerError, failure_message
 from ..control.sensors import SensorParameters, Sensors
 from ..control.startup import StartupParameters, run_startup
+from ..io.run_directory import RunDirectory
 from .._core.model import layout as L
 from ..parameters import Environment, RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
@@ -69,7 +70,7 @@ class Recording:
     chunk_seconds: float = 1.0
     record_steps: bool = False
     check_memory: bool = True
-    stream_to: str | os.PathLike | None = None
+    stream_to: str | os.PathLike | RunDirectory | None = None
     keep_seconds: float | None = None
     table_format: str | None = None
     energy: bool = False
@@ -118,7 +119,7 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
              recording: Recording | None = None,
              progress: bool | None = None, chunk_seconds: float | None = None,
              record_steps: bool | None = None, check_memory: bool | None = None,
-             stream_to: str | os.PathLike | None = None, keep_seconds: float | None = None,
+             stream_to: str | os.PathLike | RunDirectory | None = None, keep_seconds: float | None = None,
              table_format: str | None = None,
              energy: bool | None = None) -> SimulationResult:
     """Simulate the planar Scout II model.
@@ -196,7 +197,7 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         (:func:`~scoutsim.simulation.budgets.check_run_memory`) before allocating anything
         (default True); False to try anyway. A streamed run is checked against the free
         disk space instead (:func:`~scoutsim.simulation.budgets.check_stream_disk`).
-    stream_to : directory or None
+    stream_to : directory (a path, or a :class:`~scoutsim.io.run_directory.RunDirectory`) or None
         Stream the run to this directory as it is computed (:mod:`scoutsim.simulation.streaming`):
         the ``timeseries``, ``events`` (and ``steps``) tables and a manifest, written chunk
         by chunk, so the memory a run needs does not grow with its duration. The returned
