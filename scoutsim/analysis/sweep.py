@@ -50,6 +50,7 @@ from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParamet
                           validate_parameters)
 from ..io.run_directory import RunDirectory
 from ..io.tables import write_rows_csv, write_rows_parquet
+from ..simulation.initial_conditions import NAMED_STARTS
 from ..state import HybridState, InitialState
 from .parallel import map_tasks
 from .study_controller import (build_controller, check_controller_travels,
@@ -309,14 +310,15 @@ class SweepResult:
 @dataclass(frozen=True)
 class SweepBase:
     """The base configuration every point of a sweep modifies (``simulate`` arguments):
-    ``model``, ``duration`` [s], ``robot``, ``controller``, ``initial_state`` and
+    ``model``, ``duration`` [s], ``robot``, ``controller``, ``initial_state`` (a state, or
+    a start by name, "flight" or "standing", as :func:`~scoutsim.simulate` takes it) and
     ``friction_coefficient`` (the package's default floor, Coulomb mu = 1.0)."""
 
     model: str = "II"
     duration: float = 10.0
     robot: RobotParameters | None = None
     controller: object = None
-    initial_state: InitialState | HybridState | None = None
+    initial_state: InitialState | HybridState | str | None = None
     friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
 
 
@@ -368,6 +370,9 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         base.model, base.duration, base.robot, base.controller, base.initial_state,
         base.friction_coefficient)
     check_on_error(on_error)
+    if isinstance(initial_state, str) and initial_state not in NAMED_STARTS:
+        raise ValueError(f"initial_state = {initial_state!r} is not allowed: must be a state "
+                         f"or one of {list(NAMED_STARTS)}")
     if not points:
         raise ValueError("points is empty: nothing to sweep")
     names = list(dict.fromkeys(k for p in points for k in p))
@@ -396,8 +401,10 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
                 "friction_coefficient": None if math.isinf(friction_coefficient)
                 else friction_coefficient,
                 "robot": dataclasses.asdict(robot), "controller": describe_controller(controller),
-                "initial_state": None if initial_state is None
-                else dataclasses.asdict(initial_state), "orbit": bool(orbit)}
+                "initial_state": (None if initial_state is None else initial_state
+                                  if isinstance(initial_state, str)
+                                  else dataclasses.asdict(initial_state)),
+                "orbit": bool(orbit)}
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
     ck = rd = None

@@ -148,3 +148,16 @@ def test_a_range_reaching_far_from_scout_ii_is_warned_of_once_not_per_point():
     said = [str(w.message) for w in caught if issubclass(w.category, ImplausibleParameterWarning)]
     assert len(said) == 1, said
     assert f"{1.5 * high:.6g}" in said[0] and "leg_stiffness" in said[0]
+
+
+def test_a_sweep_from_a_named_start_runs_it_and_refuses_an_unknown_name(tmp_path):
+    """A sweep's base start may be named as simulate() takes it ("standing": the robot at
+    rest, set going by the start-up): each point runs from it and the row says which;
+    an unknown name is refused before any point runs, naming the allowed ones."""
+    pts = [{"controller.touchdown_angle_back_deg": 20.0}]
+    res = sweep(pts, model="ideal", duration=0.6, workers=1, out=tmp_path,
+                initial_state="standing")
+    assert res.rows[0]["status"] == "ok", res.rows[0]
+    assert res.settings["initial_state"] == "standing"
+    with pytest.raises(ValueError, match=r"initial_state = 'sitting'.*\['flight', 'standing'\]"):
+        sweep(pts, model="ideal", duration=0.6, workers=1, initial_state="sitting")
