@@ -50,8 +50,9 @@ class PythonPD:
 
 
 def speeds(runs: int, duration: float):
-    import scoutsim
     from compiled_controller import make_controller
+
+    import scoutsim
 
     scoutsim.simulation.simulator.warm_up()
     example = make_controller()

@@ -133,6 +133,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     import gymnasium
+
     import scoutsim
     import scoutsim.envs  # noqa: F401 (registers)
 
@@ -169,7 +170,7 @@ def main(argv=None):
         for mode in ("sync", "async"):
             for n in (2, 4):
                 row[f"{mode} {n}"] = time_vector(
-                    lambda k, mode=mode: make_vec(k, m=mode), kind, n, args.steps,
+                    lambda k, mode=mode, make_vec=make_vec: make_vec(k, m=mode), kind, n, args.steps,
                     args.repeats)
         rows.append(row)
         print(f"{label}: period {row['policy period [ms]']} ms, single {single:,.0f} "

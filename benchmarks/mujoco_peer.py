@@ -45,8 +45,14 @@ except ImportError:  # pragma: no cover - message for users without the benchmar
     sys.exit(2)
 
 import scoutsim
-from scoutsim import (BoundingController, ControllerParameters, InitialState, RobotParameters,
-                      Sensors, default_initial_state)
+from scoutsim import (
+    BoundingController,
+    ControllerParameters,
+    InitialState,
+    RobotParameters,
+    Sensors,
+    default_initial_state,
+)
 from scoutsim.analysis.gait import GaitMetrics
 from scoutsim.analysis.interpolation import _extrema, _hermite
 from scoutsim.analysis.stances import stance_overlap

@@ -19,7 +19,6 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from scoutsim import ControllerParameters, RobotParameters, default_initial_state
-from scoutsim.control.bounding import C_SENSE_ALPHA, bounding_step, controller_array
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.evaluate import evaluate
 from scoutsim._core.model.kinematics import project_state
@@ -28,6 +27,7 @@ from scoutsim._core.model.sensor_readings import read_encoders
 from scoutsim._core.numerics.events import event_values
 from scoutsim._core.numerics.stats import NSTAT
 from scoutsim._core.numerics.transitions import apply_event, settle
+from scoutsim.control.bounding import C_SENSE_ALPHA, bounding_step, controller_array
 from scoutsim.simulation.initial_conditions import initial_state_vector
 
 

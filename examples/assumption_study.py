@@ -30,7 +30,10 @@ import numpy as np
 
 from scoutsim import load_parameters
 from scoutsim.analysis.basin import (
-    DEFAULT_HEIGHTS, DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_of_attraction,
+    DEFAULT_HEIGHTS,
+    DEFAULT_PITCH_RATES,
+    DEFAULT_SPEEDS,
+    basin_of_attraction,
 )
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 

@@ -66,6 +66,7 @@ def main(argv=None):
     seeds = QUICK_SEEDS if args.quick else SEEDS
 
     import gymnasium
+
     import scoutsim.envs  # noqa: F401 (registers scoutsim/Bound-v0)
     from scoutsim.envs.bound import SETPOINTS
     from scoutsim.names import LEG_NAMES

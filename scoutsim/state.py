@@ -80,7 +80,7 @@ class InitialState:
     leg_length_back: float | None = None
     leg_length_front: float | None = None
 
-    def replace(self, **changes) -> "InitialState":
+    def replace(self, **changes) -> InitialState:
         return dataclasses.replace(self, **changes)
 
 

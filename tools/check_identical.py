@@ -67,8 +67,8 @@ def _simulate(scoutsim, robot, controller, init, model, method, friction, **kw):
 def run_scenarios() -> dict:
     """name -> {array name -> array, 'outcome' -> str, 'gait' -> metrics vector}."""
     import scoutsim
-    from scoutsim.state import InitialState
     from scoutsim.analysis.orbits import passive_bounding_orbit, passive_robot
+    from scoutsim.state import InitialState
 
     out = {}
     for sname, start in STARTS.items():

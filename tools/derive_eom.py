@@ -101,7 +101,7 @@ def _velocity(r):
     return sp.Matrix([_time_derivative(ri, q, dq) for ri in r])
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def energies():
     """Symbolic (T, V_grav, V_springs)."""
     n_p = P["n_p"]
@@ -126,7 +126,7 @@ def energies():
     return sp.expand(T), V_grav, V_spr
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def symbolic_eom():
     """Symbolic (M, h, Q_grav) as SymPy matrices (not simplified)."""
     T, V_grav, _ = energies()
@@ -139,7 +139,7 @@ def symbolic_eom():
     return M, h, Qg
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def symbolic_toe(leg):
     """Toe position, velocity, acceleration (2-vectors) with l a time-dependent variable."""
     z = list(q) + [lsym[leg]]
@@ -156,7 +156,7 @@ def _lam(args, expr):
     return sp.lambdify(args, expr, modules="numpy", cse=True)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _compiled():
     M, h, Qg = symbolic_eom()
     T, V_grav, V_spr = energies()

@@ -50,7 +50,7 @@ def run_episode(env, torques: str, seed: int, max_steps: int = MAX_STEPS) -> dic
     rng = np.random.default_rng(seed)
     sign = 1.0 if seed % 2 == 0 else -1.0
     steps = 0
-    for steps in range(1, max_steps + 1):
+    for steps in range(1, max_steps + 1):  # noqa: B007 (the count after the loop is reported)
         if torques == "zero":
             a = np.zeros(2)
         elif torques == "random":

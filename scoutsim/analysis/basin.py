@@ -29,16 +29,26 @@ import csv
 import dataclasses
 import itertools
 import math
-import warnings
 import os
+import warnings
 from dataclasses import dataclass, field
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, floor_label
 from .parallel import map_tasks
-from .study_controller import (build_controller, check_controller_travels, controller_label,
-                               study_controller)
-from .study_failures import (StudyError, check_on_error, end_of_study, error_fields,
-                             is_error, run_failure)
+from .study_controller import (
+    build_controller,
+    check_controller_travels,
+    controller_label,
+    study_controller,
+)
+from .study_failures import (
+    StudyError,
+    check_on_error,
+    end_of_study,
+    error_fields,
+    is_error,
+    run_failure,
+)
 
 DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
 #: initial pitch rates [rad/s]: -150 to 250 deg/s in steps of 50 deg/s

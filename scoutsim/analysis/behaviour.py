@@ -251,7 +251,7 @@ def classify_behaviour(result, gait=None,
     if gait is None:
         gait = result.gait()
     c = _counts(result, gait)
-    n, n_steady = gait.n_strides, gait.n_steady_strides
+    n = gait.n_strides
     t_end = float(result.t_end)
     strides_so_far = f"after {_plural(n, 'stride')}"
 

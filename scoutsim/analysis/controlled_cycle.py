@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..simulation.integrator import IntegratorSettings
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import InitialState
 from .poincare import MapError, floquet_multipliers

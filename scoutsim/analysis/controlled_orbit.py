@@ -18,14 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..simulation.integrator import IntegratorSettings
 from ..names import LEG_NAMES
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import HybridState
 from .poincare import MapError, floquet_multipliers
-from .stride_map import (CONTROLLED_Z_NAMES, _discrete, _hs_of, controlled_stride_map,
-                         section_state)
+from .stride_map import CONTROLLED_Z_NAMES, _discrete, _hs_of, controlled_stride_map, section_state
 
 __all__ = ["ControlledOrbit", "controlled_fixed_point"]
 
@@ -133,7 +132,7 @@ def controlled_fixed_point(start=None, *, model: str = "II",
         z = z0
     if hist[-1] >= tol:
         raise MapError(f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
-                       f"iterations (history {['%.1e' % v for v in hist]})")
+                       f"iterations (history {[f'{v:.1e}' for v in hist]})")
     if J is None or it > 0:
         J = np.empty((z.size, z.size))
         for j in range(z.size):

@@ -26,8 +26,14 @@ import math
 import tomllib
 from pathlib import Path
 
-from ..parameters import (ControllerParameters, ParameterError, RobotParameters,
-                          load_controller, load_parameters, parameter_table)
+from ..parameters import (
+    ControllerParameters,
+    ParameterError,
+    RobotParameters,
+    load_controller,
+    load_parameters,
+    parameter_table,
+)
 
 __all__ = ["CONTROLLER_LAWS", "write_controller_file", "read_controller_file",
            "ControllerFile"]

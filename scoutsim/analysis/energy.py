@@ -125,7 +125,7 @@ class EnergyBalance:
         """The balance as a Markdown table (term, energy [J], share of the input)."""
         ref = self.reference_J
         rows = [f"| {self.input_name} (input) | {self.input_J:.3f} | 100 % |"]
-        for n, e, d in self.terms:
+        for _name, e, d in self.terms:
             rows.append(f"| {d} | {e:.3f} | {100.0 * e / ref:.1f} % |")
         rows.append(f"| residual | {self.residual_J:.2e} | {self.relative_residual:.1e} |")
         return "\n".join(["| term | energy [J] | share |", "|---|---|---|"] + rows)

@@ -43,8 +43,16 @@ from ..parameters import RobotParameters
 from .behaviour import classify_behaviour
 from .stances import stance_intervals, stance_overlap
 from .stride_energy import _input_and_weight, stride_energy
-from .strides import (MIN_STEADY_STRIDES, PERIOD_TOLERANCE, STRIDE_ENERGY_METRICS,
-                      STRIDE_METRICS, Stride, _json_float, _strides, converged_tail)
+from .strides import (
+    MIN_STEADY_STRIDES,
+    PERIOD_TOLERANCE,
+    STRIDE_ENERGY_METRICS,
+    STRIDE_METRICS,
+    Stride,
+    _json_float,
+    _strides,
+    converged_tail,
+)
 
 __all__ = ["gait_metrics", "stance_intervals", "stride_table", "stride_energy", "Stride",
            "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_BEHAVIOUR_KEYS",

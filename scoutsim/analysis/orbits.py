@@ -57,8 +57,14 @@ from __future__ import annotations
 from .controlled_cycle import LIFTOFF_STATE_NAMES, ControlledCycle, controlled_cycle
 from .controlled_orbit import ControlledOrbit, controlled_fixed_point
 from .passive_orbits import PassiveOrbit, continue_passive_family, passive_bounding_orbit
-from .passive_reference import (APEX_STATE_NAMES, ORBIT_TOLERANCE, SIMULTANEOUS_EVENT_TOL,
-                                ApexMap, passive_apex_map, passive_robot)
+from .passive_reference import (
+                                APEX_STATE_NAMES,
+                                ORBIT_TOLERANCE,
+                                SIMULTANEOUS_EVENT_TOL,
+                                ApexMap,
+                                passive_apex_map,
+                                passive_robot,
+)
 from .poincare import MapError, fd_jacobian, floquet_multipliers
 from .stride_map import CONTROLLED_Z_NAMES, controlled_stride_map, section_state
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..simulation.integrator import IntegratorSettings
 from ..parameters import RobotParameters
+from ..simulation.integrator import IntegratorSettings
 from .passive_reference import ORBIT_TOLERANCE, passive_apex_map, passive_robot
 from .poincare import MapError, fd_jacobian, floquet_multipliers
 

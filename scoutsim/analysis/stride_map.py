@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..simulation.integrator import IntegratorSettings
 from ..names import ContactMode, Leg
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
+from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import HybridState, state_index, state_vector
 from .poincare import MapError

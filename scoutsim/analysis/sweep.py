@@ -45,18 +45,34 @@ from typing import Any
 import numpy as np
 
 from ..control.factory import ControllerSpec
-from ..parameters import (DEFAULT_FRICTION_COEFFICIENT, UNITS, ControllerParameters,
-                          RobotParameters, field_dimension, plausibility_warnings_off,
-                          validate_parameters)
 from ..io.run_directory import RunDirectory
 from ..io.tables import write_rows_csv, write_rows_parquet
+from ..parameters import (
+    DEFAULT_FRICTION_COEFFICIENT,
+    UNITS,
+    ControllerParameters,
+    RobotParameters,
+    field_dimension,
+    plausibility_warnings_off,
+    validate_parameters,
+)
 from ..simulation.initial_conditions import NAMED_STARTS
 from ..state import HybridState, InitialState
 from .parallel import map_tasks
-from .study_controller import (build_controller, check_controller_travels,
-                               describe_controller, study_controller)
-from .study_failures import (StudyError, check_on_error, end_of_study, error_fields,
-                             is_error, run_failure)
+from .study_controller import (
+    build_controller,
+    check_controller_travels,
+    describe_controller,
+    study_controller,
+)
+from .study_failures import (
+    StudyError,
+    check_on_error,
+    end_of_study,
+    error_fields,
+    is_error,
+    run_failure,
+)
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
                    "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",

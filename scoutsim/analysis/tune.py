@@ -101,20 +101,39 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
 from ..io.run_directory import RunDirectory, json_safe
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
 from .parallel import map_tasks, pool_is_broken, worker_pool
-from .study_controller import (build_controller, check_controller_travels,
-                               describe_controller, study_controller)
+from .study_controller import (
+    build_controller,
+    check_controller_travels,
+    describe_controller,
+    study_controller,
+)
 from .study_failures import StudyError, check_on_error, is_error
 from .sweep import read_checkpoint
+
 # the parts of a tuning, re-exported here as its public API
-from .tune_evaluation import (AGGREGATES, COLUMNS, MIN_STEADY_STRIDES, OBJECTIVES, PENALTY,
-                              EvaluationNotRunError, _error_row, tune_task)
-from .tune_optimizer import (EVALUATIONS, OPTIMIZER_STATE, MissingDependencyError,
-                             _cma_class, _key, _read_state, _write_state)
-from .tune_parameters import (TuneParameter, _apply, _base_value, has_tunable_array,
-                              parse_parameter)
+from .tune_evaluation import (
+    AGGREGATES,
+    COLUMNS,
+    MIN_STEADY_STRIDES,
+    OBJECTIVES,
+    PENALTY,
+    EvaluationNotRunError,
+    _error_row,
+    tune_task,
+)
+from .tune_optimizer import (
+    EVALUATIONS,
+    OPTIMIZER_STATE,
+    MissingDependencyError,
+    _cma_class,
+    _key,
+    _read_state,
+    _write_state,
+)
+from .tune_parameters import TuneParameter, _apply, _base_value, has_tunable_array, parse_parameter
 from .tune_result import TuneResult, _json, _write_outputs
 
 __all__ = ["tune", "TuneGoal", "TuneRuns", "TuneSearch", "TuneParameter", "TuneResult",
@@ -479,7 +498,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                                           "generation": gen})
                 todo.append(k)
 
-            def on_result(j, row, todo=todo):
+            def on_result(j, row, todo=todo, failed=failed):
                 if on_error == "raise" and is_error(row):
                     failed.append(row)      # never recorded: a resumed tuning runs it again
                     return

@@ -22,8 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..parameters import (ControllerParameters, RobotParameters, allowed_range,
-                          field_dimension)
+from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
 from .sweep import _check_name, parameter_names
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]

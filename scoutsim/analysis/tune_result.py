@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..parameters import ControllerParameters, RobotParameters
 from ..io.run_directory import RunDirectory, json_safe
 from ..io.tables import write_rows_csv, write_rows_parquet
+from ..parameters import ControllerParameters, RobotParameters
 from .tune_evaluation import COLUMNS
 
 __all__ = ["TuneResult"]

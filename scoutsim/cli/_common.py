@@ -17,8 +17,8 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from ..io.run_directory import json_safe
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 
 _IMPORTED_AT = time.perf_counter()
 
@@ -43,9 +43,10 @@ class UsageError(Exception):
 def usage_errors(*types: type[BaseException]):
     """Turn the given exceptions (default: ``ValueError``) raised inside the block into a
     :class:`UsageError` with the same message."""
+    caught = types or (ValueError,)
     try:
         yield
-    except (types or (ValueError,)) as exc:
+    except caught as exc:
         raise UsageError(str(exc)) from None
 
 
@@ -422,8 +423,8 @@ def input_file(path: str, *, directory_ok: bool = False) -> Path:
 def is_saved_run(p: Path) -> bool:
     """True if ``p`` is a run saved by ``scoutsim run``: its output directory, its
     timeseries table or a result.npz (an experiment log is not)."""
-    from ..result.run_files import TABLES_FORMAT
     from ..io.tables import TableError, read_metadata
+    from ..result.run_files import TABLES_FORMAT
     if p.is_dir() or p.name.lower().endswith(".npz"):
         return True
     try:
@@ -435,8 +436,8 @@ def is_saved_run(p: Path) -> bool:
 def load_result(p: Path, t_range: tuple[float, float] | None = None):
     """A run saved by ``scoutsim run``: its output directory (or timeseries table) or a
     result.npz (``t_range``: only that window [s], SimulationResult.load)."""
-    from ..result.simulation_result import SimulationResult
     from ..io.tables import TableError
+    from ..result.simulation_result import SimulationResult
     if not is_saved_run(p):
         raise UsageError(f"input '{p}' is not a saved run: expected the output directory of "
                          "`scoutsim run`, its timeseries table or a result.npz")

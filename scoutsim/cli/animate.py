@@ -11,8 +11,16 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import (UsageError, add_time_window_options, check_time_window, input_file,
-                      load_result, positive_float, positive_int, usage_errors)
+from ._common import (
+    UsageError,
+    add_time_window_options,
+    check_time_window,
+    input_file,
+    load_result,
+    positive_float,
+    positive_int,
+    usage_errors,
+)
 
 NAME = "animate"
 

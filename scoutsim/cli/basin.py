@@ -20,18 +20,41 @@ import os
 import sys
 import time
 
-from ..analysis.basin import (BASIN_COLUMNS, DEFAULT_FLOORS, DEFAULT_HEIGHTS,
-                              DEFAULT_PITCH_RATES, DEFAULT_SPEEDS, basin_of_attraction,
-                              pitch_rate_deg_s,
-                              basin_stats, basin_tasks, run_basin_tasks)
+from ..analysis.basin import (
+    BASIN_COLUMNS,
+    DEFAULT_FLOORS,
+    DEFAULT_HEIGHTS,
+    DEFAULT_PITCH_RATES,
+    DEFAULT_SPEEDS,
+    basin_of_attraction,
+    basin_stats,
+    basin_tasks,
+    pitch_rate_deg_s,
+    run_basin_tasks,
+)
 from ..analysis.parallel import NotSendableError
-from ..parameters import floor_label
 from ..io.run_directory import RunDirectory
-from ._common import (SCOUT_FLOOR_FRICTION, add_controller_option, add_duration_option,
-                      add_models_option, add_plots_option, check_expected_time,
-                      controller_choice, controller_label, float_list, friction_list,
-                      integrator, load_parameters, make_controller, out_dir, positive_int,
-                      show_progress, usage_errors, write_json)
+from ..parameters import floor_label
+from ._common import (
+    SCOUT_FLOOR_FRICTION,
+    add_controller_option,
+    add_duration_option,
+    add_models_option,
+    add_plots_option,
+    check_expected_time,
+    controller_choice,
+    controller_label,
+    float_list,
+    friction_list,
+    integrator,
+    load_parameters,
+    make_controller,
+    out_dir,
+    positive_int,
+    show_progress,
+    usage_errors,
+    write_json,
+)
 
 NAME = "basin"
 

@@ -15,11 +15,24 @@ from __future__ import annotations
 
 import time
 
-from ._common import (SCOUT_FLOOR_FRICTION, UsageError, add_friction_option,
-                      add_models_option, add_no_progress_option, add_plots_option, add_out_option,
-                      add_repair_spikes_option, check_logs_or_example, finite_float,
-                      load_parameters, out_dir, positive_float, report_repairs, show_progress,
-                      usage_errors)
+from ._common import (
+    SCOUT_FLOOR_FRICTION,
+    UsageError,
+    add_friction_option,
+    add_models_option,
+    add_no_progress_option,
+    add_out_option,
+    add_plots_option,
+    add_repair_spikes_option,
+    check_logs_or_example,
+    finite_float,
+    load_parameters,
+    out_dir,
+    positive_float,
+    report_repairs,
+    show_progress,
+    usage_errors,
+)
 
 NAME = "compare"
 

@@ -12,9 +12,18 @@ from __future__ import annotations
 
 import time
 
-from ._common import (UsageError, add_no_progress_option, add_out_option, add_plots_option,
-                      check_logs_or_example, load_robot, out_dir, positive_int,
-                      progress_messages, usage_errors)
+from ._common import (
+    UsageError,
+    add_no_progress_option,
+    add_out_option,
+    add_plots_option,
+    check_logs_or_example,
+    load_robot,
+    out_dir,
+    positive_int,
+    progress_messages,
+    usage_errors,
+)
 
 NAME = "identify"
 

@@ -15,10 +15,21 @@ from __future__ import annotations
 import math
 import sys
 
-from ._common import (CONTROLLED_MODELS, SCOUT_FLOOR_FRICTION, UsageError,
-                      add_controller_option, add_friction_option, add_no_progress_option,
-                      controller_choice, dumps, finite_float,
-                      load_parameters, make_controller, positive_float, progress_messages)
+from ._common import (
+    CONTROLLED_MODELS,
+    SCOUT_FLOOR_FRICTION,
+    UsageError,
+    add_controller_option,
+    add_friction_option,
+    add_no_progress_option,
+    controller_choice,
+    dumps,
+    finite_float,
+    load_parameters,
+    make_controller,
+    positive_float,
+    progress_messages,
+)
 
 NAME = "orbit"
 

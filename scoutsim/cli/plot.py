@@ -10,9 +10,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import (UsageError, add_repair_spikes_option, add_time_window_options,
-                      check_time_window, input_file, is_saved_run, load_result,
-                      report_repairs, usage_errors)
+from ._common import (
+    UsageError,
+    add_repair_spikes_option,
+    add_time_window_options,
+    check_time_window,
+    input_file,
+    is_saved_run,
+    load_result,
+    report_repairs,
+    usage_errors,
+)
 
 NAME = "plot"
 
@@ -40,9 +48,9 @@ def _run_extent(p: Path):
     """(first sample time, last sample time [s], kept seconds if the run was streamed to disk
     else None, the run if it had to be loaded whole for this) of a saved run, from its
     metadata where it has some (the tables of a long streamed run are not read whole)."""
-    from ..result.simulation_result import SimulationResult
     from ..io.run_directory import IncompleteRunError
     from ..io.tables import TableError
+    from ..result.simulation_result import SimulationResult
     if not p.name.lower().endswith(".npz"):
         try:
             meta = SimulationResult.load_metadata(p)

@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import math
 
-from ._common import (UsageError, add_out_option, load_robot, out_dir, positive_float,
-                      usage_errors)
+from ._common import UsageError, add_out_option, load_robot, out_dir, positive_float, usage_errors
 
 NAME = "rig"
 

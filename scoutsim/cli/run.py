@@ -35,17 +35,31 @@ from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
-from ..result.columns import COLUMN_UNITS, column_unit
 from ..io.run_directory import MANIFEST, RunDirectory
-from ..state import InitialState
+from ..result.columns import COLUMN_UNITS, column_unit
 from ..simulation.streaming import DEFAULT_KEEP_SECONDS
-from ._common import (MODELS, UsageError, add_controller_option, add_duration_option,
-                      add_plots_option,
-                      check_expected_time,
-                      controller_choice,
-                      command_wall_time, dumps, finite_float, integrator, load_parameters,
-                      load_sensors, make_controller, out_dir, positive_float, show_progress,
-                      usage_errors, write_json)
+from ..state import InitialState
+from ._common import (
+    MODELS,
+    UsageError,
+    add_controller_option,
+    add_duration_option,
+    add_plots_option,
+    check_expected_time,
+    command_wall_time,
+    controller_choice,
+    dumps,
+    finite_float,
+    integrator,
+    load_parameters,
+    load_sensors,
+    make_controller,
+    out_dir,
+    positive_float,
+    show_progress,
+    usage_errors,
+    write_json,
+)
 
 NAME = "run"
 
@@ -61,6 +75,7 @@ _DEFAULT_START = InitialState()
 def _simulate_default(name: str):
     """The default of :func:`scoutsim.simulate`'s argument ``name`` (its one home)."""
     import inspect
+
     from ..simulation.simulator import simulate
     return inspect.signature(simulate).parameters[name].default
 
@@ -374,8 +389,8 @@ def format_energy(summary: dict) -> str:
 
 
 def execute(args) -> int:
-    from ..simulation.simulator import simulate, warm_up
     from ..simulation.initial_conditions import default_initial_state
+    from ..simulation.simulator import simulate, warm_up
     robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
     law, cparams = controller_choice(args.controller, cparams)

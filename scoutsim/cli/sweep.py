@@ -20,11 +20,21 @@ import time
 import warnings
 
 from ..analysis.sweep import SweepBase
-from ._common import (CONTROLLED_MODELS, UsageError, add_controller_option,
-                      add_duration_option, add_plots_option, check_expected_time,
-                      controller_choice,
-                      load_parameters, make_controller, out_dir, positive_int, show_progress,
-                      usage_errors)
+from ._common import (
+    CONTROLLED_MODELS,
+    UsageError,
+    add_controller_option,
+    add_duration_option,
+    add_plots_option,
+    check_expected_time,
+    controller_choice,
+    load_parameters,
+    make_controller,
+    out_dir,
+    positive_int,
+    show_progress,
+    usage_errors,
+)
 
 #: simulated time per point [s]: SweepBase's default
 DEFAULT_DURATION_S = SweepBase.duration
@@ -108,6 +118,7 @@ def _unique(name: str, seen: set, text: str) -> None:
 def _points(args):
     """The sweep's points from --grid axes or --random bounds."""
     import numpy as np
+
     from ..analysis.sweep import grid_points, random_points
     with usage_errors():
         seen = set()

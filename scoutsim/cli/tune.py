@@ -22,11 +22,24 @@ import sys
 import time
 
 from ..analysis.tune import TuneRuns
-from ._common import (CONTROLLED_MODELS, UsageError, add_controller_option,
-                      add_duration_option, check_expected_time, controller_choice,
-                      float_list, friction_list, load_parameters, make_controller,
-                      model_list, out_dir, positive_float, positive_int, show_progress,
-                      usage_errors)
+from ._common import (
+    CONTROLLED_MODELS,
+    UsageError,
+    add_controller_option,
+    add_duration_option,
+    check_expected_time,
+    controller_choice,
+    float_list,
+    friction_list,
+    load_parameters,
+    make_controller,
+    model_list,
+    out_dir,
+    positive_float,
+    positive_int,
+    show_progress,
+    usage_errors,
+)
 
 NAME = "tune"
 #: default simulated time of every evaluation [s]: TuneRuns' default
@@ -117,9 +130,9 @@ def _starts(args, robot, model):
 
 def execute(args) -> int:
     from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
+    from ..analysis.study_failures import StudyError
     from ..analysis.sweep import read_checkpoint
     from ..analysis.tune import TuneGoal, TuneRuns, TuneSearch, tune
-    from ..analysis.study_failures import StudyError
     from ..analysis.tune_optimizer import EVALUATIONS, MissingDependencyError
     from ..analysis.tune_parameters import parse_parameter
     from ..simulation.simulator import warm_up

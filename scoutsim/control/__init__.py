@@ -12,11 +12,11 @@
 * :mod:`~scoutsim.control.dispatch`: which controller runs how.
 """
 
-from .protocol import DEFAULT_CONTROL_PERIOD, Controller, ControllerError
-from .sensors import SensorChannel, SensorParameters, Sensors, load_sensors
 from .bounding import BoundingController
 from .compiled import CompiledController
 from .pitch_feedback import PitchFeedbackController
+from .protocol import DEFAULT_CONTROL_PERIOD, Controller, ControllerError
+from .sensors import SensorChannel, SensorParameters, Sensors, load_sensors
 
 __all__ = ["Controller", "ControllerError", "DEFAULT_CONTROL_PERIOD", "Sensors",
            "SensorChannel", "SensorParameters", "load_sensors", "BoundingController",

@@ -31,12 +31,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba.jit import kernel
 from .._core.model.flags import FLAG_ON, is_set
 from .._core.model.layout import (
-    LS_BRAKE, LS_FLIGHT, LS_RETRACTION, SN_ANGLE_B, SN_LENGTH_B, SN_RATE_B, TR_LIFTOFF,
-    TR_SWEEP, TR_TOUCHDOWN,
+    LS_BRAKE,
+    LS_FLIGHT,
+    LS_RETRACTION,
+    SN_ANGLE_B,
+    SN_LENGTH_B,
+    SN_RATE_B,
+    TR_LIFTOFF,
+    TR_SWEEP,
+    TR_TOUCHDOWN,
 )
+from .._numba.jit import kernel
 from ..parameters import ControllerParameters, RobotParameters
 from .protocol import Controller
 

@@ -18,12 +18,11 @@ same for every kind.
 
 from __future__ import annotations
 
-from typing import Any
-
 import ctypes
 import math
 import numbers
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +61,7 @@ class ControllerPlan:
     control_period: float
     C: np.ndarray
     block: ControlBlock
-    bridge: "PythonBridge | None" = None
+    bridge: PythonBridge | None = None
     label: str = "builtin"
 
 

@@ -45,11 +45,10 @@ every sensor is ideal)::
 
 from __future__ import annotations
 
-import typing
-
 import dataclasses
 import math
 import tomllib
+import typing
 from dataclasses import dataclass
 from os import PathLike
 
@@ -113,7 +112,7 @@ class Sensors:
         self._v = v
 
     @classmethod
-    def from_vector(cls, y) -> "Sensors":
+    def from_vector(cls, y) -> Sensors:
         """Readings from a readings array (``layout.NSN`` slots); copies it."""
         obj = cls.__new__(cls)
         v = y.copy() if type(y) is np.ndarray and y.dtype == np.float64 else \
@@ -267,7 +266,7 @@ class SensorParameters:
         """True if no channel has noise, bias, resolution or delay."""
         return all(getattr(self, name).is_ideal() for name in CHANNELS)
 
-    def replace(self, **changes) -> "SensorParameters":
+    def replace(self, **changes) -> SensorParameters:
         return dataclasses.replace(self, **changes)
 
     def spec_array(self) -> np.ndarray:

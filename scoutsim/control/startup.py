@@ -122,11 +122,11 @@ class StartupParameters:
             if v is not None and v < 0.0:
                 raise ValueError(f"startup.{name} = {v} is not allowed: must be >= 0")
 
-    def replace(self, **changes) -> "StartupParameters":
+    def replace(self, **changes) -> StartupParameters:
         """A copy with some fields changed."""
         return replace(self, **changes)
 
-    def resolved(self, controller: ControllerParameters) -> "StartupParameters":
+    def resolved(self, controller: ControllerParameters) -> StartupParameters:
         """The parameters with every None that stands for a controller value filled in."""
         return replace(
             self,

@@ -13,8 +13,8 @@ is held over them, as the 1 kHz controller's command is held over a control peri
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 import math
+from dataclasses import dataclass
 
 import gymnasium
 import numpy as np
@@ -24,11 +24,17 @@ from ..control.bounding import SCHEDULABLE
 from ..control.dispatch import plan_controller
 from ..control.factory import FactoryError, controller_from_spec, is_factory_spec
 from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
-from ..parameters import (ControllerParameters, RobotParameters, closed_range,
-                          load_parameters, validate_parameters, validate_robot)
-from ..simulation.engine import HybridEngine, start_engine
-from ..result.failure import diagnose_failure
 from ..names import ContactMode
+from ..parameters import (
+    ControllerParameters,
+    RobotParameters,
+    closed_range,
+    load_parameters,
+    validate_parameters,
+    validate_robot,
+)
+from ..result.failure import diagnose_failure
+from ..simulation.engine import HybridEngine, start_engine
 from ..simulation.simulator import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
 from ..state import HybridState, InitialState, standing_state
 

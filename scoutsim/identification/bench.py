@@ -21,7 +21,7 @@ __all__ = ["run_bench", "Bench"]
 
 
 def run_bench(robot: RobotParameters, model: str, start_state, duration: float, *,
-              bench: Bench = Bench(), controller: ControllerParameters | None = None,
+              bench: Bench | None = None, controller: ControllerParameters | None = None,
               held_torques=None, schedule=None, dt: float = 1e-3,
               integrator: IntegratorSettings | None = None,
               provenance: dict | None = None) -> SimulationResult:
@@ -46,7 +46,7 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     """
     integrator = integrator or IntegratorSettings(method="dopri5")
     setup = assemble(robot, model, np.asarray(start_state, dtype=float),
-                     bench_plan(robot, model, controller), plant=PlantOptions(bench=bench),
+                     bench_plan(robot, model, controller), plant=PlantOptions(bench=bench or Bench()),
                      integrator=integrator, control_period=dt)
     integrator = setup.integrator
     eng = HybridEngine.assembled(setup, duration)

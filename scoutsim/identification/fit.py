@@ -42,16 +42,22 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from ..simulation.integrator import IntegratorSettings
 from ..parameters import RobotParameters, validate_robot
+from ..simulation.integrator import IntegratorSettings
 from .example import EXAMPLE_FACTORS, example_logs, example_robot
 from .fit_result import FittedParameter, IdentificationResult
 from .identifiability import fitted_parameters, reflected_gear_inertia, true_parameters
 from .multistart import refine, score_starts, start_points, starts_table
 from .parameter_vector import default_bounds, fitted_names, robot_with, search_box
 from .residuals import Residuals, channel_rms, residual_count
-from .rig_data import (FITTABLE_RIGS, MIN_MOTION_RAD, RigData, prepare_log, prepare_logs,
-                       simulate_log)
+from .rig_data import (
+    FITTABLE_RIGS,
+    MIN_MOTION_RAD,
+    RigData,
+    prepare_log,
+    prepare_logs,
+    simulate_log,
+)
 from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS
 from .uncertainty import optimum, spread
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..simulation.integrator import IntegratorSettings
 from ..parameters import RobotParameters
+from ..simulation.integrator import IntegratorSettings
 from ..validation.log_format import LogError
 from .parameter_vector import robot_with
 from .rig_data import simulate_log

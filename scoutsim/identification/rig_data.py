@@ -146,7 +146,7 @@ def prepare_log(log: ExperimentLog | str | Path, rig: str | None = None,
             raise
         raise LogError(f"{where}: metadata 'rig_config' is not usable: {exc}", log.path) from None
     moving = []
-    for leg, nm in enumerate(LEG_NAMES):
+    for leg in range(len(LEG_NAMES)):
         span = float(np.ptp(angle[:, leg]))
         if span > max(MIN_MOTION_RAD, 20 * sa):
             moving.append(leg)

@@ -40,11 +40,11 @@ from .._version import __version__
 from ..names import LEG_NAMES
 from ..parameters import ControllerParameters, RobotParameters, validate_robot
 from ..result.simulation_result import SimulationResult
-from ..state import state_vector
-from .bench import Bench, run_bench
 from ..simulation.integrator import IntegratorSettings
+from ..state import state_vector
 from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp
+from .bench import Bench, run_bench
 
 __all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",
            "rig_log", "with_toe_mass", "HIP_PARAMETERS", "hip_parameters", "stall_deflection"]

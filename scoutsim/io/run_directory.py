@@ -131,10 +131,10 @@ class RunDirectory:
         self.info = dict(info or {})
         self.files: list[str] = []
 
-    def __enter__(self) -> "RunDirectory":
+    def __enter__(self) -> RunDirectory:
         return self.open()
 
-    def open(self) -> "RunDirectory":
+    def open(self) -> RunDirectory:
         """Start writing the run (what entering the ``with`` block does, for writers whose
         run spans more than one block): the old run's files go, the manifest says
         "writing"."""

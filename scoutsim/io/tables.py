@@ -19,8 +19,8 @@ import importlib.util
 import json
 import os
 import shutil
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 

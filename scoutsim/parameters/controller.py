@@ -73,6 +73,6 @@ class ControllerParameters:
     def __post_init__(self):
         check_controller(self)
 
-    def replace(self, **changes) -> "ControllerParameters":
+    def replace(self, **changes) -> ControllerParameters:
         """Return a copy with some fields changed."""
         return dataclasses.replace(self, **changes)

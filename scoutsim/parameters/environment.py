@@ -10,7 +10,6 @@ from dataclasses import dataclass
 from .parameter_error import ParameterError
 from .robot import RobotParameters
 
-
 #: The default floor of every simulation, command and study: Coulomb friction mu = 1.0 at
 #: the toe [assumed: rubber-covered toes on carpet, where the paper's experiments ran; the
 #: paper gives no value]. mu = inf is a no-slip floor (the specification's idealisation), an option.
@@ -44,7 +43,7 @@ class Environment:
                                  "must be a number > 0 (inf for a no-slip floor) or None",
                                  "friction_coefficient")
 
-    def friction_for(self, robot: "RobotParameters") -> float:
+    def friction_for(self, robot: RobotParameters) -> float:
         """The toe's Coulomb coefficient mu [-] for ``robot`` on this floor (the default
         rule above when ``friction_coefficient`` is None)."""
         if self.friction_coefficient is not None:

@@ -16,7 +16,6 @@ from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema, _S
 from .units import _UNIT_INDEX, UNITS
 from .validation import _validate_pair, coerce_value, reporting_origins, validate_parameters
 
-
 #: TOML section -> dataclass whose fields it holds.
 SECTIONS: dict[str, type] = {**dict.fromkeys(ROBOT_SECTIONS, RobotParameters),
                              **dict.fromkeys(CONTROLLER_SECTIONS, ControllerParameters)}

@@ -12,7 +12,6 @@ from typing import Any
 
 from .units import _UNIT_INDEX
 
-
 _PACKAGED_NAME = "scout2.toml"
 
 #: the package that ships ``data/scout2.toml``: ``scoutsim``, the parent of this one

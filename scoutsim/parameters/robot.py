@@ -9,8 +9,8 @@ import dataclasses
 from dataclasses import dataclass
 
 from ..names import LEG_NAMES, leg_index
-from .parameter_error import ParameterError
 from .packaged import PACKAGED, packaged_defaults
+from .parameter_error import ParameterError
 from .schema import PER_LEG_FIELDS, ROBOT_SECTIONS, given_per_leg
 from .validation import check_robot
 
@@ -199,7 +199,7 @@ class RobotParameters:
         """Whether any per-leg field has different back and front values."""
         return any(isinstance(getattr(self, n), tuple) for n in PER_LEG_FIELDS)
 
-    def leg(self, leg) -> "RobotParameters":
+    def leg(self, leg) -> RobotParameters:
         """The robot with both legs set to leg ``leg``'s values ("back" / 0 or "front" / 1):
         one leg's quantities and everything derived from them
         (``robot.leg("front").stall_torque``)."""
@@ -293,6 +293,6 @@ class RobotParameters:
         back, front = self.per_leg("leg_mass")
         return self.torso_mass + self.legs_per_virtual_leg * (back + front)
 
-    def replace(self, **changes) -> "RobotParameters":
+    def replace(self, **changes) -> RobotParameters:
         """Return a copy with some fields changed (checked, as every construction is)."""
         return dataclasses.replace(self, **changes)

@@ -7,15 +7,13 @@ against it (:func:`.packaged.packaged_defaults`), so it is read from the file al
 
 from __future__ import annotations
 
-import typing
-
 import dataclasses
+import typing
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 
 from .packaged import _PACKAGED_NAME, _packaged
 from .units import _UNIT_INDEX, UNITS
-
 
 #: TOML sections of :class:`~scoutsim.parameters.RobotParameters` and of
 #: :class:`~scoutsim.parameters.ControllerParameters` (``files.SECTIONS`` maps each to its
@@ -189,7 +187,7 @@ def _schema() -> dict[str, _Spec]:
     return schema
 
 
-@lru_cache(maxsize=None)
+@cache
 def _fields_of(cls: type) -> dict[str, _Spec]:
     """Field name -> :class:`_Spec` of every parameter field of the dataclass ``cls``, in its
     order (a subclass's own extra fields are not parameters)."""

@@ -9,7 +9,6 @@ import numbers
 
 from .parameter_error import ParameterError
 
-
 #: Allowed unit strings and their SI factors (SI value = value * factor), grouped by
 #: dimension. The first unit of each group, with factor 1, is the SI unit. This is the one
 #: place where degrees (and every other non-SI unit) are converted.

@@ -15,16 +15,23 @@ import dataclasses
 import math
 import numbers
 import sys
+import types
 import typing
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 from ..names import LEG_NAMES
 from .parameter_error import ParameterError, _fmt, _fmt_bound
 from .plausibility import slip_hint, warn_implausible
-from .schema import (CONTROLLER_SECTIONS, PER_LEG_FIELDS, ROBOT_SECTIONS, _fields_of, _schema,
-                     _Spec, given_per_leg)
-
+from .schema import (
+    CONTROLLER_SECTIONS,
+    PER_LEG_FIELDS,
+    ROBOT_SECTIONS,
+    _fields_of,
+    _schema,
+    _Spec,
+    given_per_leg,
+)
 
 _HALF_PI = 0.5 * math.pi
 
@@ -354,7 +361,7 @@ def _validate_pair(robot, controller, origins) -> None:
 #: (``files`` sets it while it builds a parameter set from a file, so the messages of the
 #: checks run by the constructor name the file and the unit the value was given in).
 _ORIGINS: contextvars.ContextVar[typing.Mapping] = contextvars.ContextVar(
-    "parameter_origins", default={})
+    "parameter_origins", default=types.MappingProxyType({}))
 
 
 @contextlib.contextmanager
@@ -372,7 +379,7 @@ _FLOAT_MAX = sys.float_info.max
 _ACCEPTED_TYPES = {"float": (float, int), "int": (int,), "bool": (bool,)}
 
 
-@lru_cache(maxsize=None)
+@cache
 def _plan(cls: type) -> tuple:
     """Per field of the dataclass ``cls``, what :func:`_quick_scan` compares: (name, accepted
     types, whether a (back, front) pair is, allowed range, plausible range, whether 0 is
@@ -450,7 +457,7 @@ def check_controller(c) -> None:
     _check(c, _check_controller_couplings)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _sections_of(cls: type) -> tuple | None:
     """The TOML sections whose fields the dataclass ``cls`` has (None: not a parameter
     class)."""

@@ -100,7 +100,7 @@ class RobotPose:
 
     @classmethod
     def of(cls, robot, x: float, height: float, pitch: float, toes, contact,
-           leg_states=None) -> "RobotPose":
+           leg_states=None) -> RobotPose:
         """The pose of ``robot`` (:class:`~scoutsim.parameters.RobotParameters`: its hips and
         torso box) with the torso at (``x``, ``height``) [m], pitched by ``pitch`` [rad]."""
         return cls(float(x), float(height), float(pitch),

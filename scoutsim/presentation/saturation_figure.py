@@ -13,8 +13,7 @@ from matplotlib.figure import Figure
 from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from ..validation.phase import Source
-from .figure_parts import (_finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown,
-                           _tag)
+from .figure_parts import _finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown, _tag
 from .torque_speed import draw_motor_limits, motor_limits
 
 __all__ = ["fig11"]

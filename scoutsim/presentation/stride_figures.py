@@ -10,8 +10,21 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..names import LEG_NAMES
-from .figure_parts import (_DEG, _clip_note, _Extent, _finish, _leg_window, _line_kw,
-                           _notes, _prepare, _sel, _shown, _state_axis, _state_wave, _tag)
+from .figure_parts import (
+    _DEG,
+    _clip_note,
+    _Extent,
+    _finish,
+    _leg_window,
+    _line_kw,
+    _notes,
+    _prepare,
+    _sel,
+    _shown,
+    _state_axis,
+    _state_wave,
+    _tag,
+)
 
 __all__ = ["fig8", "fig9", "fig10"]
 

@@ -44,8 +44,13 @@ import numpy as np
 
 from .._core.model import layout as L
 from .._core.model.flags import flag_is_set
-from ..parameters import (UNITS, ControllerParameters, RobotParameters, field_dimension,
-                         parameter_table)
+from ..parameters import (
+    UNITS,
+    ControllerParameters,
+    RobotParameters,
+    field_dimension,
+    parameter_table,
+)
 
 __all__ = ["FailureDiagnosis", "diagnose_failure", "far_parameters", "FAR_FACTOR",
            "ENERGY_GROWTH"]

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .failure import diagnose_failure
 from .._core.model import layout as L
 from .columns import COLUMN_UNITS, ColumnViews, column_unit
 from .energy_accounts import ENERGY_COLUMNS, ENERGY_GROUPS, ENERGY_WHOLE_ROBOT, EnergyAccessors
 from .event_log import EventAccessors
+from .failure import diagnose_failure
 from .run_files import TABLES_FORMAT, ResultFiles
 from .series import SeriesAccessors
 
@@ -131,7 +131,7 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
             self._cache[key] = diagnose_failure(self)
         return self._cache[key]
 
-    def window(self, t0: float, t1: float) -> "SimulationResult":
+    def window(self, t0: float, t1: float) -> SimulationResult:
         """The samples (and their cumulative energies), events and steps with
         t0 <= t <= t1 [s], as views (all are in time order); outcome, end time, statistics,
         provenance and the run's energy totals stay the whole run's."""

@@ -17,17 +17,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._core.model import layout as L
+from .._core.model.hip_unit import NAMES as HIP_UNIT_NAMES
+from .._core.model.hip_unit import hip_unit_code
+from .._core.model.packing import robot_array
 from ..control.block import control_block
 from ..control.bounding import controller_array
 from ..control.dispatch import ControllerPlan, plan_controller
 from ..control.sensors import SensorParameters
-from .._core.model import layout as L
-from .._core.model.hip_unit import NAMES as HIP_UNIT_NAMES, hip_unit_code
-from .._core.model.packing import robot_array
 from ..parameters import ControllerParameters, Environment, RobotParameters
 from ..state import HybridState, InitialState
-from .initial_conditions import (default_initial_state, fresh_modes, initial_state_vector,
-                                 resumed_modes)
+from .initial_conditions import (
+    default_initial_state,
+    fresh_modes,
+    initial_state_vector,
+    resumed_modes,
+)
 from .integrator import IntegratorSettings
 
 __all__ = ["assemble", "RunSetup", "PlantOptions", "Bench", "bench_plan",

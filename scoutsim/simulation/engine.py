@@ -9,11 +9,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
-from ..control.dispatch import plan_controller
-from ..control.sensors import SensorParameters, Sensors
 from .._core.loop import Carry, Control, Records, Span, effective_method, readings_at, run_entry
-from .._core.numerics.work import Plant
 from .._core.model import layout as L
 from .._core.model.evaluate import NSTIFF
 from .._core.model.flags import flag_is_set
@@ -21,12 +17,16 @@ from .._core.model.rigid_body import state_energy
 from .._core.numerics.dopri5 import eval_workspace
 from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, METHOD_AUTO, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
+from .._core.numerics.work import Plant
+from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
+from ..control.dispatch import plan_controller
+from ..control.sensors import SensorParameters, Sensors
 from ..parameters import ControllerParameters, RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
+from ..state import HybridState, InitialState
 from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, RunSetup, assemble
 from .budgets import EVENT_ROWS_PER_S
 from .integrator import METHOD_CODES, IntegratorSettings
-from ..state import HybridState, InitialState
 
 __all__ = ["HybridEngine", "start_engine", "RETUNABLE"]
 
@@ -107,7 +107,7 @@ class HybridEngine:
 
     @classmethod
     def assembled(cls, setup: RunSetup, duration: float, *, record_steps: bool = False,
-                  rows: int | None = None, energy: bool = False) -> "HybridEngine":
+                  rows: int | None = None, energy: bool = False) -> HybridEngine:
         """An engine at sample 0 of the assembled run ``setup``
         (:func:`~scoutsim.simulation.assembly.assemble`), ``duration`` [s] long."""
         return cls(setup.P, setup.plan.C, setup.start, duration, setup.control_period,

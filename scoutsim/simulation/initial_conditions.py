@@ -10,9 +10,9 @@ from dataclasses import fields
 
 import numpy as np
 
-from ..control.startup import StartupParameters
 from .._core.model import layout as L
 from .._core.model.transmission import motor_mode_from_rate
+from ..control.startup import StartupParameters
 from ..parameters import ControllerParameters, RobotParameters
 from ..state import HybridState, InitialState, standing_state
 

@@ -64,7 +64,7 @@ class IntegratorSettings:
         if self.rtol is not None and self.rtol < 1e-14:
             raise ValueError(f"integrator.rtol = {self.rtol} is not allowed: must be >= 1e-14")
 
-    def resolve(self, model: str = "II") -> "IntegratorSettings":
+    def resolve(self, model: str = "II") -> IntegratorSettings:
         """The concrete method and tolerances for ``model``."""
         import dataclasses
         m = self.method

@@ -23,24 +23,29 @@ import time
 import warnings
 from dataclasses import asdict, dataclass, fields
 
-
+from .._core.model import layout as L
 from .._version import __version__
 from ..control.dispatch import PythonBridge, plan_controller
 from ..control.protocol import ControllerError, failure_message
 from ..control.sensors import SensorParameters, Sensors
 from ..control.startup import StartupParameters, run_startup
 from ..io.run_directory import RunDirectory
-from .._core.model import layout as L
 from ..parameters import Environment, RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
 from ..state import HybridState, InitialState
+
 # the parts simulate() composes, re-exported here as the public API of a run
 from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, assemble
-from .budgets import (STREAM_CHUNK_SECONDS, check_run_memory, check_stream_disk,
-                      expected_wall_time, physical_memory_bytes)
+from .budgets import (
+    STREAM_CHUNK_SECONDS,
+    check_run_memory,
+    check_stream_disk,
+    expected_wall_time,
+    physical_memory_bytes,
+)
 from .engine import HybridEngine, start_engine
-from .integrator import IntegratorSettings
 from .initial_conditions import default_initial_state, named_start
+from .integrator import IntegratorSettings
 
 __all__ = ["simulate", "Recording", "PLANT_OPTIONS", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
            "default_initial_state", "warm_up", "start_engine",

@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 
 from .._core.model import layout as L
-from ..result.simulation_result import SimulationResult
-from ..result.run_files import TABLES_FORMAT
 from ..io.run_directory import RunDirectory
 from ..io.tables import TableWriter
+from ..result.run_files import TABLES_FORMAT
+from ..result.simulation_result import SimulationResult
 
 __all__ = ["RunStream", "DEFAULT_KEEP_SECONDS"]
 

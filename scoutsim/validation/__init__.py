@@ -15,9 +15,9 @@ See docs/validation.md.
 from .experiment_log import ExperimentLog
 from .log_format import LogError
 from .log_reading import load_dataset, load_log
+from .log_strides import log_strides
 from .log_writing import save_log
 from .measurement import LaserGeometry, SensorNoise, fft_lowpass, to_log
-from .log_strides import log_strides
 
 __all__ = ["ExperimentLog", "LogError", "load_log", "load_dataset", "save_log",
            "LaserGeometry", "SensorNoise", "fft_lowpass", "to_log", "log_strides"]

@@ -51,8 +51,8 @@ from pathlib import Path
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT
-from .torso_sensors import EDGE_S
 from .log_strides import LogGait, experiment_strides, log_strides
+from .torso_sensors import EDGE_S
 
 __all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
            "percent_errors", "rank_paired_model_values", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]

@@ -73,7 +73,7 @@ def _check_columns(path, names):
         raise LogError(f"{path}: missing column(s) {', '.join(hints)}; a log needs "
                        f"{', '.join(REQUIRED_COLUMNS)} (see scoutsim.validation.logs)",
                        path, missing[0])
-    for group, options in ALTERNATIVE_COLUMNS.items():
+    for options in ALTERNATIVE_COLUMNS.values():
         if not any(all(c in seen for c in opt) for opt in options):
             present = [c for opt in options for c in opt if c in seen]
             want = " or ".join("(" + ", ".join(opt) + ")" for opt in options)

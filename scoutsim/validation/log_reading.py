@@ -14,8 +14,7 @@ import numpy as np
 
 from .experiment_log import ExperimentLog
 from .log_checks import _check_columns, _validate
-from .log_format import (COLUMN_UNITS, LOG_SUFFIXES, LogError, _PARQUET_META_KEY, _row_text,
-                         _suffix)
+from .log_format import _PARQUET_META_KEY, COLUMN_UNITS, LOG_SUFFIXES, LogError, _row_text, _suffix
 
 __all__ = ["load_log", "load_dataset"]
 

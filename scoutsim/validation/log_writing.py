@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .log_format import LOG_SUFFIXES, _PARQUET_META_KEY, _suffix
+from .log_format import _PARQUET_META_KEY, LOG_SUFFIXES, _suffix
 
 __all__ = ["save_log"]
 

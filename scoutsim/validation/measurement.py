@@ -33,8 +33,14 @@ import numpy as np
 from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from .experiment_log import ExperimentLog
-from .torso_sensors import (EDGE_S, LaserGeometry, fft_lowpass, laser_ranges, lowpass_gain,
-                      pitch_height_from_lasers)
+from .torso_sensors import (
+    EDGE_S,
+    LaserGeometry,
+    fft_lowpass,
+    laser_ranges,
+    lowpass_gain,
+    pitch_height_from_lasers,
+)
 
 __all__ = ["LaserGeometry", "SensorNoise", "laser_ranges", "pitch_height_from_lasers",
            "fft_lowpass", "lowpass_gain", "torque_from_current", "torque_per_amp", "to_log",

@@ -45,8 +45,8 @@ import numpy as np
 
 from ..names import MODEL_LABELS
 from .experiment_log import ExperimentLog
-from .measurement import to_log_like
 from .log_strides import LogGait, log_strides
+from .measurement import to_log_like
 
 __all__ = ["SIGNALS", "Source", "as_source", "as_sources", "resample_strides",
            "PhaseComparison", "phase_compare"]

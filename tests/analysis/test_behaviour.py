@@ -22,11 +22,17 @@ import pytest
 
 import scoutsim
 from scoutsim import BoundingController, Controller, InitialState, load_robot, simulate
-from scoutsim.analysis.behaviour import (BEHAVIOUR_KINDS, IN_PLACE_SPEED_M_S, REST_S,
-                                         RUN_LONGER, SLIDE_PER_METRE, classify_behaviour,
-                                         toe_slide_distance)
-from scoutsim.cli.run import format_summary
 from scoutsim._core.model import layout as L
+from scoutsim.analysis.behaviour import (
+    BEHAVIOUR_KINDS,
+    IN_PLACE_SPEED_M_S,
+    REST_S,
+    RUN_LONGER,
+    SLIDE_PER_METRE,
+    classify_behaviour,
+    toe_slide_distance,
+)
+from scoutsim.cli.run import format_summary
 from scoutsim.names import ContactMode
 from scoutsim.parameters import load_controller
 

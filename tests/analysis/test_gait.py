@@ -9,9 +9,9 @@ import pytest
 
 import scoutsim
 from scoutsim import SimulationResult
+from scoutsim._core.model import layout as L
 from scoutsim.analysis.gait import gait_metrics, stride_table
 from scoutsim.analysis.stances import stance_intervals
-from scoutsim._core.model import layout as L
 
 DT = 1e-3
 V = 1.3                   # forward speed [m/s]

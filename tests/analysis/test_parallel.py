@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from scoutsim.analysis.parallel import (SchedulerUnreachableError, WorkerDiedError,
-                                        map_tasks)
+from scoutsim.analysis.parallel import SchedulerUnreachableError, WorkerDiedError, map_tasks
 
 
 def _square_or_die(task):

@@ -12,8 +12,12 @@ import threading
 import numpy as np
 import pytest
 
-from scoutsim.analysis.parallel import (NotSendableError, check_sendable, map_tasks,
-                                        unsendable_reason)
+from scoutsim.analysis.parallel import (
+    NotSendableError,
+    check_sendable,
+    map_tasks,
+    unsendable_reason,
+)
 from scoutsim.control import CompiledController
 
 

@@ -6,8 +6,13 @@ import math
 
 import pytest
 
-from scoutsim.analysis.sweep import (SUMMARY_COLUMNS, grid_points, parameter_names,
-                                     random_points, sweep)
+from scoutsim.analysis.sweep import (
+    SUMMARY_COLUMNS,
+    grid_points,
+    parameter_names,
+    random_points,
+    sweep,
+)
 
 GRID = {"controller.touchdown_angle_front": [math.radians(19), math.radians(21)],
         "controller.touchdown_angle_back": [math.radians(17), math.radians(19)]}

@@ -16,8 +16,7 @@ pytest.importorskip("cmaes")
 import scoutsim  # noqa: E402
 from scoutsim.analysis import tune as T  # noqa: E402
 from scoutsim.analysis import tune_evaluation as E  # noqa: E402
-from scoutsim.analysis.controller_file import (read_controller_file,  # noqa: E402
-                                               write_controller_file)
+from scoutsim.analysis.controller_file import read_controller_file, write_controller_file  # noqa: E402
 from scoutsim.parameters import ControllerParameters, ParameterError  # noqa: E402
 
 ANGLES = ["controller.touchdown_angle_front_deg=18:26", "controller.touchdown_angle_back_deg=16:24"]

@@ -3,7 +3,6 @@ messages, and the basin sweep."""
 
 import csv
 import json
-import math
 import subprocess
 import sys
 
@@ -335,6 +334,7 @@ def test_no_compile_notice_when_the_core_is_cached(tmp_path, monkeypatch, capsys
 
 def test_progress_messages_go_to_stderr_unless_quiet(monkeypatch, capsys):
     import argparse
+
     from scoutsim.cli._common import progress_messages
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
     say = progress_messages(argparse.Namespace(no_progress=False, quiet=False), "orbit")

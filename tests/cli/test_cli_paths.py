@@ -15,8 +15,8 @@ import pytest
 
 import scoutsim
 from scoutsim import ControllerParameters, HybridState, IntegratorSettings, RobotParameters
-from scoutsim.cli import main
 from scoutsim._core.model import layout as L
+from scoutsim.cli import main
 from scoutsim.io.run_directory import check_run_directory
 from scoutsim.validation.log_reading import load_log
 

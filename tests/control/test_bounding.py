@@ -131,9 +131,9 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
     (every leg state); a change of a hip angle does change them (the comparison can
     fail)."""
     import scoutsim
+    from scoutsim._core.model.sensor_readings import true_readings
     from scoutsim.control.bounding import bounding_step, controller_array
     from scoutsim.control.sensors import SensorParameters
-    from scoutsim._core.model.sensor_readings import true_readings
     r = scoutsim.simulate(duration=1.0, model="II")
     geom = SensorParameters().geometry_array(ROBOT, sense_motor_angle)
     ds, aux = np.zeros(L.NS), np.zeros(L.NAUX)

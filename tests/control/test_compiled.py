@@ -11,10 +11,10 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState
+from scoutsim._core.model import layout as L
+from scoutsim._numba.jit import cache_directory
 from scoutsim.control import CompiledController, Controller, ControllerError
 from scoutsim.control import sensors as S
-from scoutsim._numba.jit import cache_directory
-from scoutsim._core.model import layout as L
 
 AIR = InitialState(y=1.0, dx=0.0, dtheta=0.0)    # in the air: a short, simple run
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scoutsim.control.bounding import bounding_step, controller_array
 from scoutsim._core.model import layout as L
+from scoutsim.control.bounding import bounding_step, controller_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 
 PARAMS = ControllerParameters().replace(

@@ -16,9 +16,9 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState
+from scoutsim._core.model import layout as L
 from scoutsim.cli import main
 from scoutsim.control import PitchFeedbackController
-from scoutsim._core.model import layout as L
 from scoutsim.parameters import ControllerParameters, ParameterError, load_controller
 
 MODELS = ("ideal", "I", "II")

@@ -11,10 +11,14 @@ import pytest
 
 import scoutsim
 from scoutsim import BoundingController, InitialState, RobotParameters
-from scoutsim.control.sensors import (
-    CHANNELS, SensorChannel, SensorParameters, Sensors, load_sensors,
-)
 from scoutsim._core.model import layout as L
+from scoutsim.control.sensors import (
+    CHANNELS,
+    SensorChannel,
+    SensorParameters,
+    Sensors,
+    load_sensors,
+)
 from scoutsim.parameters import ParameterError
 from scoutsim.validation.torso_sensors import LaserGeometry, laser_ranges
 

@@ -12,12 +12,13 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
                                 "gymnasium (pip install 'scoutsim[rl]')")
 
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
 import scoutsim  # noqa: E402
 import scoutsim.envs  # noqa: E402,F401
-from gymnasium.utils.env_checker import check_env  # noqa: E402
+from scoutsim._core.model import layout as L  # noqa: E402
 from scoutsim.control.sensors import SensorChannel, SensorParameters  # noqa: E402
 from scoutsim.envs.bound import BoundEnv  # noqa: E402
-from scoutsim._core.model import layout as L  # noqa: E402
 
 ID = "scoutsim/Bound-v0"
 #: Table I's set-points (touchdown back / front, sweep back / front), from the paper

@@ -11,8 +11,8 @@ gymnasium = pytest.importorskip("gymnasium", reason="the learning environment ne
                                 "gymnasium (pip install 'scoutsim[rl]')")
 
 import scoutsim.envs  # noqa: E402,F401
-from scoutsim.envs.bound import BoundEnv  # noqa: E402
 from scoutsim._core.model import layout as L  # noqa: E402
+from scoutsim.envs.bound import BoundEnv  # noqa: E402
 
 ID = "scoutsim/Bound-v0"
 TABLE_I_SETPOINTS = np.radians([19.0, 21.0, 0.0, 0.0])

@@ -14,12 +14,12 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
                                 "gymnasium (pip install 'scoutsim[rl]')")
 
-import scoutsim.envs  # noqa: E402,F401
 from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+import scoutsim.envs  # noqa: E402,F401
 from scoutsim.envs.bound import BoundEnv  # noqa: E402
 from scoutsim.names import ContactMode  # noqa: E402
-from scoutsim.presentation.frames import (GROUND_MARGIN_M, VIEW_HALF_WIDTH_M,  # noqa: E402
-                                          RobotPose, draw_pose)
+from scoutsim.presentation.frames import GROUND_MARGIN_M, VIEW_HALF_WIDTH_M, RobotPose, draw_pose  # noqa: E402
 from scoutsim.presentation.style import LEG_STATE_LINE_COLORS  # noqa: E402
 from scoutsim.state import state_index  # noqa: E402
 

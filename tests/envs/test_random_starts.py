@@ -81,9 +81,9 @@ def test_jammed_slide_ends_in_an_impact_on_the_friction_cone_edge():
     (energy drops only by the logged impact losses, modes consistent after every
     transition) finds nothing, and the run ends in a fall, not a numerical failure."""
     from scoutsim import simulate
+    from scoutsim._core.model.contact import JAM_AXIAL_SHARE
     from scoutsim.analysis.transition_audit import audit_transitions
     from scoutsim.control.protocol import Controller
-    from scoutsim._core.model.contact import JAM_AXIAL_SHARE
     from scoutsim.state import InitialState
 
     class Zero(Controller):

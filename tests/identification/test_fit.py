@@ -10,8 +10,15 @@ import math
 import pytest
 
 from scoutsim.cli import main
-from scoutsim.identification import (FlightSteps, FreeSwing, example_robot, identify,
-                                     prepare_log, rig_log, run_rig)
+from scoutsim.identification import (
+    FlightSteps,
+    FreeSwing,
+    example_robot,
+    identify,
+    prepare_log,
+    rig_log,
+    run_rig,
+)
 from scoutsim.parameters import RobotParameters
 from scoutsim.validation.log_format import LogError
 

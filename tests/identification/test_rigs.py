@@ -9,14 +9,21 @@ import math
 import numpy as np
 import pytest
 
-from scoutsim.identification.rigs import (FlightSteps, FreeSwing, RigNoise, Stall, rig_log,
-                                          run_rig, stall_deflection)
 from scoutsim._core.model.packing import robot_array
-from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.identification.bench import run_bench
+from scoutsim.identification.rigs import (
+    FlightSteps,
+    FreeSwing,
+    RigNoise,
+    Stall,
+    rig_log,
+    run_rig,
+    stall_deflection,
+)
+from scoutsim.parameters import ControllerParameters, RobotParameters
+from scoutsim.simulation.initial_conditions import default_initial_state, initial_state_vector
 from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.simulation.simulator import simulate
-from scoutsim.simulation.initial_conditions import default_initial_state, initial_state_vector
 
 
 def test_rig_engine_with_clamp_off_is_simulate_bit_for_bit():

@@ -14,8 +14,14 @@ import pytest
 import scoutsim
 from scoutsim import SimulationResult
 from scoutsim.cli import main
-from scoutsim.io.run_directory import (MANIFEST, IncompleteRunError, RunDirectory, atomic_write,
-                                    check_run_directory, read_manifest)
+from scoutsim.io.run_directory import (
+    MANIFEST,
+    IncompleteRunError,
+    RunDirectory,
+    atomic_write,
+    check_run_directory,
+    read_manifest,
+)
 
 
 def test_atomic_write_leaves_no_trace_when_the_writer_fails(tmp_path):

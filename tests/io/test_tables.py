@@ -6,8 +6,14 @@ import math
 import numpy as np
 import pytest
 
-from scoutsim.io.tables import (FORMATS, TableError, TableWriter, read_metadata, read_table,
-                             write_table)
+from scoutsim.io.tables import (
+    FORMATS,
+    TableError,
+    TableWriter,
+    read_metadata,
+    read_table,
+    write_table,
+)
 
 pytest.importorskip("pyarrow")
 

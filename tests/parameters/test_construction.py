@@ -29,9 +29,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scoutsim.parameters import (ControllerParameters, Environment, ImplausibleParameterWarning,
-                                 ParameterError, RobotParameters, load_parameters, load_robot,
-                                 validate_controller, validate_robot)
+from scoutsim.parameters import (
+    ControllerParameters,
+    Environment,
+    ImplausibleParameterWarning,
+    ParameterError,
+    RobotParameters,
+    load_parameters,
+    load_robot,
+    validate_controller,
+    validate_robot,
+)
 
 REPO = Path(__file__).resolve().parents[2]
 

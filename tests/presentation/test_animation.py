@@ -5,8 +5,8 @@ import pytest
 from PIL import Image
 
 import scoutsim
-from scoutsim.presentation.animation import animate, frame_times, save_animation
 from scoutsim.cli import main
+from scoutsim.presentation.animation import animate, frame_times, save_animation
 
 
 @pytest.fixture(scope="module")
@@ -111,6 +111,7 @@ def test_result_without_robot_in_provenance_is_drawn_with_the_default_robot(resu
     a rectangle of the default torso length x height, and every frame matches the frame of
     the same run whose provenance names the (default) robot it simulated."""
     import dataclasses
+
     from scoutsim.parameters import RobotParameters
     provenance = {k: v for k, v in result.provenance.items() if k != "robot"}
     bare = dataclasses.replace(result, provenance=provenance, _cache={})
@@ -133,6 +134,7 @@ def test_leg_colour_is_the_controller_state_and_toe_marker_the_simulated_contact
     says flight but the simulated toe is on the ground, the leg is drawn in the flight
     colour and its toe filled; in the air the toe is open. Both have a legend."""
     from matplotlib.colors import to_rgba
+
     from scoutsim.names import ContactMode, LegState
     from scoutsim.presentation.animation import LEG_STATE_COLORS, TOE_MARKERS
     leg = 0

@@ -11,11 +11,11 @@ import pytest
 from matplotlib.figure import Figure
 
 from scoutsim import RobotParameters, simulate
-from scoutsim.validation import SensorNoise, save_log, to_log
 from scoutsim.presentation import paper_figures as figures
+from scoutsim.state import InitialState
+from scoutsim.validation import SensorNoise, save_log, to_log
 from scoutsim.validation.errors import ModelRun, assess_errors
 from scoutsim.validation.log_strides import log_strides
-from scoutsim.state import InitialState
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the
 #: basin: Model I falls from it at about 1.4 s (the fallen-model paths of the comparison)

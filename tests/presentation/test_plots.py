@@ -250,8 +250,9 @@ def test_plot_run_title_of_a_fall_says_so():
 def test_plot_stride_power_has_a_legend_for_the_leg_state_colours():
     """The background bands' colours are named in a legend: flight, stance-retraction,
     stance-brake, each patch the colour of the bands of that state."""
-    from matplotlib.patches import Patch
     from matplotlib.colors import to_rgba
+    from matplotlib.patches import Patch
+
     from scoutsim.names import LegState
     from scoutsim.presentation.plots import plot_stride_power
     r = scoutsim.simulate(duration=1.0, model="II", energy=True)
@@ -284,8 +285,9 @@ def test_a_window_of_a_run_is_titled_by_its_run_not_by_its_own_strides(result_II
 
 def test_scoutsim_plot_of_a_window_titles_it_by_the_saved_summary(tmp_path, monkeypatch):
     import json
-    from scoutsim.cli import main
+
     import scoutsim.presentation.plots as plots
+    from scoutsim.cli import main
     out = tmp_path / "run"
     assert main(["run", "--duration", "0.5", "--out", str(out), "--no-progress",
                  "--quiet"]) == 0

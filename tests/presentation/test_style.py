@@ -47,4 +47,4 @@ def test_package_exports_load_lazily():
     assert P.plot_run.__module__ == "scoutsim.presentation.plots"
     assert P.fig12.__module__ == "scoutsim.presentation.error_figure"
     with pytest.raises(AttributeError):
-        P.no_such_figure
+        _ = P.no_such_figure

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from scoutsim import RobotParameters, SimulationResult, simulate
+from scoutsim._core.model import layout as L
 from scoutsim.analysis.transition_audit import audit_transitions
 from scoutsim.cli import main
-from scoutsim._core.model import layout as L
 from scoutsim.parameters import ParameterError, load_robot, physical_limit
 from scoutsim.simulation.initial_conditions import default_initial_state
 

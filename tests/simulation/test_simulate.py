@@ -9,8 +9,14 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim import (BoundingController, ControllerParameters, InitialState,
-                      IntegratorSettings, RobotParameters, SimulationResult)
+from scoutsim import (
+    BoundingController,
+    ControllerParameters,
+    InitialState,
+    IntegratorSettings,
+    RobotParameters,
+    SimulationResult,
+)
 from scoutsim._core.model import layout as L
 from scoutsim.simulation.engine import RETUNABLE, start_engine
 from scoutsim.simulation.simulator import PLANT_OPTIONS

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.result.simulation_result import SimulationResult
 from scoutsim.io.run_directory import check_run_directory
+from scoutsim.io.tables import FORMATS, read_table
+from scoutsim.result.simulation_result import SimulationResult
 from scoutsim.simulation.budgets import check_stream_disk
 from scoutsim.simulation.engine import HybridEngine
 from scoutsim.simulation.simulator import simulate
-from scoutsim.io.tables import FORMATS, read_table
 
 pytest.importorskip("pyarrow")
 

@@ -6,11 +6,16 @@ import numpy as np
 import pytest
 
 from scoutsim import RobotParameters, simulate
-from scoutsim.validation import to_log
 from scoutsim.presentation.phase_plots import plot_phase
-from scoutsim.validation.phase import (SIGNALS, PhaseComparison, as_source, phase_compare,
-                                       resample_strides)
 from scoutsim.state import InitialState
+from scoutsim.validation import to_log
+from scoutsim.validation.phase import (
+    SIGNALS,
+    PhaseComparison,
+    as_source,
+    phase_compare,
+    resample_strides,
+)
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the
 #: basin: Model I falls from it at about 1.4 s (the fallen-model paths of the comparison)

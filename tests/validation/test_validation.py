@@ -9,13 +9,27 @@ import numpy as np
 import pytest
 
 from scoutsim import RobotParameters, simulate
-from scoutsim.validation import (ExperimentLog, LaserGeometry, LogError, SensorNoise,
-                                 fft_lowpass, load_dataset, load_log, log_strides, save_log,
-                                 to_log)
-from scoutsim.validation.errors import (CSV_COLUMNS, ERROR_METRICS, ModelRun, assess_errors,
-                                        percent_errors)
-from scoutsim.validation.measurement import laser_ranges, pitch_height_from_lasers
 from scoutsim.state import InitialState
+from scoutsim.validation import (
+    ExperimentLog,
+    LaserGeometry,
+    LogError,
+    SensorNoise,
+    fft_lowpass,
+    load_dataset,
+    load_log,
+    log_strides,
+    save_log,
+    to_log,
+)
+from scoutsim.validation.errors import (
+    CSV_COLUMNS,
+    ERROR_METRICS,
+    ModelRun,
+    assess_errors,
+    percent_errors,
+)
+from scoutsim.validation.measurement import laser_ranges, pitch_height_from_lasers
 
 #: scoutsim's earlier default start (4 deg nose-up, no pitch motion), at the edge of the
 #: basin: Model I falls from it at about 1.4 s (the fallen-model paths of the comparison)

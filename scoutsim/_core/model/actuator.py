@@ -16,8 +16,23 @@ import math
 
 from ..._numba.jit import kernel
 from .layout import (
-    CIRCUIT_OPEN, CIRCUIT_SHORT, MODEL_IDEAL, MODEL_PASSIVE, P_C_LOAD, P_CIRCUIT, P_ETA,
-    P_IMAX, P_KT, P_KW, P_MODEL, P_N, P_NP, P_RA, P_RB, P_TAU_IDLE, P_VB,
+    CIRCUIT_OPEN,
+    CIRCUIT_SHORT,
+    MODEL_IDEAL,
+    MODEL_PASSIVE,
+    P_C_LOAD,
+    P_CIRCUIT,
+    P_ETA,
+    P_IMAX,
+    P_KT,
+    P_KW,
+    P_MODEL,
+    P_N,
+    P_NP,
+    P_RA,
+    P_RB,
+    P_TAU_IDLE,
+    P_VB,
 )
 from .roots import illinois_update
 from .transmission import motor_speed

@@ -18,18 +18,55 @@ from __future__ import annotations
 import math
 
 from ..._numba.jit import kernel
+from .flags import is_set
 from .kinematics import hip_offset
 from .kkt import MAX_ROWS, new_row
-from .flags import is_set
 from .layout import (
-    IPHB, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_SLIDE_DIR_B, NQ, P_K, P_L0, P_MASSLESS,
-    P_MU, P_NO_SLIP, P_NP, P_STRUT_OMEGA, P_TD_WORLD, ROW_MASSLESS, ROW_TOE_ACROSS,
-    ROW_TOE_ALONG, SLIDE, STICK, STRUT,
+    IPHB,
+    ITH,
+    IX,
+    IY,
+    MF_ANCHOR_B,
+    MI_CONTACT_B,
+    MI_SLIDE_DIR_B,
+    NQ,
+    P_K,
+    P_L0,
+    P_MASSLESS,
+    P_MU,
+    P_NO_SLIP,
+    P_NP,
+    P_STRUT_OMEGA,
+    P_TD_WORLD,
+    ROW_MASSLESS,
+    ROW_TOE_ACROSS,
+    ROW_TOE_ALONG,
+    SLIDE,
+    STICK,
+    STRUT,
 )
 from .leg import flight_leg_rate, leg_axial_force, leg_damping, leg_friction_level
 from .workspace import (
-    LG_FAX, LG_GN, LG_GT, LG_LDOT, LG_TOEVX, LG_TOEX, LG_TOEY, MT_CTH, MT_STH, NWK_LEG, WA_R,
-    WK_DQ, WK_L, WK_LEG, WK_META, WK_Q, WK_Q_, WK_R, WK_RKIND, WK_RLEG,
+    LG_FAX,
+    LG_GN,
+    LG_GT,
+    LG_LDOT,
+    LG_TOEVX,
+    LG_TOEX,
+    LG_TOEY,
+    MT_CTH,
+    MT_STH,
+    NWK_LEG,
+    WA_R,
+    WK_DQ,
+    WK_L,
+    WK_LEG,
+    WK_META,
+    WK_Q,
+    WK_Q_,
+    WK_R,
+    WK_RKIND,
+    WK_RLEG,
 )
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from ..._numba.jit import kernel
 from . import backlash, belt, rigid_hip
-from .layout import P_HIP_UNIT
+from .layout import P_HIP_UNIT  # noqa: F401 (read by the hooks generated below)
 
 #: the registered hip units; a unit's code is its index (the rigid unit is code 0, the one
 #: a parameter array without a unit gets)

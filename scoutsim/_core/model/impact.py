@@ -8,14 +8,37 @@ import math
 import numpy as np
 
 from ..._numba.jit import allocating
+from .flags import is_set
 from .hip_unit import geared
 from .kinematics import hip_offset, project, project_state
 from .kkt import MAX_ROWS, solve_dense
-from .flags import is_set
 from .layout import (
-    FLIGHT, IALB, IALF, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, IPHF, ITH, IX,
-    IY, MI_CONTACT_B, MI_MOTOR_B, NIMP, NIMP_LEG, NQ, P_MASSLESS, P_TD_WORLD, ROW_GEAR,
-    ROW_MASSLESS, ROW_TOE_ACROSS, ROW_TOE_ALONG, SLIP_POS, STICK, STRUT,
+    FLIGHT,
+    IALB,
+    IALF,
+    IL_B,
+    IMP_ENERGY_LOST,
+    IMP_NORMAL,
+    IMP_TANGENT,
+    IPHB,
+    IPHF,
+    ITH,
+    IX,
+    IY,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    NIMP,
+    NIMP_LEG,
+    NQ,
+    P_MASSLESS,
+    P_TD_WORLD,
+    ROW_GEAR,
+    ROW_MASSLESS,
+    ROW_TOE_ACROSS,
+    ROW_TOE_ALONG,
+    SLIP_POS,
+    STICK,
+    STRUT,
 )
 from .rigid_body import kinetic_energy_at, mass_matrix
 from .transmission import motor_mode_from_rate

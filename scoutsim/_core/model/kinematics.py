@@ -14,12 +14,34 @@ from __future__ import annotations
 import math
 
 from ..._numba.jit import kernel
-from .hip_unit import geared
 from .flags import is_set
+from .hip_unit import geared
 from .layout import (
-    HIP_SIGN, IALB, IL_B, IPHB, IPHF, ITH, IX, IY, MF_ANCHOR_B, MI_CONTACT_B, MI_MOTOR_B, NQ,
-    P_C, P_CLAMP_LEGS, P_CLAMP_TORSO, P_COM_OFFSET, P_L, P_L0, P_MASSLESS, P_TD_B, P_TD_WORLD,
-    SLIDE, STICK, STRUT, STUCK,
+    HIP_SIGN,
+    IALB,
+    IL_B,
+    IPHB,
+    IPHF,
+    ITH,
+    IX,
+    IY,
+    MF_ANCHOR_B,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    NQ,
+    P_C,
+    P_CLAMP_LEGS,
+    P_CLAMP_TORSO,
+    P_COM_OFFSET,
+    P_L,
+    P_L0,
+    P_MASSLESS,
+    P_TD_B,
+    P_TD_WORLD,
+    SLIDE,
+    STICK,
+    STRUT,
+    STUCK,
 )
 
 

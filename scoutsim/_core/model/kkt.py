@@ -18,8 +18,7 @@ import numpy as np
 
 from ..._numba.jit import allocating, kernel
 from .flags import is_set
-from .layout import (IPHB, NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO,
-                     ROW_GEAR)
+from .layout import IPHB, NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO, ROW_GEAR
 
 MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS

@@ -31,16 +31,56 @@ enters the equations of motion with the power it claims.
 from __future__ import annotations
 
 from ..._numba.jit import kernel
+from .hip_unit import belt_spring, geared
 from .layout import (
-    A_CURRENT, A_FAX, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_TAU_APP, A_TAU_BELT, A_VBATT,
-    EN_BATTERY_LOSS, EN_BELT_DAMPER, EN_CONSTRAINT, EN_CONVERSION, EN_COPPER, EN_ELECTRICAL,
-    EN_GEAR_LOSS, EN_HIP_WORK, EN_JOINT_COULOMB, EN_JOINT_VISCOUS, EN_LEG_DAMPER,
-    EN_LEG_FRICTION, EN_TOE_SLIDE, IALB, IL_B, IPHB, MI_CONTACT_B, MI_MOTOR_B, MODEL_IDEAL,
-    MODEL_PASSIVE, NAUX_LEG, NEN_LEG, NQ, P_B_J, P_ETA, P_K, P_KB, P_KT, P_KW, P_L0, P_MODEL,
-    P_N, P_NP, P_RA, P_RB, STRUT, STUCK,
+    A_CURRENT,
+    A_FAX,
+    A_GT,
+    A_HOLD,
+    A_OMEGA_M,
+    A_SLIP_V,
+    A_TAU_APP,
+    A_TAU_BELT,
+    A_VBATT,
+    EN_BATTERY_LOSS,
+    EN_BELT_DAMPER,
+    EN_CONSTRAINT,
+    EN_CONVERSION,
+    EN_COPPER,
+    EN_ELECTRICAL,
+    EN_GEAR_LOSS,
+    EN_HIP_WORK,
+    EN_JOINT_COULOMB,
+    EN_JOINT_VISCOUS,
+    EN_LEG_DAMPER,
+    EN_LEG_FRICTION,
+    EN_TOE_SLIDE,
+    IALB,
+    IL_B,
+    IPHB,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    MODEL_IDEAL,
+    MODEL_PASSIVE,
+    NAUX_LEG,
+    NEN_LEG,
+    NQ,
+    P_B_J,
+    P_ETA,
+    P_K,
+    P_KB,
+    P_KT,
+    P_KW,
+    P_L0,
+    P_MODEL,
+    P_N,
+    P_NP,
+    P_RA,
+    P_RB,
+    STRUT,
+    STUCK,
 )
 from .leg import leg_damping
-from .hip_unit import belt_spring, geared
 from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_META, WK_RLEG
 
 

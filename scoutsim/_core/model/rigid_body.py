@@ -21,11 +21,26 @@ import math
 import numpy as np
 
 from ..._numba.jit import allocating, kernel
-from .layout import (
-    IL_B, IPHB, IPHF, ITH, IX, IY, NQ, P_D, P_G, P_IL, P_IT, P_K, P_L0, P_ML, P_MT, P_NP,
-)
 from .hip_unit import geared
 from .kinematics import hip_offset
+from .layout import (
+    IL_B,
+    IPHB,
+    IPHF,
+    ITH,
+    IX,
+    IY,
+    NQ,
+    P_D,
+    P_G,
+    P_IL,
+    P_IT,
+    P_K,
+    P_L0,
+    P_ML,
+    P_MT,
+    P_NP,
+)
 from .transmission import add_gear_inertia, belt_energy
 
 

@@ -23,8 +23,23 @@ from ..._numba.jit import kernel
 from .hip_unit import belt_spring, geared
 from .kkt import new_row
 from .layout import (
-    IALB, IPHB, MI_MOTOR_B, MODEL_PASSIVE, P_B_J, P_CB, P_J1, P_J2, P_KB, P_MODEL, P_N, P_NP,
-    P_TAU_S, ROW_GEAR, SLIP_NEG, SLIP_POS, STUCK,
+    IALB,
+    IPHB,
+    MI_MOTOR_B,
+    MODEL_PASSIVE,
+    P_B_J,
+    P_CB,
+    P_J1,
+    P_J2,
+    P_KB,
+    P_MODEL,
+    P_N,
+    P_NP,
+    P_TAU_S,
+    ROW_GEAR,
+    SLIP_NEG,
+    SLIP_POS,
+    STUCK,
 )
 
 

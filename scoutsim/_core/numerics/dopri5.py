@@ -12,8 +12,8 @@ import numpy as np
 
 from ..._numba.jit import allocating, kernel
 from ..model.evaluate import NSTIFF, evaluate_ws
-from ..model.workspace import new_eval_workspace
 from ..model.layout import NAUX, NS
+from ..model.workspace import new_eval_workspace
 
 C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
 A = np.array([

@@ -25,20 +25,46 @@ from numba.extending import overload
 
 from ..._numba.compile_steps import inline_only
 from ..._numba.jit import kernel
-from ..model.power_flows import power_flows
 from ..model.evaluate import evaluate_ws
-from ..model.kinematics import project_state
-from ..model.roots import illinois_update
 from ..model.flags import is_set
+from ..model.kinematics import project_state
 from ..model.layout import (
-    A_ENERGY, A_KKT_OK, EVC_CONE, EVC_GROUND, EV_FALL_HEIGHT, EV_FALL_PITCH, EV_MOTOR_B,
-    FLIGHT, MI_CONTACT_B, MI_MOTOR_B, NAUX, NEV, NMI, NS, P_MASSLESS, SLIDE, STICK,
-    ST_FELL, ST_NUMERICAL_FAILURE, ST_RUNNING, V_SINGULAR,
+    A_ENERGY,
+    A_KKT_OK,
+    EV_FALL_HEIGHT,
+    EV_FALL_PITCH,
+    EV_MOTOR_B,
+    EVC_CONE,
+    EVC_GROUND,
+    FLIGHT,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    NAUX,
+    NEV,
+    NMI,
+    NS,
+    P_MASSLESS,
+    SLIDE,
+    ST_FELL,
+    ST_NUMERICAL_FAILURE,
+    ST_RUNNING,
+    STICK,
+    V_SINGULAR,
 )
+from ..model.power_flows import power_flows
+from ..model.roots import illinois_update
 from . import ark
 from .dopri5 import dense, step
-from .events import (contact_event, event_leg, event_slot, event_values, is_contact_event,
-                     mode_violations, record_step, stamp_transition)
+from .events import (
+    contact_event,
+    event_leg,
+    event_slot,
+    event_values,
+    is_contact_event,
+    mode_violations,
+    record_step,
+    stamp_transition,
+)
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -222,7 +248,7 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     th = th0
     side = 0
     k = kmin
-    for it in range(60):
+    for _ in range(60):
         fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp,
                                       armed)
         nf += 1

@@ -11,27 +11,82 @@ import math
 from ..._numba.jit import allocating, kernel
 from ..model.contact import slide_is_jammed, toe_can_slip
 from ..model.evaluate import evaluate_command_change, evaluate_ws
+from ..model.flags import is_set
 from ..model.impact import impact
 from ..model.kinematics import hip_offset, project_state
-from ..model.transmission import joint_has_stiction
-from ..model.flags import is_set
 from ..model.layout import (
-    A_FAX, A_GN, A_GT, A_HOLD, A_OMEGA_M, A_SLIP_V, A_STRUT, A_TOE_X, BACK, EK_FALL,
-    EK_LIFTOFF, EK_MOTOR_SLIP, EK_MOTOR_STICK, EK_SLIDE_START, EK_STICK, EK_STRUT_END,
-    EK_STRUT_START, EK_TOUCHDOWN, EK_JAM, EVC_CONE, EVC_GROUND, EVC_STOP_OR_REST,
-    EV_FALL_HEIGHT, EV_MOTOR_B,
-    FLIGHT, FRONT, IL_B, IMP_ENERGY_LOST, IMP_NORMAL, IMP_TANGENT, IPHB, ITH, IY, MF_ANCHOR_B,
-    MI_CONTACT_B, MI_MOTOR_B, MI_SLIDE_DIR_B, NAUX_LEG, NIMP_LEG, NQ, P_L0,
-    P_LEG_FRIC_SIDE, P_MASSLESS, P_MU, P_TAU_S, SLIDE, SLIDE_CAUSE_CONE,
-    SLIDE_CAUSE_LEG_PUSHES, SLIDE_CAUSE_NO_PIN_IMPULSE, SLIDE_CAUSE_STUB, SLIP_NEG, SLIP_POS,
-    STICK, STRUT, STUCK,
+    A_FAX,
+    A_GN,
+    A_GT,
+    A_HOLD,
+    A_OMEGA_M,
+    A_SLIP_V,
+    A_STRUT,
+    A_TOE_X,
+    BACK,
+    EK_FALL,
+    EK_JAM,
+    EK_LIFTOFF,
+    EK_MOTOR_SLIP,
+    EK_MOTOR_STICK,
+    EK_SLIDE_START,
+    EK_STICK,
+    EK_STRUT_END,
+    EK_STRUT_START,
+    EK_TOUCHDOWN,
+    EV_FALL_HEIGHT,
+    EV_MOTOR_B,
+    EVC_CONE,
+    EVC_GROUND,
+    EVC_STOP_OR_REST,
+    FLIGHT,
+    FRONT,
+    IL_B,
+    IMP_ENERGY_LOST,
+    IMP_NORMAL,
+    IMP_TANGENT,
+    IPHB,
+    ITH,
+    IY,
+    MF_ANCHOR_B,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    MI_SLIDE_DIR_B,
+    NAUX_LEG,
+    NIMP_LEG,
+    NQ,
+    P_L0,
+    P_LEG_FRIC_SIDE,
+    P_MASSLESS,
+    P_MU,
+    P_TAU_S,
+    SLIDE,
+    SLIDE_CAUSE_CONE,
+    SLIDE_CAUSE_LEG_PUSHES,
+    SLIDE_CAUSE_NO_PIN_IMPULSE,
+    SLIDE_CAUSE_STUB,
+    SLIP_NEG,
+    SLIP_POS,
+    STICK,
+    STRUT,
+    STUCK,
 )
+from ..model.transmission import joint_has_stiction
 from .dopri5 import eval_workspace
-from .events import (MOTOR_SPEED_TOL, SLIDE_SPEED_TOL, body_weight, event_leg, event_slot,
-                     flight_toe_enters_ground, is_contact_event, jammed_slide_moving,
-                     log_event, slide_toe_pressed)
-from .work import EventLog
+from .events import (
+    MOTOR_SPEED_TOL,
+    SLIDE_SPEED_TOL,
+    body_weight,
+    event_leg,
+    event_slot,
+    flight_toe_enters_ground,
+    is_contact_event,
+    jammed_slide_moving,
+    log_event,
+    slide_toe_pressed,
+)
 from .stats import S_MAX_FRICTION, S_MAX_IMPULSE_RATIO, S_NEND_SLIDE, S_NSTRUT, S_NSTUB
+from .work import EventLog
 
 #: a pinned leg at its stop counts as extending beyond this leg-length rate [m/s]
 LEG_STOP_SPEED_TOL = 1e-6

@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim._core.model import evaluate as D
 from scoutsim._core.model import hip_unit
 from scoutsim._core.model import layout as L
 from scoutsim._core.model import workspace as W
 from scoutsim._core.model.packing import robot_array
+from scoutsim.simulation.integrator import IntegratorSettings
 
 PLAY = math.radians(2.0)
 BACKLASH_ROBOT = scoutsim.RobotParameters(belt_backlash=PLAY)

@@ -451,7 +451,7 @@ def test_stance_constrained_dynamics(robot_name, model, legs):
     cmd = np.zeros(2)
     ds = np.empty(L.NS)
     aux = np.empty(L.NAUX)
-    for trial in range(4):
+    for _ in range(4):
         s, mi, mf = _stance_state(robot, model, legs, rng)
         s0 = s.copy()
         kinematics.project_state(s, P, mi, mf)

@@ -13,8 +13,8 @@ import pytest
 import scoutsim
 from scoutsim import InitialState, RobotParameters
 from scoutsim._core.model import evaluate as D
-from scoutsim._core.model import workspace as W
 from scoutsim._core.model import layout as L
+from scoutsim._core.model import workspace as W
 from scoutsim._core.model.packing import robot_array
 
 from . import reference_evaluator as ref

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim._core.model import hip_unit, layout as L
+from scoutsim._core.model import hip_unit
+from scoutsim._core.model import layout as L
 from scoutsim._core.model.packing import robot_array
 
 

@@ -9,10 +9,10 @@ import math
 import numpy as np
 
 from scoutsim import simulate
-from scoutsim.control.protocol import Controller
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.contact import JAM_AXIAL_SHARE, slide_axial_share
 from scoutsim._core.model.packing import robot_array
+from scoutsim.control.protocol import Controller
 from scoutsim.parameters import RobotParameters
 from scoutsim.state import InitialState
 

@@ -89,7 +89,7 @@ def test_sliding_toe_friction_opposes_its_motion(runs):
     mu = scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT
     n = 0
     for r in runs.values():
-        for k, leg in enumerate(L.LEG_NAMES):
+        for k in range(len(L.LEG_NAMES)):
             slide = r.modes[:, L.RM_CONTACT_B + k] == L.SLIDE
             v = r.aux[:, k * L.NAUX_LEG + L.A_SLIP_V][slide]
             ft = r.aux[:, k * L.NAUX_LEG + L.A_GT][slide]

@@ -105,7 +105,7 @@ def test_belt_torque_is_spring_with_dead_zone_and_damper(runs):
     r = runs["II"]
     s = r.state
     h = 0.5 * ROBOT.belt_backlash
-    for k, leg in enumerate(L.LEG_NAMES):
+    for k in range(len(L.LEG_NAMES)):
         delta = s[:, 5 + k] - s[:, 3 + k]
         rate = s[:, L.NQ + 5 + k] - s[:, L.NQ + 3 + k]
         dz = np.where(delta > h, delta - h, np.where(delta < -h, delta + h, 0.0))

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.identification.rigs import Stall, stall_deflection
 from scoutsim._core.model import layout as L
+from scoutsim.identification.rigs import Stall, stall_deflection
 
 ROBOT = scoutsim.RobotParameters()
 N = ROBOT.planetary_ratio * ROBOT.sprocket_ratio

@@ -24,11 +24,11 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim._core.model import evaluate as ev
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.packing import robot_array
 from scoutsim.parameters import PER_LEG_FIELDS, ParameterError, load_robot
+from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.state import InitialState, standing_leg_compressions, standing_state
 
 #: every per-leg quantity different between the legs, the torso COM 3 cm ahead of midway
@@ -77,7 +77,7 @@ def test_per_leg_values_read_back_and_name_the_leg():
     assert ROBOT.leg(0).gear_ratio == pytest.approx(5.0 * 20.4, rel=1e-15)
     assert ROBOT.legs_differ and not scoutsim.RobotParameters().legs_differ
     with pytest.raises(ValueError, match="planetary_ratio differs"):
-        ROBOT.gear_ratio
+        _ = ROBOT.gear_ratio
     assert ROBOT.hip_offset("back") == pytest.approx(-0.276 - 0.03, abs=1e-15)
     assert ROBOT.hip_offset("front") == pytest.approx(0.276 - 0.03, abs=1e-15)
     with pytest.raises(ParameterError, match=r"leg_stiffness \(front leg\) = -1"):

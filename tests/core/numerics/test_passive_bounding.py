@@ -9,9 +9,9 @@ import pytest
 
 import scoutsim
 from scoutsim import InitialState, IntegratorSettings
+from scoutsim._core.model import layout as L
 from scoutsim.analysis.passive_orbits import passive_bounding_orbit
 from scoutsim.analysis.passive_reference import passive_robot
-from scoutsim._core.model import layout as L
 
 TIGHT = IntegratorSettings(rtol=1e-11, atol=1e-11)
 

@@ -75,7 +75,7 @@ def test_touchdown_states_toe_on_ground_configuration_kept_energies_logged(run_i
         leg = int(ev[j, L.EVR_LEG])
         sL = (2 * leg - 1) * P[L.P_L]
 
-        def toe_height(s):
+        def toe_height(s, leg=leg, sL=sL):
             th, phi, ll = s[L.ITH], s[L.IPHB + leg], s[L.IL_B + leg]
             return s[L.IY] + sL * math.sin(th) - ll * math.cos(th + phi)
 

@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.analysis.transition_audit import audit_transitions
 from scoutsim._core.model import layout as L
 from scoutsim._core.model.impact import impact
-from scoutsim._core.model.rigid_body import kinetic_energy
 from scoutsim._core.model.packing import robot_array
+from scoutsim._core.model.rigid_body import kinetic_energy
+from scoutsim.analysis.transition_audit import audit_transitions
 from scoutsim.parameters import ControllerParameters, RobotParameters
 from scoutsim.state import HybridState, InitialState
 
