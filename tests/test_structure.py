@@ -141,3 +141,14 @@ def test_no_two_modules_share_a_base_name():
         where.setdefault(p.stem, []).append(str(rel))
     shared = {k: v for k, v in where.items() if len(v) > 1}
     assert not shared, shared
+
+
+def test_tests_mirror_the_package():
+    """Every directory of tests/ is named after the package it tests (tests/_core/model for
+    scoutsim/_core/model, ...), so a module's tests are found where the module is."""
+    tests = ROOT.parent / "tests"
+    dirs = sorted(p.relative_to(tests) for p in tests.rglob("*") if p.is_dir()
+                  and "__pycache__" not in p.parts and not p.name.startswith("."))
+    assert dirs
+    stray = [str(d) for d in dirs if not (ROOT / d).is_dir()]
+    assert not stray, stray

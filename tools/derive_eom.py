@@ -2,7 +2,7 @@
 
 This script derives the Lagrangian dynamics from scratch, from the kinetic and potential
 energies written down directly from docs/specification.md sections 1, 2 and 5 -- it shares no code with
-``scoutsim._core.model.rigid_body`` and is used by ``tests/core/model/test_eom_independent.py`` to
+``scoutsim._core.model.rigid_body`` and is used by ``tests/_core/model/test_eom_independent.py`` to
 cross-check the compiled implementation.
 
 Model (docs/specification.md section 1, 2, 5)

@@ -41,7 +41,7 @@ TEST_FILES = ("tests/model", "tests/numerics", "tests/control", "tests/analysis/
 TIMEOUT_S = 3600.0
 #: a single test (its setup or its call) still running after this long [s] fails with
 #: ``TestTimeout``: a broken law can make a run (or the SciPy reference integration of
-#: tests/core/numerics/test_against_scipy.py) stiff enough to take hours; the unmutated
+#: tests/_core/numerics/test_against_scipy.py) stiff enough to take hours; the unmutated
 #: tests take at most about 30 s each once the core is compiled
 TEST_TIMEOUT_S = 180.0
 #: the pytest plugin that enforces TEST_TIMEOUT_S, written into each copy
@@ -96,14 +96,14 @@ _WARM_UP = ("import scoutsim\n"
             "for m in ('ideal', 'I', 'II', 'passive'):\n"
             "    scoutsim.simulate(duration=0.05, model=m, energy=True)\n")
 
-LAWS = "tests/core/model/test_laws.py::"
-MORE = "tests/core/model/test_laws_more.py::"
+LAWS = "tests/_core/model/test_laws.py::"
+MORE = "tests/_core/model/test_laws_more.py::"
 ENERGY = "tests/analysis/test_energy.py::"
-IMPACT = "tests/core/model/test_impact_laws.py::"
+IMPACT = "tests/_core/model/test_impact_laws.py::"
 GAINS = "tests/control/test_per_leg_gains.py::"
 BOUNDING = "tests/control/test_bounding.py::"
-EOM = "tests/core/model/test_eom_independent.py::"
-ACTUATOR = "tests/core/model/test_actuator.py::"
+EOM = "tests/_core/model/test_eom_independent.py::"
+ACTUATOR = "tests/_core/model/test_actuator.py::"
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ descending) and lift-off (``l = l0``) located as events. It is used
   touchdown occasionally undoes itself at rounding level and lets the toe through the
   ground (:func:`_glitched` detects it; docs/orbits.md);
 * as a cross-check of the compiled simulator: tests/analysis/test_orbits.py checks that a
-  ``simulate()`` run gives the same next apex, and tests/core/numerics/test_passive_bounding.py
+  ``simulate()`` run gives the same next apex, and tests/_core/numerics/test_passive_bounding.py
   runs the compiled simulator on the orbits found here.
 
 **Section**: the torso apex in double flight, ``dy = 0`` with ``y`` at a maximum; the

@@ -1,5 +1,5 @@
 """The allocation-free evaluation (model.evaluate.evaluate_ws) reproduces the reference
-implementation (tests/core/model/reference_evaluator.py, which states every force law itself), with
+implementation (tests/_core/model/reference_evaluator.py, which states every force law itself), with
 and without the effects beyond the paper's models, on the bench rigs, and with a battery
 internal resistance; a command update on the kept factors equals a fresh evaluation; the
 motor current is odd in command and speed; and the stiff-Jacobian factors capture the

@@ -1,7 +1,7 @@
 """The effects beyond the paper's models (docs/model.md "Effects beyond the paper's
 models"), each against a special case derived by hand from its definition there. Each is
 also in the work-energy balance with every option on (tests/analysis/test_energy.py) and
-in the reference-evaluator parity (tests/core/model/test_evaluate.py)."""
+in the reference-evaluator parity (tests/_core/model/test_evaluate.py)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The reference evaluator: a second, allocating implementation of the model's right-hand
 side (dense KKT solve, its own assembly of the forces and rows), the test oracle of the
-optimized :func:`scoutsim._core.model.evaluate.evaluate_ws` (tests/core/model/test_evaluate.py).
+optimized :func:`scoutsim._core.model.evaluate.evaluate_ws` (tests/_core/model/test_evaluate.py).
 Not part of the package: it exists only to be compared against.
 
 To be an oracle of the model's laws and not a copy of them, it writes every law itself, from
@@ -17,7 +17,7 @@ package's law kernels:
   here by root finding of the toe's force balance);
 * the belt spring's dead zone, the gravity of the torso and leg bodies, the potential
   energy, and the mass matrix and velocity terms (assembled from explicit body Jacobians;
-  tools/derive_eom.py and tests/core/model/test_eom_independent.py check the package's against
+  tools/derive_eom.py and tests/_core/model/test_eom_independent.py check the package's against
   a SymPy derivation as well);
 * the projection of the dependent coordinates onto the active constraints (the contact
   modes' geometry, the bench rig's clamps, the gear angles).
