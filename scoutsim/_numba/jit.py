@@ -28,10 +28,10 @@ own file, so a cached function that inlines or links a callee from another modul
 keep the old callee after that module is edited (a stale result, silently). With the
 digest, an edit of a module compiles afresh that module and the modules that import it,
 and loads the rest from the cache (an edit of ``loop.py`` recompiles the run loop alone,
-an edit of ``model/evaluate.py`` nearly everything); directories of other digests are
-removed. The directories are ``scoutsim/__pycache__/numba/<module>-<digest>``, or, where
-the package is not writable, under ``~/.cache/scoutsim/numba``. The function's cache
-locator (:class:`_CoreCacheLocator`) puts them there, whatever Numba's own cache directory
+an edit of ``model/evaluate.py`` nearly everything). The directories are
+``scoutsim/__pycache__/numba/<module>-<digest>``, or, where the package is not writable,
+under ``~/.cache/scoutsim/numba``. The function's cache locator (:class:`_CoreCacheLocator`,
+:func:`_install_cache_locator`) puts them there, whatever Numba's own cache directory
 setting is, which is left alone (it is the user's, for their own functions).
 
 A ``NUMBA_CACHE_DIR`` set by the user is where the cache goes, in
@@ -42,27 +42,39 @@ module, and the ``scoutsim-numba-<digest>`` of older versions) are ever removed 
 only those of other digests that nothing has written to for a day
 (:data:`STALE_USER_CACHE_S`); everything else in it is left alone.
 
+Nothing is removed when the package is imported. The directories of other digests (and
+the whole-core directories of older versions) are removed by :func:`clean_cache`, which
+runs once per process when the core is first compiled or loaded from the cache, and which
+``scoutsim cache --clean`` runs on request.
+
 Compile time (docs/model.md "Compile time"): four of Numba's compiler steps repeat work
-and are replaced here by equivalent ones (:func:`_speed_up_numba`): the IR inliner's
-copies and re-translations of the callee (numba#8989, numba#9204), the hash of the compiler
-flags on every overload lookup, and the full compilation of an always-inlined overload's
-implementation that is then thrown away (numba#6856, :func:`inline_only`). They change no
-compiled code (the results are bit for bit those without them); each checks that Numba's
-code is the one it replaces and otherwise leaves it alone; ``SCOUTSIM_NUMBA_AS_IS=1`` in the
-environment leaves all four as Numba has them (to compare).
+and are replaced by equivalent ones (:mod:`.compile_steps`) only while scoutsim compiles
+its own functions: each dispatcher :func:`kernel` and :func:`allocating` make compiles
+inside :func:`compile_steps.applied` (:func:`_compiled_in_context`), and the compiles of
+its callees nest in it; other Numba users of the process see Numba as it is. Calls from
+compiled code to a core function compile one specialization per argument kind, not per
+constant (:func:`_typed_by_kind`). Each of these checks that Numba's code is the one it
+expects, else leaves Numba's as it is; :func:`status` records what was applied and why
+not. ``SCOUTSIM_NUMBA_AS_IS=1`` in the environment leaves the four replacements and
+:func:`_typed_by_kind` out (to compare: the results are bit for bit the same).
 """
 
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
+import inspect
 import os
 import re
 import shutil
+import threading
 import time
 from pathlib import Path
 
 from numba import njit
+
+from . import compile_steps
 
 _PACKAGE = Path(__file__).resolve().parents[1]
 #: the sources of the compiled core (a change in any of them invalidates the cache of the
@@ -227,28 +239,39 @@ def _last_written(directory: Path) -> float:
     return newest
 
 
-def _remove_other_digests(root: Path, digests: dict[str, str], stale_after: float | None):
+def _remove(directory: Path, stale_after: float | None, now: float) -> bool:
+    """Remove ``directory`` (not a link to one) if, with ``stale_after`` [s], nothing has
+    written to it for that long; True if it is gone."""
+    try:
+        if directory.is_symlink() or not directory.is_dir():
+            return False
+        if stale_after is not None and now - _last_written(directory) < stale_after:
+            return False
+    except OSError:
+        return False
+    shutil.rmtree(directory, ignore_errors=True)
+    return not directory.exists()
+
+
+def _remove_other_digests(root: Path, digests: dict[str, str],
+                          stale_after: float | None) -> list[Path]:
     """Remove the module directories in ``root`` of a core module at another digest than
     ``digests``; with ``stale_after`` [s], only those nothing has written to for that
-    long. Anything else in ``root`` is left alone."""
+    long. Anything else in ``root`` is left alone. Returns the directories removed."""
     current = {_module_name(rel): d for rel, d in digests.items()}
     try:
         entries = list(root.iterdir())
     except OSError:
-        return
+        return []
     now = time.time()
+    removed = []
     for old in entries:
         m = _MODULE_DIR.fullmatch(old.name)
         if m is None or m["module"] not in current or m["digest"] == current[m["module"]]:
             continue
-        try:
-            if old.is_symlink() or not old.is_dir():
-                continue
-            if stale_after is not None and now - _last_written(old) < stale_after:
-                continue
-        except OSError:
-            continue
-        shutil.rmtree(old, ignore_errors=True)
+        if _remove(old, stale_after, now):
+            removed.append(old)
+    return removed
 
 
 def _writable(base: Path) -> bool:
@@ -274,43 +297,57 @@ def _cache_root() -> tuple[Path, float | None]:
     return _PACKAGE / "__pycache__" / "numba", None
 
 
-def _remove_old_layout(root: Path, stale_after: float | None):
+def _remove_old_layout(root: Path, stale_after: float | None) -> list[Path]:
     """Remove the whole-core cache directories of older versions (``numba-<digest>`` next
-    to ``root``, or ``scoutsim-numba-<digest>`` in the user's directory once stale)."""
+    to ``root``, or ``scoutsim-numba-<digest>`` in the user's directory once stale).
+    Returns the directories removed."""
     base = root.parent
     pattern = _OLD_USER_CACHE_NAME if stale_after is not None else \
         re.compile(r"numba-[0-9a-f]{16}")
     try:
         olds = [p for p in base.iterdir() if pattern.fullmatch(p.name)]
     except OSError:
-        return
+        return []
     now = time.time()
-    for old in olds:
-        try:
-            if old.is_symlink() or not old.is_dir():
-                continue
-            if stale_after is not None and now - _last_written(old) < stale_after:
-                continue
-        except OSError:
-            continue
-        shutil.rmtree(old, ignore_errors=True)
+    return [old for old in olds if _remove(old, stale_after, now)]
 
 
 _ROOT, _STALE_AFTER = _cache_root()
 _DIGESTS = module_digests(memo=_ROOT / "imports.json")
-_remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER)
-_remove_old_layout(_ROOT, _STALE_AFTER)
 #: cache directory of each core source file (resolved path) of this package
 _MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d)
                 for rel, d in _DIGESTS.items()}
 
 
-def _install_cache_locator():
+#: what the guarded hooks of this module found on the installed Numba (:func:`status`)
+_STATUS: dict[str, str] = {}
+APPLIED = compile_steps.APPLIED
+
+
+def _install_cache_locator() -> bool:
     """Put the cache of every function of a core module into that module's directory
-    (:data:`_MODULE_DIRS`), with the module's digest as Numba's source stamp."""
+    (:data:`_MODULE_DIRS`), with the module's digest as Numba's source stamp: a class put
+    first in Numba's list of cache locators (``CacheImpl._locator_classes``, private).
+
+    Harmless to other Numba users: the locator answers only for the core's own source
+    files (a resolved path in :data:`_MODULE_DIRS`) and returns None for every other file,
+    and Numba then asks its own locators as before; nothing else of Numba's caching is
+    changed. Guarded: if Numba has no such list (another release), it is left as it is,
+    :func:`status` says why, and the core is compiled without the on-disk cache (Numba's
+    own locators check only the timestamp of a function's own file, which would serve a
+    stale callee after an edit of another module). Returns True if it is installed."""
     from numba.core import caching
 
-    class _CoreCacheLocator(caching._CacheLocator):
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    base = getattr(caching, "_CacheLocator", None)
+    classes = getattr(impl, "_locator_classes", None)
+    if not isinstance(base, type) or not isinstance(classes, list):
+        _STATUS["cache_locator"] = ("not applied: numba.core.caching has no CacheImpl."
+                                    "_locator_classes list or _CacheLocator class; the core "
+                                    "is not cached on disk")
+        return False
+
+    class _CoreCacheLocator(base):
         def __init__(self, py_func, path: Path, digest: str):
             self._lineno = py_func.__code__.co_firstlineno
             self._path = str(path)
@@ -337,28 +374,53 @@ def _install_cache_locator():
                 return None
             return self
 
-    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")
-    classes = impl._locator_classes
     if not any(c.__name__ == "_CoreCacheLocator" for c in classes):
         classes.insert(0, _CoreCacheLocator)
+    _STATUS["cache_locator"] = APPLIED
+    return True
 
 
-_install_cache_locator()
-
-
-# --- compile time: Numba's compiler steps that repeat work, replaced (compile_steps.py) ---
-from .compile_steps import speed_up_numba  # noqa: E402
-
-if not os.environ.get("SCOUTSIM_NUMBA_AS_IS"):
-    speed_up_numba()
-
-_COMMON = dict(cache=True, error_model="numpy")
+_COMMON = dict(cache=_install_cache_locator(), error_model="numpy")
 
 
 def cache_directory() -> Path:
     """Root of the on-disk cache of the compiled core (one directory per module and digest
     in it)."""
     return _ROOT
+
+
+def clean_cache() -> list[Path]:
+    """Remove the cache directories of the core's modules at other digests than this
+    package's (an older or newer version, an edited source) and the whole-core directories
+    of older versions; in a user's ``NUMBA_CACHE_DIR`` only those of ours that nothing has
+    written to for a day (:data:`STALE_USER_CACHE_S`). Returns the directories removed."""
+    return (_remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER)
+            + _remove_old_layout(_ROOT, _STALE_AFTER))
+
+
+def cache_size(root: Path | None = None) -> int:
+    """Bytes in the files under ``root`` (default: :func:`cache_directory`)."""
+    total = 0
+    for base, _, files in os.walk(root or _ROOT):
+        for name in files:
+            try:
+                total += os.lstat(os.path.join(base, name)).st_size
+            except OSError:
+                pass
+    return total
+
+
+_cleaned = False
+_clean_lock = threading.Lock()
+
+
+def _clean_once():
+    """:func:`clean_cache`, the first time the core compiles in this process."""
+    global _cleaned
+    with _clean_lock:
+        if not _cleaned:
+            _cleaned = True
+            clean_cache()
 
 
 def core_is_compiled() -> bool:
@@ -435,6 +497,26 @@ class compile_progress:
 
 #: parameters whose integer constants compile their own specializations (branch pruning)
 SPECIALIZING_PARAMETERS = ("method",)
+#: whether calls to the core's functions compile one specialization per argument kind
+#: (:func:`_typed_by_kind`); off with :data:`compile_steps.AS_IS`
+TYPED_BY_KIND = not compile_steps.AS_IS
+
+
+def _has_method(dispatcher, name: str, parameters: tuple[str, ...]) -> str | None:
+    """None if the class of ``dispatcher`` has the method ``name`` taking ``parameters``
+    (and the instance does not override it), else why not."""
+    method = getattr(type(dispatcher), name, None)
+    if method is None:
+        return f"{type(dispatcher).__name__} has no {name}"
+    if name in vars(dispatcher):
+        return f"{name} is already replaced on the dispatcher"
+    try:
+        found = tuple(inspect.signature(method).parameters)
+    except (TypeError, ValueError) as exc:
+        return f"{type(dispatcher).__name__}.{name} has no readable signature ({exc})"
+    if found != parameters:
+        return f"{type(dispatcher).__name__}.{name} takes {found}, not {parameters}"
+    return None
 
 
 def _typed_by_kind(dispatcher):
@@ -446,15 +528,29 @@ def _typed_by_kind(dispatcher):
     literal it meets. The right-hand side was compiled five times that way (20-40 s each,
     two thirds of the first run's compilation). Here the argument types are widened to
     their non-literal kind before the callee is compiled or looked up; the caller then
-    converts its constants to that kind.
+    converts its constants to that kind. It changes which specializations are compiled,
+    not what they compute.
 
     The one exception is a parameter named ``method`` (:data:`SPECIALIZING_PARAMETERS`):
     the integration method stays a literal, so each method compiles its own specialization
     of the integrator with the other methods' branches pruned, and a run compiles only the
-    method it uses (:func:`scoutsim._core.loop.run_entry`)."""
+    method it uses (:func:`scoutsim._core.loop.run_entry`).
+
+    The dispatcher's ``get_call_template`` (Numba's, called by the typing of a call) is
+    replaced on this dispatcher only, after a check that it is the method this expects
+    (``get_call_template(self, args, kws)``); else the dispatcher is left as it is and
+    :func:`status` says why. Off with :data:`TYPED_BY_KIND` false."""
+    if not TYPED_BY_KIND:
+        _STATUS["typed_by_kind"] = f"off: {compile_steps.AS_IS_VARIABLE} is set"
+        return dispatcher
+    why_not = _has_method(dispatcher, "get_call_template", ("self", "args", "kws"))
+    if why_not is not None:
+        _STATUS["typed_by_kind"] = f"not applied: {why_not}"
+        return dispatcher
+    _STATUS.setdefault("typed_by_kind", APPLIED)
     from numba.core import types
 
-    resolve = dispatcher.get_call_template
+    cls = type(dispatcher)
     code = dispatcher.py_func.__code__
     names = code.co_varnames[:code.co_argcount]
     keep = {i for i, n in enumerate(names) if n in SPECIALIZING_PARAMETERS}
@@ -463,22 +559,63 @@ def _typed_by_kind(dispatcher):
         return a if literal_ok and isinstance(a, types.IntegerLiteral) else types.unliteral(a)
 
     def get_call_template(args, kws):
-        return resolve(tuple(widen(a, i in keep) for i, a in enumerate(args)),
-                       {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
+        # (the class's method, looked up at the call: Numba's, or compile_steps's
+        # replacement while the core compiles)
+        return cls.get_call_template(
+            dispatcher, tuple(widen(a, i in keep) for i, a in enumerate(args)),
+            {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
 
     dispatcher.get_call_template = get_call_template
     return dispatcher
 
 
+def _compiled_in_context(dispatcher):
+    """Make every compile of ``dispatcher`` (a first call, a call from compiled code that
+    types it, ``dispatcher.compile``) run inside :func:`compile_steps.applied`, so
+    Numba's replaced compiler steps are in place for it and its callees and for nothing
+    else; the first one in a process also cleans the cache (:func:`clean_cache`). Numba's
+    ``compile(self, sig)`` is wrapped on this dispatcher only, after a check that it is
+    the method this expects; else the dispatcher is left as it is (compiled with Numba's
+    steps) and :func:`status` says why."""
+    why_not = _has_method(dispatcher, "compile", ("self", "sig"))
+    if why_not is not None:
+        _STATUS["compile_context"] = f"not applied: {why_not}"
+        return dispatcher
+    _STATUS.setdefault("compile_context", APPLIED)
+    compile_numba = dispatcher.compile
+
+    @functools.wraps(compile_numba)
+    def compile(sig):
+        with compile_steps.applied():
+            _clean_once()
+            return compile_numba(sig)
+
+    dispatcher.compile = compile
+    return dispatcher
+
+
+def status() -> dict[str, str]:
+    """What each of the guarded uses of Numba's internals found on the installed Numba:
+    ``"applied"``, or ``"off: ..."`` / ``"not applied: ..."`` and why (then Numba's own
+    code is used). The four compiler steps (:func:`compile_steps.status`), the compile
+    context of the core's dispatchers (``compile_context``), the per-kind typing of calls
+    (``typed_by_kind``) and the cache locator (``cache_locator``)."""
+    return {**compile_steps.status(), **_STATUS}
+
+
+def _own(dispatcher, inline: str):
+    """A dispatcher of the core: compiled inside the compile context, and typed by kind
+    unless it is inlined at the IR level (then there is no callee to specialize)."""
+    if inline == "never":
+        _typed_by_kind(dispatcher)
+    return _compiled_in_context(dispatcher)
+
+
 def _compile(func, nrt: bool, inline: str):
     deco = njit(**_COMMON, _nrt=nrt, inline=inline)
-    if inline != "never":   # inlined at the IR level: there is no callee to specialize
-        return deco if func is None else deco(func)
     if func is None:
-        return lambda f: _typed_by_kind(deco(f))
-    return _typed_by_kind(deco(func))
-
-
+        return lambda f: _own(deco(f), inline)
+    return _own(deco(func), inline)
 def kernel(func=None, *, inline: str = "never"):
     """Compile ``func`` as a non-allocating kernel (no reference counting);
     ``inline="always"`` inlines it into its callers at the Numba IR level."""
