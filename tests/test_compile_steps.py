@@ -1,8 +1,8 @@
 """The compile-time replacements of Numba's compiler steps (scoutsim._numba.compile_steps): on
 the Numba the package pins, each is applied (a Numba release that moved the replaced code
 would silently cost compile time: this says so); they are in place only while scoutsim
-compiles its own functions; and the core compiled without any of them (and without the
-per-kind typing of calls) runs bit for bit as with them (they change no compiled code)."""
+compiles its own functions; and the core compiled without any of them runs bit for bit as
+with them (they change no compiled code)."""
 
 import importlib.metadata
 import os
@@ -53,6 +53,8 @@ def test_each_replacement_is_applied_on_the_pinned_numba():
     found = jit.status()
     assert set(compile_steps.STEPS) <= set(found)
     assert {"compile_context", "typed_by_kind", "cache_locator"} <= set(found)
+    if not jit.TYPED_BY_KIND:     # switched off in this process's environment
+        assert found.pop("typed_by_kind").startswith("off:")
     not_applied = {k: v for k, v in found.items() if v != compile_steps.APPLIED}
     assert not not_applied, f"on numba {numba.__version__}: {not_applied}"
 
@@ -128,9 +130,9 @@ _RUN = textwrap.dedent("""
     import numpy as np
     import scoutsim
     from scoutsim._numba import jit
-    # the replacements and the per-kind typing are off in this process
-    assert all(v.startswith("off") for k, v in jit.status().items()
-               if k not in ("cache_locator", "compile_context")), jit.status()
+    from scoutsim._numba import compile_steps
+    # the replacements are off in this process
+    assert all(v.startswith("off") for v in compile_steps.status().values()), jit.status()
     out = {}
     for model in ("II", "I"):
         r = scoutsim.simulate(duration=0.3, model=model)
@@ -141,9 +143,8 @@ _RUN = textwrap.dedent("""
 
 def test_the_core_compiled_without_the_replacements_runs_bit_for_bit_the_same(tmp_path):
     """A process with SCOUTSIM_NUMBA_AS_IS=1 compiles the core afresh (its own, empty
-    NUMBA_CACHE_DIR) with Numba's steps as they are and one specialization per constant
-    argument (no per-kind typing); its Model II and Model I runs equal this process's in
-    every recorded column, bit for bit."""
+    NUMBA_CACHE_DIR) with Numba's steps as they are; its Model II and Model I runs equal
+    this process's in every recorded column, bit for bit."""
     env = dict(os.environ, SCOUTSIM_NUMBA_AS_IS="1", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     out = tmp_path / "as_is.npz"
     p = subprocess.run([sys.executable, "-c", _RUN, str(out)], env=env, capture_output=True,

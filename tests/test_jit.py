@@ -67,6 +67,8 @@ def test_kernel_and_allocating_set_the_options():
     assert k.py_func is f and a.py_func is f
 
 
+@pytest.mark.skipif(not jit.TYPED_BY_KIND,
+                    reason="SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS turns the per-kind typing off")
 def test_a_callee_is_compiled_once_whatever_constants_its_callers_pass():
     """Constants passed from compiled code (True / False, leg index 0 / 1) do not give the
     callee one specialization each: the right-hand side used to be compiled five times."""
@@ -232,3 +234,36 @@ def test_compile_progress_says_what_was_compiled():
     with jit.compile_progress(quiet):
         njit(lambda x: x + 1.0)(1.0)      # not the core's
     assert quiet.getvalue() == ""
+
+
+_SPECIALIZED = """
+import json
+from numba import njit
+from scoutsim._numba import jit
+
+def callee(x, flag, leg):
+    return x + (1.0 if flag else 0.0) + leg
+
+c = jit._typed_by_kind(njit(callee))
+k = njit(lambda x: c(x, True, 0) + c(x, False, 1))
+print(json.dumps({"value": k(1.0), "signatures": len(c.signatures),
+                  "status": jit.status()["typed_by_kind"]}))
+"""
+
+
+def test_the_per_kind_typing_has_a_switch(tmp_path):
+    """SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS=1 leaves calls to the core's functions as Numba
+    types them (one specialization per constant), and the status says it is off; the
+    values are the same."""
+    import json
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS="1")
+    p = subprocess.run([sys.executable, "-c", _SPECIALIZED], env=env, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["value"] == (1.0 + 1.0 + 0) + (1.0 + 0.0 + 1)
+    assert out["signatures"] == 2
+    assert out["status"] == "off: SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS is set"

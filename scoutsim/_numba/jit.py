@@ -55,8 +55,11 @@ its callees nest in it; other Numba users of the process see Numba as it is. Cal
 compiled code to a core function compile one specialization per argument kind, not per
 constant (:func:`_typed_by_kind`). Each of these checks that Numba's code is the one it
 expects, else leaves Numba's as it is; :func:`status` records what was applied and why
-not. ``SCOUTSIM_NUMBA_AS_IS=1`` in the environment leaves the four replacements and
-:func:`_typed_by_kind` out (to compare: the results are bit for bit the same).
+not. To compare (the results are bit for bit the same either way), two switches in the
+environment: ``SCOUTSIM_NUMBA_AS_IS=1`` leaves the four replacements out (Numba's steps as
+they are), ``SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS=1`` leaves :func:`_typed_by_kind` out (one
+specialization per constant argument, as Numba does by itself: about 45 % more CPU time for
+the first compile, which is why it has its own switch and is not part of the first).
 """
 
 from __future__ import annotations
@@ -497,9 +500,15 @@ class compile_progress:
 
 #: parameters whose integer constants compile their own specializations (branch pruning)
 SPECIALIZING_PARAMETERS = ("method",)
+#: the environment variable that turns :func:`_typed_by_kind` off: calls from compiled
+#: code to the core's functions then compile one specialization per constant, as Numba does
+#: by itself (the same results, bit for bit; about 45 % more CPU time for the first
+#: compile). Not part of ``SCOUTSIM_NUMBA_AS_IS``: the core compiled both ways would take
+#: its test past its time budget.
+SPECIALIZE_CONSTANTS_VARIABLE = "SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS"
 #: whether calls to the core's functions compile one specialization per argument kind
-#: (:func:`_typed_by_kind`); off with :data:`compile_steps.AS_IS`
-TYPED_BY_KIND = not compile_steps.AS_IS
+#: (:func:`_typed_by_kind`); off with :data:`SPECIALIZE_CONSTANTS_VARIABLE` set
+TYPED_BY_KIND = not os.environ.get(SPECIALIZE_CONSTANTS_VARIABLE)
 
 
 def _has_method(dispatcher, name: str, parameters: tuple[str, ...]) -> str | None:
@@ -541,7 +550,7 @@ def _typed_by_kind(dispatcher):
     (``get_call_template(self, args, kws)``); else the dispatcher is left as it is and
     :func:`status` says why. Off with :data:`TYPED_BY_KIND` false."""
     if not TYPED_BY_KIND:
-        _STATUS["typed_by_kind"] = f"off: {compile_steps.AS_IS_VARIABLE} is set"
+        _STATUS["typed_by_kind"] = f"off: {SPECIALIZE_CONSTANTS_VARIABLE} is set"
         return dispatcher
     why_not = _has_method(dispatcher, "get_call_template", ("self", "args", "kws"))
     if why_not is not None:
