@@ -1,5 +1,8 @@
-"""The compiled core's declarations (scoutsim/_numba/jit.py): every compiled function says whether
-it runs with reference counting, and the non-allocating kernels really run without it."""
+"""The compiled core's declarations (scoutsim/_numba/jit.py) and its on-disk cache
+(scoutsim/_numba/disk_cache.py): every compiled function says whether it runs with
+reference counting, and the non-allocating kernels really run without it; each module is
+cached under a digest of what it depends on, and only stale directories of ours are
+removed."""
 
 import numpy as np
 import pytest
@@ -9,7 +12,7 @@ from numba.core.errors import TypingError
 from numba.core.registry import CPUDispatcher
 
 from scoutsim._core import loop
-from scoutsim._numba import jit
+from scoutsim._numba import disk_cache, jit
 from scoutsim.control import bounding
 from scoutsim._core.model import (
     actuator, contact, evaluate, impact, kinematics, kkt, leg, rigid_body, transmission, workspace,
@@ -93,18 +96,18 @@ def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
     outside the core change nothing."""
     import pathlib
     import shutil
-    pkg = jit._PACKAGE
+    pkg = disk_cache._PACKAGE
     copy = tmp_path / "scoutsim"
     shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    d0 = jit.module_digests(copy)
-    assert d0 == jit.module_digests(pkg)
+    d0 = disk_cache.module_digests(copy)
+    assert d0 == disk_cache.module_digests(pkg)
     assert set(d0) >= {"_core/loop.py", "_numba/jit.py", "_core/model/evaluate.py",
                        "_core/numerics/hybrid.py"}
 
     def edit(rel):
         with open(copy / rel, "a") as f:
             f.write("\n# an edit\n")
-        return jit.module_digests(copy)
+        return disk_cache.module_digests(copy)
 
     d1 = edit("analysis/gait.py")     # not part of the compiled core
     assert d1 == d0
@@ -122,13 +125,14 @@ def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
         "_core/numerics/ark.py", "control/bounding.py"))
     assert d4["_core/model/layout.py"] == d3["_core/model/layout.py"]   # constants only
     # a module's directory is named by the module and its digest, under the cache's root
-    here = jit.module_digests()
-    for rel, path in jit._MODULE_DIRS.items():
+    here = disk_cache.module_digests()
+    for rel, path in disk_cache._MODULE_DIRS.items():
         rel = pathlib.Path(rel).relative_to(pkg).as_posix()
-        assert path == jit.module_cache_dir(jit.cache_directory(), rel, here[rel])
-    assert jit._MODULE_DIRS[str(pkg / "_core" / "loop.py")].name == \
+        assert path == disk_cache.module_cache_dir(disk_cache.cache_directory(), rel,
+                                                   here[rel])
+    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "loop.py")].name == \
         f"_core.loop-{here['_core/loop.py']}"
-    assert jit._MODULE_DIRS[str(pkg / "_core" / "model" / "evaluate.py")].name == \
+    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "model" / "evaluate.py")].name == \
         f"_core.model.evaluate-{here['_core/model/evaluate.py']}"
 
 
@@ -137,9 +141,10 @@ def test_a_function_is_cached_in_its_modules_directory():
     installs), whatever Numba's own cache directory setting."""
     from numba.core.caching import FunctionCache
     cache = FunctionCache(evaluate.evaluate_ws.py_func)
-    assert cache.cache_path == str(jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))])
+    directory = disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))]
+    assert cache.cache_path == str(directory)
     assert cache._impl.locator.get_source_stamp() == \
-        jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
+        disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
 
 
 def pathlib_path(f):
@@ -151,12 +156,13 @@ def pathlib_path(f):
 #: compilation), report where Numba will cache, the digest of the core's sources and which
 #: of the paths given exist after the import; then clean the cache and report what it removed
 _REPORT_CACHE_DIR = """
-import json, os, sys, numba, scoutsim._numba.jit as jit
-report = {"numba_cache_dir": numba.config.CACHE_DIR, "root": str(jit.cache_directory()),
-          "loop": str(jit._MODULE_DIRS[str(jit._PACKAGE / "_core" / "loop.py")]),
-          "digests": jit.module_digests(),
+import json, os, sys, numba, scoutsim._numba.jit
+from scoutsim._numba import disk_cache
+report = {"numba_cache_dir": numba.config.CACHE_DIR, "root": str(disk_cache.cache_directory()),
+          "loop": str(disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/loop.py")]),
+          "digests": disk_cache.module_digests(),
           "after_import": [p for p in sys.argv[1:] if os.path.exists(p)]}
-report["removed"] = [str(p) for p in jit.clean_cache()]
+report["removed"] = [str(p) for p in disk_cache.clean_cache()]
 print(json.dumps(report))
 """
 
@@ -165,8 +171,8 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     """With NUMBA_CACHE_DIR set, the compiled core is cached in a directory of it
     (scoutsim-numba), one subdirectory per module named by its digest (an edit of an
     inlined callee in another file must not be served from a stale caller). Importing the
-    package removes nothing; cleaning the cache (jit.clean_cache, run when the core first
-    compiles in a process, and by `scoutsim cache --clean`) removes only this package's
+    package removes nothing; cleaning the cache (disk_cache.clean_cache, run when the core
+    first compiles in a process, and by `scoutsim cache --clean`) removes only this package's
     directories of other digests (and the whole-core directories of older versions) that
     nothing wrote to for a day, and says which: a recent one of ours and everything not
     ours stay. Numba's own setting is left as the user set it."""
@@ -176,10 +182,10 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     import sys
     import time
     user = tmp_path / "user-cache"
-    root = jit.user_cache_dir(user)
-    assert root == user / jit.USER_CACHE_NAME
-    old_whole_stale = user / f"{jit.USER_CACHE_PREFIX}{'0' * 16}"
-    old_whole_recent = user / f"{jit.USER_CACHE_PREFIX}{'1' * 16}"
+    root = disk_cache.user_cache_dir(user)
+    assert root == user / disk_cache.USER_CACHE_NAME
+    old_whole_stale = user / f"{disk_cache.USER_CACHE_PREFIX}{'0' * 16}"
+    old_whole_recent = user / f"{disk_cache.USER_CACHE_PREFIX}{'1' * 16}"
     ours_stale = root / f"_core.loop-{'0' * 16}"
     ours_recent = root / f"_core.model.evaluate-{'1' * 16}"
     not_ours = [user / "numba-0000000000000000", user / "scoutsim-numba-notadigest",
@@ -190,22 +196,22 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
         (d / "sub").mkdir(parents=True)
         (d / "sub" / "f.nbi").write_bytes(b"x")
     (user / "a-file.txt").write_text("the user's\n")
-    old = time.time() - 2 * jit.STALE_USER_CACHE_S
+    old = time.time() - 2 * disk_cache.STALE_USER_CACHE_S
     for d in (old_whole_stale, ours_stale, *not_ours):
         for path in (d / "sub" / "f.nbi", d / "sub", d):
             os.utime(path, (old, old))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(user),
-               PYTHONPATH=os.pathsep.join([str(jit._PACKAGE.parent),
+               PYTHONPATH=os.pathsep.join([str(disk_cache._PACKAGE.parent),
                                            os.environ.get("PYTHONPATH", "")]))
     out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR, *map(str, every)],
                          env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300,
                          check=True)
     report = json.loads(out.stdout.strip().splitlines()[-1])
-    assert report["digests"] == jit.module_digests()
+    assert report["digests"] == disk_cache.module_digests()
     assert pathlib_path(report["numba_cache_dir"]) == user.resolve()
     assert pathlib_path(report["root"]) == root.resolve()
     loop_dir = pathlib_path(report["loop"])
-    assert loop_dir == jit.module_cache_dir(root, "_core/loop.py",
+    assert loop_dir == disk_cache.module_cache_dir(root, "_core/loop.py",
                                             report["digests"]["_core/loop.py"]).resolve()
     assert loop_dir.parent == root.resolve()
     assert report["after_import"] == [str(d) for d in every]     # nothing removed at import

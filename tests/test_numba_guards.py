@@ -10,7 +10,7 @@ from numba import njit
 
 import scoutsim
 from scoutsim._core import loop
-from scoutsim._numba import compile_steps, jit
+from scoutsim._numba import compile_steps, disk_cache, jit
 
 
 def _other_numba_dispatcher(py_func):
@@ -51,25 +51,25 @@ def test_a_dispatcher_of_another_numba_is_left_as_it_is(monkeypatch):
 
 def test_the_cache_locator_is_left_out_where_numba_has_no_list_of_them(monkeypatch):
     """Without Numba's list of cache locators (a tuple here, as another release might have)
-    the locator is not installed, the core is then not cached on disk (its staleness could
-    not be checked), and the status says why; on the pinned Numba it is installed once and
+    the locator is not installed and the reason is returned (jit then compiles the core
+    without the on-disk cache, its staleness could not be checked, and its status says
+    why); on the pinned Numba it is installed once and
     answers only for the core's own files."""
     from numba.core import caching
     classes = caching.CacheImpl._locator_classes
     ours = [c for c in classes if c.__name__ == "_CoreCacheLocator"]
     assert len(ours) == 1 and classes[0] is ours[0]
-    monkeypatch.setattr(jit, "_STATUS", {})
     monkeypatch.setattr(caching.CacheImpl, "_locator_classes", tuple(classes))
-    assert jit._install_cache_locator() is False
-    assert jit._STATUS["cache_locator"].startswith("not applied:")
+    assert "_locator_classes" in disk_cache.install_cache_locator()
+    assert jit.status()["cache_locator"] == jit.APPLIED     # (installed at import)
     assert caching.CacheImpl._locator_classes == tuple(classes)
     monkeypatch.undo()
     # it answers for a core function's file, with the module's directory and digest
     from scoutsim._core.model import kinematics
     f = kinematics.project_state.py_func
     loc = ours[0].from_function(f, kinematics.__file__)
-    assert loc.get_cache_path() == str(jit._MODULE_DIRS[str(jit._PACKAGE / "_core" / "model"
-                                                           / "kinematics.py")])
+    directory = disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/model/kinematics.py")]
+    assert loc.get_cache_path() == str(directory)
     # and for no other file: Numba's own locators are asked, as without scoutsim
 
     def foreign(x):

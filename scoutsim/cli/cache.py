@@ -1,7 +1,7 @@
 """``scoutsim cache``: where the compiled core is cached on disk, how large the cache is and
 whether the core is compiled; ``--clean`` removes the directories of other versions of the
 core (in a ``NUMBA_CACHE_DIR`` of the user's, only stale ones of ours:
-:func:`scoutsim._numba.jit.clean_cache`).
+:func:`scoutsim._numba.disk_cache.clean_cache`).
 
     scoutsim cache [--clean]
 """
@@ -34,7 +34,7 @@ def _size_text(n_bytes: int) -> str:
 
 
 def execute(args) -> int:
-    from .._numba.jit import cache_directory, cache_size, clean_cache, core_is_compiled
+    from .._numba.disk_cache import cache_directory, cache_size, clean_cache, core_is_compiled
     if args.clean:
         removed = clean_cache()
         for path in removed:
