@@ -171,9 +171,11 @@ def test_the_context_puts_back_numbas_own_and_never_replaces_anothers(monkeypatc
     assert Other().m() == "theirs"
     assert compile_steps._status["Other.m"].startswith("not applied:")
     Owner.own = own
+    Other.m = other_m                     # the other code's replacement taken back
     with compile_steps.applied():
-        assert Owner().own() == "ours"
-    assert Owner.__dict__["own"] is own
+        assert Owner().own() == Other().m() == "ours"
+    assert Owner.__dict__["own"] is own and Other.__dict__["m"] is other_m
+    assert compile_steps._status["Other.m"] == compile_steps.APPLIED
 
 
 def test_the_run_loop_runs_the_same_without_numbas_fingerprint(monkeypatch):

@@ -264,6 +264,7 @@ def _install():
             continue
         setattr(owner, attr, new)
         _installed.append((owner, attr, original, new))
+        _status[name] = APPLIED
 
 
 def _restore():
