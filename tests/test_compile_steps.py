@@ -1,7 +1,8 @@
-"""The compile-time replacements of Numba's compiler steps (scoutsim._numba.compile_steps): on the
-Numba the package pins, each is applied (a Numba release that moved the replaced code
-would silently cost compile time: this says so), and the core compiled without any of them
-runs bit for bit as with them (they change no compiled code)."""
+"""The compile-time replacements of Numba's compiler steps (scoutsim._numba.compile_steps): on
+the Numba the package pins, each is applied (a Numba release that moved the replaced code
+would silently cost compile time: this says so); they are in place only while scoutsim
+compiles its own functions; and the core compiled without any of them runs bit for bit as
+with them (they change no compiled code)."""
 
 import importlib.metadata
 import os
@@ -11,11 +12,24 @@ import textwrap
 
 import numpy as np
 import pytest
+from numba import njit
+from numba.core import event
 
 import scoutsim
-import scoutsim._numba.jit  # noqa: F401 - applies the replacements (unless SCOUTSIM_NUMBA_AS_IS)
+from scoutsim._numba import compile_steps, jit
 
-AS_IS = bool(os.environ.get("SCOUTSIM_NUMBA_AS_IS"))
+AS_IS = compile_steps.AS_IS
+
+
+def _numba_steps():
+    """The Numba attributes the replacements replace, as they are now."""
+    from numba.core import dispatcher, inline_closurecall, targetconfig
+    return {
+        "TargetConfig.__hash__": targetconfig.TargetConfig.__hash__,
+        "InlineWorker.inline_ir": inline_closurecall.InlineWorker.inline_ir,
+        "InlineWorker.inline_function": inline_closurecall.InlineWorker.inline_function,
+        "Dispatcher.get_call_template": dispatcher.Dispatcher.get_call_template,
+    }
 
 
 def test_the_installed_numba_is_in_the_pinned_range():
@@ -32,26 +46,93 @@ def test_the_installed_numba_is_in_the_pinned_range():
 
 @pytest.mark.skipif(AS_IS, reason="SCOUTSIM_NUMBA_AS_IS leaves Numba's steps as they are")
 def test_each_replacement_is_applied_on_the_pinned_numba():
-    """Each replacement found the code it replaces and was applied (a replaced step is
-    marked ``_scoutsim``); one that found other code would leave Numba's step alone."""
-    from numba.core import dispatcher, inline_closurecall, targetconfig
-    steps = {
-        "TargetConfig.__hash__": targetconfig.TargetConfig.__hash__,
-        "InlineWorker.inline_ir": inline_closurecall.InlineWorker.inline_ir,
-        "InlineWorker.inline_function": inline_closurecall.InlineWorker.inline_function,
-        "Dispatcher.get_call_template": dispatcher.Dispatcher.get_call_template,
-    }
-    missing = [name for name, f in steps.items() if not getattr(f, "_scoutsim", False)]
-    assert not missing, f"not applied on numba {__import__('numba').__version__}: {missing}"
+    """Each replacement's check found the code it replaces (compile_steps.status), and so did
+    the other guarded uses of Numba's internals (jit.status); one that found other code
+    would leave Numba's alone, and say why here."""
+    import numba
+    found = jit.status()
+    assert set(compile_steps.STEPS) <= set(found)
+    assert {"compile_context", "typed_by_kind", "cache_locator"} <= set(found)
+    if not jit.TYPED_BY_KIND:     # switched off in this process's environment
+        assert found.pop("typed_by_kind").startswith("off:")
+    not_applied = {k: v for k, v in found.items() if v != compile_steps.APPLIED}
+    assert not not_applied, f"on numba {numba.__version__}: {not_applied}"
+
+
+@pytest.mark.skipif(AS_IS, reason="SCOUTSIM_NUMBA_AS_IS leaves Numba's steps as they are")
+def test_the_replacements_are_in_place_only_inside_the_compile_context():
+    """Outside compile_steps.applied() Numba's own methods are in place (the very objects);
+    inside, the replacements (marked ``_scoutsim``); a nested context's exit leaves them in
+    place, the outermost one's puts Numba's back and empties the memo of translated
+    callees; the context holds Numba's compiler lock."""
+    from numba.core.compiler_lock import global_compiler_lock
+    numba_own = _numba_steps()
+    assert not any(getattr(f, "_scoutsim", False) for f in numba_own.values())
+    assert not compile_steps.in_place()
+    with compile_steps.applied():
+        inside = _numba_steps()
+        assert all(getattr(f, "_scoutsim", False) for f in inside.values()), inside
+        assert global_compiler_lock.is_locked()
+        with compile_steps.applied():
+            assert _numba_steps() == inside
+        assert _numba_steps() == inside and compile_steps.in_place()
+        compile_steps._TRANSLATED["probe"] = object()
+    after = _numba_steps()
+    assert all(after[k] is numba_own[k] for k in numba_own)
+    assert not compile_steps.in_place()
+    assert compile_steps._TRANSLATED == {}
+
+
+def test_a_core_function_compiles_inside_the_context_and_others_outside():
+    """A compile of a function declared with jit.kernel / jit.allocating (a first call, or
+    typing a call to it from other compiled code) runs inside the compile context; a plain
+    Numba function's compile does not, and after either Numba's methods are its own."""
+    numba_own = _numba_steps()
+    seen = {}
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            seen[ev.data["dispatcher"].py_func.__name__] = (
+                compile_steps.in_place(),
+                all(getattr(f, "_scoutsim", False) for f in _numba_steps().values()))
+
+        def on_end(self, ev):
+            pass
+
+    def core_probe(x):
+        return x * 2.0 + 1.0
+
+    def foreign_probe(x):
+        return core(x) - 1.0
+
+    # (not cached on disk: a compile happens whatever ran before)
+    core = jit._compiled_in_context(jit._typed_by_kind(njit(core_probe)))
+    foreign = njit(foreign_probe)
+    listener = Listener()
+    event.register("numba:compile", listener)
+    try:
+        assert foreign(3.0) == 6.0
+    finally:
+        event.unregister("numba:compile", listener)
+    assert seen["foreign_probe"] == (False, False)
+    assert seen["core_probe"] == (True, not AS_IS)
+    after = _numba_steps()
+    assert all(after[k] is numba_own[k] for k in numba_own)
+    # every dispatcher the decorators make compiles in the context
+    from scoutsim._core.model import evaluate
+    for d in (evaluate.evaluate_ws, evaluate.evaluate, jit.kernel(core_probe),
+              jit.allocating(inline="always")(core_probe)):
+        assert d.compile.__wrapped__.__func__ is type(d).compile, d
 
 
 _RUN = textwrap.dedent("""
     import sys
     import numpy as np
     import scoutsim
-    from numba.core import targetconfig
+    from scoutsim._numba import jit
+    from scoutsim._numba import compile_steps
     # the replacements are off in this process
-    assert not getattr(targetconfig.TargetConfig.__hash__, "_scoutsim", False)
+    assert all(v.startswith("off") for v in compile_steps.status().values()), jit.status()
     out = {}
     for model in ("II", "I"):
         r = scoutsim.simulate(duration=0.3, model=model)

@@ -1,5 +1,8 @@
-"""The compiled core's declarations (scoutsim/_numba/jit.py): every compiled function says whether
-it runs with reference counting, and the non-allocating kernels really run without it."""
+"""The compiled core's declarations (scoutsim/_numba/jit.py) and its on-disk cache
+(scoutsim/_numba/disk_cache.py): every compiled function says whether it runs with
+reference counting, and the non-allocating kernels really run without it; each module is
+cached under a digest of what it depends on, and only stale directories of ours are
+removed."""
 
 import numpy as np
 import pytest
@@ -9,7 +12,7 @@ from numba.core.errors import TypingError
 from numba.core.registry import CPUDispatcher
 
 from scoutsim._core import loop
-from scoutsim._numba import jit
+from scoutsim._numba import disk_cache, jit
 from scoutsim.control import bounding
 from scoutsim._core.model import (
     actuator, contact, evaluate, impact, kinematics, kkt, leg, rigid_body, transmission, workspace,
@@ -67,6 +70,8 @@ def test_kernel_and_allocating_set_the_options():
     assert k.py_func is f and a.py_func is f
 
 
+@pytest.mark.skipif(not jit.TYPED_BY_KIND,
+                    reason="SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS turns the per-kind typing off")
 def test_a_callee_is_compiled_once_whatever_constants_its_callers_pass():
     """Constants passed from compiled code (True / False, leg index 0 / 1) do not give the
     callee one specialization each: the right-hand side used to be compiled five times."""
@@ -91,39 +96,44 @@ def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
     outside the core change nothing."""
     import pathlib
     import shutil
-    pkg = pathlib.Path(jit.__file__).parent
+    pkg = disk_cache._PACKAGE
     copy = tmp_path / "scoutsim"
     shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
-    d0 = jit.module_digests(copy)
-    assert d0 == jit.module_digests(pkg)
-    assert set(d0) >= {"loop.py", "jit.py", "model/evaluate.py", "numerics/hybrid.py"}
+    d0 = disk_cache.module_digests(copy)
+    assert d0 == disk_cache.module_digests(pkg)
+    assert set(d0) >= {"_core/loop.py", "_numba/jit.py", "_core/model/evaluate.py",
+                       "_core/numerics/hybrid.py"}
 
     def edit(rel):
         with open(copy / rel, "a") as f:
             f.write("\n# an edit\n")
-        return jit.module_digests(copy)
+        return disk_cache.module_digests(copy)
 
     d1 = edit("analysis/gait.py")     # not part of the compiled core
     assert d1 == d0
-    d2 = edit("loop.py")              # nothing imports the run loop
-    assert {rel for rel in d0 if d2[rel] != d0[rel]} == {"loop.py"}
-    d3 = edit("model/leg.py")         # inlined into the right-hand side, in another file
+    d2 = edit("_core/loop.py")        # nothing imports the run loop
+    assert {rel for rel in d0 if d2[rel] != d0[rel]} == {"_core/loop.py"}
+    d3 = edit("_core/model/leg.py")   # inlined into the right-hand side, in another file
     changed = {rel for rel in d0 if d3[rel] != d2[rel]}
-    assert {"model/leg.py", "model/contact.py", "model/evaluate.py", "numerics/ark.py",
-            "numerics/hybrid.py", "loop.py"} <= changed
-    assert not changed & {"model/layout.py", "model/kkt.py", "control/bounding.py", "jit.py"}
-    d4 = edit("jit.py")               # the compilation options: every compiled module
-    assert all(d4[rel] != d3[rel] for rel in ("loop.py", "model/evaluate.py", "model/leg.py",
-                                              "numerics/ark.py", "control/bounding.py"))
-    assert d4["model/layout.py"] == d3["model/layout.py"]   # constants only
+    assert {"_core/model/leg.py", "_core/model/contact.py", "_core/model/evaluate.py",
+            "_core/numerics/ark.py", "_core/numerics/hybrid.py", "_core/loop.py"} <= changed
+    assert not changed & {"_core/model/layout.py", "_core/model/kkt.py", "control/bounding.py",
+                          "_numba/jit.py"}
+    d4 = edit("_numba/jit.py")        # the compilation options: every compiled module
+    assert all(d4[rel] != d3[rel] for rel in (
+        "_core/loop.py", "_core/model/evaluate.py", "_core/model/leg.py",
+        "_core/numerics/ark.py", "control/bounding.py"))
+    assert d4["_core/model/layout.py"] == d3["_core/model/layout.py"]   # constants only
     # a module's directory is named by the module and its digest, under the cache's root
-    here = jit.module_digests()
-    for rel, path in jit._MODULE_DIRS.items():
+    here = disk_cache.module_digests()
+    for rel, path in disk_cache._MODULE_DIRS.items():
         rel = pathlib.Path(rel).relative_to(pkg).as_posix()
-        assert path == jit.module_cache_dir(jit.cache_directory(), rel, here[rel])
-    assert jit._MODULE_DIRS[str(pkg / "loop.py")].name == f"loop-{here['loop.py']}"
-    assert jit._MODULE_DIRS[str(pkg / "model" / "evaluate.py")].name == \
-        f"model.evaluate-{here['model/evaluate.py']}"
+        assert path == disk_cache.module_cache_dir(disk_cache.cache_directory(), rel,
+                                                   here[rel])
+    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "loop.py")].name == \
+        f"_core.loop-{here['_core/loop.py']}"
+    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "model" / "evaluate.py")].name == \
+        f"_core.model.evaluate-{here['_core/model/evaluate.py']}"
 
 
 def test_a_function_is_cached_in_its_modules_directory():
@@ -131,9 +141,10 @@ def test_a_function_is_cached_in_its_modules_directory():
     installs), whatever Numba's own cache directory setting."""
     from numba.core.caching import FunctionCache
     cache = FunctionCache(evaluate.evaluate_ws.py_func)
-    assert cache.cache_path == str(jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))])
+    directory = disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))]
+    assert cache.cache_path == str(directory)
     assert cache._impl.locator.get_source_stamp() == \
-        jit._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
+        disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
 
 
 def pathlib_path(f):
@@ -142,58 +153,69 @@ def pathlib_path(f):
 
 
 #: run in a new process with NUMBA_CACHE_DIR set: import the package's jit module only (no
-#: compilation) and report where Numba will cache and the digest of the core's sources
+#: compilation), report where Numba will cache, the digest of the core's sources and which
+#: of the paths given exist after the import; then clean the cache and report what it removed
 _REPORT_CACHE_DIR = """
-import json, numba, scoutsim._numba.jit as jit
-print(json.dumps({"numba_cache_dir": numba.config.CACHE_DIR, "root": str(jit.cache_directory()),
-                  "loop": str(jit._MODULE_DIRS[str(jit._PACKAGE / "loop.py")]),
-                  "digests": jit.module_digests()}))
+import json, os, sys, numba, scoutsim._numba.jit
+from scoutsim._numba import disk_cache
+report = {"numba_cache_dir": numba.config.CACHE_DIR, "root": str(disk_cache.cache_directory()),
+          "loop": str(disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/loop.py")]),
+          "digests": disk_cache.module_digests(),
+          "after_import": [p for p in sys.argv[1:] if os.path.exists(p)]}
+report["removed"] = [str(p) for p in disk_cache.clean_cache()]
+print(json.dumps(report))
 """
 
 
 def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     """With NUMBA_CACHE_DIR set, the compiled core is cached in a directory of it
     (scoutsim-numba), one subdirectory per module named by its digest (an edit of an
-    inlined callee in another file must not be served from a stale caller), and only this
-    package's directories of other digests (and the whole-core directories of older
-    versions) that nothing wrote to for a day are removed there: a recent one of ours and
-    everything not ours stay. Numba's own setting is left as the user set it."""
+    inlined callee in another file must not be served from a stale caller). Importing the
+    package removes nothing; cleaning the cache (disk_cache.clean_cache, run when the core
+    first compiles in a process, and by `scoutsim cache --clean`) removes only this package's
+    directories of other digests (and the whole-core directories of older versions) that
+    nothing wrote to for a day, and says which: a recent one of ours and everything not
+    ours stay. Numba's own setting is left as the user set it."""
     import json
     import os
-    import pathlib
     import subprocess
     import sys
     import time
     user = tmp_path / "user-cache"
-    root = jit.user_cache_dir(user)
-    assert root == user / jit.USER_CACHE_NAME
-    old_whole_stale = user / f"{jit.USER_CACHE_PREFIX}{'0' * 16}"
-    old_whole_recent = user / f"{jit.USER_CACHE_PREFIX}{'1' * 16}"
-    ours_stale = root / f"loop-{'0' * 16}"
-    ours_recent = root / f"model.evaluate-{'1' * 16}"
+    root = disk_cache.user_cache_dir(user)
+    assert root == user / disk_cache.USER_CACHE_NAME
+    old_whole_stale = user / f"{disk_cache.USER_CACHE_PREFIX}{'0' * 16}"
+    old_whole_recent = user / f"{disk_cache.USER_CACHE_PREFIX}{'1' * 16}"
+    ours_stale = root / f"_core.loop-{'0' * 16}"
+    ours_recent = root / f"_core.model.evaluate-{'1' * 16}"
     not_ours = [user / "numba-0000000000000000", user / "scoutsim-numba-notadigest",
                 user / "another_program_abc123", root / f"notacoremodule-{'0' * 16}",
-                root / "loop-notadigest"]
-    for d in (old_whole_stale, old_whole_recent, ours_stale, ours_recent, *not_ours):
+                root / "_core.loop-notadigest"]
+    every = (old_whole_stale, old_whole_recent, ours_stale, ours_recent, *not_ours)
+    for d in every:
         (d / "sub").mkdir(parents=True)
         (d / "sub" / "f.nbi").write_bytes(b"x")
     (user / "a-file.txt").write_text("the user's\n")
-    old = time.time() - 2 * jit.STALE_USER_CACHE_S
+    old = time.time() - 2 * disk_cache.STALE_USER_CACHE_S
     for d in (old_whole_stale, ours_stale, *not_ours):
         for path in (d / "sub" / "f.nbi", d / "sub", d):
             os.utime(path, (old, old))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(user),
-               PYTHONPATH=os.pathsep.join([str(pathlib.Path(jit.__file__).parents[1]),
+               PYTHONPATH=os.pathsep.join([str(disk_cache._PACKAGE.parent),
                                            os.environ.get("PYTHONPATH", "")]))
-    out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR], env=env, cwd=tmp_path,
-                         capture_output=True, text=True, timeout=300, check=True)
+    out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR, *map(str, every)],
+                         env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                         check=True)
     report = json.loads(out.stdout.strip().splitlines()[-1])
-    assert report["digests"] == jit.module_digests()
-    assert pathlib.Path(report["numba_cache_dir"]) == user
-    assert pathlib.Path(report["root"]) == root
-    loop_dir = pathlib.Path(report["loop"])
-    assert loop_dir == jit.module_cache_dir(root, "loop.py", report["digests"]["loop.py"])
-    assert loop_dir.parent == root
+    assert report["digests"] == disk_cache.module_digests()
+    assert pathlib_path(report["numba_cache_dir"]) == user.resolve()
+    assert pathlib_path(report["root"]) == root.resolve()
+    loop_dir = pathlib_path(report["loop"])
+    assert loop_dir == disk_cache.module_cache_dir(root, "_core/loop.py",
+                                            report["digests"]["_core/loop.py"]).resolve()
+    assert loop_dir.parent == root.resolve()
+    assert report["after_import"] == [str(d) for d in every]     # nothing removed at import
+    assert sorted(report["removed"]) == sorted([str(ours_stale), str(old_whole_stale)])
     assert not ours_stale.exists() and not old_whole_stale.exists()
     assert (ours_recent / "sub" / "f.nbi").exists()
     assert (old_whole_recent / "sub" / "f.nbi").exists()
@@ -218,3 +240,36 @@ def test_compile_progress_says_what_was_compiled():
     with jit.compile_progress(quiet):
         njit(lambda x: x + 1.0)(1.0)      # not the core's
     assert quiet.getvalue() == ""
+
+
+_SPECIALIZED = """
+import json
+from numba import njit
+from scoutsim._numba import jit
+
+def callee(x, flag, leg):
+    return x + (1.0 if flag else 0.0) + leg
+
+c = jit._typed_by_kind(njit(callee))
+k = njit(lambda x: c(x, True, 0) + c(x, False, 1))
+print(json.dumps({"value": k(1.0), "signatures": len(c.signatures),
+                  "status": jit.status()["typed_by_kind"]}))
+"""
+
+
+def test_the_per_kind_typing_has_a_switch(tmp_path):
+    """SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS=1 leaves calls to the core's functions as Numba
+    types them (one specialization per constant), and the status says it is off; the
+    values are the same."""
+    import json
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS="1")
+    p = subprocess.run([sys.executable, "-c", _SPECIALIZED], env=env, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["value"] == (1.0 + 1.0 + 0) + (1.0 + 0.0 + 1)
+    assert out["signatures"] == 2
+    assert out["status"] == "off: SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS is set"

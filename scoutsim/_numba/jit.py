@@ -18,354 +18,48 @@ declared with one of two decorators:
     is set explicitly because Numba otherwise lets a callee inherit the setting of the
     function that first compiles it.
 
-Both cache their machine code on disk and use NumPy's error model (a division by zero
-gives inf / nan, it does not raise).
-
-The on-disk cache is kept per module of the compiled core, in a directory named by a
-digest of that module's source and of every core module it imports, directly or through
-others (:func:`module_digests`): Numba by itself checks only the timestamp of a function's
-own file, so a cached function that inlines or links a callee from another module would
-keep the old callee after that module is edited (a stale result, silently). With the
-digest, an edit of a module compiles afresh that module and the modules that import it,
-and loads the rest from the cache (an edit of ``loop.py`` recompiles the run loop alone,
-an edit of ``model/evaluate.py`` nearly everything); directories of other digests are
-removed. The directories are ``scoutsim/__pycache__/numba/<module>-<digest>``, or, where
-the package is not writable, under ``~/.cache/scoutsim/numba``. The function's cache
-locator (:class:`_CoreCacheLocator`) puts them there, whatever Numba's own cache directory
-setting is, which is left alone (it is the user's, for their own functions).
-
-A ``NUMBA_CACHE_DIR`` set by the user is where the cache goes, in
-``$NUMBA_CACHE_DIR/scoutsim-numba/<module>-<digest>`` (:func:`user_cache_dir`). Such a
-directory may be shared (by other programs, or by checkouts of other scoutsim versions
-running at the same time), so only directories of ours (``<module>-<digest>`` of a core
-module, and the ``scoutsim-numba-<digest>`` of older versions) are ever removed there, and
-only those of other digests that nothing has written to for a day
-(:data:`STALE_USER_CACHE_S`); everything else in it is left alone.
+Both cache their machine code on disk, one directory per module of the core named by a
+digest of what it depends on (:mod:`.disk_cache`), and use NumPy's error model (a division
+by zero gives inf / nan, it does not raise).
 
 Compile time (docs/model.md "Compile time"): four of Numba's compiler steps repeat work
-and are replaced here by equivalent ones (:func:`_speed_up_numba`): the IR inliner's
-copies and re-translations of the callee (numba#8989, numba#9204), the hash of the compiler
-flags on every overload lookup, and the full compilation of an always-inlined overload's
-implementation that is then thrown away (numba#6856, :func:`inline_only`). They change no
-compiled code (the results are bit for bit those without them); each checks that Numba's
-code is the one it replaces and otherwise leaves it alone; ``SCOUTSIM_NUMBA_AS_IS=1`` in the
-environment leaves all four as Numba has them (to compare).
+and are replaced by equivalent ones (:mod:`.compile_steps`) only while scoutsim compiles
+its own functions: each dispatcher :func:`kernel` and :func:`allocating` make compiles
+inside :func:`compile_steps.applied` (:func:`_compiled_in_context`), and the compiles of
+its callees nest in it; other Numba users of the process see Numba as it is. Calls from
+compiled code to a core function compile one specialization per argument kind, not per
+constant (:func:`_typed_by_kind`). Each of these checks that Numba's code is the one it
+expects, else leaves Numba's as it is; :func:`status` records what was applied and why
+not. To compare (the results are bit for bit the same either way), two switches in the
+environment: ``SCOUTSIM_NUMBA_AS_IS=1`` leaves the four replacements out (Numba's steps as
+they are), ``SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS=1`` leaves :func:`_typed_by_kind` out (one
+specialization per constant argument, as Numba does by itself: about 45 % more CPU time for
+the first compile, which is why it has its own switch and is not part of the first).
 """
 
 from __future__ import annotations
 
-import ast
-import hashlib
+import functools
+import inspect
 import os
-import re
-import shutil
 import time
-from pathlib import Path
 
 from numba import njit
 
-_PACKAGE = Path(__file__).resolve().parents[1]
-#: the sources of the compiled core (a change in any of them invalidates the cache of the
-#: modules that import it)
-CORE_SOURCES = ("_core/model/*.py", "_core/numerics/*.py", "_core/loop.py", "control/*.py",
-                "_numba/*.py")
+from . import compile_steps, disk_cache
+from .disk_cache import _PACKAGE
+# (where the command line asks whether the core is compiled)
+from .disk_cache import cache_directory, core_is_compiled  # noqa: F401
 
+#: what the guarded hooks of this module found on the installed Numba (:func:`status`)
+_STATUS: dict[str, str] = {}
+APPLIED = compile_steps.APPLIED
 
-def _core_files(package: Path) -> list[Path]:
-    return sorted({f for pattern in CORE_SOURCES for f in package.glob(pattern)})
+_why_not_cached = disk_cache.install_cache_locator()
+_STATUS["cache_locator"] = APPLIED if _why_not_cached is None else \
+    f"not applied: {_why_not_cached}"
 
-
-def core_digest(package: Path = _PACKAGE) -> str:
-    """Digest of the compiled core's sources (names and contents) under ``package``."""
-    h = hashlib.sha256()
-    for f in _core_files(package):
-        h.update(f.relative_to(package).as_posix().encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def _module_name(rel: str) -> str:
-    """``model/evaluate.py`` -> ``model.evaluate``, ``control/__init__.py`` -> ``control``."""
-    parts = rel[:-3].split("/")
-    if parts[-1] == "__init__":
-        parts = parts[:-1]
-    return ".".join(parts) or "__init__"
-
-
-def _imported(rel: str, source: bytes, known: set[str]) -> set[str]:
-    """The core modules (relative paths in ``known``) that the module ``rel`` imports
-    anywhere in its source, read statically: ``from .x import y`` names ``x`` and, if it is
-    a module, ``x/y``; a package import names its ``__init__``."""
-    pkg = rel.split("/")[:-1]
-    out = set()
-
-    def add(parts):
-        for cand in ("/".join(parts) + ".py", "/".join(parts + ["__init__"]) + ".py"):
-            if cand in known:
-                out.add(cand)
-
-    for node in ast.walk(ast.parse(source)):
-        if isinstance(node, ast.ImportFrom):
-            if node.level:
-                if node.level - 1 > len(pkg):
-                    continue
-                base = pkg[:len(pkg) - (node.level - 1)]
-            elif node.module and node.module.split(".")[0] == _PACKAGE.name:
-                base = []
-            else:
-                continue
-            mod = base + (node.module.split(".") if node.module else [])
-            if not node.level:
-                mod = mod[1:]
-            for i in range(1, len(mod) + 1):
-                add(mod[:i])
-            for alias in node.names:
-                add(mod + [alias.name])
-        elif isinstance(node, ast.Import):
-            for alias in node.names:
-                mod = alias.name.split(".")
-                if mod[0] == _PACKAGE.name:
-                    for i in range(2, len(mod) + 1):
-                        add(mod[1:i])
-    out.discard(rel)
-    return out
-
-
-def _import_graph(sources: dict[str, bytes], memo: Path | None) -> dict[str, set[str]]:
-    """The core modules each core module imports (:func:`_imported`), reading the sources'
-    syntax only for those not in ``memo`` (a file of earlier answers, by source digest:
-    parsing every module takes about 0.1 s, too long for every start)."""
-    import json
-    known = sorted(sources)
-    layout = hashlib.sha256("\n".join(known).encode()).hexdigest()[:16]
-    shas = {rel: hashlib.sha256(src).hexdigest()[:32] for rel, src in sources.items()}
-    old = {}
-    if memo is not None:
-        try:
-            data = json.loads(memo.read_text())
-            if data.get("layout") == layout:
-                old = data.get("modules", {})
-        except (OSError, ValueError, AttributeError):
-            old = {}
-    deps, changed = {}, False
-    for rel, src in sources.items():
-        entry = old.get(rel)
-        if isinstance(entry, dict) and entry.get("sha") == shas[rel]:
-            deps[rel] = set(entry.get("imports", ())) & set(known)
-        else:
-            deps[rel] = _imported(rel, src, set(known))
-            changed = True
-    if memo is not None and (changed or set(old) != set(sources)):
-        try:
-            memo.parent.mkdir(parents=True, exist_ok=True)
-            tmp = memo.with_name(f"{memo.name}.{os.getpid()}.tmp")
-            tmp.write_text(json.dumps({"layout": layout, "modules": {
-                rel: {"sha": shas[rel], "imports": sorted(deps[rel])} for rel in known}}))
-            os.replace(tmp, memo)
-        except OSError:
-            pass
-    return deps
-
-
-def module_digests(package: Path = _PACKAGE, memo: Path | None = None) -> dict[str, str]:
-    """For every module of the compiled core (its path relative to ``package``), a digest of
-    its source and of the sources of every core module it imports, directly or through
-    others: what its compiled functions can depend on (the constants they read, the
-    functions they inline or link). ``memo``: a file that keeps the import graph between
-    processes (:func:`_import_graph`)."""
-    sources = {f.relative_to(package).as_posix(): f.read_bytes()
-               for f in _core_files(package)}
-    deps = _import_graph(sources, memo)
-    out = {}
-    for rel in sources:
-        seen, stack = {rel}, [rel]
-        while stack:
-            for d in deps[stack.pop()]:
-                if d not in seen:
-                    seen.add(d)
-                    stack.append(d)
-        h = hashlib.sha256()
-        for d in sorted(seen):
-            h.update(d.encode())
-            h.update(b"\0")
-            h.update(sources[d])
-        out[rel] = h.hexdigest()[:16]
-    return out
-
-
-#: name of this package's cache directory inside a ``NUMBA_CACHE_DIR`` set by the user
-USER_CACHE_NAME = "scoutsim-numba"
-#: name of the cache directories of older versions (one digest of the whole core)
-USER_CACHE_PREFIX = USER_CACHE_NAME + "-"
-_OLD_USER_CACHE_NAME = re.compile(re.escape(USER_CACHE_PREFIX) + r"[0-9a-f]{16}")
-#: another digest's directory in the user's ``NUMBA_CACHE_DIR`` is removed once nothing in
-#: it has been written for this long [s] (a process of another version may be using it)
-STALE_USER_CACHE_S = 86400.0
-_MODULE_DIR = re.compile(r"(?P<module>[A-Za-z_][\w.]*)-(?P<digest>[0-9a-f]{16})")
-
-
-def user_cache_dir(base) -> Path:
-    """This package's cache directory inside ``base``, a ``NUMBA_CACHE_DIR`` set by the
-    user (one subdirectory per module and digest in it)."""
-    return Path(base) / USER_CACHE_NAME
-
-
-def module_cache_dir(root: Path, rel: str, digest: str) -> Path:
-    """The cache directory of the core module ``rel`` (relative path) at ``digest``."""
-    return Path(root) / f"{_module_name(rel)}-{digest}"
-
-
-def _last_written(directory: Path) -> float:
-    """Newest modification time [s since the epoch] of ``directory`` and everything in it."""
-    newest = directory.stat().st_mtime
-    for root, dirs, files in os.walk(directory):
-        for name in dirs + files:
-            try:
-                newest = max(newest, os.lstat(os.path.join(root, name)).st_mtime)
-            except OSError:
-                pass
-    return newest
-
-
-def _remove_other_digests(root: Path, digests: dict[str, str], stale_after: float | None):
-    """Remove the module directories in ``root`` of a core module at another digest than
-    ``digests``; with ``stale_after`` [s], only those nothing has written to for that
-    long. Anything else in ``root`` is left alone."""
-    current = {_module_name(rel): d for rel, d in digests.items()}
-    try:
-        entries = list(root.iterdir())
-    except OSError:
-        return
-    now = time.time()
-    for old in entries:
-        m = _MODULE_DIR.fullmatch(old.name)
-        if m is None or m["module"] not in current or m["digest"] == current[m["module"]]:
-            continue
-        try:
-            if old.is_symlink() or not old.is_dir():
-                continue
-            if stale_after is not None and now - _last_written(old) < stale_after:
-                continue
-        except OSError:
-            continue
-        shutil.rmtree(old, ignore_errors=True)
-
-
-def _writable(base: Path) -> bool:
-    try:
-        base.mkdir(parents=True, exist_ok=True)
-        probe = base / f".write-test-{os.getpid()}"
-        probe.touch()
-        probe.unlink()
-        return True
-    except OSError:
-        return False
-
-
-def _cache_root() -> tuple[Path, float | None]:
-    """The root of the core's cache (module directories in it) and after how long another
-    digest's directory there may be removed (None: at once)."""
-    user = os.environ.get("NUMBA_CACHE_DIR")
-    if user:
-        return user_cache_dir(user), STALE_USER_CACHE_S
-    for base in (_PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
-        if _writable(base):
-            return base / "numba", None
-    return _PACKAGE / "__pycache__" / "numba", None
-
-
-def _remove_old_layout(root: Path, stale_after: float | None):
-    """Remove the whole-core cache directories of older versions (``numba-<digest>`` next
-    to ``root``, or ``scoutsim-numba-<digest>`` in the user's directory once stale)."""
-    base = root.parent
-    pattern = _OLD_USER_CACHE_NAME if stale_after is not None else \
-        re.compile(r"numba-[0-9a-f]{16}")
-    try:
-        olds = [p for p in base.iterdir() if pattern.fullmatch(p.name)]
-    except OSError:
-        return
-    now = time.time()
-    for old in olds:
-        try:
-            if old.is_symlink() or not old.is_dir():
-                continue
-            if stale_after is not None and now - _last_written(old) < stale_after:
-                continue
-        except OSError:
-            continue
-        shutil.rmtree(old, ignore_errors=True)
-
-
-_ROOT, _STALE_AFTER = _cache_root()
-_DIGESTS = module_digests(memo=_ROOT / "imports.json")
-_remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER)
-_remove_old_layout(_ROOT, _STALE_AFTER)
-#: cache directory of each core source file (resolved path) of this package
-_MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d)
-                for rel, d in _DIGESTS.items()}
-
-
-def _install_cache_locator():
-    """Put the cache of every function of a core module into that module's directory
-    (:data:`_MODULE_DIRS`), with the module's digest as Numba's source stamp."""
-    from numba.core import caching
-
-    class _CoreCacheLocator(caching._CacheLocator):
-        def __init__(self, py_func, path: Path, digest: str):
-            self._lineno = py_func.__code__.co_firstlineno
-            self._path = str(path)
-            self._digest = digest
-
-        def get_cache_path(self):
-            return self._path
-
-        def get_source_stamp(self):
-            return self._digest
-
-        def get_disambiguator(self):
-            return str(self._lineno)
-
-        @classmethod
-        def from_function(cls, py_func, py_file):
-            path = _MODULE_DIRS.get(os.path.realpath(py_file))
-            if path is None:
-                return None
-            self = cls(py_func, path, path.name.rsplit("-", 1)[1])
-            try:
-                self.ensure_cache_path()
-            except OSError:
-                return None
-            return self
-
-    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")
-    classes = impl._locator_classes
-    if not any(c.__name__ == "_CoreCacheLocator" for c in classes):
-        classes.insert(0, _CoreCacheLocator)
-
-
-_install_cache_locator()
-
-
-# --- compile time: Numba's compiler steps that repeat work, replaced (compile_steps.py) ---
-from .compile_steps import speed_up_numba  # noqa: E402
-
-if not os.environ.get("SCOUTSIM_NUMBA_AS_IS"):
-    speed_up_numba()
-
-_COMMON = dict(cache=True, error_model="numpy")
-
-
-def cache_directory() -> Path:
-    """Root of the on-disk cache of the compiled core (one directory per module and digest
-    in it)."""
-    return _ROOT
-
-
-def core_is_compiled() -> bool:
-    """True if the compiled run loop (and with it the whole core it calls) is in the cache,
-    i.e. a simulation will not have to compile first (this process may still load it)."""
-    d = _MODULE_DIRS[str(_PACKAGE / "_core" / "loop.py")]
-    return d.is_dir() and any(d.glob("loop.run-*.nbi"))
+_COMMON = dict(cache=_why_not_cached is None, error_model="numpy")
 
 
 #: What a simulation compiles on its first call, and about how long it takes (the first
@@ -435,6 +129,32 @@ class compile_progress:
 
 #: parameters whose integer constants compile their own specializations (branch pruning)
 SPECIALIZING_PARAMETERS = ("method",)
+#: the environment variable that turns :func:`_typed_by_kind` off: calls from compiled
+#: code to the core's functions then compile one specialization per constant, as Numba does
+#: by itself (the same results, bit for bit; about 45 % more CPU time for the first
+#: compile). Not part of ``SCOUTSIM_NUMBA_AS_IS``: the core compiled both ways would take
+#: its test past its time budget.
+SPECIALIZE_CONSTANTS_VARIABLE = "SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS"
+#: whether calls to the core's functions compile one specialization per argument kind
+#: (:func:`_typed_by_kind`); off with :data:`SPECIALIZE_CONSTANTS_VARIABLE` set
+TYPED_BY_KIND = not os.environ.get(SPECIALIZE_CONSTANTS_VARIABLE)
+
+
+def _has_method(dispatcher, name: str, parameters: tuple[str, ...]) -> str | None:
+    """None if the class of ``dispatcher`` has the method ``name`` taking ``parameters``
+    (and the instance does not override it), else why not."""
+    method = getattr(type(dispatcher), name, None)
+    if method is None:
+        return f"{type(dispatcher).__name__} has no {name}"
+    if name in vars(dispatcher):
+        return f"{name} is already replaced on the dispatcher"
+    try:
+        found = tuple(inspect.signature(method).parameters)
+    except (TypeError, ValueError) as exc:
+        return f"{type(dispatcher).__name__}.{name} has no readable signature ({exc})"
+    if found != parameters:
+        return f"{type(dispatcher).__name__}.{name} takes {found}, not {parameters}"
+    return None
 
 
 def _typed_by_kind(dispatcher):
@@ -446,15 +166,29 @@ def _typed_by_kind(dispatcher):
     literal it meets. The right-hand side was compiled five times that way (20-40 s each,
     two thirds of the first run's compilation). Here the argument types are widened to
     their non-literal kind before the callee is compiled or looked up; the caller then
-    converts its constants to that kind.
+    converts its constants to that kind. It changes which specializations are compiled,
+    not what they compute.
 
     The one exception is a parameter named ``method`` (:data:`SPECIALIZING_PARAMETERS`):
     the integration method stays a literal, so each method compiles its own specialization
     of the integrator with the other methods' branches pruned, and a run compiles only the
-    method it uses (:func:`scoutsim._core.loop.run_entry`)."""
+    method it uses (:func:`scoutsim._core.loop.run_entry`).
+
+    The dispatcher's ``get_call_template`` (Numba's, called by the typing of a call) is
+    replaced on this dispatcher only, after a check that it is the method this expects
+    (``get_call_template(self, args, kws)``); else the dispatcher is left as it is and
+    :func:`status` says why. Off with :data:`TYPED_BY_KIND` false."""
+    if not TYPED_BY_KIND:
+        _STATUS["typed_by_kind"] = f"off: {SPECIALIZE_CONSTANTS_VARIABLE} is set"
+        return dispatcher
+    why_not = _has_method(dispatcher, "get_call_template", ("self", "args", "kws"))
+    if why_not is not None:
+        _STATUS["typed_by_kind"] = f"not applied: {why_not}"
+        return dispatcher
+    _STATUS.setdefault("typed_by_kind", APPLIED)
     from numba.core import types
 
-    resolve = dispatcher.get_call_template
+    cls = type(dispatcher)
     code = dispatcher.py_func.__code__
     names = code.co_varnames[:code.co_argcount]
     keep = {i for i, n in enumerate(names) if n in SPECIALIZING_PARAMETERS}
@@ -463,20 +197,64 @@ def _typed_by_kind(dispatcher):
         return a if literal_ok and isinstance(a, types.IntegerLiteral) else types.unliteral(a)
 
     def get_call_template(args, kws):
-        return resolve(tuple(widen(a, i in keep) for i, a in enumerate(args)),
-                       {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
+        # (the class's method, looked up at the call: Numba's, or compile_steps's
+        # replacement while the core compiles)
+        return cls.get_call_template(
+            dispatcher, tuple(widen(a, i in keep) for i, a in enumerate(args)),
+            {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
 
     dispatcher.get_call_template = get_call_template
     return dispatcher
 
 
+def _compiled_in_context(dispatcher):
+    """Make every compile of ``dispatcher`` (a first call, a call from compiled code that
+    types it, ``dispatcher.compile``) run inside :func:`compile_steps.applied`, so
+    Numba's replaced compiler steps are in place for it and its callees and for nothing
+    else; the first one in a process also cleans the cache
+    (:func:`~scoutsim._numba.disk_cache.clean_cache`). Numba's ``compile(self, sig)`` is
+    wrapped on this dispatcher only, after a check that it is
+    the method this expects; else the dispatcher is left as it is (compiled with Numba's
+    steps) and :func:`status` says why."""
+    why_not = _has_method(dispatcher, "compile", ("self", "sig"))
+    if why_not is not None:
+        _STATUS["compile_context"] = f"not applied: {why_not}"
+        return dispatcher
+    _STATUS.setdefault("compile_context", APPLIED)
+    compile_numba = dispatcher.compile
+
+    @functools.wraps(compile_numba)
+    def compile(sig):
+        with compile_steps.applied():
+            disk_cache.clean_once()
+            return compile_numba(sig)
+
+    dispatcher.compile = compile
+    return dispatcher
+
+
+def status() -> dict[str, str]:
+    """What each of the guarded uses of Numba's internals found on the installed Numba:
+    ``"applied"``, or ``"off: ..."`` / ``"not applied: ..."`` and why (then Numba's own
+    code is used). The four compiler steps (:func:`compile_steps.status`), the compile
+    context of the core's dispatchers (``compile_context``), the per-kind typing of calls
+    (``typed_by_kind``) and the cache locator (``cache_locator``)."""
+    return {**compile_steps.status(), **_STATUS}
+
+
+def _own(dispatcher, inline: str):
+    """A dispatcher of the core: compiled inside the compile context, and typed by kind
+    unless it is inlined at the IR level (then there is no callee to specialize)."""
+    if inline == "never":
+        _typed_by_kind(dispatcher)
+    return _compiled_in_context(dispatcher)
+
+
 def _compile(func, nrt: bool, inline: str):
     deco = njit(**_COMMON, _nrt=nrt, inline=inline)
-    if inline != "never":   # inlined at the IR level: there is no callee to specialize
-        return deco if func is None else deco(func)
     if func is None:
-        return lambda f: _typed_by_kind(deco(f))
-    return _typed_by_kind(deco(func))
+        return lambda f: _own(deco(f), inline)
+    return _own(deco(func), inline)
 
 
 def kernel(func=None, *, inline: str = "never"):

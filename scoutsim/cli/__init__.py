@@ -11,6 +11,7 @@ each (``scoutsim COMMAND --help`` for the options):
     tune      optimise controller or robot parameters (CMA-ES) against an objective
     identify  fit Model II hip-unit parameters to bench-rig logs
     rig       run a virtual bench rig and write its log
+    cache     where the compiled core is cached; --clean removes other versions
 
 This module assembles the parser and dispatches; ``_common`` holds the argument types, the
 options several sub-commands share and the input/output helpers.
@@ -33,7 +34,7 @@ import contextlib
 import os
 import sys
 
-from . import animate, basin, compare, identify, orbit, plot, rig, run, sweep, tune
+from . import animate, basin, cache, compare, identify, orbit, plot, rig, run, sweep, tune
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
@@ -42,7 +43,7 @@ __all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_tim
            "format_summary", "format_basin", "MODELS", "SCOUT_FLOOR_FRICTION"]
 
 #: the sub-command modules, in the order of ``scoutsim --help``
-COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig)
+COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig, cache)
 #: commands that simulate, so may have to compile the core first (a notice says so)
 COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, tune, identify, rig)}
 
