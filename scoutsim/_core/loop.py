@@ -12,33 +12,67 @@ the integrator (:mod:`scoutsim._core.numerics`) knows neither the controller nor
 from __future__ import annotations
 
 from collections import namedtuple
+from collections.abc import Callable
 
 import numpy as np
 
+from .._numba.jit import allocating, kernel
 from ..control.bounding import bounding_step
 from ..control.compiled import call_controller
-from .._numba.jit import allocating, kernel
 from .model.evaluate import evaluate_ws
+from .model.flags import FLAG_OFF, FLAG_ON, is_set
 from .model.hip_unit import is_geared
 from .model.kinematics import project_state
-from .model.sensor_readings import measure, read_encoders, true_readings
-from .model.rigid_body import state_energy
-from .model.flags import FLAG_OFF, FLAG_ON, is_set
 from .model.layout import (
-    A_ENERGY, A_KKT_OK, CB_ADDRESS, CB_KIND, CB_SEED, CB_STATUS, CTRL_BUILTIN, CTRL_HELD,
-    EK_CTRL_LIFTOFF, EK_CTRL_SWEEP, EK_CTRL_TOUCHDOWN, MI_CONTACT_B, MI_MOTOR_B,
-    NAUX, NEV, NIMP, NMI, NS, P_G, RM_CONTACT_B, RM_LEG_STATE_B, RM_MOTOR_B, SG_MEASURED,
-    SG_MOTOR_SIDE, ST_CONTROLLER_ERROR, ST_NUMERICAL_FAILURE, ST_RUNNING, TR_LIFTOFF, TR_SWEEP,
+    A_ENERGY,
+    A_KKT_OK,
+    CB_ADDRESS,
+    CB_KIND,
+    CB_SEED,
+    CB_STATUS,
+    CTRL_BUILTIN,
+    CTRL_HELD,
+    EK_CTRL_LIFTOFF,
+    EK_CTRL_SWEEP,
+    EK_CTRL_TOUCHDOWN,
+    MI_CONTACT_B,
+    MI_MOTOR_B,
+    NAUX,
+    NEV,
+    NIMP,
+    NMI,
+    NS,
+    P_G,
+    RM_CONTACT_B,
+    RM_LEG_STATE_B,
+    RM_MOTOR_B,
+    SG_MEASURED,
+    SG_MOTOR_SIDE,
+    ST_CONTROLLER_ERROR,
+    ST_NUMERICAL_FAILURE,
+    ST_RUNNING,
+    TR_LIFTOFF,
+    TR_SWEEP,
     TR_TOUCHDOWN,
 )
+from .model.rigid_body import state_energy
+from .model.sensor_readings import measure, read_encoders, true_readings
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
 from .numerics.events import log_event, mode_violations, stamp_states, stamp_transition
-from .numerics.hybrid import (HW_EVAL_KEPT, HW_STIFF_VALID, METHOD_ARK4, METHOD_AUTO,
-                              METHOD_DOPRI5, STEP_HEADROOM, AdvanceScratch, advance)
+from .numerics.hybrid import (
+    HW_EVAL_KEPT,
+    HW_STIFF_VALID,
+    METHOD_ARK4,
+    METHOD_AUTO,
+    METHOD_DOPRI5,
+    STEP_HEADROOM,
+    AdvanceScratch,
+    advance,
+)
 from .numerics.stats import S_NFEV
-from .numerics.work import EventLog, EventWork, StepWork
 from .numerics.transitions import settle_ws
+from .numerics.work import EventLog, EventWork, StepWork
 
 __all__ = ["run", "run_entry", "effective_method", "record_sample", "sense", "readings_at",
            "Control", "Span", "Records", "Carry"]
@@ -260,6 +294,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
 #: argument fingerprints)
 _ENTRIES: dict[tuple, object] = {}
 
+_compute_fingerprint: Callable[..., bytes] | None
 try:    # Numba's key of its type cache (private; None where missing: typed instead)
     from numba._dispatcher import compute_fingerprint as _compute_fingerprint
 except ImportError:

@@ -8,7 +8,7 @@ ones while scoutsim compiles its own core, and only then (docs/model.md "Compile
   away (:func:`inline_only`, :func:`_inline_overloads`, numba#6856).
 
 They change no compiled code: the results are bit for bit those without them
-(``tests/test_compile_steps.py`` compiles the core both ways and compares).
+(``tests/_numba/test_compile_steps.py`` compiles the core both ways and compares).
 
 **Only while the core compiles.** The replacements are class attributes of Numba's, so
 they would change every Numba user of the process if they stayed in place. They are put
@@ -23,7 +23,7 @@ re-translated callees (:func:`_inline_translation`) lives as long as the outermo
 replaces (its source text or signature, on the Numba releases of the pin in
 pyproject.toml) and otherwise leaves Numba's step as it is. What each check found is
 recorded, not swallowed: :func:`status` says, for each replacement, ``"applied"`` or why
-not (``tests/test_compile_steps.py`` fails on the pinned Numba unless all four are applied).
+not (``tests/_numba/test_compile_steps.py`` fails on the pinned Numba unless all four are applied).
 Only the errors a moved or changed Numba can give (a missing module or attribute, a source
 that cannot be read, a signature that differs) count as "not the known code"; any other
 error propagates.
@@ -145,7 +145,7 @@ def _inline_copy():
 
 #: the callees' IR translated by the untyped pipeline, by (function, code, flags): kept
 #: while the outermost :func:`applied` context lasts, cleared when it exits
-_TRANSLATED = {}
+_TRANSLATED: dict[tuple, object] = {}
 
 
 def _inline_translation():

@@ -305,7 +305,7 @@ def install_cache_locator() -> str | None:
         return ("numba.core.caching has no CacheImpl._locator_classes list or _CacheLocator "
                 "class; the core is not cached on disk")
 
-    class _CoreCacheLocator(base):
+    class _CoreCacheLocator(base):  # type: ignore[valid-type,misc]  # (Numba's class, found above)
         def __init__(self, py_func, path: Path, digest: str):
             self._lineno = py_func.__code__.co_firstlineno
             self._path = str(path)

@@ -47,9 +47,9 @@ import time
 from numba import njit
 
 from . import compile_steps, disk_cache
-from .disk_cache import _PACKAGE
+
 # (where the command line asks whether the core is compiled)
-from .disk_cache import cache_directory, core_is_compiled  # noqa: F401
+from .disk_cache import _PACKAGE, cache_directory, core_is_compiled  # noqa: F401
 
 #: what the guarded hooks of this module found on the installed Numba (:func:`status`)
 _STATUS: dict[str, str] = {}
@@ -251,7 +251,8 @@ def _own(dispatcher, inline: str):
 
 
 def _compile(func, nrt: bool, inline: str):
-    deco = njit(**_COMMON, _nrt=nrt, inline=inline)
+    # _nrt: Numba's own switch of reference counting, not in its published signature
+    deco = njit(**_COMMON, _nrt=nrt, inline=inline)  # type: ignore[call-overload]
     if func is None:
         return lambda f: _own(deco(f), inline)
     return _own(deco(func), inline)

@@ -15,10 +15,10 @@ import dataclasses
 import math
 import numbers
 import sys
-import types
 import typing
 from dataclasses import dataclass
 from functools import cache
+from types import MappingProxyType
 
 from ..names import LEG_NAMES
 from .parameter_error import ParameterError, _fmt, _fmt_bound
@@ -361,7 +361,7 @@ def _validate_pair(robot, controller, origins) -> None:
 #: (``files`` sets it while it builds a parameter set from a file, so the messages of the
 #: checks run by the constructor name the file and the unit the value was given in).
 _ORIGINS: contextvars.ContextVar[typing.Mapping] = contextvars.ContextVar(
-    "parameter_origins", default=types.MappingProxyType({}))
+    "parameter_origins", default=MappingProxyType({}))
 
 
 @contextlib.contextmanager

@@ -12,12 +12,21 @@ from numba.core.errors import TypingError
 from numba.core.registry import CPUDispatcher
 
 from scoutsim._core import loop
-from scoutsim._numba import disk_cache, jit
-from scoutsim.control import bounding
 from scoutsim._core.model import (
-    actuator, contact, evaluate, impact, kinematics, kkt, leg, rigid_body, transmission, workspace,
+    actuator,
+    contact,
+    evaluate,
+    impact,
+    kinematics,
+    kkt,
+    leg,
+    rigid_body,
+    transmission,
+    workspace,
 )
 from scoutsim._core.numerics import ark, dopri5, events, hybrid, transitions
+from scoutsim._numba import disk_cache, jit
+from scoutsim.control import bounding
 
 MODULES = (kinematics, rigid_body, leg, actuator, transmission, contact, kkt, workspace,
            impact, evaluate, ark, dopri5, events, transitions, hybrid, loop, bounding)

@@ -1,0 +1,1 @@
+"""Tests of how the core is compiled and cached (scoutsim._numba)."""
