@@ -19,6 +19,7 @@ from ..model.roots import illinois_update
 from .events import event_values
 from .stepper import do_step, method_dense
 
+#: an event's instant is located when its bracket is narrower than this [s]
 EVENT_TIME_TOL = 1e-13
 #: an event function counts as at its zero on a step that ends within this time of it [s]
 #: (measured with the function's slope over the step; docs/specification.md section 7 asks for 1e-9 s)
