@@ -93,7 +93,8 @@ MAGIC_FORMS = (
      re.compile(r"(&|\|=)\s*[124]\b"), ("_core/loop.py", "control/bounding.py")),
     ("contact-event slot arithmetic by hand (numerics/events.py contact_event, event_leg, "
      "event_slot)", re.compile(r"(//|%)\s*NEV_CONTACT\b|NEV_CONTACT\s*\+\s*[0-9]"),
-     ("_core/loop.py", "_core/numerics/hybrid.py", "_core/numerics/transitions.py")),
+     ("_core/loop.py", "_core/numerics/hybrid.py", "_core/numerics/event_location.py",
+      "_core/numerics/transitions.py")),
     ("an impact output by number (layout IMP_*)",
      re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"), ("_core/model/impact.py", "_core/numerics/transitions.py")),
 )

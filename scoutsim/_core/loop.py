@@ -60,17 +60,9 @@ from .model.sensor_readings import measure, read_encoders, true_readings
 from .numerics import ark
 from .numerics.dopri5 import eval_workspace
 from .numerics.events import log_event, mode_violations, stamp_states, stamp_transition
-from .numerics.hybrid import (
-    HW_EVAL_KEPT,
-    HW_STIFF_VALID,
-    METHOD_ARK4,
-    METHOD_AUTO,
-    METHOD_DOPRI5,
-    STEP_HEADROOM,
-    AdvanceScratch,
-    advance,
-)
+from .numerics.hybrid import HW_EVAL_KEPT, HW_STIFF_VALID, STEP_HEADROOM, AdvanceScratch, advance
 from .numerics.stats import S_NFEV
+from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
 from .numerics.transitions import settle_ws
 from .numerics.work import EventLog, EventWork, StepWork
 
@@ -174,7 +166,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     :func:`~scoutsim._core.numerics.events.record_step`): the call returns at a sample before
     ``steps`` has fewer than ``STEP_HEADROOM`` free rows (as before ``ev`` fills up).
     ``energy`` (layout ``EN_*``) accumulates the energy of every power flow over the
-    integrator's steps (:func:`~scoutsim._core.numerics.hybrid.accumulate_energy`); an empty
+    integrator's steps (:func:`~scoutsim._core.numerics.step_energy.accumulate_energy`); an empty
     array switches the accounting off. ``out_energy`` (rows as ``out_t``, ``NEN`` columns;
     empty (0, NEN) without the accounting) receives ``energy`` at every recorded sample:
     the cumulative energy of every flow [J]. Returns (k, n_out, nev, status, t)."""

@@ -22,21 +22,20 @@ timeseries.csv; ``--npz``: result.npz. :meth:`scoutsim.SimulationResult.load` re
 
 Exit code 1 if the integration failed numerically, 130 if interrupted (the data so far is
 still written); a fall is a completed run (exit 0, the summary says so).
+
+Here are the command's options and the run; the printed summary is in
+:mod:`scoutsim.cli.run_summary`, the files beyond the run's tables and the rescue of a run
+whose directory could not be written in :mod:`scoutsim.cli.run_outputs`.
 """
 
 from __future__ import annotations
 
 import math
-import signal
 import sys
-import threading
 import time
-from contextlib import contextmanager
-from pathlib import Path
-from types import SimpleNamespace
 
 from ..io.run_directory import MANIFEST, RunDirectory
-from ..result.columns import COLUMN_UNITS, column_unit
+from ..result.columns import COLUMN_UNITS, column_unit  # noqa: F401 (re-exported by scoutsim.cli)
 from ..simulation.streaming import DEFAULT_KEEP_SECONDS
 from ..state import InitialState
 from ._common import (
@@ -60,6 +59,14 @@ from ._common import (
     usage_errors,
     write_json,
 )
+from .run_outputs import (
+    EXIT_WRITE_FAILED,
+    ctrl_c_deferred,
+    rescue,
+    streamed_write_failed,
+    write_timeseries_csv,
+)
+from .run_summary import format_energy, format_summary
 
 NAME = "run"
 
@@ -152,10 +159,6 @@ def register(sub, common) -> None:
     run.set_defaults(func=execute)
 
 
-#: exit status of a run whose outputs could not be written (BSD sysexits EX_IOERR)
-EXIT_WRITE_FAILED = 74
-
-
 def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
     """Write the run's files into ``out`` (``rd``: the streamed run's directory, whose
     tables are written already, or None); the finished RunDirectory."""
@@ -182,65 +185,6 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
     return rd
 
 
-@contextmanager
-def _ctrl_c_deferred():
-    """While the outputs are written, a first Ctrl-C is held until they are whole (the
-    command then exits 130); a second one abandons them (KeyboardInterrupt: the directory
-    keeps saying "writing"). Writing a run takes a fraction of its computing."""
-    state = SimpleNamespace(asked=False)
-    if threading.current_thread() is not threading.main_thread():
-        yield state
-        return
-
-    def handler(signum, frame):
-        if state.asked:
-            raise KeyboardInterrupt
-        state.asked = True
-        print("scoutsim run: writing the outputs; they will be complete in a moment "
-              "(Ctrl-C again to abandon them)", file=sys.stderr, flush=True)
-
-    previous = signal.signal(signal.SIGINT, handler)
-    try:
-        yield state
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-def _streamed_write_failed(result, out, rd) -> int:
-    """A streamed run whose tables the disk refused: say what the directory kept, mark it
-    partial, save the kept end of the run elsewhere."""
-    info = result.provenance["stream"]
-    print(f"scoutsim run: error: could not write the run's tables to {out}/: "
-          f"{info['write_error']}; the run stopped at t = {result.t_end:g} s", file=sys.stderr)
-    kept = ", ".join(info["tables_kept"]) or "no table"
-    until = info["written_until_s"]
-    print(f"scoutsim run: {out}/ keeps {kept}" + (f" (samples up to t = {until:g} s)"
-                                                   if until is not None else ""),
-          file=sys.stderr)
-    try:
-        rd.finish(outcome=result.outcome, partial=True)
-    except OSError:
-        pass                            # (the manifest keeps saying "writing")
-    print(_rescue(result, f"the run's last {info['keep_seconds']:g} s"), file=sys.stderr)
-    return EXIT_WRITE_FAILED
-
-
-def _rescue(result, what: str = "the run's data") -> str:
-    """Save a run whose output directory failed somewhere else (the system's temporary
-    directory, then the home directory): what was computed is not lost. The message."""
-    import os
-    import tempfile
-    name = f"scoutsim_rescued_{os.getpid()}_{int(time.time())}.npz"
-    for d in (Path(tempfile.gettempdir()), Path.home()):
-        try:
-            path = result.save(d / name)
-        except OSError:
-            continue
-        return (f"scoutsim run: {what} saved instead to {path} "
-                "(SimulationResult.load reads it)")
-    return f"scoutsim run: {what} could not be saved anywhere (no space left?)"
-
-
 def _stream_choice(args) -> bool:
     """Whether the run streams its tables to disk: asked with --stream, or chosen because
     the run would not fit in memory (said on stderr)."""
@@ -263,129 +207,6 @@ def _stream_choice(args) -> bool:
               "tables to disk as they are computed (the summary covers the last "
               f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)", file=sys.stderr)
     return stream
-
-
-def write_timeseries_csv(result, path) -> Path:
-    """Write ``result.columns()`` as CSV, one row per sample, header ``name [unit]``; floats
-    with 17 significant digits, so ``np.loadtxt`` reads every value back bit for bit."""
-    import numpy as np
-    cols = result.columns()
-    names = list(cols)
-    header = ",".join(f"{n} [{u}]" if (u := column_unit(n)) else n for n in names)
-    data = np.column_stack([np.asarray(cols[n], dtype=float) for n in names]) if names else \
-        np.zeros((0, 0))
-    path = Path(path)
-    # 17 significant digits: every float64 reads back to the same bits
-    np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.17g")
-    return path
-
-
-def _fmt(v, spec: str, unit: str = "") -> str:
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "n/a"
-    return f"{v:{spec}}{(' ' + unit) if unit else ''}"
-
-
-def _pair(a, b, spec: str, unit: str) -> str:
-    if a is None and b is None:
-        return "n/a"
-    return f"{_fmt(a, spec)} / {_fmt(b, spec)}{(' ' + unit) if unit else ''}"
-
-
-def format_summary(summary: dict, *, duration: float, wall_s: float, t_end: float,
-                   friction: float | None = None, load_s: float | None = None,
-                   command_wall_s: float | None = None) -> str:
-    """The human-readable summary table of a run: what the robot did (``behaviour``:
-    steady bounding, or what instead, :mod:`scoutsim.analysis.behaviour`), the gait means
-    over the steady strides, ``wall_s`` the simulation's wall time [s] (its real-time factor
-    is t_end / wall_s), ``load_s`` the time the compiled core took to get ready before it,
-    ``command_wall_s`` the whole command's."""
-    import textwrap
-    outcome = summary.get("outcome")
-    if outcome != "completed" and t_end is not None:
-        outcome = f"{outcome} at t = {t_end:.3f} s"
-    rtf = (t_end / wall_s) if wall_s > 0 and t_end else None
-    steady = bool(summary.get("n_steady_strides"))
-    speed = _fmt(summary.get("mean_speed_m_s"), ".3f", "m/s")
-    if not steady:
-        # no steady stride: the run's average instead, said to be one
-        average = ((summary.get("behaviour_detail") or {}).get("counts") or {}).get(
-            "average_speed_m_s")
-        speed = "n/a (no steady stride)" + (
-            f"; {average:.3f} m/s averaged over the run" if average is not None else "")
-    rows = [
-        ("outcome", outcome),
-        ("what the robot did", summary.get("behaviour") or "n/a"),
-    ]
-    n_steady = summary.get("n_steady_strides") or 0
-    if steady and summary.get("steady_bounding") is False:
-        # a few strides passed the steadiness test, but the run is no steady bound: the
-        # means below describe those strides alone, and say so
-        rows.append(("gait means below", f"over {n_steady} steady stride"
-                     f"{'s' if n_steady != 1 else ''} only (not a steady bound)"))
-    rows += [
-        ("mean forward speed", speed),
-        ("stride frequency", _fmt(summary.get("stride_frequency_hz"), ".3f", "Hz")),
-        ("duty factor back / front", _pair(summary.get("duty_factor_back"),
-                                           summary.get("duty_factor_front"), ".3f", "")),
-        ("pitch max / min", _pair(summary.get("pitch_max_deg"), summary.get("pitch_min_deg"),
-                                  ".2f", "deg")),
-        ("COM height max / min", _pair(summary.get("height_max_m"), summary.get("height_min_m"),
-                                       ".4f", "m")),
-        ("largest friction ratio |F_t|/F_n", _fmt(summary.get("max_friction_ratio"), ".3f")),
-        ("steady strides", _fmt(summary.get("n_steady_strides"), "d")
-         + (f" (of {summary['n_strides']})" if summary.get("n_strides") is not None else "")),
-        ("steady bounding", {True: "yes", False: "no", None: "n/a"}.get(
-            summary.get("steady_bounding"), "n/a")),
-    ]
-    if "startup_duration_s" in summary:
-        rows.append(("start-up (standing to bounding)",
-                     _fmt(summary["startup_duration_s"], ".3f", "s") + " (t = 0 to the "
-                     "hand-over to the bounding controller)"))
-    rows += [
-        ("simulation", (f"{wall_s:.3f} s wall, real-time factor {rtf:.0f}x" if rtf else
-                        _fmt(wall_s, ".3f", "s"))),
-    ]
-    if load_s is not None:
-        rows.append(("compiled core", f"ready in {load_s:.2f} s (loaded from the cache, or "
-                                      "compiled on a first run)"))
-    if command_wall_s is not None:
-        rows.append(("command wall time", f"{command_wall_s:.2f} s (start-up, simulation, "
-                                          "outputs)"))
-    width = max(len(k) for k, _ in rows)
-    model = summary.get("model")
-    floor = ("" if friction is None else
-             ", floor: no slip" if math.isinf(friction) else f", floor: Coulomb mu = {friction:g}")
-    lines = [f"scoutsim run: model {model}, {duration:g} s requested{floor}"]
-    for k, v in rows:
-        line = f"  {k:<{width}}  {v}"
-        if k == "what the robot did":       # a sentence: wrapped under its column
-            lines += textwrap.wrap(line, 100, subsequent_indent=" " * (width + 4),
-                                   break_on_hyphens=False)
-        else:
-            lines.append(line)
-    return "\n".join(lines)
-
-
-def format_energy(summary: dict) -> str:
-    """The short energy block of a run's summary (:data:`SUMMARY_ENERGY_KEYS
-    <scoutsim.analysis.gait.SUMMARY_ENERGY_KEYS>`): where the electrical energy went over
-    the run, and the steady strides' mean power and cost of transport."""
-    e = summary.get("electrical_energy_j")
-    head = ("  energy, whole run      " + (
-        f"electrical {e:.1f} J = copper {summary['copper_loss_j']:.1f} + transmission "
-        f"{summary['transmission_loss_j']:.1f} + hip work {summary['hip_work_j']:.1f} J"
-        if e is not None else f"hip work {_fmt(summary.get('hip_work_j'), '.1f', 'J')}"))
-    rows = [head,
-            f"  hip work went to       friction and dampers "
-            f"{_fmt(summary.get('friction_loss_j'), '.1f', 'J')}, impacts "
-            f"{_fmt(summary.get('impact_loss_j'), '.1f', 'J')}, mechanical energy "
-            f"{_fmt(summary.get('mechanical_energy_change_j'), '+.1f', 'J')} (residual "
-            f"{_fmt(summary.get('energy_residual_j'), '.2g', 'J')})",
-            f"  steady strides         mean electrical power "
-            f"{_fmt(summary.get('mean_electrical_power_w'), '.1f', 'W')}, cost of transport "
-            f"{_fmt(summary.get('cost_of_transport'), '.3f')}"]
-    return "\n".join(rows)
 
 
 def execute(args) -> int:
@@ -446,7 +267,7 @@ def execute(args) -> int:
                              if stream else {}))
     wall = time.perf_counter() - wall0
     if result.outcome == "write_failed":
-        return _streamed_write_failed(result, out, rd)
+        return streamed_write_failed(result, out, rd)
 
     summary = result.summary()
     balance = result.energy_balance() if energy else None
@@ -456,7 +277,7 @@ def execute(args) -> int:
     info |= {"scoutsim_version": result.provenance.get("scoutsim_version"),
              "t_end": result.t_end}
     try:
-        with _ctrl_c_deferred() as deferred:
+        with ctrl_c_deferred() as deferred:
             rd = _write_outputs(args, out, result, summary, rd, command, info, interrupted)
     except OSError as exc:        # a full disk, a directory where a file goes, permissions
         print(f"scoutsim run: error: could not write the run's files to {out}/: "
@@ -464,7 +285,7 @@ def execute(args) -> int:
                                           else ""),
               file=sys.stderr)
         if not stream:
-            print(_rescue(result), file=sys.stderr)
+            print(rescue(result), file=sys.stderr)
         return EXIT_WRITE_FAILED
     files = [out / name for name in rd.files] + [out / MANIFEST]
 

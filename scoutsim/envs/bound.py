@@ -8,58 +8,46 @@ through, and ``step`` reports each reward term in ``info``.
 A policy step is ``policy_period / control_period`` samples of the compiled run loop
 (:class:`~scoutsim.simulation.engine.HybridEngine`, one engine per episode): the policy's action
 is held over them, as the 1 kHz controller's command is held over a control period.
+
+Here are the environment, its episodes and its steps; the reward's settings are in
+:mod:`scoutsim.envs.reward`; what an action, the spaces, a start and the rendering can be,
+and the robot and controller made from the keywords, in :mod:`scoutsim.envs.configuration`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 
 import gymnasium
 import numpy as np
-from gymnasium import spaces
 
 from ..control.bounding import SCHEDULABLE
-from ..control.dispatch import plan_controller
-from ..control.factory import FactoryError, controller_from_spec, is_factory_spec
-from ..control.sensors import N_SENSORS, SensorParameters, load_sensors
+from ..control.sensors import SensorParameters, load_sensors
 from ..names import ContactMode
-from ..parameters import (
-    ControllerParameters,
-    RobotParameters,
-    closed_range,
-    load_parameters,
-    validate_parameters,
-    validate_robot,
-)
+from ..parameters import ControllerParameters, RobotParameters
 from ..result.failure import diagnose_failure
 from ..simulation.engine import HybridEngine, start_engine
-from ..simulation.simulator import PLANT_OPTIONS as SIMULATE_PLANT_OPTIONS
 from ..state import HybridState, InitialState, standing_state
+from .configuration import (
+    ACTION_TYPES,
+    PLANT_OPTIONS,
+    RANDOM_START_HALF_WIDTHS,
+    RENDER_MODES,
+    RENDER_SIZE,
+    SETPOINTS,
+    STARTS,
+    action_space,
+    environment_parameters,
+    observation_space,
+    split_options,
+    start_state,
+)
+from .reward import Reward, check_weights, health_range
 
 __all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
            "RANDOM_START_HALF_WIDTHS", "RENDER_MODES", "RENDER_SIZE", "NON_PHYSICAL_ENDS"]
 
-#: what an action is: the hip torques, or the set-points of the Table I controller
-ACTION_TYPES = ("torque", "setpoints")
-#: the set-points a "setpoints" action gives, in its order (fields of
-#: :class:`~scoutsim.parameters.ControllerParameters`, [rad] relative to the torso)
-SETPOINTS = ("touchdown_angle_back", "touchdown_angle_front", "sweep_limit_back",
-             "sweep_limit_front")
-#: the starts known by name
-STARTS = ("flight", "standing", "random")
-#: the "random" start: InitialState field -> half-width [SI] of the uniform interval about
-#: the flight start (``reset_noise_scale`` = 1): height 0.32-0.35 m, forward speed
-#: 1.0-1.4 m/s, pitch rate 100-200 deg/s, the neighbourhood of the flight start from which
-#: ideal, Model I and Model II all bound under the Table I controller (docs/model.md
-#: "Default start and floor"; the height interval is centred on 0.33 m: 0.315-0.345 m)
-RANDOM_START_HALF_WIDTHS = {"y": 0.015, "dx": 0.2, "dtheta": math.radians(50.0)}
-#: what :meth:`BoundEnv.render` can draw (Gymnasium's ``render_mode``)
-RENDER_MODES = ("rgb_array",)
-#: the frame's size keywords [pixels] with their defaults (None: the default of
-#: :func:`scoutsim.presentation.frames.draw_pose`, 480 x 240)
-RENDER_SIZE = {"render_width": None, "render_height": None}
 #: the ends of an episode that are the simulator's, not the robot's (``info["outcome"]``):
 #: the integrator or the constrained dynamics could not go on, or the controller failed
 NON_PHYSICAL_ENDS = ("numerical_failure", "controller_error")
@@ -232,7 +220,7 @@ class BoundEnv(gymnasium.Env):
                  render_mode: str | None = None, **options):
         render_width, render_height = (options.pop(name, default) for name, default in
                                        RENDER_SIZE.items())
-        reward, plant, parameters = _options(reward, options)
+        reward, plant, parameters = split_options(reward, options)
         forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
             reward.forward_reward_weight, reward.target_speed, reward.energy_cost_weight,
             reward.healthy_reward)
@@ -256,8 +244,8 @@ class BoundEnv(gymnasium.Env):
                                  "pixels >= 16 (or None: the default)")
         #: the "MODULE:FACTORY" the Table I parameters were made by (None: given)
         self.controller_spec = controller if isinstance(controller, str) else None
-        self.robot, self.controller = _parameters(robot, controller, robot_file, parameters,
-                                                  model)
+        self.robot, self.controller = environment_parameters(robot, controller, robot_file,
+                                                             parameters, model)
         if sensors is None:
             sensors = load_sensors(robot_file, self.robot) if robot_file is not None \
                 else SensorParameters()
@@ -275,21 +263,14 @@ class BoundEnv(gymnasium.Env):
         self.control_period = dt
         self.samples_per_step = int(n)
         self.policy_period = n * dt
-        for name, v in (("forward_reward_weight", forward_reward_weight),
-                        ("energy_cost_weight", energy_cost_weight),
-                        ("healthy_reward", healthy_reward)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ValueError(f"{name} = {v!r} is not allowed: must be a finite number")
-        if target_speed is not None and not math.isfinite(target_speed):
-            raise ValueError(f"target_speed = {target_speed!r} m/s is not allowed: must be "
-                             "finite or None")
+        check_weights(reward)
         self.forward_reward_weight = float(forward_reward_weight)
         self.target_speed = None if target_speed is None else float(target_speed)
         self.energy_cost_weight = float(energy_cost_weight)
         self.healthy_reward = float(healthy_reward)
         self.terminate_when_fallen = bool(terminate_when_fallen)
-        self.healthy_height_range = _interval(healthy_height_range, "healthy_height_range")
-        self.healthy_pitch_range = _interval(healthy_pitch_range, "healthy_pitch_range")
+        self.healthy_height_range = health_range(healthy_height_range, "healthy_height_range")
+        self.healthy_pitch_range = health_range(healthy_pitch_range, "healthy_pitch_range")
         if not (isinstance(start, (InitialState, HybridState)) or callable(start)
                 or start in STARTS):
             raise ValueError(f"start = {start!r} is not allowed: must be one of "
@@ -313,20 +294,14 @@ class BoundEnv(gymnasium.Env):
         self.metadata = {**type(self).metadata,
                          "render_fps": round(rate) if abs(rate - round(rate)) < 1e-9 * rate
                          else rate}
-        self.observation_space = spaces.Box(-np.inf, np.inf, (N_SENSORS,), np.float64)
-        if action_type == "torque":
-            tau = np.array([self.robot.leg(leg).max_leg_torque for leg in (0, 1)])
-            self.action_space = spaces.Box(-tau, tau, (2,), np.float64)
-        else:
-            lo, hi = zip(*(closed_range(name) for name in SETPOINTS))
-            self.action_space = spaces.Box(np.array(lo), np.array(hi), (len(SETPOINTS),),
-                                           np.float64)
+        self.observation_space = observation_space()
+        self.action_space = action_space(self.robot, action_type)
         #: the set-points' slots in the engine's controller array ``engine.C``
         self.setpoint_slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
         self._engine: HybridEngine | None = None
         # an engine from the first start, to check the options now (reset makes the
         # episode's)
-        self._new_engine(self._start_state(None), 0)
+        self._new_engine(start_state(self.start, self.reset_noise_scale, None), 0)
         self._running = False
         self._reset_done = False
 
@@ -354,7 +329,8 @@ class BoundEnv(gymnasium.Env):
         """Start an episode (see the class docstring); returns (observation, info)."""
         super().reset(seed=seed)
         noise_seed = int(self.np_random.integers(0, 2 ** 63 - 1))
-        self._new_engine(self._start_state(self.np_random), noise_seed)
+        self._new_engine(start_state(self.start, self.reset_noise_scale,
+                                     self.np_random), noise_seed)
         # the readings of sample 0 under zero torques, as simulate()'s controllers see them
         # before their first command (with torque actions the loop reads sample 0 again
         # under the first action: the accelerometer, currents and battery of that reading
@@ -438,29 +414,6 @@ class BoundEnv(gymnasium.Env):
 
     # -- pieces -----------------------------------------------------------------------------
 
-    def _start_state(self, rng):
-        """The start of an episode: a HybridState or InitialState."""
-        start = self.start
-        if isinstance(start, (InitialState, HybridState)):
-            return start
-        if start == "flight":
-            return InitialState()
-        if start == "random":
-            init = InitialState()
-            if rng is None:
-                return init
-            changes = {name: getattr(init, name) + self.reset_noise_scale * half
-                       * float(rng.uniform(-1.0, 1.0))
-                       for name, half in RANDOM_START_HALF_WIDTHS.items()}
-            return init.replace(**changes)
-        if rng is None:    # (a user's distribution: drawn at reset only)
-            return None
-        state = start(rng)
-        if not isinstance(state, (InitialState, HybridState)):
-            raise TypeError(f"start(np_random) returned {type(state).__name__}: must be an "
-                            "InitialState or a HybridState")
-        return state
-
     def _new_engine(self, start, noise_seed: int):
         """A fresh engine for an episode from ``start`` with sensor noise seed
         ``noise_seed``."""
@@ -506,98 +459,3 @@ class BoundEnv(gymnasium.Env):
         eng = self._live_engine
         return {"t": eng.t_now, "x_position": eng.x, "height": eng.height,
                 "pitch": eng.pitch, "outcome": eng.status_name}
-
-
-def _interval(pair, name: str) -> tuple[float, float]:
-    try:
-        lo, hi = (float(v) for v in pair)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {pair!r} is not allowed: must be (min, max)") from None
-    if math.isnan(lo) or math.isnan(hi) or lo > hi:
-        raise ValueError(f"{name} = {pair!r} is not allowed: must be (min, max), min <= max")
-    return lo, hi
-
-
-@dataclass(frozen=True)
-class Reward:
-    """The reward and the termination of :class:`BoundEnv` (each field is also a keyword of
-    the environment, which overrides the bundle's): ``forward_reward_weight``,
-    ``target_speed`` [m/s] (None: reward speed itself), ``energy_cost_weight`` [1/J],
-    ``healthy_reward``, ``terminate_when_fallen``, ``healthy_height_range`` [m],
-    ``healthy_pitch_range`` [rad] (see :class:`BoundEnv`)."""
-
-    forward_reward_weight: float = 1.0
-    target_speed: float | None = None
-    energy_cost_weight: float = 0.01
-    healthy_reward: float = 1.0
-    terminate_when_fallen: bool = True
-    healthy_height_range: tuple = (0.2, math.inf)
-    healthy_pitch_range: tuple = (-math.radians(30.0), math.radians(30.0))
-
-
-#: the environment's keywords for the plant beyond the robot, with their defaults: the floor's
-#: friction and the pitch limit as :func:`scoutsim.simulate` has them, and the integrator
-PLANT_OPTIONS = {**{k: SIMULATE_PLANT_OPTIONS[k] for k in ("friction_coefficient",
-                                                         "pitch_limit_deg")},
-                 "integrator": None}
-
-
-def _options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:
-    """The environment's :class:`Reward` (with the keywords of its fields applied), its
-    plant options (:data:`PLANT_OPTIONS`) and the rest: robot and controller fields."""
-    fields = {f.name for f in dataclasses.fields(Reward)}
-    rew = {k: options.pop(k) for k in list(options) if k in fields}
-    plant = {k: options.pop(k, default) for k, default in PLANT_OPTIONS.items()}
-    return dataclasses.replace(reward or Reward(), **rew), plant, options
-
-
-def _parameters(robot, controller, robot_file, overrides, model):
-    """(RobotParameters, ControllerParameters) from the constructor's arguments."""
-    robot_fields = {f.name for f in dataclasses.fields(RobotParameters)}
-    ctrl_fields = {f.name for f in dataclasses.fields(ControllerParameters)}
-    unknown = set(overrides) - robot_fields - ctrl_fields
-    if unknown:
-        import difflib
-        name = sorted(unknown)[0]
-        close = difflib.get_close_matches(name, sorted(robot_fields | ctrl_fields), n=1)
-        raise TypeError(f"BoundEnv got an unexpected keyword {name!r}: not an option nor a "
-                        "field of RobotParameters or ControllerParameters"
-                        + (f"; did you mean {close[0]!r}?" if close else ""))
-    r_over = {k: v for k, v in overrides.items() if k in robot_fields}
-    c_over = {k: v for k, v in overrides.items() if k in ctrl_fields}
-    spec = controller if isinstance(controller, str) else None
-    if spec is not None:
-        controller = None
-        if not is_factory_spec(spec):
-            raise ValueError(f"controller = {spec!r} is not allowed: a string must be "
-                             "'MODULE:FACTORY' (e.g. 'my_gaits:make', a function in "
-                             "my_gaits.py returning ControllerParameters)")
-    if robot_file is not None:
-        if robot is not None or controller is not None:
-            raise ValueError("robot_file is not allowed together with robot or controller")
-        robot, controller = load_parameters(robot_file, r_over, c_over)
-    else:
-        robot = (robot if robot is not None else RobotParameters()).replace(**r_over)
-        controller = (controller if controller is not None
-                      else ControllerParameters()).replace(**c_over)
-        validate_robot(robot)
-    if spec is not None:
-        controller = _from_factory(spec, robot, controller, model).replace(**c_over)
-    validate_parameters(robot, controller)
-    return robot, controller
-
-
-def _from_factory(spec: str, robot: RobotParameters, params: ControllerParameters,
-                  model: str) -> ControllerParameters:
-    """The Table I parameters the factory ``spec`` makes for ``robot`` from ``params``."""
-    made = controller_from_spec(spec, robot, params)
-    # what simulate() would run it as: the built-in law (with these parameters) or not
-    plan = plan_controller(made, model, robot)
-    if plan.kind != "builtin":
-        raise FactoryError(f"controller {spec!r} returned {type(made).__name__}, a controller "
-                           "with a command() of its own: BoundEnv runs the Table I law (the "
-                           "agent sets its set-points) or the agent's hip torques, so its "
-                           "factory must return ControllerParameters (or a "
-                           "BoundingController with the built-in law)")
-    assert plan.parameters is not None      # (the built-in law runs with parameters)
-    return plan.parameters

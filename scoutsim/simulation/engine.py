@@ -15,8 +15,9 @@ from .._core.model.evaluate import NSTIFF
 from .._core.model.flags import flag_is_set
 from .._core.model.rigid_body import state_energy
 from .._core.numerics.dopri5 import eval_workspace
-from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, METHOD_AUTO, NHW, STEP_HEADROOM
+from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
+from .._core.numerics.stepper import METHOD_AUTO
 from .._core.numerics.work import Plant
 from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
 from ..control.dispatch import plan_controller

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .._core.numerics.hybrid import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5
+from .._core.numerics.stepper import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5
 
 __all__ = ["IntegratorSettings", "DEFAULT_TOLERANCES", "AUTO_ARK_MIN_RTOL", "METHOD_CODES"]
 

@@ -14,6 +14,11 @@ controller sees the consequences at its next sample.
 An event function is armed only after it has been seen positive, so a function that is
 zero or negative right after a transition (a toe placed below ground by a massless leg, a
 motor that has just broken away) does not re-trigger at once.
+
+The method's step and continuous extension are in :mod:`scoutsim._core.numerics.stepper`,
+the location of an event's zero within a step in :mod:`scoutsim._core.numerics.event_location`,
+the energy of the power flows over a step in :mod:`scoutsim._core.numerics.step_energy`;
+here are the step loop of one control period and the arming and application of the events.
 """
 
 from __future__ import annotations
@@ -21,9 +26,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from numba.extending import overload
 
-from ..._numba.compile_steps import inline_only
 from ..._numba.jit import kernel
 from ..model.evaluate import evaluate_ws
 from ..model.flags import is_set
@@ -51,10 +54,9 @@ from ..model.layout import (
     STICK,
     V_SINGULAR,
 )
-from ..model.power_flows import power_flows
 from ..model.roots import illinois_update
 from . import ark
-from .dopri5 import dense, step
+from .event_location import EVENT_TIME_TOL, dense_event_values, refine_event
 from .events import (
     contact_event,
     event_leg,
@@ -66,15 +68,9 @@ from .events import (
     stamp_transition,
 )
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
+from .step_energy import accumulate_energy
+from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
 from .transitions import apply_event, record_friction, settle_ws
-
-# integration methods (``run(..., method)``)
-# (the user-level choice, e.g. ARK3 for Model II at the default tolerance, is made by
-# ``simulation.IntegratorSettings.resolve``; run() itself maps AUTO to DOPRI5)
-METHOD_AUTO = -1      # DOPRI5
-METHOD_DOPRI5 = 0     # explicit Dormand-Prince 5(4): the reference
-METHOD_ARK4 = 1       # additive RK 4(3), belt spring-dampers implicit (ark.py; Model II)
-METHOD_ARK3 = 2       # additive RK 3(2) (ark.py, ARK3(2)4L[2]SA), same splitting
 
 # slots of run()'s hwork array, carried between calls
 HW_STEP = 0           # step-size guess [s]
@@ -82,10 +78,6 @@ HW_STIFF_VALID = 1    # 1: the ARK stiff factors sfwork are valid
 HW_EVAL_KEPT = 2      # 1: the evaluation workspace holds the last evaluation of the state
 NHW = 3
 
-EVENT_TIME_TOL = 1e-13
-#: an event function counts as at its zero on a step that ends within this time of it [s]
-#: (measured with the function's slope over the step; docs/specification.md section 7 asks for 1e-9 s)
-EVENT_STATE_TOL = 1e-10
 #: a pending event counts as reached at another event's instant when its (normalised)
 #: function is below this: toe height 3e-13 m, a force of 2.4e-10 N on Scout II
 SIMULTANEOUS_EVENT_TOL = 1e-12
@@ -105,59 +97,6 @@ STEP_HEADROOM = MAX_STEPS_PER_PERIOD + MAX_EVENTS_PER_PERIOD + 2
 WHOLE_PERIOD_FRACTION = 0.5
 
 
-# --- the method, chosen when the integrator is compiled ---------------------------------
-# ``method`` reaches the integrator as a compile-time constant (jit.SPECIALIZING_PARAMETERS,
-# loop.run_entry). The two functions below are resolved from it while the caller is being
-# compiled, so a run compiles only its own method's stepper and continuous extension
-# (a Model II run at the default tolerance neither DOPRI5 nor ARK4: 10 % of the first run's
-# compilation, docs/model.md "Compile time").
-
-
-def method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
-    """One step of ``method`` (a constant) on the step's ``work``
-    (:class:`~scoutsim._core.numerics.work.StepWork`); compiled code only (:func:`_method_step`)."""
-    raise NotImplementedError("method_step is resolved when a kernel is compiled")
-
-
-@overload(method_step, prefer_literal=True, inline="always")
-def _method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
-    m = getattr(method, "literal_value", None)
-    if m == METHOD_ARK4:
-        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
-            return ark.step(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
-        return inline_only(impl)
-    if m == METHOD_ARK3:
-        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
-            return ark.step3(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
-        return inline_only(impl)
-    if m == METHOD_DOPRI5:
-        def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
-            err, ok = step(s, h, P, mi, mf, cmd, work)
-            return err, ok, 6
-        return inline_only(impl)
-    return None   # not a method constant: no implementation (a typing error names it)
-
-
-def method_dense(method, s, y_new, h, K, th, out):
-    """The continuous extension of ``method``'s last step (a constant) at the fraction
-    ``th`` into ``out``; compiled code only (:func:`_method_dense`)."""
-    raise NotImplementedError("method_dense is resolved when a kernel is compiled")
-
-
-@overload(method_dense, prefer_literal=True, inline="always")
-def _method_dense(method, s, y_new, h, K, th, out):
-    m = getattr(method, "literal_value", None)
-    if m == METHOD_ARK4 or m == METHOD_ARK3:
-        def impl(method, s, y_new, h, K, th, out):
-            ark.dense(s, y_new, h, K, th, out)
-        return inline_only(impl)
-    if m == METHOD_DOPRI5:
-        def impl(method, s, y_new, h, K, th, out):
-            dense(s, h, K, th, out)
-        return inline_only(impl)
-    return None
-
-
 @kernel(inline="always")
 def arm_jams(mi, e_now, armed):
     """Arm the jam event of every sliding toe whose slide is already at or beyond its jam
@@ -171,140 +110,15 @@ def arm_jams(mi, e_now, armed):
             armed[kj] = True
 
 
-@kernel(inline="always")
-def do_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf=True):
-    """One step of the selected method (a constant, :func:`method_step`) on the step's
-    ``work`` (:class:`~scoutsim._core.numerics.work.StepWork`); returns (error_norm, ok,
-    evaluations). ``want_sf``: the ARK methods also refresh the stiff factors at the
-    step's end (SF1)."""
-    return method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf)
-
-
-@kernel(inline="always")
-def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
-    """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
-    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew,
-                       method >= METHOD_ARK4, SF0, True)
-
-
-@kernel(inline="always")
-def dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw):
-    """Event functions (into evw.e_tmp) at the fraction ``th`` of the step of size ``h``
-    from ``s`` to ``work.y_new``, on the method's continuous extension (one evaluation;
-    ``work``: :class:`~scoutsim._core.numerics.work.StepWork`, ``evw``: its ``EventWork``)."""
-    ybuf, aux_tmp, ew = evw.ybuf, evw.aux_tmp, work.ew
-    method_dense(method, s, work.y_new, h, work.K, th, ybuf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, work.tmp, aux_tmp, ew, False, ew[3],
-                True)
-    project_state(ybuf, P, mi, mf)
-    event_values(ybuf, aux_tmp, P, mi, evw.e_tmp)
-
-
-@kernel(inline="always")
-def smallest_armed_event(y, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed):
-    """The smallest armed event function at state ``y`` (evaluated on a projected copy)
-    and its slot: (value, slot)."""
-    for i in range(NS):
-        ybuf[i] = y[i]
-    project_state(ybuf, P, mi, mf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, False, ew[3], True)
-    event_values(ybuf, aux_tmp, P, mi, e_tmp)
-    fc = 1.0
-    k = -1
-    for i in range(NEV):
-        if armed[i] and e_tmp[i] < fc:
-            fc = e_tmp[i]
-            k = i
-    return fc, k
-
-
-@kernel
-def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
-    """Make the step from ``s`` end on the earliest zero of the armed event functions
-    themselves (not of their continuous-extension interpolants).
-
-    ``y_new`` holds the step of length th0 h located on the continuous extension for event
-    ``kmin``; ``e_start`` / ``e_full`` are the event values at the step's start (armed ones
-    > 0) and at its full length h. The step stands if, on it, the smallest armed event
-    function g = min_i e_i has crossed (<= 0) by no more than EVENT_STATE_TOL of its slope;
-    otherwise g's zero is located by Illinois iterations on redone steps. Using g, not
-    e_kmin alone, keeps a refinement from stepping over another event. Returns
-    (he, event slot, evaluations); y_new holds the step to he. ``work``: the step's
-    :class:`~scoutsim._core.numerics.work.StepWork`; ``evw``: its ``EventWork`` (the armed events,
-    their values ``e_old`` at the step's start, the probe buffers)."""
-    armed, e_start, ybuf, aux_tmp, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.aux_tmp, \
-        evw.e_tmp
-    y_new, tmp, ew = work.y_new, work.tmp, work.ew
-    nf = 0
-    a = 0.0
-    fa = 1.0
-    b = 1.0
-    fb = -1.0
-    for i in range(NEV):
-        if armed[i] and e_start[i] < fa:
-            fa = e_start[i]
-        if armed[i] and e_full[i] < 0.0 and e_full[i] > fb:
-            fb = e_full[i]
-    th = th0
-    side = 0
-    k = kmin
-    for _ in range(60):
-        fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp,
-                                      armed)
-        nf += 1
-        if kk >= 0:
-            k = kk
-        slope = abs(e_full[k] - e_start[k]) / h
-        if fc <= 0.0 and fc >= -slope * EVENT_STATE_TOL:
-            return th * h, k, nf
-        a, fa, b, fb, side = illinois_update(th, fc, a, fa, b, fb, side)
-        done = (b - a) * h < EVENT_TIME_TOL
-        th = b if done else (a * fb - b * fa) / (fb - fa)
-        err, ok, nfs = do_step(method, s, th * h, P, mi, mf, cmd, work, True, False)
-        nf += nfs
-        if done:
-            break
-    # bracket closed to EVENT_TIME_TOL: the step to b, where g <= 0
-    fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed)
-    nf += 1
-    if kk >= 0:
-        k = kk
-    return th * h, k, nf
-
-
 #: advance()'s scratch arrays (``imp``: the impulses of a touchdown), and the step recording (``steps``, ``stepc``:
 #: :func:`~scoutsim._core.numerics.events.record_step`), the state before a transition
 #: (``s_before``, for the event records) and the work-energy accounting (``energy``: the
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; ``ew_e``
 #: an evaluation workspace of its own and ``y_e, ds_e, aux_e, p_e`` its scratch:
-#: :func:`accumulate_energy`)
+#: :func:`~scoutsim._core.numerics.step_energy.accumulate_energy`)
 AdvanceScratch = namedtuple("AdvanceScratch",
                             "e_end pending mi_before s_before steps stepc energy ew_e y_e "
                             "ds_e aux_e p_e imp")
-
-#: Gauss-Legendre nodes and weights on [0, 1] (3 points, exact for polynomials of degree 5)
-GAUSS_NODES = (0.5 - 0.15 ** 0.5, 0.5, 0.5 + 0.15 ** 0.5)
-GAUSS_WEIGHTS = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
-
-
-@kernel
-def accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc):
-    """Add the energy of every power flow (model/power_flows.py) over the step of size ``h``
-    from ``s`` to ``y_new`` to ``sc.energy``: 3-point Gauss-Legendre quadrature on the
-    method's continuous extension, with the step's modes and held commands. Uses its own
-    evaluation workspace, so the integration is unchanged, bit for bit."""
-    ew = sc.ew_e
-    y = sc.y_e
-    p = sc.p_e
-    for g in range(3):
-        method_dense(method, s, y_new, h, K, GAUSS_NODES[g], y)
-        project_state(y, P, mi, mf)
-        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew, False, ew[3],
-                    True)
-        power_flows(y, sc.ds_e, sc.aux_e, P, mi, ew[0], ew[1], p)
-        w = GAUSS_WEIGHTS[g] * h
-        for i in range(p.shape[0]):
-            sc.energy[i] += w * p[i]
 
 
 @kernel
