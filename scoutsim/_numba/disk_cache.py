@@ -219,9 +219,12 @@ def _remove(directory: Path, stale_after: float | None, now: float) -> bool:
 
 def _remove_other_digests(root: Path, digests: dict[str, str],
                           stale_after: float | None) -> list[Path]:
-    """Remove the module directories in ``root`` of a core module at another digest than
-    ``digests``; with ``stale_after`` [s], only those nothing has written to for that
-    long. Anything else in ``root`` is left alone. Returns the directories removed."""
+    """Remove the module directories in ``root`` (``<module>-<digest>``) of a core module
+    at another digest than ``digests``; in the package's own cache (``stale_after`` None)
+    also those of a module the core no longer has (a version whose modules were named or
+    placed otherwise). With ``stale_after`` [s] (a user's shared directory), only those
+    nothing has written to for that long. Anything else in ``root`` is left alone. Returns
+    the directories removed."""
     current = {_module_name(rel): d for rel, d in digests.items()}
     try:
         entries = list(root.iterdir())
@@ -231,8 +234,11 @@ def _remove_other_digests(root: Path, digests: dict[str, str],
     removed = []
     for old in entries:
         m = _MODULE_DIR.fullmatch(old.name)
-        if m is None or m["module"] not in current or m["digest"] == current[m["module"]]:
+        if m is None:
             continue
+        known = current.get(m["module"])
+        if known == m["digest"] or (known is None and stale_after is not None):
+            continue    # current; or, in a shared directory, a module this version lacks
         if _remove(old, stale_after, now):
             removed.append(old)
     return removed

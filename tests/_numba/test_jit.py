@@ -24,12 +24,22 @@ from scoutsim._core.model import (
     transmission,
     workspace,
 )
-from scoutsim._core.numerics import ark, dopri5, events, hybrid, transitions
+from scoutsim._core.numerics import (
+    ark,
+    dopri5,
+    event_location,
+    events,
+    hybrid,
+    step_energy,
+    stepper,
+    transitions,
+)
 from scoutsim._numba import disk_cache, jit
 from scoutsim.control import bounding
 
 MODULES = (kinematics, rigid_body, leg, actuator, transmission, contact, kkt, workspace,
-           impact, evaluate, ark, dopri5, events, transitions, hybrid, loop, bounding)
+           impact, evaluate, ark, dopri5, events, transitions, stepper, event_location,
+           step_energy, hybrid, loop, bounding)
 
 
 def dispatchers(module):
@@ -282,3 +292,37 @@ def test_the_per_kind_typing_has_a_switch(tmp_path):
     assert out["value"] == (1.0 + 1.0 + 0) + (1.0 + 0.0 + 1)
     assert out["signatures"] == 2
     assert out["status"] == "off: SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS is set"
+
+
+def test_the_cleaner_removes_directories_of_other_digests_and_of_modules_gone(tmp_path):
+    """In the package's own cache, a module directory at another digest, or of a module the
+    core no longer has (an older layout: ``numerics.hybrid-<digest>``), is removed; the
+    current directories and anything that is not a module directory stay. In a user's
+    shared directory only our modules' other digests go, once nothing has written to them
+    for a while (a module this version lacks may be another version's, running now)."""
+    import os
+    import time
+    digests = {"_core/loop.py": "0" * 16, "_core/numerics/hybrid.py": "1" * 16}
+
+    def make(base):
+        keep = [base / f"_core.loop-{'0' * 16}", base / f"_core.numerics.hybrid-{'1' * 16}",
+                base / "imports.json", base / "not-a-module-dir"]
+        other = base / f"_core.loop-{'2' * 16}"
+        gone = [base / f"numerics.hybrid-{'3' * 16}", base / f"loop-{'4' * 16}"]
+        base.mkdir()
+        for p in keep + [other] + gone:
+            p.write_text("{}") if p.suffix == ".json" else p.mkdir()
+        return keep, other, gone
+
+    keep, other, gone = make(tmp_path / "own")
+    removed = disk_cache._remove_other_digests(tmp_path / "own", digests, stale_after=None)
+    assert sorted(removed) == sorted([other, *gone])
+    assert all(p.exists() for p in keep)
+
+    keep, other, gone = make(tmp_path / "shared")
+    assert disk_cache._remove_other_digests(tmp_path / "shared", digests, 3600.0) == []
+    old = time.time() - 7200.0
+    for p in (other, *gone):
+        os.utime(p, (old, old))
+    assert disk_cache._remove_other_digests(tmp_path / "shared", digests, 3600.0) == [other]
+    assert all(p.exists() for p in keep + gone)

@@ -4,7 +4,7 @@ For the work-energy balance of a run (``simulate(energy=True)``,
 ``SimulationResult.energy_balance``, docs/model.md "Work-energy balance"): at a state and
 its evaluation, every power flow [W] of the model, per virtual leg (both motors of a leg
 together), into the slots of ``layout.EN_*``. The integrator integrates them over each of
-its steps (``scoutsim._core.numerics.hybrid``); the impact losses come from the touchdown records.
+its steps (``scoutsim._core.numerics.step_energy``); the impact losses come from the touchdown records.
 
 Per motor, with current i, motor speed w_m (relative to the torso), delivered torque
 tau_out and the paper's constant-efficiency torque tau_0 = N eta K_T i (docs/specification.md
