@@ -116,3 +116,13 @@ def _png_draws_each_axes_data(path, fig, dpi=None):
 def png_draws_each_axes_data():
     """``png_draws_each_axes_data(path, fig)``: see :func:`_png_draws_each_axes_data`."""
     return _png_draws_each_axes_data
+
+
+@pytest.fixture(autouse=True)
+def _parameter_warnings_start_afresh():
+    """Each test starts with no memory of values already warned of with their file (the
+    process-wide memory that keeps the library from warning twice of one value): a test
+    that expects a warning must not depend on which tests ran before it in the process."""
+    from scoutsim.parameters import plausibility
+    plausibility._WARNED_FROM_A_FILE.clear()
+    yield
