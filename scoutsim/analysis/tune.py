@@ -111,7 +111,7 @@ from .study_controller import (
     study_controller,
 )
 from .study_failures import StudyError, check_on_error, is_error
-from .sweep import read_checkpoint
+from .sweep_checkpoint import read_checkpoint
 
 # the parts of a tuning, re-exported here as its public API
 from .tune_evaluation import (
@@ -498,6 +498,8 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                                           "generation": gen})
                 todo.append(k)
 
+            failed: list = []
+
             def on_result(j, row, todo=todo, failed=failed):
                 if on_error == "raise" and is_error(row):
                     failed.append(row)      # never recorded: a resumed tuning runs it again
@@ -512,7 +514,6 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     # one pool for every generation (a broken one is replaced)
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
-                failed: list = []
                 map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
                           progress=False, on_result=on_result, error_row=_error_row)
                 if failed:

@@ -31,7 +31,7 @@ from ..parameters import plausibility_warnings_off, validate_parameters
 from .strides import MIN_STEADY_STRIDES  # steady strides a steady bound needs
 from .study_controller import build_controller
 from .study_failures import StudyError, error_fields, run_failure
-from .sweep import _orbit_columns
+from .sweep_orbit import orbit_columns
 from .tune_parameters import _apply
 
 __all__ = ["tune_task", "OBJECTIVES", "AGGREGATES", "PENALTY", "MIN_STEADY_STRIDES",
@@ -145,7 +145,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
         objective = row["cost_of_transport"]
     elif kind == "stability":
         if row["steady_bounding"]:
-            orbit = _orbit_columns(r, robot, ctrl, {"model": scenario["model"],
+            orbit = orbit_columns(r, robot, ctrl, {"model": scenario["model"],
                                                     "friction_coefficient": scenario["friction"]})
             row["spectral_radius"] = orbit["orbit_spectral_radius"]
             if orbit["orbit_spectral_radius"] is None:

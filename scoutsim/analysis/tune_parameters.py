@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
-from .sweep import _check_name, parameter_names
+from .sweep_points import check_name, parameter_names
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
 
@@ -204,7 +204,7 @@ def _check_tuned_name(name: str, base: str) -> None:
     """ValueError naming ``name`` (``base``: without its _deg suffix) unless it is a field
     of RobotParameters / ControllerParameters, with the nearest name as a hint."""
     try:
-        _check_name(base)
+        check_name(base)
     except ValueError:
         import difflib
         names = parameter_names()
