@@ -146,7 +146,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     elif kind == "stability":
         if row["steady_bounding"]:
             orbit = orbit_columns(r, robot, ctrl, {"model": scenario["model"],
-                                                    "friction_coefficient": scenario["friction"]})
+                                                   "friction_coefficient": scenario["friction"]})
             row["spectral_radius"] = orbit["orbit_spectral_radius"]
             if orbit["orbit_spectral_radius"] is None:
                 broken.append(("no periodic orbit", 1.0))

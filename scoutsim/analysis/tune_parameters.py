@@ -239,3 +239,18 @@ def _base_value(p: TuneParameter, robot, cparams, spec) -> float:
         return float(spec["params"][int(p.key[7:-1])])
     sec, _, fld = p.key.partition(".")
     return float(getattr(robot if sec == "robot" else cparams, fld))
+
+
+def warn_of_box_ends(params, robot, cparams) -> None:
+    """Make the parameter sets at each tuned parameter's bounds once, here, so a search box
+    that reaches far from a robot of this kind is warned of once for the tuning
+    (:class:`~scoutsim.parameters.ImplausibleParameterWarning`), not per candidate; bounds
+    that are not allowed are the candidates' own business."""
+    for p in params:
+        if p.key.startswith("params["):
+            continue
+        for v in (p.low, p.high):
+            try:
+                _apply({p.key: v}, robot, cparams, None)
+            except (ValueError, TypeError):
+                pass
