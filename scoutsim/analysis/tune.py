@@ -121,27 +121,27 @@ from .tune_evaluation import (
     OBJECTIVES,
     PENALTY,
     EvaluationNotRunError,
-    _error_row,
+    evaluation_error_row,
     tune_task,
 )
 from .tune_optimizer import (
     EVALUATIONS,
     OPTIMIZER_STATE,
     MissingDependencyError,
-    _cma_class,
-    _key,
-    _read_state,
-    _write_state,
+    checkpoint_key,
+    cma_class,
+    read_state,
+    write_state,
 )
 from .tune_parameters import (
     TuneParameter,
-    _apply,
-    _base_value,
+    apply_values,
+    base_value,
     has_tunable_array,
     parse_parameter,
     warn_of_box_ends,
 )
-from .tune_result import TuneResult, _json, _write_outputs
+from .tune_result import TuneResult, json_default, write_outputs
 from .tune_settings import TuneGoal, TuneRuns, TuneSearch, bundles, check_settings
 
 __all__ = ["tune", "TuneGoal", "TuneRuns", "TuneSearch", "TuneParameter", "TuneResult",
@@ -206,7 +206,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                                                    goal.max_current, goal.min_speed)
     duration, robot, controller = runs.duration, runs.robot, runs.controller
     budget, seed, sigma, population = search.budget, search.seed, search.sigma, search.population
-    CMA = _cma_class()
+    CMA = cma_class()
     check_settings(goal, search)
     check_on_error(on_error)
     robot = robot or RobotParameters()
@@ -245,7 +245,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     n_gen = budget // pop
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
-    base = np.array([_base_value(p, robot, cparams, spec) for p in params])
+    base = np.array([base_value(p, robot, cparams, spec) for p in params])
     mean0 = np.clip((base - lo) / (hi - lo), 0.0, 1.0)
     goal_settings = {"objective": objective, "target": target, "aggregate": aggregate,
                      "max_belt_deflection": max_belt_deflection, "max_current": max_current,
@@ -263,7 +263,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 "duration_s": duration, "robot": dataclasses.asdict(robot),
                 "controller_parameters": dataclasses.asdict(cparams), "seed": seed,
                 "sigma": sigma, "population": pop}
-    skey = _key(settings)
+    skey = checkpoint_key(settings)
     task_base = {"goal": goal_settings, "duration": duration, "robot": robot, "cparams": cparams,
                  "controller": spec, "scenarios": scenarios}
     warn_of_box_ends(params, robot, cparams)
@@ -278,7 +278,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             "kind": "tune", "checkpoint": EVALUATIONS, "optimizer_state": OPTIMIZER_STATE,
             "budget": budget}).open()
         ck, state_path = out / EVALUATIONS, out / OPTIMIZER_STATE
-        saved = _read_state(state_path) if resume else None
+        saved = read_state(state_path) if resume else None
         if saved is not None and saved["key"] == skey:
             cma, gen = saved["cma"], saved["generation"]
             done = read_checkpoint(ck)
@@ -290,7 +290,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         cma = CMA(mean=mean0, sigma=sigma, bounds=np.array([[0.0, 1.0]] * dim), seed=seed,
                   population_size=pop)
         gen = 0
-        cma = _write_state(state_path, skey, 0, cma)
+        cma = write_state(state_path, skey, 0, cma)
     n_resumed = len(done)
 
     bar = tqdm(total=n_gen * pop, unit="run", desc="tune", file=sys.stderr,
@@ -314,7 +314,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         # the generations already told: their rows come from the checkpoint
         for g in range(min(gen, n_gen)):
             for i in range(pop):
-                k = _key([skey, g, i])
+                k = checkpoint_key([skey, g, i])
                 if k not in done:
                     raise ValueError(f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} of "
                                      f"generation {g}, which {out}/{OPTIMIZER_STATE} has "
@@ -326,7 +326,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 stopped = "converged"
                 break
             xs = [cma.ask() for _ in range(pop)]
-            keys = [_key([skey, gen, i]) for i in range(pop)]
+            keys = [checkpoint_key([skey, gen, i]) for i in range(pop)]
             tasks, todo = [], []
             for i, (x, k) in enumerate(zip(xs, keys)):
                 values = {p.key: float(p.low + (p.high - p.low) * u) for p, u in zip(params, x)}
@@ -345,7 +345,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     failed.append(row)      # never recorded: a resumed tuning runs it again
                     return
                 if fh is not None:
-                    fh.write(json.dumps({"key": todo[j], "row": row}, default=_json) + "\n")
+                    fh.write(json.dumps({"key": todo[j], "row": row}, default=json_default) + "\n")
                     fh.flush()
                 record(todo[j], row)
 
@@ -355,7 +355,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
                 map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
-                          progress=False, on_result=on_result, error_row=_error_row)
+                          progress=False, on_result=on_result, error_row=evaluation_error_row)
                 if failed:
                     failed.sort(key=lambda r: r["evaluation"])
                     r = failed[0]
@@ -372,7 +372,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                           "infeasible and go on", failed)
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
-            cma = _write_state(state_path, skey, gen, cma)
+            cma = write_state(state_path, skey, gen, cma)
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
         if rd is not None and isinstance(exc, (KeyboardInterrupt, StudyError)):
@@ -386,7 +386,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         if fh is not None:
             fh.close()
 
-    keys = [_key([skey, g, i]) for g in range(gen if stopped == "converged" else n_gen)
+    keys = [checkpoint_key([skey, g, i]) for g in range(gen if stopped == "converged" else n_gen)
             for i in range(pop)]
     raw = [rows_by_key[k] for k in keys]
     rows = []
@@ -397,7 +397,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     b = min(range(len(rows)), key=lambda j: (rows[j]["score"], j))
     best_row = rows[b]
     best_values = {p.key: raw[b]["values"][p.key] for p in params}
-    b_robot, b_cparams, b_params = _apply(best_values, robot, cparams, spec.get("params"))
+    b_robot, b_cparams, b_params = apply_values(best_values, robot, cparams, spec.get("params"))
     n_errors = sum(r.get("status") == "error" for r in rows)
     res = TuneResult(rows=rows, parameters=params, best=best_row, best_values=best_values,
                      robot=b_robot, controller_parameters=b_cparams, params=b_params,
@@ -410,5 +410,5 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                       "run and are recorded with status 'error', scored as infeasible",
                       RuntimeWarning, stacklevel=2)
     if rd is not None:
-        _write_outputs(res, rd, command)
+        write_outputs(res, rd, command)
     return res

@@ -217,7 +217,7 @@ def _check_tuned_name(name: str, base: str) -> None:
                          f"of a CompiledController{hint}") from None
 
 
-def _apply(values: dict, robot, cparams, params):
+def apply_values(values: dict, robot, cparams, params):
     """The robot, controller parameters and parameter array with the tuned ``values``
     ({key: SI}) set."""
     rob = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("robot.")}
@@ -232,7 +232,7 @@ def _apply(values: dict, robot, cparams, params):
     return robot, cparams, params
 
 
-def _base_value(p: TuneParameter, robot, cparams, spec) -> float:
+def base_value(p: TuneParameter, robot, cparams, spec) -> float:
     """The base value of ``p`` [SI]: its field of ``robot`` or ``cparams``, or its entry of
     the compiled controller's parameter array (``spec["params"]``)."""
     if p.key.startswith("params["):
@@ -251,6 +251,6 @@ def warn_of_box_ends(params, robot, cparams) -> None:
             continue
         for v in (p.low, p.high):
             try:
-                _apply({p.key: v}, robot, cparams, None)
+                apply_values({p.key: v}, robot, cparams, None)
             except (ValueError, TypeError):
                 pass

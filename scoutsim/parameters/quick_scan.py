@@ -38,8 +38,9 @@ def scan_plan(cls: type) -> tuple:
 def quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
     """The fields' single-field checks by comparison alone: None if a value is not of its
     field's plain type (``float`` or a subclass, ``int``, ``bool``, or a (back, front) tuple
-    of them) or is outside its allowed range (:func:`~scoutsim.parameters.field_rules.check_fields` then says why), else
-    the implausible values as (name, value, leg)."""
+    of them) or is outside its allowed range
+    (:func:`~scoutsim.parameters.field_rules.check_fields` then says why), else the
+    implausible values as (name, value, leg)."""
     implausible: list[tuple[str, typing.Any, int | None]] = []
     for name, types, per_leg, lo, hi, p_lo, p_hi, p_zero in plan:
         v = values[name]
