@@ -16,9 +16,7 @@ an error with the reason; see :mod:`scoutsim.analysis.parallel`). The table is w
 Parquet (``pyarrow``) and CSV.
 
 Names and units: a point's names are ``robot.<field>`` / ``controller.<field>`` in SI
-units, or, for an angle field, ``<name>_deg`` in degrees (converted to SI for the run); the
-table's column of a parameter holds its values as named, so a ``_deg`` column holds
-degrees and every other column its field's SI unit (:func:`axis_label`).
+units, or ``<name>_deg`` in degrees for an angle field (:mod:`scoutsim.analysis.sweep_points`).
 
 Controllers: the base controller is ControllerParameters (Table I; ``controller.<field>``
 points set its fields), a user's controller object (a CompiledController, a Python
@@ -29,13 +27,17 @@ factory gets). It is checked before the first point runs
 (:mod:`scoutsim.analysis.study_controller`). Each row's ``status`` says whether the point
 ran (ok), is not allowed (invalid: outcome ``invalid_parameters``) or could not be run by
 the study (error: :mod:`scoutsim.analysis.study_failures`, ``on_error``).
+
+The parts have their own modules: :mod:`~scoutsim.analysis.sweep_points` (the names a
+sweep varies, grid and random points), :mod:`~scoutsim.analysis.sweep_orbit` (a point's
+periodic orbit, ``orbit=True``) and :mod:`~scoutsim.analysis.sweep_checkpoint` (the
+checkpoint file a sweep resumes from). This module runs the points and holds the table,
+and re-exports their public names.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import itertools
 import json
 import math
 from dataclasses import dataclass, field
@@ -49,10 +51,8 @@ from ..io.run_directory import RunDirectory
 from ..io.tables import write_rows_csv, write_rows_parquet
 from ..parameters import (
     DEFAULT_FRICTION_COEFFICIENT,
-    UNITS,
     ControllerParameters,
     RobotParameters,
-    field_dimension,
     plausibility_warnings_off,
     validate_parameters,
 )
@@ -73,120 +73,28 @@ from .study_failures import (
     is_error,
     run_failure,
 )
+from .sweep_checkpoint import CHECKPOINT, json_default, read_checkpoint, was_error
+from .sweep_orbit import ORBIT_COLUMNS, ORBIT_RTOL, ORBIT_TOL, orbit_columns
+from .sweep_points import (
+    DEG,
+    axis_label,
+    check_name,
+    grid_points,
+    parameter_names,
+    point_key,
+    random_points,
+    si_name,
+)
+
+__all__ = ["sweep", "sweep_task", "SweepBase", "SweepResult", "SUMMARY_COLUMNS",
+           "ORBIT_COLUMNS", "ORBIT_RTOL", "ORBIT_TOL", "orbit_columns", "CHECKPOINT",
+           "read_checkpoint", "DEG", "parameter_names", "si_name", "axis_label", "grid_points",
+           "random_points", "point_key"]
 
 SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
                    "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
                    "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
                    "steady_bounding", "max_friction_ratio", "status", "error")
-#: suffix of a name that gives an angle field in degrees
-DEG = "_deg"
-
-_SECTIONS = {"robot": RobotParameters, "controller": ControllerParameters}
-
-
-def parameter_names() -> list[str]:
-    """All names a sweep can vary."""
-    return [f"{sec}.{f.name}" for sec, cls in _SECTIONS.items()
-            for f in dataclasses.fields(cls)]
-
-
-def si_name(name: str) -> tuple[str, float]:
-    """The field a point's ``name`` sets and the SI value per unit of its values:
-    ``(name without _deg, pi / 180)`` for a degrees name, else ``(name, 1)``."""
-    if name.endswith(DEG):
-        return name[:-len(DEG)], math.pi / 180.0
-    return name, 1.0
-
-
-def axis_label(name: str) -> tuple[float, str]:
-    """How a plot shows a sweep column: ``(factor, label)``, the column's values times
-    ``factor`` in the unit the label gives. An angle in SI is shown in degrees, a ``_deg``
-    column as it is, another field in its SI unit ("-" for a pure number); any other
-    column by its name (its unit is in the name: ``mean_speed_m_s``)."""
-    base, scale = si_name(name)
-    dim = field_dimension(base.partition(".")[2]) if base.partition(".")[0] in _SECTIONS \
-        else None
-    if dim is None:
-        return 1.0, name
-    if scale != 1.0:
-        return 1.0, f"{name} [deg]"
-    if dim == "angle":
-        return 180.0 / math.pi, f"{name} [deg]"
-    unit = next(iter(UNITS[dim]))
-    return 1.0, f"{name} [{'-' if unit == '1' else unit}]"
-
-
-def _check_name(name: str):
-    base, scale = si_name(name)
-    sec, _, fld = base.partition(".")
-    cls = _SECTIONS.get(sec)
-    if scale != 1.0 and cls is not None and field_dimension(fld) != "angle":
-        raise ValueError(f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
-                         f"degrees for an angle; {base!r} is not an angle (give it in SI "
-                         "units, without the suffix)")
-    if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
-        import difflib
-        near = difflib.get_close_matches(name, parameter_names(), n=1)
-        hint = f"; did you mean {near[0]!r}?" if near else ""
-        raise ValueError(f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
-                         f"controller.<field> of RobotParameters / ControllerParameters (a "
-                         f"_deg suffix on an angle takes degrees){hint}")
-
-
-def grid_points(grid: dict) -> list[dict]:
-    """Cartesian product of ``{name: values}`` as a list of points (last name fastest)."""
-    for name in grid:
-        _check_name(name)
-    names = list(grid)
-    return [dict(zip(names, map(float, vals)))
-            for vals in itertools.product(*(list(grid[n]) for n in names))]
-
-
-def random_points(bounds: dict, n: int, seed: int = 0) -> list[dict]:
-    """``n`` points drawn uniformly within ``{name: (low, high)}`` (seeded, reproducible)."""
-    for name in bounds:
-        _check_name(name)
-    rng = np.random.default_rng(seed)
-    names = list(bounds)
-    lo = np.array([bounds[k][0] for k in names], dtype=float)
-    hi = np.array([bounds[k][1] for k in names], dtype=float)
-    u = rng.random((n, len(names)))
-    return [dict(zip(names, map(float, lo + (hi - lo) * row))) for row in u]
-
-
-def point_key(point: dict, settings: dict) -> str:
-    """Stable identity of a point within a sweep (for resuming)."""
-    blob = json.dumps({"point": point, "settings": settings}, sort_keys=True, default=repr)
-    return hashlib.sha256(blob.encode()).hexdigest()[:16]
-
-
-#: columns added by ``orbit=True``: the controlled orbit at the point (Newton from the run's
-#: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`)
-ORBIT_COLUMNS = ("orbit_period_s", "orbit_spectral_radius", "orbit_stable", "orbit_residual",
-                 "orbit_status")
-#: integrator and tolerance of the per-point orbit (looser than the single-orbit default,
-#: rtol 1e-11 / 1e-10: a sweep wants stability, not the 12th digit)
-ORBIT_RTOL = 1e-9
-ORBIT_TOL = 1e-7
-
-
-def _orbit_columns(result, robot, ctrl, task) -> dict:
-    from ..simulation.integrator import IntegratorSettings
-    from .controlled_orbit import controlled_fixed_point
-    from .poincare import MapError
-    out: dict[str, Any] = {k: None for k in ORBIT_COLUMNS}
-    try:
-        o = controlled_fixed_point(result, model=task["model"],
-                                   friction_coefficient=task["friction_coefficient"],
-                                   robot=robot, controller=ctrl, tol=ORBIT_TOL, max_iter=6,
-                                   integrator=IntegratorSettings(rtol=ORBIT_RTOL,
-                                                                 atol=ORBIT_RTOL / 10))
-        out.update(orbit_period_s=o.period, orbit_residual=o.residual,
-                   orbit_spectral_radius=float(np.max(np.abs(o.multipliers))),
-                   orbit_stable=o.stable, orbit_status="ok")
-    except MapError as exc:
-        out["orbit_status"] = f"no orbit: {exc}"
-    return out
 
 
 def _point_parameters(task: dict):
@@ -272,7 +180,7 @@ def _sweep_point(task: dict) -> dict:
         row["steady_bounding"] = bool(s.get("steady_bounding"))
         if task.get("orbit"):
             if row["steady_bounding"]:
-                row.update(_orbit_columns(r, robot, ctrl, task))
+                row.update(orbit_columns(r, robot, ctrl, task))
             else:
                 row.update(orbit_status="no orbit: not steady bounding")
         row.update(status="ok", error="")
@@ -394,7 +302,7 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     names = list(dict.fromkeys(k for p in points for k in p))
     fields_set: dict = {}
     for n in names:
-        _check_name(n)
+        check_name(n)
         base_name = si_name(n)[0]
         if base_name in fields_set:
             raise ValueError(f"sweep parameters {fields_set[base_name]!r} and {n!r} set the "
@@ -432,7 +340,7 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
                                                       "n_points": len(points)}).open()
         ck = out / CHECKPOINT
         if resume:      # (a point the study could not run is run again)
-            done = {k: r for k, r in read_checkpoint(ck).items() if not _was_error(r)}
+            done = {k: r for k, r in read_checkpoint(ck).items() if not was_error(r)}
         elif ck.exists():
             ck.unlink()
     todo = [i for i, k in enumerate(keys) if k not in done]
@@ -446,7 +354,7 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
 
     def on_result(j, row):
         if fh is not None:
-            fh.write(json.dumps({"key": keys[todo[j]], "row": row}, default=_json) + "\n")
+            fh.write(json.dumps({"key": keys[todo[j]], "row": row}, default=json_default) + "\n")
             fh.flush()
 
     try:
@@ -486,34 +394,6 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
     return res
 
 
-#: name of the checkpoint file in a sweep's output directory: one JSON record per finished
-#: point, appended and flushed as each point arrives
-CHECKPOINT = "points.jsonl"
-
-
-def read_checkpoint(path) -> dict:
-    """The finished points of a checkpoint file, ``{key: row}`` (empty if there is none).
-
-    A last line cut by a kill (no newline at its end) is skipped and cut off the file, so
-    that the records appended next start on a line of their own."""
-    path = Path(path)
-    if not path.exists():
-        return {}
-    data = path.read_bytes()
-    whole = data[:data.rfind(b"\n") + 1]
-    if len(whole) != len(data):
-        with open(path, "r+b") as f:
-            f.truncate(len(whole))
-    done = {}
-    for line in whole.decode("utf-8", errors="replace").splitlines():
-        try:
-            rec = json.loads(line)
-            done[rec["key"]] = rec["row"]
-        except (json.JSONDecodeError, KeyError, TypeError):
-            continue       # a damaged record: that point runs again
-    return done
-
-
 def _error_row(task: dict, exc: BaseException) -> dict:
     """The row of a point whose task failed in its worker process (it could not be loaded
     there, or the worker died twice, see :func:`scoutsim.analysis.parallel.map_tasks`);
@@ -525,14 +405,3 @@ def _error_row(task: dict, exc: BaseException) -> dict:
     row.update(error_fields(exc), steady_bounding=False)
     return row
 
-
-def _was_error(row: dict) -> bool:
-    """Whether a checkpoint's row is a point the study could not run (a row written
-    before statuses existed: outcome "error")."""
-    return row.get("status", "error" if row.get("outcome") == "error" else "ok") == "error"
-
-
-def _json(v):
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    return repr(v)

@@ -78,13 +78,14 @@ Outputs in ``out``: ``tune.csv`` / ``tune.parquet`` (every evaluation), ``conver
 ``best.toml`` (a controller file, :mod:`scoutsim.analysis.controller_file`, that
 ``scoutsim run --controller FILE`` reads), ``best.json`` and ``manifest.json``.
 
-The parts have their own modules: :mod:`~scoutsim.analysis.tune_parameters` (the tuned
-parameters: names, bounds, units), :mod:`~scoutsim.analysis.tune_evaluation` (one
-evaluation: the scenarios' runs and the score), :mod:`~scoutsim.analysis.tune_optimizer`
-(CMA-ES, its saved state and the checkpoint's files) and
-:mod:`~scoutsim.analysis.tune_result` (the result and the files written). This module
-holds the run driver, :func:`tune`, with the settings it takes (:class:`TuneGoal`,
-:class:`TuneRuns`, :class:`TuneSearch`), and re-exports the public names.
+The parts have their own modules: :mod:`~scoutsim.analysis.tune_settings` (the settings
+``tune()`` takes: :class:`TuneGoal`, :class:`TuneRuns`, :class:`TuneSearch`),
+:mod:`~scoutsim.analysis.tune_controller` (the controller tuned and what it reads),
+:mod:`~scoutsim.analysis.tune_parameters` (the tuned parameters: names, bounds, units),
+:mod:`~scoutsim.analysis.tune_evaluation` (one evaluation: the scenarios' runs and the
+score), :mod:`~scoutsim.analysis.tune_optimizer` (CMA-ES, its saved state and the
+checkpoint's files) and :mod:`~scoutsim.analysis.tune_result` (the result and the files
+written). This module holds the run driver, :func:`tune`, and re-exports the public names.
 """
 
 from __future__ import annotations
@@ -95,23 +96,22 @@ import json
 import math
 import os
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
 from ..io.run_directory import RunDirectory, json_safe
-from ..parameters import DEFAULT_FRICTION_COEFFICIENT, ControllerParameters, RobotParameters
+from ..parameters import RobotParameters
 from .parallel import map_tasks, pool_is_broken, worker_pool
 from .study_controller import (
     build_controller,
     check_controller_travels,
     describe_controller,
-    study_controller,
 )
 from .study_failures import StudyError, check_on_error, is_error
-from .sweep import read_checkpoint
+from .sweep_checkpoint import read_checkpoint
+from .tune_controller import check_tuned_fields, controller_spec
 
 # the parts of a tuning, re-exported here as its public API
 from .tune_evaluation import (
@@ -121,171 +121,33 @@ from .tune_evaluation import (
     OBJECTIVES,
     PENALTY,
     EvaluationNotRunError,
-    _error_row,
+    evaluation_error_row,
     tune_task,
 )
 from .tune_optimizer import (
     EVALUATIONS,
     OPTIMIZER_STATE,
     MissingDependencyError,
-    _cma_class,
-    _key,
-    _read_state,
-    _write_state,
+    checkpoint_key,
+    cma_class,
+    read_state,
+    write_state,
 )
-from .tune_parameters import TuneParameter, _apply, _base_value, has_tunable_array, parse_parameter
-from .tune_result import TuneResult, _json, _write_outputs
+from .tune_parameters import (
+    TuneParameter,
+    apply_values,
+    base_value,
+    has_tunable_array,
+    parse_parameter,
+    warn_of_box_ends,
+)
+from .tune_result import TuneResult, json_default, write_outputs
+from .tune_settings import TuneGoal, TuneRuns, TuneSearch, bundles, check_settings
 
 __all__ = ["tune", "TuneGoal", "TuneRuns", "TuneSearch", "TuneParameter", "TuneResult",
            "parse_parameter", "OBJECTIVES", "AGGREGATES", "PENALTY", "EVALUATIONS",
            "OPTIMIZER_STATE", "MIN_STEADY_STRIDES", "COLUMNS", "tune_task",
            "MissingDependencyError", "EvaluationNotRunError"]
-
-
-@dataclass(frozen=True)
-class TuneGoal:
-    """What a tuning minimises, and under which constraints (module docstring).
-
-    Attributes
-    ----------
-    objective : one of :data:`OBJECTIVES`.
-    target : the steady speed of the ``"speed"`` objective [m/s] (None for the others).
-    aggregate : one of :data:`AGGREGATES`: the worst or the mean of the scenarios' scores.
-    max_belt_deflection [rad], max_current [A], min_speed [m/s] : optional constraints
-        (None: not constrained).
-    """
-
-    objective: str = "speed"
-    target: float | None = None
-    aggregate: str = "worst"
-    max_belt_deflection: float | None = None
-    max_current: float | None = None
-    min_speed: float | None = None
-
-
-@dataclass(frozen=True)
-class TuneRuns:
-    """The runs of every evaluation: the base robot and controller, run for ``duration`` on
-    each scenario, the product of ``models`` (or ``model``), ``floors`` and ``starts``.
-
-    Attributes
-    ----------
-    model, models : the model of every run, or a list of models (default Model II).
-    floors : toe friction coefficients mu [-] (default: the default floor, 1.0).
-    starts : :class:`~scoutsim.InitialState` s (default: the default start).
-    duration : simulated time of every run [s] (default 20).
-    robot : base RobotParameters (default Scout II's).
-    controller : ControllerParameters (Table I), ``"pitch-feedback"``, a
-        PitchFeedbackController, a user's CompiledController or Python controller (defined
-        at the top level of a module the workers can import), or a user's factory
-        ``"MODULE:FACTORY"`` / ControllerSpec (it gets each candidate's robot and
-        controller parameters); default Table I.
-    """
-
-    model: str = "II"
-    models: list | None = None
-    floors: list | None = None
-    starts: list | None = None
-    duration: float = 20.0
-    robot: RobotParameters | None = None
-    controller: object = None
-
-
-@dataclass(frozen=True)
-class TuneSearch:
-    """How CMA-ES searches.
-
-    Attributes
-    ----------
-    budget : the most evaluations; the tuning runs whole generations of ``population``
-        candidates, ``budget // population`` of them, and ends sooner if CMA-ES converges.
-    seed : the optimiser's random seed.
-    sigma : its initial step, a fraction of each parameter's range.
-    population : candidates per generation, at least 4 (default: CMA-ES's 4 + 3 ln n for
-        n parameters).
-    """
-
-    budget: int = 200
-    seed: int = 0
-    sigma: float = 0.1
-    population: int | None = None
-
-
-def _bundles(goal, runs, search, fields: dict) -> list:
-    """[goal, runs, search] (the bundles given, or their defaults) with every keyword of
-    ``fields`` set on the bundle that has a field of that name; TypeError naming a
-    keyword that none has."""
-    known: set = set()
-    out = []
-    for given, cls in ((goal, TuneGoal), (runs, TuneRuns), (search, TuneSearch)):
-        names = {f.name for f in dataclasses.fields(cls)}
-        known |= names
-        out.append(dataclasses.replace(cls() if given is None else given,
-                                       **{k: v for k, v in fields.items() if k in names}))
-    unknown = [k for k in fields if k not in known]
-    if unknown:
-        raise TypeError(f"tune() got an unexpected keyword argument {unknown[0]!r}")
-    return out
-
-
-def _controller_spec(controller, robot):
-    """(kind, base ControllerParameters, spec for the workers) of the controller given:
-    Table I, pitch feedback, a compiled controller (its parameter array can be tuned), a
-    Python controller, or a user's factory (``"MODULE:FACTORY"`` / ControllerSpec: it gets
-    each candidate's robot and controller parameters)."""
-    from ..control.compiled import CompiledController
-    from ..control.factory import ControllerSpec
-    from ..control.pitch_feedback import PitchFeedbackController
-    if controller is None or isinstance(controller, ControllerParameters):
-        return "table-i", controller or ControllerParameters(), {"kind": "table-i"}
-    controller = study_controller(controller, robot)
-    if isinstance(controller, str):
-        if controller not in ("table-i", "pitch-feedback"):
-            raise ValueError(f"controller = {controller!r} is not allowed: table-i, "
-                             "pitch-feedback, MODULE:FACTORY, ControllerParameters, a "
-                             "ControllerSpec or a controller object")
-        return controller, ControllerParameters(), {"kind": controller}
-    if isinstance(controller, PitchFeedbackController):
-        return ("pitch-feedback", controller.controller_parameters, {"kind": "pitch-feedback"})
-    if isinstance(controller, ControllerSpec):
-        return "factory", controller.params or ControllerParameters(), {
-            "kind": "factory", "controller": controller}
-    if isinstance(controller, CompiledController):
-        base = controller.controller_parameters or ControllerParameters()
-        return "compiled", base, {"kind": "compiled", "controller": controller,
-                                  "params": [float(x) for x in controller.params]}
-    if callable(getattr(controller, "command", None)):
-        return "python", ControllerParameters(), {"kind": "python", "controller": controller}
-    raise TypeError(f"controller of type {type(controller).__name__} cannot be tuned: give "
-                    "ControllerParameters, a controller object, or MODULE:FACTORY")
-
-
-def _check_tuned_fields(kind: str, params: list) -> None:
-    """ValueError for a tuned ``controller.<field>`` that the controller does not read (a
-    compiled or Python controller object: it does not take ControllerParameters)."""
-    if kind in ("compiled", "python"):
-        bad = [p.name for p in params if p.key.startswith("controller.")]
-        if bad:
-            raise ValueError(f"parameter {bad[0]!r} is not allowed with a {kind} controller "
-                             "object, which does not read ControllerParameters: tune its "
-                             "controller.params[i] (a CompiledController), robot.<field>, or "
-                             "give the controller as MODULE:FACTORY (a factory make(robot, "
-                             "params) gets each candidate's parameters)")
-
-
-def _warn_of_box_ends(params, robot, cparams) -> None:
-    """Make the parameter sets at each tuned parameter's bounds once, here, so a search box
-    that reaches far from a robot of this kind is warned of once for the tuning
-    (:class:`~scoutsim.parameters.ImplausibleParameterWarning`), not per candidate; bounds
-    that are not allowed are the candidates' own business."""
-    for p in params:
-        if p.key.startswith("params["):
-            continue
-        for v in (p.low, p.high):
-            try:
-                _apply({p.key: v}, robot, cparams, None)
-            except (ValueError, TypeError):
-                pass
 
 
 def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = None,
@@ -338,35 +200,17 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         raised or could not be made, or (EvaluationNotRunError) its worker died twice or a
         Dask worker could not load the task; the finished ones are kept likewise.
     """
-    goal, runs, search = _bundles(goal, runs, search, fields)
+    goal, runs, search = bundles(goal, runs, search, fields)
     objective, target, aggregate = goal.objective, goal.target, goal.aggregate
     max_belt_deflection, max_current, min_speed = (goal.max_belt_deflection,
                                                    goal.max_current, goal.min_speed)
-    model, models, floors, starts = runs.model, runs.models, runs.floors, runs.starts
     duration, robot, controller = runs.duration, runs.robot, runs.controller
     budget, seed, sigma, population = search.budget, search.seed, search.sigma, search.population
-    CMA = _cma_class()
-    if objective not in OBJECTIVES:
-        raise ValueError(f"objective = {objective!r} is not allowed: must be one of "
-                         f"{', '.join(OBJECTIVES)}")
-    if objective == "speed":
-        if target is None or not (math.isfinite(target) and target > 0):
-            raise ValueError(f"target = {target!r} is not allowed: the speed objective needs "
-                             "a target speed > 0 [m/s]")
-    elif target is not None:
-        raise ValueError(f"target is only allowed with objective 'speed', not {objective!r}")
-    if aggregate not in AGGREGATES:
-        raise ValueError(f"aggregate = {aggregate!r} is not allowed: must be worst or mean")
-    if not (math.isfinite(sigma) and 0 < sigma <= 1):
-        raise ValueError(f"sigma = {sigma!r} is not allowed: must be in (0, 1] (a fraction "
-                         "of each parameter's range)")
-    for name, v in (("max_belt_deflection", max_belt_deflection),
-                    ("max_current", max_current), ("min_speed", min_speed)):
-        if v is not None and not (math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} = {v!r} is not allowed: must be a number > 0")
+    CMA = cma_class()
+    check_settings(goal, search)
     check_on_error(on_error)
     robot = robot or RobotParameters()
-    kind, cparams, spec = _controller_spec(controller, robot)
+    kind, cparams, spec = controller_spec(controller, robot)
     if objective == "stability" and kind != "table-i":
         raise ValueError(f"objective 'stability' is not allowed with the {kind} controller: "
                          "the orbit tools cut the stride map where the controller logs a "
@@ -383,18 +227,14 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
               for p in parameters]
     if not params:
         raise ValueError("no parameter to tune: give at least one")
-    _check_tuned_fields(kind, params)
+    check_tuned_fields(kind, params)
     check_controller_travels(spec.get("controller"), workers, scheduler, 2)
     seen = set()
     for p in params:
         if p.key in seen:
             raise ValueError(f"parameter {p.name!r} is given twice")
         seen.add(p.key)
-    models = list(models) if models else [model]
-    floors = list(floors) if floors else [DEFAULT_FRICTION_COEFFICIENT]
-    starts = list(starts) if starts else [None]
-    scenarios = [{"model": m, "friction": mu, "initial_state": s}
-                 for m in models for mu in floors for s in starts]
+    scenarios = runs.scenarios()
     dim = len(params)
     pop = int(population) if population else 4 + int(3 * math.log(dim))
     if pop < 4:     # (CMA-ES's weights need at least two selected candidates)
@@ -405,7 +245,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     n_gen = budget // pop
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
-    base = np.array([_base_value(p, robot, cparams, spec) for p in params])
+    base = np.array([base_value(p, robot, cparams, spec) for p in params])
     mean0 = np.clip((base - lo) / (hi - lo), 0.0, 1.0)
     goal_settings = {"objective": objective, "target": target, "aggregate": aggregate,
                      "max_belt_deflection": max_belt_deflection, "max_current": max_current,
@@ -423,10 +263,10 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 "duration_s": duration, "robot": dataclasses.asdict(robot),
                 "controller_parameters": dataclasses.asdict(cparams), "seed": seed,
                 "sigma": sigma, "population": pop}
-    skey = _key(settings)
+    skey = checkpoint_key(settings)
     task_base = {"goal": goal_settings, "duration": duration, "robot": robot, "cparams": cparams,
                  "controller": spec, "scenarios": scenarios}
-    _warn_of_box_ends(params, robot, cparams)
+    warn_of_box_ends(params, robot, cparams)
 
     done: dict = {}
     rd = ck = state_path = None
@@ -438,7 +278,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             "kind": "tune", "checkpoint": EVALUATIONS, "optimizer_state": OPTIMIZER_STATE,
             "budget": budget}).open()
         ck, state_path = out / EVALUATIONS, out / OPTIMIZER_STATE
-        saved = _read_state(state_path) if resume else None
+        saved = read_state(state_path) if resume else None
         if saved is not None and saved["key"] == skey:
             cma, gen = saved["cma"], saved["generation"]
             done = read_checkpoint(ck)
@@ -450,7 +290,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         cma = CMA(mean=mean0, sigma=sigma, bounds=np.array([[0.0, 1.0]] * dim), seed=seed,
                   population_size=pop)
         gen = 0
-        cma = _write_state(state_path, skey, 0, cma)
+        cma = write_state(state_path, skey, 0, cma)
     n_resumed = len(done)
 
     bar = tqdm(total=n_gen * pop, unit="run", desc="tune", file=sys.stderr,
@@ -474,7 +314,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         # the generations already told: their rows come from the checkpoint
         for g in range(min(gen, n_gen)):
             for i in range(pop):
-                k = _key([skey, g, i])
+                k = checkpoint_key([skey, g, i])
                 if k not in done:
                     raise ValueError(f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} of "
                                      f"generation {g}, which {out}/{OPTIMIZER_STATE} has "
@@ -486,7 +326,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 stopped = "converged"
                 break
             xs = [cma.ask() for _ in range(pop)]
-            keys = [_key([skey, gen, i]) for i in range(pop)]
+            keys = [checkpoint_key([skey, gen, i]) for i in range(pop)]
             tasks, todo = [], []
             for i, (x, k) in enumerate(zip(xs, keys)):
                 values = {p.key: float(p.low + (p.high - p.low) * u) for p, u in zip(params, x)}
@@ -505,7 +345,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     failed.append(row)      # never recorded: a resumed tuning runs it again
                     return
                 if fh is not None:
-                    fh.write(json.dumps({"key": todo[j], "row": row}, default=_json) + "\n")
+                    fh.write(json.dumps({"key": todo[j], "row": row}, default=json_default) + "\n")
                     fh.flush()
                 record(todo[j], row)
 
@@ -515,7 +355,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
                 map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
-                          progress=False, on_result=on_result, error_row=_error_row)
+                          progress=False, on_result=on_result, error_row=evaluation_error_row)
                 if failed:
                     failed.sort(key=lambda r: r["evaluation"])
                     r = failed[0]
@@ -532,7 +372,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                           "infeasible and go on", failed)
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
-            cma = _write_state(state_path, skey, gen, cma)
+            cma = write_state(state_path, skey, gen, cma)
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
         if rd is not None and isinstance(exc, (KeyboardInterrupt, StudyError)):
@@ -546,7 +386,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         if fh is not None:
             fh.close()
 
-    keys = [_key([skey, g, i]) for g in range(gen if stopped == "converged" else n_gen)
+    keys = [checkpoint_key([skey, g, i]) for g in range(gen if stopped == "converged" else n_gen)
             for i in range(pop)]
     raw = [rows_by_key[k] for k in keys]
     rows = []
@@ -557,7 +397,7 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     b = min(range(len(rows)), key=lambda j: (rows[j]["score"], j))
     best_row = rows[b]
     best_values = {p.key: raw[b]["values"][p.key] for p in params}
-    b_robot, b_cparams, b_params = _apply(best_values, robot, cparams, spec.get("params"))
+    b_robot, b_cparams, b_params = apply_values(best_values, robot, cparams, spec.get("params"))
     n_errors = sum(r.get("status") == "error" for r in rows)
     res = TuneResult(rows=rows, parameters=params, best=best_row, best_values=best_values,
                      robot=b_robot, controller_parameters=b_cparams, params=b_params,
@@ -570,5 +410,5 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                       "run and are recorded with status 'error', scored as infeasible",
                       RuntimeWarning, stacklevel=2)
     if rd is not None:
-        _write_outputs(res, rd, command)
+        write_outputs(res, rd, command)
     return res

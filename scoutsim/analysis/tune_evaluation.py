@@ -31,8 +31,8 @@ from ..parameters import plausibility_warnings_off, validate_parameters
 from .strides import MIN_STEADY_STRIDES  # steady strides a steady bound needs
 from .study_controller import build_controller
 from .study_failures import StudyError, error_fields, run_failure
-from .sweep import _orbit_columns
-from .tune_parameters import _apply
+from .sweep_orbit import orbit_columns
+from .tune_parameters import apply_values
 
 __all__ = ["tune_task", "OBJECTIVES", "AGGREGATES", "PENALTY", "MIN_STEADY_STRIDES",
            "COLUMNS", "EvaluationNotRunError"]
@@ -145,8 +145,8 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
         objective = row["cost_of_transport"]
     elif kind == "stability":
         if row["steady_bounding"]:
-            orbit = _orbit_columns(r, robot, ctrl, {"model": scenario["model"],
-                                                    "friction_coefficient": scenario["friction"]})
+            orbit = orbit_columns(r, robot, ctrl, {"model": scenario["model"],
+                                                   "friction_coefficient": scenario["friction"]})
             row["spectral_radius"] = orbit["orbit_spectral_radius"]
             if orbit["orbit_spectral_radius"] is None:
                 broken.append(("no periodic orbit", 1.0))
@@ -185,8 +185,8 @@ def _evaluate(task: dict) -> dict:
     row = {"evaluation": task["evaluation"], "generation": task["generation"],
            "values": dict(task["values"])}
     try:
-        robot, cparams, params = _apply(task["values"], task["robot"], task["cparams"],
-                                        task["controller"].get("params"))
+        robot, cparams, params = apply_values(task["values"], task["robot"], task["cparams"],
+                                              task["controller"].get("params"))
         validate_parameters(robot, cparams)
     except ValueError as exc:
         return _not_run(row, {"status": "invalid", "outcome": "invalid_parameters",
@@ -219,7 +219,7 @@ class EvaluationNotRunError(StudyError):
     every finished evaluation; the same call again goes on once the cause is fixed."""
 
 
-def _error_row(task: dict, exc: BaseException) -> dict:
+def evaluation_error_row(task: dict, exc: BaseException) -> dict:
     """The row of an evaluation whose task failed in its worker (it died twice, or the
     task could not be loaded there): an error of the tuning (``not_run``: the tuning
     raises :class:`EvaluationNotRunError` unless it records errors)."""

@@ -6,7 +6,7 @@ the names of the two files in the output directory that a resumed tuning goes on
 evaluation, ``{"key": ..., "row": ...}``, appended as it arrives; ``out/optimizer.pkl``
 (:data:`OPTIMIZER_STATE`) holds the pickled optimiser, its random generator and the
 number of generations told, written atomically. Records and state are keyed by
-:func:`_key`, a hash of the tuning's settings (and of the generation and candidate), so a
+:func:`checkpoint_key`, a hash of the tuning's settings (and of the generation and candidate), so a
 call with other settings starts afresh.
 """
 
@@ -31,7 +31,7 @@ class MissingDependencyError(ImportError):
     """The optional optimiser library is not installed (the message says what to install)."""
 
 
-def _cma_class():
+def cma_class():
     """The optimiser's class, ``cmaes.CMA``; MissingDependencyError without ``cmaes``."""
     try:
         from cmaes import CMA
@@ -42,14 +42,14 @@ def _cma_class():
     return CMA
 
 
-def _key(blob) -> str:
+def checkpoint_key(blob) -> str:
     """A short hash of ``blob`` (as JSON, keys sorted): the key of a tuning's settings, and
     of an evaluation from the settings' key, its generation and its place in it."""
     text = json.dumps(blob, sort_keys=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _read_state(path: Path):
+def read_state(path: Path):
     """The optimiser's state saved in ``path`` ({key, generation, cma}), or None."""
     if not path.exists():
         return None
@@ -76,7 +76,7 @@ def _thaw(blob: bytes) -> dict:
     return state
 
 
-def _write_state(path: Path | None, key: str, generation: int, cma):
+def write_state(path: Path | None, key: str, generation: int, cma):
     """Save the optimiser's state to ``path`` (atomically; None: nowhere) and return the
     optimiser as read back from it, so that an uninterrupted tuning goes on from exactly
     what a resumed one reads."""

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
-from .sweep import _check_name, parameter_names
+from .sweep_points import check_name, parameter_names
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
 
@@ -204,7 +204,7 @@ def _check_tuned_name(name: str, base: str) -> None:
     """ValueError naming ``name`` (``base``: without its _deg suffix) unless it is a field
     of RobotParameters / ControllerParameters, with the nearest name as a hint."""
     try:
-        _check_name(base)
+        check_name(base)
     except ValueError:
         import difflib
         names = parameter_names()
@@ -217,7 +217,7 @@ def _check_tuned_name(name: str, base: str) -> None:
                          f"of a CompiledController{hint}") from None
 
 
-def _apply(values: dict, robot, cparams, params):
+def apply_values(values: dict, robot, cparams, params):
     """The robot, controller parameters and parameter array with the tuned ``values``
     ({key: SI}) set."""
     rob = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("robot.")}
@@ -232,10 +232,25 @@ def _apply(values: dict, robot, cparams, params):
     return robot, cparams, params
 
 
-def _base_value(p: TuneParameter, robot, cparams, spec) -> float:
+def base_value(p: TuneParameter, robot, cparams, spec) -> float:
     """The base value of ``p`` [SI]: its field of ``robot`` or ``cparams``, or its entry of
     the compiled controller's parameter array (``spec["params"]``)."""
     if p.key.startswith("params["):
         return float(spec["params"][int(p.key[7:-1])])
     sec, _, fld = p.key.partition(".")
     return float(getattr(robot if sec == "robot" else cparams, fld))
+
+
+def warn_of_box_ends(params, robot, cparams) -> None:
+    """Make the parameter sets at each tuned parameter's bounds once, here, so a search box
+    that reaches far from a robot of this kind is warned of once for the tuning
+    (:class:`~scoutsim.parameters.ImplausibleParameterWarning`), not per candidate; bounds
+    that are not allowed are the candidates' own business."""
+    for p in params:
+        if p.key.startswith("params["):
+            continue
+        for v in (p.low, p.high):
+            try:
+                apply_values({p.key: v}, robot, cparams, None)
+            except (ValueError, TypeError):
+                pass

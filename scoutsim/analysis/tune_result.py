@@ -98,14 +98,14 @@ class TuneResult:
                 "settings": self.settings}
 
 
-def _write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
+def write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
     rd.write("tune.csv", res.to_csv)
     try:
         rd.write("tune.parquet", res.to_parquet)
     except RuntimeError:
         pass
     rd.write("best.json", lambda p: p.write_text(
-        json.dumps(json_safe(res.best_dict()), indent=2, default=_json) + "\n"))
+        json.dumps(json_safe(res.best_dict()), indent=2, default=json_default) + "\n"))
     if res.settings["controller"] in ("table-i", "pitch-feedback"):
         b = res.best
         header = (f"scoutsim controller file: the best of {len(res.rows)} evaluations of "
@@ -126,7 +126,7 @@ def _write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
     rd.finish(outcome="completed", partial=False)
 
 
-def _json(v):
+def json_default(v):
     """JSON's fallback (``default=``) for what :func:`~scoutsim.io.run_directory.json_safe`
     leaves: a NumPy scalar as its number, anything else as its repr."""
     if isinstance(v, (np.floating, np.integer)):

@@ -20,10 +20,14 @@ Modules (each imports only those above it):
   range (:func:`field_dimension`, :func:`plausible_range`), and :data:`PER_LEG_FIELDS`.
 * ``plausibility``: :class:`ImplausibleParameterWarning`, for a value far outside what a
   robot of Scout II's kind has, naming the likely unit slip.
-* ``validation``: allowed ranges (sign rules and physical bounds: :func:`allowed_range`,
-  :func:`closed_range`, :func:`physical_limit`), the checks the dataclasses run when they
-  are constructed, and :func:`validate_robot`, :func:`validate_controller`,
-  :func:`validate_parameters`.
+* ``field_rules``: allowed ranges (sign rules and physical bounds: :func:`allowed_range`,
+  :func:`closed_range`, :func:`physical_limit`) and the type and range check of each field
+  by itself.
+* ``field_couplings``: the rules that couple fields (within a robot, within a controller,
+  between the two).
+* ``quick_scan``: the single-field checks by comparison alone, for a set that passes them.
+* ``validation``: the checks the dataclasses run when they are constructed, and
+  :func:`validate_robot`, :func:`validate_controller`, :func:`validate_parameters`.
 * ``robot``, ``controller``: :class:`RobotParameters` (with its derived quantities; the
   leg, hip-unit and motor quantities of :data:`PER_LEG_FIELDS` may differ between the back
   and front legs) and :class:`ControllerParameters`; constructing either checks it.

@@ -10,11 +10,12 @@ import typing
 from os import PathLike
 
 from .controller import ControllerParameters
+from .field_couplings import check_pair_couplings
 from .parameter_error import ParameterError, _fmt, _unknown
 from .robot import RobotParameters
 from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema, _Spec
 from .units import _UNIT_INDEX, UNITS
-from .validation import _validate_pair, coerce_value, reporting_origins, validate_parameters
+from .validation import coerce_value, reporting_origins, validate_parameters
 
 #: TOML section -> dataclass whose fields it holds.
 SECTIONS: dict[str, type] = {**dict.fromkeys(ROBOT_SECTIONS, RobotParameters),
@@ -194,7 +195,7 @@ def load_parameters(path: str | PathLike | None = None,
     """
     robot, _ = _build(RobotParameters, path, robot_overrides)
     controller, c_origins = _build(ControllerParameters, path, controller_overrides)
-    _validate_pair(robot, controller, c_origins)
+    check_pair_couplings(robot, controller, c_origins)
     return robot, controller
 
 
@@ -272,5 +273,5 @@ def from_dict(d: typing.Mapping) -> tuple[RobotParameters, ControllerParameters]
         out.append(obj)
         origins.update(o)
     robot, controller = out
-    _validate_pair(robot, controller, origins)
+    check_pair_couplings(robot, controller, origins)
     return robot, controller

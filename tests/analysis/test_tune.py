@@ -189,8 +189,8 @@ def test_a_parameter_given_twice_and_a_budget_below_one_generation_are_refused()
 def test_the_settings_bundles_take_the_same_keywords_as_tune():
     """tune(names, target=..., budget=...) sets the fields of TuneGoal / TuneSearch; a
     keyword that is no field is refused, naming it."""
-    goal, runs, search = T._bundles(T.TuneGoal(objective="cot"), None, None,
-                                    {"budget": 8, "models": ["I"], "min_speed": 1.0})
+    goal, runs, search = T.bundles(T.TuneGoal(objective="cot"), None, None,
+                                   {"budget": 8, "models": ["I"], "min_speed": 1.0})
     assert goal == T.TuneGoal(objective="cot", min_speed=1.0)
     assert runs == T.TuneRuns(models=["I"]) and search == T.TuneSearch(budget=8)
     with pytest.raises(ValueError, match="budget = 3"):
