@@ -18,6 +18,7 @@ import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1] / "scoutsim"
 
+# fmt: off
 #: layer of each package (or root module), by prefix (longest prefix wins); higher imports
 #: lower only. Every module belongs to its package's layer: a new module needs no entry.
 LAYERS = {
@@ -45,6 +46,7 @@ CONVENIENCE_ACCESSORS = {
      "scoutsim.presentation.identification_plots"),                    # fit result .plot()
     ("scoutsim.envs.bound", "scoutsim.presentation.frames"),           # BoundEnv.render()
 }
+# fmt: on
 
 
 def _modules():

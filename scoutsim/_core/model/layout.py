@@ -10,6 +10,9 @@ modes, motor-joint modes, model variants ``MODEL_*``, event kinds ``EK_*``, viol
 Numba reads as compile-time constants. :mod:`scoutsim.names` builds its enums from them.
 """
 
+# fmt: off
+# (a table: its columns and comments are aligned by hand)
+
 # --- legs -------------------------------------------------------------------------------
 BACK = 0
 FRONT = 1
@@ -381,3 +384,4 @@ ST_CONTROLLER_ERROR = 4   # the controller raised or returned no finite torques
 STATUS_NAMES = {ST_RUNNING: "running", ST_COMPLETED: "completed", ST_FELL: "fell",
                 ST_NUMERICAL_FAILURE: "numerical_failure",
                 ST_CONTROLLER_ERROR: "controller_error"}
+# fmt: on
