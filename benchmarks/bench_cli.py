@@ -37,8 +37,9 @@ REPO = Path(__file__).resolve().parents[1]
 
 def timed(cmd, env=None, cwd=None) -> float:
     t0 = time.perf_counter()
-    subprocess.run(cmd, env=env, cwd=cwd, check=True, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.PIPE)
+    subprocess.run(
+        cmd, env=env, cwd=cwd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
     return time.perf_counter() - t0
 
 
@@ -48,8 +49,12 @@ def verdict(ok: bool) -> str:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--venv", type=Path, default=None,
-                    help="use this venv (scoutsim installed) instead of a fresh one")
+    ap.add_argument(
+        "--venv",
+        type=Path,
+        default=None,
+        help="use this venv (scoutsim installed) instead of a fresh one",
+    )
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
 
@@ -59,10 +64,13 @@ def main() -> int:
             venv = tmp / "venv"
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
-            subprocess.run([str(venv / "bin" / "pip"), "install", "-q", "-e", str(REPO)],
-                           check=True)
-            print(f"install (fresh venv, pip install -e .)   {time.perf_counter() - t0:7.1f} s",
-                  flush=True)
+            subprocess.run(
+                [str(venv / "bin" / "pip"), "install", "-q", "-e", str(REPO)], check=True
+            )
+            print(
+                f"install (fresh venv, pip install -e .)   {time.perf_counter() - t0:7.1f} s",
+                flush=True,
+            )
         else:
             venv = args.venv
         py = str(venv / "bin" / "python")
@@ -70,39 +78,64 @@ def main() -> int:
         env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / "numba_cache"))
 
         first = timed([scoutsim, "run", "--plots", "--out", str(tmp / "first")], env=env)
-        print(f"first `scoutsim run --plots` (empty cache) {first:6.1f} s   target <= 60 s: "
-              f"{verdict(first <= 60.0)}", flush=True)
+        print(
+            f"first `scoutsim run --plots` (empty cache) {first:6.1f} s   target <= 60 s: "
+            f"{verdict(first <= 60.0)}",
+            flush=True,
+        )
 
         walls = {}
         for duration in (1, 10, 61):
             walls[duration] = statistics.median(
-                timed([scoutsim, "run", "--duration", str(duration), "--out",
-                       str(tmp / f"warm{duration}")], env=env) for _ in range(args.repeat))
+                timed(
+                    [
+                        scoutsim,
+                        "run",
+                        "--duration",
+                        str(duration),
+                        "--out",
+                        str(tmp / f"warm{duration}"),
+                    ],
+                    env=env,
+                )
+                for _ in range(args.repeat)
+            )
         rtf = (61 - 1) / (walls[61] - walls[1])
-        print(f"warm `scoutsim run --duration 1`          {walls[1]:7.2f} s   target <= 1.0 s: "
-              f"{verdict(walls[1] <= 1.0)}")
-        print(f"warm `scoutsim run` (10 s)                {walls[10]:7.2f} s   target <= 1.5 s: "
-              f"{verdict(walls[10] <= 1.5)}")
+        print(
+            f"warm `scoutsim run --duration 1`          {walls[1]:7.2f} s   target <= 1.0 s: "
+            f"{verdict(walls[1] <= 1.0)}"
+        )
+        print(
+            f"warm `scoutsim run` (10 s)                {walls[10]:7.2f} s   target <= 1.5 s: "
+            f"{verdict(walls[10] <= 1.5)}"
+        )
         print(f"warm `scoutsim run --duration 61`         {walls[61]:7.2f} s")
-        print(f"end-to-end real-time factor (61-1)/(w61-w1) {rtf:5.0f}x    target >= 100: "
-              f"{verdict(rtf >= 100.0)}")
+        print(
+            f"end-to-end real-time factor (61-1)/(w61-w1) {rtf:5.0f}x    target >= 100: "
+            f"{verdict(rtf >= 100.0)}"
+        )
 
         floor = statistics.median(
-            timed([py, "-c", "import numba, scipy.linalg"], env=env)
-            for _ in range(args.repeat))
-        code = ("import time, scoutsim; scoutsim.simulate(duration=0.01); w = []\n"
-                f"for _ in range({args.repeat}):\n"
-                "    t = time.perf_counter(); scoutsim.simulate(duration=10.0); "
-                "w.append(time.perf_counter() - t)\n"
-                "print(min(w))")
-        out = subprocess.run([py, "-c", code], env=env, check=True, capture_output=True,
-                             text=True)
+            timed([py, "-c", "import numba, scipy.linalg"], env=env) for _ in range(args.repeat)
+        )
+        code = (
+            "import time, scoutsim; scoutsim.simulate(duration=0.01); w = []\n"
+            f"for _ in range({args.repeat}):\n"
+            "    t = time.perf_counter(); scoutsim.simulate(duration=10.0); "
+            "w.append(time.perf_counter() - t)\n"
+            "print(min(w))"
+        )
+        out = subprocess.run([py, "-c", code], env=env, check=True, capture_output=True, text=True)
         inproc = float(out.stdout.split()[-1])
-        print(f"baseline: start-up floor (import numba, scipy.linalg) {floor:5.2f} s; the warm "
-              f"1 s run takes {walls[1] / floor:.1f}x that")
-        print(f"baseline: 10 s of Model II in one process {inproc * 1e3:7.1f} ms (real-time "
-              f"factor {10.0 / inproc:.0f}x); the command's marginal cost per simulated "
-              f"second is {(walls[61] - walls[1]) / 60 / (inproc / 10):.1f}x the simulator's")
+        print(
+            f"baseline: start-up floor (import numba, scipy.linalg) {floor:5.2f} s; the warm "
+            f"1 s run takes {walls[1] / floor:.1f}x that"
+        )
+        print(
+            f"baseline: 10 s of Model II in one process {inproc * 1e3:7.1f} ms (real-time "
+            f"factor {10.0 / inproc:.0f}x); the command's marginal cost per simulated "
+            f"second is {(walls[61] - walls[1]) / 60 / (inproc / 10):.1f}x the simulator's"
+        )
     return 0
 
 

@@ -56,13 +56,18 @@ def speeds(runs: int, duration: float):
 
     scoutsim.simulation.simulator.warm_up()
     example = make_controller()
-    kinds = {"built-in Table I (compiled)": None, "compiled user example": example,
-             "trivial Python PD": PythonPD()}
+    kinds = {
+        "built-in Table I (compiled)": None,
+        "compiled user example": example,
+        "trivial Python PD": PythonPD(),
+    }
     ref = scoutsim.simulate(duration=duration)
     same = scoutsim.simulate(controller=example, duration=duration)
-    print(f"compiled example's run == built-in run, bit for bit: "
-          f"{np.array_equal(ref.state, same.state)}")
-    for c in kinds.values():                       # warm every path once
+    print(
+        f"compiled example's run == built-in run, bit for bit: "
+        f"{np.array_equal(ref.state, same.state)}"
+    )
+    for c in kinds.values():  # warm every path once
         scoutsim.simulate(controller=c, duration=0.1)
     walls = {k: [] for k in kinds}
     t_end = {}
@@ -77,11 +82,13 @@ def speeds(runs: int, duration: float):
     print(f"{'controller':30s} {'wall [ms]':>10s} {'min-max':>15s} {'RTF':>6s} {'x built-in':>10s}")
     for name, w in walls.items():
         med = statistics.median(w)
-        print(f"{name:30s} {med * 1e3:10.1f} {min(w) * 1e3:7.1f}-{max(w) * 1e3:<7.1f} "
-              f"{t_end[name] / med:6.0f} {med / base:10.2f}")
+        print(
+            f"{name:30s} {med * 1e3:10.1f} {min(w) * 1e3:7.1f}-{max(w) * 1e3:<7.1f} "
+            f"{t_end[name] / med:6.0f} {med / base:10.2f}"
+        )
 
 
-EDIT = textwrap.dedent('''
+EDIT = textwrap.dedent("""
     import time, sys
     sys.path.insert(0, {examples!r})
     import scoutsim
@@ -96,9 +103,9 @@ EDIT = textwrap.dedent('''
     t0 = time.perf_counter()
     r = scoutsim.simulate(controller=c, duration=1.0)
     print(compile_s, time.perf_counter() - t0, r.outcome)
-''')
+""")
 
-CORE = textwrap.dedent('''
+CORE = textwrap.dedent("""
     import time
     t0 = time.perf_counter()
     import scoutsim
@@ -107,28 +114,42 @@ CORE = textwrap.dedent('''
     t1 = time.perf_counter()
     scoutsim.simulation.simulator.warm_up()
     print(t1 - t0, time.perf_counter() - t1)
-''')
+""")
 
 
 def compile_times(core: bool):
     stamp = str(time.time_ns())
-    out = subprocess.run([sys.executable, "-c", EDIT.format(examples=str(ROOT / "examples"),
-                                                            stamp=stamp)],
-                         capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
-    print(f"\nfresh edit of the example controller (core cache warm, new process): compiled "
-          f"in {float(out[0]):.2f} s; its first 1 s run then took {float(out[1]):.3f} s "
-          f"({out[2]})")
+    out = subprocess.run(
+        [sys.executable, "-c", EDIT.format(examples=str(ROOT / "examples"), stamp=stamp)],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    ).stdout.split()
+    print(
+        f"\nfresh edit of the example controller (core cache warm, new process): compiled "
+        f"in {float(out[0]):.2f} s; its first 1 s run then took {float(out[1]):.3f} s "
+        f"({out[2]})"
+    )
     if not core:
         return
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         t0 = time.perf_counter()
-        out = subprocess.run([sys.executable, "-c", CORE], capture_output=True, text=True,
-                             check=True, cwd=ROOT, env=env).stdout.split()
+        out = subprocess.run(
+            [sys.executable, "-c", CORE],
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=ROOT,
+            env=env,
+        ).stdout.split()
         total = time.perf_counter() - t0
-    print(f"the simulator core with an empty cache (new process; what an edit of the core "
-          f"costs): import {float(out[0]):.1f} s, compile {float(out[1]):.1f} s, "
-          f"{total:.1f} s in all")
+    print(
+        f"the simulator core with an empty cache (new process; what an edit of the core "
+        f"costs): import {float(out[0]):.1f} s, compile {float(out[1]):.1f} s, "
+        f"{total:.1f} s in all"
+    )
 
 
 def main(argv=None):

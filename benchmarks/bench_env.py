@@ -43,8 +43,11 @@ TABLE_I = np.radians([19.0, 21.0, 0.0, 0.0])
 def machine() -> str:
     try:
         out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        name = next(line.split(":", 1)[1].strip() for line in out.splitlines()
-                    if line.startswith("Model name"))
+        name = next(
+            line.split(":", 1)[1].strip()
+            for line in out.splitlines()
+            if line.startswith("Model name")
+        )
     except (OSError, StopIteration):
         name = platform.processor() or "unknown CPU"
     return f"{name}, {os.cpu_count()} logical CPUs"
@@ -95,6 +98,7 @@ def time_vector(make_vec, kind, n, steps, repeats):
 def engine_share(model, steps, repeats):
     """(env steps/s, engine-only steps/s) of the set-point episodes."""
     import gymnasium
+
     env = gymnasium.make("scoutsim/Bound-v0", model=model, action_type="setpoints")
     rng = np.random.default_rng(0)
     actions = [policy("setpoints", None, rng) for _ in range(steps)]
@@ -139,25 +143,39 @@ def main(argv=None):
 
     scoutsim.simulation.simulator.warm_up()
     print(f"load average (1, 5, 15 min) at the start: {os.getloadavg()}")
-    print(f"machine: {machine()}; Python {platform.python_version()}, gymnasium "
-          f"{gymnasium.__version__}, scoutsim {scoutsim.__version__}")
+    print(
+        f"machine: {machine()}; Python {platform.python_version()}, gymnasium "
+        f"{gymnasium.__version__}, scoutsim {scoutsim.__version__}"
+    )
     rows = []
     envs = []
     for kind in ("torque", "setpoints"):
         kw = dict(model=args.model, action_type=kind)
-        envs.append((f"scoutsim/Bound-v0 Model {args.model}, {kind}", kind,
-                     lambda kw=kw: gymnasium.make("scoutsim/Bound-v0", **kw),
-                     lambda n, kw=kw, m=None: gymnasium.make_vec(
-                         "scoutsim/Bound-v0", num_envs=n, vectorization_mode=m, **kw)))
+        envs.append(
+            (
+                f"scoutsim/Bound-v0 Model {args.model}, {kind}",
+                kind,
+                lambda kw=kw: gymnasium.make("scoutsim/Bound-v0", **kw),
+                lambda n, kw=kw, m=None: gymnasium.make_vec(
+                    "scoutsim/Bound-v0", num_envs=n, vectorization_mode=m, **kw
+                ),
+            )
+        )
     if not args.no_mujoco:
         try:
             import mujoco
+
             for name, skip in (("Hopper-v5", 5), ("HalfCheetah-v5", 1)):
-                envs.append((f"{name} (MuJoCo {mujoco.__version__}), frame_skip {skip}",
-                             "random",
-                             lambda name=name, skip=skip: gymnasium.make(name, frame_skip=skip),
-                             lambda n, name=name, skip=skip, m=None: gymnasium.make_vec(
-                                 name, num_envs=n, vectorization_mode=m, frame_skip=skip)))
+                envs.append(
+                    (
+                        f"{name} (MuJoCo {mujoco.__version__}), frame_skip {skip}",
+                        "random",
+                        lambda name=name, skip=skip: gymnasium.make(name, frame_skip=skip),
+                        lambda n, name=name, skip=skip, m=None: gymnasium.make_vec(
+                            name, num_envs=n, vectorization_mode=m, frame_skip=skip
+                        ),
+                    )
+                )
         except ImportError:
             print("(mujoco not installed: no MuJoCo rows; pip install 'gymnasium[mujoco]')")
     for label, kind, make, make_vec in envs:
@@ -165,33 +183,48 @@ def main(argv=None):
         period = probe.unwrapped.dt
         probe.close()
         single, resets = time_single(make, kind, args.steps, args.repeats)
-        row = {"env": label, "policy period [ms]": round(period * 1e3, 6),
-               "single": single, "resets / run": resets}
+        row = {
+            "env": label,
+            "policy period [ms]": round(period * 1e3, 6),
+            "single": single,
+            "resets / run": resets,
+        }
         for mode in ("sync", "async"):
             for n in (2, 4):
                 row[f"{mode} {n}"] = time_vector(
-                    lambda k, mode=mode, make_vec=make_vec: make_vec(k, m=mode), kind, n, args.steps,
-                    args.repeats)
+                    lambda k, mode=mode, make_vec=make_vec: make_vec(k, m=mode),
+                    kind,
+                    n,
+                    args.steps,
+                    args.repeats,
+                )
         rows.append(row)
-        print(f"{label}: period {row['policy period [ms]']} ms, single {single:,.0f} "
-              f"steps/s ({resets:.0f} resets per {args.steps} steps), "
-              + ", ".join(f"{m} {row[m]:,.0f}" for m in
-                          ("sync 2", "sync 4", "async 2", "async 4")), flush=True)
+        print(
+            f"{label}: period {row['policy period [ms]']} ms, single {single:,.0f} "
+            f"steps/s ({resets:.0f} resets per {args.steps} steps), "
+            + ", ".join(f"{m} {row[m]:,.0f}" for m in ("sync 2", "sync 4", "async 2", "async 4")),
+            flush=True,
+        )
     print()
     cols = ("single", "sync 2", "sync 4", "async 2", "async 4")
-    print("| environment (10 ms policy period) | single | " + " | ".join(
-        f"make_vec {c}" for c in cols[1:]) + " |")
+    print(
+        "| environment (10 ms policy period) | single | "
+        + " | ".join(f"make_vec {c}" for c in cols[1:])
+        + " |"
+    )
     print("|---|" + "---|" * len(cols))
     for row in rows:
         print(f"| {row['env']} | " + " | ".join(f"{row[c]:,.0f}" for c in cols) + " |")
     env_rate, eng_rate, call = engine_share(args.model, args.steps, args.repeats)
     compiled = 1.0 / eng_rate - call
-    print(f"\nset-point steps, Model {args.model}: environment {env_rate:,.0f} steps/s "
-          f"({1e6 / env_rate:.1f} us per step), the engine alone {eng_rate:,.0f} steps/s "
-          f"({1e6 / eng_rate:.1f} us), of which {1e6 * call:.1f} us the call of the compiled "
-          f"loop itself: {1e6 * compiled:.1f} us in the compiled loop, "
-          f"{100 * (1 - compiled * env_rate):.0f} % of a step outside it (the most a native "
-          "batched step, all in compiled code, could save)")
+    print(
+        f"\nset-point steps, Model {args.model}: environment {env_rate:,.0f} steps/s "
+        f"({1e6 / env_rate:.1f} us per step), the engine alone {eng_rate:,.0f} steps/s "
+        f"({1e6 / eng_rate:.1f} us), of which {1e6 * call:.1f} us the call of the compiled "
+        f"loop itself: {1e6 * compiled:.1f} us in the compiled loop, "
+        f"{100 * (1 - compiled * env_rate):.0f} % of a step outside it (the most a native "
+        "batched step, all in compiled code, could save)"
+    )
     print(f"load average (1, 5, 15 min) at the end: {os.getloadavg()}")
 
 

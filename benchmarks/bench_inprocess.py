@@ -64,11 +64,14 @@ def main():
     if base is None:
         tmp = Path(tempfile.mkdtemp(prefix="scoutsim_base_"))
         base = tmp / "tree"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(base),
-                        args.base], check=True, capture_output=True)
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(base), args.base],
+            check=True,
+            capture_output=True,
+        )
     core = None if args.core < 0 else args.core
     try:
-        for tree in (base, ROOT):     # build / load each side's compiled core
+        for tree in (base, ROOT):  # build / load each side's compiled core
             print(f"preparing {tree} ...", file=sys.stderr, flush=True)
             run_side(tree, 1, core)
         meds = {"base": [], "this": []}
@@ -78,22 +81,32 @@ def main():
                 m, b = run_side(tree, args.runs, core)
                 meds[side].append(m)
                 bests[side].append(b)
-                print(f"  process {i + 1} {side}: median {m * 1e3:.2f} ms, best {b * 1e3:.2f} ms",
-                      flush=True)
-        print(f"10 s of Model II in one process, {args.processes} processes x {args.runs} runs "
-              "per side")
+                print(
+                    f"  process {i + 1} {side}: median {m * 1e3:.2f} ms, best {b * 1e3:.2f} ms",
+                    flush=True,
+                )
+        print(
+            f"10 s of Model II in one process, {args.processes} processes x {args.runs} runs "
+            "per side"
+        )
         for side in ("base", "this"):
             ms = [m * 1e3 for m in meds[side]]
-            print(f"  {side:4s}: median over processes {statistics.median(ms):.2f} ms "
-                  f"(process medians {min(ms):.2f}-{max(ms):.2f}); best run "
-                  f"{min(bests[side]) * 1e3:.2f} ms")
+            print(
+                f"  {side:4s}: median over processes {statistics.median(ms):.2f} ms "
+                f"(process medians {min(ms):.2f}-{max(ms):.2f}); best run "
+                f"{min(bests[side]) * 1e3:.2f} ms"
+            )
         ratio = statistics.median(meds["this"]) / statistics.median(meds["base"])
-        print(f"  this / base: {ratio:.3f} (median over processes); best runs "
-              f"{min(bests['this']) / min(bests['base']):.3f}")
+        print(
+            f"  this / base: {ratio:.3f} (median over processes); best runs "
+            f"{min(bests['this']) / min(bests['base']):.3f}"
+        )
     finally:
         if tmp is not None:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)],
-                           capture_output=True)
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)],
+                capture_output=True,
+            )
 
 
 if __name__ == "__main__":

@@ -18,7 +18,7 @@ import scoutsim
 
 
 def main():
-    scoutsim.simulate(duration=0.01, model="II")            # compile outside the trace
+    scoutsim.simulate(duration=0.01, model="II")  # compile outside the trace
     tracemalloc.start()
     t0 = time.perf_counter()
     r = scoutsim.simulate(duration=60.0, model="II", friction_coefficient=0.8)

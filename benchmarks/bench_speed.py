@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-MU = 1.0   # the default floor (scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT)
+MU = 1.0  # the default floor (scoutsim.parameters.DEFAULT_FRICTION_COEFFICIENT)
 
 
 def sub(cmd, env=None):
@@ -42,12 +42,25 @@ def main():
 
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        t_compile, _ = sub([sys.executable, "-c",
-                            "import scoutsim; scoutsim.simulate(duration=0.01, model='II')"], env)
+        t_compile, _ = sub(
+            [sys.executable, "-c", "import scoutsim; scoutsim.simulate(duration=0.01, model='II')"],
+            env,
+        )
     scoutsim.simulate(duration=0.01, model="II")  # warm the normal cache
     with tempfile.TemporaryDirectory() as out:
-        t_start, _ = sub([sys.executable, "-m", "scoutsim", "run", "--duration", "1",
-                          "--out", out, "--no-progress"])
+        t_start, _ = sub(
+            [
+                sys.executable,
+                "-m",
+                "scoutsim",
+                "run",
+                "--duration",
+                "1",
+                "--out",
+                out,
+                "--no-progress",
+            ]
+        )
     default = scoutsim.IntegratorSettings().resolve("II")
     reference = scoutsim.IntegratorSettings(method="dopri5").resolve("II")
 
@@ -55,8 +68,9 @@ def main():
         walls = []
         for _ in range(n):
             t0 = time.perf_counter()
-            res = scoutsim.simulate(duration=10.0, model="II", friction_coefficient=MU,
-                                    integrator=integ)
+            res = scoutsim.simulate(
+                duration=10.0, model="II", friction_coefficient=MU, integrator=integ
+            )
             walls.append(time.perf_counter() - t0)
         return min(walls), res
 
@@ -72,28 +86,49 @@ def main():
     w_span = min(ws)
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
     # the baseline at the default run's own tolerances (RK45 = the same Dormand-Prince pair)
-    _, out = sub([sys.executable, str(HERE / "scipy_baseline.py"), str(span), "II", str(MU),
-                  str(default.rtol), str(default.atol)], env)
+    _, out = sub(
+        [
+            sys.executable,
+            str(HERE / "scipy_baseline.py"),
+            str(span),
+            "II",
+            str(MU),
+            str(default.rtol),
+            str(default.atol),
+        ],
+        env,
+    )
     base = json.loads(out.strip().splitlines()[-1])
     rows = [
         ("first-call compile (new process, empty cache)", f"{t_compile:.1f} s", "reported"),
         ("cached start-up: scoutsim run --duration 1", f"{t_start:.2f} s", "< 3 s"),
-        (f"10 s Model II, default ({default.method} rtol {default.rtol:g}), best of 3",
-         f"{w10 * 1000:.0f} ms", "<= 50 ms"),
+        (
+            f"10 s Model II, default ({default.method} rtol {default.rtol:g}), best of 3",
+            f"{w10 * 1000:.0f} ms",
+            "<= 50 ms",
+        ),
         ("real-time factor", f"{10.0 / w10:.1f}", ">= 200"),
-        (f"10 s Model II, reference (dopri5 rtol {reference.rtol:g}), best of 3",
-         f"{w10_ref * 1000:.0f} ms", ""),
+        (
+            f"10 s Model II, reference (dopri5 rtol {reference.rtol:g}), best of 3",
+            f"{w10_ref * 1000:.0f} ms",
+            "",
+        ),
         ("default / reference speed ratio", f"{w10_ref / w10:.1f}x", ""),
-        (f"SciPy solve_ivp (RK45, rtol {default.rtol:g}), {span} s simulated",
-         f"{base['wall_s']:.2f} s", ""),
+        (
+            f"SciPy solve_ivp (RK45, rtol {default.rtol:g}), {span} s simulated",
+            f"{base['wall_s']:.2f} s",
+            "",
+        ),
         (f"scoutsim, same {span} s", f"{w_span * 1000:.1f} ms", ""),
         ("speed-up over SciPy baseline", f"{base['wall_s'] / w_span:.1f}x", ">= 20x"),
     ]
-    print(f"scoutsim {scoutsim.__version__}  outcome of the 10 s run: {r.outcome} "
-          f"(t_end {r.t_end:.2f} s, {int(r.stats['rhs_evaluations'])} RHS evaluations; "
-          f"reference {int(r_ref.stats['rhs_evaluations'])}); mean speed "
-          f"{r.summary()['mean_speed_m_s']:.5f} m/s (reference "
-          f"{r_ref.summary()['mean_speed_m_s']:.5f})")
+    print(
+        f"scoutsim {scoutsim.__version__}  outcome of the 10 s run: {r.outcome} "
+        f"(t_end {r.t_end:.2f} s, {int(r.stats['rhs_evaluations'])} RHS evaluations; "
+        f"reference {int(r_ref.stats['rhs_evaluations'])}); mean speed "
+        f"{r.summary()['mean_speed_m_s']:.5f} m/s (reference "
+        f"{r_ref.summary()['mean_speed_m_s']:.5f})"
+    )
     for name, val, target in rows:
         print(f"{name:<52} {val:>12}   target {target}")
 

@@ -37,8 +37,8 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
     C = controller_array(ctrl, robot)
     s = initial_state_vector(default_initial_state(), robot, ctrl, (0, 0), True)
     mi = np.zeros(L.NMI, dtype=np.int64)
-    mi[L.MI_MOTOR_B:L.MI_MOTOR_B + 2] = L.STUCK
-    mi[L.MI_SLIDE_DIR_B:L.MI_SLIDE_DIR_B + 2] = 1
+    mi[L.MI_MOTOR_B : L.MI_MOTOR_B + 2] = L.STUCK
+    mi[L.MI_SLIDE_DIR_B : L.MI_SLIDE_DIR_B + 2] = 1
     mf = np.zeros(L.NMF)
     ls = np.zeros(2, dtype=np.int64)
     cmd = np.zeros(2)
@@ -70,6 +70,7 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
             v = np.zeros(L.NEV)
             event_values(yy, a, P, mi, v)
             return v[k]
+
         e.terminal = True
         e.direction = -1
         return e
@@ -82,8 +83,7 @@ def run(duration, model="II", rtol=1e-8, atol=1e-9, friction_coefficient=math.in
         nev = settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats)
         t_end = (k + 1) * dt
         while t < t_end - 1e-15:
-            sol = solve_ivp(f, (t, t_end), s, method="RK45", rtol=rtol, atol=atol,
-                            events=events)
+            sol = solve_ivp(f, (t, t_end), s, method="RK45", rtol=rtol, atol=atol, events=events)
             s = sol.y[:, -1].copy()
             project_state(s, P, mi, mf)
             t = sol.t[-1]
@@ -109,5 +109,15 @@ if __name__ == "__main__":
     t0 = time.perf_counter()
     t, nev, s = run(dur, model, rtol=rtol, atol=atol, friction_coefficient=mu)
     wall = time.perf_counter() - t0
-    print(json.dumps({"simulated_s": t, "wall_s": wall, "events": nev,
-                      "x": float(s[0]), "y": float(s[1]), "theta": float(s[2])}))
+    print(
+        json.dumps(
+            {
+                "simulated_s": t,
+                "wall_s": wall,
+                "events": nev,
+                "x": float(s[0]),
+                "y": float(s[1]),
+                "theta": float(s[2]),
+            }
+        )
+    )

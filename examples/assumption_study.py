@@ -38,21 +38,24 @@ from scoutsim.analysis.basin import (
 from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
 
 MODELS = ("ideal", "I", "II")
-GRID = dict(speeds=DEFAULT_SPEEDS, pitch_rates=DEFAULT_PITCH_RATES,
-            heights=DEFAULT_HEIGHTS, duration=10.0)
+GRID = dict(
+    speeds=DEFAULT_SPEEDS, pitch_rates=DEFAULT_PITCH_RATES, heights=DEFAULT_HEIGHTS, duration=10.0
+)
 #: --quick: the default flight start alone (1.2 m/s, 150 deg/s, 0.33 m), 5 s
-QUICK_GRID = dict(speeds=(1.2,), pitch_rates=(math.radians(150.0),), heights=(0.33,),
-                  duration=5.0)
+QUICK_GRID = dict(speeds=(1.2,), pitch_rates=(math.radians(150.0),), heights=(0.33,), duration=5.0)
 FRICTIONS = (0.6, 0.8, 1.0, 1.5, math.inf)
-THRESHOLDS = ((4e-3, 3e-3), (5e-3, 4e-3), (10e-3, 8e-3))   # touchdown, lift-off [m]
+THRESHOLDS = ((4e-3, 3e-3), (5e-3, 4e-3), (10e-3, 8e-3))  # touchdown, lift-off [m]
 
 
 def report(label, b):
     parts = []
     for m in b.models():
         f = b.fraction(m)
-        speeds = sorted(r["mean_speed_m_s"] for r in b.rows
-                        if r["model"] == m and r["steady_bounding"] and r["mean_speed_m_s"])
+        speeds = sorted(
+            r["mean_speed_m_s"]
+            for r in b.rows
+            if r["model"] == m and r["steady_bounding"] and r["mean_speed_m_s"]
+        )
         sp = f"{np.median(speeds):.2f} m/s" if speeds else "-"
         parts.append(f"{m}: {f:.2f} ({sp})")
     print(f"| {label} | " + " | ".join(parts) + " |", flush=True)
@@ -60,12 +63,17 @@ def report(label, b):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--robot", metavar="FILE",
-                    help="TOML robot file, as `scoutsim run --robot` (default: Scout II)")
-    ap.add_argument("--workers", type=int, default=None,
-                    help="processes (default: all cores; 1 with --quick)")
-    ap.add_argument("--quick", action="store_true",
-                    help="one start, 5 s, per case (seconds in all)")
+    ap.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="TOML robot file, as `scoutsim run --robot` (default: Scout II)",
+    )
+    ap.add_argument(
+        "--workers", type=int, default=None, help="processes (default: all cores; 1 with --quick)"
+    )
+    ap.add_argument(
+        "--quick", action="store_true", help="one start, 5 s, per case (seconds in all)"
+    )
     args = ap.parse_args(argv)
     robot, controller = load_parameters(args.robot)
     grid = QUICK_GRID if args.quick else GRID
@@ -73,23 +81,31 @@ def main(argv=None):
     n = len(grid["speeds"]) * len(grid["pitch_rates"]) * len(grid["heights"])
 
     def basin(models=MODELS, rob=robot, ctrl=controller, **kw):
-        return basin_of_attraction(models=models, robot=rob, controller=ctrl,
-                                   workers=workers, **grid, **kw)
+        return basin_of_attraction(
+            models=models, robot=rob, controller=ctrl, workers=workers, **grid, **kw
+        )
 
-    print(f"fraction of {n} start{'' if n == 1 else 's'} reaching steady bounding (median "
-          "speed of those that do)")
+    print(
+        f"fraction of {n} start{'' if n == 1 else 's'} reaching steady bounding (median "
+        "speed of those that do)"
+    )
     for mu in FRICTIONS:
         report(f"toe friction mu = {mu}", basin(friction_coefficient=mu))
     for td, lo in THRESHOLDS:
         c = controller.replace(touchdown_compression=td, liftoff_compression=lo)
         for mu in (1.0, math.inf):
-            report(f"mu = {mu}, thresholds {td*1e3:.0f} / {lo*1e3:.0f} mm",
-                   basin(ctrl=c, friction_coefficient=mu))
+            report(
+                f"mu = {mu}, thresholds {td * 1e3:.0f} / {lo * 1e3:.0f} mm",
+                basin(ctrl=c, friction_coefficient=mu),
+            )
     for name, value in VIRTUAL_SCOUT_EFFECTS.items():
-        report(f"{name} = {value:.4g}",
-               basin(models=("I", "II"), rob=robot.replace(**{name: value})))
-    report("all effects of the virtual Scout II",
-           basin(models=("I", "II"), rob=robot.replace(**VIRTUAL_SCOUT_EFFECTS)))
+        report(
+            f"{name} = {value:.4g}", basin(models=("I", "II"), rob=robot.replace(**{name: value}))
+        )
+    report(
+        "all effects of the virtual Scout II",
+        basin(models=("I", "II"), rob=robot.replace(**VIRTUAL_SCOUT_EFFECTS)),
+    )
 
 
 if __name__ == "__main__":

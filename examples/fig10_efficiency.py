@@ -37,14 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
-IDLE = 0.8            # gearbox_idle_loss_torque [N m] at the leg, per physical leg
-C_LOAD = 0.05         # gearbox_load_loss_coefficient [-]
-DURATION = 8.0        # simulated time [s]
+IDLE = 0.8  # gearbox_idle_loss_torque [N m] at the leg, per physical leg
+C_LOAD = 0.05  # gearbox_load_loss_coefficient [-]
+DURATION = 8.0  # simulated time [s]
 QUICK_DURATION = 4.0  # ... with --quick
-STEADY_FROM = 2.0     # [s]: the samples after it count as the steady bound
+STEADY_FROM = 2.0  # [s]: the samples after it count as the steady bound
 STEP_BEFORE_END = 3.0  # [s]: the step plotted starts at the first lift-off after
-                      # duration - STEP_BEFORE_END (at least STEADY_FROM)
-LOW = 5.0             # |torque| [N m] below which a sample counts as low-torque
+# duration - STEP_BEFORE_END (at least STEADY_FROM)
+LOW = 5.0  # |torque| [N m] below which a sample counts as low-torque
 MOTORING_SPEED = 500.0  # motor speed [rad/s] of the efficiency curve (motoring: i, w > 0)
 
 
@@ -53,8 +53,10 @@ def one_step(res, leg, t_from):
     lo = res.event_times("liftoff", leg)
     lo = lo[lo > t_from]
     if len(lo) < 2:
-        raise SystemExit(f"{leg} leg: fewer than two lift-offs after t = {t_from:g} s "
-                         f"(run {res.outcome} at {res.t_end:.3f} s); no step to plot")
+        raise SystemExit(
+            f"{leg} leg: fewer than two lift-offs after t = {t_from:g} s "
+            f"(run {res.outcome} at {res.t_end:.3f} s); no step to plot"
+        )
     return np.flatnonzero((res.t >= lo[0]) & (res.t < lo[1]))
 
 
@@ -64,14 +66,25 @@ def _fmt(v, spec=".4g"):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--robot", metavar="FILE",
-                    help="TOML robot file, as `scoutsim run --robot` (default: Scout II)")
-    ap.add_argument("--out", type=Path, default=Path("fig10_efficiency.png"),
-                    help="the PNG written (default: fig10_efficiency.png)")
-    ap.add_argument("--quick", action="store_true",
-                    help=f"simulate {QUICK_DURATION:g} s instead of {DURATION:g} s")
+    ap.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="TOML robot file, as `scoutsim run --robot` (default: Scout II)",
+    )
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=Path("fig10_efficiency.png"),
+        help="the PNG written (default: fig10_efficiency.png)",
+    )
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"simulate {QUICK_DURATION:g} s instead of {DURATION:g} s",
+    )
     args = ap.parse_args(argv)
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -86,8 +99,10 @@ def main(argv=None):
     duration = QUICK_DURATION if args.quick else DURATION
     step_from = max(STEADY_FROM, duration - STEP_BEFORE_END)
     kw = dict(duration=duration, model="II", friction_coefficient=DEFAULT_FRICTION_COEFFICIENT)
-    runs = {"constant efficiency": simulate(const, table, **kw),
-            "idle + load losses": simulate(lossy, table, **kw)}
+    runs = {
+        "constant efficiency": simulate(const, table, **kw),
+        "idle + load losses": simulate(lossy, table, **kw),
+    }
     for name, res in runs.items():
         if res.outcome != "completed":
             raise SystemExit(f"{name}: run {res.outcome} at t = {res.t_end:.3f} s")
@@ -95,8 +110,10 @@ def main(argv=None):
     k_t = {leg: const.leg(leg).torque_per_amp for leg in LEG_NAMES}
 
     fig, axs = plt.subplots(2, 2, figsize=(10, 6.4))
-    print(f"{'':<22} {'leg':<6} {'low-torque samples':>18} {'mean |tau_est|':>15} "
-          f"{'mean |tau_est - tau_out|':>25}")
+    print(
+        f"{'':<22} {'leg':<6} {'low-torque samples':>18} {'mean |tau_est|':>15} "
+        f"{'mean |tau_est - tau_out|':>25}"
+    )
     for j, leg in enumerate(LEG_NAMES):
         ax = axs[0, j]
         for (name, res), style in zip(runs.items(), ("-", "--")):
@@ -105,21 +122,25 @@ def main(argv=None):
             est = k_t[leg] * res.motor_current(leg)[k]
             ax.plot(t, est, style, lw=1.2, label=f"{name}: N eta K_T i")
             if name != "constant efficiency":
-                ax.plot(t, res.hip_torque_applied(leg)[k], ":", lw=1.2,
-                        label=f"{name}: delivered")
+                ax.plot(t, res.hip_torque_applied(leg)[k], ":", lw=1.2, label=f"{name}: delivered")
                 st = res.leg_state(leg)[k]
-                ax.step(t, np.where(st == 0, 30, np.where(st == 2, 20, 10)), "k", lw=0.6,
-                        where="post", label="leg state (flight / brake / retraction)")
+                ax.step(
+                    t,
+                    np.where(st == 0, 30, np.where(st == 2, 20, 10)),
+                    "k",
+                    lw=0.6,
+                    where="post",
+                    label="leg state (flight / brake / retraction)",
+                )
             # low-torque statistics over the whole steady part
-            m = (res.t > STEADY_FROM)
+            m = res.t > STEADY_FROM
             e_all = k_t[leg] * res.motor_current(leg)[m]
             d_all = res.hip_torque_applied(leg)[m]
             low = np.abs(e_all) < LOW
             n_low = int(low.sum())
             mean_est = np.mean(np.abs(e_all[low])) if n_low else math.nan
             mean_err = np.mean(np.abs(e_all[low] - d_all[low])) if n_low else math.nan
-            print(f"{name:<22} {leg:<6} {n_low:>18} {mean_est:>13.3f} N m "
-                  f"{mean_err:>21.3f} N m")
+            print(f"{name:<22} {leg:<6} {n_low:>18} {mean_est:>13.3f} N m {mean_err:>21.3f} N m")
         ax.set_title(f"{leg} leg, one step (paper Fig. 10 layout)", fontsize=9)
         ax.set_xlabel("time since lift-off [s]")
         ax.set_ylabel("hip torque per leg [N m]")
@@ -136,17 +157,23 @@ def main(argv=None):
         eff = tau_out / (one.gear_ratio * one.torque_constant * cur)
         curves.append((leg, one, tau_out, eff))
     (_, back, tau_b, eff_b), (_, front, tau_f, eff_f) = curves
-    if (np.array_equal(tau_b, tau_f) and np.array_equal(eff_b, eff_f)
-            and back.efficiency == front.efficiency):
+    if (
+        np.array_equal(tau_b, tau_f)
+        and np.array_equal(eff_b, eff_f)
+        and back.efficiency == front.efficiency
+    ):
         curves = [("both legs", back, tau_b, eff_b)]
     ax = axs[1, 0]
     top = 0.0
     for label, one, tau_out, eff in curves:
         top = max(top, tau_out.max())
-        line, = ax.plot(tau_out, 100 * eff, label=f"{label}: idle + load losses (motoring)")
-        ax.axhline(100 * one.efficiency, color=line.get_color(), ls="--",
-                   label=f"{label}: constant {one.gearbox_efficiency:.0%} x "
-                         f"{one.sprocket_efficiency:.0%}")
+        (line,) = ax.plot(tau_out, 100 * eff, label=f"{label}: idle + load losses (motoring)")
+        ax.axhline(
+            100 * one.efficiency,
+            color=line.get_color(),
+            ls="--",
+            label=f"{label}: constant {one.gearbox_efficiency:.0%} x {one.sprocket_efficiency:.0%}",
+        )
     ax.set_xlim(0, top)
     ax.set_ylim(0, 80)
     ax.set_xlabel("delivered torque per leg [N m]")
@@ -158,9 +185,17 @@ def main(argv=None):
     # gait metrics
     ax = axs[1, 1]
     ax.axis("off")
-    keys = ("mean_speed_m_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
-            "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m",
-            "max_belt_deflection_deg")
+    keys = (
+        "mean_speed_m_s",
+        "stride_frequency_hz",
+        "duty_factor_back",
+        "duty_factor_front",
+        "pitch_max_deg",
+        "pitch_min_deg",
+        "height_max_m",
+        "height_min_m",
+        "max_belt_deflection_deg",
+    )
     sums = {n: r.summary() for n, r in runs.items()}
     rows = []
     print(f"\n{'gait metric (steady)':<26}" + "".join(f"{n:>22}" for n in runs) + f"{'change':>10}")
@@ -169,8 +204,12 @@ def main(argv=None):
         ch = (b - a) / abs(a) * 100 if (a not in (None, 0) and b is not None) else math.nan
         rows.append([key, _fmt(a), _fmt(b), f"{_fmt(ch, '+.1f')} %"])
         print(f"{key:<26}{_fmt(a):>22}{_fmt(b):>22}{_fmt(ch, '.1f'):>9}%")
-    tab = ax.table(cellText=rows, colLabels=["metric", "constant", "losses", "change"],
-                   loc="center", cellLoc="right")
+    tab = ax.table(
+        cellText=rows,
+        colLabels=["metric", "constant", "losses", "change"],
+        loc="center",
+        cellLoc="right",
+    )
     tab.auto_set_font_size(False)
     tab.set_fontsize(7)
     tab.scale(1, 1.2)

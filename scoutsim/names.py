@@ -39,9 +39,23 @@ from enum import IntEnum, IntFlag
 
 from ._core.model import layout as _layout
 
-__all__ = ["Leg", "LEG_NAMES", "leg_index", "LegState", "LEG_STATE_NAMES", "ContactMode",
-           "CONTACT_NAMES", "MotorJointMode", "MOTOR_JOINT_NAMES", "Model", "MODEL_LABELS",
-           "EventKind", "EVENT_KIND_NAMES", "Violation", "VIOLATION_NAMES"]
+__all__ = [
+    "Leg",
+    "LEG_NAMES",
+    "leg_index",
+    "LegState",
+    "LEG_STATE_NAMES",
+    "ContactMode",
+    "CONTACT_NAMES",
+    "MotorJointMode",
+    "MOTOR_JOINT_NAMES",
+    "Model",
+    "MODEL_LABELS",
+    "EventKind",
+    "EVENT_KIND_NAMES",
+    "Violation",
+    "VIOLATION_NAMES",
+]
 
 
 class _Coded(IntEnum):
@@ -58,8 +72,7 @@ class _Coded(IntEnum):
         for member in cls:
             if member.label == label:
                 return member
-        raise ValueError(f"{label!r} is not allowed: must be one of "
-                         f"{[m.label for m in cls]}")
+        raise ValueError(f"{label!r} is not allowed: must be one of {[m.label for m in cls]}")
 
 
 class Leg(_Coded):
@@ -138,7 +151,7 @@ class Model(_Coded):
 
     @property
     def display_name(self) -> str:
-        """"ideal actuator", "Model I", "Model II" or "passive (no controller)"."""
+        """ "ideal actuator", "Model I", "Model II" or "passive (no controller)"."""
         return MODEL_LABELS[self.label]
 
 

@@ -22,8 +22,16 @@ import numpy as np
 from ._core.model import layout as L
 from .parameters import ControllerParameters, RobotParameters
 
-__all__ = ["InitialState", "HybridState", "standing_state", "standing_leg_compression",
-           "standing_leg_compressions", "STATE_NAMES", "state_index", "state_vector"]
+__all__ = [
+    "InitialState",
+    "HybridState",
+    "standing_state",
+    "standing_leg_compression",
+    "standing_leg_compressions",
+    "STATE_NAMES",
+    "state_index",
+    "state_vector",
+]
 
 #: The components of the state vector, in its order (SI: m, rad, m/s, rad/s): torso x, y,
 #: pitch theta, leg angles phi and Model II driven-gear angles alpha (back, front; relative
@@ -37,8 +45,9 @@ def state_index(name: str) -> int:
     try:
         return L.STATE_NAMES.index(name)
     except ValueError:
-        raise ValueError(f"name = {name!r} is not allowed: must be one of "
-                         f"{list(L.STATE_NAMES)}") from None
+        raise ValueError(
+            f"name = {name!r} is not allowed: must be one of {list(L.STATE_NAMES)}"
+        ) from None
 
 
 def state_vector(**components: float) -> np.ndarray:
@@ -122,23 +131,30 @@ class HybridState:
     def __post_init__(self):
         s = np.asarray(self.state, dtype=float)
         if s.shape != (L.NS,) or not np.all(np.isfinite(s)):
-            raise ValueError(f"HybridState.state must be {L.NS} finite numbers, got shape "
-                             f"{s.shape}")
+            raise ValueError(
+                f"HybridState.state must be {L.NS} finite numbers, got shape {s.shape}"
+            )
         object.__setattr__(self, "state", tuple(float(v) for v in s))
-        allowed = {"leg_states": (L.LS_FLIGHT, L.LS_RETRACTION, L.LS_BRAKE),
-                   "contact_modes": (L.FLIGHT, L.STICK, L.SLIDE, L.STRUT),
-                   "motor_modes": (L.STUCK, L.SLIP_POS, L.SLIP_NEG),
-                   "slide_directions": (1, -1)}
+        allowed = {
+            "leg_states": (L.LS_FLIGHT, L.LS_RETRACTION, L.LS_BRAKE),
+            "contact_modes": (L.FLIGHT, L.STICK, L.SLIDE, L.STRUT),
+            "motor_modes": (L.STUCK, L.SLIP_POS, L.SLIP_NEG),
+            "slide_directions": (1, -1),
+        }
         for name, ok in allowed.items():
             v = tuple(int(x) for x in getattr(self, name))
             if len(v) != 2 or any(x not in ok for x in v):
-                raise ValueError(f"HybridState.{name} = {getattr(self, name)!r} is not "
-                                 f"allowed: two values from {sorted(ok)}")
+                raise ValueError(
+                    f"HybridState.{name} = {getattr(self, name)!r} is not "
+                    f"allowed: two values from {sorted(ok)}"
+                )
             object.__setattr__(self, name, v)
         a = tuple(float(x) for x in self.toe_anchors)
         if len(a) != 2 or not all(math.isfinite(x) for x in a):
-            raise ValueError(f"HybridState.toe_anchors = {self.toe_anchors!r} is not allowed: "
-                             "two finite positions [m]")
+            raise ValueError(
+                f"HybridState.toe_anchors = {self.toe_anchors!r} is not allowed: "
+                "two finite positions [m]"
+            )
         object.__setattr__(self, "toe_anchors", a)
 
     def mode_arrays(self) -> tuple[np.ndarray, np.ndarray]:
@@ -186,14 +202,19 @@ def standing_leg_compression(robot: RobotParameters | None = None) -> float:
     the two legs of any robot): m g / (2 n k). Scout II: 17.2 mm."""
     back, front = standing_leg_compressions(robot)
     if back != front:
-        raise ValueError(f"the standing legs are compressed unequally (back {back:.4g} m, "
-                         f"front {front:.4g} m): use standing_leg_compressions(robot)")
+        raise ValueError(
+            f"the standing legs are compressed unequally (back {back:.4g} m, "
+            f"front {front:.4g} m): use standing_leg_compressions(robot)"
+        )
     return back
 
 
-def standing_state(robot: RobotParameters | None = None, model: str = "II",
-                   controller: ControllerParameters | None = None,
-                   x: float = 0.0) -> HybridState:
+def standing_state(
+    robot: RobotParameters | None = None,
+    model: str = "II",
+    controller: ControllerParameters | None = None,
+    x: float = 0.0,
+) -> HybridState:
     """The robot at rest on its four legs: a static equilibrium.
 
     Both virtual legs are vertical, with their toes pinned on the ground (contact mode
@@ -239,9 +260,11 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
     robot = robot if robot is not None else RobotParameters()
     ctrl = controller if controller is not None else ControllerParameters()
     if model not in ("II", "I", "ideal"):
-        raise ValueError(f"model = {model!r} is not allowed for a standing start: must be "
-                         "'ideal', 'I' or 'II' (the passive model has no hip actuator to "
-                         "hold its legs)")
+        raise ValueError(
+            f"model = {model!r} is not allowed for a standing start: must be "
+            "'ideal', 'I' or 'II' (the passive model has no hip actuator to "
+            "hold its legs)"
+        )
     if not (isinstance(x, (int, float)) and math.isfinite(x)):
         raise ValueError(f"x = {x!r} m is not allowed: must be a finite number")
     comps = standing_leg_compressions(robot)
@@ -250,15 +273,19 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
         l0 = robot.per_leg("leg_rest_length")[leg]
         which = "" if not robot.legs_differ else f" ({L.LEG_NAMES[leg]} leg)"
         if not comp < l0:
-            raise ValueError(f"robot.leg_stiffness = {robot.per_leg('leg_stiffness')[leg]} N/m"
-                             f"{which} is not allowed for a standing start: the leg would be "
-                             f"compressed by {comp:.3g} m, more than its rest length "
-                             f"l0 = {l0} m")
+            raise ValueError(
+                f"robot.leg_stiffness = {robot.per_leg('leg_stiffness')[leg]} N/m"
+                f"{which} is not allowed for a standing start: the leg would be "
+                f"compressed by {comp:.3g} m, more than its rest length "
+                f"l0 = {l0} m"
+            )
         if not comp > ctrl.touchdown_compression:
-            raise ValueError(f"controller.touchdown_compression = {ctrl.touchdown_compression} "
-                             "m is not allowed for a standing start: the standing legs are "
-                             f"compressed by {comp:.4g} m only{which}, so the controller "
-                             "would read them as in flight; it must be below that")
+            raise ValueError(
+                f"controller.touchdown_compression = {ctrl.touchdown_compression} "
+                "m is not allowed for a standing start: the standing legs are "
+                f"compressed by {comp:.4g} m only{which}, so the controller "
+                "would read them as in flight; it must be below that"
+            )
         lengths.append(l0 - comp)
     hb, hf = robot.hip_offset(0), robot.hip_offset(1)
     theta = math.asin((lengths[1] - lengths[0]) / (hf - hb))
@@ -267,8 +294,12 @@ def standing_state(robot: RobotParameters | None = None, model: str = "II",
     s[L.IY] = lengths[0] - hb * math.sin(theta)
     s[L.ITH] = theta
     for leg in range(2):
-        s[L.IPHB + leg] = s[L.IALB + leg] = 0.0 - theta      # vertical legs (0.0, not -0.0)
+        s[L.IPHB + leg] = s[L.IALB + leg] = 0.0 - theta  # vertical legs (0.0, not -0.0)
         s[L.IL_B + leg] = lengths[leg]
-    return HybridState(state=tuple(s), leg_states=(L.LS_BRAKE, L.LS_BRAKE),
-                       contact_modes=(L.STICK, L.STICK), motor_modes=(L.STUCK, L.STUCK),
-                       toe_anchors=(x + hb * math.cos(theta), x + hf * math.cos(theta)))
+    return HybridState(
+        state=tuple(s),
+        leg_states=(L.LS_BRAKE, L.LS_BRAKE),
+        contact_modes=(L.STICK, L.STICK),
+        motor_modes=(L.STUCK, L.STUCK),
+        toe_anchors=(x + hb * math.cos(theta), x + hf * math.cos(theta)),
+    )

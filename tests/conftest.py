@@ -19,7 +19,9 @@ def force_outcome(monkeypatch):
             r = real(*args, **kwargs)
             r.outcome = outcome
             return r
+
         monkeypatch.setattr(scoutsim.simulation.simulator, "simulate", simulate)
+
     return force
 
 
@@ -38,7 +40,9 @@ def interrupt_run(monkeypatch):
             if len(calls) == n:
                 r.outcome = "interrupted"
             return r
+
         monkeypatch.setattr(scoutsim.simulation.simulator, "simulate", simulate)
+
     return interrupt
 
 
@@ -53,6 +57,7 @@ def dask_client_timeouts(monkeypatch):
         def __init__(self, *args, **kwargs):
             timeouts.append(kwargs.get("timeout"))
             super().__init__(*args, **kwargs)
+
     monkeypatch.setattr(distributed, "Client", Client)
     return timeouts
 
@@ -81,15 +86,20 @@ def _png_draws_each_axes_data(path, fig, dpi=None):
     import numpy as np
 
     from scoutsim.presentation.style import PNG_DPI
+
     dpi = dpi or PNG_DPI
     shown = mpimg.imread(path)[..., :3]
     w_in, h_in = fig.get_size_inches()
     assert shown.shape[:2] == (round(h_in * dpi), round(w_in * dpi))
-    data_axes = [ax for ax in fig.get_axes()
-                 if ax.get_visible() and (ax.lines or ax.collections or ax.patches)]
+    data_axes = [
+        ax
+        for ax in fig.get_axes()
+        if ax.get_visible() and (ax.lines or ax.collections or ax.patches)
+    ]
     assert data_axes
-    hidden = [a for ax in data_axes for a in (*ax.lines, *ax.collections, *ax.patches)
-              if a.get_visible()]
+    hidden = [
+        a for ax in data_axes for a in (*ax.lines, *ax.collections, *ax.patches) if a.get_visible()
+    ]
     for a in hidden:
         a.set_visible(False)
     try:
@@ -108,8 +118,9 @@ def _png_draws_each_axes_data(path, fig, dpi=None):
         rows = slice(round((1 - y1) * height) + 2, round((1 - y0) * height) - 2)
         cols = slice(round(x0 * width) + 2, round(x1 * width) - 2)
         inside = int(np.count_nonzero(differs[rows, cols]))
-        assert inside >= 0.5 * (cols.stop - cols.start), \
+        assert inside >= 0.5 * (cols.stop - cols.start), (
             f"{path}: the axes {ax.get_ylabel()!r} shows no data ({inside} pixels)"
+        )
 
 
 @pytest.fixture
@@ -124,5 +135,6 @@ def _parameter_warnings_start_afresh():
     process-wide memory that keeps the library from warning twice of one value): a test
     that expects a warning must not depend on which tests ran before it in the process."""
     from scoutsim.parameters import plausibility
+
     plausibility._WARNED_FROM_A_FILE.clear()
     yield

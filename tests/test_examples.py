@@ -55,8 +55,10 @@ def run_example(script: Path, cwd: Path, robot_file: Path, *args: str) -> str:
     if "--robot" in script.read_text():
         cmd += ["--robot", str(robot_file)]
     out = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=TIMEOUT_S)
-    assert out.returncode == 0, (f"{' '.join(cmd)} exited {out.returncode}\n"
-                                 f"stdout:\n{out.stdout[-3000:]}\nstderr:\n{out.stderr[-3000:]}")
+    assert out.returncode == 0, (
+        f"{' '.join(cmd)} exited {out.returncode}\n"
+        f"stdout:\n{out.stdout[-3000:]}\nstderr:\n{out.stderr[-3000:]}"
+    )
     return out.stdout
 
 
@@ -73,8 +75,12 @@ def check_compiled_controller(stdout: str, cwd: Path):
 def check_fig10_efficiency(stdout: str, cwd: Path):
     png = cwd / "fig10_efficiency.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    rows = re.findall(r"^(constant efficiency|idle \+ load losses)\s+(back|front)\s+(\d+)\s+"
-                      r"(\S+) N m\s+(\S+) N m$", stdout, re.M)
+    rows = re.findall(
+        r"^(constant efficiency|idle \+ load losses)\s+(back|front)\s+(\d+)\s+"
+        r"(\S+) N m\s+(\S+) N m$",
+        stdout,
+        re.M,
+    )
     assert len(rows) == 4, stdout
     for run, leg, n_low, _, error in rows:
         assert int(n_low) > 0, (run, leg)
@@ -115,7 +121,7 @@ def check_tune_setpoints(stdout: str, cwd: Path):
     assert float(best.group(1)) >= float(start.group(1))
 
 
-CHECKS = {name[len("check_"):]: f for name, f in globals().items() if name.startswith("check_")}
+CHECKS = {name[len("check_") :]: f for name, f in globals().items() if name.startswith("check_")}
 
 
 def test_every_check_is_of_an_example():

@@ -74,11 +74,14 @@ def _graph(module_level_only=False):
         for node in nodes:
             targets, missing = _resolve(node, pkg, mods)
             edges[name].update(t for t in targets if t != name)
-            unresolved += [f"{path.relative_to(ROOT.parent)}:{node.lineno}: "
-                           f"`{ast.unparse(node)}` ({m} is not a module of the package)"
-                           for m in sorted(set(missing))]
-    assert not unresolved, "imports that resolve to no module of the package:\n" + \
-        "\n".join(unresolved)
+            unresolved += [
+                f"{path.relative_to(ROOT.parent)}:{node.lineno}: "
+                f"`{ast.unparse(node)}` ({m} is not a module of the package)"
+                for m in sorted(set(missing))
+            ]
+    assert not unresolved, "imports that resolve to no module of the package:\n" + "\n".join(
+        unresolved
+    )
     return edges
 
 
@@ -95,7 +98,9 @@ def _resolve(node, pkg, mods):
         parts = pkg.split(".")
         if node.level > len(parts):  # above the package root
             return [], ["." * node.level + (node.module or "")]
-        mod = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
+        mod = ".".join(
+            parts[: len(parts) - node.level + 1] + ([node.module] if node.module else [])
+        )
     else:
         mod = node.module or ""
         if mod.split(".")[0] != ROOT.name:
@@ -144,7 +149,10 @@ def test_an_import_of_a_missing_module_is_reported():
     wrong = ast.parse("from .parameters import RobotParameters").body[0]
     right = ast.parse("from ..parameters import RobotParameters").body[0]
     absolute = ast.parse("import scoutsim.no_such_module").body[0]
-    assert _resolve(wrong, "scoutsim.presentation", mods) == ([], ["scoutsim.presentation.parameters"])
+    assert _resolve(wrong, "scoutsim.presentation", mods) == (
+        [],
+        ["scoutsim.presentation.parameters"],
+    )
     assert _resolve(right, "scoutsim.presentation", mods) == (["scoutsim.parameters"], [])
     assert _resolve(absolute, "scoutsim.presentation", mods) == ([], ["scoutsim.no_such_module"])
 
@@ -158,7 +166,7 @@ def test_no_import_cycles():
         stack.append(m)
         for t in sorted(edges[m]):
             if state.get(t) == 1:
-                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(t):] + [t]))
+                raise AssertionError("import cycle: " + " -> ".join(stack[stack.index(t) :] + [t]))
             if t not in state:
                 visit(t, stack)
         stack.pop()
@@ -171,8 +179,12 @@ def test_no_import_cycles():
 
 def test_imports_go_down_the_layers():
     edges = _graph()
-    against = {(a, b) for a, ts in edges.items() for b in ts
-               if _layer(b) > _layer(a) or (_layer(b) == _layer(a) and _peer_forbidden(a, b))}
+    against = {
+        (a, b)
+        for a, ts in edges.items()
+        for b in ts
+        if _layer(b) > _layer(a) or (_layer(b) == _layer(a) and _peer_forbidden(a, b))
+    }
     assert against == CONVENIENCE_ACCESSORS
 
 
@@ -196,11 +208,17 @@ def test_upper_layers_do_not_import_the_core():
     no module of theirs imports ``scoutsim._core`` (any submodule, deferred or not), so the
     compiled core's array layout can change under them."""
     edges = _graph()
-    found = {a for a, ts in edges.items() if _layer(a) >= MODEL_FREE_LAYER
-             for b in ts if b == "scoutsim._core" or b.startswith("scoutsim._core.")}
+    found = {
+        a
+        for a, ts in edges.items()
+        if _layer(a) >= MODEL_FREE_LAYER
+        for b in ts
+        if b == "scoutsim._core" or b.startswith("scoutsim._core.")
+    }
     assert found == set(MODEL_IMPORT_EXCEPTIONS), (
         "modules above the simulation layer that import scoutsim._core: "
-        + ", ".join(sorted(found - set(MODEL_IMPORT_EXCEPTIONS))))
+        + ", ".join(sorted(found - set(MODEL_IMPORT_EXCEPTIONS)))
+    )
 
 
 def _peer_forbidden(a, b):

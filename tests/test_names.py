@@ -16,12 +16,13 @@ LABELLED = [N.Leg, N.LegState, N.ContactMode, N.MotorJointMode, N.Model, N.Event
 
 def _table_codes(prefix):
     """The integer constants of the core's table whose names start with ``prefix``."""
-    return {name: v for name, v in vars(L).items()
-            if name.startswith(prefix) and type(v) is int}
+    return {name: v for name, v in vars(L).items() if name.startswith(prefix) and type(v) is int}
 
 
-@pytest.mark.parametrize("enum, prefix", [
-    (N.LegState, "LS_"), (N.EventKind, "EK_"), (N.Violation, "V_"), (N.Model, "MODEL_")])
+@pytest.mark.parametrize(
+    "enum, prefix",
+    [(N.LegState, "LS_"), (N.EventKind, "EK_"), (N.Violation, "V_"), (N.Model, "MODEL_")],
+)
 def test_every_code_of_a_family_in_the_table_has_a_member(enum, prefix):
     """A code the core gains (a new ``EK_*``, ``V_*``, ...) without a member fails here."""
     codes = _table_codes(prefix)
@@ -104,8 +105,14 @@ def test_members_are_their_codes():
 
 
 def test_leg_index():
-    assert [N.leg_index(x) for x in ("back", "front", 0, 1, N.Leg.BACK, N.Leg.FRONT)] == \
-        [0, 1, 0, 1, 0, 1]
+    assert [N.leg_index(x) for x in ("back", "front", 0, 1, N.Leg.BACK, N.Leg.FRONT)] == [
+        0,
+        1,
+        0,
+        1,
+        0,
+        1,
+    ]
     assert type(N.leg_index(N.Leg.FRONT)) is int
     for bad in ("left", 2, -1, True, None, 1.0, [0]):
         with pytest.raises(ValueError, match="leg"):

@@ -37,8 +37,9 @@ def _on_motor_limit(r, leg):
     """Per sample: the motor works on a limit of section 4, the current limit
     |i| >= (1 - 0.1 %) i_max or the torque-speed line |R_A i + K_w w_m| >= (1 - 0.1 %) V_b."""
     i = np.asarray(r.motor_current(leg))
-    v_terminal = (ROBOT.armature_resistance * i
-                  + ROBOT.speed_constant * np.asarray(r.motor_speed(leg)))
+    v_terminal = ROBOT.armature_resistance * i + ROBOT.speed_constant * np.asarray(
+        r.motor_speed(leg)
+    )
     on_current = np.abs(i) >= (1.0 - ON_LIMIT) * ROBOT.current_limit
     on_line = np.abs(v_terminal) >= (1.0 - ON_LIMIT) * np.asarray(r.battery_voltage)
     return on_current | on_line
@@ -57,7 +58,7 @@ def test_models_i_and_ii_reach_a_steady_stride(runs, model):
 
 
 def test_model_ii_speed_near_paper_1_3_m_s(runs):
-    """"the resulting average forward speed was approximately 1.3 m/s"."""
+    """ "the resulting average forward speed was approximately 1.3 m/s"."""
     assert 1.1 <= runs["II"].gait().mean_speed_m_s <= 1.5
 
 
@@ -77,8 +78,9 @@ def test_model_ii_belt_deflection_below_the_stall_deflection(runs):
     robot = scoutsim.RobotParameters()
     N = robot.planetary_ratio * robot.sprocket_ratio
     eta = robot.gearbox_efficiency * robot.sprocket_efficiency
-    stall = (N * eta * robot.torque_constant * robot.current_limit
-             + N * robot.joint_stiction) / robot.belt_stiffness
+    stall = (
+        N * eta * robot.torque_constant * robot.current_limit + N * robot.joint_stiction
+    ) / robot.belt_stiffness
     r = runs["II"]
     m = _steady(r)
     for leg in ("back", "front"):
@@ -113,8 +115,12 @@ def _quadrant_shares(r, leg, mask):
     plane: applied hip torque and leg angular rate, positive forward (toe moving ahead)."""
     tau = np.asarray(r.hip_torque_applied(leg))[mask]
     rate = np.asarray(r.leg_rate(leg))[mask]
-    return {1: np.mean((tau > 0) & (rate > 0)), 2: np.mean((tau < 0) & (rate > 0)),
-            3: np.mean((tau < 0) & (rate < 0)), 4: np.mean((tau > 0) & (rate < 0))}
+    return {
+        1: np.mean((tau > 0) & (rate > 0)),
+        2: np.mean((tau < 0) & (rate > 0)),
+        3: np.mean((tau < 0) & (rate < 0)),
+        4: np.mean((tau > 0) & (rate < 0)),
+    }
 
 
 @pytest.mark.parametrize("model", ["I", "II"])
@@ -228,8 +234,9 @@ def test_ideal_actuator_with_the_retraction_law_reaches_a_cycle(runs):
         i = np.asarray(r.motor_current(leg))
         back_emf = ROBOT.speed_constant * np.asarray(r.motor_speed(leg))
         vb = np.asarray(r.battery_voltage)
-        beyond_line = ((i > (vb - back_emf) / ROBOT.armature_resistance + 1e-6)
-                       | (i < (-vb - back_emf) / ROBOT.armature_resistance - 1e-6))
+        beyond_line = (i > (vb - back_emf) / ROBOT.armature_resistance + 1e-6) | (
+            i < (-vb - back_emf) / ROBOT.armature_resistance - 1e-6
+        )
         state = r.leg_state(leg)
         assert not np.any(beyond_line[w & (state == RETRACTION)]), leg
         assert np.mean(beyond_line[w & (state == FLIGHT)]) > 0.1, leg
@@ -277,8 +284,9 @@ def test_without_the_torque_speed_line_anywhere_the_ideal_actuator_finds_no_cycl
     from each of 9 starts (1.0-1.4 m/s, pitch rate 100-200 deg/s) over 20 s, all of which
     reach the bounding cycle with the Table I law.
     """
-    r = scoutsim.simulate(duration=10.0, model="ideal",
-                          controller=ConstantMaxTorqueRetraction(ControllerParameters()))
+    r = scoutsim.simulate(
+        duration=10.0, model="ideal", controller=ConstantMaxTorqueRetraction(ControllerParameters())
+    )
     assert r.outcome == "completed"
     assert not r.gait().is_steady_bounding()
     bounces, strides = _back_leg_bounces(r)
@@ -323,16 +331,21 @@ def fig12_table():
     from scoutsim.validation import load_dataset
     from scoutsim.validation.errors import compare
     from scoutsim.validation.make_example import example_paths
+
     return compare(load_dataset(example_paths()), models=("I", "II"))
 
 
 #: the Fig. 12 metrics on which Model II's mean error is below Model I's on the example data
-MODEL_II_BETTER = ("stride_frequency_hz", "duty_factor_front", "pitch_max_deg",
-                   "height_max_m", "height_min_m")
+MODEL_II_BETTER = (
+    "stride_frequency_hz",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "height_max_m",
+    "height_min_m",
+)
 
 
-def test_fig12_model_ii_errors_below_model_i_in_five_of_seven_and_all_below_25_percent(
-        fig12_table):
+def test_fig12_model_ii_errors_below_model_i_in_five_of_seven_and_all_below_25_percent(fig12_table):
     """Fig. 12 text: "the average errors for Model II in all the parameters are below the
     corresponding ones for Model I, and most strikingly, all are smaller than 25%".
 
@@ -345,10 +358,13 @@ def test_fig12_model_ii_errors_below_model_i_in_five_of_seven_and_all_below_25_p
     example data differ from the paper's claim.
     """
     from scoutsim.validation.errors import ERROR_METRICS
-    mean = {(m, metric): fig12_table.row(m, metric).mean_percent_error
-            for m in ("I", "II") for metric in ERROR_METRICS}
+
+    mean = {
+        (m, metric): fig12_table.row(m, metric).mean_percent_error
+        for m in ("I", "II")
+        for metric in ERROR_METRICS
+    }
     assert all(math.isfinite(v) for v in mean.values())
-    better = tuple(metric for metric in ERROR_METRICS
-                   if mean["II", metric] < mean["I", metric])
+    better = tuple(metric for metric in ERROR_METRICS if mean["II", metric] < mean["I", metric])
     assert better == MODEL_II_BETTER
     assert all(mean["II", metric] < 25.0 for metric in ERROR_METRICS)

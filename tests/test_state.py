@@ -35,10 +35,10 @@ def test_standing_state_geometry_toes_below_the_hips_torso_level_at_rest():
     h = standing_state(x=0.5)
     s = np.array(h.state)
     length = 0.323 - standing_leg_compression()
-    assert s[L.IY] == pytest.approx(length, abs=1e-15)     # hips at the COM's height
+    assert s[L.IY] == pytest.approx(length, abs=1e-15)  # hips at the COM's height
     assert s[L.IL_B] == s[L.IL_F] == pytest.approx(length, abs=1e-15)
     assert s[L.ITH] == s[L.IPHB] == s[L.IPHF] == s[L.IALB] == s[L.IALF] == 0.0
-    assert np.all(s[L.NQ:2 * L.NQ] == 0.0)
+    assert np.all(s[L.NQ : 2 * L.NQ] == 0.0)
     assert h.toe_anchors == pytest.approx((0.5 - 0.552 / 2, 0.5 + 0.552 / 2), abs=1e-15)
     assert h.contact_modes == (L.STICK, L.STICK)
     assert h.leg_states == (L.LS_BRAKE, L.LS_BRAKE)
@@ -54,7 +54,7 @@ def test_standing_state_is_a_static_equilibrium_zero_accelerations_and_half_weig
     aux = np.zeros(L.NAUX)
     evaluate(np.array(h.state), P, mi, mf, np.zeros(2), ds, aux)
     # net force and moment zero: every acceleration (torso, legs, gears) ~ 0
-    assert np.max(np.abs(ds[L.NQ:2 * L.NQ])) < 1e-9
+    assert np.max(np.abs(ds[L.NQ : 2 * L.NQ])) < 1e-9
     # each toe carries half the weight, no tangential force (the hips hold no torque)
     m = 20.865 + 4 * 0.97
     for leg in range(2):
@@ -70,12 +70,12 @@ def test_standing_robot_held_by_the_stance_brake_stays_put_for_two_seconds(model
     h = standing_state(model=model)
     r = scoutsim.simulate(None, None, h, 2.0, model=model)
     assert r.outcome == "completed"
-    assert np.max(np.abs(r.state[:, L.NQ:2 * L.NQ])) < 1e-9          # velocities
-    assert np.max(np.abs(r.state[-1] - np.array(h.state))) < 1e-9    # drift [m, rad]
+    assert np.max(np.abs(r.state[:, L.NQ : 2 * L.NQ])) < 1e-9  # velocities
+    assert np.max(np.abs(r.state[-1] - np.array(h.state))) < 1e-9  # drift [m, rad]
     assert np.all(r.leg_state("back") == L.LS_BRAKE)
     assert np.all(r.contact_mode("front") == L.STICK)
-    if model == "II":       # the motor joints stay stuck by their stiction
-        assert np.all(r.modes[:, L.RM_MOTOR_B:L.RM_MOTOR_B + 2] == L.STUCK)
+    if model == "II":  # the motor joints stay stuck by their stiction
+        assert np.all(r.modes[:, L.RM_MOTOR_B : L.RM_MOTOR_B + 2] == L.STUCK)
 
 
 def test_standing_robot_pushed_gently_recovers_and_stays_standing():
@@ -86,7 +86,7 @@ def test_standing_robot_pushed_gently_recovers_and_stays_standing():
     s[L.NQ + L.IX] = 0.05
     r = scoutsim.simulate(None, None, dataclasses.replace(h, state=tuple(s)), 2.0, model="I")
     assert r.outcome == "completed"
-    assert np.max(np.abs(r.state[-1, L.NQ:2 * L.NQ])) < 0.005
+    assert np.max(np.abs(r.state[-1, L.NQ : 2 * L.NQ])) < 0.005
     assert np.max(np.abs(np.degrees(r.pitch))) < 1.0
     for leg in ("back", "front"):
         assert np.all(r.leg_state(leg) == L.LS_BRAKE)
@@ -99,8 +99,11 @@ def test_standing_state_refuses_the_passive_model_and_too_soft_or_too_stiff_legs
     with pytest.raises(ValueError, match="robot.leg_stiffness"):
         standing_state(RobotParameters().replace(leg_stiffness=100.0))
     with pytest.raises(ValueError, match="controller.touchdown_compression"):
-        standing_state(controller=scoutsim.ControllerParameters().replace(
-            touchdown_compression=0.02, liftoff_compression=0.015))
+        standing_state(
+            controller=scoutsim.ControllerParameters().replace(
+                touchdown_compression=0.02, liftoff_compression=0.015
+            )
+        )
     with pytest.raises(ValueError, match="x = "):
         standing_state(x=math.nan)
 
@@ -109,6 +112,7 @@ def test_state_vector_sets_components_by_name():
     """state_vector puts each named component in its slot of the layout (the rest zero);
     state_index finds it; an unknown name is refused."""
     from scoutsim.state import STATE_NAMES, state_index, state_vector
+
     assert STATE_NAMES == L.STATE_NAMES
     s = state_vector(y=0.4, dtheta=1.5, phi_front=-0.2, leg_length_back=0.3)
     expected = np.zeros(L.NS)

@@ -15,7 +15,7 @@ MAX_PARAMETERS = 12
 #: and why; matched exactly, so an entry that no longer names a wide function fails too
 WIDE_BY_DESIGN = {
     "simulation/simulator.py:simulate": "the public entry point spells out every keyword "
-                                        "for IDEs, inspect.signature and type checkers",
+    "for IDEs, inspect.signature and type checkers",
 }
 
 
@@ -24,8 +24,11 @@ def _sources():
 
 
 def test_no_module_over_600_lines():
-    long = {str(p.relative_to(ROOT)): n for p in _sources()
-            if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in _sources()
+        if (n := len(p.read_text().splitlines())) > MAX_LINES
+    }
     assert not long, long
 
 
@@ -37,8 +40,13 @@ def test_no_function_over_12_parameters():
         for node in ast.walk(ast.parse(p.read_text())):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 a = node.args
-                n = (len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs)
-                     + (a.vararg is not None) + (a.kwarg is not None))
+                n = (
+                    len(a.posonlyargs)
+                    + len(a.args)
+                    + len(a.kwonlyargs)
+                    + (a.vararg is not None)
+                    + (a.kwarg is not None)
+                )
                 if a.args and a.args[0].arg in ("self", "cls"):
                     n -= 1
                 if n > MAX_PARAMETERS:
@@ -53,10 +61,12 @@ def test_no_function_over_12_parameters():
 
 
 def test_integrators_and_run_loop_know_no_model_variant():
-    found = [f"{p.relative_to(ROOT)}:{i}" for p in [*sorted((CORE / "numerics").glob("*.py")),
-                                                    CORE / "loop.py"]
-             for i, line in enumerate(p.read_text().splitlines(), 1)
-             if re.search(r"\bMODEL_(II|I|IDEAL|PASSIVE)\b|\bP_MODEL\b", line)]
+    found = [
+        f"{p.relative_to(ROOT)}:{i}"
+        for p in [*sorted((CORE / "numerics").glob("*.py")), CORE / "loop.py"]
+        for i, line in enumerate(p.read_text().splitlines(), 1)
+        if re.search(r"\bMODEL_(II|I|IDEAL|PASSIVE)\b|\bP_MODEL\b", line)
+    ]
     assert not found, found
 
 
@@ -65,38 +75,65 @@ def test_hip_units_are_reached_only_through_their_registry():
     imported by model/hip_unit.py alone: the rest of the package reaches a unit through the
     registry's hooks, so adding a unit is its module and its entry in the registry."""
     model = CORE / "model"
-    units = sorted(p.stem for p in model.glob("*.py")
-                   if re.search(r"^GEARED\s*=", p.read_text(), re.M))
+    units = sorted(
+        p.stem for p in model.glob("*.py") if re.search(r"^GEARED\s*=", p.read_text(), re.M)
+    )
     assert {"rigid_hip", "belt", "backlash"} <= set(units), units
     registry = (model / "hip_unit.py").read_text()
     for unit in units:
         assert re.search(rf"^from \. import .*\b{unit}\b", registry, re.M), unit
-    pattern = re.compile(rf"^\s*(from\s+\S*\b({'|'.join(units)})\b\s+import|from\s+\.+\S*\s+"
-                         rf"import\s+.*\b({'|'.join(units)})\b|import\s+\S*\.({'|'.join(units)})\b)",
-                         re.M)
-    found = [str(p.relative_to(ROOT)) for p in _sources()
-             if p != model / "hip_unit.py" and pattern.search(p.read_text())]
+    pattern = re.compile(
+        rf"^\s*(from\s+\S*\b({'|'.join(units)})\b\s+import|from\s+\.+\S*\s+"
+        rf"import\s+.*\b({'|'.join(units)})\b|import\s+\S*\.({'|'.join(units)})\b)",
+        re.M,
+    )
+    found = [
+        str(p.relative_to(ROOT))
+        for p in _sources()
+        if p != model / "hip_unit.py" and pattern.search(p.read_text())
+    ]
     assert not found, found
 
 
 #: forms of the compiled core's arrays read by number where layout.py has a name:
 #: (what, pattern, files relative to the package)
 MAGIC_FORMS = (
-    ("a leg or gear angle indexed by number (layout IPHB / IALB + leg)",
-     re.compile(r"(?<![\w.])[35]\s*\+\s*leg\b"), ("**/*.py",)),
-    ("a huge number standing for an infinite friction coefficient (P_NO_SLIP)",
-     re.compile(r"\b1e30[0-9]\b"), ("**/*.py",)),
-    ("a flag slot compared with one half by hand (model/flags.py is_set)",
-     re.compile(r"\b(P|meta|hwork|aux|C|geom)\[(-1,\s*)?(L\.)?[A-Z_]+\]\s*[<>]=?\s*0\.5\b"),
-     ("**/*.py",)),
-    ("a controller transition bit by its value (layout TR_*)",
-     re.compile(r"(&|\|=)\s*[124]\b"), ("_core/loop.py", "control/bounding.py")),
-    ("contact-event slot arithmetic by hand (numerics/events.py contact_event, event_leg, "
-     "event_slot)", re.compile(r"(//|%)\s*NEV_CONTACT\b|NEV_CONTACT\s*\+\s*[0-9]"),
-     ("_core/loop.py", "_core/numerics/hybrid.py", "_core/numerics/event_location.py",
-      "_core/numerics/transitions.py")),
-    ("an impact output by number (layout IMP_*)",
-     re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"), ("_core/model/impact.py", "_core/numerics/transitions.py")),
+    (
+        "a leg or gear angle indexed by number (layout IPHB / IALB + leg)",
+        re.compile(r"(?<![\w.])[35]\s*\+\s*leg\b"),
+        ("**/*.py",),
+    ),
+    (
+        "a huge number standing for an infinite friction coefficient (P_NO_SLIP)",
+        re.compile(r"\b1e30[0-9]\b"),
+        ("**/*.py",),
+    ),
+    (
+        "a flag slot compared with one half by hand (model/flags.py is_set)",
+        re.compile(r"\b(P|meta|hwork|aux|C|geom)\[(-1,\s*)?(L\.)?[A-Z_]+\]\s*[<>]=?\s*0\.5\b"),
+        ("**/*.py",),
+    ),
+    (
+        "a controller transition bit by its value (layout TR_*)",
+        re.compile(r"(&|\|=)\s*[124]\b"),
+        ("_core/loop.py", "control/bounding.py"),
+    ),
+    (
+        "contact-event slot arithmetic by hand (numerics/events.py contact_event, event_leg, "
+        "event_slot)",
+        re.compile(r"(//|%)\s*NEV_CONTACT\b|NEV_CONTACT\s*\+\s*[0-9]"),
+        (
+            "_core/loop.py",
+            "_core/numerics/hybrid.py",
+            "_core/numerics/event_location.py",
+            "_core/numerics/transitions.py",
+        ),
+    ),
+    (
+        "an impact output by number (layout IMP_*)",
+        re.compile(r"\b(imp|out)\[\s*([0-9]|3\s*\*)"),
+        ("_core/model/impact.py", "_core/numerics/transitions.py"),
+    ),
 )
 
 
@@ -120,13 +157,14 @@ MAX_ROOT_MODULES = 8
 #: packages whose modules may share a base name with a module elsewhere, and why
 SHARED_BASE_NAMES = {
     "cli": "each module of the command line is named after its command (scoutsim basin, "
-           "sweep, tune), which runs the study of the same name in scoutsim.analysis",
+    "sweep, tune), which runs the study of the same name in scoutsim.analysis",
 }
 
 
 def test_the_package_root_holds_few_modules():
-    root = sorted(p.stem for p in ROOT.glob("*.py")
-                  if p.stem not in ("__init__", "__main__", "_version"))
+    root = sorted(
+        p.stem for p in ROOT.glob("*.py") if p.stem not in ("__init__", "__main__", "_version")
+    )
     assert len(root) <= MAX_ROOT_MODULES, root
 
 
@@ -148,8 +186,11 @@ def test_tests_mirror_the_package():
     """Every directory of tests/ is named after the package it tests (tests/_core/model for
     scoutsim/_core/model, ...), so a module's tests are found where the module is."""
     tests = ROOT.parent / "tests"
-    dirs = sorted(p.relative_to(tests) for p in tests.rglob("*") if p.is_dir()
-                  and "__pycache__" not in p.parts and not p.name.startswith("."))
+    dirs = sorted(
+        p.relative_to(tests)
+        for p in tests.rglob("*")
+        if p.is_dir() and "__pycache__" not in p.parts and not p.name.startswith(".")
+    )
     assert dirs
     stray = [str(d) for d in dirs if not (ROOT / d).is_dir()]
     assert not stray, stray

@@ -42,8 +42,11 @@ STARTS = {
 FLOORS = {"mu1": 1.0, "noslip": math.inf}
 MODELS = (("ideal", None), ("I", None), ("II", None), ("II", "dopri5"))
 #: passive orbits: (forward speed [m/s], apex height [m], pitch rate [rad/s])
-PASSIVE = (("bound", 1.3, 0.35, math.radians(50.0)), ("pronk", 1.3, 0.35, 0.0),
-           ("bound_fast", 1.6, 0.36, math.radians(60.0)))
+PASSIVE = (
+    ("bound", 1.3, 0.35, math.radians(50.0)),
+    ("pronk", 1.3, 0.35, 0.0),
+    ("bound_fast", 1.6, 0.36, math.radians(60.0)),
+)
 DURATION = 3.0
 ARRAYS = ("t", "state", "aux", "modes", "events")
 
@@ -82,8 +85,16 @@ def run_scenarios() -> dict:
         orb = passive_bounding_orbit(speed, height, rate)
         z = orb.z
         init = InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3])
-        r = _simulate(scoutsim, passive_robot(), None, init, "passive", None, math.inf,
-                      passive_touchdown_angles=orb.touchdown_angles)
+        r = _simulate(
+            scoutsim,
+            passive_robot(),
+            None,
+            init,
+            "passive",
+            None,
+            math.inf,
+            passive_touchdown_angles=orb.touchdown_angles,
+        )
         out[f"passive_{pname}"] = _record(r)
     return out
 
@@ -92,8 +103,14 @@ def _record(r) -> dict:
     rec = {a: np.asarray(getattr(r, a)) for a in ARRAYS}
     rec["outcome"] = str(r.outcome)
     summary = r.summary()
-    rec["gait"] = np.array([np.nan if v is None else float(v) for v in summary.values()
-                            if v is None or isinstance(v, (int, float))], dtype=float)
+    rec["gait"] = np.array(
+        [
+            np.nan if v is None else float(v)
+            for v in summary.values()
+            if v is None or isinstance(v, (int, float))
+        ],
+        dtype=float,
+    )
     return rec
 
 
@@ -133,8 +150,10 @@ def compare(path: Path) -> bool:
         all_same = False
         g, g0 = rec["gait"], ref[f"{name}/gait"]
         ok = np.allclose(g, g0, rtol=1e-9, atol=0.0, equal_nan=True)
-        print(f"{name:40s} DIFFERENT: {'; '.join(diffs)}; gait metrics "
-              f"{'agree to 1e-9' if ok else f'DIFFER {g} vs {g0}'}")
+        print(
+            f"{name:40s} DIFFERENT: {'; '.join(diffs)}; gait metrics "
+            f"{'agree to 1e-9' if ok else f'DIFFER {g} vs {g0}'}"
+        )
     return all_same
 
 
@@ -143,11 +162,18 @@ def reference_from(commit: str, path: Path) -> None:
     directory, kept for its compiled cache) to ``path``."""
     tree = Path(tempfile.gettempdir()) / f"scoutsim_ref_tree_{commit}"
     if not tree.exists():
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree),
-                        commit], check=True, capture_output=True)
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(tree), commit],
+            check=True,
+            capture_output=True,
+        )
     env = dict(os.environ, PYTHONPATH=str(tree))
-    subprocess.run([sys.executable, str(Path(__file__).resolve()), "save", str(path)],
-                   check=True, cwd=str(tree), env=env)
+    subprocess.run(
+        [sys.executable, str(Path(__file__).resolve()), "save", str(path)],
+        check=True,
+        cwd=str(tree),
+        env=env,
+    )
 
 
 def main(argv=None) -> int:

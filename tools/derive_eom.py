@@ -46,15 +46,16 @@ Q_NAMES = ("x", "y", "theta", "phi_b", "phi_f", "alpha_b", "alpha_f")
 LEG_PARAMS = ("m_l", "I_l", "d", "N", "J1", "J2", "k", "l0", "k_b")
 LEG_SUFFIX = ("_b", "_f")
 PARAM_NAMES = ("m_t", "I_t", "n_p", "L", "e", "g") + tuple(
-    n + sfx for sfx in LEG_SUFFIX for n in LEG_PARAMS)
-LEG_SIGN = (-1, 1)           # leg 0 = back (hip at -L - e), leg 1 = front (L - e)
+    n + sfx for sfx in LEG_SUFFIX for n in LEG_PARAMS
+)
+LEG_SIGN = (-1, 1)  # leg 0 = back (hip at -L - e), leg 1 = front (L - e)
 
 q = sp.symbols(" ".join(Q_NAMES), real=True)
 dq = sp.symbols(" ".join("d" + n for n in Q_NAMES), real=True)
 ddq = sp.symbols(" ".join("dd" + n for n in Q_NAMES), real=True)
 prm = sp.symbols(" ".join(PARAM_NAMES), real=True)
 P = dict(zip(PARAM_NAMES, prm))
-lsym = sp.symbols("l_b l_f", real=True)          # leg lengths
+lsym = sp.symbols("l_b l_f", real=True)  # leg lengths
 dlsym = sp.symbols("dl_b dl_f", real=True)
 ddlsym = sp.symbols("ddl_b ddl_f", real=True)
 
@@ -85,12 +86,12 @@ def leg_angle(leg):
 
 def unit_axis(leg):
     g = leg_angle(leg)
-    return sp.Matrix([sp.sin(g), -sp.cos(g)])       # hip -> toe
+    return sp.Matrix([sp.sin(g), -sp.cos(g)])  # hip -> toe
 
 
 def unit_normal(leg):
     g = leg_angle(leg)
-    return sp.Matrix([sp.cos(g), sp.sin(g)])        # d u / d g
+    return sp.Matrix([sp.cos(g), sp.sin(g)])  # d u / d g
 
 
 def leg_com(leg):
@@ -105,8 +106,10 @@ def _velocity(r):
 def energies():
     """Symbolic (T, V_grav, V_springs)."""
     n_p = P["n_p"]
-    T = sp.Rational(1, 2) * P["m_t"] * (dq[0] ** 2 + dq[1] ** 2) \
+    T = (
+        sp.Rational(1, 2) * P["m_t"] * (dq[0] ** 2 + dq[1] ** 2)
         + sp.Rational(1, 2) * P["I_t"] * dq[2] ** 2
+    )
     V_grav = P["m_t"] * P["g"] * y
     V_spr = 0
     for leg in range(2):
@@ -115,14 +118,17 @@ def energies():
         w_leg = dq[2] + dq[3 + leg]
         w_j2 = dq[2] + dq[5 + leg]
         w_j1 = dq[2] + N * dq[5 + leg]
-        T += sp.Rational(1, 2) * n_p * m_l * (vc.dot(vc)) \
-            + sp.Rational(1, 2) * n_p * I_l * w_leg ** 2 \
-            + sp.Rational(1, 2) * n_p * leg_param("J2", leg) * w_j2 ** 2 \
-            + sp.Rational(1, 2) * n_p * leg_param("J1", leg) * w_j1 ** 2
+        T += (
+            sp.Rational(1, 2) * n_p * m_l * (vc.dot(vc))
+            + sp.Rational(1, 2) * n_p * I_l * w_leg**2
+            + sp.Rational(1, 2) * n_p * leg_param("J2", leg) * w_j2**2
+            + sp.Rational(1, 2) * n_p * leg_param("J1", leg) * w_j1**2
+        )
         V_grav += n_p * m_l * P["g"] * leg_com(leg)[1]
-        V_spr += sp.Rational(1, 2) * n_p * leg_param("k", leg) \
-            * (leg_param("l0", leg) - lsym[leg]) ** 2 \
+        V_spr += (
+            sp.Rational(1, 2) * n_p * leg_param("k", leg) * (leg_param("l0", leg) - lsym[leg]) ** 2
             + sp.Rational(1, 2) * n_p * leg_param("k_b", leg) * (q[5 + leg] - q[3 + leg]) ** 2
+        )
     return sp.expand(T), V_grav, V_spr
 
 
@@ -131,7 +137,7 @@ def symbolic_eom():
     """Symbolic (M, h, Q_grav) as SymPy matrices (not simplified)."""
     T, V_grav, _ = energies()
     n = len(q)
-    p = [sp.diff(T, v) for v in dq]                               # dT/d dq
+    p = [sp.diff(T, v) for v in dq]  # dT/d dq
     M = sp.Matrix(n, n, lambda i, j: sp.diff(p[i], dq[j]))
     # d/dt(dT/d dq_i) = sum_j d p_i/d q_j dq_j + (M ddq)_i
     h = sp.Matrix([_time_derivative(p[i], q, dq) - sp.diff(T, q[i]) for i in range(n)])
@@ -198,8 +204,9 @@ def mass_matrix(q_, params):
 
 def coriolis(q_, dq_, params):
     """Velocity-product vector h(q, dq) (M ddq + h = Q), length 7."""
-    return np.array(_compiled()["h"](_vec(q_, 7), _vec(dq_, 7), _pvec(params)),
-                    dtype=float).reshape(7)
+    return np.array(
+        _compiled()["h"](_vec(q_, 7), _vec(dq_, 7), _pvec(params)), dtype=float
+    ).reshape(7)
 
 
 def gravity_force(q_, params):
@@ -217,21 +224,25 @@ def potential_energy(q_, l_, params):
 
 
 def toe_position(q_, l, params, leg):
-    return np.array(_compiled()[("toe", leg)](_vec(q_, 7), float(l), _pvec(params)),
-                    dtype=float).reshape(2)
+    return np.array(
+        _compiled()[("toe", leg)](_vec(q_, 7), float(l), _pvec(params)), dtype=float
+    ).reshape(2)
 
 
 def toe_velocity(q_, dq_, l, dl, params, leg):
-    return np.array(_compiled()[("toe_v", leg)](_vec(q_, 7), _vec(dq_, 7), float(l),
-                                                float(dl), _pvec(params)),
-                    dtype=float).reshape(2)
+    return np.array(
+        _compiled()[("toe_v", leg)](_vec(q_, 7), _vec(dq_, 7), float(l), float(dl), _pvec(params)),
+        dtype=float,
+    ).reshape(2)
 
 
 def toe_acceleration(q_, dq_, ddq_, l, dl, ddl, params, leg):
-    return np.array(_compiled()[("toe_a", leg)](_vec(q_, 7), _vec(dq_, 7), _vec(ddq_, 7),
-                                                float(l), float(dl), float(ddl),
-                                                _pvec(params)),
-                    dtype=float).reshape(2)
+    return np.array(
+        _compiled()[("toe_a", leg)](
+            _vec(q_, 7), _vec(dq_, 7), _vec(ddq_, 7), float(l), float(dl), float(ddl), _pvec(params)
+        ),
+        dtype=float,
+    ).reshape(2)
 
 
 def leg_normal(q_, leg):
@@ -248,12 +259,24 @@ def params_from_robot(robot, gears=True):
     """Named parameter dict from a ``scoutsim.RobotParameters`` (read field by field,
     independently of ``scoutsim._core.model.packing``; a per-leg field given as a (back, front)
     pair gives each leg its value). ``gears=False`` zeroes J1, J2 and k_b."""
-    out = {"m_t": robot.torso_mass, "I_t": robot.torso_inertia,
-           "n_p": float(robot.legs_per_virtual_leg), "L": robot.hip_spacing / 2.0,
-           "e": robot.com_offset, "g": robot.gravity}
-    fields = {"m_l": "leg_mass", "I_l": "leg_inertia", "d": "leg_com_distance",
-              "J1": "drive_gear_inertia", "J2": "driven_gear_inertia",
-              "k": "leg_stiffness", "l0": "leg_rest_length", "k_b": "belt_stiffness"}
+    out = {
+        "m_t": robot.torso_mass,
+        "I_t": robot.torso_inertia,
+        "n_p": float(robot.legs_per_virtual_leg),
+        "L": robot.hip_spacing / 2.0,
+        "e": robot.com_offset,
+        "g": robot.gravity,
+    }
+    fields = {
+        "m_l": "leg_mass",
+        "I_l": "leg_inertia",
+        "d": "leg_com_distance",
+        "J1": "drive_gear_inertia",
+        "J2": "driven_gear_inertia",
+        "k": "leg_stiffness",
+        "l0": "leg_rest_length",
+        "k_b": "belt_stiffness",
+    }
     for leg, sfx in enumerate(LEG_SUFFIX):
         for name, field in fields.items():
             value = _pair(getattr(robot, field))[leg]
@@ -264,6 +287,7 @@ def params_from_robot(robot, gears=True):
 
 def main():
     import time
+
     t0 = time.perf_counter()
     M, h, Qg = symbolic_eom()
     t1 = time.perf_counter()

@@ -35,6 +35,7 @@ def make_env(model: str, keep_going: bool = False):
     ``keep_going``: the episode goes on when the robot is down (``terminate_when_fallen``
     off), until the simulator's fall or the time limit (more of each episode is fuzzed)."""
     from scoutsim.envs.bound import BoundEnv
+
     return BoundEnv(model=model, start="random", terminate_when_fallen=not keep_going)
 
 
@@ -69,12 +70,19 @@ def run_episode(env, torques: str, seed: int, max_steps: int = MAX_STEPS) -> dic
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--episodes", type=int, default=300, help="episodes (seeds 0..N-1) per "
-                    "model and torque regime (default 300)")
+    ap.add_argument(
+        "--episodes",
+        type=int,
+        default=300,
+        help="episodes (seeds 0..N-1) per model and torque regime (default 300)",
+    )
     ap.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
     ap.add_argument("--torques", nargs="+", default=list(TORQUES), choices=TORQUES)
-    ap.add_argument("--keep-going", action="store_true", help="go on when the robot is "
-                    "down, until the simulator's fall or the time limit")
+    ap.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="go on when the robot is down, until the simulator's fall or the time limit",
+    )
     a = ap.parse_args(argv)
     failures = 0
     t_all = time.perf_counter()
@@ -90,9 +98,12 @@ def main(argv=None) -> int:
                 if ep["outcome"] == "numerical_failure":
                     failed.append((seed, round(ep["t"], 4)))
             failures += len(failed)
-            print(f"model {model:5s} torques {torques:9s}: {a.episodes} episodes, "
-                  f"{dict(sorted(counts.items()))}, numerical_failure at (seed, t) "
-                  f"{failed}, {time.perf_counter() - t0:.1f} s", flush=True)
+            print(
+                f"model {model:5s} torques {torques:9s}: {a.episodes} episodes, "
+                f"{dict(sorted(counts.items()))}, numerical_failure at (seed, t) "
+                f"{failed}, {time.perf_counter() - t0:.1f} s",
+                flush=True,
+            )
     print(f"total: {failures} numerical failures, {time.perf_counter() - t_all:.1f} s")
     return 1 if failures else 0
 

@@ -66,8 +66,18 @@ from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
 from .numerics.transitions import settle_ws
 from .numerics.work import EventLog, EventWork, StepWork
 
-__all__ = ["run", "run_entry", "effective_method", "record_sample", "sense", "readings_at",
-           "Control", "Span", "Records", "Carry"]
+__all__ = [
+    "run",
+    "run_entry",
+    "effective_method",
+    "record_sample",
+    "sense",
+    "readings_at",
+    "Control",
+    "Span",
+    "Records",
+    "Carry",
+]
 
 
 @kernel
@@ -81,8 +91,7 @@ def sense(k, s, P, mi, mf, cmd, kept, cb, ew, s_tmp):
         for i in range(NS):
             s_tmp[i] = s[i]
         project_state(s_tmp, P, mi, mf)
-        evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew,
-                    False, ew[3], True)
+        evaluate_ws(s_tmp, P, mi, mf, cmd, cb.last[:NS], cb.last[NS:], ew, False, ew[3], True)
     true_readings(s, cb.last[:NS], cb.last[NS:], P[P_G], cb.geom, cb.y)
     if is_set(cb.geom[SG_MEASURED]):
         measure(k, cb.spec, cb.ints[CB_SEED], cb.hist, cb.y)
@@ -101,8 +110,7 @@ def readings_at(k, s, P, mi, mf, cmd, kept, cb):
 
 
 @kernel
-def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energy,
-                  out_energy):
+def record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energy, out_energy):
     """Append one row (time, state, outputs, leg states and modes) to the time series, and
     the energy accumulator ``energy`` (layout ``EN_*``, [J] since the run's start) to
     ``out_energy`` unless that is empty (no accounting)."""
@@ -130,8 +138,7 @@ Span = namedtuple("Span", "k_start k_stop k_last dt rtol atol")
 #: where the run is recorded: the time series (``out_t``, ``out_s``, ``out_aux``,
 #: ``out_ls``), the event records and statistics (``ev``, ``stats``), the integrator
 #: steps (``steps``, ``stepc``) and the energy accounting (``energy``, ``out_energy``)
-Records = namedtuple("Records",
-                     "out_t out_s out_aux out_ls ev stats steps stepc energy out_energy")
+Records = namedtuple("Records", "out_t out_s out_aux out_ls ev stats steps stepc energy out_energy")
 #: what a run carries from one call to the next: ``hwork`` (step-size guess and flags),
 #: which event functions are ``armed``, the ARK stiff factors ``sfwork`` and the evaluation
 #: workspace ``ew``
@@ -190,21 +197,32 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     ew_s = eval_workspace()
     s_tmp = np.zeros(NS)
     kind = cb.ints[CB_KIND]
-    SF0 = sfwork   # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
+    SF0 = sfwork  # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
     if energy.shape[0] > 0:
         ew_e = eval_workspace()
-    else:   # (no accounting: placeholders of the same types)
+    else:  # (no accounting: placeholders of the same types)
         ew_e = (np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros((1, 1)))
-    sc = AdvanceScratch(np.empty(NEV), np.zeros(NEV, dtype=np.bool_),
-                        np.zeros(NMI, dtype=np.int64), np.empty(NS), steps, stepc, energy,
-                        ew_e, np.zeros(NS), np.zeros(NS), np.zeros(NAUX),
-                        np.zeros(energy.shape[0]), imp)
+    sc = AdvanceScratch(
+        np.empty(NEV),
+        np.zeros(NEV, dtype=np.bool_),
+        np.zeros(NMI, dtype=np.int64),
+        np.empty(NS),
+        steps,
+        stepc,
+        energy,
+        ew_e,
+        np.zeros(NS),
+        np.zeros(NS),
+        np.zeros(NAUX),
+        np.zeros(energy.shape[0]),
+        imp,
+    )
     work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol)
     evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
     log = EventLog(ev, stats)
-    sf_ok = is_set(hwork[HW_STIFF_VALID])   # SF0 holds stiff factors from an earlier step
+    sf_ok = is_set(hwork[HW_STIFF_VALID])  # SF0 holds stiff factors from an earlier step
     t = k_start * dt
     k = k_start
     while k < k_stop:
@@ -238,32 +256,52 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
-        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew,
-                        is_set(hwork[HW_EVAL_KEPT]))
+        nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew, is_set(hwork[HW_EVAL_KEPT]))
         hwork[HW_EVAL_KEPT] = FLAG_OFF
         stats[S_NFEV] += 1
         if nev > nev0:
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
             # audit it like an event (rare: the energy before is computed only here)
-            stamp_transition(ev, nev0, nev, state_energy(s_prev, P), aux[A_ENERGY],
-                             mode_violations(s, K[0], aux, P, mi), s_prev, s)
+            stamp_transition(
+                ev,
+                nev0,
+                nev,
+                state_energy(s_prev, P),
+                aux[A_ENERGY],
+                mode_violations(s, K[0], aux, P, mi),
+                s_prev,
+                s,
+            )
         # record the sample
-        n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
-                              energy, out_energy)
+        n_out = record_sample(
+            t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energy, out_energy
+        )
         if not is_set(aux[A_KKT_OK]):
             return k, n_out, nev, ST_NUMERICAL_FAILURE, t
         if k >= k_last:
             k += 1
             break
         t_next = (k + 1) * dt
-        t, nev, status = advance(t, t_next, plant, hwork, aux, log, nev, method, work, evw,
-                                 sc, sf_ok or method == METHOD_DOPRI5)
+        t, nev, status = advance(
+            t,
+            t_next,
+            plant,
+            hwork,
+            aux,
+            log,
+            nev,
+            method,
+            work,
+            evw,
+            sc,
+            sf_ok or method == METHOD_DOPRI5,
+        )
         sf_ok = True
         hwork[HW_STIFF_VALID] = FLAG_ON
         # K[0], aux and ew now hold the evaluation at s (the end of the last step, or the
         # state after an event), with the command of the period just ended
         hwork[HW_EVAL_KEPT] = FLAG_ON if status == ST_RUNNING else FLAG_OFF
-        if status == ST_RUNNING:    # what the sensors of the next sample read
+        if status == ST_RUNNING:  # what the sensors of the next sample read
             for i in range(NS):
                 cb.last[i] = K[0, i]
             for i in range(NAUX):
@@ -271,8 +309,9 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         if status != ST_RUNNING:
             # record the final state (fall or failure) off the grid
             evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
-            n_out = record_sample(t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out,
-                                  energy, out_energy)
+            n_out = record_sample(
+                t, s, aux, ls, mi, out_t, out_s, out_aux, out_ls, n_out, energy, out_energy
+            )
             return k + 1, n_out, nev, status, t
         k += 1
         if nev > ev.shape[0] - 64:
@@ -287,7 +326,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
 _ENTRIES: dict[tuple, object] = {}
 
 _compute_fingerprint: Callable[..., bytes] | None
-try:    # Numba's key of its type cache (private; None where missing: typed instead)
+try:  # Numba's key of its type cache (private; None where missing: typed instead)
     from numba._dispatcher import compute_fingerprint as _compute_fingerprint
 except ImportError:
     _compute_fingerprint = None
@@ -323,6 +362,7 @@ def run_entry(method: int, args: tuple):
     if entry is None:
         from numba import typeof
         from numba.core import types
+
         argtypes = tuple(typeof(a) for a in args)
         typed_key = (method, argtypes)
         entry = _ENTRIES.get(typed_key)

@@ -104,8 +104,9 @@ def _flags_hash():
     try:
         same = cls.__hash__(probe) == hash(tuple(sorted(options)))
     except (AttributeError, TypeError) as exc:
-        raise _NotTheKnownCode(f"TargetConfig.__hash__ fails on a default instance "
-                               f"({exc})") from None
+        raise _NotTheKnownCode(
+            f"TargetConfig.__hash__ fails on a default instance ({exc})"
+        ) from None
     if not same:
         raise _NotTheKnownCode("TargetConfig.__hash__ is not the hash of its option names")
     hashes = {}
@@ -133,8 +134,9 @@ def _inline_copy():
     old_a = "kernel_copy.blocks = {}\n"
     old_b = "copy.deepcopy(the_ir.blocks[block_label])"
     if src.count(old_a) != 1 or src.count(old_b) != 1:
-        raise _NotTheKnownCode("InlineWorker.inline_ir does not copy the blocks one by one "
-                               "as expected")
+        raise _NotTheKnownCode(
+            "InlineWorker.inline_ir does not copy the blocks one by one as expected"
+        )
     indent = src.split(old_a)[0].rsplit("\n", 1)[1]
     src = src.replace(old_a, old_a + indent + "_memo = {}\n")
     src = src.replace(old_b, "copy.deepcopy(the_ir.blocks[block_label], _memo)")
@@ -155,12 +157,16 @@ def _inline_translation():
     per function and flags in :data:`_TRANSLATED` (``inline_ir`` copies it before
     changing anything) for the duration of one compile of the core."""
     worker = _lookup("numba.core.inline_closurecall", "InlineWorker")
-    _check_parameters(worker.inline_function, "InlineWorker.inline_function",
-                      ("self", "caller_ir", "block", "i", "function", "arg_typs"))
+    _check_parameters(
+        worker.inline_function,
+        "InlineWorker.inline_function",
+        ("self", "caller_ir", "block", "i", "function", "arg_typs"),
+    )
     src = _source(worker.inline_function, "InlineWorker.inline_function")
     if "callee_ir = self.run_untyped_passes(function)" not in src:
-        raise _NotTheKnownCode("InlineWorker.inline_function does not translate the callee "
-                               "with run_untyped_passes")
+        raise _NotTheKnownCode(
+            "InlineWorker.inline_function does not translate the callee with run_untyped_passes"
+        )
 
     def inline_function(self, caller_ir, block, i, function, arg_typs=None):
         key = (function, function.__code__, repr(self.flags))
@@ -215,7 +221,7 @@ STEPS = {
     "Dispatcher.get_call_template": _inline_overloads,
 }
 
-_INHERITED = object()   # (an attribute the class inherits: put back by deleting ours)
+_INHERITED = object()  # (an attribute the class inherits: put back by deleting ours)
 _LOCK = threading.Lock()
 _status: dict[str, str] = {}
 #: the checked replacements: name -> (owner, attribute, Numba's own, the replacement)
@@ -271,7 +277,7 @@ def _restore():
     while _installed:
         owner, attr, original, new = _installed.pop()
         if owner.__dict__.get(attr) is not new:
-            continue   # replaced again by other code meanwhile: theirs stays
+            continue  # replaced again by other code meanwhile: theirs stays
         if original is _INHERITED:
             delattr(owner, attr)
         else:
@@ -286,6 +292,7 @@ def applied():
     count of depth): the outermost one puts them in place and puts Numba's own back."""
     global _depth
     from numba.core.compiler_lock import global_compiler_lock
+
     with global_compiler_lock:
         with _LOCK:
             if _depth == 0:

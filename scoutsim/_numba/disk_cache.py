@@ -43,8 +43,13 @@ from pathlib import Path
 _PACKAGE = Path(__file__).resolve().parents[1]
 #: the sources of the compiled core (a change in any of them invalidates the cache of the
 #: modules that import it)
-CORE_SOURCES = ("_core/model/*.py", "_core/numerics/*.py", "_core/loop.py", "control/*.py",
-                "_numba/*.py")
+CORE_SOURCES = (
+    "_core/model/*.py",
+    "_core/numerics/*.py",
+    "_core/loop.py",
+    "control/*.py",
+    "_numba/*.py",
+)
 
 
 def _core_files(package: Path) -> list[Path]:
@@ -85,7 +90,7 @@ def _imported(rel: str, source: bytes, known: set[str]) -> set[str]:
             if node.level:
                 if node.level - 1 > len(pkg):
                     continue
-                base = pkg[:len(pkg) - (node.level - 1)]
+                base = pkg[: len(pkg) - (node.level - 1)]
             elif node.module and node.module.split(".")[0] == _PACKAGE.name:
                 base = []
             else:
@@ -112,6 +117,7 @@ def _import_graph(sources: dict[str, bytes], memo: Path | None) -> dict[str, set
     syntax only for those not in ``memo`` (a file of earlier answers, by source digest:
     parsing every module takes about 0.1 s, too long for every start)."""
     import json
+
     known = sorted(sources)
     layout = hashlib.sha256("\n".join(known).encode()).hexdigest()[:16]
     shas = {rel: hashlib.sha256(src).hexdigest()[:32] for rel, src in sources.items()}
@@ -135,8 +141,16 @@ def _import_graph(sources: dict[str, bytes], memo: Path | None) -> dict[str, set
         try:
             memo.parent.mkdir(parents=True, exist_ok=True)
             tmp = memo.with_name(f"{memo.name}.{os.getpid()}.tmp")
-            tmp.write_text(json.dumps({"layout": layout, "modules": {
-                rel: {"sha": shas[rel], "imports": sorted(deps[rel])} for rel in known}}))
+            tmp.write_text(
+                json.dumps(
+                    {
+                        "layout": layout,
+                        "modules": {
+                            rel: {"sha": shas[rel], "imports": sorted(deps[rel])} for rel in known
+                        },
+                    }
+                )
+            )
             os.replace(tmp, memo)
         except OSError:
             pass
@@ -149,8 +163,7 @@ def module_digests(package: Path = _PACKAGE, memo: Path | None = None) -> dict[s
     others: what its compiled functions can depend on (the constants they read, the
     functions they inline or link). ``memo``: a file that keeps the import graph between
     processes (:func:`_import_graph`)."""
-    sources = {f.relative_to(package).as_posix(): f.read_bytes()
-               for f in _core_files(package)}
+    sources = {f.relative_to(package).as_posix(): f.read_bytes() for f in _core_files(package)}
     deps = _import_graph(sources, memo)
     out = {}
     for rel in sources:
@@ -217,8 +230,9 @@ def _remove(directory: Path, stale_after: float | None, now: float) -> bool:
     return not directory.exists()
 
 
-def _remove_other_digests(root: Path, digests: dict[str, str],
-                          stale_after: float | None) -> list[Path]:
+def _remove_other_digests(
+    root: Path, digests: dict[str, str], stale_after: float | None
+) -> list[Path]:
     """Remove the module directories in ``root`` (``<module>-<digest>``) of a core module
     at another digest than ``digests``; in the package's own cache (``stale_after`` None)
     also those of a module the core no longer has (a version whose modules were named or
@@ -238,7 +252,7 @@ def _remove_other_digests(root: Path, digests: dict[str, str],
             continue
         known = current.get(m["module"])
         if known == m["digest"] or (known is None and stale_after is not None):
-            continue    # current; or, in a shared directory, a module this version lacks
+            continue  # current; or, in a shared directory, a module this version lacks
         if _remove(old, stale_after, now):
             removed.append(old)
     return removed
@@ -272,8 +286,7 @@ def _remove_old_layout(root: Path, stale_after: float | None) -> list[Path]:
     to ``root``, or ``scoutsim-numba-<digest>`` in the user's directory once stale).
     Returns the directories removed."""
     base = root.parent
-    pattern = _OLD_USER_CACHE_NAME if stale_after is not None else \
-        re.compile(r"numba-[0-9a-f]{16}")
+    pattern = _OLD_USER_CACHE_NAME if stale_after is not None else re.compile(r"numba-[0-9a-f]{16}")
     try:
         olds = [p for p in base.iterdir() if pattern.fullmatch(p.name)]
     except OSError:
@@ -285,8 +298,7 @@ def _remove_old_layout(root: Path, stale_after: float | None) -> list[Path]:
 _ROOT, _STALE_AFTER = _cache_root()
 _DIGESTS = module_digests(memo=_ROOT / "imports.json")
 #: cache directory of each core source file (resolved path) of this package
-_MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d)
-                for rel, d in _DIGESTS.items()}
+_MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d) for rel, d in _DIGESTS.items()}
 
 
 def install_cache_locator() -> str | None:
@@ -308,8 +320,10 @@ def install_cache_locator() -> str | None:
     base = getattr(caching, "_CacheLocator", None)
     classes = getattr(impl, "_locator_classes", None)
     if not isinstance(base, type) or not isinstance(classes, list):
-        return ("numba.core.caching has no CacheImpl._locator_classes list or _CacheLocator "
-                "class; the core is not cached on disk")
+        return (
+            "numba.core.caching has no CacheImpl._locator_classes list or _CacheLocator "
+            "class; the core is not cached on disk"
+        )
 
     class _CoreCacheLocator(base):  # type: ignore[valid-type,misc]  # (Numba's class, found above)
         def __init__(self, py_func, path: Path, digest: str):
@@ -354,8 +368,9 @@ def clean_cache() -> list[Path]:
     package's (an older or newer version, an edited source) and the whole-core directories
     of older versions; in a user's ``NUMBA_CACHE_DIR`` only those of ours that nothing has
     written to for a day (:data:`STALE_USER_CACHE_S`). Returns the directories removed."""
-    return (_remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER)
-            + _remove_old_layout(_ROOT, _STALE_AFTER))
+    return _remove_other_digests(_ROOT, _DIGESTS, _STALE_AFTER) + _remove_old_layout(
+        _ROOT, _STALE_AFTER
+    )
 
 
 def cache_size(root: Path | None = None) -> int:

@@ -56,16 +56,17 @@ _STATUS: dict[str, str] = {}
 APPLIED = compile_steps.APPLIED
 
 _why_not_cached = disk_cache.install_cache_locator()
-_STATUS["cache_locator"] = APPLIED if _why_not_cached is None else \
-    f"not applied: {_why_not_cached}"
+_STATUS["cache_locator"] = APPLIED if _why_not_cached is None else f"not applied: {_why_not_cached}"
 
 _COMMON = dict(cache=_why_not_cached is None, error_model="numpy")
 
 
 #: What a simulation compiles on its first call, and about how long it takes (the first
 #: call of ``loop.run``; measured on a 2-core machine, docs/model.md "Compile time").
-FIRST_COMPILE_NOTICE = ("compiling the simulator core with Numba (first run after an "
-                        "install or an update; about 1 min on a 2-core machine, then cached)")
+FIRST_COMPILE_NOTICE = (
+    "compiling the simulator core with Numba (first run after an "
+    "install or an update; about 1 min on a 2-core machine, then cached)"
+)
 
 
 class compile_progress:
@@ -96,7 +97,7 @@ class compile_progress:
             def on_end(self, ev):
                 try:
                     progress._compiled(ev.data["dispatcher"].py_func)
-                except Exception:   # never let a message break a compile
+                except Exception:  # never let a message break a compile
                     pass
 
         self.t0 = time.perf_counter()
@@ -110,19 +111,24 @@ class compile_progress:
             return
         self.done += 1
         if self.tty:
-            name = f"{module[len(_PACKAGE.name) + 1:]}.{py_func.__qualname__}"
-            self.stream.write(f"\r\033[K{self.prefix}compiled {self.done} functions in "
-                              f"{time.perf_counter() - self.t0:.0f} s (last: {name})")
+            name = f"{module[len(_PACKAGE.name) + 1 :]}.{py_func.__qualname__}"
+            self.stream.write(
+                f"\r\033[K{self.prefix}compiled {self.done} functions in "
+                f"{time.perf_counter() - self.t0:.0f} s (last: {name})"
+            )
             self.stream.flush()
 
     def __exit__(self, *exc):
         from numba.core import event
+
         event.unregister("numba:compile", self._listener)
         if self.done:
             end = "\r\033[K" if self.tty else ""
-            self.stream.write(f"{end}{self.prefix}compiled {self.done} function"
-                              f"{'s' if self.done != 1 else ''} of the core in "
-                              f"{time.perf_counter() - self.t0:.1f} s (cached now)\n")
+            self.stream.write(
+                f"{end}{self.prefix}compiled {self.done} function"
+                f"{'s' if self.done != 1 else ''} of the core in "
+                f"{time.perf_counter() - self.t0:.1f} s (cached now)\n"
+            )
             self.stream.flush()
         return False
 
@@ -190,7 +196,7 @@ def _typed_by_kind(dispatcher):
 
     cls = type(dispatcher)
     code = dispatcher.py_func.__code__
-    names = code.co_varnames[:code.co_argcount]
+    names = code.co_varnames[: code.co_argcount]
     keep = {i for i, n in enumerate(names) if n in SPECIALIZING_PARAMETERS}
 
     def widen(a, literal_ok):
@@ -200,8 +206,10 @@ def _typed_by_kind(dispatcher):
         # (the class's method, looked up at the call: Numba's, or compile_steps's
         # replacement while the core compiles)
         return cls.get_call_template(
-            dispatcher, tuple(widen(a, i in keep) for i, a in enumerate(args)),
-            {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()})
+            dispatcher,
+            tuple(widen(a, i in keep) for i, a in enumerate(args)),
+            {k: widen(v, k in SPECIALIZING_PARAMETERS) for k, v in kws.items()},
+        )
 
     dispatcher.get_call_template = get_call_template
     return dispatcher

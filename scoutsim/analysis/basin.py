@@ -50,16 +50,27 @@ from .study_failures import (
     run_failure,
 )
 
-DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)                         # m/s
+DEFAULT_SPEEDS = (0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8)  # m/s
 #: initial pitch rates [rad/s]: -150 to 250 deg/s in steps of 50 deg/s
 DEFAULT_PITCH_RATES = tuple(math.radians(w) for w in range(-150, 251, 50))
-DEFAULT_HEIGHTS = (0.33, 0.38)                                                     # m
+DEFAULT_HEIGHTS = (0.33, 0.38)  # m
 #: floors of the default map: the package's default floor and the no-slip idealisation
 DEFAULT_FLOORS = (DEFAULT_FRICTION_COEFFICIENT, math.inf)
 
 
-BASIN_COLUMNS = ("model", "friction", "speed", "pitch_rate_deg_s", "height", "outcome",
-                 "steady_bounding", "mean_speed_m_s", "n_steady_strides", "status", "error")
+BASIN_COLUMNS = (
+    "model",
+    "friction",
+    "speed",
+    "pitch_rate_deg_s",
+    "height",
+    "outcome",
+    "steady_bounding",
+    "mean_speed_m_s",
+    "n_steady_strides",
+    "status",
+    "error",
+)
 
 
 def _start_of(task: dict) -> dict:
@@ -84,6 +95,7 @@ def basin_task(task: dict) -> dict:
     is not allowed) or error (the study could not run it; :mod:`.study_failures`)."""
     from ..simulation.simulator import simulate
     from ..state import InitialState
+
     row = _start_of(task)
     try:
         controller = build_controller(task["controller"], task["robot"])
@@ -91,9 +103,15 @@ def basin_task(task: dict) -> dict:
         return _failed(row, error_fields(exc))
     try:
         init = InitialState(dx=task["speed"], dtheta=task["pitch_rate"], y=task["height"])
-        result = simulate(task["robot"], controller, init, task["duration"],
-                          model=task["model"], integrator=task["integrator"],
-                          friction_coefficient=task["friction"])
+        result = simulate(
+            task["robot"],
+            controller,
+            init,
+            task["duration"],
+            model=task["model"],
+            integrator=task["integrator"],
+            friction_coefficient=task["friction"],
+        )
     except Exception as exc:  # noqa: BLE001 - classified and reported per start
         return _failed(row, run_failure(exc, "invalid_start"))
     if result.outcome == "interrupted":
@@ -102,10 +120,14 @@ def basin_task(task: dict) -> dict:
         raise KeyboardInterrupt
     g = result.gait()
     speed = g.mean_speed_m_s
-    row.update(outcome=result.outcome, steady_bounding=bool(g.is_steady_bounding()),
-               mean_speed_m_s=(float(speed) if speed is not None and math.isfinite(speed)
-                               else None),
-               n_steady_strides=int(g.n_steady_strides), status="ok", error="")
+    row.update(
+        outcome=result.outcome,
+        steady_bounding=bool(g.is_steady_bounding()),
+        mean_speed_m_s=(float(speed) if speed is not None and math.isfinite(speed) else None),
+        n_steady_strides=int(g.n_steady_strides),
+        status="ok",
+        error="",
+    )
     return row
 
 
@@ -116,12 +138,20 @@ def _basin_error_row(task: dict, exc: Exception) -> dict:
 
 
 def _where(row: dict) -> str:
-    return (f"model {row['model']}, speed {row['speed']:g} m/s, pitch rate "
-            f"{row['pitch_rate_deg_s']:g} deg/s, height {row['height']:g} m")
+    return (
+        f"model {row['model']}, speed {row['speed']:g} m/s, pitch rate "
+        f"{row['pitch_rate_deg_s']:g} deg/s, height {row['height']:g} m"
+    )
 
 
-def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=None,
-                    on_result=None, on_error: str = "record") -> list[dict]:
+def run_basin_tasks(
+    tasks: list[dict],
+    workers: int,
+    progress: bool,
+    scheduler=None,
+    on_result=None,
+    on_error: str = "record",
+) -> list[dict]:
     """Run the starts (locally in parallel, or on a Dask cluster); rows in task order
     (``on_result(index, row)`` as each arrives: what an interrupted map keeps). The
     controller is checked before the first start runs (NotSendableError if it cannot go to
@@ -131,14 +161,20 @@ def run_basin_tasks(tasks: list[dict], workers: int, progress: bool, scheduler=N
     check_on_error(on_error)
     if tasks:
         check_controller_travels(tasks[0]["controller"], workers, scheduler, len(tasks))
-    rows = map_tasks(basin_task, tasks, workers=workers, scheduler=scheduler,
-                     progress=progress, desc="basin", error_row=_basin_error_row,
-                     on_result=on_result,
-                     stop_when=is_error if on_error == "raise" else None)
+    rows = map_tasks(
+        basin_task,
+        tasks,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        desc="basin",
+        error_row=_basin_error_row,
+        on_result=on_result,
+        stop_when=is_error if on_error == "raise" else None,
+    )
     if on_error == "raise":
         arrived = [r for r in rows if r is not None]
-        end_of_study(rows, on_error, "basin map", _where,
-                     result=BasinResult(rows=arrived))
+        end_of_study(rows, on_error, "basin map", _where, result=BasinResult(rows=arrived))
     return rows
 
 
@@ -155,12 +191,18 @@ def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
     invalid starts, errors of the study, valid starts (the others), steady starts,
     fraction (steady / valid), outcomes, median cycle speed [m/s]."""
     per = {}
-    keys = ([(m, None) for m in models] if floors is None else
-            [(m, mu) for mu in floors for m in models])
+    keys = (
+        [(m, None) for m in models]
+        if floors is None
+        else [(m, mu) for mu in floors for m in models]
+    )
     for m, mu in keys:
         mine = [r for r in rows if r["model"] == m and (mu is None or r["friction"] == mu)]
-        speeds = sorted(r["mean_speed_m_s"] for r in mine
-                        if r["steady_bounding"] and r["mean_speed_m_s"] is not None)
+        speeds = sorted(
+            r["mean_speed_m_s"]
+            for r in mine
+            if r["steady_bounding"] and r["mean_speed_m_s"] is not None
+        )
         invalid = sum(_status(r) == "invalid" for r in mine)
         errors = sum(_status(r) == "error" for r in mine)
         valid = len(mine) - invalid - errors
@@ -169,14 +211,19 @@ def basin_stats(rows: list[dict], models: list[str], floors=None) -> dict:
         for r in mine:
             outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
         key = m if mu is None else f"{m} @ {floor_label(mu)}"
-        per[key] = {"model": m, "friction": mu, "n_starts": len(mine),
-                    "n_invalid_start": invalid, "n_errors": errors, "n_valid": valid,
-                    "n_steady_bounding": steady,
-                    "fraction_steady_bounding": (steady / valid) if valid else None,
-                    "median_cycle_speed_m_s": (speeds[len(speeds) // 2] if speeds else None),
-                    "outcomes": outcomes}
+        per[key] = {
+            "model": m,
+            "friction": mu,
+            "n_starts": len(mine),
+            "n_invalid_start": invalid,
+            "n_errors": errors,
+            "n_valid": valid,
+            "n_steady_bounding": steady,
+            "fraction_steady_bounding": (steady / valid) if valid else None,
+            "median_cycle_speed_m_s": (speeds[len(speeds) // 2] if speeds else None),
+            "outcomes": outcomes,
+        }
     return per
-
 
 
 @dataclass
@@ -190,8 +237,13 @@ class BasinResult:
         """Fraction of valid starts of ``model`` (on floor ``friction``; None = all floors)
         that reach steady bounding (None if there are none). Invalid starts and starts
         the study could not run (status "error") are not valid starts."""
-        valid = [r for r in self.rows if r["model"] == model and _status(r) == "ok"
-                 and (friction is None or r["friction"] == friction)]
+        valid = [
+            r
+            for r in self.rows
+            if r["model"] == model
+            and _status(r) == "ok"
+            and (friction is None or r["friction"] == friction)
+        ]
         if not valid:
             return None
         return sum(r["steady_bounding"] for r in valid) / len(valid)
@@ -219,19 +271,37 @@ class BasinResult:
                 w.writerow({k: ("" if r.get(k) is None else r[k]) for k in BASIN_COLUMNS})
 
 
-def basin_tasks(models, floors, speeds, pitch_rates, heights, duration, robot=None,
-                controller=None, integrator=None) -> list[dict]:
+def basin_tasks(
+    models,
+    floors,
+    speeds,
+    pitch_rates,
+    heights,
+    duration,
+    robot=None,
+    controller=None,
+    integrator=None,
+) -> list[dict]:
     """One task per (floor, model, speed [m/s], pitch rate [rad/s], height [m]), in that
     nesting order (a ``"MODULE:FACTORY"`` controller becomes a ControllerSpec, its factory
     imported once here: :func:`~scoutsim.analysis.study_controller.study_controller`).
     The rows give the pitch rate in deg/s (``pitch_rate_deg_s``)."""
     controller = study_controller(controller, robot)
-    return [{"model": m, "speed": float(v), "pitch_rate": float(w),
-             "pitch_rate_deg_s": pitch_rate_deg_s(w), "height": float(y),
-             "robot": robot, "controller": controller, "duration": duration,
-             "integrator": integrator, "friction": float(mu)}
-            for mu, m, v, w, y in itertools.product(floors, models, speeds, pitch_rates,
-                                                    heights)]
+    return [
+        {
+            "model": m,
+            "speed": float(v),
+            "pitch_rate": float(w),
+            "pitch_rate_deg_s": pitch_rate_deg_s(w),
+            "height": float(y),
+            "robot": robot,
+            "controller": controller,
+            "duration": duration,
+            "integrator": integrator,
+            "friction": float(mu),
+        }
+        for mu, m, v, w, y in itertools.product(floors, models, speeds, pitch_rates, heights)
+    ]
 
 
 @dataclass(frozen=True)
@@ -258,10 +328,19 @@ class BasinGrid:
     friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
 
 
-def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0, robot=None,
-                        controller=None, integrator=None, workers: int | None = None,
-                        scheduler=None, progress: bool = False, on_error: str = "raise",
-                        **grid_fields) -> BasinResult:
+def basin_of_attraction(
+    grid: BasinGrid | None = None,
+    *,
+    duration: float = 10.0,
+    robot=None,
+    controller=None,
+    integrator=None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: bool = False,
+    on_error: str = "raise",
+    **grid_fields,
+) -> BasinResult:
     """Run the grid of starts and classify each (see module docstring).
 
     Parameters
@@ -294,37 +373,50 @@ def basin_of_attraction(grid: BasinGrid | None = None, *, duration: float = 10.0
     """
     if "pitch_rates_deg_s" in grid_fields:
         if "pitch_rates" in grid_fields:
-            raise TypeError("basin_of_attraction() takes pitch_rates [rad/s] or the older "
-                            "pitch_rates_deg_s [deg/s], not both")
-        warnings.warn("basin_of_attraction(pitch_rates_deg_s=...) is deprecated: give "
-                      "pitch_rates in rad/s (e.g. numpy.radians(rates_deg_s))",
-                      DeprecationWarning, stacklevel=2)
-        grid_fields["pitch_rates"] = tuple(math.radians(w)
-                                           for w in grid_fields.pop("pitch_rates_deg_s"))
+            raise TypeError(
+                "basin_of_attraction() takes pitch_rates [rad/s] or the older "
+                "pitch_rates_deg_s [deg/s], not both"
+            )
+        warnings.warn(
+            "basin_of_attraction(pitch_rates_deg_s=...) is deprecated: give "
+            "pitch_rates in rad/s (e.g. numpy.radians(rates_deg_s))",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        grid_fields["pitch_rates"] = tuple(
+            math.radians(w) for w in grid_fields.pop("pitch_rates_deg_s")
+        )
     fields = {f.name for f in dataclasses.fields(BasinGrid)}
     if unknown := sorted(set(grid_fields) - fields):
-        raise TypeError(f"basin_of_attraction() got an unexpected keyword argument "
-                        f"{unknown[0]!r}")
+        raise TypeError(f"basin_of_attraction() got an unexpected keyword argument {unknown[0]!r}")
     grid = dataclasses.replace(grid or BasinGrid(), **grid_fields)
     check_on_error(on_error)
-    floors = (tuple(grid.floors) if grid.floors is not None
-              else (grid.friction_coefficient,))
-    tasks = basin_tasks(grid.models, floors, grid.speeds, grid.pitch_rates,
-                        grid.heights, duration, robot, controller, integrator)
+    floors = tuple(grid.floors) if grid.floors is not None else (grid.friction_coefficient,)
+    tasks = basin_tasks(
+        grid.models,
+        floors,
+        grid.speeds,
+        grid.pitch_rates,
+        grid.heights,
+        duration,
+        robot,
+        controller,
+        integrator,
+    )
     workers = workers or os.cpu_count() or 1
     settings = {
-        "models": list(grid.models), "speeds_m_s": list(grid.speeds),
+        "models": list(grid.models),
+        "speeds_m_s": list(grid.speeds),
         "pitch_rates_deg_s": [pitch_rate_deg_s(w) for w in grid.pitch_rates],
         "heights_m": list(grid.heights),
-        "duration_s": duration, "controller": controller_label(tasks[0]["controller"])
-        if tasks else None,
-        "floors": [None if math.isinf(mu) else mu for mu in floors]}
+        "duration_s": duration,
+        "controller": controller_label(tasks[0]["controller"]) if tasks else None,
+        "floors": [None if math.isinf(mu) else mu for mu in floors],
+    }
     try:
-        rows = run_basin_tasks(tasks, workers, progress, scheduler=scheduler,
-                               on_error=on_error)
+        rows = run_basin_tasks(tasks, workers, progress, scheduler=scheduler, on_error=on_error)
     except StudyError as exc:
         exc.result.settings = settings
         raise
     end_of_study(rows, on_error, "basin map", _where)
-    return BasinResult(rows=rows, settings=settings | {
-        "n_errors": sum(is_error(r) for r in rows)})
+    return BasinResult(rows=rows, settings=settings | {"n_errors": sum(is_error(r) for r in rows)})

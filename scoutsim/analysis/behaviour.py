@@ -68,14 +68,38 @@ from ..names import ContactMode, EventKind
 from .stances import stance_overlap
 from .strides import MIN_STEADY_STRIDES, PERIOD_TOLERANCE
 
-__all__ = ["Behaviour", "classify_behaviour", "toe_slide_distance", "BEHAVIOUR_KINDS",
-           "IN_PLACE_SPEED_M_S", "SLIDE_PER_METRE", "SLIDE_NOTE_PER_METRE", "SLIDE_MIN_M",
-           "REST_S", "SETTLED_STRIDES", "MAX_CYCLE_STRIDES", "CYCLE_REPEATS", "RUN_LONGER"]
+__all__ = [
+    "Behaviour",
+    "classify_behaviour",
+    "toe_slide_distance",
+    "BEHAVIOUR_KINDS",
+    "IN_PLACE_SPEED_M_S",
+    "SLIDE_PER_METRE",
+    "SLIDE_NOTE_PER_METRE",
+    "SLIDE_MIN_M",
+    "REST_S",
+    "SETTLED_STRIDES",
+    "MAX_CYCLE_STRIDES",
+    "CYCLE_REPEATS",
+    "RUN_LONGER",
+]
 
 #: The kinds of behaviour, in the order :func:`classify_behaviour` tests them.
-BEHAVIOUR_KINDS = ("no_data", "numerical_failure", "controller_error", "write_failed",
-                   "fell", "bounding", "airborne", "standing", "sliding", "periodic",
-                   "hopping_in_place", "too_short", "irregular")
+BEHAVIOUR_KINDS = (
+    "no_data",
+    "numerical_failure",
+    "controller_error",
+    "write_failed",
+    "fell",
+    "bounding",
+    "airborne",
+    "standing",
+    "sliding",
+    "periodic",
+    "hopping_in_place",
+    "too_short",
+    "irregular",
+)
 #: Average forward speed [m/s] below which the robot counts as staying in place.
 IN_PLACE_SPEED_M_S = 0.1
 #: Toe sliding per metre the torso travelled [m/m] from which sliding is what the run did:
@@ -138,8 +162,13 @@ class Behaviour:
 
     def to_dict(self) -> dict:
         """JSON-safe dict: kind, text, t_s, advice, counts."""
-        return {"kind": self.kind, "text": self.text, "t_s": _num(self.t_s),
-                "advice": self.advice, "counts": dict(self.counts)}
+        return {
+            "kind": self.kind,
+            "text": self.text,
+            "t_s": _num(self.t_s),
+            "advice": self.advice,
+            "counts": dict(self.counts),
+        }
 
     def __str__(self) -> str:
         return self.text
@@ -178,7 +207,7 @@ def _fall(result):
     if log["t"].size == 0:
         return float(result.t_end), None
     limit = math.radians(float((result.provenance or {}).get("pitch_limit_deg", 60.0)))
-    pitch = abs(float(log["v2"][-1]))            # the fall record: v1 = y, v2 = theta
+    pitch = abs(float(log["v2"][-1]))  # the fall record: v1 = y, v2 = theta
     cause = "pitch" if pitch >= limit * (1.0 - 1e-6) else "torso_contact"
     return float(log["t"][-1]), cause
 
@@ -203,17 +232,18 @@ def _counts(result, gait) -> dict:
     legs = ("back", "front")
     steady = gait.n_steady_strides > 0
     return {
-        "n_strides": gait.n_strides, "n_steady_strides": gait.n_steady_strides,
+        "n_strides": gait.n_strides,
+        "n_steady_strides": gait.n_steady_strides,
         "liftoffs": {n: int(len(result.event_times("liftoff", n))) for n in legs},
         "touchdowns": {n: int(len(result.event_times("touchdown", n))) for n in legs},
         "ground_contact_fraction": {
             n: (_num(stance_overlap(gait.stance[n], t0, t1) / span) if span > 0 else None)
-            for n in legs},
+            for n in legs
+        },
         "distance_m": _num(distance),
         "average_speed_m_s": _num(distance / span) if span > 0 else None,
         "toe_slide_m": {n: _num(s) for n, s in zip(legs, slide)},
-        "slide_per_metre": (_num(sum(slide) / abs(distance)) if abs(distance) > 1e-3
-                            else None),
+        "slide_per_metre": (_num(sum(slide) / abs(distance)) if abs(distance) > 1e-3 else None),
         "fall_cause": None,
         "speed_m_s": _num(gait.mean_speed_m_s) if steady else None,
         "stride_frequency_hz": _num(gait.stride_frequency_hz) if steady else None,
@@ -225,8 +255,7 @@ def _last_liftoff(result) -> float | None:
     return float(np.max(lo)) if lo.size else None
 
 
-def classify_behaviour(result, gait=None,
-                       period_tolerance: float = PERIOD_TOLERANCE) -> Behaviour:
+def classify_behaviour(result, gait=None, period_tolerance: float = PERIOD_TOLERANCE) -> Behaviour:
     """What ``result`` did (module docstring): steady bounding, or what instead.
 
     Parameters
@@ -246,8 +275,13 @@ def classify_behaviour(result, gait=None,
     t = np.asarray(result.t, dtype=float)
     outcome = str(result.outcome)
     if t.size == 0:
-        return Behaviour("no_data", f"{outcome}: no sample recorded", None, None,
-                         {"n_strides": 0, "n_steady_strides": 0})
+        return Behaviour(
+            "no_data",
+            f"{outcome}: no sample recorded",
+            None,
+            None,
+            {"n_strides": 0, "n_steady_strides": 0},
+        )
     if gait is None:
         gait = result.gait()
     c = _counts(result, gait)
@@ -260,24 +294,49 @@ def classify_behaviour(result, gait=None,
         failure = getattr(result, "failure", None)
         if failure is not None:
             why = f" ({failure.kind.replace('_', ' ')})"
-        return Behaviour("numerical_failure", f"the integration failed at t = {t_end:.2f} s"
-                         f"{why}, {strides_so_far}", t_end, None, c)
+        return Behaviour(
+            "numerical_failure",
+            f"the integration failed at t = {t_end:.2f} s{why}, {strides_so_far}",
+            t_end,
+            None,
+            c,
+        )
     if outcome == "controller_error":
-        return Behaviour("controller_error", f"the controller failed at t = {t_end:.2f} s, "
-                         f"{strides_so_far}", t_end, None, c)
+        return Behaviour(
+            "controller_error",
+            f"the controller failed at t = {t_end:.2f} s, {strides_so_far}",
+            t_end,
+            None,
+            c,
+        )
     if outcome == "write_failed":
-        return Behaviour("write_failed", f"stopped at t = {t_end:.2f} s: the run's tables "
-                         f"could not be written, {strides_so_far}", t_end, None, c)
+        return Behaviour(
+            "write_failed",
+            f"stopped at t = {t_end:.2f} s: the run's tables "
+            f"could not be written, {strides_so_far}",
+            t_end,
+            None,
+            c,
+        )
     if outcome == "fell":
         t_fall, cause = _fall(result)
         c["fall_cause"] = cause
-        how = {"pitch": "its pitch passed "
-                        f"{float((result.provenance or {}).get('pitch_limit_deg', 60.0)):g} deg",
-               "torso_contact": "the torso touched the ground"}.get(cause, "")
+        how = {
+            "pitch": "its pitch passed "
+            f"{float((result.provenance or {}).get('pitch_limit_deg', 60.0)):g} deg",
+            "torso_contact": "the torso touched the ground",
+        }.get(cause, "")
         slid = _slide_note(c)
-        return Behaviour("fell", f"fell at t = {t_fall:.2f} s" + (f": {how}" if how else "")
-                         + f", {strides_so_far}" + (f"; {slid}" if slid else ""),
-                         t_fall, None, c)
+        return Behaviour(
+            "fell",
+            f"fell at t = {t_fall:.2f} s"
+            + (f": {how}" if how else "")
+            + f", {strides_so_far}"
+            + (f"; {slid}" if slid else ""),
+            t_fall,
+            None,
+            c,
+        )
 
     stop = f"interrupted at t = {t_end:.2f} s; until then " if outcome == "interrupted" else ""
     b = _motion(result, gait, c, period_tolerance)
@@ -285,7 +344,7 @@ def classify_behaviour(result, gait=None,
 
 
 def _slide_note(c, per_metre: float = SLIDE_NOTE_PER_METRE) -> str:
-    """"the toes slid X m while the torso travelled Y m" when that is at least
+    """ "the toes slid X m while the torso travelled Y m" when that is at least
     ``per_metre`` per metre travelled and SLIDE_MIN_M in all, else ""."""
     r = c["slide_per_metre"]
     slide = sum(v or 0.0 for v in c["toe_slide_m"].values())
@@ -305,8 +364,9 @@ def _cycle(strides, tol: float, transient_s: float):
             break
         p = np.array([s.period_s for s in late[-m:]])
         cycle = float(np.sum(p[-k:]))
-        if (np.all(np.abs(p[k:] - p[:-k]) <= tol * cycle)
-                and np.ptp(p[-k:]) > tol * float(np.median(p[-k:]))):
+        if np.all(np.abs(p[k:] - p[:-k]) <= tol * cycle) and np.ptp(p[-k:]) > tol * float(
+            np.median(p[-k:])
+        ):
             return k
     return None
 
@@ -320,32 +380,46 @@ def _motion(result, gait, c, tol) -> Behaviour:
     if gait.is_steady_bounding():
         v, f = c["speed_m_s"], c["stride_frequency_hz"]
         where = " in place" if abs(v) < IN_PLACE_SPEED_M_S else ""
-        text = (f"steady bounding{where} at {v:.2f} m/s, {f:.2f} Hz "
-                f"({n_steady} steady strides)") + (f"; {slid}" if slid else "")
+        text = (
+            f"steady bounding{where} at {v:.2f} m/s, {f:.2f} Hz ({n_steady} steady strides)"
+        ) + (f"; {slid}" if slid else "")
         return Behaviour("bounding", text)
     if sum(c["touchdowns"].values()) == 0:
-        return Behaviour("airborne", f"in flight the whole run ({t_end - t0:.2f} s): no toe "
-                         "touched the ground")
+        return Behaviour(
+            "airborne", f"in flight the whole run ({t_end - t0:.2f} s): no toe touched the ground"
+        )
 
     # on the ground for good: stood, or slid on its toes
     last_lo = _last_liftoff(result)
-    both_down = all(int(np.asarray(result.contact_mode(leg))[-1]) != ContactMode.FLIGHT
-                    for leg in (0, 1))
-    since = last_lo if last_lo is not None else float(
-        np.min(np.concatenate([result.event_times("touchdown", leg) for leg in (0, 1)])))
+    both_down = all(
+        int(np.asarray(result.contact_mode(leg))[-1]) != ContactMode.FLIGHT for leg in (0, 1)
+    )
+    since = (
+        last_lo
+        if last_lo is not None
+        else float(np.min(np.concatenate([result.event_times("touchdown", leg) for leg in (0, 1)])))
+    )
     if both_down and t_end - since >= REST_S:
         x = np.asarray(result.x, dtype=float)
         moved = float(x[-1] - x[int(np.searchsorted(np.asarray(result.t), since))])
         slide = sum(toe_slide_distance(result, leg, since) for leg in (0, 1))
         before = "no stride before" if n == 0 else f"after {_plural(n, 'stride')}"
         if slide >= SLIDE_MIN_M and abs(moved) >= SLIDE_MIN_M:
-            return Behaviour("sliding", f"toes slid {slide:.2f} m on the ground from "
-                             f"t = {since:.2f} s on, without lifting off, while the torso "
-                             f"moved {moved:.2f} m ({before})", since)
+            return Behaviour(
+                "sliding",
+                f"toes slid {slide:.2f} m on the ground from "
+                f"t = {since:.2f} s on, without lifting off, while the torso "
+                f"moved {moved:.2f} m ({before})",
+                since,
+            )
         if n == 0:
-            return Behaviour("standing", f"stood: did not leave the ground after "
-                             f"t = {since:.2f} s (no stride; the torso moved "
-                             f"{c['distance_m']:.2f} m in all)", since)
+            return Behaviour(
+                "standing",
+                f"stood: did not leave the ground after "
+                f"t = {since:.2f} s (no stride; the torso moved "
+                f"{c['distance_m']:.2f} m in all)",
+                since,
+            )
         return Behaviour("standing", f"came to a stand at t = {since:.2f} s {before}", since)
 
     speed = _recent_speed(strides, c)
@@ -356,18 +430,26 @@ def _motion(result, gait, c, tol) -> Behaviour:
         speed = sum(s.mean_speed_m_s * s.period_s for s in last) / cycle
         parts = " / ".join(f"{s.period_s:.3f}" for s in last)
         where = " in place" if abs(speed) < IN_PLACE_SPEED_M_S else ""
-        return Behaviour("periodic", f"a steady gait{where} with {k} back-leg lift-offs per "
-                         f"cycle (strides of {parts} s; cycle {cycle:.3f} s, "
-                         f"{1.0 / cycle:.2f} Hz) at {speed:.2f} m/s: not a bound of one "
-                         "lift-off per stride" + (f"; {slid}" if slid else ""))
+        return Behaviour(
+            "periodic",
+            f"a steady gait{where} with {k} back-leg lift-offs per "
+            f"cycle (strides of {parts} s; cycle {cycle:.3f} s, "
+            f"{1.0 / cycle:.2f} Hz) at {speed:.2f} m/s: not a bound of one "
+            "lift-off per stride" + (f"; {slid}" if slid else ""),
+        )
     note = f"; {slid}" if slid else ""
     if speed is not None and abs(speed) < IN_PLACE_SPEED_M_S:
         lo = sum(c["liftoffs"].values())
-        return Behaviour("hopping_in_place", f"hopped in place: {_plural(lo, 'lift-off')}, "
-                         f"{_plural(n, 'stride')}, mean forward speed {speed:.2f} m/s{note}")
+        return Behaviour(
+            "hopping_in_place",
+            f"hopped in place: {_plural(lo, 'lift-off')}, "
+            f"{_plural(n, 'stride')}, mean forward speed {speed:.2f} m/s{note}",
+        )
     if _slide_note(c, SLIDE_PER_METRE):
-        return Behaviour("sliding", f"{slid.removeprefix('the ')}; {_plural(n, 'stride')}, "
-                         f"{_none_steady(n_steady)}")
+        return Behaviour(
+            "sliding",
+            f"{slid.removeprefix('the ')}; {_plural(n, 'stride')}, {_none_steady(n_steady)}",
+        )
 
     # strides: too few after the transient to tell, or irregular
     tr = gait.transient_s
@@ -376,33 +458,51 @@ def _motion(result, gait, c, tol) -> Behaviour:
     spread = f"periods {p.min():.3f}-{p.max():.3f} s" if n else ""
     if n and t_end - strides[-1].t_end > max(REST_S, 3.0 * strides[-1].period_s):
         # the back legs stopped lifting off: not a matter of the run's length
-        return Behaviour("irregular", f"{_plural(n, 'stride')}, {_none_steady(n_steady)} "
-                         f"({spread}); no back-leg lift-off after t = {strides[-1].t_end:.2f} s"
-                         f"{note}")
+        return Behaviour(
+            "irregular",
+            f"{_plural(n, 'stride')}, {_none_steady(n_steady)} "
+            f"({spread}); no back-leg lift-off after t = {strides[-1].t_end:.2f} s"
+            f"{note}",
+        )
     if n_steady < MIN_STEADY_STRIDES:
         # too short a run: the last strides converged, at least SETTLED_STRIDES of them; or
         # every stride after the transient converged (or there is none) and the time after
         # the transient holds fewer than 7 strides of the last period
-        room = ((t_end - tr) / float(np.median(p[-SETTLED_STRIDES:])) if n
-                else (0.0 if t_end < tr else math.inf))
-        if n_steady >= SETTLED_STRIDES or (n_steady == len(cand)
-                                           and room < MIN_STEADY_STRIDES + 1):
+        room = (
+            (t_end - tr) / float(np.median(p[-SETTLED_STRIDES:]))
+            if n
+            else (0.0 if t_end < tr else math.inf)
+        )
+        if n_steady >= SETTLED_STRIDES or (n_steady == len(cand) and room < MIN_STEADY_STRIDES + 1):
             if t_end < tr:
-                how = ((f"the last {SETTLED_STRIDES} with equal periods"
-                        if _settled(strides, tol) else f"still settling ({spread})")
-                       if n >= SETTLED_STRIDES else (spread or "none complete"))
+                how = (
+                    (
+                        f"the last {SETTLED_STRIDES} with equal periods"
+                        if _settled(strides, tol)
+                        else f"still settling ({spread})"
+                    )
+                    if n >= SETTLED_STRIDES
+                    else (spread or "none complete")
+                )
                 how += f"; the run ended before the {tr:g} s transient did"
             else:
-                how = (f"{'the last ' if n_steady < len(cand) else ''}{n_steady} steady after "
-                       f"the {tr:g} s transient, too few to call the gait steady (at least "
-                       f"{MIN_STEADY_STRIDES})")
-            return Behaviour("too_short", f"{_plural(n, 'stride')}, {how}: {RUN_LONGER}{note}",
-                             None, RUN_LONGER)
+                how = (
+                    f"{'the last ' if n_steady < len(cand) else ''}{n_steady} steady after "
+                    f"the {tr:g} s transient, too few to call the gait steady (at least "
+                    f"{MIN_STEADY_STRIDES})"
+                )
+            return Behaviour(
+                "too_short", f"{_plural(n, 'stride')}, {how}: {RUN_LONGER}{note}", None, RUN_LONGER
+            )
     if n == 0:
-        return Behaviour("irregular", "no complete stride: the back legs lifted off "
-                         f"{_plural(c['liftoffs']['back'], 'time')}{note}")
-    return Behaviour("irregular", f"{_plural(n, 'stride')} taken, {_none_steady(n_steady)} "
-                     f"({spread}){note}")
+        return Behaviour(
+            "irregular",
+            "no complete stride: the back legs lifted off "
+            f"{_plural(c['liftoffs']['back'], 'time')}{note}",
+        )
+    return Behaviour(
+        "irregular", f"{_plural(n, 'stride')} taken, {_none_steady(n_steady)} ({spread}){note}"
+    )
 
 
 def _none_steady(n_steady: int) -> str:

@@ -75,6 +75,7 @@ def _liftoff_states(result):
     1 kHz samples, velocities linearly (their derivative, the acceleration, is not stored;
     error O(h^2 a'), about 1e-4 m/s)."""
     from .interpolation import _hermite
+
     t = result.t
     te = result.event_times("liftoff", "back")
     te = te[(te > t[0]) & (te < t[-1])]
@@ -86,11 +87,17 @@ def _liftoff_states(result):
     return te, np.column_stack(cols)
 
 
-def controlled_cycle(*, model: str = "II", friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-                     duration: float = 12.0, robot=None, controller=None,
-                     initial_state: InitialState | None = None,
-                     integrator: IntegratorSettings | None = None,
-                     n_tail: int = 10) -> ControlledCycle:
+def controlled_cycle(
+    *,
+    model: str = "II",
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+    duration: float = 12.0,
+    robot=None,
+    controller=None,
+    initial_state: InitialState | None = None,
+    integrator: IntegratorSettings | None = None,
+    n_tail: int = 10,
+) -> ControlledCycle:
     """Converged bounding cycle of the controlled robot (default Model II on the default floor).
 
     Simulation-only estimate (no restarts; :func:`controlled_fixed_point` is the Newton
@@ -99,17 +106,25 @@ def controlled_cycle(*, model: str = "II", friction_coefficient: float = DEFAULT
     least-squares fit ``dz_{k+1} = A dz_k`` of the deviations from the converged state of
     the strides whose deviation is above 20x the converged jitter.
     """
-    r = simulate(robot, controller, initial_state, duration, model=model,
-                 integrator=integrator, friction_coefficient=friction_coefficient)
+    r = simulate(
+        robot,
+        controller,
+        initial_state,
+        duration,
+        model=model,
+        integrator=integrator,
+        friction_coefficient=friction_coefficient,
+    )
     te, Z = _liftoff_states(r)
     n = len(te)
     if n < n_tail + 3:
-        raise MapError(f"only {n} back-leg lift-offs in {duration} s (outcome {r.outcome}): "
-                       "no steady cycle")
+        raise MapError(
+            f"only {n} back-leg lift-offs in {duration} s (outcome {r.outcome}): no steady cycle"
+        )
     tail = Z[-n_tail:]
     z = tail.mean(axis=0)
     spread = np.max(np.abs(tail - z), axis=0)
-    period = float(np.mean(np.diff(te[-n_tail - 1:])))
+    period = float(np.mean(np.diff(te[-n_tail - 1 :])))
     scale = np.maximum(np.abs(Z).max(axis=0), 1e-3)
     D = (Z - z) / scale
     noise = max(20.0 * float(np.max(spread / scale)), 1e-9)
@@ -118,11 +133,21 @@ def controlled_cycle(*, model: str = "II", friction_coefficient: float = DEFAULT
         X, Y = D[use], D[use + 1]
         A, *_ = np.linalg.lstsq(X, Y, rcond=None)
         mult = floquet_multipliers(A.T)
-        method = (f"least-squares linear stride map fitted to {len(use)} transient strides "
-                  "(finite differences along the converging transient; see "
-                  "controlled_fixed_point for the Newton solution)")
+        method = (
+            f"least-squares linear stride map fitted to {len(use)} transient strides "
+            "(finite differences along the converging transient; see "
+            "controlled_fixed_point for the Newton solution)"
+        )
     else:
         mult = np.full(Z.shape[1], np.nan + 0j)
         method = "too few transient strides above the jitter to fit the stride map"
-    return ControlledCycle(z=z, period=period, spread=spread, multipliers=mult,
-                           n_strides=n, n_tail=n_tail, outcome=r.outcome, method=method)
+    return ControlledCycle(
+        z=z,
+        period=period,
+        spread=spread,
+        multipliers=mult,
+        n_strides=n,
+        n_tail=n_tail,
+        outcome=r.outcome,
+        method=method,
+    )

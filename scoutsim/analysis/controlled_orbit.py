@@ -34,18 +34,18 @@ class ControlledOrbit:
     """Fixed point of the controlled stride map (section: the control sample at which the
     controller detects back-leg lift-off)."""
 
-    z: np.ndarray                 # section coordinates (CONTROLLED_Z_NAMES), SI
-    state: object                 # the HybridState at the section
-    period: float                 # [s], a whole number of control periods
-    residual: float               # max |P(z) - z| (SI units of each coordinate)
-    multipliers: np.ndarray       # eigenvalues of dP/dz (complex)
+    z: np.ndarray  # section coordinates (CONTROLLED_Z_NAMES), SI
+    state: object  # the HybridState at the section
+    period: float  # [s], a whole number of control periods
+    residual: float  # max |P(z) - z| (SI units of each coordinate)
+    multipliers: np.ndarray  # eigenvalues of dP/dz (complex)
     jacobian: np.ndarray = field(repr=False)
     iterations: int = 0
-    history: list = field(default_factory=list)   # residual per Newton iteration
+    history: list = field(default_factory=list)  # residual per Newton iteration
     #: leg angle from the world vertical (theta + phi) at each leg's touchdown on the orbit
     #: [rad] (back, front; linear interpolation between the 1 kHz samples)
     touchdown_angles_world: tuple = (math.nan, math.nan)
-    mean_speed: float = math.nan    # forward travel over the period / period [m/s]
+    mean_speed: float = math.nan  # forward travel over the period / period [m/s]
 
     @property
     def stable(self) -> bool:
@@ -68,12 +68,20 @@ class ControlledOrbit:
         }
 
 
-def controlled_fixed_point(start=None, *, model: str = "II",
-                           friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, robot=None, controller=None,
-                           integrator: IntegratorSettings | None = None,
-                           settle_duration: float = 12.0, tol: float = 1e-10,
-                           max_iter: int = 10, jacobian_step: float = 1e-6,
-                           progress=None) -> ControlledOrbit:
+def controlled_fixed_point(
+    start=None,
+    *,
+    model: str = "II",
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+    robot=None,
+    controller=None,
+    integrator: IntegratorSettings | None = None,
+    settle_duration: float = 12.0,
+    tol: float = 1e-10,
+    max_iter: int = 10,
+    jacobian_step: float = 1e-6,
+    progress=None,
+) -> ControlledOrbit:
     """Periodic orbit of the controlled robot (Table I law at 1 kHz) by Newton's method on
     the sampled stride map :func:`controlled_stride_map`, and its Floquet multipliers.
 
@@ -91,13 +99,24 @@ def controlled_fixed_point(start=None, *, model: str = "II",
     is found within ``max_iter`` iterations. ``progress``: optional callable(str), told
     the settling run and each Newton iteration's residual."""
     integ = integrator or IntegratorSettings(rtol=1e-11, atol=1e-12)
-    kw = dict(model=model, friction_coefficient=friction_coefficient, robot=robot,
-              controller=controller, integrator=integ)
+    kw = dict(
+        model=model,
+        friction_coefficient=friction_coefficient,
+        robot=robot,
+        controller=controller,
+        integrator=integ,
+    )
     say = progress or (lambda message: None)
     if start is None:
         say(f"settling: {settle_duration:g} s of model {model} to a Newton start")
-        start = simulate(robot, controller, None, settle_duration, model=model,
-                         friction_coefficient=friction_coefficient)
+        start = simulate(
+            robot,
+            controller,
+            None,
+            settle_duration,
+            model=model,
+            friction_coefficient=friction_coefficient,
+        )
     if not isinstance(start, HybridState):
         start = section_state(start)
     disc = _discrete(start)
@@ -112,8 +131,10 @@ def controlled_fixed_point(start=None, *, model: str = "II",
         hist.append(res)
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
         if _discrete(h1) != disc:
-            raise MapError(f"the discrete state at the section changed ({disc} -> "
-                           f"{_discrete(h1)}): not a period-1 orbit of this section")
+            raise MapError(
+                f"the discrete state at the section changed ({disc} -> "
+                f"{_discrete(h1)}): not a period-1 orbit of this section"
+            )
         if res < tol or it == max_iter:
             break
         J = np.empty((z.size, z.size))
@@ -123,16 +144,20 @@ def controlled_fixed_point(start=None, *, model: str = "II",
             zp[j] += e
             _, zj1, _, Tj = controlled_stride_map(_hs_of(zp, disc), **kw)
             if Tj != T:
-                raise MapError(f"the stride length changed from {T} s to {Tj} s under a "
-                               f"perturbation of {CONTROLLED_Z_NAMES[j]}: the start lies on "
-                               "a sample-phase boundary")
+                raise MapError(
+                    f"the stride length changed from {T} s to {Tj} s under a "
+                    f"perturbation of {CONTROLLED_Z_NAMES[j]}: the start lies on "
+                    "a sample-phase boundary"
+                )
             J[:, j] = (zj1 - z1) / e
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
         z0, z1, h1, T = controlled_stride_map(_hs_of(z + dz, disc), **kw)
         z = z0
     if hist[-1] >= tol:
-        raise MapError(f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
-                       f"iterations (history {[f'{v:.1e}' for v in hist]})")
+        raise MapError(
+            f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
+            f"iterations (history {[f'{v:.1e}' for v in hist]})"
+        )
     if J is None or it > 0:
         J = np.empty((z.size, z.size))
         for j in range(z.size):
@@ -141,8 +166,15 @@ def controlled_fixed_point(start=None, *, model: str = "II",
             zp[j] += e
             J[:, j] = (controlled_stride_map(_hs_of(zp, disc), **kw)[1] - z1) / e
     hs = _hs_of(z, disc)
-    r = simulate(robot, controller, hs, T, model=model, integrator=integ,
-                 friction_coefficient=friction_coefficient)
+    r = simulate(
+        robot,
+        controller,
+        hs,
+        T,
+        model=model,
+        integrator=integ,
+        friction_coefficient=friction_coefficient,
+    )
     td = []
     for leg in LEG_NAMES:
         te = r.event_times("touchdown", leg)
@@ -151,8 +183,15 @@ def controlled_fixed_point(start=None, *, model: str = "II",
             continue
         g = r.pitch + r.leg_angle(leg)
         td.append(float(np.interp(te[0], r.t, g)))
-    return ControlledOrbit(z=z, state=hs, period=T, residual=hist[-1],
-                           multipliers=floquet_multipliers(J), jacobian=J,
-                           iterations=len(hist) - 1, history=hist,
-                           touchdown_angles_world=tuple(td),
-                           mean_speed=float((r.x[-1] - r.x[0]) / (r.t[-1] - r.t[0])))
+    return ControlledOrbit(
+        z=z,
+        state=hs,
+        period=T,
+        residual=hist[-1],
+        multipliers=floquet_multipliers(J),
+        jacobian=J,
+        iterations=len(hist) - 1,
+        history=hist,
+        touchdown_angles_world=tuple(td),
+        mean_speed=float((r.x[-1] - r.x[0]) / (r.t[-1] - r.t[0])),
+    )

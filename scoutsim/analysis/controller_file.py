@@ -35,8 +35,7 @@ from ..parameters import (
     parameter_table,
 )
 
-__all__ = ["CONTROLLER_LAWS", "write_controller_file", "read_controller_file",
-           "ControllerFile"]
+__all__ = ["CONTROLLER_LAWS", "write_controller_file", "read_controller_file", "ControllerFile"]
 
 #: the laws a controller file may name: the paper's Table I controller, and Table I with
 #: torso feedback at touchdown (:class:`~scoutsim.control.PitchFeedbackController`)
@@ -58,17 +57,24 @@ def _value(v) -> str:
         return "true" if v else "false"
     if isinstance(v, int):
         return str(v)
-    return repr(float(v))          # shortest repr: reads back to the same float
+    return repr(float(v))  # shortest repr: reads back to the same float
 
 
-def write_controller_file(path, law: str, controller: ControllerParameters,
-                          robot: RobotParameters | None = None, *, header: str = "") -> Path:
+def write_controller_file(
+    path,
+    law: str,
+    controller: ControllerParameters,
+    robot: RobotParameters | None = None,
+    *,
+    header: str = "",
+) -> Path:
     """Write a controller file (module docstring) to ``path``: ``law`` (one of
     :data:`CONTROLLER_LAWS`), every field of ``controller`` and, if given, of ``robot``, in
     SI units; ``header``: comment lines at the top (provenance)."""
     if law not in CONTROLLER_LAWS:
-        raise ValueError(f"law = {law!r} is not allowed: must be one of "
-                         f"{', '.join(CONTROLLER_LAWS)}")
+        raise ValueError(
+            f"law = {law!r} is not allowed: must be one of {', '.join(CONTROLLER_LAWS)}"
+        )
     rows = parameter_table()
     lines = [f"# {h}" if h else "#" for h in header.splitlines()]
     lines += ["", "[controller_law]", f'name = "{law}"']
@@ -79,7 +85,7 @@ def write_controller_file(path, law: str, controller: ControllerParameters,
             continue
         v = getattr(obj, row["name"])
         unit = row["si_unit"]
-        entry = f"{row['name']} = {{ value = {_value(v)}, unit = \"{unit}\" }}"
+        entry = f'{row["name"]} = {{ value = {_value(v)}, unit = "{unit}" }}'
         if unit == "rad":
             entry += f"   # {math.degrees(v):.4f} deg"
         sections.setdefault(row["section"], []).append(entry)
@@ -106,26 +112,33 @@ def read_controller_file(path) -> ControllerFile:
     try:
         data = tomllib.loads(path.read_text("utf-8"))
     except OSError as exc:
-        raise ParameterError(f"controller file '{path}' cannot be read: "
-                             f"{exc.strerror or exc}") from None
+        raise ParameterError(
+            f"controller file '{path}' cannot be read: {exc.strerror or exc}"
+        ) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"controller file '{path}' is not TOML: {exc}") from None
     law_section = data.get("controller_law")
     if not isinstance(law_section, dict) or "name" not in law_section:
-        raise ParameterError(f"controller file '{path}' has no [controller_law] section with "
-                             f"a name (one of {', '.join(CONTROLLER_LAWS)}); a file written "
-                             "by scoutsim tune has one", "controller_law")
+        raise ParameterError(
+            f"controller file '{path}' has no [controller_law] section with "
+            f"a name (one of {', '.join(CONTROLLER_LAWS)}); a file written "
+            "by scoutsim tune has one",
+            "controller_law",
+        )
     if extra := sorted(set(law_section) - {"name"}):
-        raise ParameterError(f"[controller_law] of controller file '{path}': unknown key(s) "
-                             f"{extra}; allowed: name", "controller_law")
+        raise ParameterError(
+            f"[controller_law] of controller file '{path}': unknown key(s) {extra}; allowed: name",
+            "controller_law",
+        )
     law = law_section["name"]
     if law not in CONTROLLER_LAWS:
-        raise ParameterError(f"[controller_law] name = {law!r} in controller file '{path}' is "
-                             f"not allowed: must be one of {', '.join(CONTROLLER_LAWS)}",
-                             "controller_law")
+        raise ParameterError(
+            f"[controller_law] name = {law!r} in controller file '{path}' is "
+            f"not allowed: must be one of {', '.join(CONTROLLER_LAWS)}",
+            "controller_law",
+        )
     if "controller" not in data:
-        raise ParameterError(f"controller file '{path}' has no [controller] section",
-                             "controller")
+        raise ParameterError(f"controller file '{path}' has no [controller] section", "controller")
     if "robot" in data:
         robot, controller = load_parameters(path)
     else:

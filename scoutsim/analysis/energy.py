@@ -34,18 +34,28 @@ from ..names import LEG_NAMES
 #: the terms of the balance, in order: (name, description, flows summed over both legs)
 ELECTRICAL_TERMS = (
     ("copper", "motor copper losses R_A i^2", ("copper",)),
-    ("transmission", "transmission losses: the constant efficiency (signed) and the "
-     "optional load-dependent losses", ("conversion", "gear_loss")),
+    (
+        "transmission",
+        "transmission losses: the constant efficiency (signed) and the "
+        "optional load-dependent losses",
+        ("conversion", "gear_loss"),
+    ),
 )
 MECHANICAL_TERMS = (
-    ("joint_friction", "motor-joint viscous and Coulomb friction (Model II)",
-     ("joint_viscous", "joint_coulomb")),
+    (
+        "joint_friction",
+        "motor-joint viscous and Coulomb friction (Model II)",
+        ("joint_viscous", "joint_coulomb"),
+    ),
     ("belt_damper", "belt damper (Model II)", ("belt_damper",)),
     ("leg_damper", "telescopic leg dampers", ("leg_damper",)),
     ("leg_friction", "telescopic leg sliding-joint friction", ("leg_friction",)),
     ("toe_sliding", "friction of sliding toes on the floor", ("toe_slide",)),
-    ("constraint_work", "work of the constraint forces (zero up to a strut's "
-     "stabilisation)", ("constraint",)),
+    (
+        "constraint_work",
+        "work of the constraint forces (zero up to a strut's stabilisation)",
+        ("constraint",),
+    ),
 )
 
 
@@ -68,7 +78,7 @@ class EnergyBalance:
     battery_loss_J: float
     hip_work_J: float
     duration_s: float
-    flows: dict              #: result.energy_flows: every flow per leg [J]
+    flows: dict  #: result.energy_flows: every flow per leg [J]
     #: distance the torso travelled forward over the run [m] (None for a streamed run,
     #: whose result holds only its end) and the robot's total mass [kg]
     distance_m: float | None = None
@@ -108,18 +118,22 @@ class EnergyBalance:
         for n, e, _ in self.terms:
             if n == name:
                 return e
-        raise KeyError(f"no term {name!r}: the terms are "
-                       f"{', '.join(n for n, _, _ in self.terms)}")
+        raise KeyError(f"no term {name!r}: the terms are {', '.join(n for n, _, _ in self.terms)}")
 
     def as_dict(self) -> dict:
         """JSON-safe: the input, every term, the residual [J]."""
-        return ({"model": self.model, "input": self.input_name, "input_J": self.input_J}
-                | {f"{n}_J": e for n, e, _ in self.terms}
-                | {"battery_J": self.battery_J, "battery_loss_J": self.battery_loss_J,
-                   "residual_J": self.residual_J,
-                   "relative_residual": self.relative_residual,
-                   "mean_input_power_W": self.mean_input_power_W,
-                   "cost_of_transport": self.cost_of_transport})
+        return (
+            {"model": self.model, "input": self.input_name, "input_J": self.input_J}
+            | {f"{n}_J": e for n, e, _ in self.terms}
+            | {
+                "battery_J": self.battery_J,
+                "battery_loss_J": self.battery_loss_J,
+                "residual_J": self.residual_J,
+                "relative_residual": self.relative_residual,
+                "mean_input_power_W": self.mean_input_power_W,
+                "cost_of_transport": self.cost_of_transport,
+            }
+        )
 
     def table(self) -> str:
         """The balance as a Markdown table (term, energy [J], share of the input)."""
@@ -135,8 +149,10 @@ def energy_balance(result) -> EnergyBalance:
     """The work-energy balance of ``result`` (a run made with ``simulate(energy=True)``)."""
     flows = result.energy_flows
     if flows is None:
-        raise ValueError("this run did not account for its energy: run it with "
-                         "simulate(..., energy=True) (scoutsim run does by default)")
+        raise ValueError(
+            "this run did not account for its energy: run it with "
+            "simulate(..., energy=True) (scoutsim run does by default)"
+        )
     model = result.provenance.get("model", "II")
 
     def both(*names):
@@ -156,8 +172,13 @@ def energy_balance(result) -> EnergyBalance:
     for name, desc, names in MECHANICAL_TERMS:
         terms.append((name, both(*names), desc))
     terms.append(("impacts", flows["impacts"], "touchdown impacts"))
-    terms.append(("mechanical_change", flows["mechanical_end"] - flows["mechanical_start"],
-                  "change of mechanical energy (kinetic, gravity, leg and belt springs)"))
+    terms.append(
+        (
+            "mechanical_change",
+            flows["mechanical_end"] - flows["mechanical_start"],
+            "change of mechanical energy (kinetic, gravity, leg and belt springs)",
+        )
+    )
     distance = None
     if "stream" not in result.provenance and len(result.t):
         distance = float(result.x[-1] - result.x[0])
@@ -165,11 +186,20 @@ def energy_balance(result) -> EnergyBalance:
     mass = gravity = None
     if robot:
         from ..parameters import RobotParameters
+
         params = RobotParameters(**robot)
         mass, gravity = params.total_mass, params.gravity
     return EnergyBalance(
-        model=model, input_name=input_name, input_J=input_J, terms=tuple(terms),
+        model=model,
+        input_name=input_name,
+        input_J=input_J,
+        terms=tuple(terms),
         battery_J=(electrical + flows["battery_loss"]) if model in ("I", "II") else 0.0,
-        battery_loss_J=flows["battery_loss"], hip_work_J=hip,
-        duration_s=float(result.t_end), flows=dict(flows), distance_m=distance,
-        total_mass_kg=mass, gravity=gravity or 9.81)
+        battery_loss_J=flows["battery_loss"],
+        hip_work_J=hip,
+        duration_s=float(result.t_end),
+        flows=dict(flows),
+        distance_m=distance,
+        total_mass_kg=mass,
+        gravity=gravity or 9.81,
+    )

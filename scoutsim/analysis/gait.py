@@ -54,31 +54,69 @@ from .strides import (
     converged_tail,
 )
 
-__all__ = ["gait_metrics", "stance_intervals", "stride_table", "stride_energy", "Stride",
-           "GaitMetrics", "SUMMARY_KEYS", "SUMMARY_EXTRA_KEYS", "SUMMARY_BEHAVIOUR_KEYS",
-           "SUMMARY_ENERGY_KEYS",
-           "STRIDE_METRICS", "STRIDE_ENERGY_METRICS", "stance_overlap", "converged_tail"]
+__all__ = [
+    "gait_metrics",
+    "stance_intervals",
+    "stride_table",
+    "stride_energy",
+    "Stride",
+    "GaitMetrics",
+    "SUMMARY_KEYS",
+    "SUMMARY_EXTRA_KEYS",
+    "SUMMARY_BEHAVIOUR_KEYS",
+    "SUMMARY_ENERGY_KEYS",
+    "STRIDE_METRICS",
+    "STRIDE_ENERGY_METRICS",
+    "stance_overlap",
+    "converged_tail",
+]
 
 #: Keys that :meth:`GaitMetrics.summary` returns first, in this order.
-SUMMARY_KEYS = ("outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
-                "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
-                "height_min_m", "max_friction_ratio", "n_steady_strides")
+SUMMARY_KEYS = (
+    "outcome",
+    "mean_speed_m_s",
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "pitch_min_deg",
+    "height_max_m",
+    "height_min_m",
+    "max_friction_ratio",
+    "n_steady_strides",
+)
 #: Keys that follow :data:`SUMMARY_KEYS` in :meth:`GaitMetrics.summary`, in this order.
-SUMMARY_EXTRA_KEYS = ("t_end_s", "n_strides", "stride_period_cv", "steady_bounding",
-                      "motor_saturation_retraction_back", "motor_saturation_retraction_front",
-                      "max_belt_deflection_deg", "max_impact_impulse_ratio",
-                      "end_of_stance_slides", "model")
+SUMMARY_EXTRA_KEYS = (
+    "t_end_s",
+    "n_strides",
+    "stride_period_cv",
+    "steady_bounding",
+    "motor_saturation_retraction_back",
+    "motor_saturation_retraction_front",
+    "max_belt_deflection_deg",
+    "max_impact_impulse_ratio",
+    "end_of_stance_slides",
+    "model",
+)
 #: Keys that follow :data:`SUMMARY_EXTRA_KEYS` in :meth:`GaitMetrics.summary`: what the run
 #: did (:func:`~scoutsim.analysis.behaviour.classify_behaviour`): the sentence, its kind
 #: and the counts it was decided from (with the time and the advice).
 SUMMARY_BEHAVIOUR_KEYS = ("behaviour", "behaviour_kind", "behaviour_detail")
 #: Keys that follow :data:`SUMMARY_BEHAVIOUR_KEYS` in :meth:`GaitMetrics.summary`: what the
 #: gait costs (all None for a run made without the energy accounting).
-SUMMARY_ENERGY_KEYS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
-                       "hip_work_j", "friction_loss_j", "impact_loss_j",
-                       "mechanical_energy_change_j", "energy_residual_j",
-                       "energy_relative_residual", "mean_electrical_power_w",
-                       "cost_of_transport")
+SUMMARY_ENERGY_KEYS = (
+    "electrical_energy_j",
+    "copper_loss_j",
+    "transmission_loss_j",
+    "hip_work_j",
+    "friction_loss_j",
+    "impact_loss_j",
+    "mechanical_energy_change_j",
+    "energy_residual_j",
+    "energy_relative_residual",
+    "mean_electrical_power_w",
+    "cost_of_transport",
+)
 
 #: Current mismatch [A] above which the amplifier/motor limit counts as active.
 SATURATION_TOLERANCE_A = 1e-6
@@ -128,8 +166,9 @@ class GaitMetrics:
 
     def __post_init__(self):
         steady = self.steady_strides
-        self.means = {k: (float(np.mean([s[k] for s in steady])) if steady else None)
-                      for k in STRIDE_METRICS}
+        self.means = {
+            k: (float(np.mean([s[k] for s in steady])) if steady else None) for k in STRIDE_METRICS
+        }
 
     # -- counts and steady strides --------------------------------------------------------
     @property
@@ -202,8 +241,9 @@ class GaitMetrics:
         p = np.array([s.period_s for s in steady])
         return float(np.std(p) / np.mean(p))
 
-    def is_steady_bounding(self, min_strides: int = MIN_STEADY_STRIDES,
-                           max_period_cv: float = 0.05) -> bool:
+    def is_steady_bounding(
+        self, min_strides: int = MIN_STEADY_STRIDES, max_period_cv: float = 0.05
+    ) -> bool:
         """Whether the run is steady bounding.
 
         True iff the robot did not fall and the integration did not fail (outcome
@@ -211,8 +251,7 @@ class GaitMetrics:
         ``min_strides`` steady strides (the paper used >= 7 per run, Sec. IV.C) and the
         stride-period coefficient of variation is at most ``max_period_cv``.
         """
-        if (self.outcome not in ("completed", "interrupted")
-                or self.n_steady_strides < min_strides):
+        if self.outcome not in ("completed", "interrupted") or self.n_steady_strides < min_strides:
             return False
         cv = self.stride_period_cv
         return cv is not None and cv <= max_period_cv
@@ -271,8 +310,9 @@ class GaitMetrics:
         0 for the other variants); None if there are no samples."""
         if len(result.t) == 0:
             return None
-        b = np.concatenate([np.asarray(result.belt_deflection(0)),
-                            np.asarray(result.belt_deflection(1))])
+        b = np.concatenate(
+            [np.asarray(result.belt_deflection(0)), np.asarray(result.belt_deflection(1))]
+        )
         return _json_float(math.degrees(float(np.max(np.abs(b)))))
 
     # -- export ---------------------------------------------------------------------------
@@ -308,9 +348,11 @@ class GaitMetrics:
         out["stride_period_cv"] = _json_float(self.stride_period_cv)
         out["steady_bounding"] = bool(self.is_steady_bounding())
         out["motor_saturation_retraction_back"] = _json_float(
-            self.motor_saturation_fraction(result, 0))
+            self.motor_saturation_fraction(result, 0)
+        )
         out["motor_saturation_retraction_front"] = _json_float(
-            self.motor_saturation_fraction(result, 1))
+            self.motor_saturation_fraction(result, 1)
+        )
         out["max_belt_deflection_deg"] = self.max_belt_deflection_deg(result)
         out["max_impact_impulse_ratio"] = _json_float(stats.get("max_impact_impulse_ratio"))
         out["end_of_stance_slides"] = _json_number(stats.get("end_of_stance_slides"))
@@ -350,43 +392,54 @@ class GaitMetrics:
             return out
         b = result.energy_balance()
         electrical = b.model in ("I", "II")
-        friction = sum(b.term(n) for n in ("joint_friction", "belt_damper", "leg_damper",
-                                           "leg_friction", "toe_sliding"))
-        out.update({
-            "electrical_energy_j": b.input_J if electrical else None,
-            "copper_loss_j": b.term("copper") if electrical else None,
-            "transmission_loss_j": b.term("transmission") if electrical else None,
-            "hip_work_j": b.hip_work_J, "friction_loss_j": friction,
-            "impact_loss_j": b.term("impacts"),
-            "mechanical_energy_change_j": b.term("mechanical_change"),
-            "energy_residual_j": b.residual_J,
-            "energy_relative_residual": b.relative_residual})
+        friction = sum(
+            b.term(n)
+            for n in ("joint_friction", "belt_damper", "leg_damper", "leg_friction", "toe_sliding")
+        )
+        out.update(
+            {
+                "electrical_energy_j": b.input_J if electrical else None,
+                "copper_loss_j": b.term("copper") if electrical else None,
+                "transmission_loss_j": b.term("transmission") if electrical else None,
+                "hip_work_j": b.hip_work_J,
+                "friction_loss_j": friction,
+                "impact_loss_j": b.term("impacts"),
+                "mechanical_energy_change_j": b.term("mechanical_change"),
+                "energy_residual_j": b.residual_J,
+                "energy_relative_residual": b.relative_residual,
+            }
+        )
         steady = [st for st in self.steady_strides if st.distance_m is not None]
         if steady:
             span = sum(st.energy_t_end - st.energy_t_start for st in steady)
             distance = sum(st.distance_m for st in steady)
             if electrical:
-                out["mean_electrical_power_w"] = sum(st.electrical_energy_j
-                                                     for st in steady) / span
+                out["mean_electrical_power_w"] = sum(st.electrical_energy_j for st in steady) / span
             input_name, weight = _input_and_weight(result)
             if input_name is not None and distance > 0:
-                energy = sum(st.electrical_energy_j if electrical else st.hip_work_j
-                             for st in steady)
+                energy = sum(
+                    st.electrical_energy_j if electrical else st.hip_work_j for st in steady
+                )
                 out["cost_of_transport"] = energy / (weight * distance)
         return {k: _json_float(v) for k, v in out.items()}
 
     def to_dict(self) -> dict:
         """JSON-safe dict: transient, outcome, counts, means, period CV and all strides."""
-        return {"transient_s": float(self.transient_s), "outcome": self.outcome,
-                "t_end_s": _json_float(self.t_end), "n_strides": self.n_strides,
-                "n_steady_strides": self.n_steady_strides,
-                "means": {k: _json_float(v) for k, v in self.means.items()},
-                "stride_period_cv": _json_float(self.stride_period_cv),
-                "strides": [s.to_dict() for s in self.strides]}
+        return {
+            "transient_s": float(self.transient_s),
+            "outcome": self.outcome,
+            "t_end_s": _json_float(self.t_end),
+            "n_strides": self.n_strides,
+            "n_steady_strides": self.n_steady_strides,
+            "means": {k: _json_float(v) for k, v in self.means.items()},
+            "stride_period_cv": _json_float(self.stride_period_cv),
+            "strides": [s.to_dict() for s in self.strides],
+        }
 
 
-def gait_metrics(result, transient_s: float = 2.0,
-                 period_tolerance: float = PERIOD_TOLERANCE) -> GaitMetrics:
+def gait_metrics(
+    result, transient_s: float = 2.0, period_tolerance: float = PERIOD_TOLERANCE
+) -> GaitMetrics:
     """Split a run into strides and compute the gait metrics (docs/specification.md section 8; paper Sec. IV).
 
     Parameters
@@ -408,18 +461,25 @@ def gait_metrics(result, transient_s: float = 2.0,
         All strides (back-leg lift-off to the next back-leg lift-off), their metrics and
         the means over the steady strides.
     """
-    if not (isinstance(transient_s, (int, float)) and math.isfinite(transient_s)
-            and transient_s >= 0):
-        raise ValueError(f"transient_s = {transient_s!r} is not allowed: must be a finite "
-                         "number >= 0")
+    if not (
+        isinstance(transient_s, (int, float)) and math.isfinite(transient_s) and transient_s >= 0
+    ):
+        raise ValueError(
+            f"transient_s = {transient_s!r} is not allowed: must be a finite number >= 0"
+        )
     if not (isinstance(period_tolerance, (int, float)) and 0 < period_tolerance < 1):
-        raise ValueError(f"period_tolerance = {period_tolerance!r} is not allowed: must be "
-                         "in (0, 1)")
+        raise ValueError(
+            f"period_tolerance = {period_tolerance!r} is not allowed: must be in (0, 1)"
+        )
     stances = (stance_intervals(result, 0), stance_intervals(result, 1))
     strides = converged_tail(_strides(result, float(transient_s), stances), period_tolerance)
-    return GaitMetrics(strides=strides, transient_s=float(transient_s),
-                       outcome=str(result.outcome), t_end=float(result.t_end),
-                       stance={"back": stances[0], "front": stances[1]})
+    return GaitMetrics(
+        strides=strides,
+        transient_s=float(transient_s),
+        outcome=str(result.outcome),
+        t_end=float(result.t_end),
+        stance={"back": stances[0], "front": stances[1]},
+    )
 
 
 def stride_table(result, transient_s: float = 2.0) -> dict:
@@ -441,14 +501,15 @@ def stride_table(result, transient_s: float = 2.0) -> dict:
         (bool); each of length ``n_strides``.
     """
     strides = gait_metrics(result, transient_s).strides
-    cols = {"index": np.array([s.index for s in strides], dtype=int),
-            "t_start": np.array([s.t_start for s in strides], dtype=float),
-            "t_end": np.array([s.t_end for s in strides], dtype=float)}
+    cols = {
+        "index": np.array([s.index for s in strides], dtype=int),
+        "t_start": np.array([s.t_start for s in strides], dtype=float),
+        "t_end": np.array([s.t_end for s in strides], dtype=float),
+    }
     for k in STRIDE_METRICS:
         cols[k] = np.array([s[k] for s in strides], dtype=float)
     if strides and strides[0].energy_t_start is not None:
         for k in ("energy_t_start", "energy_t_end") + STRIDE_ENERGY_METRICS:
-            cols[k] = np.array([np.nan if s[k] is None else s[k] for s in strides],
-                               dtype=float)
+            cols[k] = np.array([np.nan if s[k] is None else s[k] for s in strides], dtype=float)
     cols["steady"] = np.array([s.steady for s in strides], dtype=bool)
     return cols

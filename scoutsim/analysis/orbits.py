@@ -58,19 +58,35 @@ from .controlled_cycle import LIFTOFF_STATE_NAMES, ControlledCycle, controlled_c
 from .controlled_orbit import ControlledOrbit, controlled_fixed_point
 from .passive_orbits import PassiveOrbit, continue_passive_family, passive_bounding_orbit
 from .passive_reference import (
-                                APEX_STATE_NAMES,
-                                ORBIT_TOLERANCE,
-                                SIMULTANEOUS_EVENT_TOL,
-                                ApexMap,
-                                passive_apex_map,
-                                passive_robot,
+    APEX_STATE_NAMES,
+    ORBIT_TOLERANCE,
+    SIMULTANEOUS_EVENT_TOL,
+    ApexMap,
+    passive_apex_map,
+    passive_robot,
 )
 from .poincare import MapError, fd_jacobian, floquet_multipliers
 from .stride_map import CONTROLLED_Z_NAMES, controlled_stride_map, section_state
 
-__all__ = ["MapError", "ApexMap", "PassiveOrbit", "ControlledCycle", "ControlledOrbit",
-           "controlled_fixed_point", "controlled_stride_map", "section_state",
-           "CONTROLLED_Z_NAMES", "passive_robot", "passive_apex_map", "fd_jacobian",
-           "passive_bounding_orbit", "continue_passive_family", "floquet_multipliers",
-           "controlled_cycle", "APEX_STATE_NAMES", "LIFTOFF_STATE_NAMES", "ORBIT_TOLERANCE",
-           "SIMULTANEOUS_EVENT_TOL"]
+__all__ = [
+    "MapError",
+    "ApexMap",
+    "PassiveOrbit",
+    "ControlledCycle",
+    "ControlledOrbit",
+    "controlled_fixed_point",
+    "controlled_stride_map",
+    "section_state",
+    "CONTROLLED_Z_NAMES",
+    "passive_robot",
+    "passive_apex_map",
+    "fd_jacobian",
+    "passive_bounding_orbit",
+    "continue_passive_family",
+    "floquet_multipliers",
+    "controlled_cycle",
+    "APEX_STATE_NAMES",
+    "LIFTOFF_STATE_NAMES",
+    "ORBIT_TOLERANCE",
+    "SIMULTANEOUS_EVENT_TOL",
+]

@@ -62,9 +62,17 @@ import sys
 import threading
 import types
 
-__all__ = ["map_tasks", "worker_pool", "WorkerDiedError", "SchedulerUnreachableError",
-           "NotSendableError", "check_sendable", "leaves_process", "MAX_BATCH",
-           "SCHEDULER_TIMEOUT_S"]
+__all__ = [
+    "map_tasks",
+    "worker_pool",
+    "WorkerDiedError",
+    "SchedulerUnreachableError",
+    "NotSendableError",
+    "check_sendable",
+    "leaves_process",
+    "MAX_BATCH",
+    "SCHEDULER_TIMEOUT_S",
+]
 
 #: seconds a worker waits between looks at its parent (it exits when the parent is gone)
 PARENT_POLL_S = 0.5
@@ -88,8 +96,10 @@ class NotSendableError(TypeError):
 
 
 #: what to do with something that cannot be sent (the end of NotSendableError's message)
-SEND_ADVICE = ("define it at the top level of a module the workers can import (a file on "
-               "sys.path / PYTHONPATH, or an installed package), or run with workers=1")
+SEND_ADVICE = (
+    "define it at the top level of a module the workers can import (a file on "
+    "sys.path / PYTHONPATH, or an installed package), or run with workers=1"
+)
 
 
 def leaves_process(workers: int | None, scheduler, n_tasks: int) -> bool:
@@ -152,11 +162,15 @@ def unsendable_reason(obj) -> str | None:
         if module == "__main__":
             main = sys.modules.get("__main__")
             if getattr(main, "__file__", None) is None:
-                return ("it is, or holds, a function or class defined in an interactive "
-                        "session (__main__ has no file a worker process could import)")
+                return (
+                    "it is, or holds, a function or class defined in an interactive "
+                    "session (__main__ has no file a worker process could import)"
+                )
         elif not _importable(module):
-            return (f"it is, or holds, a function or class of module {module!r}, which a "
-                    "worker process cannot import by name (not found on sys.path)")
+            return (
+                f"it is, or holds, a function or class of module {module!r}, which a "
+                "worker process cannot import by name (not found on sys.path)"
+            )
     return None
 
 
@@ -165,17 +179,25 @@ def check_sendable(obj, what: str, advice: str = SEND_ADVICE) -> None:
     process (:func:`unsendable_reason`), with ``advice`` on what to do instead."""
     reason = unsendable_reason(obj)
     if reason is not None:
-        raise NotSendableError(f"{what} cannot be sent to the worker processes: {reason}; "
-                               f"{advice}")
+        raise NotSendableError(f"{what} cannot be sent to the worker processes: {reason}; {advice}")
 
 
 class _Stopped(Exception):
     """Raised inside :func:`map_tasks` when a result asks to stop (``stop_when``)."""
 
 
-def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
-              progress: bool = False, desc: str = "runs", on_result=None,
-              error_row=None, stop_when=None) -> list:
+def map_tasks(
+    func,
+    tasks: list,
+    *,
+    workers: int | None = None,
+    scheduler=None,
+    progress: bool = False,
+    desc: str = "runs",
+    on_result=None,
+    error_row=None,
+    stop_when=None,
+) -> list:
     """Apply ``func`` to every task and return the results in task order.
 
     Parameters
@@ -203,6 +225,7 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
     SchedulerUnreachableError : a scheduler address that does not answer.
     """
     from tqdm import tqdm
+
     n = len(tasks)
     out: list = [None] * n
     if leaves_process(workers, scheduler, n):
@@ -210,8 +233,7 @@ def map_tasks(func, tasks: list, *, workers: int | None = None, scheduler=None,
         if unsendable_reason(tasks) is not None:
             for i, task in enumerate(tasks):
                 check_sendable(task, f"task {i} of the {desc}")
-    bar = tqdm(total=n, unit="run", desc=desc, file=sys.stderr, disable=not progress,
-               leave=False)
+    bar = tqdm(total=n, unit="run", desc=desc, file=sys.stderr, disable=not progress, leave=False)
     stopping: list[int] = []
 
     def done(i, res):
@@ -257,7 +279,7 @@ MAX_BATCH = 16
 def _batches(indices: list[int], workers: int) -> list[list[int]]:
     n = len(indices)
     size = max(1, min(MAX_BATCH, n // (BATCHES_PER_WORKER * max(1, workers))))
-    return [indices[i:i + size] for i in range(0, n, size)]
+    return [indices[i : i + size] for i in range(0, n, size)]
 
 
 # -----------------------------------------------------------------------------------------
@@ -276,8 +298,9 @@ def _worker_init(started) -> None:
     _STARTED = started
     parent = multiprocessing.parent_process()
     if parent is not None:
-        threading.Thread(target=_exit_when_orphaned, args=(parent,), daemon=True,
-                         name="scoutsim-parent-watch").start()
+        threading.Thread(
+            target=_exit_when_orphaned, args=(parent,), daemon=True, name="scoutsim-parent-watch"
+        ).start()
 
 
 def _exit_when_orphaned(parent) -> None:
@@ -322,7 +345,7 @@ def _collect(indices, fut, done, failed):
                 done(i, val)
             else:
                 failed(i, val)
-        except _Stopped as exc:      # the rest of the batch has arrived: keep it too
+        except _Stopped as exc:  # the rest of the batch has arrived: keep it too
             stop = exc
     if stop is not None:
         raise stop
@@ -333,8 +356,9 @@ def _map_executor(pool, func, tasks, indices, done, failed):
     they complete. On an interruption the batches not yet started are cancelled (the pool
     stays the caller's); a batch whose worker died fails its tasks."""
     nw = getattr(pool, "_max_workers", None) or os.cpu_count() or 1
-    futures = {pool.submit(_run_batch, func, None, [tasks[i] for i in b]): b
-               for b in _batches(indices, nw)}
+    futures = {
+        pool.submit(_run_batch, func, None, [tasks[i] for i in b]): b for b in _batches(indices, nw)
+    }
     try:
         for fut in cf.as_completed(futures):
             _collect(futures[fut], fut, done, failed)
@@ -350,8 +374,9 @@ def _new_pool(workers: int, started=None):
     ctx = multiprocessing.get_context("spawn")
     if started is None:
         started = ctx.Array("q", 1, lock=False)
-    return cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
-                                  initializer=_worker_init, initargs=(started,))
+    return cf.ProcessPoolExecutor(
+        max_workers=workers, mp_context=ctx, initializer=_worker_init, initargs=(started,)
+    )
 
 
 @contextlib.contextmanager
@@ -442,14 +467,18 @@ def _map_local(func, tasks, workers, done, failed):
             for fut in cf.as_completed(futures):
                 b = futures[fut]
                 if isinstance(fut.exception(), cf.process.BrokenProcessPool):
-                    continue             # sorted out below, once every future has settled
+                    continue  # sorted out below, once every future has settled
                 finished.add(b)
                 _collect(batches[b], fut, done, failed)
         except BaseException:
             # Ctrl-C: keep what has arrived, then stop the workers at once
             for fut, b in futures.items():
-                if b not in finished and fut.done() and not fut.cancelled() \
-                        and fut.exception() is None:
+                if (
+                    b not in finished
+                    and fut.done()
+                    and not fut.cancelled()
+                    and fut.exception() is None
+                ):
                     finished.add(b)
                     _collect(batches[b], fut, done, failed)
             _stop_pool(pool)
@@ -474,9 +503,13 @@ def _retry_alone(func, tasks, indices, done, failed):
                 fut.result()
             except cf.process.BrokenProcessPool:
                 pool.shutdown(wait=True)
-                failed(i, WorkerDiedError(
-                    "the worker process running this task died twice (killed by a signal, "
-                    "out of memory or crashed); it was retried once, alone"))
+                failed(
+                    i,
+                    WorkerDiedError(
+                        "the worker process running this task died twice (killed by a signal, "
+                        "out of memory or crashed); it was retried once, alone"
+                    ),
+                )
                 pool = _new_pool(1)
                 continue
             except Exception:  # noqa: BLE001 - reported by _collect
@@ -492,8 +525,9 @@ def _map_dask(func, tasks, scheduler, done, failed):
     try:
         from distributed import Client, as_completed
     except ImportError as exc:  # pragma: no cover - depends on the installation
-        raise RuntimeError("scheduler given but dask.distributed is not installed: "
-                           "pip install 'dask[distributed]'") from exc
+        raise RuntimeError(
+            "scheduler given but dask.distributed is not installed: pip install 'dask[distributed]'"
+        ) from exc
     own = not isinstance(scheduler, Client)
     if own:
         try:
@@ -503,21 +537,26 @@ def _map_dask(func, tasks, scheduler, done, failed):
                 f"scheduler = {scheduler!r}: no Dask scheduler answered there within "
                 f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}); start one with "
                 "`dask scheduler` (and workers with `dask worker ADDRESS`), and give its "
-                "address as tcp://HOST:PORT") from None
+                "address as tcp://HOST:PORT"
+            ) from None
     else:
         client = scheduler
     from distributed import KilledWorker
+
     futures = []
     try:
         nw = max(1, len(client.scheduler_info().get("workers", {})))
         batches = _batches(list(range(len(tasks))), nw)
-        futures = client.map(functools.partial(_run_batch, func, None),
-                             [[tasks[i] for i in b] for b in batches], pure=False)
+        futures = client.map(
+            functools.partial(_run_batch, func, None),
+            [[tasks[i] for i in b] for b in batches],
+            pure=False,
+        )
         index = {f.key: b for f, b in zip(futures, batches)}
         suspects = []
         for fut in as_completed(futures):
             if fut.status == "error" and isinstance(fut.exception(), KilledWorker):
-                suspects += index[fut.key]      # sorted out below, one at a time
+                suspects += index[fut.key]  # sorted out below, one at a time
                 continue
             _collect(index[fut.key], fut, done, failed)
         # Dask gave these up because workers died while they were there; but a worker

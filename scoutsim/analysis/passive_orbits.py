@@ -138,10 +138,18 @@ def _solve_angles(z, guess, robot, integ, tol, max_iter):
     return gam, r, n_eval
 
 
-def passive_bounding_orbit(speed: float, apex_height: float, pitch_rate: float, *,
-                           guess=None, robot: RobotParameters | None = None,
-                           rtol: float = ORBIT_TOLERANCE, tol: float = 1e-11,
-                           max_iter: int = 40, jacobian_step: float = 1e-5) -> PassiveOrbit:
+def passive_bounding_orbit(
+    speed: float,
+    apex_height: float,
+    pitch_rate: float,
+    *,
+    guess=None,
+    robot: RobotParameters | None = None,
+    rtol: float = ORBIT_TOLERANCE,
+    tol: float = 1e-11,
+    max_iter: int = 40,
+    jacobian_step: float = 1e-5,
+) -> PassiveOrbit:
     """Periodic passive bounding through the level-torso apex ``(apex_height, 0, speed,
     pitch_rate)``: solve for the touchdown angles, then linearise the return map.
 
@@ -176,26 +184,47 @@ def passive_bounding_orbit(speed: float, apex_height: float, pitch_rate: float, 
         except MapError:
             gam = None
         if gam is None or r is None or np.max(np.abs(r)) > 1e-9:
-            fam = continue_passive_family(speed, apex_height,
-                                          np.linspace(0.0, pitch_rate, 6), robot=rob,
-                                          rtol=rtol, tol=tol, linearise=False)
+            fam = continue_passive_family(
+                speed,
+                apex_height,
+                np.linspace(0.0, pitch_rate, 6),
+                robot=rob,
+                rtol=rtol,
+                tol=tol,
+                linearise=False,
+            )
             return _finish(fam[-1], rob, integ, jacobian_step)
     res = float(np.max(np.abs(r)))
     if not res <= 1e-9:
-        raise MapError(f"no periodic orbit found at speed {speed} m/s, apex height "
-                       f"{apex_height} m, pitch rate {math.degrees(pitch_rate):.3g} deg/s "
-                       f"(residual {res:.3g} after {n} map evaluations)")
-    orb = PassiveOrbit(speed=float(speed), apex_height=float(apex_height),
-                       pitch_rate=float(pitch_rate), touchdown_angles=(float(gam[0]), float(gam[1])),
-                       period=math.nan, residual=res, jacobian=np.full((4, 4), np.nan),
-                       multipliers=np.full(4, np.nan + 0j), order=(), iterations=n, rtol=rtol)
+        raise MapError(
+            f"no periodic orbit found at speed {speed} m/s, apex height "
+            f"{apex_height} m, pitch rate {math.degrees(pitch_rate):.3g} deg/s "
+            f"(residual {res:.3g} after {n} map evaluations)"
+        )
+    orb = PassiveOrbit(
+        speed=float(speed),
+        apex_height=float(apex_height),
+        pitch_rate=float(pitch_rate),
+        touchdown_angles=(float(gam[0]), float(gam[1])),
+        period=math.nan,
+        residual=res,
+        jacobian=np.full((4, 4), np.nan),
+        multipliers=np.full(4, np.nan + 0j),
+        order=(),
+        iterations=n,
+        rtol=rtol,
+    )
     return _finish(orb, rob, integ, jacobian_step)
 
 
 def _finish(orb: PassiveOrbit, rob, integ, jacobian_step) -> PassiveOrbit:
     """Fill in period, order, Jacobian and multipliers of a converged orbit."""
     m = passive_apex_map(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
-    J = fd_jacobian(lambda x: passive_apex_map(x, orb.touchdown_angles, robot=rob, rtol=integ.rtol).z, orb.z, jacobian_step)
+    J = fd_jacobian(
+        lambda x: passive_apex_map(x, orb.touchdown_angles, robot=rob, rtol=integ.rtol).z,
+        orb.z,
+        jacobian_step,
+    )
     orb.period = m.period
     orb.order = m.order
     orb.residual = float(np.max(np.abs(m.z - orb.z)))
@@ -204,10 +233,17 @@ def _finish(orb: PassiveOrbit, rob, integ, jacobian_step) -> PassiveOrbit:
     return orb
 
 
-def continue_passive_family(speed: float, apex_height: float, pitch_rates, *,
-                            robot: RobotParameters | None = None, rtol: float = ORBIT_TOLERANCE,
-                            tol: float = 1e-11, linearise: bool = True,
-                            jacobian_step: float = 1e-5) -> list[PassiveOrbit]:
+def continue_passive_family(
+    speed: float,
+    apex_height: float,
+    pitch_rates,
+    *,
+    robot: RobotParameters | None = None,
+    rtol: float = ORBIT_TOLERANCE,
+    tol: float = 1e-11,
+    linearise: bool = True,
+    jacobian_step: float = 1e-5,
+) -> list[PassiveOrbit]:
     """Natural-parameter continuation of passive bounding orbits in the apex pitch rate.
 
     Each solve starts from a secant prediction through the two previous solutions (the
@@ -232,14 +268,24 @@ def continue_passive_family(speed: float, apex_height: float, pitch_rates, *,
         gam, r, n = _solve_angles(z, guess, rob, integ, tol, 40)
         res = float(np.max(np.abs(r)))
         if not res <= 1e-9:
-            raise MapError(f"continuation lost the family at pitch rate "
-                           f"{math.degrees(w):.3g} deg/s (residual {res:.3g})")
+            raise MapError(
+                f"continuation lost the family at pitch rate "
+                f"{math.degrees(w):.3g} deg/s (residual {res:.3g})"
+            )
         sols.append((w, gam))
-        orb = PassiveOrbit(speed=float(speed), apex_height=float(apex_height), pitch_rate=w,
-                           touchdown_angles=(float(gam[0]), float(gam[1])), period=math.nan,
-                           residual=res, jacobian=np.full((4, 4), np.nan),
-                           multipliers=np.full(4, np.nan + 0j), order=(), iterations=n,
-                           rtol=rtol)
+        orb = PassiveOrbit(
+            speed=float(speed),
+            apex_height=float(apex_height),
+            pitch_rate=w,
+            touchdown_angles=(float(gam[0]), float(gam[1])),
+            period=math.nan,
+            residual=res,
+            jacobian=np.full((4, 4), np.nan),
+            multipliers=np.full(4, np.nan + 0j),
+            order=(),
+            iterations=n,
+            rtol=rtol,
+        )
         if linearise:
             orb = _finish(orb, rob, integ, jacobian_step)
         out.append(orb)

@@ -36,8 +36,14 @@ from ..names import LEG_NAMES, EventKind, Leg
 from ..parameters import RobotParameters
 from .poincare import MapError
 
-__all__ = ["passive_robot", "passive_apex_map", "ApexMap", "APEX_STATE_NAMES",
-           "ORBIT_TOLERANCE", "SIMULTANEOUS_EVENT_TOL"]
+__all__ = [
+    "passive_robot",
+    "passive_apex_map",
+    "ApexMap",
+    "APEX_STATE_NAMES",
+    "ORBIT_TOLERANCE",
+    "SIMULTANEOUS_EVENT_TOL",
+]
 
 #: Components of the apex section state z.
 APEX_STATE_NAMES = ("y", "theta", "dx", "dtheta")
@@ -49,6 +55,7 @@ def passive_robot(robot: RobotParameters | None = None) -> RobotParameters:
     """The massless-leg conservative configuration (docs/specification.md section 2) of ``robot`` (default Scout II):
     leg mass, leg inertia and leg damping set to zero."""
     import dataclasses
+
     base = robot if robot is not None else RobotParameters()
     return dataclasses.replace(base, leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
 
@@ -78,10 +85,16 @@ def _glitched(result) -> bool:
         log = result.event_log(leg=leg)
         t, kinds = log["t"], log["kind"]
         for i in range(len(t) - 1):
-            if (kinds[i] == EventKind.TOUCHDOWN and kinds[i + 1] == EventKind.LIFTOFF
-                    and t[i + 1] - t[i] < 1e-12):
-                if not (i + 2 < len(t) and kinds[i + 2] == EventKind.TOUCHDOWN
-                        and t[i + 2] - t[i + 1] < 1e-9):
+            if (
+                kinds[i] == EventKind.TOUCHDOWN
+                and kinds[i + 1] == EventKind.LIFTOFF
+                and t[i + 1] - t[i] < 1e-12
+            ):
+                if not (
+                    i + 2 < len(t)
+                    and kinds[i + 2] == EventKind.TOUCHDOWN
+                    and t[i + 2] - t[i + 1] < 1e-9
+                ):
                     return True
     return False
 
@@ -118,6 +131,7 @@ def _passive_rhs(rob: RobotParameters, anchors):
             fy += Fy
             tq += sL * c * Fy - sL * sn * Fx
         return [u[3], u[4], u[5], fx / m, fy / m - g, tq / I]
+
     return rhs
 
 
@@ -130,13 +144,14 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     """From apex z, run the passive model until both legs have had a stance and both are in
     flight; return (state at the last lift-off, its time, order of first touchdowns)."""
     from scipy.integrate import solve_ivp
+
     l0, hip = rob.per_leg("leg_rest_length"), _hips(rob)
     u = np.array([0.0, z[0], z[1], z[2], 0.0, z[3]], dtype=float)
     t = 0.0
     anchors = [None, None]
     had_stance = [False, False]
     first_td = [math.inf, math.inf]
-    armed = [True, True]   # a flight toe event counts only after the toe was seen above ground
+    armed = [True, True]  # a flight toe event counts only after the toe was seen above ground
 
     def toe_y(u, leg):
         sL = hip[leg]
@@ -155,16 +170,20 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
         evs, meaning = [], []
         for leg in (0, 1):
             if anchors[leg] is None:
+
                 def e(t_, u_, leg=leg):
                     return toe_y(u_, leg)
+
                 e.direction = -1.0 if armed[leg] else 1.0
                 meaning.append(("touchdown" if armed[leg] else "arm", leg))
             else:
+
                 def e(t_, u_, leg=leg):
                     sL = hip[leg]
                     hx = u_[0] + sL * math.cos(u_[2])
                     hy = u_[1] + sL * math.sin(u_[2])
                     return math.hypot(hx - anchors[leg], hy) - l0[leg]
+
                 e.direction = 1.0
                 meaning.append(("liftoff", leg))
             e.terminal = True
@@ -172,10 +191,18 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
 
         def fall(t_, u_):
             return u_[1] - 0.5 * rob.torso_height
+
         fall.terminal = True
         evs.append(fall)
-        sol = solve_ivp(_passive_rhs(rob, list(anchors)), (t, max_period), u,
-                        method="DOP853", rtol=rtol, atol=rtol, events=evs)
+        sol = solve_ivp(
+            _passive_rhs(rob, list(anchors)),
+            (t, max_period),
+            u,
+            method="DOP853",
+            rtol=rtol,
+            atol=rtol,
+            events=evs,
+        )
         hit = [(te[0], i) for i, te in enumerate(sol.t_events) if len(te)]
         if not hit:
             raise MapError(f"no stride within {max_period} s")
@@ -214,8 +241,14 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     raise MapError("too many phases in one stride")
 
 
-def passive_apex_map(z, touchdown_angles, *, robot: RobotParameters | None = None,
-                     rtol: float = ORBIT_TOLERANCE, max_period: float = 2.0) -> ApexMap:
+def passive_apex_map(
+    z,
+    touchdown_angles,
+    *,
+    robot: RobotParameters | None = None,
+    rtol: float = ORBIT_TOLERANCE,
+    max_period: float = 2.0,
+) -> ApexMap:
     """Apex-to-apex return map of the passive model.
 
     Parameters
@@ -248,8 +281,10 @@ def passive_apex_map(z, touchdown_angles, *, robot: RobotParameters | None = Non
     g = rob.gravity
     dy = u[4]
     if dy < 0.0:
-        raise MapError(f"no apex in the flight after both stances (the torso is descending "
-                       f"at the last lift-off, t = {t_lo:.4f} s)")
+        raise MapError(
+            f"no apex in the flight after both stances (the torso is descending "
+            f"at the last lift-off, t = {t_lo:.4f} s)"
+        )
     ta = dy / g
     z_next = np.array([u[1] + dy * dy / (2.0 * g), u[2] + u[5] * ta, u[3], u[5]])
     return ApexMap(z=z_next, period=t_lo + ta, order=order)

@@ -36,8 +36,7 @@ def stance_intervals(result, leg) -> np.ndarray:
     (k, 2) ndarray
         Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
     """
-    log = result.event_log(kinds=(EventKind.TOUCHDOWN, EventKind.LIFTOFF),
-                           leg=leg_index(leg))
+    log = result.event_log(kinds=(EventKind.TOUCHDOWN, EventKind.LIFTOFF), leg=leg_index(leg))
     order = np.argsort(log["t"], kind="stable")
     times, kinds = log["t"][order], log["kind"][order]
     t0 = float(result.t[0]) if len(result.t) else 0.0

@@ -26,9 +26,12 @@ def _input_and_weight(result):
     if not robot or model not in ("I", "II", "ideal"):
         return None, None
     from ..parameters import RobotParameters
+
     params = RobotParameters(**robot)
-    return ("electrical" if model in ("I", "II") else "hip_work",
-            params.total_mass * params.gravity)
+    return (
+        "electrical" if model in ("I", "II") else "hip_work",
+        params.total_mass * params.gravity,
+    )
 
 
 def _nearest_sample(t, te: float) -> int:
@@ -65,16 +68,23 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
     distance = float(result.x[j] - result.x[i])
     input_name, weight = _input_and_weight(result)
     electrical = input_name == "electrical"
-    out = {"energy_t_start": float(t[i]), "energy_t_end": float(t[j]),
-           "electrical_energy_j": delta("electrical") if electrical else None,
-           "copper_loss_j": delta("copper") if electrical else None,
-           "transmission_loss_j": delta("transmission") if electrical else None,
-           "hip_work_j": hip, "friction_loss_j": friction, "impact_loss_j": impacts,
-           "mechanical_energy_change_j": mech,
-           "energy_residual_j": hip - friction - delta("constraint") - impacts - mech,
-           "distance_m": distance}
-    out["mean_electrical_power_w"] = (out["electrical_energy_j"] / float(t[j] - t[i])
-                                      if electrical else None)
-    out["cost_of_transport"] = (delta(input_name) / (weight * distance)
-                                if input_name is not None and distance > 0 else None)
+    out = {
+        "energy_t_start": float(t[i]),
+        "energy_t_end": float(t[j]),
+        "electrical_energy_j": delta("electrical") if electrical else None,
+        "copper_loss_j": delta("copper") if electrical else None,
+        "transmission_loss_j": delta("transmission") if electrical else None,
+        "hip_work_j": hip,
+        "friction_loss_j": friction,
+        "impact_loss_j": impacts,
+        "mechanical_energy_change_j": mech,
+        "energy_residual_j": hip - friction - delta("constraint") - impacts - mech,
+        "distance_m": distance,
+    }
+    out["mean_electrical_power_w"] = (
+        out["electrical_energy_j"] / float(t[j] - t[i]) if electrical else None
+    )
+    out["cost_of_transport"] = (
+        delta(input_name) / (weight * distance) if input_name is not None and distance > 0 else None
+    )
     return out

@@ -26,9 +26,24 @@ __all__ = ["controlled_stride_map", "section_state", "CONTROLLED_Z_NAMES"]
 
 #: names of the section coordinates z of the controlled stride map (SI)
 CONTROLLED_Z_NAMES = (
-    "y", "theta", "phi_back", "phi_front", "alpha_back", "alpha_front",
-    "dx", "dy", "dtheta", "dphi_back", "dphi_front", "dalpha_back", "dalpha_front",
-    "leg_length_back", "leg_length_front", "anchor_back_rel", "anchor_front_rel")
+    "y",
+    "theta",
+    "phi_back",
+    "phi_front",
+    "alpha_back",
+    "alpha_front",
+    "dx",
+    "dy",
+    "dtheta",
+    "dphi_back",
+    "dphi_front",
+    "dalpha_back",
+    "dalpha_front",
+    "leg_length_back",
+    "leg_length_front",
+    "anchor_back_rel",
+    "anchor_front_rel",
+)
 #: the components of z taken from the state vector (all but x), in z's order
 _STATE_Z_NAMES = CONTROLLED_Z_NAMES[:-2]
 #: the contact modes in which a toe is pinned at its anchor
@@ -40,8 +55,7 @@ def _z_of(hs) -> np.ndarray:
     anchors relative to x (0 for a leg not pinned)."""
     s = np.asarray(hs.state)
     x = s[state_index("x")]
-    rel = [(hs.toe_anchors[leg] - x) if hs.contact_modes[leg] in _PINNED else 0.0
-           for leg in Leg]
+    rel = [(hs.toe_anchors[leg] - x) if hs.contact_modes[leg] in _PINNED else 0.0 for leg in Leg]
     return np.concatenate([s[[state_index(n) for n in _STATE_Z_NAMES]], rel])
 
 
@@ -53,8 +67,12 @@ def _hs_of(z, discrete):
 
 
 def _discrete(hs) -> dict:
-    return dict(leg_states=hs.leg_states, contact_modes=hs.contact_modes,
-                motor_modes=hs.motor_modes, slide_directions=hs.slide_directions)
+    return dict(
+        leg_states=hs.leg_states,
+        contact_modes=hs.contact_modes,
+        motor_modes=hs.motor_modes,
+        slide_directions=hs.slide_directions,
+    )
 
 
 def section_state(result):
@@ -65,29 +83,46 @@ def section_state(result):
     dt = float(result.provenance["control_period_s"])
     te = result.event_times("controller_liftoff", "back")
     if result.outcome != "completed" or len(te) < 3:
-        raise MapError(f"no steady bounding to start from (outcome {result.outcome}, "
-                       f"{len(te)} back-leg lift-offs in {result.t[-1]:.3g} s)")
+        raise MapError(
+            f"no steady bounding to start from (outcome {result.outcome}, "
+            f"{len(te)} back-leg lift-offs in {result.t[-1]:.3g} s)"
+        )
     return result.hybrid_state(int(round(te[-2] / dt)))
 
 
-def controlled_stride_map(hs, *, model: str = "II", friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-                          robot=None, controller=None,
-                          integrator: IntegratorSettings | None = None,
-                          max_period: float = 0.6):
+def controlled_stride_map(
+    hs,
+    *,
+    model: str = "II",
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+    robot=None,
+    controller=None,
+    integrator: IntegratorSettings | None = None,
+    max_period: float = 0.6,
+):
     """One stride of the sampled closed loop from the HybridState ``hs`` taken at a control
     sample: run until the controller next detects a back-leg lift-off (a sample, so the
     stride lasts a whole number of control periods) and return
     ``(z_start, z_end, hs_end, period_s)`` with z the section coordinates
     (:data:`CONTROLLED_Z_NAMES`); z_start is ``hs`` after the projection of its dependent
     coordinates. MapError if the robot falls or no lift-off is detected."""
-    r = simulate(robot, controller, hs, max_period, model=model, integrator=integrator,
-                 friction_coefficient=friction_coefficient)
+    r = simulate(
+        robot,
+        controller,
+        hs,
+        max_period,
+        model=model,
+        integrator=integrator,
+        friction_coefficient=friction_coefficient,
+    )
     dt = float(r.provenance["control_period_s"])
     te = r.event_times("controller_liftoff", "back")
     te = te[te > 0.5 * dt]
     if len(te) == 0:
-        raise MapError(f"no back-leg lift-off detected within {max_period} s (outcome "
-                       f"{r.outcome} at t = {r.t_end:.3f} s)")
+        raise MapError(
+            f"no back-leg lift-off detected within {max_period} s (outcome "
+            f"{r.outcome} at t = {r.t_end:.3f} s)"
+        )
     k1 = int(round(te[0] / dt))
     if k1 >= len(r.t):
         raise MapError(f"the run ended (outcome {r.outcome}) at the lift-off sample")

@@ -23,8 +23,14 @@ from .interpolation import _extrema, _hermite
 from .stances import stance_overlap
 from .stride_energy import stride_energy
 
-__all__ = ["Stride", "converged_tail", "STRIDE_METRICS", "STRIDE_ENERGY_METRICS",
-           "MIN_STEADY_STRIDES", "PERIOD_TOLERANCE"]
+__all__ = [
+    "Stride",
+    "converged_tail",
+    "STRIDE_METRICS",
+    "STRIDE_ENERGY_METRICS",
+    "MIN_STEADY_STRIDES",
+    "PERIOD_TOLERANCE",
+]
 
 #: Steady strides that make a run steady bounding (the paper used at least 7 per run,
 #: Sec. IV.C).
@@ -33,15 +39,32 @@ MIN_STEADY_STRIDES = 7
 PERIOD_TOLERANCE = 0.05
 
 #: Per-stride numeric metrics that are averaged over the steady strides.
-STRIDE_METRICS = ("period_s", "stride_frequency_hz", "duty_factor_back", "duty_factor_front",
-                  "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m",
-                  "mean_speed_m_s")
+STRIDE_METRICS = (
+    "period_s",
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "pitch_min_deg",
+    "height_max_m",
+    "height_min_m",
+    "mean_speed_m_s",
+)
 
 #: Per-stride energy fields of :class:`Stride` (None without the energy accounting).
-STRIDE_ENERGY_METRICS = ("electrical_energy_j", "copper_loss_j", "transmission_loss_j",
-                         "hip_work_j", "friction_loss_j", "impact_loss_j",
-                         "mechanical_energy_change_j", "energy_residual_j", "distance_m",
-                         "mean_electrical_power_w", "cost_of_transport")
+STRIDE_ENERGY_METRICS = (
+    "electrical_energy_j",
+    "copper_loss_j",
+    "transmission_loss_j",
+    "hip_work_j",
+    "friction_loss_j",
+    "impact_loss_j",
+    "mechanical_energy_change_j",
+    "energy_residual_j",
+    "distance_m",
+    "mean_electrical_power_w",
+    "cost_of_transport",
+)
 
 
 def _json_float(v):
@@ -188,16 +211,24 @@ def _strides(result, transient_s, stances):
             continue  # duplicate event time: not a stride
         pmax, pmin = _extrema(t, th, dth, a, b)
         hmax, hmin = _extrema(t, hy, dhy, a, b)
-        out.append(Stride(
-            index=len(out), t_start=a, t_end=b, period_s=period,
-            stride_frequency_hz=1.0 / period,
-            duty_factor_back=stance_overlap(stances[0], a, b) / period,
-            duty_factor_front=stance_overlap(stances[1], a, b) / period,
-            pitch_max_deg=math.degrees(pmax), pitch_min_deg=math.degrees(pmin),
-            height_max_m=hmax, height_min_m=hmin,
-            mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
-            steady=bool(a >= transient_s and b <= t_end_run),
-            **stride_energy(result, a, b, cumulative)))
+        out.append(
+            Stride(
+                index=len(out),
+                t_start=a,
+                t_end=b,
+                period_s=period,
+                stride_frequency_hz=1.0 / period,
+                duty_factor_back=stance_overlap(stances[0], a, b) / period,
+                duty_factor_front=stance_overlap(stances[1], a, b) / period,
+                pitch_max_deg=math.degrees(pmax),
+                pitch_min_deg=math.degrees(pmin),
+                height_max_m=hmax,
+                height_min_m=hmin,
+                mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
+                steady=bool(a >= transient_s and b <= t_end_run),
+                **stride_energy(result, a, b, cumulative),
+            )
+        )
     return out
 
 
@@ -211,9 +242,12 @@ def converged_tail(strides, tol):
     ref = float(np.median([strides[i].period_s for i in cand[-7:]]))
     first = len(strides)
     for i in reversed(cand):
-        if abs(strides[i].period_s - ref) <= tol * ref and (first == len(strides) or i == first - 1):
+        if abs(strides[i].period_s - ref) <= tol * ref and (
+            first == len(strides) or i == first - 1
+        ):
             first = i
         else:
             break
-    return [dataclasses.replace(st, steady=(i >= first and st.steady))
-            for i, st in enumerate(strides)]
+    return [
+        dataclasses.replace(st, steady=(i >= first and st.steady)) for i, st in enumerate(strides)
+    ]

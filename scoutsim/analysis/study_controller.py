@@ -42,15 +42,22 @@ from ..control.protocol import controller_name
 from ..parameters import ControllerParameters
 from .parallel import _importable, check_sendable, leaves_process
 
-__all__ = ["study_controller", "check_controller_travels", "build_controller",
-           "describe_controller", "controller_label", "CONTROLLER_ADVICE"]
+__all__ = [
+    "study_controller",
+    "check_controller_travels",
+    "build_controller",
+    "describe_controller",
+    "controller_label",
+    "CONTROLLER_ADVICE",
+]
 
 #: what to do instead with a controller that cannot be sent (NotSendableError's end)
 CONTROLLER_ADVICE = (
     "define it (its class, or a CompiledController's command function) at the top level of "
     "a module the workers can import (a file on sys.path / PYTHONPATH, or an installed "
     "package), or give the study 'MODULE:FACTORY' (a ControllerSpec: the controller is "
-    "made in each worker by a function of such a module), or run with workers=1")
+    "made in each worker by a function of such a module), or run with workers=1"
+)
 
 
 def study_controller(controller, robot=None):
@@ -76,8 +83,11 @@ def check_controller_travels(controller, workers, scheduler, n_points: int) -> N
         module = controller.spec.partition(":")[0]
         if not _importable(module):
             from .parallel import NotSendableError
-            raise NotSendableError(f"{what}: module {module!r} was imported here but a worker "
-                                   f"process cannot import it by name; {CONTROLLER_ADVICE}")
+
+            raise NotSendableError(
+                f"{what}: module {module!r} was imported here but a worker "
+                f"process cannot import it by name; {CONTROLLER_ADVICE}"
+            )
 
 
 def build_controller(controller, robot=None, params: ControllerParameters | None = None):
@@ -110,23 +120,23 @@ def describe_controller(controller):
     if isinstance(controller, ControllerParameters):
         return dataclasses.asdict(controller)
     if isinstance(controller, ControllerSpec):
-        return {"factory": controller.spec,
-                "robot": None if controller.robot is None
-                else dataclasses.asdict(controller.robot),
-                "params": None if controller.params is None
-                else dataclasses.asdict(controller.params)}
+        return {
+            "factory": controller.spec,
+            "robot": None if controller.robot is None else dataclasses.asdict(controller.robot),
+            "params": None if controller.params is None else dataclasses.asdict(controller.params),
+        }
     kind = type(controller)
-    out = {"class": f"{kind.__module__}.{kind.__qualname__}",
-           "name": controller_label(controller)}
+    out = {"class": f"{kind.__module__}.{kind.__qualname__}", "name": controller_label(controller)}
     fn = getattr(controller, "command_function", None)
-    if fn is not None:        # a compiled controller: its function and arrays
+    if fn is not None:  # a compiled controller: its function and arrays
         cparams = getattr(controller, "controller_parameters", None)
         return out | {
             "command": f"{getattr(fn, '__module__', '')}.{getattr(fn, '__qualname__', fn)}",
             "params": [float(x) for x in controller.params],
             "state": [float(x) for x in controller.initial_state],
             "control_period": float(controller.control_period),
-            "controller_parameters": None if cparams is None else dataclasses.asdict(cparams)}
+            "controller_parameters": None if cparams is None else dataclasses.asdict(cparams),
+        }
     try:
         out["pickle_sha256"] = hashlib.sha256(pickle.dumps(controller)).hexdigest()[:16]
     except Exception:  # noqa: BLE001 - an unpicklable controller runs in one process only

@@ -37,8 +37,16 @@ import warnings
 from ..control.factory import FactoryError
 from ..control.protocol import ControllerError
 
-__all__ = ["StudyError", "ON_ERROR", "STATUSES", "check_on_error", "run_failure",
-           "error_fields", "is_error", "end_of_study"]
+__all__ = [
+    "StudyError",
+    "ON_ERROR",
+    "STATUSES",
+    "check_on_error",
+    "run_failure",
+    "error_fields",
+    "is_error",
+    "end_of_study",
+]
 
 #: what a study can do with an error of the study (module docstring)
 ON_ERROR = ("raise", "record")
@@ -69,9 +77,11 @@ class StudyError(RuntimeError):
 def check_on_error(on_error: str) -> str:
     """``on_error`` if it is one of :data:`ON_ERROR`; ValueError naming it otherwise."""
     if on_error not in ON_ERROR:
-        raise ValueError(f"on_error = {on_error!r} is not allowed: must be 'raise' (stop at "
-                         "the first error of the study) or 'record' (record it as a row "
-                         "with status 'error')")
+        raise ValueError(
+            f"on_error = {on_error!r} is not allowed: must be 'raise' (stop at "
+            "the first error of the study) or 'record' (record it as a row "
+            "with status 'error')"
+        )
     return on_error
 
 
@@ -88,8 +98,11 @@ def run_failure(exc: Exception, invalid_outcome: str) -> dict:
         cause = exc.__cause__
         if cause is None:
             return {"status": "ok", "outcome": "controller_error", "error": str(exc)}
-        return {"status": "error", "outcome": "error",
-                "error": f"ControllerError: {exc} ({type(cause).__name__}: {cause})"}
+        return {
+            "status": "error",
+            "outcome": "error",
+            "error": f"ControllerError: {exc} ({type(cause).__name__}: {cause})",
+        }
     if isinstance(exc, ValueError) and not isinstance(exc, FactoryError):
         return {"status": "invalid", "outcome": invalid_outcome, "error": str(exc)}
     return error_fields(exc)
@@ -100,8 +113,9 @@ def is_error(row) -> bool:
     return isinstance(row, dict) and row.get("status") == "error"
 
 
-def end_of_study(rows: list, on_error: str, what: str, where, result=None,
-                 n_points: int | None = None) -> None:
+def end_of_study(
+    rows: list, on_error: str, what: str, where, result=None, n_points: int | None = None
+) -> None:
     """Apply the ``on_error`` policy to a study's ``rows`` (None: a point that did not
     arrive): :class:`StudyError` if one errored and ``on_error`` is "raise", a
     RuntimeWarning if "record". ``what`` names the study ("basin map", "sweep"), ``where``
@@ -111,14 +125,21 @@ def end_of_study(rows: list, on_error: str, what: str, where, result=None,
         return
     n = len(rows) if n_points is None else n_points
     shown = "; ".join(f"{where(r)}: {r['error']}" for r in errors[:SHOWN_ERRORS])
-    more = (f" (and {len(errors) - SHOWN_ERRORS} more)" if len(errors) > SHOWN_ERRORS
-            else "")
+    more = f" (and {len(errors) - SHOWN_ERRORS} more)" if len(errors) > SHOWN_ERRORS else ""
     if on_error == "raise":
-        raise StudyError(f"the {what} stopped: {len(errors)} of its {n} points could not be "
-                         f"run (an error of the study, not a result about the robot): "
-                         f"{shown}{more}. Fix the cause and run it again, or pass "
-                         "on_error='record' to record such points as rows with status "
-                         "'error' and go on", errors, result)
-    warnings.warn(f"the {what}: {len(errors)} of its {n} points could not be run and are "
-                  f"recorded with status 'error' (left out of every fraction): "
-                  f"{shown}{more}", RuntimeWarning, stacklevel=3)
+        raise StudyError(
+            f"the {what} stopped: {len(errors)} of its {n} points could not be "
+            f"run (an error of the study, not a result about the robot): "
+            f"{shown}{more}. Fix the cause and run it again, or pass "
+            "on_error='record' to record such points as rows with status "
+            "'error' and go on",
+            errors,
+            result,
+        )
+    warnings.warn(
+        f"the {what}: {len(errors)} of its {n} points could not be run and are "
+        f"recorded with status 'error' (left out of every fraction): "
+        f"{shown}{more}",
+        RuntimeWarning,
+        stacklevel=3,
+    )

@@ -86,15 +86,46 @@ from .sweep_points import (
     si_name,
 )
 
-__all__ = ["sweep", "sweep_task", "SweepBase", "SweepResult", "SUMMARY_COLUMNS",
-           "ORBIT_COLUMNS", "ORBIT_RTOL", "ORBIT_TOL", "orbit_columns", "CHECKPOINT",
-           "read_checkpoint", "DEG", "parameter_names", "si_name", "axis_label", "grid_points",
-           "random_points", "point_key"]
+__all__ = [
+    "sweep",
+    "sweep_task",
+    "SweepBase",
+    "SweepResult",
+    "SUMMARY_COLUMNS",
+    "ORBIT_COLUMNS",
+    "ORBIT_RTOL",
+    "ORBIT_TOL",
+    "orbit_columns",
+    "CHECKPOINT",
+    "read_checkpoint",
+    "DEG",
+    "parameter_names",
+    "si_name",
+    "axis_label",
+    "grid_points",
+    "random_points",
+    "point_key",
+]
 
-SUMMARY_COLUMNS = ("outcome", "t_end_s", "average_speed_m_s", "mean_speed_m_s", "stride_frequency_hz",
-                   "duty_factor_back", "duty_factor_front", "pitch_max_deg", "pitch_min_deg",
-                   "height_max_m", "height_min_m", "n_steady_strides", "stride_period_cv",
-                   "steady_bounding", "max_friction_ratio", "status", "error")
+SUMMARY_COLUMNS = (
+    "outcome",
+    "t_end_s",
+    "average_speed_m_s",
+    "mean_speed_m_s",
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "pitch_min_deg",
+    "height_max_m",
+    "height_min_m",
+    "n_steady_strides",
+    "stride_period_cv",
+    "steady_bounding",
+    "max_friction_ratio",
+    "status",
+    "error",
+)
 
 
 def _point_parameters(task: dict):
@@ -133,8 +164,9 @@ def _warn_of_range_ends(points: list[dict], names: list[str], base: dict) -> Non
     allowed are the points' own business."""
     for name in names:
         held = [p for p in points if name in p]
-        for p in {id(q): q for q in (min(held, key=lambda q: q[name]),
-                                      max(held, key=lambda q: q[name]))}.values():
+        for p in {
+            id(q): q for q in (min(held, key=lambda q: q[name]), max(held, key=lambda q: q[name]))
+        }.values():
             try:
                 _point_parameters(base | {"point": p})
             except (ValueError, TypeError):
@@ -143,6 +175,7 @@ def _warn_of_range_ends(points: list[dict], names: list[str], base: dict) -> Non
 
 def _sweep_point(task: dict) -> dict:
     from ..simulation.simulator import simulate
+
     row = dict(task["point"])
     row.update({k: None for k in SUMMARY_COLUMNS})
     if task.get("orbit"):
@@ -151,20 +184,27 @@ def _sweep_point(task: dict) -> dict:
     c = task["controller"]
     try:
         robot, cparams = _point_parameters(task)
-        if isinstance(c, ControllerSpec):    # (the factory gets parameters that are allowed)
+        if isinstance(c, ControllerSpec):  # (the factory gets parameters that are allowed)
             validate_parameters(robot, cparams)
     except ValueError as exc:
         row.update(status="invalid", outcome="invalid_parameters", error=str(exc))
         return row
     try:
-        ctrl = (cparams if isinstance(c, ControllerParameters)
-                else build_controller(c, robot, cparams))
+        ctrl = (
+            cparams if isinstance(c, ControllerParameters) else build_controller(c, robot, cparams)
+        )
     except Exception as exc:  # noqa: BLE001 - an error of the study, reported per point
         row.update(error_fields(exc))
         return row
     try:
-        r = simulate(robot, ctrl, task["initial_state"], task["duration"], model=task["model"],
-                     friction_coefficient=task["friction_coefficient"])
+        r = simulate(
+            robot,
+            ctrl,
+            task["initial_state"],
+            task["duration"],
+            model=task["model"],
+            friction_coefficient=task["friction_coefficient"],
+        )
     except Exception as exc:  # noqa: BLE001 - classified and reported per point
         row.update(run_failure(exc, "invalid_parameters"))
         return row
@@ -199,8 +239,10 @@ class SweepResult:
     settings: dict = field(default_factory=dict)
 
     def column(self, name) -> np.ndarray:
-        return np.array([np.nan if r.get(name) is None else r.get(name) for r in self.rows],
-                        dtype=float if name not in ("outcome", "status", "error") else object)
+        return np.array(
+            [np.nan if r.get(name) is None else r.get(name) for r in self.rows],
+            dtype=float if name not in ("outcome", "status", "error") else object,
+        )
 
     def errors(self) -> list:
         """The rows of the points the study could not run (status "error")."""
@@ -221,13 +263,15 @@ class SweepResult:
         write_rows_csv(path, self.columns())
 
     def to_parquet(self, path):
-        write_rows_parquet(path, self.columns(),
-                           "pip install pyarrow (or pip install 'scoutsim[sweep]')")
+        write_rows_parquet(
+            path, self.columns(), "pip install pyarrow (or pip install 'scoutsim[sweep]')"
+        )
 
     def plot_map(self, x: str, y: str, value: str = "mean_speed_m_s", path=None):
         """Map of ``value`` over two swept parameters (grid sweeps); a convenience for
         :func:`scoutsim.presentation.plots.plot_sweep_map` (needs Matplotlib)."""
         from ..presentation.plots import plot_sweep_map
+
         return plot_sweep_map(self, x, y, value, path)
 
 
@@ -246,10 +290,20 @@ class SweepBase:
     friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT
 
 
-def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
-          workers: int | None = None, scheduler=None, progress: bool = False,
-          resume: bool = True, orbit: bool = False, command: str = "",
-          on_error: str = "raise", **base_fields) -> SweepResult:
+def sweep(
+    points: list[dict],
+    *,
+    base: SweepBase | None = None,
+    out=None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: bool = False,
+    resume: bool = True,
+    orbit: bool = False,
+    command: str = "",
+    on_error: str = "raise",
+    **base_fields,
+) -> SweepResult:
     """Run every point (see module docstring).
 
     Parameters
@@ -291,12 +345,19 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         raise TypeError(f"sweep() got an unexpected keyword argument {unknown[0]!r}")
     base = dataclasses.replace(base or SweepBase(), **base_fields)
     model, duration, robot, controller, initial_state, friction_coefficient = (
-        base.model, base.duration, base.robot, base.controller, base.initial_state,
-        base.friction_coefficient)
+        base.model,
+        base.duration,
+        base.robot,
+        base.controller,
+        base.initial_state,
+        base.friction_coefficient,
+    )
     check_on_error(on_error)
     if isinstance(initial_state, str) and initial_state not in NAMED_STARTS:
-        raise ValueError(f"initial_state = {initial_state!r} is not allowed: must be a state "
-                         f"or one of {list(NAMED_STARTS)}")
+        raise ValueError(
+            f"initial_state = {initial_state!r} is not allowed: must be a state "
+            f"or one of {list(NAMED_STARTS)}"
+        )
     if not points:
         raise ValueError("points is empty: nothing to sweep")
     names = list(dict.fromkeys(k for p in points for k in p))
@@ -305,30 +366,43 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         check_name(n)
         base_name = si_name(n)[0]
         if base_name in fields_set:
-            raise ValueError(f"sweep parameters {fields_set[base_name]!r} and {n!r} set the "
-                             "same field: give one")
+            raise ValueError(
+                f"sweep parameters {fields_set[base_name]!r} and {n!r} set the same field: give one"
+            )
         fields_set[base_name] = n
     robot = robot or RobotParameters()
     controller = study_controller(controller, robot) or ControllerParameters()
     if isinstance(controller, str):
-        raise ValueError(f"controller = {controller!r} is not allowed: give "
-                         "ControllerParameters, a controller object, or MODULE:FACTORY")
+        raise ValueError(
+            f"controller = {controller!r} is not allowed: give "
+            "ControllerParameters, a controller object, or MODULE:FACTORY"
+        )
     if not isinstance(controller, (ControllerParameters, ControllerSpec)) and any(
-            n.startswith("controller.") for n in names):
-        raise ValueError(f"sweep parameters {[n for n in names if n.startswith('controller.')]}"
-                         " are not allowed with a controller object, which does not read "
-                         "ControllerParameters: give the controller as 'MODULE:FACTORY' (a "
-                         "factory make(robot, params) gets each point's parameters), or "
-                         "sweep robot.<field> only")
+        n.startswith("controller.") for n in names
+    ):
+        raise ValueError(
+            f"sweep parameters {[n for n in names if n.startswith('controller.')]}"
+            " are not allowed with a controller object, which does not read "
+            "ControllerParameters: give the controller as 'MODULE:FACTORY' (a "
+            "factory make(robot, params) gets each point's parameters), or "
+            "sweep robot.<field> only"
+        )
     check_controller_travels(controller, workers, scheduler, len(points))
-    settings = {"model": model, "duration_s": duration,
-                "friction_coefficient": None if math.isinf(friction_coefficient)
-                else friction_coefficient,
-                "robot": dataclasses.asdict(robot), "controller": describe_controller(controller),
-                "initial_state": (None if initial_state is None else initial_state
-                                  if isinstance(initial_state, str)
-                                  else dataclasses.asdict(initial_state)),
-                "orbit": bool(orbit)}
+    settings = {
+        "model": model,
+        "duration_s": duration,
+        "friction_coefficient": None if math.isinf(friction_coefficient) else friction_coefficient,
+        "robot": dataclasses.asdict(robot),
+        "controller": describe_controller(controller),
+        "initial_state": (
+            None
+            if initial_state is None
+            else initial_state
+            if isinstance(initial_state, str)
+            else dataclasses.asdict(initial_state)
+        ),
+        "orbit": bool(orbit),
+    }
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
     ck = rd = None
@@ -336,18 +410,30 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         out = Path(out)
         # the directory's manifest lists the tables once they are written whole; entering
         # removes an earlier sweep's tables (never the checkpoint) so none looks current
-        rd = RunDirectory(out, command=command, info={"kind": "sweep", "checkpoint": CHECKPOINT,
-                                                      "n_points": len(points)}).open()
+        rd = RunDirectory(
+            out,
+            command=command,
+            info={"kind": "sweep", "checkpoint": CHECKPOINT, "n_points": len(points)},
+        ).open()
         ck = out / CHECKPOINT
-        if resume:      # (a point the study could not run is run again)
+        if resume:  # (a point the study could not run is run again)
             done = {k: r for k, r in read_checkpoint(ck).items() if not was_error(r)}
         elif ck.exists():
             ck.unlink()
     todo = [i for i, k in enumerate(keys) if k not in done]
     tasks: list[dict[str, Any]] = [
-        {"point": points[i], "model": model, "duration": duration, "robot": robot,
-         "controller": controller, "initial_state": initial_state,
-         "friction_coefficient": friction_coefficient, "orbit": orbit} for i in todo]
+        {
+            "point": points[i],
+            "model": model,
+            "duration": duration,
+            "robot": robot,
+            "controller": controller,
+            "initial_state": initial_state,
+            "friction_coefficient": friction_coefficient,
+            "orbit": orbit,
+        }
+        for i in todo
+    ]
     if tasks:
         _warn_of_range_ends([t["point"] for t in tasks], names, tasks[0])
     fh = open(ck, "a") if ck is not None else None
@@ -358,12 +444,19 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
             fh.flush()
 
     try:
-        new_rows = map_tasks(sweep_task, tasks, workers=workers, scheduler=scheduler,
-                             progress=progress, desc="sweep", on_result=on_result,
-                             error_row=_error_row,
-                             stop_when=is_error if on_error == "raise" else None)
+        new_rows = map_tasks(
+            sweep_task,
+            tasks,
+            workers=workers,
+            scheduler=scheduler,
+            progress=progress,
+            desc="sweep",
+            on_result=on_result,
+            error_row=_error_row,
+            stop_when=is_error if on_error == "raise" else None,
+        )
     except KeyboardInterrupt:
-        if rd is not None:      # no table: the same call again goes on from the checkpoint
+        if rd is not None:  # no table: the same call again goes on from the checkpoint
             rd.finish(outcome="interrupted", partial=True)
         raise
     finally:
@@ -373,15 +466,27 @@ def sweep(points: list[dict], *, base: SweepBase | None = None, out=None,
         if row is not None:
             done[keys[j]] = row
     rows = [done[k] for k in keys if k in done]
-    res = SweepResult(rows=rows, parameters=names,
-                      settings=settings | {"n_points": len(points), "n_resumed":
-                                           len(points) - len(todo),
-                                           "n_errors": sum(is_error(r) for r in rows)})
+    res = SweepResult(
+        rows=rows,
+        parameters=names,
+        settings=settings
+        | {
+            "n_points": len(points),
+            "n_resumed": len(points) - len(todo),
+            "n_errors": sum(is_error(r) for r in rows),
+        },
+    )
     try:
-        end_of_study(rows, on_error, "sweep", lambda r: str({n: r.get(n) for n in names}),
-                     result=res, n_points=len(keys))
+        end_of_study(
+            rows,
+            on_error,
+            "sweep",
+            lambda r: str({n: r.get(n) for n in names}),
+            result=res,
+            n_points=len(keys),
+        )
     except StudyError:
-        if rd is not None:      # no table: the same call again runs the failed points
+        if rd is not None:  # no table: the same call again runs the failed points
             rd.finish(outcome="study error", partial=True)
         raise
     if rd is not None:
@@ -404,4 +509,3 @@ def _error_row(task: dict, exc: BaseException) -> dict:
         row.update({k: None for k in ORBIT_COLUMNS})
     row.update(error_fields(exc), steady_bounding=False)
     return row
-

@@ -24,7 +24,7 @@ def read_checkpoint(path) -> dict:
     if not path.exists():
         return {}
     data = path.read_bytes()
-    whole = data[:data.rfind(b"\n") + 1]
+    whole = data[: data.rfind(b"\n") + 1]
     if len(whole) != len(data):
         with open(path, "r+b") as f:
             f.truncate(len(whole))
@@ -34,7 +34,7 @@ def read_checkpoint(path) -> dict:
             rec = json.loads(line)
             done[rec["key"]] = rec["row"]
         except (json.JSONDecodeError, KeyError, TypeError):
-            continue       # a damaged record: that point runs again
+            continue  # a damaged record: that point runs again
     return done
 
 

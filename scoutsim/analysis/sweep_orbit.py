@@ -11,8 +11,13 @@ import numpy as np
 
 #: columns added by ``orbit=True``: the controlled orbit at the point (Newton from the run's
 #: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`)
-ORBIT_COLUMNS = ("orbit_period_s", "orbit_spectral_radius", "orbit_stable", "orbit_residual",
-                 "orbit_status")
+ORBIT_COLUMNS = (
+    "orbit_period_s",
+    "orbit_spectral_radius",
+    "orbit_stable",
+    "orbit_residual",
+    "orbit_status",
+)
 #: integrator and tolerance of the per-point orbit (looser than the single-orbit default,
 #: rtol 1e-11 / 1e-10: a sweep wants stability, not the 12th digit)
 ORBIT_RTOL = 1e-9
@@ -25,16 +30,26 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
     from ..simulation.integrator import IntegratorSettings
     from .controlled_orbit import controlled_fixed_point
     from .poincare import MapError
+
     out: dict[str, Any] = {k: None for k in ORBIT_COLUMNS}
     try:
-        o = controlled_fixed_point(result, model=task["model"],
-                                   friction_coefficient=task["friction_coefficient"],
-                                   robot=robot, controller=ctrl, tol=ORBIT_TOL, max_iter=6,
-                                   integrator=IntegratorSettings(rtol=ORBIT_RTOL,
-                                                                 atol=ORBIT_RTOL / 10))
-        out.update(orbit_period_s=o.period, orbit_residual=o.residual,
-                   orbit_spectral_radius=float(np.max(np.abs(o.multipliers))),
-                   orbit_stable=o.stable, orbit_status="ok")
+        o = controlled_fixed_point(
+            result,
+            model=task["model"],
+            friction_coefficient=task["friction_coefficient"],
+            robot=robot,
+            controller=ctrl,
+            tol=ORBIT_TOL,
+            max_iter=6,
+            integrator=IntegratorSettings(rtol=ORBIT_RTOL, atol=ORBIT_RTOL / 10),
+        )
+        out.update(
+            orbit_period_s=o.period,
+            orbit_residual=o.residual,
+            orbit_spectral_radius=float(np.max(np.abs(o.multipliers))),
+            orbit_stable=o.stable,
+            orbit_status="ok",
+        )
     except MapError as exc:
         out["orbit_status"] = f"no orbit: {exc}"
     return out

@@ -27,15 +27,14 @@ _SECTIONS = {"robot": RobotParameters, "controller": ControllerParameters}
 
 def parameter_names() -> list[str]:
     """All names a sweep can vary."""
-    return [f"{sec}.{f.name}" for sec, cls in _SECTIONS.items()
-            for f in dataclasses.fields(cls)]
+    return [f"{sec}.{f.name}" for sec, cls in _SECTIONS.items() for f in dataclasses.fields(cls)]
 
 
 def si_name(name: str) -> tuple[str, float]:
     """The field a point's ``name`` sets and the SI value per unit of its values:
     ``(name without _deg, pi / 180)`` for a degrees name, else ``(name, 1)``."""
     if name.endswith(DEG):
-        return name[:-len(DEG)], math.pi / 180.0
+        return name[: -len(DEG)], math.pi / 180.0
     return name, 1.0
 
 
@@ -45,8 +44,7 @@ def axis_label(name: str) -> tuple[float, str]:
     column as it is, another field in its SI unit ("-" for a pure number); any other
     column by its name (its unit is in the name: ``mean_speed_m_s``)."""
     base, scale = si_name(name)
-    dim = field_dimension(base.partition(".")[2]) if base.partition(".")[0] in _SECTIONS \
-        else None
+    dim = field_dimension(base.partition(".")[2]) if base.partition(".")[0] in _SECTIONS else None
     if dim is None:
         return 1.0, name
     if scale != 1.0:
@@ -57,24 +55,27 @@ def axis_label(name: str) -> tuple[float, str]:
     return 1.0, f"{name} [{'-' if unit == '1' else unit}]"
 
 
-
-
 def check_name(name: str):
     """ValueError for a name a sweep cannot vary (naming the nearest that it can)."""
     base, scale = si_name(name)
     sec, _, fld = base.partition(".")
     cls = _SECTIONS.get(sec)
     if scale != 1.0 and cls is not None and field_dimension(fld) != "angle":
-        raise ValueError(f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
-                         f"degrees for an angle; {base!r} is not an angle (give it in SI "
-                         "units, without the suffix)")
+        raise ValueError(
+            f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
+            f"degrees for an angle; {base!r} is not an angle (give it in SI "
+            "units, without the suffix)"
+        )
     if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
         import difflib
+
         near = difflib.get_close_matches(name, parameter_names(), n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
-        raise ValueError(f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
-                         f"controller.<field> of RobotParameters / ControllerParameters (a "
-                         f"_deg suffix on an angle takes degrees){hint}")
+        raise ValueError(
+            f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
+            f"controller.<field> of RobotParameters / ControllerParameters (a "
+            f"_deg suffix on an angle takes degrees){hint}"
+        )
 
 
 def grid_points(grid: dict) -> list[dict]:
@@ -82,8 +83,10 @@ def grid_points(grid: dict) -> list[dict]:
     for name in grid:
         check_name(name)
     names = list(grid)
-    return [dict(zip(names, map(float, vals)))
-            for vals in itertools.product(*(list(grid[n]) for n in names))]
+    return [
+        dict(zip(names, map(float, vals)))
+        for vals in itertools.product(*(list(grid[n]) for n in names))
+    ]
 
 
 def random_points(bounds: dict, n: int, seed: int = 0) -> list[dict]:
@@ -102,4 +105,3 @@ def point_key(point: dict, settings: dict) -> str:
     """Stable identity of a point within a sweep (for resuming)."""
     blob = json.dumps({"point": point, "settings": settings}, sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
-

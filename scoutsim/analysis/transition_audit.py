@@ -44,13 +44,13 @@ BALANCE_RTOL_FACTOR = 100.0
 class Transition:
     """One plant transition: the event records it logged and its audit."""
 
-    t: float                 #: time [s]
-    kinds: tuple             #: names of the event records it logged, in order
-    legs: tuple              #: leg of each record (0 back, 1 front, -1 none)
+    t: float  #: time [s]
+    kinds: tuple  #: names of the event records it logged, in order
+    legs: tuple  #: leg of each record (0 back, 1 front, -1 none)
     energy_before_J: float
     energy_after_J: float
-    logged_loss_J: float     #: kinetic energy the touchdown impacts of this transition lost
-    violations: int          #: bit mask of scoutsim.names.Violation
+    logged_loss_J: float  #: kinetic energy the touchdown impacts of this transition lost
+    violations: int  #: bit mask of scoutsim.names.Violation
 
     @property
     def unexplained_loss_J(self) -> float:
@@ -94,19 +94,24 @@ class TransitionAudit:
                 continue
             scale = max(abs(tr.energy_before_J), abs(tr.energy_after_J), 1.0)
             if abs(tr.unexplained_loss_J) > self.rel_tol * scale:
-                out.append(f"t = {tr.t:.9f} s {what}: energy {tr.energy_before_J:.9f} -> "
-                           f"{tr.energy_after_J:.9f} J, logged loss {tr.logged_loss_J:.3e} J, "
-                           f"unexplained {tr.unexplained_loss_J:+.3e} J")
+                out.append(
+                    f"t = {tr.t:.9f} s {what}: energy {tr.energy_before_J:.9f} -> "
+                    f"{tr.energy_after_J:.9f} J, logged loss {tr.logged_loss_J:.3e} J, "
+                    f"unexplained {tr.unexplained_loss_J:+.3e} J"
+                )
             if tr.logged_loss_J < -self.rel_tol * scale:
-                out.append(f"t = {tr.t:.9f} s {what}: an impact gained energy "
-                           f"({-tr.logged_loss_J:.3e} J)")
+                out.append(
+                    f"t = {tr.t:.9f} s {what}: an impact gained energy ({-tr.logged_loss_J:.3e} J)"
+                )
             if tr.violations:
                 out.append(f"t = {tr.t:.9f} s {what}: " + ", ".join(tr.violation_names()))
         b = self.balance
         if b is not None and not abs(b.relative_residual) <= self.balance_tol:
-            out.append(f"work-energy balance: residual {b.residual_J:+.3e} J = "
-                       f"{b.relative_residual:+.1e} of the input ({b.input_J:.3f} J), beyond "
-                       f"{self.balance_tol:.0e}")
+            out.append(
+                f"work-energy balance: residual {b.residual_J:+.3e} J = "
+                f"{b.relative_residual:+.1e} of the input ({b.input_J:.3f} J), beyond "
+                f"{self.balance_tol:.0e}"
+            )
         return out
 
     @property
@@ -130,7 +135,7 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
     for i in range(len(t)):
         eb, ea = e_before[i], e_after[i]
         if np.isnan(eb):
-            cur = None          # a controller record: not a plant transition
+            cur = None  # a controller record: not a plant transition
             continue
         key = (t[i], eb, ea if not np.isnan(ea) else None)
         if cur is None or cur["key"] != key:
@@ -144,17 +149,22 @@ def audit_transitions(result, rel_tol: float = ENERGY_REL_TOL) -> TransitionAudi
         bits = 0
         for i in rows:
             bits |= int(violations[i])
-        trs.append(Transition(
-            t=float(t[rows[0]]),
-            kinds=tuple(EVENT_KIND_NAMES.get(int(kind[i]), "?") for i in rows),
-            legs=tuple(int(leg[i]) for i in rows),
-            energy_before_J=float(e_before[rows[0]]),
-            energy_after_J=float(e_after[rows[0]]),
-            logged_loss_J=float(loss), violations=bits))
+        trs.append(
+            Transition(
+                t=float(t[rows[0]]),
+                kinds=tuple(EVENT_KIND_NAMES.get(int(kind[i]), "?") for i in rows),
+                legs=tuple(int(leg[i]) for i in rows),
+                energy_before_J=float(e_before[rows[0]]),
+                energy_after_J=float(e_after[rows[0]]),
+                logged_loss_J=float(loss),
+                violations=bits,
+            )
+        )
     balance = None
     balance_tol = 1e-6
     if getattr(result, "energy_flows", None) is not None:
         from .energy import energy_balance
+
         balance = energy_balance(result)
         rtol = (result.provenance.get("integrator") or {}).get("rtol") or 1e-8
         balance_tol = max(1e-6, BALANCE_RTOL_FACTOR * rtol)

@@ -144,16 +144,42 @@ from .tune_parameters import (
 from .tune_result import TuneResult, json_default, write_outputs
 from .tune_settings import TuneGoal, TuneRuns, TuneSearch, bundles, check_settings
 
-__all__ = ["tune", "TuneGoal", "TuneRuns", "TuneSearch", "TuneParameter", "TuneResult",
-           "parse_parameter", "OBJECTIVES", "AGGREGATES", "PENALTY", "EVALUATIONS",
-           "OPTIMIZER_STATE", "MIN_STEADY_STRIDES", "COLUMNS", "tune_task",
-           "MissingDependencyError", "EvaluationNotRunError"]
+__all__ = [
+    "tune",
+    "TuneGoal",
+    "TuneRuns",
+    "TuneSearch",
+    "TuneParameter",
+    "TuneResult",
+    "parse_parameter",
+    "OBJECTIVES",
+    "AGGREGATES",
+    "PENALTY",
+    "EVALUATIONS",
+    "OPTIMIZER_STATE",
+    "MIN_STEADY_STRIDES",
+    "COLUMNS",
+    "tune_task",
+    "MissingDependencyError",
+    "EvaluationNotRunError",
+]
 
 
-def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = None,
-         search: TuneSearch | None = None, out=None, workers: int | None = None,
-         scheduler=None, progress: bool = False, resume: bool = True, command: str = "",
-         on_error: str = "raise", **fields) -> TuneResult:
+def tune(
+    parameters,
+    *,
+    goal: TuneGoal | None = None,
+    runs: TuneRuns | None = None,
+    search: TuneSearch | None = None,
+    out=None,
+    workers: int | None = None,
+    scheduler=None,
+    progress: bool = False,
+    resume: bool = True,
+    command: str = "",
+    on_error: str = "raise",
+    **fields,
+) -> TuneResult:
     """Optimise parameters against an objective with CMA-ES (module docstring).
 
     Parameters
@@ -202,8 +228,11 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     """
     goal, runs, search = bundles(goal, runs, search, fields)
     objective, target, aggregate = goal.objective, goal.target, goal.aggregate
-    max_belt_deflection, max_current, min_speed = (goal.max_belt_deflection,
-                                                   goal.max_current, goal.min_speed)
+    max_belt_deflection, max_current, min_speed = (
+        goal.max_belt_deflection,
+        goal.max_current,
+        goal.min_speed,
+    )
     duration, robot, controller = runs.duration, runs.robot, runs.controller
     budget, seed, sigma, population = search.budget, search.seed, search.sigma, search.population
     CMA = cma_class()
@@ -212,19 +241,25 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     robot = robot or RobotParameters()
     kind, cparams, spec = controller_spec(controller, robot)
     if objective == "stability" and kind != "table-i":
-        raise ValueError(f"objective 'stability' is not allowed with the {kind} controller: "
-                         "the orbit tools cut the stride map where the controller logs a "
-                         "back-leg lift-off, which only the Table I controller logs")
+        raise ValueError(
+            f"objective 'stability' is not allowed with the {kind} controller: "
+            "the orbit tools cut the stride map where the controller logs a "
+            "back-leg lift-off, which only the Table I controller logs"
+        )
     probe = spec.get("controller")
     if kind == "factory" and any("params[" in str(p) for p in parameters):
         # a factory's parameter array: the controller it makes for the base robot
         probe = build_controller(probe, robot, cparams)
         if has_tunable_array(probe):
             spec["params"] = [float(x) for x in probe.params]
-    params = [p if isinstance(p, TuneParameter) else
-              parse_parameter(p, probe if kind in ("compiled", "factory") else controller,
-                              robot, cparams)
-              for p in parameters]
+    params = [
+        p
+        if isinstance(p, TuneParameter)
+        else parse_parameter(
+            p, probe if kind in ("compiled", "factory") else controller, robot, cparams
+        )
+        for p in parameters
+    ]
     if not params:
         raise ValueError("no parameter to tune: give at least one")
     check_tuned_fields(kind, params)
@@ -237,35 +272,60 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     scenarios = runs.scenarios()
     dim = len(params)
     pop = int(population) if population else 4 + int(3 * math.log(dim))
-    if pop < 4:     # (CMA-ES's weights need at least two selected candidates)
+    if pop < 4:  # (CMA-ES's weights need at least two selected candidates)
         raise ValueError(f"population = {population!r} is not allowed: must be >= 4")
     if budget < pop:
-        raise ValueError(f"budget = {budget} is not allowed: it must hold at least one "
-                         f"generation of {pop} evaluations")
+        raise ValueError(
+            f"budget = {budget} is not allowed: it must hold at least one "
+            f"generation of {pop} evaluations"
+        )
     n_gen = budget // pop
     lo = np.array([p.low for p in params])
     hi = np.array([p.high for p in params])
     base = np.array([base_value(p, robot, cparams, spec) for p in params])
     mean0 = np.clip((base - lo) / (hi - lo), 0.0, 1.0)
-    goal_settings = {"objective": objective, "target": target, "aggregate": aggregate,
-                     "max_belt_deflection": max_belt_deflection, "max_current": max_current,
-                     "min_speed": min_speed}
-    settings = {"parameters": [dataclasses.asdict(p) for p in params], "goal": goal_settings,
-                "controller": kind,
-                # (a user's controller described by names and numbers, not addresses)
-                "controller_spec": {k: (describe_controller(v) if k == "controller" else v)
-                                    for k, v in spec.items()},
-                "scenarios": [{"model": s["model"], "friction": None if math.isinf(s["friction"])
-                               else s["friction"], "initial_state": None
-                               if s["initial_state"] is None
-                               else dataclasses.asdict(s["initial_state"])}
-                              for s in scenarios],
-                "duration_s": duration, "robot": dataclasses.asdict(robot),
-                "controller_parameters": dataclasses.asdict(cparams), "seed": seed,
-                "sigma": sigma, "population": pop}
+    goal_settings = {
+        "objective": objective,
+        "target": target,
+        "aggregate": aggregate,
+        "max_belt_deflection": max_belt_deflection,
+        "max_current": max_current,
+        "min_speed": min_speed,
+    }
+    settings = {
+        "parameters": [dataclasses.asdict(p) for p in params],
+        "goal": goal_settings,
+        "controller": kind,
+        # (a user's controller described by names and numbers, not addresses)
+        "controller_spec": {
+            k: (describe_controller(v) if k == "controller" else v) for k, v in spec.items()
+        },
+        "scenarios": [
+            {
+                "model": s["model"],
+                "friction": None if math.isinf(s["friction"]) else s["friction"],
+                "initial_state": None
+                if s["initial_state"] is None
+                else dataclasses.asdict(s["initial_state"]),
+            }
+            for s in scenarios
+        ],
+        "duration_s": duration,
+        "robot": dataclasses.asdict(robot),
+        "controller_parameters": dataclasses.asdict(cparams),
+        "seed": seed,
+        "sigma": sigma,
+        "population": pop,
+    }
     skey = checkpoint_key(settings)
-    task_base = {"goal": goal_settings, "duration": duration, "robot": robot, "cparams": cparams,
-                 "controller": spec, "scenarios": scenarios}
+    task_base = {
+        "goal": goal_settings,
+        "duration": duration,
+        "robot": robot,
+        "cparams": cparams,
+        "controller": spec,
+        "scenarios": scenarios,
+    }
     warn_of_box_ends(params, robot, cparams)
 
     done: dict = {}
@@ -274,9 +334,16 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     gen = 0
     if out is not None:
         out = Path(out)
-        rd = RunDirectory(out, command=command, info={
-            "kind": "tune", "checkpoint": EVALUATIONS, "optimizer_state": OPTIMIZER_STATE,
-            "budget": budget}).open()
+        rd = RunDirectory(
+            out,
+            command=command,
+            info={
+                "kind": "tune",
+                "checkpoint": EVALUATIONS,
+                "optimizer_state": OPTIMIZER_STATE,
+                "budget": budget,
+            },
+        ).open()
         ck, state_path = out / EVALUATIONS, out / OPTIMIZER_STATE
         saved = read_state(state_path) if resume else None
         if saved is not None and saved["key"] == skey:
@@ -287,14 +354,25 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                 if p.exists():
                     p.unlink()
     if cma is None:
-        cma = CMA(mean=mean0, sigma=sigma, bounds=np.array([[0.0, 1.0]] * dim), seed=seed,
-                  population_size=pop)
+        cma = CMA(
+            mean=mean0,
+            sigma=sigma,
+            bounds=np.array([[0.0, 1.0]] * dim),
+            seed=seed,
+            population_size=pop,
+        )
         gen = 0
         cma = write_state(state_path, skey, 0, cma)
     n_resumed = len(done)
 
-    bar = tqdm(total=n_gen * pop, unit="run", desc="tune", file=sys.stderr,
-               disable=not progress, leave=False)
+    bar = tqdm(
+        total=n_gen * pop,
+        unit="run",
+        desc="tune",
+        file=sys.stderr,
+        disable=not progress,
+        leave=False,
+    )
     rows_by_key: dict = {}
     stopped = "budget"
     fh = open(ck, "a") if ck is not None else None
@@ -316,10 +394,12 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             for i in range(pop):
                 k = checkpoint_key([skey, g, i])
                 if k not in done:
-                    raise ValueError(f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} of "
-                                     f"generation {g}, which {out}/{OPTIMIZER_STATE} has "
-                                     "told the optimiser: start afresh (resume off, "
-                                     "--no-resume)")
+                    raise ValueError(
+                        f"{out}/{EVALUATIONS} lacks evaluation {g * pop + i} of "
+                        f"generation {g}, which {out}/{OPTIMIZER_STATE} has "
+                        "told the optimiser: start afresh (resume off, "
+                        "--no-resume)"
+                    )
                 record(k, done[k])
         while gen < n_gen:
             if cma.should_stop():
@@ -330,19 +410,23 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
             tasks, todo = [], []
             for i, (x, k) in enumerate(zip(xs, keys)):
                 values = {p.key: float(p.low + (p.high - p.low) * u) for p, u in zip(params, x)}
-                if k in done and done[k].get("values") == values and (
-                        on_error == "record" or not is_error(done[k])):
+                if (
+                    k in done
+                    and done[k].get("values") == values
+                    and (on_error == "record" or not is_error(done[k]))
+                ):
                     record(k, done[k])
                     continue
-                tasks.append(task_base | {"values": values, "evaluation": gen * pop + i,
-                                          "generation": gen})
+                tasks.append(
+                    task_base | {"values": values, "evaluation": gen * pop + i, "generation": gen}
+                )
                 todo.append(k)
 
-            failed: list = []     # this generation's evaluations that could not be run
+            failed: list = []  # this generation's evaluations that could not be run
 
             def on_result(j, row, todo=todo, failed=failed):
                 if on_error == "raise" and is_error(row):
-                    failed.append(row)      # never recorded: a resumed tuning runs it again
+                    failed.append(row)  # never recorded: a resumed tuning runs it again
                     return
                 if fh is not None:
                     fh.write(json.dumps({"key": todo[j], "row": row}, default=json_default) + "\n")
@@ -354,30 +438,50 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
                     # one pool for every generation (a broken one is replaced)
                     pools.close()
                     scheduler = pools.enter_context(worker_pool(min(n_workers, pop)))
-                map_tasks(tune_task, tasks, workers=workers, scheduler=scheduler,
-                          progress=False, on_result=on_result, error_row=evaluation_error_row)
+                map_tasks(
+                    tune_task,
+                    tasks,
+                    workers=workers,
+                    scheduler=scheduler,
+                    progress=False,
+                    on_result=on_result,
+                    error_row=evaluation_error_row,
+                )
                 if failed:
                     failed.sort(key=lambda r: r["evaluation"])
                     r = failed[0]
                     shown = {p.name: p.shown(r["values"][p.key]) for p in params}
-                    error = (EvaluationNotRunError if any(f.get("not_run") for f in failed)
-                             else StudyError)
+                    error = (
+                        EvaluationNotRunError
+                        if any(f.get("not_run") for f in failed)
+                        else StudyError
+                    )
                     raise error(
                         f"{len(failed)} evaluation(s) of generation {gen} could not be run "
                         f"(an error of the tuning, not a score); evaluation "
                         f"{r['evaluation']} at {shown}: {r['error']}"
-                        + (f"; the finished evaluations are kept in {ck}: the same call "
-                           "again goes on from them" if ck is not None else "")
+                        + (
+                            f"; the finished evaluations are kept in {ck}: the same call "
+                            "again goes on from them"
+                            if ck is not None
+                            else ""
+                        )
                         + "; or pass on_error='record' to score such evaluations as "
-                          "infeasible and go on", failed)
+                        "infeasible and go on",
+                        failed,
+                    )
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
             cma = write_state(state_path, skey, gen, cma)
     except BaseException as exc:
-        pools.__exit__(type(exc), exc, exc.__traceback__)     # kills the workers at once
+        pools.__exit__(type(exc), exc, exc.__traceback__)  # kills the workers at once
         if rd is not None and isinstance(exc, (KeyboardInterrupt, StudyError)):
-            rd.finish(outcome="interrupted" if isinstance(exc, KeyboardInterrupt)
-                      else "evaluation not run", partial=True)
+            rd.finish(
+                outcome="interrupted"
+                if isinstance(exc, KeyboardInterrupt)
+                else "evaluation not run",
+                partial=True,
+            )
         raise
     else:
         pools.close()
@@ -386,8 +490,11 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
         if fh is not None:
             fh.close()
 
-    keys = [checkpoint_key([skey, g, i]) for g in range(gen if stopped == "converged" else n_gen)
-            for i in range(pop)]
+    keys = [
+        checkpoint_key([skey, g, i])
+        for g in range(gen if stopped == "converged" else n_gen)
+        for i in range(pop)
+    ]
     raw = [rows_by_key[k] for k in keys]
     rows = []
     for r in raw:
@@ -399,16 +506,27 @@ def tune(parameters, *, goal: TuneGoal | None = None, runs: TuneRuns | None = No
     best_values = {p.key: raw[b]["values"][p.key] for p in params}
     b_robot, b_cparams, b_params = apply_values(best_values, robot, cparams, spec.get("params"))
     n_errors = sum(r.get("status") == "error" for r in rows)
-    res = TuneResult(rows=rows, parameters=params, best=best_row, best_values=best_values,
-                     robot=b_robot, controller_parameters=b_cparams, params=b_params,
-                     settings=json_safe(settings) | {"budget": budget,
-                                                      "n_resumed": n_resumed},
-                     stopped=stopped, n_errors=n_errors)
+    res = TuneResult(
+        rows=rows,
+        parameters=params,
+        best=best_row,
+        best_values=best_values,
+        robot=b_robot,
+        controller_parameters=b_cparams,
+        params=b_params,
+        settings=json_safe(settings) | {"budget": budget, "n_resumed": n_resumed},
+        stopped=stopped,
+        n_errors=n_errors,
+    )
     if n_errors:
         import warnings
-        warnings.warn(f"the tuning: {n_errors} of its {len(rows)} evaluations could not be "
-                      "run and are recorded with status 'error', scored as infeasible",
-                      RuntimeWarning, stacklevel=2)
+
+        warnings.warn(
+            f"the tuning: {n_errors} of its {len(rows)} evaluations could not be "
+            "run and are recorded with status 'error', scored as infeasible",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     if rd is not None:
         write_outputs(res, rd, command)
     return res

@@ -18,28 +18,43 @@ def controller_spec(controller, robot):
     from ..control.compiled import CompiledController
     from ..control.factory import ControllerSpec
     from ..control.pitch_feedback import PitchFeedbackController
+
     if controller is None or isinstance(controller, ControllerParameters):
         return "table-i", controller or ControllerParameters(), {"kind": "table-i"}
     controller = study_controller(controller, robot)
     if isinstance(controller, str):
         if controller not in ("table-i", "pitch-feedback"):
-            raise ValueError(f"controller = {controller!r} is not allowed: table-i, "
-                             "pitch-feedback, MODULE:FACTORY, ControllerParameters, a "
-                             "ControllerSpec or a controller object")
+            raise ValueError(
+                f"controller = {controller!r} is not allowed: table-i, "
+                "pitch-feedback, MODULE:FACTORY, ControllerParameters, a "
+                "ControllerSpec or a controller object"
+            )
         return controller, ControllerParameters(), {"kind": controller}
     if isinstance(controller, PitchFeedbackController):
         return ("pitch-feedback", controller.controller_parameters, {"kind": "pitch-feedback"})
     if isinstance(controller, ControllerSpec):
-        return "factory", controller.params or ControllerParameters(), {
-            "kind": "factory", "controller": controller}
+        return (
+            "factory",
+            controller.params or ControllerParameters(),
+            {"kind": "factory", "controller": controller},
+        )
     if isinstance(controller, CompiledController):
         base = controller.controller_parameters or ControllerParameters()
-        return "compiled", base, {"kind": "compiled", "controller": controller,
-                                  "params": [float(x) for x in controller.params]}
+        return (
+            "compiled",
+            base,
+            {
+                "kind": "compiled",
+                "controller": controller,
+                "params": [float(x) for x in controller.params],
+            },
+        )
     if callable(getattr(controller, "command", None)):
         return "python", ControllerParameters(), {"kind": "python", "controller": controller}
-    raise TypeError(f"controller of type {type(controller).__name__} cannot be tuned: give "
-                    "ControllerParameters, a controller object, or MODULE:FACTORY")
+    raise TypeError(
+        f"controller of type {type(controller).__name__} cannot be tuned: give "
+        "ControllerParameters, a controller object, or MODULE:FACTORY"
+    )
 
 
 def check_tuned_fields(kind: str, params: list) -> None:
@@ -48,8 +63,10 @@ def check_tuned_fields(kind: str, params: list) -> None:
     if kind in ("compiled", "python"):
         bad = [p.name for p in params if p.key.startswith("controller.")]
         if bad:
-            raise ValueError(f"parameter {bad[0]!r} is not allowed with a {kind} controller "
-                             "object, which does not read ControllerParameters: tune its "
-                             "controller.params[i] (a CompiledController), robot.<field>, or "
-                             "give the controller as MODULE:FACTORY (a factory make(robot, "
-                             "params) gets each candidate's parameters)")
+            raise ValueError(
+                f"parameter {bad[0]!r} is not allowed with a {kind} controller "
+                "object, which does not read ControllerParameters: tune its "
+                "controller.params[i] (a CompiledController), robot.<field>, or "
+                "give the controller as MODULE:FACTORY (a factory make(robot, "
+                "params) gets each candidate's parameters)"
+            )

@@ -34,8 +34,15 @@ from .study_failures import StudyError, error_fields, run_failure
 from .sweep_orbit import orbit_columns
 from .tune_parameters import apply_values
 
-__all__ = ["tune_task", "OBJECTIVES", "AGGREGATES", "PENALTY", "MIN_STEADY_STRIDES",
-           "COLUMNS", "EvaluationNotRunError"]
+__all__ = [
+    "tune_task",
+    "OBJECTIVES",
+    "AGGREGATES",
+    "PENALTY",
+    "MIN_STEADY_STRIDES",
+    "COLUMNS",
+    "EvaluationNotRunError",
+]
 
 #: what can be minimised (module docstring)
 OBJECTIVES = ("speed", "max-speed", "cot", "stability")
@@ -44,10 +51,27 @@ AGGREGATES = ("worst", "mean")
 #: score of a broken constraint (module docstring); larger than any objective value
 PENALTY = 1000.0
 #: the table's columns after the parameters
-COLUMNS = ("evaluation", "generation", "score", "objective", "feasible", "violations",
-           "outcome", "t_end_s", "mean_speed_m_s", "average_speed_m_s", "n_steady_strides",
-           "steady_bounding", "cost_of_transport", "max_belt_deflection_deg",
-           "peak_current_a", "spectral_radius", "scenario", "status", "error")
+COLUMNS = (
+    "evaluation",
+    "generation",
+    "score",
+    "objective",
+    "feasible",
+    "violations",
+    "outcome",
+    "t_end_s",
+    "mean_speed_m_s",
+    "average_speed_m_s",
+    "n_steady_strides",
+    "steady_bounding",
+    "cost_of_transport",
+    "max_belt_deflection_deg",
+    "peak_current_a",
+    "spectral_radius",
+    "scenario",
+    "status",
+    "error",
+)
 #: the score of an evaluation that is not allowed or could not be run
 NOT_RUN_SCORE = 30.0 * PENALTY
 
@@ -62,11 +86,13 @@ def _controller(spec, robot, cparams, params):
         return cparams
     if kind == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
+
         return PitchFeedbackController(cparams)
     ctrl = build_controller(spec["controller"], robot, cparams)
     if params is not None and getattr(ctrl, "command_function", None) is not None:
         import copy
-        ctrl = copy.copy(ctrl)          # (its compiled callback is shared, not compiled)
+
+        ctrl = copy.copy(ctrl)  # (its compiled callback is shared, not compiled)
         ctrl.params = np.array(params, dtype=np.float64)
     return ctrl
 
@@ -83,46 +109,86 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     compiled controller's array ``params``) and score it (module docstring)."""
     from ..control.protocol import ControllerError
     from ..simulation.simulator import simulate
+
     goal = task["goal"]
     duration = task["duration"]
     try:
         ctrl = _controller(task["controller"], robot, cparams, params)
     except Exception as exc:  # noqa: BLE001 - an error of the tuning
-        return {k: None for k in COLUMNS[3:]} | error_fields(exc) | {
-            "score": NOT_RUN_SCORE, "feasible": False, "steady_bounding": False,
-            "violations": "error"}
+        return (
+            {k: None for k in COLUMNS[3:]}
+            | error_fields(exc)
+            | {
+                "score": NOT_RUN_SCORE,
+                "feasible": False,
+                "steady_bounding": False,
+                "violations": "error",
+            }
+        )
     try:
-        r = simulate(robot, ctrl, scenario["initial_state"], duration,
-                     model=scenario["model"], friction_coefficient=scenario["friction"],
-                     energy=goal["objective"] == "cot")
+        r = simulate(
+            robot,
+            ctrl,
+            scenario["initial_state"],
+            duration,
+            model=scenario["model"],
+            friction_coefficient=scenario["friction"],
+            energy=goal["objective"] == "cot",
+        )
     except Exception as exc:  # noqa: BLE001 - classified: the controller's stop, or not
         failure = run_failure(exc, "invalid_start")
         if failure["status"] == "ok" and isinstance(exc, ControllerError):
             # the controller stopped its run: scored as a fall at that time
-            return {k: None for k in COLUMNS[3:]} | failure | {
-                "t_end_s": float(exc.t), "steady_bounding": False, "feasible": False,
-                "score": 10.0 * PENALTY * (2.0 - min(1.0, exc.t / duration)),
-                "violations": "controller_error"}
-        return {k: None for k in COLUMNS[3:]} | failure | {
-            "score": NOT_RUN_SCORE, "feasible": False, "steady_bounding": False,
-            "violations": failure["outcome"]}
+            return (
+                {k: None for k in COLUMNS[3:]}
+                | failure
+                | {
+                    "t_end_s": float(exc.t),
+                    "steady_bounding": False,
+                    "feasible": False,
+                    "score": 10.0 * PENALTY * (2.0 - min(1.0, exc.t / duration)),
+                    "violations": "controller_error",
+                }
+            )
+        return (
+            {k: None for k in COLUMNS[3:]}
+            | failure
+            | {
+                "score": NOT_RUN_SCORE,
+                "feasible": False,
+                "steady_bounding": False,
+                "violations": failure["outcome"],
+            }
+        )
     if r.outcome == "interrupted":
-        raise KeyboardInterrupt          # a cut run is not an evaluation: never recorded
+        raise KeyboardInterrupt  # a cut run is not an evaluation: never recorded
     s = r.summary()
     t_end = float(r.t[-1])
     avg = float((r.x[-1] - r.x[0]) / t_end) if t_end > 0 else None
-    row = {"outcome": s["outcome"], "t_end_s": t_end, "mean_speed_m_s": s["mean_speed_m_s"],
-           "average_speed_m_s": avg, "n_steady_strides": s["n_steady_strides"],
-           "steady_bounding": bool(s["steady_bounding"]),
-           "cost_of_transport": s.get("cost_of_transport"),
-           "max_belt_deflection_deg": s.get("max_belt_deflection_deg"),
-           "peak_current_a": _peak_current(r), "spectral_radius": None}
+    row = {
+        "outcome": s["outcome"],
+        "t_end_s": t_end,
+        "mean_speed_m_s": s["mean_speed_m_s"],
+        "average_speed_m_s": avg,
+        "n_steady_strides": s["n_steady_strides"],
+        "steady_bounding": bool(s["steady_bounding"]),
+        "cost_of_transport": s.get("cost_of_transport"),
+        "max_belt_deflection_deg": s.get("max_belt_deflection_deg"),
+        "peak_current_a": _peak_current(r),
+        "spectral_radius": None,
+    }
     if r.outcome != "completed":
-        row.update(score=10.0 * PENALTY * (2.0 - min(1.0, t_end / duration)), objective=None,
-                   feasible=False, violations=r.outcome, status="ok", error="")
+        row.update(
+            score=10.0 * PENALTY * (2.0 - min(1.0, t_end / duration)),
+            objective=None,
+            feasible=False,
+            violations=r.outcome,
+            status="ok",
+            error="",
+        )
         return row
     v = s["mean_speed_m_s"] if s["mean_speed_m_s"] is not None else avg
-    broken = []                                   # (name, relative excess)
+    broken = []  # (name, relative excess)
     if not row["steady_bounding"]:
         missing = 1.0 - min(s["n_steady_strides"] or 0, MIN_STEADY_STRIDES) / MIN_STEADY_STRIDES
         broken.append(("not steady", missing if missing > 0 else 1.0))
@@ -145,8 +211,12 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
         objective = row["cost_of_transport"]
     elif kind == "stability":
         if row["steady_bounding"]:
-            orbit = orbit_columns(r, robot, ctrl, {"model": scenario["model"],
-                                                   "friction_coefficient": scenario["friction"]})
+            orbit = orbit_columns(
+                r,
+                robot,
+                ctrl,
+                {"model": scenario["model"], "friction_coefficient": scenario["friction"]},
+            )
             row["spectral_radius"] = orbit["orbit_spectral_radius"]
             if orbit["orbit_spectral_radius"] is None:
                 broken.append(("no periodic orbit", 1.0))
@@ -154,21 +224,33 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     if objective is None and not broken:
         broken.append((f"no {kind} objective", 1.0))
     if broken:
-        score = PENALTY * (1 + len(broken) + sum(min(1.0, e) for _, e in broken)) \
-            + (objective if objective is not None else 0.0)
+        score = PENALTY * (1 + len(broken) + sum(min(1.0, e) for _, e in broken)) + (
+            objective if objective is not None else 0.0
+        )
     else:
-        assert objective is not None    # (a missing objective is a broken constraint)
+        assert objective is not None  # (a missing objective is a broken constraint)
         score = objective
-    row.update(score=float(score), objective=objective, feasible=not broken,
-               violations="; ".join(n for n, _ in broken), status="ok", error="")
+    row.update(
+        score=float(score),
+        objective=objective,
+        feasible=not broken,
+        violations="; ".join(n for n, _ in broken),
+        status="ok",
+        error="",
+    )
     return row
 
 
 def _not_run(row: dict, fields: dict) -> dict:
     """``row`` as an evaluation that is not allowed or could not be run."""
     row.update({k: None for k in COLUMNS[2:]})
-    row.update(fields, score=NOT_RUN_SCORE, feasible=False, steady_bounding=False,
-               violations=fields["outcome"])
+    row.update(
+        fields,
+        score=NOT_RUN_SCORE,
+        feasible=False,
+        steady_bounding=False,
+        violations=fields["outcome"],
+    )
     return row
 
 
@@ -182,20 +264,25 @@ def tune_task(task: dict) -> dict:
 
 
 def _evaluate(task: dict) -> dict:
-    row = {"evaluation": task["evaluation"], "generation": task["generation"],
-           "values": dict(task["values"])}
+    row = {
+        "evaluation": task["evaluation"],
+        "generation": task["generation"],
+        "values": dict(task["values"]),
+    }
     try:
-        robot, cparams, params = apply_values(task["values"], task["robot"], task["cparams"],
-                                              task["controller"].get("params"))
+        robot, cparams, params = apply_values(
+            task["values"], task["robot"], task["cparams"], task["controller"].get("params")
+        )
         validate_parameters(robot, cparams)
     except ValueError as exc:
-        return _not_run(row, {"status": "invalid", "outcome": "invalid_parameters",
-                              "error": str(exc)})
+        return _not_run(
+            row, {"status": "invalid", "outcome": "invalid_parameters", "error": str(exc)}
+        )
     try:
         rows = [_scenario_row(task, sc, robot, cparams, params) for sc in task["scenarios"]]
     except Exception as exc:  # noqa: BLE001 - an error of the tuning (scoring a run)
         return _not_run(row, error_fields(exc))
-    for status in ("error", "invalid"):        # one scenario not run: the evaluation's
+    for status in ("error", "invalid"):  # one scenario not run: the evaluation's
         bad = [r for r in rows if r.get("status", "ok") == status]
         if bad:
             return _not_run(row, {k: bad[0][k] for k in ("status", "outcome", "error")})
@@ -205,8 +292,7 @@ def _evaluate(task: dict) -> dict:
     if task["goal"]["aggregate"] == "mean":
         picked["score"] = float(np.mean(scores))
         objs = [r["objective"] for r in rows]
-        picked["objective"] = (float(np.mean(objs)) if all(o is not None for o in objs)
-                               else None)
+        picked["objective"] = float(np.mean(objs)) if all(o is not None for o in objs) else None
         picked["feasible"] = all(r["feasible"] for r in rows)
     picked["scenario"] = worst
     row.update(picked)
@@ -223,6 +309,9 @@ def evaluation_error_row(task: dict, exc: BaseException) -> dict:
     """The row of an evaluation whose task failed in its worker (it died twice, or the
     task could not be loaded there): an error of the tuning (``not_run``: the tuning
     raises :class:`EvaluationNotRunError` unless it records errors)."""
-    row = {"evaluation": task["evaluation"], "generation": task["generation"],
-           "values": dict(task["values"])}
+    row = {
+        "evaluation": task["evaluation"],
+        "generation": task["generation"],
+        "values": dict(task["values"]),
+    }
     return _not_run(row, error_fields(exc)) | {"not_run": True}

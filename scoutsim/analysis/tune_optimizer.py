@@ -38,7 +38,8 @@ def cma_class():
     except ImportError:
         raise MissingDependencyError(
             "tuning needs the CMA-ES library 'cmaes', which is not installed: "
-            "pip install cmaes (or pip install 'scoutsim[tune]')") from None
+            "pip install cmaes (or pip install 'scoutsim[tune]')"
+        ) from None
     return CMA
 
 
@@ -56,8 +57,16 @@ def read_state(path: Path):
     try:
         state = _thaw(path.read_bytes())
         return state if "key" in state else None
-    except (OSError, pickle.UnpicklingError, EOFError, AttributeError, ImportError,
-            KeyError, TypeError, ValueError):
+    except (
+        OSError,
+        pickle.UnpicklingError,
+        EOFError,
+        AttributeError,
+        ImportError,
+        KeyError,
+        TypeError,
+        ValueError,
+    ):
         return None
 
 
@@ -65,8 +74,9 @@ def _freeze(key: str, generation: int, cma) -> bytes:
     """The optimiser's state as bytes. ``cmaes.CMA`` leaves its random generator out of its
     pickle (an unpickled one draws from a fresh, unseeded generator), so the generator's
     state is saved beside it."""
-    return pickle.dumps({"key": key, "generation": generation, "cma": cma,
-                         "rng": cma._rng.get_state()})
+    return pickle.dumps(
+        {"key": key, "generation": generation, "cma": cma, "rng": cma._rng.get_state()}
+    )
 
 
 def _thaw(blob: bytes) -> dict:

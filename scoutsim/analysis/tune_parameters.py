@@ -89,6 +89,7 @@ def default_search_range(key: str, base: float) -> tuple[float, float] | None:
         hi = hi_r if hi_closed else hi_r - eps
     return lo, hi
 
+
 _PARAMS_NAME = re.compile(r"^controller\.params\[(\d+)\]$")
 
 
@@ -116,8 +117,12 @@ class TuneParameter:
         return si / self.scale
 
 
-def parse_parameter(text: str, controller=None, robot: RobotParameters | None = None,
-                    cparams: ControllerParameters | None = None) -> TuneParameter:
+def parse_parameter(
+    text: str,
+    controller=None,
+    robot: RobotParameters | None = None,
+    cparams: ControllerParameters | None = None,
+) -> TuneParameter:
     """``NAME`` or ``NAME=LOW:HIGH`` (LOW, HIGH in the name's unit: degrees for a ``_deg``
     name) as a :class:`TuneParameter`; without a range, the field's default search range
     around its value in ``robot`` / ``cparams`` (default: Scout II's;
@@ -134,8 +139,9 @@ def parse_parameter(text: str, controller=None, robot: RobotParameters | None = 
         except ValueError:
             bounds = None
         if bounds is None or len(bounds) != 2:
-            raise ValueError(f"parameter {text!r} is not allowed: give NAME or NAME=LOW:HIGH "
-                             "with two numbers")
+            raise ValueError(
+                f"parameter {text!r} is not allowed: give NAME or NAME=LOW:HIGH with two numbers"
+            )
         if not all(math.isfinite(b) for b in bounds):
             raise ValueError(f"parameter {text!r}: LOW and HIGH must be finite numbers")
         if not bounds[0] < bounds[1]:
@@ -145,13 +151,17 @@ def parse_parameter(text: str, controller=None, robot: RobotParameters | None = 
         i = int(m.group(1))
         n = getattr(controller, "params", None)
         if n is None or not has_tunable_array(controller):
-            raise ValueError(f"parameter {name!r} is not allowed: controller.params[i] tunes "
-                             "the parameter array of a CompiledController given as the "
-                             "controller (Table I and pitch feedback: tune their "
-                             "controller.<field> instead)")
+            raise ValueError(
+                f"parameter {name!r} is not allowed: controller.params[i] tunes "
+                "the parameter array of a CompiledController given as the "
+                "controller (Table I and pitch feedback: tune their "
+                "controller.<field> instead)"
+            )
         if i >= len(n):
-            raise ValueError(f"parameter {name!r} is not allowed: the controller has "
-                             f"{len(n)} parameters (params[0] .. params[{len(n) - 1}])")
+            raise ValueError(
+                f"parameter {name!r} is not allowed: the controller has "
+                f"{len(n)} parameters (params[0] .. params[{len(n) - 1}])"
+            )
         if bounds is None:
             raise ValueError(f"parameter {name!r} needs a range: {name}=LOW:HIGH")
         return TuneParameter(name, f"params[{i}]", bounds[0], bounds[1])
@@ -160,34 +170,47 @@ def parse_parameter(text: str, controller=None, robot: RobotParameters | None = 
     _check_tuned_name(name, base)
     if name.endswith("_deg"):
         if field_dimension(base.partition(".")[2]) != "angle":
-            raise ValueError(f"parameter {name!r} is not allowed: the _deg suffix takes "
-                             f"degrees for an angle; {base!r} is not an angle (give it in SI "
-                             "units, without the suffix)")
+            raise ValueError(
+                f"parameter {name!r} is not allowed: the _deg suffix takes "
+                f"degrees for an angle; {base!r} is not an angle (give it in SI "
+                "units, without the suffix)"
+            )
         scale = math.pi / 180.0
     fld = base.partition(".")[2]
     if fld in ("legs_per_virtual_leg", "sense_motor_angle"):
-        raise ValueError(f"parameter {name!r} is not allowed: tuning varies continuous "
-                         "parameters, and this one is a whole number or a switch")
+        raise ValueError(
+            f"parameter {name!r} is not allowed: tuning varies continuous "
+            "parameters, and this one is a whole number or a switch"
+        )
     lo_r, hi_r, lo_closed, hi_closed = allowed_range(fld)
     if bounds is None:
         section = base.partition(".")[0]
-        owner = ((robot or RobotParameters()) if section == "robot"
-                 else (cparams or ControllerParameters()))
+        owner = (
+            (robot or RobotParameters())
+            if section == "robot"
+            else (cparams or ControllerParameters())
+        )
         found = default_search_range(base, float(getattr(owner, fld)))
         if found is None:
-            raise ValueError(f"parameter {name!r} needs a range: it has no default search "
-                             f"range; give {name}=LOW:HIGH")
+            raise ValueError(
+                f"parameter {name!r} needs a range: it has no default search "
+                f"range; give {name}=LOW:HIGH"
+            )
         lo, hi = found
     else:
         lo, hi = bounds[0] * scale, bounds[1] * scale
         ok_lo = lo_r is None or lo > lo_r or (lo == lo_r and lo_closed)
         ok_hi = hi_r is None or hi < hi_r or (hi == hi_r and hi_closed)
         if not (ok_lo and ok_hi):
+
             def show(v):
                 return "unbounded" if v is None else f"{v / scale:.9g}"
-            raise ValueError(f"parameter {text!r} is not allowed: the range must lie within "
-                             f"the field's allowed values, {'[' if lo_closed else '('}"
-                             f"{show(lo_r)}, {show(hi_r)}{']' if hi_closed else ')'}")
+
+            raise ValueError(
+                f"parameter {text!r} is not allowed: the range must lie within "
+                f"the field's allowed values, {'[' if lo_closed else '('}"
+                f"{show(lo_r)}, {show(hi_r)}{']' if hi_closed else ')'}"
+            )
     return TuneParameter(name, base, lo, hi, scale)
 
 
@@ -196,8 +219,11 @@ def has_tunable_array(controller) -> bool:
     it is (not one that packs it again from its parameters for each run's robot, as
     :class:`~scoutsim.control.PitchFeedbackController` does: tune its fields)."""
     from ..control.compiled import CompiledController
-    return (isinstance(controller, CompiledController)
-            and type(controller).params_for is CompiledController.params_for)
+
+    return (
+        isinstance(controller, CompiledController)
+        and type(controller).params_for is CompiledController.params_for
+    )
 
 
 def _check_tuned_name(name: str, base: str) -> None:
@@ -207,14 +233,17 @@ def _check_tuned_name(name: str, base: str) -> None:
         check_name(base)
     except ValueError:
         import difflib
+
         names = parameter_names()
         names += [n + "_deg" for n in names if field_dimension(n.partition(".")[2]) == "angle"]
         near = difflib.get_close_matches(name, names, n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
-        raise ValueError(f"parameter {name!r} is not allowed: must be robot.<field> or "
-                         "controller.<field> of RobotParameters / ControllerParameters "
-                         "(a _deg suffix on an angle takes degrees), or controller.params[i] "
-                         f"of a CompiledController{hint}") from None
+        raise ValueError(
+            f"parameter {name!r} is not allowed: must be robot.<field> or "
+            "controller.<field> of RobotParameters / ControllerParameters "
+            "(a _deg suffix on an angle takes degrees), or controller.params[i] "
+            f"of a CompiledController{hint}"
+        ) from None
 
 
 def apply_values(values: dict, robot, cparams, params):

@@ -72,30 +72,42 @@ class TuneResult:
         """Figure of every evaluation's score and the best so far (needs Matplotlib); a
         convenience for :func:`scoutsim.presentation.plots.plot_tune_convergence`."""
         from ..presentation.plots import plot_tune_convergence
+
         return plot_tune_convergence(self, path)
 
     def write_controller_file(self, path, header: str = "") -> Path:
         """The best parameters as a controller file (``scoutsim run --controller FILE``);
         the robot's sections too if robot parameters were tuned."""
         from .controller_file import write_controller_file
+
         law = self.settings["controller"]
         if law not in ("table-i", "pitch-feedback"):
-            raise ValueError("a CompiledController's parameters go to best.json, not to a "
-                             "controller file")
+            raise ValueError(
+                "a CompiledController's parameters go to best.json, not to a controller file"
+            )
         tuned_robot = any(p.key.startswith("robot.") for p in self.parameters)
-        return write_controller_file(path, law, self.controller_parameters,
-                                     self.robot if tuned_robot else None, header=header)
+        return write_controller_file(
+            path,
+            law,
+            self.controller_parameters,
+            self.robot if tuned_robot else None,
+            header=header,
+        )
 
     def best_dict(self) -> dict:
         """JSON-safe summary of the best evaluation."""
-        return {"best_score": self.best["score"], "best_evaluation": self.best["evaluation"],
-                "parameters": {p.name: self.best[p.name] for p in self.parameters},
-                "parameters_si": self.best_values,
-                "params": None if self.params is None else [float(x) for x in self.params],
-                "metrics": {k: self.best.get(k) for k in COLUMNS},
-                "n_evaluations": len(self.rows), "n_errors": self.n_errors,
-                "stopped": self.stopped,
-                "settings": self.settings}
+        return {
+            "best_score": self.best["score"],
+            "best_evaluation": self.best["evaluation"],
+            "parameters": {p.name: self.best[p.name] for p in self.parameters},
+            "parameters_si": self.best_values,
+            "params": None if self.params is None else [float(x) for x in self.params],
+            "metrics": {k: self.best.get(k) for k in COLUMNS},
+            "n_evaluations": len(self.rows),
+            "n_errors": self.n_errors,
+            "stopped": self.stopped,
+            "settings": self.settings,
+        }
 
 
 def write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
@@ -104,20 +116,28 @@ def write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
         rd.write("tune.parquet", res.to_parquet)
     except RuntimeError:
         pass
-    rd.write("best.json", lambda p: p.write_text(
-        json.dumps(json_safe(res.best_dict()), indent=2, default=json_default) + "\n"))
+    rd.write(
+        "best.json",
+        lambda p: p.write_text(
+            json.dumps(json_safe(res.best_dict()), indent=2, default=json_default) + "\n"
+        ),
+    )
     if res.settings["controller"] in ("table-i", "pitch-feedback"):
         b = res.best
-        header = (f"scoutsim controller file: the best of {len(res.rows)} evaluations of "
-                  f"`{command or 'scoutsim.analysis.tune.tune'}`\n"
-                  f"objective {res.settings['goal']['objective']}"
-                  + (f" (target {res.settings['goal']['target']:g} m/s)"
-                     if res.settings['goal']['target'] is not None else "")
-                  + f": score {b['score']:.6g}, mean steady speed "
-                  + (f"{b['mean_speed_m_s']:.4f} m/s" if b["mean_speed_m_s"] is not None
-                     else "n/a")
-                  + f", {b['n_steady_strides']} steady strides\n"
-                  "run it: scoutsim run --controller THIS_FILE")
+        header = (
+            f"scoutsim controller file: the best of {len(res.rows)} evaluations of "
+            f"`{command or 'scoutsim.analysis.tune.tune'}`\n"
+            f"objective {res.settings['goal']['objective']}"
+            + (
+                f" (target {res.settings['goal']['target']:g} m/s)"
+                if res.settings["goal"]["target"] is not None
+                else ""
+            )
+            + f": score {b['score']:.6g}, mean steady speed "
+            + (f"{b['mean_speed_m_s']:.4f} m/s" if b["mean_speed_m_s"] is not None else "n/a")
+            + f", {b['n_steady_strides']} steady strides\n"
+            "run it: scoutsim run --controller THIS_FILE"
+        )
         rd.write("best.toml", lambda p: res.write_controller_file(p, header=header))
     try:
         rd.write("convergence.png", lambda p: res.plot_convergence(p))

@@ -68,8 +68,12 @@ class TuneRuns:
         models = list(self.models) if self.models else [self.model]
         floors = list(self.floors) if self.floors else [DEFAULT_FRICTION_COEFFICIENT]
         starts = list(self.starts) if self.starts else [None]
-        return [{"model": m, "friction": mu, "initial_state": s}
-                for m in models for mu in floors for s in starts]
+        return [
+            {"model": m, "friction": mu, "initial_state": s}
+            for m in models
+            for mu in floors
+            for s in starts
+        ]
 
 
 @dataclass(frozen=True)
@@ -101,8 +105,11 @@ def bundles(goal, runs, search, fields: dict) -> list:
     for given, cls in ((goal, TuneGoal), (runs, TuneRuns), (search, TuneSearch)):
         names = {f.name for f in dataclasses.fields(cls)}
         known |= names
-        out.append(dataclasses.replace(cls() if given is None else given,
-                                       **{k: v for k, v in fields.items() if k in names}))
+        out.append(
+            dataclasses.replace(
+                cls() if given is None else given, **{k: v for k, v in fields.items() if k in names}
+            )
+        )
     unknown = [k for k in fields if k not in known]
     if unknown:
         raise TypeError(f"tune() got an unexpected keyword argument {unknown[0]!r}")
@@ -113,24 +120,35 @@ def check_settings(goal: TuneGoal, search: TuneSearch) -> None:
     """ValueError naming a setting that is not allowed: the objective, its target, the
     aggregate, CMA-ES's initial step ``sigma``, a constraint's bound."""
     objective, target, aggregate = goal.objective, goal.target, goal.aggregate
-    max_belt_deflection, max_current, min_speed = (goal.max_belt_deflection,
-                                                   goal.max_current, goal.min_speed)
+    max_belt_deflection, max_current, min_speed = (
+        goal.max_belt_deflection,
+        goal.max_current,
+        goal.min_speed,
+    )
     sigma = search.sigma
     if objective not in OBJECTIVES:
-        raise ValueError(f"objective = {objective!r} is not allowed: must be one of "
-                         f"{', '.join(OBJECTIVES)}")
+        raise ValueError(
+            f"objective = {objective!r} is not allowed: must be one of {', '.join(OBJECTIVES)}"
+        )
     if objective == "speed":
         if target is None or not (math.isfinite(target) and target > 0):
-            raise ValueError(f"target = {target!r} is not allowed: the speed objective needs "
-                             "a target speed > 0 [m/s]")
+            raise ValueError(
+                f"target = {target!r} is not allowed: the speed objective needs "
+                "a target speed > 0 [m/s]"
+            )
     elif target is not None:
         raise ValueError(f"target is only allowed with objective 'speed', not {objective!r}")
     if aggregate not in AGGREGATES:
         raise ValueError(f"aggregate = {aggregate!r} is not allowed: must be worst or mean")
     if not (math.isfinite(sigma) and 0 < sigma <= 1):
-        raise ValueError(f"sigma = {sigma!r} is not allowed: must be in (0, 1] (a fraction "
-                         "of each parameter's range)")
-    for name, v in (("max_belt_deflection", max_belt_deflection),
-                    ("max_current", max_current), ("min_speed", min_speed)):
+        raise ValueError(
+            f"sigma = {sigma!r} is not allowed: must be in (0, 1] (a fraction "
+            "of each parameter's range)"
+        )
+    for name, v in (
+        ("max_belt_deflection", max_belt_deflection),
+        ("max_current", max_current),
+        ("min_speed", min_speed),
+    ):
         if v is not None and not (math.isfinite(v) and v > 0):
             raise ValueError(f"{name} = {v!r} is not allowed: must be a number > 0")

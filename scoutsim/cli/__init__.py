@@ -39,8 +39,17 @@ from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values,
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
 
-__all__ = ["main", "build_parser", "TIMESERIES_UNITS", "column_unit", "write_timeseries_csv",
-           "format_summary", "format_basin", "MODELS", "SCOUT_FLOOR_FRICTION"]
+__all__ = [
+    "main",
+    "build_parser",
+    "TIMESERIES_UNITS",
+    "column_unit",
+    "write_timeseries_csv",
+    "format_summary",
+    "format_basin",
+    "MODELS",
+    "SCOUT_FLOOR_FRICTION",
+]
 
 #: the sub-command modules, in the order of ``scoutsim --help``
 COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig, cache)
@@ -51,26 +60,29 @@ COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, tune, 
 def build_parser() -> argparse.ArgumentParser:
     """The ``scoutsim`` argument parser with all sub-commands (:data:`COMMANDS`)."""
     from .._version import __version__
+
     parser = argparse.ArgumentParser(
         prog="scoutsim",
         description="Simulate planar Scout II bounding (Poulakakis, Smith & Buehler, ICRA 2004).",
         epilog="examples:\n"
-               "  scoutsim run                       # Model II, 10 s, tables in scoutsim_out/\n"
-               "  scoutsim run --plots --steps       # also figures and every integrator step\n"
-               "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
-               "  scoutsim run --json                # summary as JSON on stdout\n"
-               "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
-               "  scoutsim tune --objective speed --target 1.3 --param "
-               "controller.touchdown_angle_front_deg --out tuned\n"
-               "  scoutsim run --controller tuned/best.toml\n"
-               "  scoutsim compare run1.csv run2.csv --model I,II --out cmp\n"
-               "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
-               "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"
-               "  scoutsim animate scoutsim_out --out run.gif --t0 3 --t1 4",
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+        "  scoutsim run                       # Model II, 10 s, tables in scoutsim_out/\n"
+        "  scoutsim run --plots --steps       # also figures and every integrator step\n"
+        "  scoutsim run --model I --duration 5 --robot my_robot.toml --out out_I\n"
+        "  scoutsim run --json                # summary as JSON on stdout\n"
+        "  scoutsim basin --model I,II --speeds 1.0,1.3 --pitch-rates -50,0 --workers 4\n"
+        "  scoutsim tune --objective speed --target 1.3 --param "
+        "controller.touchdown_angle_front_deg --out tuned\n"
+        "  scoutsim run --controller tuned/best.toml\n"
+        "  scoutsim compare run1.csv run2.csv --model I,II --out cmp\n"
+        "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
+        "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"
+        "  scoutsim animate scoutsim_out --out run.gif --t0 3 --t1 4",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"scoutsim {__version__}")
-    sub = parser.add_subparsers(dest="command",
-                                metavar="{" + ",".join(c.NAME for c in COMMANDS) + "}")
+    sub = parser.add_subparsers(
+        dest="command", metavar="{" + ",".join(c.NAME for c in COMMANDS) + "}"
+    )
     common = simulation_options()
     for command in COMMANDS:
         command.register(sub, common)
@@ -93,9 +105,11 @@ def main(argv=None) -> int:
     progress: contextlib.AbstractContextManager = contextlib.nullcontext()
     if args.command in COMPILING_COMMANDS and not getattr(args, "quiet", False):
         from .._numba.jit import FIRST_COMPILE_NOTICE, compile_progress, core_is_compiled
+
         if not core_is_compiled():
-            print(f"scoutsim {args.command}: {FIRST_COMPILE_NOTICE} ...", file=sys.stderr,
-                  flush=True)
+            print(
+                f"scoutsim {args.command}: {FIRST_COMPILE_NOTICE} ...", file=sys.stderr, flush=True
+            )
             progress = compile_progress(sys.stderr)
     try:
         with progress, _parameter_warnings_in_one_line(args.command):
@@ -124,6 +138,7 @@ def _parameter_warnings_in_one_line(command: str):
     import warnings
 
     from ..parameters import ImplausibleParameterWarning
+
     python_shows = warnings.showwarning
 
     def show(message, category, filename, lineno, file=None, line=None):
@@ -131,6 +146,7 @@ def _parameter_warnings_in_one_line(command: str):
             print(f"scoutsim {command}: warning: {message}", file=file or sys.stderr)
         else:
             python_shows(message, category, filename, lineno, file, line)
+
     warnings.showwarning = show
     try:
         yield
@@ -154,7 +170,7 @@ def console_main() -> None:
     command = next((a for a in argv if not a.startswith("-")), None)
     try:
         code = main(argv)
-    except KeyboardInterrupt:   # Ctrl-C while the command starts (imports, options)
+    except KeyboardInterrupt:  # Ctrl-C while the command starts (imports, options)
         print(f"scoutsim {command or ''}: interrupted".replace("  ", " "), file=sys.stderr)
         code = 130
     if command in FAST_EXIT_COMMANDS:

@@ -31,8 +31,15 @@ MODELS = CONTROLLED_MODELS + ("passive",)
 SCOUT_FLOOR_FRICTION = DEFAULT_FRICTION_COEFFICIENT
 
 #: options whose value is a comma-separated list that may start with a minus sign
-_LIST_OPTIONS = ("--speeds", "--pitch-rates", "--heights", "--model", "--models", "--floors",
-                 "--pitch-rate")
+_LIST_OPTIONS = (
+    "--speeds",
+    "--pitch-rates",
+    "--heights",
+    "--model",
+    "--models",
+    "--floors",
+    "--pitch-rate",
+)
 
 
 class UsageError(Exception):
@@ -101,6 +108,7 @@ def float_list(positive: bool = False):
         if not items or any(s == "" for s in items):
             raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of numbers")
         return [(positive_float if positive else finite_float)(s) for s in items]
+
     return parse
 
 
@@ -119,8 +127,13 @@ def join_list_values(argv: list[str]) -> list[str]:
     out, i = [], 0
     while i < len(argv):
         tok = argv[i]
-        if (tok in _LIST_OPTIONS and i + 1 < len(argv) and len(argv[i + 1]) > 1
-                and argv[i + 1][0] == "-" and (argv[i + 1][1].isdigit() or argv[i + 1][1] == ".")):
+        if (
+            tok in _LIST_OPTIONS
+            and i + 1 < len(argv)
+            and len(argv[i + 1]) > 1
+            and argv[i + 1][0] == "-"
+            and (argv[i + 1][1].isdigit() or argv[i + 1][1] == ".")
+        ):
             out.append(f"{tok}={argv[i + 1]}")
             i += 2
             continue
@@ -133,21 +146,29 @@ def join_list_values(argv: list[str]) -> list[str]:
 # options defined alike by several sub-commands
 # -----------------------------------------------------------------------------------------
 def add_out_option(parser, default: str = "scoutsim_out", *, note: str = ", created if needed"):
-    parser.add_argument("--out", default=default, metavar="DIR",
-                        help=f"output directory{note} (default: {default})")
+    parser.add_argument(
+        "--out", default=default, metavar="DIR", help=f"output directory{note} (default: {default})"
+    )
 
 
 def add_friction_option(parser, help: str):
-    parser.add_argument("--friction", type=friction, default=SCOUT_FLOOR_FRICTION, metavar="MU",
-                        help=help)
+    parser.add_argument(
+        "--friction", type=friction, default=SCOUT_FLOOR_FRICTION, metavar="MU", help=help
+    )
 
 
 def add_no_progress_option(parser):
-    parser.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (it is also off when stderr is not a terminal)")
-    parser.add_argument("--quiet", action="store_true",
-                        help="nothing on stderr but errors and warnings: no progress bar, no notice of "
-                             "the first run's compilation")
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (it is also off when stderr is not a terminal)",
+    )
+    parser.add_argument(
+        "--quiet",
+        action="store_true",
+        help="nothing on stderr but errors and warnings: no progress bar, no notice of "
+        "the first run's compilation",
+    )
 
 
 #: --controller choices: the paper's Table I law, and Table I with torso feedback at
@@ -161,18 +182,21 @@ def add_controller_option(parser):
     """--controller: which controller runs: a built-in law with the robot file's
     [controller] section, a controller file (as ``scoutsim tune`` writes its best
     parameters) or a user's controller named ``MODULE:FACTORY``."""
-    parser.add_argument("--controller", default="table-i",
-                        metavar="{" + ",".join(CONTROLLERS) + ",FILE,MODULE:FACTORY}",
-                        help="table-i: the paper's Table I controller (no torso feedback); "
-                             "pitch-feedback: Table I with the touchdown angles corrected "
-                             "by torso pitch and pitch rate (PitchFeedbackController, gains "
-                             "pitch_gain_* / pitch_rate_gain_* of the robot file's "
-                             "[controller]); FILE: a controller file, its law and every "
-                             "controller parameter (as scoutsim tune writes best.toml; it "
-                             "replaces the robot file's [controller]); MODULE:FACTORY: your "
-                             "own controller, FACTORY(robot, params) in the importable "
-                             "module MODULE (on PYTHONPATH) returning any controller "
-                             "scoutsim.simulate accepts (default: table-i)")
+    parser.add_argument(
+        "--controller",
+        default="table-i",
+        metavar="{" + ",".join(CONTROLLERS) + ",FILE,MODULE:FACTORY}",
+        help="table-i: the paper's Table I controller (no torso feedback); "
+        "pitch-feedback: Table I with the touchdown angles corrected "
+        "by torso pitch and pitch rate (PitchFeedbackController, gains "
+        "pitch_gain_* / pitch_rate_gain_* of the robot file's "
+        "[controller]); FILE: a controller file, its law and every "
+        "controller parameter (as scoutsim tune writes best.toml; it "
+        "replaces the robot file's [controller]); MODULE:FACTORY: your "
+        "own controller, FACTORY(robot, params) in the importable "
+        "module MODULE (on PYTHONPATH) returning any controller "
+        "scoutsim.simulate accepts (default: table-i)",
+    )
 
 
 def controller_choice(value: str, params):
@@ -180,11 +204,13 @@ def controller_choice(value: str, params):
     robot file's ``params``, a controller file's law and parameters, or a ``MODULE:FACTORY``
     string (the law) with ``params``. UsageError naming the file and the problem otherwise."""
     from ..control.factory import is_factory_spec
+
     if value in CONTROLLERS:
         return value, params
     p = Path(value)
     if p.is_file():
         from ..analysis.controller_file import read_controller_file
+
         with usage_errors():
             cf = read_controller_file(p)
         return cf.law, cf.controller
@@ -192,9 +218,11 @@ def controller_choice(value: str, params):
         raise UsageError(f"--controller {value!r}: not a file")
     if is_factory_spec(value):
         return value.strip(), params
-    raise UsageError(f"--controller {value!r} is not allowed: not one of "
-                     f"{', '.join(CONTROLLERS)}, no controller file of that name, and not "
-                     "of the form MODULE:FACTORY")
+    raise UsageError(
+        f"--controller {value!r} is not allowed: not one of "
+        f"{', '.join(CONTROLLERS)}, no controller file of that name, and not "
+        "of the form MODULE:FACTORY"
+    )
 
 
 def controller_label(law: str) -> str:
@@ -210,12 +238,14 @@ def make_controller(name: str, params, robot=None, *, on_workers: bool = False):
     of a study makes itself, after the factory was tried here once)."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
+
         return PitchFeedbackController(params)
     if name in CONTROLLERS:
         return params
     from ..control.factory import ControllerSpec, FactoryError, controller_from_spec
+
     try:
-        controller = controller_from_spec(name, robot, params)   # fails here, not on workers
+        controller = controller_from_spec(name, robot, params)  # fails here, not on workers
         return ControllerSpec(name, robot, params) if on_workers else controller
     except FactoryError as exc:
         raise UsageError(str(exc)) from None
@@ -225,18 +255,27 @@ def add_models_option(parser):
     """--model LIST (alias --models): a comma-separated list of models, by default the
     controlled ones (every command that takes a model calls the option --model; the
     commands that run one model take one)."""
-    parser.add_argument("--model", "--models", dest="model", type=model_list,
-                        default=list(CONTROLLED_MODELS), metavar="LIST",
-                        help="comma-separated models (default: "
-                             + ",".join(CONTROLLED_MODELS) + ")")
+    parser.add_argument(
+        "--model",
+        "--models",
+        dest="model",
+        type=model_list,
+        default=list(CONTROLLED_MODELS),
+        metavar="LIST",
+        help="comma-separated models (default: " + ",".join(CONTROLLED_MODELS) + ")",
+    )
 
 
 def add_plots_option(parser, default: bool, what: str):
     """--plots / --no-plots, the same pair in every command that draws figures; ``what``
     says which figures, ``default`` whether the command draws them unasked."""
-    parser.add_argument("--plots", action=argparse.BooleanOptionalAction, default=default,
-                        help=f"{'' if default else 'also '}draw {what} (default: "
-                             f"{'--plots' if default else '--no-plots'})")
+    parser.add_argument(
+        "--plots",
+        action=argparse.BooleanOptionalAction,
+        default=default,
+        help=f"{'' if default else 'also '}draw {what} (default: "
+        f"{'--plots' if default else '--no-plots'})",
+    )
 
 
 def add_time_window_options(parser, t0_help: str, t1_help: str):
@@ -248,34 +287,59 @@ def add_duration_option(parser, default: float, what: str = "simulated time per 
     """--duration S with the command's own ``default`` [s] (each command has its own, from
     the function it calls: argparse would share one default between the commands whose
     parsers have the option from a common parent)."""
-    parser.add_argument("--duration", type=positive_float, default=float(default),
-                        metavar="S", help=f"{what} [s] (default: {default:g})")
+    parser.add_argument(
+        "--duration",
+        type=positive_float,
+        default=float(default),
+        metavar="S",
+        help=f"{what} [s] (default: {default:g})",
+    )
 
 
 def simulation_options() -> argparse.ArgumentParser:
     """The parent parser of the sub-commands that simulate runs (run, basin, sweep, tune);
     each adds its own --duration (:func:`add_duration_option`)."""
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("--robot", metavar="FILE",
-                        help="TOML robot/controller file with the layout of "
-                             "scoutsim/data/scout2.toml; unset entries keep the Scout II "
-                             "defaults")
+    common.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="TOML robot/controller file with the layout of "
+        "scoutsim/data/scout2.toml; unset entries keep the Scout II "
+        "defaults",
+    )
     add_out_option(common)
-    common.add_argument("--rtol", type=positive_float, default=None, metavar="X",
-                        help="integrator relative tolerance (default: 1e-5 for Model II "
-                             "(ARK3), 1e-8 otherwise (DOPRI5))")
-    common.add_argument("--atol", type=positive_float, default=None, metavar="X",
-                        help="integrator absolute tolerance (default: 1e-6 for Model II "
-                             "(ARK3), 1e-9 otherwise (DOPRI5))")
-    add_friction_option(common, "Coulomb friction coefficient of the toes (default: "
-                                f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
-                                "paper's experiments ran; 'inf' = no slip; see docs/model.md)")
+    common.add_argument(
+        "--rtol",
+        type=positive_float,
+        default=None,
+        metavar="X",
+        help="integrator relative tolerance (default: 1e-5 for Model II "
+        "(ARK3), 1e-8 otherwise (DOPRI5))",
+    )
+    common.add_argument(
+        "--atol",
+        type=positive_float,
+        default=None,
+        metavar="X",
+        help="integrator absolute tolerance (default: 1e-6 for Model II "
+        "(ARK3), 1e-9 otherwise (DOPRI5))",
+    )
+    add_friction_option(
+        common,
+        "Coulomb friction coefficient of the toes (default: "
+        f"{SCOUT_FLOOR_FRICTION}, rubber toes on carpet, where the "
+        "paper's experiments ran; 'inf' = no slip; see docs/model.md)",
+    )
     add_no_progress_option(common)
-    common.add_argument("--max-hours", type=positive_float, default=DEFAULT_MAX_HOURS,
-                        metavar="H",
-                        help="refuse a job expected to take longer than H hours of wall time "
-                             f"before starting (default: {DEFAULT_MAX_HOURS:g}; an estimate "
-                             "from the simulator's speed on a slow machine)")
+    common.add_argument(
+        "--max-hours",
+        type=positive_float,
+        default=DEFAULT_MAX_HOURS,
+        metavar="H",
+        help="refuse a job expected to take longer than H hours of wall time "
+        f"before starting (default: {DEFAULT_MAX_HOURS:g}; an estimate "
+        "from the simulator's speed on a slow machine)",
+    )
     return common
 
 
@@ -283,37 +347,52 @@ def simulation_options() -> argparse.ArgumentParser:
 DEFAULT_MAX_HOURS = 24.0
 
 
-def check_expected_time(args, simulated_s: dict, *, workers: int = 1,
-                        per_run_s: float = 0.0, runs: int = 1, what: str = "the run") -> None:
+def check_expected_time(
+    args,
+    simulated_s: dict,
+    *,
+    workers: int = 1,
+    per_run_s: float = 0.0,
+    runs: int = 1,
+    what: str = "the run",
+) -> None:
     """UsageError if a job of ``simulated_s`` ({model: simulated seconds}; plus
     ``per_run_s`` for each of ``runs`` runs), spread over ``workers`` processes, is expected
     to take longer than ``args.max_hours``."""
     from ..simulation.budgets import expected_wall_time
+
     wall = sum(expected_wall_time(sim_s, model) for model, sim_s in simulated_s.items())
     hours = (wall + per_run_s * runs) / max(1, workers) / 3600.0
     if hours > args.max_hours:
-        raise UsageError(f"{what} would take about {hours:.3g} h of wall time (estimated from "
-                         f"the simulator's speed on a slow machine), more than --max-hours "
-                         f"{args.max_hours:g}; raise --max-hours to run it anyway")
+        raise UsageError(
+            f"{what} would take about {hours:.3g} h of wall time (estimated from "
+            f"the simulator's speed on a slow machine), more than --max-hours "
+            f"{args.max_hours:g}; raise --max-hours to run it anyway"
+        )
 
 
 # -----------------------------------------------------------------------------------------
 # checks and inputs
 # -----------------------------------------------------------------------------------------
 def add_repair_spikes_option(parser) -> None:
-    parser.add_argument("--repair-spikes", action="store_true",
-                        help="replace each isolated spike of a log (one to three samples far "
-                             "from their neighbours, which the log check refuses) by the "
-                             "median of its neighbours, and report each on stderr")
+    parser.add_argument(
+        "--repair-spikes",
+        action="store_true",
+        help="replace each isolated spike of a log (one to three samples far "
+        "from their neighbours, which the log check refuses) by the "
+        "median of its neighbours, and report each on stderr",
+    )
 
 
 def report_repairs(logs, command: str) -> None:
     """Say on stderr which spikes were replaced when the logs were loaded."""
     for log in logs:
         for column, row, value, median in log.repairs:
-            print(f"scoutsim {command}: {log.path}: column '{column}', row {row}: spike "
-                  f"{value:.6g} replaced by its neighbours' median {median:.6g}",
-                  file=sys.stderr)
+            print(
+                f"scoutsim {command}: {log.path}: column '{column}', row {row}: spike "
+                f"{value:.6g} replaced by its neighbours' median {median:.6g}",
+                file=sys.stderr,
+            )
 
 
 def check_logs_or_example(args, missing: str):
@@ -350,8 +429,12 @@ def progress_messages(args, command: str):
     t0 = time.perf_counter()
 
     def say(message: str) -> None:
-        print(f"scoutsim {command} [{time.perf_counter() - t0:6.1f} s]: {message}",
-              file=sys.stderr, flush=True)
+        print(
+            f"scoutsim {command} [{time.perf_counter() - t0:6.1f} s]: {message}",
+            file=sys.stderr,
+            flush=True,
+        )
+
     return say
 
 
@@ -363,6 +446,7 @@ def show_progress(args) -> bool:
 def load_parameters(path):
     """(robot, controller) from the user's TOML file (or the defaults); UsageError if bad."""
     from ..parameters import load_parameters
+
     if path is not None:
         p = Path(path)
         if not p.exists():
@@ -383,6 +467,7 @@ def load_sensors(path, robot):
     """The sensors of the user's TOML file's ``[sensors]`` (ideal without one); UsageError
     if bad."""
     from ..control.sensors import load_sensors as load
+
     try:
         return load(path, robot)
     except ValueError as exc:  # ParameterError names the field
@@ -400,6 +485,7 @@ def load_robot(path):
 def integrator(args):
     """IntegratorSettings from --rtol / --atol (unset: the defaults)."""
     from ..simulation.integrator import IntegratorSettings
+
     kw = {}
     if args.rtol is not None:
         kw["rtol"] = args.rtol
@@ -425,6 +511,7 @@ def is_saved_run(p: Path) -> bool:
     timeseries table or a result.npz (an experiment log is not)."""
     from ..io.tables import TableError, read_metadata
     from ..result.run_files import TABLES_FORMAT
+
     if p.is_dir() or p.name.lower().endswith(".npz"):
         return True
     try:
@@ -438,9 +525,12 @@ def load_result(p: Path, t_range: tuple[float, float] | None = None):
     result.npz (``t_range``: only that window [s], SimulationResult.load)."""
     from ..io.tables import TableError
     from ..result.simulation_result import SimulationResult
+
     if not is_saved_run(p):
-        raise UsageError(f"input '{p}' is not a saved run: expected the output directory of "
-                         "`scoutsim run`, its timeseries table or a result.npz")
+        raise UsageError(
+            f"input '{p}' is not a saved run: expected the output directory of "
+            "`scoutsim run`, its timeseries table or a result.npz"
+        )
     try:
         return SimulationResult.load(p, t_range=t_range)
     except (OSError, ValueError, KeyError, TableError) as exc:

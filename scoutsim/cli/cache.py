@@ -13,14 +13,19 @@ NAME = "cache"
 
 def register(sub, common) -> None:
     c = sub.add_parser(
-        NAME, help="where the compiled core is cached, its size; --clean removes old versions",
+        NAME,
+        help="where the compiled core is cached, its size; --clean removes old versions",
         description="Print the directory of the compiled core's on-disk cache, its size and "
-                    "whether the core is compiled. With --clean, first remove the cache "
-                    "directories of other versions of the core (an older install, an edited "
-                    "source); in a NUMBA_CACHE_DIR of yours only the directories of scoutsim's "
-                    "that nothing has written to for a day, nothing else.")
-    c.add_argument("--clean", action="store_true",
-                   help="remove the cache directories of other versions of the core")
+        "whether the core is compiled. With --clean, first remove the cache "
+        "directories of other versions of the core (an older install, an edited "
+        "source); in a NUMBA_CACHE_DIR of yours only the directories of scoutsim's "
+        "that nothing has written to for a day, nothing else.",
+    )
+    c.add_argument(
+        "--clean",
+        action="store_true",
+        help="remove the cache directories of other versions of the core",
+    )
     c.set_defaults(func=execute)
 
 
@@ -35,6 +40,7 @@ def _size_text(n_bytes: int) -> str:
 
 def execute(args) -> int:
     from .._numba.disk_cache import cache_directory, cache_size, clean_cache, core_is_compiled
+
     if args.clean:
         removed = clean_cache()
         for path in removed:

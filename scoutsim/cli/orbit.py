@@ -36,33 +36,61 @@ NAME = "orbit"
 
 def register(sub, common) -> None:
     orbit = sub.add_parser(
-        NAME, help="periodic bounding orbit and its Floquet multipliers (docs/orbits.md)",
+        NAME,
+        help="periodic bounding orbit and its Floquet multipliers (docs/orbits.md)",
         description="--passive: the conservative massless-leg model's periodic bound through "
-                    "a level-torso apex of the given speed, height and pitch rate; solves for "
-                    "the touchdown angles (from the world vertical) and prints them, the "
-                    "period, the multipliers of the apex return map and the map residual. "
-                    "Without --passive: the controlled robot's periodic orbit (Newton on the "
-                    "stride map sampled where the controller detects back-leg lift-off, "
-                    "started from a converged run), its touchdown angles from the world "
-                    "vertical, period, Floquet multipliers and residual.")
-    orbit.add_argument("--passive", action="store_true",
-                       help="the passive conservative model (massless legs, "
-                            "docs/orbits.md)")
-    orbit.add_argument("--speed", type=positive_float, default=1.3, metavar="V",
-                       help="--passive: forward speed at the apex [m/s] (default: 1.3)")
-    orbit.add_argument("--apex-height", type=positive_float, default=0.35, metavar="H",
-                       help="--passive: torso COM height at the apex [m] (default: 0.35)")
-    orbit.add_argument("--pitch-rate", type=finite_float, default=0.0, metavar="W",
-                       help="--passive: pitch rate at the apex [deg/s] (default: 0)")
-    orbit.add_argument("--model", choices=CONTROLLED_MODELS, default="II",
-                       help="controlled model (default: II)")
+        "a level-torso apex of the given speed, height and pitch rate; solves for "
+        "the touchdown angles (from the world vertical) and prints them, the "
+        "period, the multipliers of the apex return map and the map residual. "
+        "Without --passive: the controlled robot's periodic orbit (Newton on the "
+        "stride map sampled where the controller detects back-leg lift-off, "
+        "started from a converged run), its touchdown angles from the world "
+        "vertical, period, Floquet multipliers and residual.",
+    )
+    orbit.add_argument(
+        "--passive",
+        action="store_true",
+        help="the passive conservative model (massless legs, docs/orbits.md)",
+    )
+    orbit.add_argument(
+        "--speed",
+        type=positive_float,
+        default=1.3,
+        metavar="V",
+        help="--passive: forward speed at the apex [m/s] (default: 1.3)",
+    )
+    orbit.add_argument(
+        "--apex-height",
+        type=positive_float,
+        default=0.35,
+        metavar="H",
+        help="--passive: torso COM height at the apex [m] (default: 0.35)",
+    )
+    orbit.add_argument(
+        "--pitch-rate",
+        type=finite_float,
+        default=0.0,
+        metavar="W",
+        help="--passive: pitch rate at the apex [deg/s] (default: 0)",
+    )
+    orbit.add_argument(
+        "--model", choices=CONTROLLED_MODELS, default="II", help="controlled model (default: II)"
+    )
     add_friction_option(orbit, f"controlled: toe friction (default: {SCOUT_FLOOR_FRICTION})")
-    orbit.add_argument("--duration", type=positive_float, default=12.0, metavar="S",
-                       help="controlled: simulated time to the Newton start [s] (default: 12)")
-    orbit.add_argument("--robot", metavar="FILE",
-                       help="TOML robot/controller file with the layout of "
-                            "scoutsim/data/scout2.toml (--passive: its massless-leg "
-                            "configuration); unset entries keep the Scout II defaults")
+    orbit.add_argument(
+        "--duration",
+        type=positive_float,
+        default=12.0,
+        metavar="S",
+        help="controlled: simulated time to the Newton start [s] (default: 12)",
+    )
+    orbit.add_argument(
+        "--robot",
+        metavar="FILE",
+        help="TOML robot/controller file with the layout of "
+        "scoutsim/data/scout2.toml (--passive: its massless-leg "
+        "configuration); unset entries keep the Scout II defaults",
+    )
     add_controller_option(orbit)
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     add_no_progress_option(orbit)
@@ -74,12 +102,14 @@ def execute(args) -> int:
     from ..analysis.passive_orbits import PassiveOrbit, passive_bounding_orbit
     from ..analysis.poincare import MapError
     from ..parameters import ControllerParameters
+
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = cparams
     if args.passive and args.controller != "table-i":
-        raise UsageError("--controller is not allowed with --passive (the passive model "
-                         "has no controller)")
+        raise UsageError(
+            "--controller is not allowed with --passive (the passive model has no controller)"
+        )
     if not args.passive:
         controller = make_controller(law, cparams, robot)
         if not isinstance(controller, ControllerParameters):
@@ -90,17 +120,23 @@ def execute(args) -> int:
                 f"stride restarts from; {args.controller} made a "
                 f"{type(controller).__name__}, whose own state a restarted stride would "
                 "lose. Give the Table I law your parameters instead: a controller file, or "
-                "a MODULE:FACTORY that returns ControllerParameters")
+                "a MODULE:FACTORY that returns ControllerParameters"
+            )
     orb: PassiveOrbit | ControlledOrbit
     try:
         if args.passive:
-            orb = passive_bounding_orbit(args.speed, args.apex_height,
-                                         math.radians(args.pitch_rate), robot=robot)
+            orb = passive_bounding_orbit(
+                args.speed, args.apex_height, math.radians(args.pitch_rate), robot=robot
+            )
         else:
-            orb = controlled_fixed_point(model=args.model, friction_coefficient=args.friction,
-                                         robot=robot, controller=controller,
-                                         settle_duration=args.duration,
-                                         progress=progress_messages(args, NAME))
+            orb = controlled_fixed_point(
+                model=args.model,
+                friction_coefficient=args.friction,
+                robot=robot,
+                controller=controller,
+                settle_duration=args.duration,
+                progress=progress_messages(args, NAME),
+            )
     except MapError as exc:
         print(f"scoutsim orbit: {exc}", file=sys.stderr)
         return 1
@@ -115,34 +151,51 @@ def execute(args) -> int:
 
 
 def _print_passive(args, orb, d) -> None:
-    print(f"scoutsim orbit: passive model, apex speed {args.speed:g} m/s, height "
-          f"{args.apex_height:g} m, pitch rate {args.pitch_rate:g} deg/s, torso level")
-    print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.6f} / "
-          f"{d['touchdown_angle_front_deg']:.6f} deg (from the world vertical)")
+    print(
+        f"scoutsim orbit: passive model, apex speed {args.speed:g} m/s, height "
+        f"{args.apex_height:g} m, pitch rate {args.pitch_rate:g} deg/s, torso level"
+    )
+    print(
+        f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.6f} / "
+        f"{d['touchdown_angle_front_deg']:.6f} deg (from the world vertical)"
+    )
     print(f"  period                        {d['period_s']:.6f} s")
-    print("  eigenvalues                   " + ", ".join(
-        f"{m.real:.6f}{m.imag:+.6f}j" for m in orb.multipliers)
-          + f"  (|.| = {', '.join(f'{abs(m):.4f}' for m in orb.multipliers)})")
+    print(
+        "  eigenvalues                   "
+        + ", ".join(f"{m.real:.6f}{m.imag:+.6f}j" for m in orb.multipliers)
+        + f"  (|.| = {', '.join(f'{abs(m):.4f}' for m in orb.multipliers)})"
+    )
     print(f"  residual max|P(z)-z|          {d['residual']:.2e}")
 
 
 def _print_controlled(args, orb, d) -> None:
     import numpy as np
+
     law = "Table I" + ("" if args.controller == "table-i" else f" ({args.controller})")
-    print(f"scoutsim orbit: model {args.model}, {law} controller at 1 kHz, mu = "
-          f"{args.friction:g}; section: the sample at which the controller detects back-leg "
-          "lift-off; Newton on the sampled stride map")
-    print(f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "
-          f"{d['touchdown_angle_front_deg']:.4f} deg (from the world vertical, on the orbit)")
-    print(f"  period                        {d['period_s']:.6f} s "
-          f"({round(d['period_s'] * 1000)} control periods), mean speed "
-          f"{d['mean_speed_m_s']:.4f} m/s")
+    print(
+        f"scoutsim orbit: model {args.model}, {law} controller at 1 kHz, mu = "
+        f"{args.friction:g}; section: the sample at which the controller detects back-leg "
+        "lift-off; Newton on the sampled stride map"
+    )
+    print(
+        f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "
+        f"{d['touchdown_angle_front_deg']:.4f} deg (from the world vertical, on the orbit)"
+    )
+    print(
+        f"  period                        {d['period_s']:.6f} s "
+        f"({round(d['period_s'] * 1000)} control periods), mean speed "
+        f"{d['mean_speed_m_s']:.4f} m/s"
+    )
     for name, v in d["state"].items():
         print(f"    {name:<18} {v: .9f}")
     mags = np.abs(orb.multipliers)
     big = np.argsort(-mags)[:6]
-    print("  largest multipliers           " + ", ".join(
-        f"{orb.multipliers[i].real:.4f}{orb.multipliers[i].imag:+.4f}j" for i in big)
-          + f"  (spectral radius {mags.max():.4f}: {'stable' if orb.stable else 'unstable'})")
-    print(f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
-          "Newton iterations")
+    print(
+        "  largest multipliers           "
+        + ", ".join(f"{orb.multipliers[i].real:.4f}{orb.multipliers[i].imag:+.4f}j" for i in big)
+        + f"  (spectral radius {mags.max():.4f}: {'stable' if orb.stable else 'unstable'})"
+    )
+    print(
+        f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
+        "Newton iterations"
+    )

@@ -84,6 +84,7 @@ def _simulate_default(name: str):
     import inspect
 
     from ..simulation.simulator import simulate
+
     return inspect.signature(simulate).parameters[name].default
 
 
@@ -93,69 +94,127 @@ DEFAULT_DURATION_S = _simulate_default("duration")
 
 def register(sub, common) -> None:
     from ..io.tables import FORMATS
+
     run = sub.add_parser(
-        NAME, parents=[common], help="simulate one run, print a summary, write its tables",
+        NAME,
+        parents=[common],
+        help="simulate one run, print a summary, write its tables",
         description="Simulate one bounding run and write to DIR: timeseries and events tables "
-                    "(Parquet, or gzip-compressed CSV without pyarrow) and summary.json; "
-                    "figures with --plots. SimulationResult.load(DIR) reads the run back.")
-    run.add_argument("--model", choices=MODELS, default="II",
-                     help="actuator/transmission model (default: II)")
-    run.add_argument("--start", choices=("flight", "standing"), default="flight",
-                     help="flight (default): released in flight at --speed, --height, "
-                          "--pitch-rate; standing: at rest on its four legs, set going by "
-                          "the start-up (a step of the back legs, then a push of all four) "
-                          "into the Table I bound "
-                          "(summary: startup_duration_s)")
+        "(Parquet, or gzip-compressed CSV without pyarrow) and summary.json; "
+        "figures with --plots. SimulationResult.load(DIR) reads the run back.",
+    )
+    run.add_argument(
+        "--model", choices=MODELS, default="II", help="actuator/transmission model (default: II)"
+    )
+    run.add_argument(
+        "--start",
+        choices=("flight", "standing"),
+        default="flight",
+        help="flight (default): released in flight at --speed, --height, "
+        "--pitch-rate; standing: at rest on its four legs, set going by "
+        "the start-up (a step of the back legs, then a push of all four) "
+        "into the Table I bound "
+        "(summary: startup_duration_s)",
+    )
     add_duration_option(run, DEFAULT_DURATION_S)
     add_controller_option(run)
-    run.add_argument("--speed", type=finite_float, default=None, metavar="V",
-                     help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
-                          "passive model: scoutsim.default_initial_state)")
-    run.add_argument("--height", type=positive_float, default=None, metavar="Y",
-                     help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g}; "
-                          "passive model: higher, so that its hanging legs clear the ground "
-                          "by the same margin)")
-    run.add_argument("--pitch-rate", type=finite_float, default=None, metavar="W",
-                     help="initial pitch rate [deg/s] (default: "
-                     f"{math.degrees(_DEFAULT_START.dtheta):g})")
-    run.add_argument("--steps", action="store_true",
-                     help="also record every integrator step (steps table: time, state, "
-                          "plant modes)")
-    run.add_argument("--format", choices=FORMATS, default=None,
-                     help="format of the tables: parquet (default when pyarrow is "
-                          "installed) or csv (gzip-compressed, the default otherwise)")
-    add_plots_option(run, False, "run.png (pitch, height, leg angles and states, hip "
-                                 "torques; runs over 4 s: an overview and the last strides), "
-                                 "torque_speed.png (paper Fig. 11) and, with the energy "
-                                 "accounting, stride_power.png (power over the last steady "
-                                 "stride by destination)")
-    run.add_argument("--csv", action="store_true",
-                     help="also write timeseries.csv (plain CSV, one row per sample)")
-    run.add_argument("--npz", action="store_true",
-                     help="also write result.npz (the whole result in one NumPy file)")
-    run.add_argument("--stream", action="store_true",
-                     help="write the tables as the run is computed, keeping only its last "
-                          "--keep seconds in memory (for runs too long for memory; the "
-                          "summary and figures cover the kept end). Chosen by itself when "
-                          "the run would not fit in memory")
-    run.add_argument("--keep", type=positive_float, default=None, metavar="S",
-                     help="with --stream: seconds at the end of the run kept in memory for "
-                          f"the summary and figures (default: {DEFAULT_KEEP_SECONDS:g})")
-    run.add_argument("--no-size-check", action="store_true",
-                     help="skip the checks of the memory and disk space the run needs (and "
-                          "do not stream because of them)")
-    run.add_argument("--energy", action="store_true",
-                     help="also print the whole work-energy balance table (every term, "
-                          "the residual)")
-    run.add_argument("--no-energy", action="store_true",
-                     help="no energy accounting, for a faster run (by default every "
-                          "power flow is integrated: electrical energy, copper and "
-                          "transmission losses, friction, dampers, impacts, cost of "
-                          "transport in summary.json and the energy block; it leaves the "
-                          "motion the same and makes the simulation of 10 s of Model II "
-                          "1.65x slower)")
-    run.add_argument("--json", action="store_true",
-                     help="print the summary as JSON on stdout instead of the table")
+    run.add_argument(
+        "--speed",
+        type=finite_float,
+        default=None,
+        metavar="V",
+        help=f"initial forward speed [m/s] (default: {_DEFAULT_START.dx:g}; "
+        "passive model: scoutsim.default_initial_state)",
+    )
+    run.add_argument(
+        "--height",
+        type=positive_float,
+        default=None,
+        metavar="Y",
+        help=f"initial torso COM height [m] (default: {_DEFAULT_START.y:g}; "
+        "passive model: higher, so that its hanging legs clear the ground "
+        "by the same margin)",
+    )
+    run.add_argument(
+        "--pitch-rate",
+        type=finite_float,
+        default=None,
+        metavar="W",
+        help=f"initial pitch rate [deg/s] (default: {math.degrees(_DEFAULT_START.dtheta):g})",
+    )
+    run.add_argument(
+        "--steps",
+        action="store_true",
+        help="also record every integrator step (steps table: time, state, plant modes)",
+    )
+    run.add_argument(
+        "--format",
+        choices=FORMATS,
+        default=None,
+        help="format of the tables: parquet (default when pyarrow is "
+        "installed) or csv (gzip-compressed, the default otherwise)",
+    )
+    add_plots_option(
+        run,
+        False,
+        "run.png (pitch, height, leg angles and states, hip "
+        "torques; runs over 4 s: an overview and the last strides), "
+        "torque_speed.png (paper Fig. 11) and, with the energy "
+        "accounting, stride_power.png (power over the last steady "
+        "stride by destination)",
+    )
+    run.add_argument(
+        "--csv",
+        action="store_true",
+        help="also write timeseries.csv (plain CSV, one row per sample)",
+    )
+    run.add_argument(
+        "--npz",
+        action="store_true",
+        help="also write result.npz (the whole result in one NumPy file)",
+    )
+    run.add_argument(
+        "--stream",
+        action="store_true",
+        help="write the tables as the run is computed, keeping only its last "
+        "--keep seconds in memory (for runs too long for memory; the "
+        "summary and figures cover the kept end). Chosen by itself when "
+        "the run would not fit in memory",
+    )
+    run.add_argument(
+        "--keep",
+        type=positive_float,
+        default=None,
+        metavar="S",
+        help="with --stream: seconds at the end of the run kept in memory for "
+        f"the summary and figures (default: {DEFAULT_KEEP_SECONDS:g})",
+    )
+    run.add_argument(
+        "--no-size-check",
+        action="store_true",
+        help="skip the checks of the memory and disk space the run needs (and "
+        "do not stream because of them)",
+    )
+    run.add_argument(
+        "--energy",
+        action="store_true",
+        help="also print the whole work-energy balance table (every term, the residual)",
+    )
+    run.add_argument(
+        "--no-energy",
+        action="store_true",
+        help="no energy accounting, for a faster run (by default every "
+        "power flow is integrated: electrical energy, copper and "
+        "transmission losses, friction, dampers, impacts, cost of "
+        "transport in summary.json and the energy block; it leaves the "
+        "motion the same and makes the simulation of 10 s of Model II "
+        "1.65x slower)",
+    )
+    run.add_argument(
+        "--json",
+        action="store_true",
+        help="print the summary as JSON on stdout instead of the table",
+    )
     run.set_defaults(func=execute)
 
 
@@ -167,7 +226,7 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
         for path in result.save_tables(out, fmt=args.format):
             rd.add(path.name)
     else:
-        rd.info = info           # (the streamed tables are already written and listed)
+        rd.info = info  # (the streamed tables are already written and listed)
     rd.write("summary.json", lambda p: write_json(p, summary))
     if args.csv:
         rd.write("timeseries.csv", lambda p: write_timeseries_csv(result, p))
@@ -175,11 +234,16 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
         rd.write("result.npz", lambda p: result.save(p))
     if args.plots:
         from ..presentation.plots import plot_run, plot_torque_speed
+
         rd.write("run.png", lambda p: plot_run(result, p, overview="auto"))
         rd.write("torque_speed.png", lambda p: plot_torque_speed(result, "both", p))
-        if result.energy_series is not None and result.provenance.get("model") != "passive" \
-                and any(s.energy_t_start is not None for s in result.strides):
+        if (
+            result.energy_series is not None
+            and result.provenance.get("model") != "passive"
+            and any(s.energy_t_start is not None for s in result.strides)
+        ):
             from ..presentation.plots import plot_stride_power
+
             rd.write("stride_power.png", lambda p: plot_stride_power(result, p))
     rd.finish(outcome=result.outcome, partial=interrupted)
     return rd
@@ -189,6 +253,7 @@ def _stream_choice(args) -> bool:
     """Whether the run streams its tables to disk: asked with --stream, or chosen because
     the run would not fit in memory (said on stderr)."""
     from ..simulation.budgets import check_run_memory
+
     if args.keep is not None and not args.stream:
         raise UsageError("--keep is only allowed with --stream")
     try:
@@ -199,25 +264,33 @@ def _stream_choice(args) -> bool:
         fits = False
     stream = args.stream or not fits
     if stream and (args.csv or args.npz):
-        raise UsageError(f"{'--csv' if args.csv else '--npz'} is not allowed with a streamed "
-                         "run (it needs the whole time series in memory): read the streamed "
-                         "tables instead (SimulationResult.load(DIR))")
+        raise UsageError(
+            f"{'--csv' if args.csv else '--npz'} is not allowed with a streamed "
+            "run (it needs the whole time series in memory): read the streamed "
+            "tables instead (SimulationResult.load(DIR))"
+        )
     if stream and not args.stream:
-        print(f"scoutsim run: {args.duration:g} s would not fit in memory: streaming the "
-              "tables to disk as they are computed (the summary covers the last "
-              f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)", file=sys.stderr)
+        print(
+            f"scoutsim run: {args.duration:g} s would not fit in memory: streaming the "
+            "tables to disk as they are computed (the summary covers the last "
+            f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)",
+            file=sys.stderr,
+        )
     return stream
 
 
 def execute(args) -> int:
     from ..simulation.initial_conditions import default_initial_state
     from ..simulation.simulator import simulate, warm_up
+
     robot, cparams = load_parameters(args.robot)
     sensors = load_sensors(args.robot, robot)
     law, cparams = controller_choice(args.controller, cparams)
     if args.controller != "table-i" and args.model == "passive":
-        raise UsageError(f"--controller {args.controller} is not allowed with --model "
-                         "passive (the passive model has no controller)")
+        raise UsageError(
+            f"--controller {args.controller} is not allowed with --model "
+            "passive (the passive model has no controller)"
+        )
     controller = make_controller(law, cparams, robot)
     integ = integrator(args)
     changes = {}
@@ -232,15 +305,21 @@ def execute(args) -> int:
     init: InitialState | str = default_initial_state(args.model, robot).replace(**changes)
     if args.start == "standing":
         if changes:
-            raise UsageError("--speed, --height and --pitch-rate are only allowed with "
-                             "--start flight (a standing robot is at rest)")
+            raise UsageError(
+                "--speed, --height and --pitch-rate are only allowed with "
+                "--start flight (a standing robot is at rest)"
+            )
         if args.model == "passive":
-            raise UsageError("--start standing is not allowed with --model passive (no "
-                             "actuator holds or sets going the standing robot)")
+            raise UsageError(
+                "--start standing is not allowed with --model passive (no "
+                "actuator holds or sets going the standing robot)"
+            )
         if not isinstance(controller, type(cparams)):
-            raise UsageError(f"--start standing is not allowed with --controller "
-                             f"{args.controller}: the start-up hands over to the Table I "
-                             "controller")
+            raise UsageError(
+                f"--start standing is not allowed with --controller "
+                f"{args.controller}: the start-up hands over to the Table I "
+                "controller"
+            )
         init = "standing"
     out = out_dir(args.out)
     progress = show_progress(args)
@@ -252,19 +331,32 @@ def execute(args) -> int:
     stream = _stream_choice(args)
     load_s = warm_up()
     command = " ".join(["scoutsim"] + sys.argv[1:])
-    info = {"model": args.model, "controller": args.controller, "duration_s": args.duration,
-            "streamed": stream}
+    info = {
+        "model": args.model,
+        "controller": args.controller,
+        "duration_s": args.duration,
+        "streamed": stream,
+    }
     # a streamed run's directory is entered when its first rows arrive (streaming.RunStream)
     rd = RunDirectory(out, command=command, info=info) if stream else None
     wall0 = time.perf_counter()
     with usage_errors():  # invalid initial state or option
-        result = simulate(robot, controller, init, args.duration, model=args.model,
-                          integrator=integ, friction_coefficient=args.friction,
-                          progress=progress, record_steps=args.steps, stream_to=rd,
-                          check_memory=not args.no_size_check, energy=energy,
-                          sensors=sensors,
-                          **({"keep_seconds": args.keep, "table_format": args.format}
-                             if stream else {}))
+        result = simulate(
+            robot,
+            controller,
+            init,
+            args.duration,
+            model=args.model,
+            integrator=integ,
+            friction_coefficient=args.friction,
+            progress=progress,
+            record_steps=args.steps,
+            stream_to=rd,
+            check_memory=not args.no_size_check,
+            energy=energy,
+            sensors=sensors,
+            **({"keep_seconds": args.keep, "table_format": args.format} if stream else {}),
+        )
     wall = time.perf_counter() - wall0
     if result.outcome == "write_failed":
         return streamed_write_failed(result, out, rd)
@@ -274,16 +366,17 @@ def execute(args) -> int:
     if balance is not None:
         summary["energy_balance"] = balance.as_dict()
     interrupted = result.outcome == "interrupted"
-    info |= {"scoutsim_version": result.provenance.get("scoutsim_version"),
-             "t_end": result.t_end}
+    info |= {"scoutsim_version": result.provenance.get("scoutsim_version"), "t_end": result.t_end}
     try:
         with ctrl_c_deferred() as deferred:
             rd = _write_outputs(args, out, result, summary, rd, command, info, interrupted)
-    except OSError as exc:        # a full disk, a directory where a file goes, permissions
-        print(f"scoutsim run: error: could not write the run's files to {out}/: "
-              f"{exc.strerror or exc}" + (f" ({name})" if (name := exc.filename2 or exc.filename)
-                                          else ""),
-              file=sys.stderr)
+    except OSError as exc:  # a full disk, a directory where a file goes, permissions
+        print(
+            f"scoutsim run: error: could not write the run's files to {out}/: "
+            f"{exc.strerror or exc}"
+            + (f" ({name})" if (name := exc.filename2 or exc.filename) else ""),
+            file=sys.stderr,
+        )
         if not stream:
             print(rescue(result), file=sys.stderr)
         return EXIT_WRITE_FAILED
@@ -292,34 +385,55 @@ def execute(args) -> int:
     if args.json:
         print(dumps(summary))
     else:
-        print(format_summary(summary, duration=args.duration, wall_s=wall, t_end=result.t_end,
-                             friction=args.friction, load_s=load_s,
-                             command_wall_s=command_wall_time()))
-        if args.model == "passive" and result.outcome == "fell" \
-                and max(robot.per_leg("leg_mass")) > 0:
-            print("  (passive model: no actuators, so legs with mass swing freely at the hips "
-                  "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
-                  "passively: see scoutsim orbit --passive)")
+        print(
+            format_summary(
+                summary,
+                duration=args.duration,
+                wall_s=wall,
+                t_end=result.t_end,
+                friction=args.friction,
+                load_s=load_s,
+                command_wall_s=command_wall_time(),
+            )
+        )
+        if (
+            args.model == "passive"
+            and result.outcome == "fell"
+            and max(robot.per_leg("leg_mass")) > 0
+        ):
+            print(
+                "  (passive model: no actuators, so legs with mass swing freely at the hips "
+                "and the robot folds; massless legs, leg_mass = leg_inertia = 0, bound "
+                "passively: see scoutsim orbit --passive)"
+            )
         if balance is not None:
             print(format_energy(summary))
         if balance is not None and args.energy:
             cot = balance.cost_of_transport
-            print(f"\nwork-energy balance over {balance.duration_s:g} s "
-                  f"(mean input {balance.mean_input_power_W:.1f} W, hip work "
-                  f"{balance.hip_work_J:.1f} J"
-                  + (f", cost of transport {cot:.2f}" if cot is not None else "") + "):")
+            print(
+                f"\nwork-energy balance over {balance.duration_s:g} s "
+                f"(mean input {balance.mean_input_power_W:.1f} W, hip work "
+                f"{balance.hip_work_J:.1f} J"
+                + (f", cost of transport {cot:.2f}" if cot is not None else "")
+                + "):"
+            )
             print(balance.table())
         if stream and result.provenance["stream"]["kept_from_s"] is not None:
             kept = result.provenance["stream"]["kept_from_s"]
-            print(f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "
-                  "the tables hold the whole run)")
+            print(
+                f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "
+                "the tables hold the whole run)"
+            )
         print(f"wrote {', '.join(f.name for f in files)} to {out}/")
     if result.outcome == "numerical_failure":
         # what stopped the run and what to check: the parameters far from the Scout II
         # defaults, or the integrator tolerance (SimulationResult.failure)
-        print(f"scoutsim run: the integration failed numerically: "
-              f"{result.failure.message(cli=True)} (see summary.json and the timeseries "
-              "table)", file=sys.stderr)
+        print(
+            f"scoutsim run: the integration failed numerically: "
+            f"{result.failure.message(cli=True)} (see summary.json and the timeseries "
+            "table)",
+            file=sys.stderr,
+        )
         return 1
     if result.outcome == "interrupted" or deferred.asked:
         return 130

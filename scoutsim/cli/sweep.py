@@ -47,41 +47,75 @@ NAME = "sweep"
 
 def register(sub, common) -> None:
     sw = sub.add_parser(
-        NAME, parents=[common],
+        NAME,
+        parents=[common],
         help="parameter sweep (grid or random sample) in parallel or on a Dask cluster",
         description="Run a grid or random sample of robot/controller parameters, named "
-                    "robot.<field> or controller.<field> (SI units as in RobotParameters / "
-                    "ControllerParameters; a _deg suffix on an angle field takes degrees), "
-                    "and write sweep.parquet, sweep.csv, the checkpoint points.jsonl (an "
-                    "interrupted sweep resumes) and, for a two-parameter grid, map.png. "
-                    "Example: scoutsim sweep --grid controller.touchdown_angle_front_deg="
-                    "15:27:20 --grid controller.touchdown_angle_back_deg=13:25:20 "
-                    "--duration 2")
+        "robot.<field> or controller.<field> (SI units as in RobotParameters / "
+        "ControllerParameters; a _deg suffix on an angle field takes degrees), "
+        "and write sweep.parquet, sweep.csv, the checkpoint points.jsonl (an "
+        "interrupted sweep resumes) and, for a two-parameter grid, map.png. "
+        "Example: scoutsim sweep --grid controller.touchdown_angle_front_deg="
+        "15:27:20 --grid controller.touchdown_angle_back_deg=13:25:20 "
+        "--duration 2",
+    )
     add_duration_option(sw, DEFAULT_DURATION_S, "simulated time per point")
     add_controller_option(sw)
-    add_plots_option(sw, True, "map.png (and with --orbit stability.png) of a two-parameter "
-                               "grid")
-    sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:NUM",
-                    help="grid axis (repeatable): NUM values from START to STOP")
-    sw.add_argument("--random", action="append", default=[], metavar="NAME=LOW:HIGH",
-                    help="uniformly sampled parameter (repeatable), with --samples")
-    sw.add_argument("--samples", type=positive_int, default=100, metavar="N",
-                    help="number of random points (default: 100)")
+    add_plots_option(sw, True, "map.png (and with --orbit stability.png) of a two-parameter grid")
+    sw.add_argument(
+        "--grid",
+        action="append",
+        default=[],
+        metavar="NAME=START:STOP:NUM",
+        help="grid axis (repeatable): NUM values from START to STOP",
+    )
+    sw.add_argument(
+        "--random",
+        action="append",
+        default=[],
+        metavar="NAME=LOW:HIGH",
+        help="uniformly sampled parameter (repeatable), with --samples",
+    )
+    sw.add_argument(
+        "--samples",
+        type=positive_int,
+        default=100,
+        metavar="N",
+        help="number of random points (default: 100)",
+    )
     sw.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    sw.add_argument("--max-points", type=positive_int, default=100_000, metavar="N",
-                    help="refuse sweeps of more points than this before starting "
-                         "(default: 100000)")
-    sw.add_argument("--model", choices=CONTROLLED_MODELS, default="II",
-                    help="model (default: II)")
-    sw.add_argument("--workers", type=positive_int, default=None, metavar="N",
-                    help="local processes (default: all cores)")
-    sw.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                    help="Dask distributed scheduler address (e.g. tcp://host:8786)")
-    sw.add_argument("--no-resume", action="store_true",
-                    help="recompute every point even if DIR/points.jsonl has it")
-    sw.add_argument("--orbit", action="store_true",
-                    help="also find each bounding point's periodic orbit (Newton) and record "
-                         "its period and Floquet stability (a few s per point)")
+    sw.add_argument(
+        "--max-points",
+        type=positive_int,
+        default=100_000,
+        metavar="N",
+        help="refuse sweeps of more points than this before starting (default: 100000)",
+    )
+    sw.add_argument("--model", choices=CONTROLLED_MODELS, default="II", help="model (default: II)")
+    sw.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="local processes (default: all cores)",
+    )
+    sw.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
+    )
+    sw.add_argument(
+        "--no-resume",
+        action="store_true",
+        help="recompute every point even if DIR/points.jsonl has it",
+    )
+    sw.add_argument(
+        "--orbit",
+        action="store_true",
+        help="also find each bounding point's periodic orbit (Newton) and record "
+        "its period and Floquet stability (a few s per point)",
+    )
     sw.set_defaults(func=execute)
 
 
@@ -101,11 +135,14 @@ def _sweep_axis(text: str, n_parts: int):
         raise UsageError(f"{text!r}: the range must be finite numbers")
     if name.endswith("_deg"):
         from ..parameters import field_dimension
+
         base = name[:-4]
         if field_dimension(base.partition(".")[2]) != "angle":
-            raise UsageError(f"{text!r} is not allowed: the _deg suffix takes degrees for "
-                             f"an angle; {base!r} is not an angle (give it in SI units, "
-                             "without the suffix)")
+            raise UsageError(
+                f"{text!r} is not allowed: the _deg suffix takes degrees for "
+                f"an angle; {base!r} is not an angle (give it in SI units, "
+                "without the suffix)"
+            )
     return name, vals
 
 
@@ -120,6 +157,7 @@ def _points(args):
     import numpy as np
 
     from ..analysis.sweep import grid_points, random_points
+
     with usage_errors():
         seen = set()
         if args.grid:
@@ -132,9 +170,11 @@ def _points(args):
                 sizes[name] = (a, b, int(n))
             total = math.prod(n for _, _, n in sizes.values())
             if total > args.max_points:
-                raise UsageError(f"the grid has {total:.4g} points, more than --max-points "
-                                 f"{args.max_points} (at about 0.1 s per point of 10 s); "
-                                 "raise --max-points to run it anyway")
+                raise UsageError(
+                    f"the grid has {total:.4g} points, more than --max-points "
+                    f"{args.max_points} (at about 0.1 s per point of 10 s); "
+                    "raise --max-points to run it anyway"
+                )
             return grid_points({k: np.linspace(a, b, n) for k, (a, b, n) in sizes.items()})
         bounds = {}
         for g in args.random:
@@ -144,8 +184,10 @@ def _points(args):
                 raise UsageError(f"{g!r} is not allowed: LOW must be below HIGH")
             bounds[name] = (a, b)
         if args.samples > args.max_points:
-            raise UsageError(f"--samples {args.samples} is more than --max-points "
-                             f"{args.max_points}; raise --max-points to run it anyway")
+            raise UsageError(
+                f"--samples {args.samples} is more than --max-points "
+                f"{args.max_points}; raise --max-points to run it anyway"
+            )
         return random_points(bounds, args.samples, args.seed)
 
 
@@ -153,13 +195,18 @@ def execute(args) -> int:
     from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.sweep import CHECKPOINT, read_checkpoint, sweep
     from ..io.run_directory import add_to_manifest, atomic_write
+
     if bool(args.grid) == bool(args.random):
         raise UsageError("give either --grid axes or --random parameters")
     points = _points(args)
-    check_expected_time(args, {args.model: len(points) * args.duration}, runs=len(points),
-                        per_run_s=ORBIT_SECONDS_PER_POINT if args.orbit else 0.0,
-                        workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
-                        what=f"the sweep of {len(points)} points")
+    check_expected_time(
+        args,
+        {args.model: len(points) * args.duration},
+        runs=len(points),
+        per_run_s=ORBIT_SECONDS_PER_POINT if args.orbit else 0.0,
+        workers=1 if args.scheduler else (args.workers or os.cpu_count() or 1),
+        what=f"the sweep of {len(points)} points",
+    )
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = make_controller(law, cparams, robot, on_workers=True)
@@ -167,39 +214,62 @@ def execute(args) -> int:
     progress = show_progress(args)
     wall0 = time.perf_counter()
     try:
-        with usage_errors(SchedulerUnreachableError, NotSendableError), \
-                warnings.catch_warnings():
+        with usage_errors(SchedulerUnreachableError, NotSendableError), warnings.catch_warnings():
             # the points the sweep could not run are reported below, by point
             warnings.simplefilter("ignore", RuntimeWarning)
-            res = sweep(points, model=args.model, duration=args.duration, robot=robot,
-                        controller=controller, friction_coefficient=args.friction, out=out,
-                        workers=args.workers, scheduler=args.scheduler, progress=progress,
-                        resume=not args.no_resume, orbit=args.orbit, on_error="record",
-                        command=" ".join(["scoutsim"] + sys.argv[1:]))
+            res = sweep(
+                points,
+                model=args.model,
+                duration=args.duration,
+                robot=robot,
+                controller=controller,
+                friction_coefficient=args.friction,
+                out=out,
+                workers=args.workers,
+                scheduler=args.scheduler,
+                progress=progress,
+                resume=not args.no_resume,
+                orbit=args.orbit,
+                on_error="record",
+                command=" ".join(["scoutsim"] + sys.argv[1:]),
+            )
     except KeyboardInterrupt:
         n_done = len(read_checkpoint(out / CHECKPOINT))
-        print(f"scoutsim sweep: interrupted; {n_done} of {len(points)} points are done and "
-              f"kept in {out}/{CHECKPOINT} (no table written): run the same command again "
-              "to finish the rest", file=sys.stderr)
+        print(
+            f"scoutsim sweep: interrupted; {n_done} of {len(points)} points are done and "
+            f"kept in {out}/{CHECKPOINT} (no table written): run the same command again "
+            "to finish the rest",
+            file=sys.stderr,
+        )
         return 130
     wall = time.perf_counter() - wall0
     outcomes: dict[str, int] = {}
     for r in res.rows:
         outcomes[r["outcome"]] = outcomes.get(r["outcome"], 0) + 1
     steady = sum(bool(r.get("steady_bounding")) for r in res.rows)
-    print(f"scoutsim sweep: {len(points)} points of model {args.model}, {args.duration:g} s "
-          f"each ({res.settings['n_resumed']} resumed from {out}/points.jsonl)")
+    print(
+        f"scoutsim sweep: {len(points)} points of model {args.model}, {args.duration:g} s "
+        f"each ({res.settings['n_resumed']} resumed from {out}/points.jsonl)"
+    )
     print("  outcomes: " + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())))
     print(f"  steady bounding: {steady}")
     print(f"  wall time {wall:.1f} s; wrote sweep.parquet, sweep.csv to {out}/")
     if args.grid and len(res.parameters) == 2 and args.plots:
-        atomic_write(out / "map.png", lambda p: res.plot_map(
-            res.parameters[0], res.parameters[1], "average_speed_m_s", path=p))
+        atomic_write(
+            out / "map.png",
+            lambda p: res.plot_map(
+                res.parameters[0], res.parameters[1], "average_speed_m_s", path=p
+            ),
+        )
         add_to_manifest(out, ["map.png"])
         print(f"  map of the average speed: {out}/map.png")
         if args.orbit:
-            atomic_write(out / "stability.png", lambda p: res.plot_map(
-                res.parameters[0], res.parameters[1], "orbit_spectral_radius", path=p))
+            atomic_write(
+                out / "stability.png",
+                lambda p: res.plot_map(
+                    res.parameters[0], res.parameters[1], "orbit_spectral_radius", path=p
+                ),
+            )
             add_to_manifest(out, ["stability.png"])
             print(f"  map of the orbit's spectral radius (< 1: stable): {out}/stability.png")
     if args.orbit:
@@ -207,10 +277,15 @@ def execute(args) -> int:
         print(f"  periodic orbits found and stable: {stable} of {steady} bounding points")
     errors = res.errors()
     for r in errors[:3]:
-        print(f"scoutsim sweep: point {({k: r[k] for k in res.parameters})} could not run (an "
-              f"error of the sweep, not of the robot): {r['error']}", file=sys.stderr)
+        print(
+            f"scoutsim sweep: point { ({k: r[k] for k in res.parameters}) } could not run (an "
+            f"error of the sweep, not of the robot): {r['error']}",
+            file=sys.stderr,
+        )
     if errors:
-        print(f"scoutsim sweep: {len(errors)} of {len(points)} points could not run (status "
-              f"'error' in the table); the same command again runs them afresh",
-              file=sys.stderr)
+        print(
+            f"scoutsim sweep: {len(errors)} of {len(points)} points could not run (status "
+            f"'error' in the table); the same command again runs them afresh",
+            file=sys.stderr,
+        )
     return 1 if errors else 0

@@ -18,6 +18,15 @@ from .pitch_feedback import PitchFeedbackController
 from .protocol import DEFAULT_CONTROL_PERIOD, Controller, ControllerError
 from .sensors import SensorChannel, SensorParameters, Sensors, load_sensors
 
-__all__ = ["Controller", "ControllerError", "DEFAULT_CONTROL_PERIOD", "Sensors",
-           "SensorChannel", "SensorParameters", "load_sensors", "BoundingController",
-           "CompiledController", "PitchFeedbackController"]
+__all__ = [
+    "Controller",
+    "ControllerError",
+    "DEFAULT_CONTROL_PERIOD",
+    "Sensors",
+    "SensorChannel",
+    "SensorParameters",
+    "load_sensors",
+    "BoundingController",
+    "CompiledController",
+    "PitchFeedbackController",
+]

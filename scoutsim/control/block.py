@@ -36,10 +36,16 @@ __all__ = ["ControlBlock", "control_block"]
 ControlBlock = namedtuple("ControlBlock", "ints spec geom hist y last params state")
 
 
-def control_block(kind: int, *, address: int = 0, spec: np.ndarray | None = None,
-                  geom: np.ndarray | None = None, seed: int = 0,
-                  params: np.ndarray | None = None,
-                  state: np.ndarray | None = None) -> ControlBlock:
+def control_block(
+    kind: int,
+    *,
+    address: int = 0,
+    spec: np.ndarray | None = None,
+    geom: np.ndarray | None = None,
+    seed: int = 0,
+    params: np.ndarray | None = None,
+    state: np.ndarray | None = None,
+) -> ControlBlock:
     """A fresh control block for one run (see the module docstring); ``spec`` and ``geom``
     default to ideal sensors with the lasers at the Scout II torso ends."""
     ints = np.zeros(L.NCB, dtype=np.int64)
@@ -52,9 +58,20 @@ def control_block(kind: int, *, address: int = 0, spec: np.ndarray | None = None
         geom[L.SG_LASER_HALF_SPACING] = 0.35
     depth = int(spec[L.SPEC_DELAY].max()) + 1
     return ControlBlock(
-        ints=ints, spec=spec, geom=np.ascontiguousarray(geom, float),
-        hist=np.zeros((depth, L.NSN)), y=np.zeros(L.NSN), last=np.zeros(L.NS + L.NAUX),
-        params=(np.zeros(1) if params is None or params.size == 0 else
-                np.ascontiguousarray(params, dtype=np.float64)),
-        state=(np.zeros(1) if state is None or state.size == 0 else
-               np.ascontiguousarray(state, dtype=np.float64)))
+        ints=ints,
+        spec=spec,
+        geom=np.ascontiguousarray(geom, float),
+        hist=np.zeros((depth, L.NSN)),
+        y=np.zeros(L.NSN),
+        last=np.zeros(L.NS + L.NAUX),
+        params=(
+            np.zeros(1)
+            if params is None or params.size == 0
+            else np.ascontiguousarray(params, dtype=np.float64)
+        ),
+        state=(
+            np.zeros(1)
+            if state is None or state.size == 0
+            else np.ascontiguousarray(state, dtype=np.float64)
+        ),
+    )

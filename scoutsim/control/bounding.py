@@ -48,22 +48,40 @@ from ..parameters import ControllerParameters, RobotParameters
 from .protocol import Controller
 
 # controller parameter array layout
-(C_TD_B, C_TD_F, C_SW_B, C_SW_F, C_KPF_B, C_KDF_B, C_KPF_F, C_KDF_F, C_KPB_B, C_KDB_B,
- C_KPB_F, C_KDB_F, C_TD_COMP, C_LO_COMP, C_SENSE_ALPHA, C_ENABLED) = range(16)
+(
+    C_TD_B,
+    C_TD_F,
+    C_SW_B,
+    C_SW_F,
+    C_KPF_B,
+    C_KDF_B,
+    C_KPF_F,
+    C_KDF_F,
+    C_KPB_B,
+    C_KDB_B,
+    C_KPB_F,
+    C_KDB_F,
+    C_TD_COMP,
+    C_LO_COMP,
+    C_SENSE_ALPHA,
+    C_ENABLED,
+) = range(16)
 # what the controller knows of the robot (packed once by controller_array), per virtual
 # leg: two slots, back then front (C[C_X + leg])
-C_L0 = 16          # leg rest length l0 [m] (compression = l0 - sensed length)
-C_TAU_MAX = 18     # tau_max = N eta K_T V_bar / R_A of eq. (3), at the leg [N m]
-C_SLOPE = 20       # A = -N^2 eta K_T K_w / R_A of eq. (2), at the leg [N m s/rad]
-C_TAU_LIMIT = 22   # N eta K_T i_max of eq. (4), at the leg [N m]
+C_L0 = 16  # leg rest length l0 [m] (compression = l0 - sensed length)
+C_TAU_MAX = 18  # tau_max = N eta K_T V_bar / R_A of eq. (3), at the leg [N m]
+C_SLOPE = 20  # A = -N^2 eta K_T K_w / R_A of eq. (2), at the leg [N m s/rad]
+C_TAU_LIMIT = 22  # N eta K_T i_max of eq. (4), at the leg [N m]
 NC = 24
 
 
 #: ControllerParameters field -> slot of the compiled controller's array, for the fields a
 #: run may change while it runs (a schedule of set-points, e.g. a bench rig's steps)
 SCHEDULABLE = {
-    "touchdown_angle_back": C_TD_B, "touchdown_angle_front": C_TD_F,
-    "sweep_limit_back": C_SW_B, "sweep_limit_front": C_SW_F,
+    "touchdown_angle_back": C_TD_B,
+    "touchdown_angle_front": C_TD_F,
+    "sweep_limit_back": C_SW_B,
+    "sweep_limit_front": C_SW_F,
 }
 
 
@@ -76,8 +94,9 @@ def retraction_constants(robot: RobotParameters) -> tuple[float, float, float]:
     return robot.stall_torque, -robot.torque_speed_slope, robot.max_leg_torque
 
 
-def controller_array(c: ControllerParameters | None,
-                     robot: RobotParameters | None = None) -> np.ndarray:
+def controller_array(
+    c: ControllerParameters | None, robot: RobotParameters | None = None
+) -> np.ndarray:
     """Pack ControllerParameters, and what the controller knows of ``robot`` (leg rest
     length, the motor constants of eqs. 2-4; default Scout II), into the compiled
     controller's array (``c`` None = disabled)."""
@@ -205,8 +224,10 @@ class BoundingController(Controller):
     def command(self, t, sensors):
         """Hip torques (back, front) [N m] of one sample (updates ``leg_states``)."""
         if self._C is None:
-            raise RuntimeError("BoundingController.command before reset(robot): the "
-                               "controller needs the robot's motor constants")
+            raise RuntimeError(
+                "BoundingController.command before reset(robot): the "
+                "controller needs the robot's motor constants"
+            )
         y = np.array(sensors.vector, dtype=float)
         cmd = np.zeros(2)
         tr = np.zeros(2, dtype=np.int64)

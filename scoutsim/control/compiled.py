@@ -58,9 +58,15 @@ __all__ = ["CompiledController", "CONTROLLER_SIGNATURE", "call_controller"]
 
 #: the C signature of a controller function (see the module docstring)
 CONTROLLER_SIGNATURE = types.int64(
-    types.float64, types.CPointer(types.float64), types.CPointer(types.float64), types.int64,
-    types.CPointer(types.float64), types.int64, types.CPointer(types.float64),
-    types.CPointer(types.int64))
+    types.float64,
+    types.CPointer(types.float64),
+    types.CPointer(types.float64),
+    types.int64,
+    types.CPointer(types.float64),
+    types.int64,
+    types.CPointer(types.float64),
+    types.CPointer(types.int64),
+)
 
 
 @intrinsic
@@ -77,16 +83,32 @@ def call_controller(typingctx, address, t, sensors, params, state, torque, leg_s
         def array(i, value):
             return context.make_array(ty[i])(context, builder, value)
 
-        y, p, st, tau, ls = (array(2, a_y), array(3, a_p), array(4, a_st), array(5, a_tau),
-                             array(6, a_ls))
+        y, p, st, tau, ls = (
+            array(2, a_y),
+            array(3, a_p),
+            array(4, a_st),
+            array(5, a_tau),
+            array(6, a_ls),
+        )
         i64 = ir.IntType(64)
         dbl = ir.DoubleType()
-        fnty = ir.FunctionType(i64, [dbl, dbl.as_pointer(), dbl.as_pointer(), i64,
-                                     dbl.as_pointer(), i64, dbl.as_pointer(),
-                                     i64.as_pointer()])
+        fnty = ir.FunctionType(
+            i64,
+            [
+                dbl,
+                dbl.as_pointer(),
+                dbl.as_pointer(),
+                i64,
+                dbl.as_pointer(),
+                i64,
+                dbl.as_pointer(),
+                i64.as_pointer(),
+            ],
+        )
         fn = builder.inttoptr(a_addr, fnty.as_pointer())
-        return builder.call(fn, [a_t, y.data, p.data, p.nitems, st.data, st.nitems,
-                                 tau.data, ls.data])
+        return builder.call(
+            fn, [a_t, y.data, p.data, p.nitems, st.data, st.nitems, tau.data, ls.data]
+        )
 
     return sig, codegen
 
@@ -103,7 +125,7 @@ def _wrap(command):
     process and function (:data:`_CALLBACKS`)."""
     try:
         return _CALLBACKS[command]
-    except (KeyError, TypeError):     # (TypeError: an unhashable callable, never cached)
+    except (KeyError, TypeError):  # (TypeError: an unhashable callable, never cached)
         pass
     wrapper = _compile_callback(command)
     try:
@@ -116,13 +138,20 @@ def _wrap(command):
 def _compile_callback(command):
     """:func:`_wrap` without the cache."""
     from numba import carray, cfunc, njit
+
     inner = njit(command)
     nsn = L.NSN
 
     @cfunc(CONTROLLER_SIGNATURE)
     def wrapper(t, y, params, n_params, state, n_state, torque, leg_states):
-        return inner(t, carray(y, nsn), carray(params, n_params), carray(state, n_state),
-                     carray(torque, 2), carray(leg_states, 2))
+        return inner(
+            t,
+            carray(y, nsn),
+            carray(params, n_params),
+            carray(state, n_state),
+            carray(torque, 2),
+            carray(leg_states, 2),
+        )
 
     return wrapper
 
@@ -163,12 +192,18 @@ class CompiledController(Controller):
     and the worker wraps it again (compiled once per process and function).
     """
 
-    def __init__(self, command, params=None, state=None, *,
-                 control_period: float = DEFAULT_CONTROL_PERIOD, name: str | None = None):
+    def __init__(
+        self,
+        command,
+        params=None,
+        state=None,
+        *,
+        control_period: float = DEFAULT_CONTROL_PERIOD,
+        name: str | None = None,
+    ):
         self.command_function = command
         self.params = np.array([] if params is None else params, dtype=np.float64).ravel()
-        self.initial_state = np.array([] if state is None else state,
-                                      dtype=np.float64).ravel()
+        self.initial_state = np.array([] if state is None else state, dtype=np.float64).ravel()
         self.control_period = float(control_period)
         self.name = name or getattr(command, "__name__", type(self).__name__)
         self._compile()
@@ -181,9 +216,11 @@ class CompiledController(Controller):
         try:
             self._cfunc = _wrap(self.command_function)
         except Exception as exc:
-            raise TypeError(f"CompiledController({self.name}): the command function does not "
-                            f"compile with Numba (nopython mode) for command(t, y, params, "
-                            f"state, torque, leg_states): {exc}") from exc
+            raise TypeError(
+                f"CompiledController({self.name}): the command function does not "
+                f"compile with Numba (nopython mode) for command(t, y, params, "
+                f"state, torque, leg_states): {exc}"
+            ) from exc
         self.compile_time_s = time.perf_counter() - t0
         self.address = int(self._cfunc.address)
 
@@ -224,24 +261,33 @@ class CompiledController(Controller):
         readings ``sensors`` (a :class:`~scoutsim.control.sensors.Sensors`). Updates a
         state of its own, started from ``initial_state`` at the first call."""
         if not hasattr(self, "_py_state"):
-            self._py_state = (self.initial_state.copy() if self.initial_state.size else
-                              np.zeros(1))
+            self._py_state = self.initial_state.copy() if self.initial_state.size else np.zeros(1)
         params = self.params if self.params.size else np.zeros(1)
         torque = np.zeros(2)
-        rc = self._cfunc.ctypes(float(t), _ptr(sensors.vector, np.float64), _ptr(params),
-                                params.size, _ptr(self._py_state), self._py_state.size,
-                                _ptr(torque), _ptr(self.leg_states, np.int64))
+        rc = self._cfunc.ctypes(
+            float(t),
+            _ptr(sensors.vector, np.float64),
+            _ptr(params),
+            params.size,
+            _ptr(self._py_state),
+            self._py_state.size,
+            _ptr(torque),
+            _ptr(self.leg_states, np.int64),
+        )
         if rc != 0:
             raise RuntimeError(f"{self.name} returned status {rc}")
         return float(torque[0]), float(torque[1])
 
     def __repr__(self):
-        return (f"CompiledController({self.name}, params={self.params.size}, "
-                f"state={self.initial_state.size}, control_period={self.control_period})")
+        return (
+            f"CompiledController({self.name}, params={self.params.size}, "
+            f"state={self.initial_state.size}, control_period={self.control_period})"
+        )
 
 
 def _ptr(a, dtype=np.float64):
     import ctypes
+
     a = np.ascontiguousarray(a, dtype=dtype)
     ctype = ctypes.c_double if dtype == np.float64 else ctypes.c_int64
     return a.ctypes.data_as(ctypes.POINTER(ctype))

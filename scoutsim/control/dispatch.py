@@ -67,8 +67,10 @@ class ControllerPlan:
 
 def _runs_builtin(controller) -> bool:
     """A BoundingController (or a subclass) that does not override ``command``."""
-    return (isinstance(controller, BoundingController)
-            and type(controller).command is BoundingController.command)
+    return (
+        isinstance(controller, BoundingController)
+        and type(controller).command is BoundingController.command
+    )
 
 
 def _period(controller) -> float:
@@ -77,12 +79,20 @@ def _period(controller) -> float:
     dt = getattr(controller, "control_period", None)
     if dt is None:
         params = getattr(controller, "params", None)
-        dt = (params.control_period if isinstance(params, ControllerParameters)
-              else DEFAULT_CONTROL_PERIOD)
-    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or \
-            not (math.isfinite(dt) and 1e-6 <= float(dt) <= 1.0):
-        raise ValueError(f"controller.control_period = {dt!r} s is not allowed: must be in "
-                         f"[1e-6, 1] s ({controller_name(controller)})")
+        dt = (
+            params.control_period
+            if isinstance(params, ControllerParameters)
+            else DEFAULT_CONTROL_PERIOD
+        )
+    if (
+        isinstance(dt, bool)
+        or not isinstance(dt, numbers.Real)
+        or not (math.isfinite(dt) and 1e-6 <= float(dt) <= 1.0)
+    ):
+        raise ValueError(
+            f"controller.control_period = {dt!r} s is not allowed: must be in "
+            f"[1e-6, 1] s ({controller_name(controller)})"
+        )
     return float(dt)
 
 
@@ -90,8 +100,9 @@ def _period(controller) -> float:
 _IDEAL_SENSORS = SensorParameters()
 
 
-def plan_controller(controller, model: str, robot: RobotParameters,
-                    sensors: SensorParameters | None = None) -> ControllerPlan:
+def plan_controller(
+    controller, model: str, robot: RobotParameters, sensors: SensorParameters | None = None
+) -> ControllerPlan:
     """The plan of a run of ``model`` on ``robot`` controlled by ``controller`` (see the
     module docstring) with the sensors ``sensors`` (default: ideal)."""
     sensors = sensors if sensors is not None else _IDEAL_SENSORS
@@ -116,9 +127,11 @@ def plan_controller(controller, model: str, robot: RobotParameters,
         if not isinstance(cparams, ControllerParameters):
             cparams = None
     else:
-        raise TypeError("controller must be ControllerParameters, a BoundingController, a "
-                        "CompiledController or an object with a command(t, sensors) method "
-                        "(scoutsim.control.protocol)")
+        raise TypeError(
+            "controller must be ControllerParameters, a BoundingController, a "
+            "CompiledController or an object with a command(t, sensors) method "
+            "(scoutsim.control.protocol)"
+        )
     if user is not None and not callable(getattr(user, "command", None)):
         raise TypeError(f"controller {controller_name(user)} has no command(t, sensors) method")
     # the hip encoders read the motor side (Model II: alpha) as the Table I controller is
@@ -131,22 +144,46 @@ def plan_controller(controller, model: str, robot: RobotParameters,
     if user is None:
         dt = cparams.control_period if cparams is not None else DEFAULT_CONTROL_PERIOD
         block = control_block(L.CTRL_BUILTIN, spec=spec, geom=geom, seed=sensors.seed)
-        return ControllerPlan(kind="builtin" if cparams is not None else "none",
-                              controller=None, parameters=cparams, control_period=dt,
-                              C=controller_array(cparams, robot), block=block,
-                              label="builtin" if cparams is not None else "none")
+        return ControllerPlan(
+            kind="builtin" if cparams is not None else "none",
+            controller=None,
+            parameters=cparams,
+            control_period=dt,
+            C=controller_array(cparams, robot),
+            block=block,
+            label="builtin" if cparams is not None else "none",
+        )
     dt = _period(user)
     if isinstance(user, CompiledController):
         params = np.array(user.params_for(robot), dtype=np.float64).ravel()
-        block = control_block(L.CTRL_POINTER, address=user.address, spec=spec, geom=geom,
-                              seed=sensors.seed, params=params,
-                              state=user.initial_state.copy())
-        return ControllerPlan(kind="compiled", controller=user, parameters=cparams,
-                              control_period=dt, C=controller_array(None), block=block,
-                              label=controller_name(user))
+        block = control_block(
+            L.CTRL_POINTER,
+            address=user.address,
+            spec=spec,
+            geom=geom,
+            seed=sensors.seed,
+            params=params,
+            state=user.initial_state.copy(),
+        )
+        return ControllerPlan(
+            kind="compiled",
+            controller=user,
+            parameters=cparams,
+            control_period=dt,
+            C=controller_array(None),
+            block=block,
+            label=controller_name(user),
+        )
     block = control_block(L.CTRL_POINTER, spec=spec, geom=geom, seed=sensors.seed)
-    return ControllerPlan(kind="python", controller=user, parameters=cparams, control_period=dt,
-                          C=controller_array(None), block=block, label=controller_name(user))
+    return ControllerPlan(
+        kind="python",
+        controller=user,
+        parameters=cparams,
+        control_period=dt,
+        C=controller_array(None),
+        block=block,
+        label=controller_name(user),
+    )
 
 
 def _torque(v) -> float | None:
@@ -173,9 +210,17 @@ def torques(returned) -> tuple[float, float] | None:
 
 
 #: the ctypes form of :data:`scoutsim.control.compiled.CONTROLLER_SIGNATURE`
-_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p,
-                             ctypes.c_int64, ctypes.c_void_p, ctypes.c_int64, ctypes.c_void_p,
-                             ctypes.c_void_p)
+_CALLBACK = ctypes.CFUNCTYPE(
+    ctypes.c_int64,
+    ctypes.c_double,
+    ctypes.c_void_p,
+    ctypes.c_void_p,
+    ctypes.c_int64,
+    ctypes.c_void_p,
+    ctypes.c_int64,
+    ctypes.c_void_p,
+    ctypes.c_void_p,
+)
 
 
 class PythonBridge:
@@ -190,8 +235,7 @@ class PythonBridge:
     KeyboardInterrupt sets ``interrupted``.
     """
 
-    def __init__(self, controller, block: ControlBlock, cmd: np.ndarray, ls: np.ndarray,
-                 dt: float):
+    def __init__(self, controller, block: ControlBlock, cmd: np.ndarray, ls: np.ndarray, dt: float):
         self.controller = controller
         self._command = controller.command
         self._y, self._cmd, self._ls, self._dt = block.y, cmd, ls, dt

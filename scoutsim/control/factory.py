@@ -31,8 +31,13 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["ControllerSpec", "FactoryError", "is_factory_spec", "load_factory",
-           "controller_from_spec"]
+__all__ = [
+    "ControllerSpec",
+    "FactoryError",
+    "is_factory_spec",
+    "load_factory",
+    "controller_from_spec",
+]
 
 #: ``module.path:attribute.path`` (Python identifiers separated by dots)
 _SPEC = re.compile(r"^[A-Za-z_][\w]*(\.[A-Za-z_][\w]*)*:[A-Za-z_][\w]*(\.[A-Za-z_][\w]*)*$")
@@ -52,24 +57,31 @@ def load_factory(spec: str):
     """The callable that ``spec`` (``MODULE:FACTORY``) names; :class:`FactoryError` if the
     string is malformed, the module cannot be imported or has no such attribute."""
     if not is_factory_spec(spec):
-        raise FactoryError(f"controller {spec!r} is not of the form MODULE:FACTORY "
-                           "(e.g. 'my_controllers:make', a function in my_controllers.py "
-                           "that returns a controller)")
+        raise FactoryError(
+            f"controller {spec!r} is not of the form MODULE:FACTORY "
+            "(e.g. 'my_controllers:make', a function in my_controllers.py "
+            "that returns a controller)"
+        )
     module_name, attr_path = spec.strip().split(":")
     try:
         obj = importlib.import_module(module_name)
     except ImportError as exc:
-        raise FactoryError(f"controller {spec!r}: cannot import module {module_name!r} "
-                           f"({exc}); put its directory on PYTHONPATH (or run from it) so "
-                           "that `python -c 'import " + module_name + "'` works") from exc
+        raise FactoryError(
+            f"controller {spec!r}: cannot import module {module_name!r} "
+            f"({exc}); put its directory on PYTHONPATH (or run from it) so "
+            "that `python -c 'import " + module_name + "'` works"
+        ) from exc
     for part in attr_path.split("."):
         if not hasattr(obj, part):
-            raise FactoryError(f"controller {spec!r}: module {module_name!r} has no "
-                               f"attribute {attr_path!r}")
+            raise FactoryError(
+                f"controller {spec!r}: module {module_name!r} has no attribute {attr_path!r}"
+            )
         obj = getattr(obj, part)
     if not callable(obj):
-        raise FactoryError(f"controller {spec!r}: {attr_path!r} is not callable; it must be "
-                           "a function (or class) called with (robot, params)")
+        raise FactoryError(
+            f"controller {spec!r}: {attr_path!r} is not callable; it must be "
+            "a function (or class) called with (robot, params)"
+        )
     return obj
 
 
@@ -77,17 +89,21 @@ def _call(factory, spec: str, robot, params):
     """``factory(robot, params)``, or with as many of them as it takes."""
     try:
         sig = inspect.signature(factory)
-        positional = [p for p in sig.parameters.values()
-                      if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        positional = [
+            p
+            for p in sig.parameters.values()
+            if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)
+        ]
         varargs = any(p.kind == p.VAR_POSITIONAL for p in sig.parameters.values())
         n = 2 if varargs else min(2, len(positional))
-    except (TypeError, ValueError):   # a builtin without a signature: try both
+    except (TypeError, ValueError):  # a builtin without a signature: try both
         n = 2
     return factory(*(robot, params)[:n])
 
 
 def _is_controller(obj) -> bool:
     from ..parameters import ControllerParameters
+
     return isinstance(obj, ControllerParameters) or callable(getattr(obj, "command", None))
 
 
@@ -96,14 +112,17 @@ def controller_from_spec(spec: str, robot=None, params=None):
     controller parameters ``params`` (defaults: Scout II's). :class:`FactoryError` if it
     cannot be loaded or does not return a controller."""
     from ..parameters import ControllerParameters, RobotParameters
+
     robot = RobotParameters() if robot is None else robot
     params = ControllerParameters() if params is None else params
     factory = load_factory(spec)
     controller = _call(factory, spec, robot, params)
     if not _is_controller(controller):
-        raise FactoryError(f"controller {spec!r} returned {type(controller).__name__}, not "
-                           "a controller: return ControllerParameters, an object with "
-                           "command(t, sensors), or a CompiledController")
+        raise FactoryError(
+            f"controller {spec!r} returned {type(controller).__name__}, not "
+            "a controller: return ControllerParameters, an object with "
+            "command(t, sensors), or a CompiledController"
+        )
     return controller
 
 
@@ -120,12 +139,11 @@ class ControllerSpec:
 
     def __post_init__(self):
         if not is_factory_spec(self.spec):
-            load_factory(self.spec)   # raises FactoryError with the explanation
+            load_factory(self.spec)  # raises FactoryError with the explanation
 
     def build(self, robot=None):
         """The controller, made for ``robot`` (default: the spec's robot)."""
-        return controller_from_spec(self.spec, self.robot if robot is None else robot,
-                                    self.params)
+        return controller_from_spec(self.spec, self.robot if robot is None else robot, self.params)
 
     def __str__(self):
         return self.spec

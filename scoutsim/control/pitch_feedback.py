@@ -42,19 +42,27 @@ from ..parameters import ControllerParameters, RobotParameters, validate_control
 from .bounding import C_TD_B, NC, bounding_step, controller_array
 from .compiled import CompiledController, _wrap
 
-__all__ = ["PitchFeedbackController", "pitch_feedback_array", "P_PITCH_GAIN_B",
-           "P_PITCH_GAIN_F", "P_PITCH_RATE_GAIN_B", "P_PITCH_RATE_GAIN_F", "NP"]
+__all__ = [
+    "PitchFeedbackController",
+    "pitch_feedback_array",
+    "P_PITCH_GAIN_B",
+    "P_PITCH_GAIN_F",
+    "P_PITCH_RATE_GAIN_B",
+    "P_PITCH_RATE_GAIN_F",
+    "NP",
+]
 
 # slots of the parameter array after the Table I controller array (slots 0 .. NC - 1)
-P_PITCH_GAIN_B = NC          # k_theta, back virtual leg [rad/rad]
-P_PITCH_GAIN_F = NC + 1      # k_theta, front virtual leg [rad/rad]
+P_PITCH_GAIN_B = NC  # k_theta, back virtual leg [rad/rad]
+P_PITCH_GAIN_F = NC + 1  # k_theta, front virtual leg [rad/rad]
 P_PITCH_RATE_GAIN_B = NC + 2  # k_omega, back virtual leg [s]
 P_PITCH_RATE_GAIN_F = NC + 3  # k_omega, front virtual leg [s]
 NP = NC + 4
 
 
-def pitch_feedback_array(params: ControllerParameters,
-                         robot: RobotParameters | None = None) -> np.ndarray:
+def pitch_feedback_array(
+    params: ControllerParameters, robot: RobotParameters | None = None
+) -> np.ndarray:
     """The parameter array of the compiled controller: the Table I array of ``params`` and
     ``robot`` (:func:`~scoutsim.control.bounding.controller_array`; default Scout II) and
     the four torso-feedback gains (SI)."""
@@ -76,8 +84,11 @@ def pitch_feedback_command(t, y, params, state, torque, leg_states):
     pitch = y[L.SN_PITCH]
     rate = y[L.SN_PITCH_RATE]
     for leg in range(2):
-        C[C_TD_B + leg] = (params[C_TD_B + leg] + params[P_PITCH_GAIN_B + leg] * pitch
-                           + params[P_PITCH_RATE_GAIN_B + leg] * rate)
+        C[C_TD_B + leg] = (
+            params[C_TD_B + leg]
+            + params[P_PITCH_GAIN_B + leg] * pitch
+            + params[P_PITCH_RATE_GAIN_B + leg] * rate
+        )
     transitions = np.zeros(2, dtype=np.int64)
     bounding_step(y, C, leg_states, torque, transitions)
     return 0
@@ -138,6 +149,8 @@ class PitchFeedbackController(CompiledController):
 
     def __repr__(self):
         c = self.controller_parameters
-        return (f"PitchFeedbackController(k_theta = ({c.pitch_gain_back:g}, "
-                f"{c.pitch_gain_front:g}), k_omega = ({c.pitch_rate_gain_back:g}, "
-                f"{c.pitch_rate_gain_front:g}) s (back, front))")
+        return (
+            f"PitchFeedbackController(k_theta = ({c.pitch_gain_back:g}, "
+            f"{c.pitch_gain_front:g}), k_omega = ({c.pitch_rate_gain_back:g}, "
+            f"{c.pitch_rate_gain_front:g}) s (back, front))"
+        )

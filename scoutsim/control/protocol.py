@@ -79,8 +79,9 @@ class ControllerError(RuntimeError):
         all of it).
     """
 
-    def __init__(self, message: str, *, controller, t: float, sample: int, returned=None,
-                 result=None):
+    def __init__(
+        self, message: str, *, controller, t: float, sample: int, returned=None, result=None
+    ):
         super().__init__(message)
         self.controller, self.t, self.sample = controller, t, sample
         self.returned, self.result = returned, result
@@ -92,8 +93,9 @@ def controller_name(controller) -> str:
     return name if isinstance(name, str) else type(controller).__name__
 
 
-def failure_message(controller, sample: int, dt: float, returned,
-                    exc: BaseException | None, status: int = 0) -> str:
+def failure_message(
+    controller, sample: int, dt: float, returned, exc: BaseException | None, status: int = 0
+) -> str:
     """What :class:`ControllerError` says: the controller, the sample time, what it raised
     or returned (a compiled controller's nonzero ``status``), and up to where the run's
     data go."""
@@ -102,9 +104,13 @@ def failure_message(controller, sample: int, dt: float, returned,
     elif status != 0:
         what = f"returned status {status} (0 goes on), torques {reprlib.repr(returned)}"
     else:
-        what = (f"returned {reprlib.repr(returned)}, not two finite hip torques [N m] "
-                "(back, front)")
-    kept = (f"its samples up to t = {(sample - 1) * dt:.10g} s are in the error's .result"
-            if sample > 0 else "before its first sample")
-    return (f"controller {controller_name(controller)}.command(t = {sample * dt:.10g} s, "
-            f"sensors) {what}; the run stopped at that sample ({kept})")
+        what = f"returned {reprlib.repr(returned)}, not two finite hip torques [N m] (back, front)"
+    kept = (
+        f"its samples up to t = {(sample - 1) * dt:.10g} s are in the error's .result"
+        if sample > 0
+        else "before its first sample"
+    )
+    return (
+        f"controller {controller_name(controller)}.command(t = {sample * dt:.10g} s, "
+        f"sensors) {what}; the run stopped at that sample ({kept})"
+    )

@@ -104,19 +104,26 @@ class StartupParameters:
             if v is None and name in optional:
                 continue
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v)):
-                raise ValueError(f"startup.{name} = {v!r} is not allowed: must be a finite "
-                                 "number" + (" or None" if name in optional else ""))
+                raise ValueError(
+                    f"startup.{name} = {v!r} is not allowed: must be a finite "
+                    "number" + (" or None" if name in optional else "")
+                )
         if self.stand_duration < 0.0:
-            raise ValueError(f"startup.stand_duration = {self.stand_duration} s is not "
-                             "allowed: must be >= 0")
+            raise ValueError(
+                f"startup.stand_duration = {self.stand_duration} s is not allowed: must be >= 0"
+            )
         if not 0.0 < self.handover_timeout <= 5.0:
-            raise ValueError(f"startup.handover_timeout = {self.handover_timeout} s is not "
-                             "allowed: must be in (0, 5] s")
+            raise ValueError(
+                f"startup.handover_timeout = {self.handover_timeout} s is not "
+                "allowed: must be in (0, 5] s"
+            )
         for name in ("step_angle_back", "front_pushoff_angle"):
             v = getattr(self, name)
             if v is not None and not abs(v) < math.pi / 2:
-                raise ValueError(f"startup.{name} = {math.degrees(v):.1f} deg is not "
-                                 "allowed: must be in (-90, 90) deg")
+                raise ValueError(
+                    f"startup.{name} = {math.degrees(v):.1f} deg is not "
+                    "allowed: must be in (-90, 90) deg"
+                )
         for name in ("step_kp", "step_kd"):
             v = getattr(self, name)
             if v is not None and v < 0.0:
@@ -130,10 +137,14 @@ class StartupParameters:
         """The parameters with every None that stands for a controller value filled in."""
         return replace(
             self,
-            step_angle_back=(controller.touchdown_angle_back if self.step_angle_back is None
-                             else self.step_angle_back),
+            step_angle_back=(
+                controller.touchdown_angle_back
+                if self.step_angle_back is None
+                else self.step_angle_back
+            ),
             step_kp=controller.brake_kp_back if self.step_kp is None else self.step_kp,
-            step_kd=controller.brake_kd_back if self.step_kd is None else self.step_kd)
+            step_kd=controller.brake_kd_back if self.step_kd is None else self.step_kd,
+        )
 
     def back_step(self, controller: ControllerParameters) -> tuple[float, float, float]:
         """The back legs' step: (sweep limit [rad], stance-brake gains [N m/rad],
@@ -167,21 +178,26 @@ class StartupRecord:
 
     def to_dict(self) -> dict:
         """JSON-safe (a run's provenance)."""
-        return {"step_s": self.step_s, "push_s": self.push_s,
-                "liftoff_s": list(self.liftoff_s), "handover_s": self.handover_s,
-                "completed": self.completed, "parameters": asdict(self.parameters)}
+        return {
+            "step_s": self.step_s,
+            "push_s": self.push_s,
+            "liftoff_s": list(self.liftoff_s),
+            "handover_s": self.handover_s,
+            "completed": self.completed,
+            "parameters": asdict(self.parameters),
+        }
 
 
 def _set_brake(engine, leg: int, angle: float, kp: float, kd: float) -> None:
     """Set leg ``leg``'s sweep limit (the stance-brake set-point) [rad] and stance-brake
     gains [N m/rad], [N m s/rad] of the engine's Table I controller."""
     name = LEG_NAMES[leg]
-    engine.retune(**{f"sweep_limit_{name}": angle, f"brake_kp_{name}": kp,
-                     f"brake_kd_{name}": kd})
+    engine.retune(**{f"sweep_limit_{name}": angle, f"brake_kp_{name}": kp, f"brake_kd_{name}": kd})
 
 
-def run_startup(engine, params: StartupParameters,
-                controller: ControllerParameters) -> StartupRecord:
+def run_startup(
+    engine, params: StartupParameters, controller: ControllerParameters
+) -> StartupRecord:
     """Drive ``engine`` through the start-up from standing, up to the hand-over.
 
     ``engine`` runs the compiled Table I controller over the plant
@@ -196,10 +212,11 @@ def run_startup(engine, params: StartupParameters,
     """
     p = params.resolved(controller)
     dt = engine.dt
-    table = [(controller.sweep_limit_back, controller.brake_kp_back, controller.brake_kd_back),
-             (controller.sweep_limit_front, controller.brake_kp_front,
-              controller.brake_kd_front)]
-    for leg in range(2):     # stand: hold the standing angle with the stance-brake law
+    table = [
+        (controller.sweep_limit_back, controller.brake_kp_back, controller.brake_kd_back),
+        (controller.sweep_limit_front, controller.brake_kp_front, controller.brake_kd_front),
+    ]
+    for leg in range(2):  # stand: hold the standing angle with the stance-brake law
         _set_brake(engine, leg, standing_leg_angle(engine.s, leg), table[leg][1], table[leg][2])
     k_step = int(round(p.stand_duration / dt))
     k_timeout = k_step + int(round(p.handover_timeout / dt))
@@ -215,8 +232,13 @@ def run_startup(engine, params: StartupParameters,
             break
         engine.advance(engine.k + 1)
         # (ls now holds the leg states the sample just run, k - 1, set)
-        if (push is None and handed[BACK] and not handed[FRONT]
-                and p.front_pushoff_angle is not None and engine.ls[BACK] == LS_RETRACTION):
+        if (
+            push is None
+            and handed[BACK]
+            and not handed[FRONT]
+            and p.front_pushoff_angle is not None
+            and engine.ls[BACK] == LS_RETRACTION
+        ):
             # the stepped back legs touched down and thrust: the front legs push with them
             push = round((engine.k - 1) * dt, 9)
             engine.retune(sweep_limit_front=p.front_pushoff_angle)
@@ -228,9 +250,14 @@ def run_startup(engine, params: StartupParameters,
                 liftoff[leg] = round((engine.k - 1) * dt, 9)
                 _set_brake(engine, leg, *table[leg])
     completed = all(handed)
-    for leg in range(2):     # timeout or end of the run: every leg back to Table I
+    for leg in range(2):  # timeout or end of the run: every leg back to Table I
         if not handed[leg]:
             _set_brake(engine, leg, *table[leg])
-    return StartupRecord(step_s=round(k_step * dt, 9), push_s=push, liftoff_s=tuple(liftoff),
-                         handover_s=round(engine.k * dt, 9) if completed else None,
-                         completed=completed, parameters=p)
+    return StartupRecord(
+        step_s=round(k_step * dt, 9),
+        push_s=push,
+        liftoff_s=tuple(liftoff),
+        handover_s=round(engine.k * dt, 9) if completed else None,
+        completed=completed,
+        parameters=p,
+    )

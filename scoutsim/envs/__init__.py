@@ -17,9 +17,11 @@ from __future__ import annotations
 
 try:
     import gymnasium
-except ImportError as exc:     # pragma: no cover - exercised with gymnasium hidden
-    raise ImportError("scoutsim.envs needs Gymnasium: pip install 'scoutsim[rl]' "
-                      "(or pip install 'gymnasium>=1.0')") from exc
+except ImportError as exc:  # pragma: no cover - exercised with gymnasium hidden
+    raise ImportError(
+        "scoutsim.envs needs Gymnasium: pip install 'scoutsim[rl]' "
+        "(or pip install 'gymnasium>=1.0')"
+    ) from exc
 
 from .bound import BoundEnv
 
@@ -32,5 +34,8 @@ BOUND_ID = "scoutsim/Bound-v0"
 DEFAULT_MAX_EPISODE_STEPS = 1000
 
 if BOUND_ID not in gymnasium.registry:
-    gymnasium.register(id=BOUND_ID, entry_point="scoutsim.envs.bound:BoundEnv",
-                       max_episode_steps=DEFAULT_MAX_EPISODE_STEPS)
+    gymnasium.register(
+        id=BOUND_ID,
+        entry_point="scoutsim.envs.bound:BoundEnv",
+        max_episode_steps=DEFAULT_MAX_EPISODE_STEPS,
+    )

@@ -45,8 +45,18 @@ from .configuration import (
 )
 from .reward import Reward, check_weights, health_range
 
-__all__ = ["BoundEnv", "Reward", "PLANT_OPTIONS", "ACTION_TYPES", "SETPOINTS", "STARTS",
-           "RANDOM_START_HALF_WIDTHS", "RENDER_MODES", "RENDER_SIZE", "NON_PHYSICAL_ENDS"]
+__all__ = [
+    "BoundEnv",
+    "Reward",
+    "PLANT_OPTIONS",
+    "ACTION_TYPES",
+    "SETPOINTS",
+    "STARTS",
+    "RANDOM_START_HALF_WIDTHS",
+    "RENDER_MODES",
+    "RENDER_SIZE",
+    "NON_PHYSICAL_ENDS",
+]
 
 #: the ends of an episode that are the simulator's, not the robot's (``info["outcome"]``):
 #: the integrator or the constrained dynamics could not go on, or the controller failed
@@ -211,44 +221,72 @@ class BoundEnv(gymnasium.Env):
     #: that of the default policy period, 10 ms)
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 100}
 
-    def __init__(self, model: str = "II", action_type: str = "torque",
-                 policy_period: float = 0.01, *, reward: Reward | None = None,
-                 start="flight", reset_noise_scale: float = 1.0,
-                 robot: RobotParameters | None = None,
-                 controller: ControllerParameters | str | None = None,
-                 robot_file=None, sensors: SensorParameters | None = None,
-                 render_mode: str | None = None, **options):
-        render_width, render_height = (options.pop(name, default) for name, default in
-                                       RENDER_SIZE.items())
+    def __init__(
+        self,
+        model: str = "II",
+        action_type: str = "torque",
+        policy_period: float = 0.01,
+        *,
+        reward: Reward | None = None,
+        start="flight",
+        reset_noise_scale: float = 1.0,
+        robot: RobotParameters | None = None,
+        controller: ControllerParameters | str | None = None,
+        robot_file=None,
+        sensors: SensorParameters | None = None,
+        render_mode: str | None = None,
+        **options,
+    ):
+        render_width, render_height = (
+            options.pop(name, default) for name, default in RENDER_SIZE.items()
+        )
         reward, plant, parameters = split_options(reward, options)
         forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
-            reward.forward_reward_weight, reward.target_speed, reward.energy_cost_weight,
-            reward.healthy_reward)
+            reward.forward_reward_weight,
+            reward.target_speed,
+            reward.energy_cost_weight,
+            reward.healthy_reward,
+        )
         terminate_when_fallen, healthy_height_range, healthy_pitch_range = (
-            reward.terminate_when_fallen, reward.healthy_height_range,
-            reward.healthy_pitch_range)
+            reward.terminate_when_fallen,
+            reward.healthy_height_range,
+            reward.healthy_pitch_range,
+        )
         friction_coefficient, pitch_limit_deg, integrator = (
-            plant["friction_coefficient"], plant["pitch_limit_deg"], plant["integrator"])
+            plant["friction_coefficient"],
+            plant["pitch_limit_deg"],
+            plant["integrator"],
+        )
         if model not in ("ideal", "I", "II"):
             raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
         if action_type not in ACTION_TYPES:
-            raise ValueError(f"action_type = {action_type!r} is not allowed: must be one of "
-                             f"{list(ACTION_TYPES)}")
+            raise ValueError(
+                f"action_type = {action_type!r} is not allowed: must be one of {list(ACTION_TYPES)}"
+            )
         if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ValueError(f"render_mode = {render_mode!r} is not allowed: must be None or "
-                             f"one of {list(RENDER_MODES)}")
+            raise ValueError(
+                f"render_mode = {render_mode!r} is not allowed: must be None or "
+                f"one of {list(RENDER_MODES)}"
+            )
         for name, v in (("render_width", render_width), ("render_height", render_height)):
-            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, np.integer))
-                                  or v < 16):
-                raise ValueError(f"{name} = {v!r} is not allowed: must be a whole number of "
-                                 "pixels >= 16 (or None: the default)")
+            if v is not None and (
+                isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 16
+            ):
+                raise ValueError(
+                    f"{name} = {v!r} is not allowed: must be a whole number of "
+                    "pixels >= 16 (or None: the default)"
+                )
         #: the "MODULE:FACTORY" the Table I parameters were made by (None: given)
         self.controller_spec = controller if isinstance(controller, str) else None
-        self.robot, self.controller = environment_parameters(robot, controller, robot_file,
-                                                             parameters, model)
+        self.robot, self.controller = environment_parameters(
+            robot, controller, robot_file, parameters, model
+        )
         if sensors is None:
-            sensors = load_sensors(robot_file, self.robot) if robot_file is not None \
+            sensors = (
+                load_sensors(robot_file, self.robot)
+                if robot_file is not None
                 else SensorParameters()
+            )
         if not isinstance(sensors, SensorParameters):
             raise TypeError(f"sensors must be SensorParameters, not {type(sensors).__name__}")
         self.sensors = sensors
@@ -256,10 +294,15 @@ class BoundEnv(gymnasium.Env):
         self.action_type = action_type
         dt = self.controller.control_period
         n = round(policy_period / dt) if policy_period > 0 else 0
-        if not (math.isfinite(policy_period) and n >= 1
-                and abs(n * dt - policy_period) <= 1e-9 * policy_period):
-            raise ValueError(f"policy_period = {policy_period!r} s is not allowed: must be a "
-                             f"whole multiple (>= 1) of the control period {dt:g} s")
+        if not (
+            math.isfinite(policy_period)
+            and n >= 1
+            and abs(n * dt - policy_period) <= 1e-9 * policy_period
+        ):
+            raise ValueError(
+                f"policy_period = {policy_period!r} s is not allowed: must be a "
+                f"whole multiple (>= 1) of the control period {dt:g} s"
+            )
         self.control_period = dt
         self.samples_per_step = int(n)
         self.policy_period = n * dt
@@ -271,29 +314,37 @@ class BoundEnv(gymnasium.Env):
         self.terminate_when_fallen = bool(terminate_when_fallen)
         self.healthy_height_range = health_range(healthy_height_range, "healthy_height_range")
         self.healthy_pitch_range = health_range(healthy_pitch_range, "healthy_pitch_range")
-        if not (isinstance(start, (InitialState, HybridState)) or callable(start)
-                or start in STARTS):
-            raise ValueError(f"start = {start!r} is not allowed: must be one of "
-                             f"{list(STARTS)}, an InitialState, a HybridState or a callable")
+        if not (
+            isinstance(start, (InitialState, HybridState)) or callable(start) or start in STARTS
+        ):
+            raise ValueError(
+                f"start = {start!r} is not allowed: must be one of "
+                f"{list(STARTS)}, an InitialState, a HybridState or a callable"
+            )
         if start == "standing":
             start = standing_state(self.robot, model, self.controller)
         self.start = start
         if not (math.isfinite(reset_noise_scale) and reset_noise_scale >= 0.0):
-            raise ValueError(f"reset_noise_scale = {reset_noise_scale!r} is not allowed: "
-                             "must be a finite number >= 0")
+            raise ValueError(
+                f"reset_noise_scale = {reset_noise_scale!r} is not allowed: "
+                "must be a finite number >= 0"
+            )
         self.reset_noise_scale = float(reset_noise_scale)
         self.friction_coefficient = friction_coefficient
         self.pitch_limit_deg = pitch_limit_deg
         self.integrator = integrator
         self.render_mode = render_mode
         #: the frame's size keywords of draw_pose (none: its default size)
-        self._frame_size = {key: int(v) for key, v in (("width", render_width),
-                                                       ("height", render_height))
-                            if v is not None}
+        self._frame_size = {
+            key: int(v)
+            for key, v in (("width", render_width), ("height", render_height))
+            if v is not None
+        }
         rate = 1.0 / self.policy_period
-        self.metadata = {**type(self).metadata,
-                         "render_fps": round(rate) if abs(rate - round(rate)) < 1e-9 * rate
-                         else rate}
+        self.metadata = {
+            **type(self).metadata,
+            "render_fps": round(rate) if abs(rate - round(rate)) < 1e-9 * rate else rate,
+        }
         self.observation_space = observation_space()
         self.action_space = action_space(self.robot, action_type)
         #: the set-points' slots in the engine's controller array ``engine.C``
@@ -322,15 +373,16 @@ class BoundEnv(gymnasium.Env):
     def _live_engine(self) -> HybridEngine:
         """The engine, for the pieces below (the constructor makes one, reset() the
         episode's)."""
-        assert self._engine is not None     # (made in __init__, never cleared)
+        assert self._engine is not None  # (made in __init__, never cleared)
         return self._engine
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode (see the class docstring); returns (observation, info)."""
         super().reset(seed=seed)
-        noise_seed = int(self.np_random.integers(0, 2 ** 63 - 1))
-        self._new_engine(start_state(self.start, self.reset_noise_scale,
-                                     self.np_random), noise_seed)
+        noise_seed = int(self.np_random.integers(0, 2**63 - 1))
+        self._new_engine(
+            start_state(self.start, self.reset_noise_scale, self.np_random), noise_seed
+        )
         # the readings of sample 0 under zero torques, as simulate()'s controllers see them
         # before their first command (with torque actions the loop reads sample 0 again
         # under the first action: the accelerometer, currents and battery of that reading
@@ -344,12 +396,10 @@ class BoundEnv(gymnasium.Env):
         truncated, info)."""
         eng = self._engine
         if eng is None or not self._running:
-            raise RuntimeError("BoundEnv.step: the episode has ended (or not begun): call "
-                               "reset()")
+            raise RuntimeError("BoundEnv.step: the episode has ended (or not begun): call reset()")
         a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
         if not np.all(np.isfinite(a)):
-            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be "
-                             "finite")
+            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be finite")
         a = np.clip(a, self.action_space.low, self.action_space.high)
         if self.action_type == "torque":
             eng.cmd[:] = a
@@ -359,7 +409,7 @@ class BoundEnv(gymnasium.Env):
         eng.advance(eng.k + self.samples_per_step)
         outcome = eng.status_name
         broken = outcome in NON_PHYSICAL_ENDS
-        message = self._failure_message() if broken else None   # (from the step's records)
+        message = self._failure_message() if broken else None  # (from the step's records)
         eng.discard_records()
         obs = eng.read_sensors().copy()
         x1, t1 = eng.x, eng.t_now
@@ -384,9 +434,15 @@ class BoundEnv(gymnasium.Env):
         truncated = not terminated and eng.stopped
         self._running = not (terminated or truncated)
         info = self._info_now()
-        info.update(reward_forward=r_forward, reward_energy=r_energy,
-                    reward_healthy=r_healthy, x_velocity=v, electrical_energy=energy,
-                    is_healthy=up, numerical_failure=outcome == "numerical_failure")
+        info.update(
+            reward_forward=r_forward,
+            reward_energy=r_energy,
+            reward_healthy=r_healthy,
+            x_velocity=v,
+            electrical_energy=energy,
+            is_healthy=up,
+            numerical_failure=outcome == "numerical_failure",
+        )
         if broken:
             info["failure_message"] = message
         return obs, float(reward), bool(terminated), bool(truncated), info
@@ -398,18 +454,22 @@ class BoundEnv(gymnasium.Env):
         if self.render_mode is None:
             return None
         if not self._reset_done:
-            raise gymnasium.error.ResetNeeded("BoundEnv.render: call reset() before "
-                                              "render()")
+            raise gymnasium.error.ResetNeeded("BoundEnv.render: call reset() before render()")
         # the drawing lives in the presentation layer (deferred: imported on first render)
         from ..presentation.frames import RobotPose, draw_pose
+
         eng = self._engine
         legs = (0, 1)
         pose = RobotPose.of(
-            self.robot, eng.x, eng.height, eng.pitch,
+            self.robot,
+            eng.x,
+            eng.height,
+            eng.pitch,
             toes=[eng.toe_position(leg) for leg in legs],
             contact=[eng.contact_mode(leg) != ContactMode.FLIGHT for leg in legs],
             # the Table I controller's leg states ("torque": no controller runs)
-            leg_states=tuple(eng.ls) if self.action_type == "setpoints" else None)
+            leg_states=tuple(eng.ls) if self.action_type == "setpoints" else None,
+        )
         return draw_pose(pose, **self._frame_size)
 
     # -- pieces -----------------------------------------------------------------------------
@@ -419,12 +479,19 @@ class BoundEnv(gymnasium.Env):
         ``noise_seed``."""
         self._accounting = self.energy_cost_weight != 0.0
         self._engine = start_engine(
-            start, _ENGINE_DURATION, robot=self.robot, model=self.model,
-            controller=self.controller, hold_commands=self.action_type == "torque",
+            start,
+            _ENGINE_DURATION,
+            robot=self.robot,
+            model=self.model,
+            controller=self.controller,
+            hold_commands=self.action_type == "torque",
             sensors=self.sensors.replace(seed=noise_seed),
             friction_coefficient=self.friction_coefficient,
-            pitch_limit_deg=self.pitch_limit_deg, integrator=self.integrator,
-            energy=self._accounting, rows=self.samples_per_step + 2)
+            pitch_limit_deg=self.pitch_limit_deg,
+            integrator=self.integrator,
+            energy=self._accounting,
+            rows=self.samples_per_step + 2,
+        )
         self._running = True
 
     def _electrical(self) -> float:
@@ -438,13 +505,15 @@ class BoundEnv(gymnasium.Env):
         (:func:`~scoutsim.result.failure.diagnose_failure`), or the controller's failure."""
         eng = self._live_engine
         if eng.status_name != "numerical_failure":
-            return (f"the controller failed at t = {eng.t_now:.6g} s (outcome "
-                    f"{eng.status_name!r})")
-        provenance = {"model": self.model, "robot": dataclasses.asdict(self.robot),
-                      "controller": dataclasses.asdict(self.controller),
-                      "integrator": dataclasses.asdict(eng.integ)}
+            return f"the controller failed at t = {eng.t_now:.6g} s (outcome {eng.status_name!r})"
+        provenance = {
+            "model": self.model,
+            "robot": dataclasses.asdict(self.robot),
+            "controller": dataclasses.asdict(self.controller),
+            "integrator": dataclasses.asdict(eng.integ),
+        }
         diagnosis = diagnose_failure(eng.result(provenance))
-        assert diagnosis is not None    # (the run's outcome is "numerical_failure")
+        assert diagnosis is not None  # (the run's outcome is "numerical_failure")
         return diagnosis.message()
 
     def _state_finite(self) -> bool:
@@ -457,5 +526,10 @@ class BoundEnv(gymnasium.Env):
 
     def _info_now(self) -> dict:
         eng = self._live_engine
-        return {"t": eng.t_now, "x_position": eng.x, "height": eng.height,
-                "pitch": eng.pitch, "outcome": eng.status_name}
+        return {
+            "t": eng.t_now,
+            "x_position": eng.x,
+            "height": eng.height,
+            "pitch": eng.pitch,
+            "outcome": eng.status_name,
+        }

@@ -34,8 +34,12 @@ from .reward import Reward
 ACTION_TYPES = ("torque", "setpoints")
 #: the set-points a "setpoints" action gives, in its order (fields of
 #: :class:`~scoutsim.parameters.ControllerParameters`, [rad] relative to the torso)
-SETPOINTS = ("touchdown_angle_back", "touchdown_angle_front", "sweep_limit_back",
-             "sweep_limit_front")
+SETPOINTS = (
+    "touchdown_angle_back",
+    "touchdown_angle_front",
+    "sweep_limit_back",
+    "sweep_limit_front",
+)
 #: the starts known by name
 STARTS = ("flight", "standing", "random")
 #: the "random" start: InitialState field -> half-width [SI] of the uniform interval about
@@ -49,6 +53,7 @@ RENDER_MODES = ("rgb_array",)
 #: the frame's size keywords [pixels] with their defaults (None: the default of
 #: :func:`scoutsim.presentation.frames.draw_pose`, 480 x 240)
 RENDER_SIZE = {"render_width": None, "render_height": None}
+
 
 def observation_space() -> spaces.Box:
     """The observation's box: the sensor readings in their order, float64, unbounded."""
@@ -78,24 +83,28 @@ def start_state(start, reset_noise_scale: float, rng):
         init = InitialState()
         if rng is None:
             return init
-        changes = {name: getattr(init, name) + reset_noise_scale * half
-                   * float(rng.uniform(-1.0, 1.0))
-                   for name, half in RANDOM_START_HALF_WIDTHS.items()}
+        changes = {
+            name: getattr(init, name) + reset_noise_scale * half * float(rng.uniform(-1.0, 1.0))
+            for name, half in RANDOM_START_HALF_WIDTHS.items()
+        }
         return init.replace(**changes)
-    if rng is None:    # (a user's distribution: drawn at reset only)
+    if rng is None:  # (a user's distribution: drawn at reset only)
         return None
     state = start(rng)
     if not isinstance(state, (InitialState, HybridState)):
-        raise TypeError(f"start(np_random) returned {type(state).__name__}: must be an "
-                        "InitialState or a HybridState")
+        raise TypeError(
+            f"start(np_random) returned {type(state).__name__}: must be an "
+            "InitialState or a HybridState"
+        )
     return state
 
 
 #: the environment's keywords for the plant beyond the robot, with their defaults: the floor's
 #: friction and the pitch limit as :func:`scoutsim.simulate` has them, and the integrator
-PLANT_OPTIONS = {**{k: SIMULATE_PLANT_OPTIONS[k] for k in ("friction_coefficient",
-                                                         "pitch_limit_deg")},
-                 "integrator": None}
+PLANT_OPTIONS = {
+    **{k: SIMULATE_PLANT_OPTIONS[k] for k in ("friction_coefficient", "pitch_limit_deg")},
+    "integrator": None,
+}
 
 
 def split_options(reward: Reward | None, options: dict) -> tuple[Reward, dict, dict]:
@@ -114,28 +123,34 @@ def environment_parameters(robot, controller, robot_file, overrides, model):
     unknown = set(overrides) - robot_fields - ctrl_fields
     if unknown:
         import difflib
+
         name = sorted(unknown)[0]
         close = difflib.get_close_matches(name, sorted(robot_fields | ctrl_fields), n=1)
-        raise TypeError(f"BoundEnv got an unexpected keyword {name!r}: not an option nor a "
-                        "field of RobotParameters or ControllerParameters"
-                        + (f"; did you mean {close[0]!r}?" if close else ""))
+        raise TypeError(
+            f"BoundEnv got an unexpected keyword {name!r}: not an option nor a "
+            "field of RobotParameters or ControllerParameters"
+            + (f"; did you mean {close[0]!r}?" if close else "")
+        )
     r_over = {k: v for k, v in overrides.items() if k in robot_fields}
     c_over = {k: v for k, v in overrides.items() if k in ctrl_fields}
     spec = controller if isinstance(controller, str) else None
     if spec is not None:
         controller = None
         if not is_factory_spec(spec):
-            raise ValueError(f"controller = {spec!r} is not allowed: a string must be "
-                             "'MODULE:FACTORY' (e.g. 'my_gaits:make', a function in "
-                             "my_gaits.py returning ControllerParameters)")
+            raise ValueError(
+                f"controller = {spec!r} is not allowed: a string must be "
+                "'MODULE:FACTORY' (e.g. 'my_gaits:make', a function in "
+                "my_gaits.py returning ControllerParameters)"
+            )
     if robot_file is not None:
         if robot is not None or controller is not None:
             raise ValueError("robot_file is not allowed together with robot or controller")
         robot, controller = load_parameters(robot_file, r_over, c_over)
     else:
         robot = (robot if robot is not None else RobotParameters()).replace(**r_over)
-        controller = (controller if controller is not None
-                      else ControllerParameters()).replace(**c_over)
+        controller = (controller if controller is not None else ControllerParameters()).replace(
+            **c_over
+        )
         validate_robot(robot)
     if spec is not None:
         controller = _from_factory(spec, robot, controller, model).replace(**c_over)
@@ -143,17 +158,20 @@ def environment_parameters(robot, controller, robot_file, overrides, model):
     return robot, controller
 
 
-def _from_factory(spec: str, robot: RobotParameters, params: ControllerParameters,
-                  model: str) -> ControllerParameters:
+def _from_factory(
+    spec: str, robot: RobotParameters, params: ControllerParameters, model: str
+) -> ControllerParameters:
     """The Table I parameters the factory ``spec`` makes for ``robot`` from ``params``."""
     made = controller_from_spec(spec, robot, params)
     # what simulate() would run it as: the built-in law (with these parameters) or not
     plan = plan_controller(made, model, robot)
     if plan.kind != "builtin":
-        raise FactoryError(f"controller {spec!r} returned {type(made).__name__}, a controller "
-                           "with a command() of its own: BoundEnv runs the Table I law (the "
-                           "agent sets its set-points) or the agent's hip torques, so its "
-                           "factory must return ControllerParameters (or a "
-                           "BoundingController with the built-in law)")
-    assert plan.parameters is not None      # (the built-in law runs with parameters)
+        raise FactoryError(
+            f"controller {spec!r} returned {type(made).__name__}, a controller "
+            "with a command() of its own: BoundEnv runs the Table I law (the "
+            "agent sets its set-points) or the agent's hip torques, so its "
+            "factory must return ControllerParameters (or a "
+            "BoundingController with the built-in law)"
+        )
+    assert plan.parameters is not None  # (the built-in law runs with parameters)
     return plan.parameters

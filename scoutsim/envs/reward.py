@@ -41,13 +41,19 @@ def check_weights(reward: Reward) -> None:
     """Refuse a reward weight that is not a finite number and a target speed that is not
     finite (or None), naming the field."""
     forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
-        reward.forward_reward_weight, reward.target_speed, reward.energy_cost_weight,
-        reward.healthy_reward)
-    for name, v in (("forward_reward_weight", forward_reward_weight),
-                    ("energy_cost_weight", energy_cost_weight),
-                    ("healthy_reward", healthy_reward)):
+        reward.forward_reward_weight,
+        reward.target_speed,
+        reward.energy_cost_weight,
+        reward.healthy_reward,
+    )
+    for name, v in (
+        ("forward_reward_weight", forward_reward_weight),
+        ("energy_cost_weight", energy_cost_weight),
+        ("healthy_reward", healthy_reward),
+    ):
         if not (isinstance(v, (int, float)) and math.isfinite(v)):
             raise ValueError(f"{name} = {v!r} is not allowed: must be a finite number")
     if target_speed is not None and not math.isfinite(target_speed):
-        raise ValueError(f"target_speed = {target_speed!r} m/s is not allowed: must be "
-                         "finite or None")
+        raise ValueError(
+            f"target_speed = {target_speed!r} m/s is not allowed: must be finite or None"
+        )

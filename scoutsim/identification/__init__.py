@@ -9,9 +9,23 @@ from importlib import import_module
 
 #: public name -> the module that defines it
 _EXPORTS = {
-    **{n: ".rigs" for n in ("HIP_PARAMETERS", "RIG_NAMES", "FlightSteps", "FreeSwing",
-                            "RigNoise", "Stall", "hip_parameters", "rig_log", "run_rig",
-                            "stall_deflection", "with_toe_mass", "DEFAULT_PARAMS")},
+    **{
+        n: ".rigs"
+        for n in (
+            "HIP_PARAMETERS",
+            "RIG_NAMES",
+            "FlightSteps",
+            "FreeSwing",
+            "RigNoise",
+            "Stall",
+            "hip_parameters",
+            "rig_log",
+            "run_rig",
+            "stall_deflection",
+            "with_toe_mass",
+            "DEFAULT_PARAMS",
+        )
+    },
     **{n: ".fit_result" for n in ("FittedParameter", "IdentificationResult")},
     **{n: ".example" for n in ("example_logs", "example_robot")},
     **{n: ".fit" for n in ("FitSettings", "identify")},

@@ -20,11 +20,20 @@ from ..simulation.integrator import IntegratorSettings
 __all__ = ["run_bench", "Bench"]
 
 
-def run_bench(robot: RobotParameters, model: str, start_state, duration: float, *,
-              bench: Bench | None = None, controller: ControllerParameters | None = None,
-              held_torques=None, schedule=None, dt: float = 1e-3,
-              integrator: IntegratorSettings | None = None,
-              provenance: dict | None = None) -> SimulationResult:
+def run_bench(
+    robot: RobotParameters,
+    model: str,
+    start_state,
+    duration: float,
+    *,
+    bench: Bench | None = None,
+    controller: ControllerParameters | None = None,
+    held_torques=None,
+    schedule=None,
+    dt: float = 1e-3,
+    integrator: IntegratorSettings | None = None,
+    provenance: dict | None = None,
+) -> SimulationResult:
     """Run the hybrid model on a bench: the engine of
     :func:`~scoutsim.simulation.simulator.simulate` with the rig options a hip-unit
     identification needs (:mod:`scoutsim.identification.rigs`).
@@ -45,9 +54,15 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     integrator : IntegratorSettings (default: the reference, DOPRI5).
     """
     integrator = integrator or IntegratorSettings(method="dopri5")
-    setup = assemble(robot, model, np.asarray(start_state, dtype=float),
-                     bench_plan(robot, model, controller), plant=PlantOptions(bench=bench or Bench()),
-                     integrator=integrator, control_period=dt)
+    setup = assemble(
+        robot,
+        model,
+        np.asarray(start_state, dtype=float),
+        bench_plan(robot, model, controller),
+        plant=PlantOptions(bench=bench or Bench()),
+        integrator=integrator,
+        control_period=dt,
+    )
     integrator = setup.integrator
     eng = HybridEngine.assembled(setup, duration)
     if held_torques is not None:
@@ -57,8 +72,9 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
     for _, changes in sched:
         for field in changes:
             if field not in SCHEDULABLE:
-                raise ValueError(f"schedule field {field!r} is not allowed: must be one of "
-                                 f"{sorted(SCHEDULABLE)}")
+                raise ValueError(
+                    f"schedule field {field!r} is not allowed: must be one of {sorted(SCHEDULABLE)}"
+                )
     si = 0
     while eng.running:
         while si < len(sched) and sched[si][0] <= eng.k:
@@ -68,6 +84,14 @@ def run_bench(robot: RobotParameters, model: str, start_state, duration: float, 
         if si < len(sched):
             k_stop = min(k_stop, int(sched[si][0]))
         eng.advance(k_stop)
-    return eng.result(dict(provenance or {}, model=model, robot=asdict(robot),
-                           control_period_s=dt, integrator=asdict(integrator),
-                           scoutsim_version=__version__, duration_s=duration))
+    return eng.result(
+        dict(
+            provenance or {},
+            model=model,
+            robot=asdict(robot),
+            control_period_s=dt,
+            integrator=asdict(integrator),
+            scoutsim_version=__version__,
+            duration_s=duration,
+        )
+    )

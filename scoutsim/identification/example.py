@@ -17,9 +17,14 @@ __all__ = ["EXAMPLE_FACTORS", "example_robot", "example_logs"]
 
 #: Factors applied to the Table II values to make the example's "true" hip unit: the fit
 #: starts from Table II and must find these.
-EXAMPLE_FACTORS = {"drive_gear_inertia": 1.5, "driven_gear_inertia": 0.7,
-                   "joint_stiction": 1.6, "joint_damping": 0.6, "belt_stiffness": 1.3,
-                   "belt_damping": 0.8}
+EXAMPLE_FACTORS = {
+    "drive_gear_inertia": 1.5,
+    "driven_gear_inertia": 0.7,
+    "joint_stiction": 1.6,
+    "joint_damping": 0.6,
+    "belt_stiffness": 1.3,
+    "belt_damping": 0.8,
+}
 
 
 def example_robot(base: RobotParameters | None = None) -> RobotParameters:
@@ -28,11 +33,13 @@ def example_robot(base: RobotParameters | None = None) -> RobotParameters:
     return base.replace(**{k: getattr(base, k) * f for k, f in EXAMPLE_FACTORS.items()})
 
 
-def example_logs(rigs=("free-swing", "flight-steps"), seed: int = 0, noise: RigNoise | None = None,
-                 out_dir=None) -> list:
+def example_logs(
+    rigs=("free-swing", "flight-steps"), seed: int = 0, noise: RigNoise | None = None, out_dir=None
+) -> list:
     """Virtual rig logs made with :func:`example_robot` and sensor noise (seeded; one seed
     per log, ``seed + i``). Saved as ``<rig>.csv.gz`` in ``out_dir`` if given."""
     from .rigs import rig_log
+
     true = example_robot()
     noise = noise or RigNoise()
     logs = []
@@ -43,11 +50,16 @@ def example_logs(rigs=("free-swing", "flight-steps"), seed: int = 0, noise: RigN
         elif name == "flight-steps":
             rig = FlightSteps()
         else:
-            raise ValueError(f"rig = {name!r} is not allowed: must be one of "
-                             f"{', '.join(FITTABLE_RIGS)}")
-        log = rig_log(run_rig(rig, true), noise=noise, seed=seed + i,
-                      notes="scoutsim identify --example: true hip unit = Table II x "
-                            + json.dumps(EXAMPLE_FACTORS))
+            raise ValueError(
+                f"rig = {name!r} is not allowed: must be one of {', '.join(FITTABLE_RIGS)}"
+            )
+        log = rig_log(
+            run_rig(rig, true),
+            noise=noise,
+            seed=seed + i,
+            notes="scoutsim identify --example: true hip unit = Table II x "
+            + json.dumps(EXAMPLE_FACTORS),
+        )
         if out_dir is not None:
             out = Path(out_dir)
             out.mkdir(parents=True, exist_ok=True)

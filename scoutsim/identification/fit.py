@@ -61,10 +61,22 @@ from .rig_data import (
 from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS
 from .uncertainty import optimum, spread
 
-__all__ = ["identify", "FitSettings", "IdentificationResult", "FittedParameter", "RigData",
-           "prepare_log", "simulate_log", "DEFAULT_PARAMS", "default_bounds",
-           "MIN_MOTION_RAD", "FITTABLE_RIGS", "EXAMPLE_FACTORS", "example_robot",
-           "example_logs"]
+__all__ = [
+    "identify",
+    "FitSettings",
+    "IdentificationResult",
+    "FittedParameter",
+    "RigData",
+    "prepare_log",
+    "simulate_log",
+    "DEFAULT_PARAMS",
+    "default_bounds",
+    "MIN_MOTION_RAD",
+    "FITTABLE_RIGS",
+    "EXAMPLE_FACTORS",
+    "example_robot",
+    "example_logs",
+]
 
 
 @dataclass(frozen=True)
@@ -105,11 +117,20 @@ def _settings(settings: FitSettings | None, options: dict) -> FitSettings:
     return dataclasses.replace(settings or FitSettings(), **options)
 
 
-def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameters | None = None,
-             bounds: dict | None = None, start: dict | None = None,
-             integrator: IntegratorSettings | None = None, use_current: bool | None = None,
-             progress=None, settings: FitSettings | None = None,
-             **options) -> IdentificationResult:
+def identify(
+    logs,
+    params=None,
+    *,
+    rig: str | None = None,
+    robot: RobotParameters | None = None,
+    bounds: dict | None = None,
+    start: dict | None = None,
+    integrator: IntegratorSettings | None = None,
+    use_current: bool | None = None,
+    progress=None,
+    settings: FitSettings | None = None,
+    **options,
+) -> IdentificationResult:
     """Fit hip-unit parameters to one or more rig logs (see the module docstring).
 
     Parameters
@@ -132,13 +153,18 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     """
     s = _settings(settings, options)
     base = validate_robot(robot if robot is not None else RobotParameters())
-    differ = [n for n in (*HIP_PARAMETERS, "planetary_ratio", "sprocket_ratio")
-              if isinstance(getattr(base, n), tuple)]
+    differ = [
+        n
+        for n in (*HIP_PARAMETERS, "planetary_ratio", "sprocket_ratio")
+        if isinstance(getattr(base, n), tuple)
+    ]
     if differ:
-        raise ValueError(f"robot: the hip units differ between the legs in "
-                         f"{', '.join(differ)}; the fit identifies one hip unit for both "
-                         "legs: give those fields one value (in Python, robot.leg('back') "
-                         "or robot.leg('front') is one leg's robot)")
+        raise ValueError(
+            f"robot: the hip units differ between the legs in "
+            f"{', '.join(differ)}; the fit identifies one hip unit for both "
+            "legs: give those fields one value (in Python, robot.leg('back') "
+            "or robot.leg('front') is one leg's robot)"
+        )
     if not (0.0 < s.confidence < 1.0):
         raise ValueError(f"confidence = {s.confidence} is not allowed: must be in (0, 1)")
     data = prepare_logs(logs, rig, base, use_current)
@@ -147,8 +173,7 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     p = len(names)
     nres = residual_count(data, p)
     residuals = Residuals(data, base, names, integrator)
-    scored = score_starts(residuals, start_points(base, sb, start, s.n_starts, s.seed),
-                          progress)
+    scored = score_starts(residuals, start_points(base, sb, start, s.n_starts, s.seed), progress)
     starts_info = starts_table(scored, names)
     best = refine(residuals, scored, starts_info, sb, s, progress)
     opt = optimum(residuals, best.x, nres, p, s.confidence)
@@ -158,10 +183,22 @@ def identify(logs, params=None, *, rig: str | None = None, robot: RobotParameter
     combos = reflected_gear_inertia(sb, opt, spr, base, true)
     rms = channel_rms(opt.r, data)
     return IdentificationResult(
-        parameters=fitted, confidence=s.confidence, robot=robot_with(base, names, opt.x),
-        start_robot=base, correlation=spr.corr, singular_values=spr.S,
-        singular_vectors=spr.Vt.T, cost=float(best.cost), residual_scale=math.sqrt(opt.s2),
-        channel_rms=rms, n_residuals=nres, data=data, starts=starts_info,
-        nfev=residuals.nfev, message=str(best.message),
-        curvature_ratios=[float(v) for v in spr.ratios], flat=[bool(v) for v in spr.flat],
-        combinations=combos)
+        parameters=fitted,
+        confidence=s.confidence,
+        robot=robot_with(base, names, opt.x),
+        start_robot=base,
+        correlation=spr.corr,
+        singular_values=spr.S,
+        singular_vectors=spr.Vt.T,
+        cost=float(best.cost),
+        residual_scale=math.sqrt(opt.s2),
+        channel_rms=rms,
+        n_residuals=nres,
+        data=data,
+        starts=starts_info,
+        nfev=residuals.nfev,
+        message=str(best.message),
+        curvature_ratios=[float(v) for v in spr.ratios],
+        flat=[bool(v) for v in spr.flat],
+        combinations=combos,
+    )

@@ -38,12 +38,18 @@ class FittedParameter:
     def to_dict(self) -> dict:
         def num(x):
             return None if (x is None or not math.isfinite(x)) else float(x)
-        return {"value": float(self.value), "unit": self.unit,
-                "interval": [num(self.interval[0]), num(self.interval[1])],
-                "identifiable": bool(self.identifiable), "reason": self.reason,
-                "log_sd": num(self.log_sd), "start": float(self.start),
-                "search_box": [float(self.bounds[0]), float(self.bounds[1])],
-                "true": num(self.true)}
+
+        return {
+            "value": float(self.value),
+            "unit": self.unit,
+            "interval": [num(self.interval[0]), num(self.interval[1])],
+            "identifiable": bool(self.identifiable),
+            "reason": self.reason,
+            "log_sd": num(self.log_sd),
+            "start": float(self.start),
+            "search_box": [float(self.bounds[0]), float(self.bounds[1])],
+            "true": num(self.true),
+        }
 
 
 @dataclass
@@ -81,18 +87,26 @@ class IdentificationResult:
             "rigs": [d.rig.name for d in self.data],
             "confidence": self.confidence,
             "parameters": {k: p.to_dict() for k, p in self.parameters.items()},
-            "correlation": {"names": self.names,
-                            "matrix": [[None if not math.isfinite(v) else round(float(v), 6)
-                                        for v in row] for row in self.correlation]},
+            "correlation": {
+                "names": self.names,
+                "matrix": [
+                    [None if not math.isfinite(v) else round(float(v), 6) for v in row]
+                    for row in self.correlation
+                ],
+            },
             "singular_values": [float(v) for v in self.singular_values],
-            "singular_vectors": [[round(float(v), 6) for v in col]
-                                 for col in self.singular_vectors.T],
+            "singular_vectors": [
+                [round(float(v), 6) for v in col] for col in self.singular_vectors.T
+            ],
             "curvature_ratios": [float(v) for v in self.curvature_ratios],
             "flat_directions": [bool(v) for v in self.flat],
             "combinations": self.combinations,
-            "cost": self.cost, "residual_scale": self.residual_scale,
-            "channel_rms_over_sigma": self.channel_rms, "n_residuals": self.n_residuals,
-            "function_evaluations": self.nfev, "optimizer_message": self.message,
+            "cost": self.cost,
+            "residual_scale": self.residual_scale,
+            "channel_rms_over_sigma": self.channel_rms,
+            "n_residuals": self.n_residuals,
+            "function_evaluations": self.nfev,
+            "optimizer_message": self.message,
             "multistart": self.starts,
         }
 
@@ -100,17 +114,24 @@ class IdentificationResult:
         """Plain-text table: fitted value, interval, identifiable flag (and truth if known)."""
         c = round(100 * self.confidence)
         has_true = any(p.true is not None for p in self.parameters.values())
-        lines = [f"{'parameter':<30} {'unit':<10} " + (f"{'true':>11} " if has_true else "")
-                 + f"{'fitted':>11}  {str(c) + ' % interval':<27} identifiable"]
+        lines = [
+            f"{'parameter':<30} {'unit':<10} "
+            + (f"{'true':>11} " if has_true else "")
+            + f"{'fitted':>11}  {str(c) + ' % interval':<27} identifiable"
+        ]
         for p in self.parameters.values():
             lo, hi = p.interval
             iv = f"[{lo:.4g}, {hi:.4g}]" if math.isfinite(hi) else f"[{lo:.4g}, inf]"
             tr = (f"{p.true:>11.4g} " if p.true is not None else f"{'':>11} ") if has_true else ""
-            lines.append(f"{p.name:<30} {p.unit:<10} {tr}{p.value:>11.4g}  {iv:<27} "
-                         + ("yes" if p.identifiable else f"NO ({p.reason})"))
-        lines.append(f"residual scale s = {self.residual_scale:.3f} (1 = residuals as large as "
-                     f"the stated sensor noise); rms/sigma per channel: "
-                     + ", ".join(f"{k} {v:.3f}" for k, v in self.channel_rms.items()))
+            lines.append(
+                f"{p.name:<30} {p.unit:<10} {tr}{p.value:>11.4g}  {iv:<27} "
+                + ("yes" if p.identifiable else f"NO ({p.reason})")
+            )
+        lines.append(
+            f"residual scale s = {self.residual_scale:.3f} (1 = residuals as large as "
+            f"the stated sensor noise); rms/sigma per channel: "
+            + ", ".join(f"{k} {v:.3f}" for k, v in self.channel_rms.items())
+        )
         pairs = []
         n = len(self.names)
         for i in range(n):
@@ -122,25 +143,31 @@ class IdentificationResult:
             lines.append("strongly correlated (|rho| > 0.95): " + "; ".join(pairs))
         if len(self.singular_values):
             sv = self.singular_values
-            lines.append("singular values of the scaled Jacobian: "
-                         + ", ".join(f"{x:.3g}" for x in sv) + "; cost rise over the "
-                         "interval / linear prediction: "
-                         + ", ".join(f"{x:.2f}" for x in self.curvature_ratios))
+            lines.append(
+                "singular values of the scaled Jacobian: "
+                + ", ".join(f"{x:.3g}" for x in sv)
+                + "; cost rise over the "
+                "interval / linear prediction: "
+                + ", ".join(f"{x:.2f}" for x in self.curvature_ratios)
+            )
             for k in np.flatnonzero(self.flat):
                 v = self.singular_vectors[:, k]
                 idx = np.argsort(-np.abs(v))[:3]
-                comb = " ".join(f"{v[i]:+.2f} ln {self.names[i]}" for i in idx
-                                if abs(v[i]) > 0.05)
+                comb = " ".join(f"{v[i]:+.2f} ln {self.names[i]}" for i in idx if abs(v[i]) > 0.05)
                 lines.append(f"flat direction (not determined by these logs): {comb}")
         for name, c in self.combinations.items():
             lo, hi = c["interval"]
             tr = f" (true {c['true']:.5g})" if c.get("true") is not None else ""
             if hi is None:
-                lines.append(f"combination {name} = {c['definition']}: {c['value']:.5g} "
-                             f"{c['unit']}, not determined either{tr}")
+                lines.append(
+                    f"combination {name} = {c['definition']}: {c['value']:.5g} "
+                    f"{c['unit']}, not determined either{tr}"
+                )
             else:
-                lines.append(f"determined combination {name} = {c['definition']}: "
-                             f"{c['value']:.5g} {c['unit']}, interval [{lo:.5g}, {hi:.5g}]{tr}")
+                lines.append(
+                    f"determined combination {name} = {c['definition']}: "
+                    f"{c['value']:.5g} {c['unit']}, interval [{lo:.5g}, {hi:.5g}]{tr}"
+                )
         return "\n".join(lines)
 
     def save(self, out_dir, figures: bool = True) -> Path:
@@ -159,6 +186,7 @@ class IdentificationResult:
         :func:`scoutsim.presentation.identification_plots.plot_fit` (needs Matplotlib).
         Returns the paths written."""
         from ..presentation.identification_plots import plot_fit
+
         files = []
         for i, d in enumerate(self.data):
             fit_a, fit_c, _ = simulate_log(d, self.robot)

@@ -37,8 +37,9 @@ def true_parameters(data: list) -> dict:
     return true
 
 
-def fitted_parameters(sb: SearchBox, opt: Optimum, sd, base: RobotParameters, true: dict,
-                      max_interval_ratio: float) -> dict:
+def fitted_parameters(
+    sb: SearchBox, opt: Optimum, sd, base: RobotParameters, true: dict, max_interval_ratio: float
+) -> dict:
     """name -> :class:`FittedParameter`: value exp(x), interval exp(x +- zq sd), and
     whether it is identifiable (finite interval spanning at most ``max_interval_ratio``,
     not at the search box's edge) or why not."""
@@ -60,15 +61,23 @@ def fitted_parameters(sb: SearchBox, opt: Optimum, sd, base: RobotParameters, tr
         else:
             ok, why = True, ""
         fitted[n] = FittedParameter(
-            name=n, unit=HIP_PARAMETERS[n], value=math.exp(x[i]), interval=(lo, hi),
-            identifiable=ok, reason=why, log_sd=float(sd[i]),
-            start=float(getattr(base, n)), bounds=(math.exp(xlo[i]), math.exp(xhi[i])),
-            true=(float(true[n]) if n in true else None))
+            name=n,
+            unit=HIP_PARAMETERS[n],
+            value=math.exp(x[i]),
+            interval=(lo, hi),
+            identifiable=ok,
+            reason=why,
+            log_sd=float(sd[i]),
+            start=float(getattr(base, n)),
+            bounds=(math.exp(xlo[i]), math.exp(xhi[i])),
+            true=(float(true[n]) if n in true else None),
+        )
     return fitted
 
 
-def reflected_gear_inertia(sb: SearchBox, opt: Optimum, spr: Spread, base: RobotParameters,
-                           true: dict) -> dict:
+def reflected_gear_inertia(
+    sb: SearchBox, opt: Optimum, spr: Spread, base: RobotParameters, true: dict
+) -> dict:
     """The combination the clamped rigs determine when both gear inertias are fitted: the
     reflected gear-train inertia J_2 + N^2 J_1 [kg m^2] (docs/specification.md section 5)
     with its interval, as {"reflected_gear_inertia": {...}}; {} if not both are fitted."""
@@ -78,7 +87,7 @@ def reflected_gear_inertia(sb: SearchBox, opt: Optimum, spr: Spread, base: Robot
     combos = {}
     if "drive_gear_inertia" in names and "driven_gear_inertia" in names:
         i1, i2 = names.index("drive_gear_inertia"), names.index("driven_gear_inertia")
-        n2 = base.gear_ratio ** 2
+        n2 = base.gear_ratio**2
         j1, j2 = math.exp(x[i1]), math.exp(x[i2])
         jr = j2 + n2 * j1
         g = np.zeros(p)
@@ -93,14 +102,20 @@ def reflected_gear_inertia(sb: SearchBox, opt: Optimum, spr: Spread, base: Robot
             gv = abs(float(g @ Vt[k]))
             gear_dir = Vt[k, i1] ** 2 + Vt[k, i2] ** 2 > 0.5
             if gv > 0.2 * float(np.linalg.norm(g)) or (
-                    not gear_dir and gv * spans.get(int(k), 0.0) > half):
+                not gear_dir and gv * spans.get(int(k), 0.0) > half
+            ):
                 half = math.inf
         tr = None
         if "drive_gear_inertia" in true and "driven_gear_inertia" in true:
             tr = float(true["driven_gear_inertia"]) + n2 * float(true["drive_gear_inertia"])
         combos["reflected_gear_inertia"] = {
-            "definition": "J_2 + N^2 J_1", "value": jr, "unit": "kg m^2",
-            "interval": [jr * math.exp(-half), jr * math.exp(half) if math.isfinite(half)
-                         else None],
-            "true": tr}
+            "definition": "J_2 + N^2 J_1",
+            "value": jr,
+            "unit": "kg m^2",
+            "interval": [
+                jr * math.exp(-half),
+                jr * math.exp(half) if math.isfinite(half) else None,
+            ],
+            "true": tr,
+        }
     return combos

@@ -19,17 +19,23 @@ from .parameter_vector import SearchBox
 __all__ = ["start_points", "score_starts", "starts_table", "refine"]
 
 
-def start_points(base: RobotParameters, sb: SearchBox, start: dict | None, n_starts: int,
-                 seed: int) -> list:
+def start_points(
+    base: RobotParameters, sb: SearchBox, start: dict | None, n_starts: int, seed: int
+) -> list:
     """(label, x) of every start: the starting robot's values (clipped to the box; the
     box's centre for a value of 0), ``start`` {name: value [SI]} if given, and ``n_starts``
     points of a scrambled Sobol sequence (``seed``) in the box."""
     names, box, xlo, xhi = sb
     p = len(names)
     cands = []
-    x_nom = np.clip([math.log(v) if v > 0 else 0.5 * (a + b)
-                     for v, (a, b) in zip((float(getattr(base, n)) for n in names), box)],
-                    xlo, xhi)
+    x_nom = np.clip(
+        [
+            math.log(v) if v > 0 else 0.5 * (a + b)
+            for v, (a, b) in zip((float(getattr(base, n)) for n in names), box)
+        ],
+        xlo,
+        xhi,
+    )
     cands.append(("start robot", np.array(x_nom, dtype=float)))
     if start:
         xs = np.array([math.log(float(start.get(n, math.exp(x)))) for n, x in zip(names, x_nom)])
@@ -56,21 +62,29 @@ def score_starts(residuals, cands: list, progress=None) -> list:
 
 def starts_table(scored: list, names: list) -> list:
     """The starts as dicts (label, cost, parameter values [SI]) for the report."""
-    return [{"label": lbl, "cost": c, "x": {n: float(math.exp(v)) for n, v in zip(names, x)}}
-            for c, lbl, x in scored]
+    return [
+        {"label": lbl, "cost": c, "x": {n: float(math.exp(v)) for n, v in zip(names, x)}}
+        for c, lbl, x in scored
+    ]
 
 
-def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings,
-           progress=None):
+def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings, progress=None):
     """The best least-squares optimum (``scipy.optimize.OptimizeResult``) from the
     ``settings.n_local`` cheapest starts (each one's refined cost noted in
     ``starts_info``), polished by one more local fit from it."""
     xlo, xhi = sb.xlo, sb.xhi
     diff_step, max_nfev = settings.diff_step, settings.max_nfev
     best = None
-    for c0, label, x0 in scored[:max(1, settings.n_local)]:
-        sol = optimize.least_squares(residuals, x0, bounds=(xlo, xhi), method="trf",
-                                     x_scale=1.0, diff_step=diff_step, max_nfev=max_nfev)
+    for c0, label, x0 in scored[: max(1, settings.n_local)]:
+        sol = optimize.least_squares(
+            residuals,
+            x0,
+            bounds=(xlo, xhi),
+            method="trf",
+            x_scale=1.0,
+            diff_step=diff_step,
+            max_nfev=max_nfev,
+        )
         for si in starts_info:
             if si["label"] == label:
                 si["refined_cost"] = float(sol.cost)
@@ -82,8 +96,15 @@ def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings,
         raise ValueError("scored is empty: refine needs at least one start")
     # polish: one more local fit from the best optimum with a fresh trust region (a
     # stick/slip kink can stall trf's trust region before the minimum)
-    sol = optimize.least_squares(residuals, best.x, bounds=(xlo, xhi), method="trf",
-                                 x_scale=1.0, diff_step=diff_step, max_nfev=max_nfev)
+    sol = optimize.least_squares(
+        residuals,
+        best.x,
+        bounds=(xlo, xhi),
+        method="trf",
+        x_scale=1.0,
+        diff_step=diff_step,
+        max_nfev=max_nfev,
+    )
     if progress:
         progress(f"polished: cost {best.cost:.4g} -> {sol.cost:.4g}")
     if sol.cost < best.cost:

@@ -17,15 +17,17 @@ from .rigs import DEFAULT_PARAMS, HIP_PARAMETERS
 __all__ = ["SearchBox", "default_bounds", "fitted_names", "search_box", "robot_with"]
 
 #: Search box for parameters whose starting value is 0 (the transmission losses).
-_ZERO_START_BOX = {"gearbox_idle_loss_torque": (1e-3, 2.0),
-                   "gearbox_load_loss_coefficient": (1e-3, 0.5)}
+_ZERO_START_BOX = {
+    "gearbox_idle_loss_torque": (1e-3, 2.0),
+    "gearbox_load_loss_coefficient": (1e-3, 0.5),
+}
 
 
 class SearchBox(NamedTuple):
     """The fitted parameters and their search box in ln p."""
 
-    names: list     # the fitted parameters, in the order of x
-    box: list       # (ln lo, ln hi) of each
+    names: list  # the fitted parameters, in the order of x
+    box: list  # (ln lo, ln hi) of each
     xlo: np.ndarray  # (p,) lower ends, ln of SI values
     xhi: np.ndarray  # (p,) upper ends, ln of SI values
 
@@ -40,8 +42,10 @@ def default_bounds(name: str, value: float, factor: float = 10.0) -> tuple[float
         return lo, hi
     if name in _ZERO_START_BOX:
         return _ZERO_START_BOX[name]
-    raise ValueError(f"bounds[{name!r}]: the starting value is {value}; give a search box "
-                     "(lo, hi) with 0 < lo < hi")
+    raise ValueError(
+        f"bounds[{name!r}]: the starting value is {value}; give a search box "
+        "(lo, hi) with 0 < lo < hi"
+    )
 
 
 def fitted_names(params, data) -> list:
@@ -52,8 +56,9 @@ def fitted_names(params, data) -> list:
     names = list(params)
     for n in names:
         if n not in HIP_PARAMETERS:
-            raise ValueError(f"params: {n!r} is not allowed: must be among "
-                             f"{', '.join(HIP_PARAMETERS)}")
+            raise ValueError(
+                f"params: {n!r} is not allowed: must be among {', '.join(HIP_PARAMETERS)}"
+            )
     if len(set(names)) != len(names) or not names:
         raise ValueError(f"params = {names} is not allowed: need distinct names, at least one")
     return names

@@ -25,8 +25,10 @@ def residual_count(data: list, p: int) -> int:
     ``p`` fitted parameters."""
     nres = sum(d.n_residuals for d in data)
     if nres <= p:
-        raise LogError(f"{data[0].log.path or data[0].name}: only {nres} residuals for {p} "
-                       "parameters", data[0].log.path)
+        raise LogError(
+            f"{data[0].log.path or data[0].name}: only {nres} residuals for {p} parameters",
+            data[0].log.path,
+        )
     return nres
 
 
@@ -35,8 +37,9 @@ class Residuals:
     and the others of ``base``; a non-finite residual counts as 1e6. ``nfev`` counts the
     evaluations (each replays every rig)."""
 
-    def __init__(self, data: list, base: RobotParameters, names: list,
-                 integrator: IntegratorSettings | None):
+    def __init__(
+        self, data: list, base: RobotParameters, names: list, integrator: IntegratorSettings | None
+    ):
         self.data = data
         self.base = base
         self.names = names
@@ -66,11 +69,11 @@ def channel_rms(r: np.ndarray, data: list) -> dict:
     o = 0
     for j, d in enumerate(data):
         n = d.angle.shape[0] * len(d.legs)
-        ra = r[o:o + n]
+        ra = r[o : o + n]
         o += n
         rms[f"log {j + 1} ({d.rig.name}) angle"] = float(np.sqrt(np.mean(ra * ra)))
         if d.current is not None:
-            rc = r[o:o + n]
+            rc = r[o : o + n]
             o += n
             rms[f"log {j + 1} ({d.rig.name}) current"] = float(np.sqrt(np.mean(rc * rc)))
     return rms

@@ -46,45 +46,81 @@ from ..validation.experiment_log import ExperimentLog
 from ..validation.measurement import torque_per_amp
 from .bench import Bench, run_bench
 
-__all__ = ["FreeSwing", "FlightSteps", "Stall", "RigNoise", "RIG_NAMES", "run_rig",
-           "rig_log", "with_toe_mass", "HIP_PARAMETERS", "hip_parameters", "stall_deflection"]
+__all__ = [
+    "FreeSwing",
+    "FlightSteps",
+    "Stall",
+    "RigNoise",
+    "RIG_NAMES",
+    "run_rig",
+    "rig_log",
+    "with_toe_mass",
+    "HIP_PARAMETERS",
+    "hip_parameters",
+    "stall_deflection",
+]
 
 RIG_NAMES = ("free-swing", "flight-steps", "stall")
 
 #: The Model II hip-unit parameters (docs/specification.md section 5) and the transmission-loss parameters
 #: (docs/model.md), with their SI units: what the rigs exercise and identification fits.
 HIP_PARAMETERS = {
-    "drive_gear_inertia": "kg m^2", "driven_gear_inertia": "kg m^2",
-    "joint_stiction": "N m", "joint_damping": "N m s/rad", "belt_stiffness": "N m/rad",
-    "belt_damping": "N m s/rad", "gearbox_idle_loss_torque": "N m",
+    "drive_gear_inertia": "kg m^2",
+    "driven_gear_inertia": "kg m^2",
+    "joint_stiction": "N m",
+    "joint_damping": "N m s/rad",
+    "belt_stiffness": "N m/rad",
+    "belt_damping": "N m s/rad",
+    "gearbox_idle_loss_torque": "N m",
     "gearbox_load_loss_coefficient": "1",
 }
 
 #: Parameters fitted by default for each rig.
 DEFAULT_PARAMS = {
-    "free-swing": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
-                   "joint_damping", "belt_stiffness", "belt_damping"),
-    "flight-steps": ("drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
-                     "joint_damping", "belt_stiffness", "belt_damping"),
+    "free-swing": (
+        "drive_gear_inertia",
+        "driven_gear_inertia",
+        "joint_stiction",
+        "joint_damping",
+        "belt_stiffness",
+        "belt_damping",
+    ),
+    "flight-steps": (
+        "drive_gear_inertia",
+        "driven_gear_inertia",
+        "joint_stiction",
+        "joint_damping",
+        "belt_stiffness",
+        "belt_damping",
+    ),
 }
 
 
 def hip_parameters(robot: RobotParameters) -> dict:
     """The :data:`HIP_PARAMETERS` values of ``robot`` (SI; [back, front] for a value that
     differs between the legs)."""
-    return {k: (list(map(float, v)) if isinstance(v, tuple) else float(v))
-            for k in HIP_PARAMETERS for v in (getattr(robot, k),)}
+    return {
+        k: (list(map(float, v)) if isinstance(v, tuple) else float(v))
+        for k in HIP_PARAMETERS
+        for v in (getattr(robot, k),)
+    }
 
 
 def _check(name, value, lo, hi, unit="", lo_open=False, hi_open=False, deg=False):
     f = math.degrees if deg else (lambda x: x)
-    ok = (isinstance(value, (int, float)) and math.isfinite(value)
-          and (value > lo if lo_open else value >= lo) and (value < hi if hi_open else value <= hi))
+    ok = (
+        isinstance(value, (int, float))
+        and math.isfinite(value)
+        and (value > lo if lo_open else value >= lo)
+        and (value < hi if hi_open else value <= hi)
+    )
     if not ok:
         shown = f(value) if isinstance(value, (int, float)) else value
-        raise ValueError(f"{name} = {shown!r}{' deg' if deg else (' ' + unit if unit else '')} "
-                         f"is not allowed: must be in {'(' if lo_open else '['}{f(lo):g}, "
-                         f"{f(hi):g}{')' if hi_open else ']'}{' deg' if deg else (' ' + unit if unit else '')}")
+        raise ValueError(
+            f"{name} = {shown!r}{' deg' if deg else (' ' + unit if unit else '')} "
+            f"is not allowed: must be in {'(' if lo_open else '['}{f(lo):g}, "
+            f"{f(hi):g}{')' if hi_open else ']'}{' deg' if deg else (' ' + unit if unit else '')}"
+        )
 
 
 @dataclass(frozen=True)
@@ -110,12 +146,20 @@ class FreeSwing:
 
     def __post_init__(self):
         for n in ("release_angle_back", "release_angle_front"):
-            _check(f"free_swing.{n}", getattr(self, n), -math.pi / 2, math.pi / 2,
-                   lo_open=True, hi_open=True, deg=True)
+            _check(
+                f"free_swing.{n}",
+                getattr(self, n),
+                -math.pi / 2,
+                math.pi / 2,
+                lo_open=True,
+                hi_open=True,
+                deg=True,
+            )
         _check("free_swing.toe_mass", self.toe_mass, 0.0, 100.0, "kg")
         if self.motor not in ("open", "short"):
-            raise ValueError(f"free_swing.motor = {self.motor!r} is not allowed: must be "
-                             "'open' or 'short'")
+            raise ValueError(
+                f"free_swing.motor = {self.motor!r} is not allowed: must be 'open' or 'short'"
+            )
         _check("free_swing.duration", self.duration, 0.0, 600.0, "s", lo_open=True)
         _check("free_swing.clamp_height", self.clamp_height, 0.0, 10.0, "m", lo_open=True)
 
@@ -151,33 +195,51 @@ class FlightSteps:
         if n == 0 or self.step_times[0] != 0.0:
             raise ValueError("flight_steps.step_times is not allowed: must start at 0 s")
         if any(b <= a for a, b in zip(self.step_times, self.step_times[1:])):
-            raise ValueError(f"flight_steps.step_times = {self.step_times} is not allowed: "
-                             "must be strictly increasing")
+            raise ValueError(
+                f"flight_steps.step_times = {self.step_times} is not allowed: "
+                "must be strictly increasing"
+            )
         for nm in ("angles_back", "angles_front"):
             v = getattr(self, nm)
             if len(v) != n:
-                raise ValueError(f"flight_steps.{nm} has {len(v)} entries; must have one per "
-                                 f"step time ({n})")
+                raise ValueError(
+                    f"flight_steps.{nm} has {len(v)} entries; must have one per step time ({n})"
+                )
             for a in v:
-                _check(f"flight_steps.{nm}", a, -math.pi / 2, math.pi / 2, lo_open=True,
-                       hi_open=True, deg=True)
+                _check(
+                    f"flight_steps.{nm}",
+                    a,
+                    -math.pi / 2,
+                    math.pi / 2,
+                    lo_open=True,
+                    hi_open=True,
+                    deg=True,
+                )
         for nm in ("initial_angle_back", "initial_angle_front"):
             v = getattr(self, nm)
             if v is not None:
-                _check(f"flight_steps.{nm}", v, -math.pi / 2, math.pi / 2, lo_open=True,
-                       hi_open=True, deg=True)
+                _check(
+                    f"flight_steps.{nm}",
+                    v,
+                    -math.pi / 2,
+                    math.pi / 2,
+                    lo_open=True,
+                    hi_open=True,
+                    deg=True,
+                )
         _check("flight_steps.duration", self.duration, 0.0, 600.0, "s", lo_open=True)
         if self.step_times[-1] >= self.duration:
-            raise ValueError(f"flight_steps.step_times: last step at {self.step_times[-1]} s is "
-                             f"not allowed: must be < duration = {self.duration} s")
+            raise ValueError(
+                f"flight_steps.step_times: last step at {self.step_times[-1]} s is "
+                f"not allowed: must be < duration = {self.duration} s"
+            )
         _check("flight_steps.clamp_height", self.clamp_height, 0.0, 10.0, "m", lo_open=True)
 
     def commands(self, t) -> np.ndarray:
         """(n, 2) touchdown-angle command [rad] (back, front) at times ``t`` [s]."""
         t = np.asarray(t, dtype=float)
         k = np.searchsorted(np.asarray(self.step_times), t + 1e-9, side="right") - 1
-        return np.column_stack([np.asarray(self.angles_back)[k],
-                                np.asarray(self.angles_front)[k]])
+        return np.column_stack([np.asarray(self.angles_back)[k], np.asarray(self.angles_front)[k]])
 
 
 @dataclass(frozen=True)
@@ -199,8 +261,15 @@ class Stall:
     name: str = field(default="stall", init=False)
 
     def __post_init__(self):
-        _check("stall.leg_angle", self.leg_angle, -math.pi / 2, math.pi / 2, lo_open=True,
-               hi_open=True, deg=True)
+        _check(
+            "stall.leg_angle",
+            self.leg_angle,
+            -math.pi / 2,
+            math.pi / 2,
+            lo_open=True,
+            hi_open=True,
+            deg=True,
+        )
         if self.torque is not None:
             _check("stall.torque", self.torque, -1e4, 1e4, "N m")
         _check("stall.duration", self.duration, 0.0, 600.0, "s", lo_open=True)
@@ -225,8 +294,10 @@ class RigNoise:
 
     def __post_init__(self):
         if not (isinstance(self.encoder_counts_per_rev, int) and self.encoder_counts_per_rev >= 0):
-            raise ValueError(f"noise.encoder_counts_per_rev = {self.encoder_counts_per_rev!r} "
-                             "is not allowed: must be an integer >= 0")
+            raise ValueError(
+                f"noise.encoder_counts_per_rev = {self.encoder_counts_per_rev!r} "
+                "is not allowed: must be an integer >= 0"
+            )
         _check("noise.angle_rad", self.angle_rad, 0.0, 1.0, "rad")
         _check("noise.current_a", self.current_a, 0.0, 100.0, "A")
 
@@ -256,20 +327,36 @@ def _clamped_state(clamp_height, phi_b, phi_f, robot):
     l0b, l0f = robot.per_leg("leg_rest_length")
     for leg, phi, l0 in ((0, phi_b, l0b), (1, phi_f, l0f)):
         sL = robot.hip_offset(leg)
-        if clamp_height - l0 * math.cos(phi) <= 0.0 or \
-                clamp_height - 0.5 * robot.torso_height <= 0.0:
-            raise ValueError(f"clamp_height = {clamp_height} m is not allowed: the "
-                             f"{LEG_NAMES[leg]} toe or the torso would touch the ground "
-                             f"(hip at x = {sL:+.3f} m); use a height > l0 + torso_height/2")
-    return state_vector(y=clamp_height, phi_back=phi_b, phi_front=phi_f,
-                        alpha_back=phi_b, alpha_front=phi_f,
-                        leg_length_back=l0b, leg_length_front=l0f)
+        if (
+            clamp_height - l0 * math.cos(phi) <= 0.0
+            or clamp_height - 0.5 * robot.torso_height <= 0.0
+        ):
+            raise ValueError(
+                f"clamp_height = {clamp_height} m is not allowed: the "
+                f"{LEG_NAMES[leg]} toe or the torso would touch the ground "
+                f"(hip at x = {sL:+.3f} m); use a height > l0 + torso_height/2"
+            )
+    return state_vector(
+        y=clamp_height,
+        phi_back=phi_b,
+        phi_front=phi_f,
+        alpha_back=phi_b,
+        alpha_front=phi_f,
+        leg_length_back=l0b,
+        leg_length_front=l0f,
+    )
 
 
-def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
-            controller: ControllerParameters | None = None,
-            integrator: IntegratorSettings | None = None,
-            touchdown_commands=None, dt: float | None = None) -> SimulationResult:
+def run_rig(
+    rig,
+    robot: RobotParameters | None = None,
+    *,
+    model: str = "II",
+    controller: ControllerParameters | None = None,
+    integrator: IntegratorSettings | None = None,
+    touchdown_commands=None,
+    dt: float | None = None,
+) -> SimulationResult:
     """Run a bench rig (:class:`FreeSwing`, :class:`FlightSteps` or :class:`Stall`) on the
     simulator (see the module docstring).
 
@@ -298,11 +385,17 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
     prov = {"rig": {"name": rig.name, **asdict(rig)}}
     if isinstance(rig, FreeSwing):
         rb = with_toe_mass(robot, rig.toe_mass)
-        s0 = _clamped_state(rig.clamp_height, rig.release_angle_back, rig.release_angle_front,
-                            rb)
-        return run_bench(rb, model, s0, rig.duration,
-                         bench=Bench(clamp_torso=True, motor_circuit=rig.motor), dt=dt,
-                         integrator=integ, provenance=prov)
+        s0 = _clamped_state(rig.clamp_height, rig.release_angle_back, rig.release_angle_front, rb)
+        return run_bench(
+            rb,
+            model,
+            s0,
+            rig.duration,
+            bench=Bench(clamp_torso=True, motor_circuit=rig.motor),
+            dt=dt,
+            integrator=integ,
+            provenance=prov,
+        )
     if isinstance(rig, FlightSteps):
         n = int(round(rig.duration / dt)) + 1
         if touchdown_commands is None:
@@ -310,29 +403,52 @@ def run_rig(rig, robot: RobotParameters | None = None, *, model: str = "II",
         else:
             td = np.asarray(touchdown_commands, dtype=float)
             if td.shape != (n, 2):
-                raise ValueError(f"touchdown_commands has shape {td.shape}; must be ({n}, 2) "
-                                 "(one row per control sample of the rig's duration)")
+                raise ValueError(
+                    f"touchdown_commands has shape {td.shape}; must be ({n}, 2) "
+                    "(one row per control sample of the rig's duration)"
+                )
         change = np.flatnonzero(np.any(td[1:] != td[:-1], axis=1)) + 1
-        schedule = [(int(k), {"touchdown_angle_back": td[k, 0],
-                              "touchdown_angle_front": td[k, 1]})
-                    for k in np.concatenate([[0], change])]
+        schedule = [
+            (int(k), {"touchdown_angle_back": td[k, 0], "touchdown_angle_front": td[k, 1]})
+            for k in np.concatenate([[0], change])
+        ]
         pb = td[0, 0] if rig.initial_angle_back is None else rig.initial_angle_back
         pf = td[0, 1] if rig.initial_angle_front is None else rig.initial_angle_front
         s0 = _clamped_state(rig.clamp_height, pb, pf, robot)
-        return run_bench(robot, model, s0, rig.duration, bench=Bench(clamp_torso=True),
-                         controller=cparams, schedule=schedule, dt=dt, integrator=integ,
-                         provenance=prov | {"controller": asdict(cparams)})
+        return run_bench(
+            robot,
+            model,
+            s0,
+            rig.duration,
+            bench=Bench(clamp_torso=True),
+            controller=cparams,
+            schedule=schedule,
+            dt=dt,
+            integrator=integ,
+            provenance=prov | {"controller": asdict(cparams)},
+        )
     if isinstance(rig, Stall):
         s0 = _clamped_state(rig.clamp_height, rig.leg_angle, rig.leg_angle, robot)
-        taus = tuple(robot.leg(leg).max_leg_torque if rig.torque is None else rig.torque
-                     for leg in (0, 1))
-        return run_bench(robot, model, s0, rig.duration,
-                         bench=Bench(clamp_torso=True, clamp_legs=True), held_torques=taus, dt=dt, integrator=integ, provenance=prov)
+        taus = tuple(
+            robot.leg(leg).max_leg_torque if rig.torque is None else rig.torque for leg in (0, 1)
+        )
+        return run_bench(
+            robot,
+            model,
+            s0,
+            rig.duration,
+            bench=Bench(clamp_torso=True, clamp_legs=True),
+            held_torques=taus,
+            dt=dt,
+            integrator=integ,
+            provenance=prov,
+        )
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 
 
-def encoder_reading(angle, robot: RobotParameters, noise: RigNoise | None, rng,
-                    leg=0) -> np.ndarray:
+def encoder_reading(
+    angle, robot: RobotParameters, noise: RigNoise | None, rng, leg=0
+) -> np.ndarray:
     """What the motor encoder reports for the motor-side angle ``angle`` [rad, leg side]:
     white noise, then quantisation to 2 pi / (counts N)."""
     a = np.asarray(angle, dtype=float)
@@ -346,8 +462,13 @@ def encoder_reading(angle, robot: RobotParameters, noise: RigNoise | None, rng,
     return a
 
 
-def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=0,
-            source: str | None = None, notes: str = "") -> ExperimentLog:
+def rig_log(
+    result: SimulationResult,
+    noise: RigNoise | None = RigNoise(),
+    seed=0,
+    source: str | None = None,
+    notes: str = "",
+) -> ExperimentLog:
     """The log a rig run would have produced (project log format, plus rig columns).
 
     Columns: ``t``; ``pitch_rad`` = 0 and ``height_m`` = the clamp height (the clamp, not
@@ -368,8 +489,11 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
     rng = np.random.default_rng(seed)
     t = result.t
     dt = float(prov["control_period_s"])
-    cols = {"t": t, "pitch_rad": np.zeros_like(t),
-            "height_m": np.full_like(t, float(rig["clamp_height"]))}
+    cols = {
+        "t": t,
+        "pitch_rad": np.zeros_like(t),
+        "height_m": np.full_like(t, float(rig["clamp_height"])),
+    }
     for leg, nm in enumerate(LEG_NAMES):
         enc = encoder_reading(result.motor_angle(leg), robot, noise, rng, leg)
         cols[f"phi_{nm}_rad"] = enc
@@ -387,10 +511,13 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
         cols["touchdown_cmd_back_rad"] = td[:, 0]
         cols["touchdown_cmd_front_rad"] = td[:, 1]
     meta = {
-        "source": source or f"scoutsim {__version__} virtual {rig['name']} rig, model "
-                            f"{prov.get('model')}",
-        "synthetic": True, "notes": notes, "lowpass_hz": None,
-        "rig": rig["name"], "rig_config": {k: v for k, v in rig.items() if k != "name"},
+        "source": source
+        or f"scoutsim {__version__} virtual {rig['name']} rig, model {prov.get('model')}",
+        "synthetic": True,
+        "notes": notes,
+        "lowpass_hz": None,
+        "rig": rig["name"],
+        "rig_config": {k: v for k, v in rig.items() if k != "name"},
         "model": prov.get("model"),
         "encoder": "motor-side angle alpha (motor encoder), at the leg",
         "sensor_noise": None if noise is None else asdict(noise),
@@ -402,8 +529,11 @@ def rig_log(result: SimulationResult, noise: RigNoise | None = RigNoise(), seed=
     return ExperimentLog(columns=cols, meta=meta, path=None)
 
 
-def stall_deflection(robot: RobotParameters | None = None, rig: Stall | None = None,
-                     integrator: IntegratorSettings | None = None) -> dict:
+def stall_deflection(
+    robot: RobotParameters | None = None,
+    rig: Stall | None = None,
+    integrator: IntegratorSettings | None = None,
+) -> dict:
     """Run the stall rig and report the belt deflection (the robot measured about 8 deg, paper Sec. III).
 
     Returns a dict (SI, plus ``*_deg``): ``torque_nm`` (delivered hip torque per physical
@@ -418,12 +548,18 @@ def stall_deflection(robot: RobotParameters | None = None, rig: Stall | None = N
     b = res.belt_deflection("back")
     tau = float(res.hip_torque_applied("back")[-1])
     back = robot.leg("back")
-    band = ((tau - back.gear_ratio * back.joint_stiction) / back.belt_stiffness,
-            (tau + back.gear_ratio * back.joint_stiction) / back.belt_stiffness)
-    return {"torque_nm": tau, "deflection_final_rad": float(b[-1]),
-            "deflection_final_deg": math.degrees(float(b[-1])),
-            "deflection_max_rad": float(np.max(np.abs(b))),
-            "deflection_max_deg": math.degrees(float(np.max(np.abs(b)))),
-            "static_band_rad": band, "static_band_deg": tuple(math.degrees(x) for x in band),
-            "creep_time_constant_s": back.belt_damping / back.belt_stiffness,
-            "result": res}
+    band = (
+        (tau - back.gear_ratio * back.joint_stiction) / back.belt_stiffness,
+        (tau + back.gear_ratio * back.joint_stiction) / back.belt_stiffness,
+    )
+    return {
+        "torque_nm": tau,
+        "deflection_final_rad": float(b[-1]),
+        "deflection_final_deg": math.degrees(float(b[-1])),
+        "deflection_max_rad": float(np.max(np.abs(b))),
+        "deflection_max_deg": math.degrees(float(np.max(np.abs(b)))),
+        "static_band_rad": band,
+        "static_band_deg": tuple(math.degrees(x) for x in band),
+        "creep_time_constant_s": back.belt_damping / back.belt_stiffness,
+        "result": res,
+    }

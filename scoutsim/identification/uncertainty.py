@@ -33,32 +33,31 @@ from scipy import stats
 
 from .parameter_vector import SearchBox
 
-__all__ = ["Optimum", "Spread", "optimum", "jacobian", "flat_directions", "covariance",
-           "spread"]
+__all__ = ["Optimum", "Spread", "optimum", "jacobian", "flat_directions", "covariance", "spread"]
 
 
 class Optimum(NamedTuple):
     """The best fit and its residual statistics."""
 
-    x: np.ndarray   # (p,) ln p at the optimum
-    r: np.ndarray   # weighted residuals there [-]
-    s2: float       # residual variance s^2 = |r|^2 / (n - p) [-]
-    cost: float     # |r|^2 / 2 [-]
-    zq: float       # Student-t quantile t_{n-p, (1+c)/2} of the intervals
+    x: np.ndarray  # (p,) ln p at the optimum
+    r: np.ndarray  # weighted residuals there [-]
+    s2: float  # residual variance s^2 = |r|^2 / (n - p) [-]
+    cost: float  # |r|^2 / 2 [-]
+    zq: float  # Student-t quantile t_{n-p, (1+c)/2} of the intervals
 
 
 class Spread(NamedTuple):
     """The uncertainty of x = ln p at the optimum."""
 
-    S: np.ndarray        # (k,) singular values of the weighted Jacobian
-    Vt: np.ndarray       # (k, p) its right singular vectors (rows)
-    flat: np.ndarray     # (k,) bool: the direction is undetermined
-    ratios: list         # cost rise over the interval / linear prediction, per direction
+    S: np.ndarray  # (k,) singular values of the weighted Jacobian
+    Vt: np.ndarray  # (k, p) its right singular vectors (rows)
+    flat: np.ndarray  # (k,) bool: the direction is undetermined
+    ratios: list  # cost rise over the interval / linear prediction, per direction
     cov_det: np.ndarray  # (p, p) covariance of x from the determined directions only
-    cov: np.ndarray      # (p, p) covariance, inf where a flat direction reaches
-    spans: dict          # flat direction index -> its length across the search box [ln p]
-    sd: np.ndarray       # (p,) standard deviation of x
-    corr: np.ndarray     # (p, p) correlation of x
+    cov: np.ndarray  # (p, p) covariance, inf where a flat direction reaches
+    spans: dict  # flat direction index -> its length across the search box [ln p]
+    sd: np.ndarray  # (p,) standard deviation of x
+    corr: np.ndarray  # (p, p) correlation of x
 
 
 def optimum(residuals, x, nres: int, p: int, confidence: float) -> Optimum:
@@ -146,8 +145,7 @@ def covariance(opt: Optimum, sb: SearchBox, S, Vt, flat):
     return cov_det, cov, spans
 
 
-def spread(residuals, opt: Optimum, sb: SearchBox, jac_step: float,
-           flat_ratio: float) -> Spread:
+def spread(residuals, opt: Optimum, sb: SearchBox, jac_step: float, flat_ratio: float) -> Spread:
     """The uncertainty of x at the optimum: Jacobian (:func:`jacobian`), its SVD, the
     curvature check (:func:`flat_directions`), the covariance (:func:`covariance`),
     standard deviations and correlations."""

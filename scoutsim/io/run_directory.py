@@ -26,8 +26,16 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["MANIFEST", "RunDirectory", "atomic_write", "read_manifest", "check_run_directory",
-           "add_to_manifest", "IncompleteRunError", "json_safe"]
+__all__ = [
+    "MANIFEST",
+    "RunDirectory",
+    "atomic_write",
+    "read_manifest",
+    "check_run_directory",
+    "add_to_manifest",
+    "IncompleteRunError",
+    "json_safe",
+]
 
 #: name of the manifest file
 MANIFEST = "manifest.json"
@@ -97,13 +105,14 @@ def check_run_directory(directory) -> dict | None:
         return None
     d = Path(directory)
     if manifest.get("status") not in ("complete", "partial"):
-        raise IncompleteRunError(f"{d}: the run's files were not all written (the manifest "
-                                 f"says '{manifest.get('status')}'): writing was cut off")
+        raise IncompleteRunError(
+            f"{d}: the run's files were not all written (the manifest "
+            f"says '{manifest.get('status')}'): writing was cut off"
+        )
     for name, info in manifest.get("files", {}).items():
         p = d / name
         if not p.exists() or p.stat().st_size != info["bytes"]:
-            raise IncompleteRunError(f"{d}: {name} is missing or not the file the manifest "
-                                     "lists")
+            raise IncompleteRunError(f"{d}: {name} is missing or not the file the manifest lists")
     return manifest
 
 
@@ -159,7 +168,7 @@ class RunDirectory:
         return self
 
     def __exit__(self, *exc) -> None:
-        return None   # the manifest keeps saying "writing" unless finish() was reached
+        return None  # the manifest keeps saying "writing" unless finish() was reached
 
     def write(self, name: str, write) -> Path:
         """Write the run's file ``name`` atomically with ``write(tmp_path)``."""
@@ -184,7 +193,13 @@ class RunDirectory:
             for name in self.files:
                 p = self.dir / name
                 files[name] = {"bytes": p.stat().st_size}
-        manifest = {"format": FORMAT, "status": status, "command": self.command,
-                    "outcome": outcome, **self.info, "files": files}
+        manifest = {
+            "format": FORMAT,
+            "status": status,
+            "command": self.command,
+            "outcome": outcome,
+            **self.info,
+            "files": files,
+        }
         text = json.dumps(manifest, indent=2, allow_nan=True) + "\n"
         return atomic_write(self.dir / MANIFEST, lambda p: p.write_text(text))

@@ -26,9 +26,19 @@ import numpy as np
 
 from .run_directory import PARTIAL_SUFFIX, atomic_write
 
-__all__ = ["FORMATS", "SUFFIXES", "default_format", "write_table", "read_table",
-           "read_metadata", "table_path", "TableWriter", "TableError", "write_rows_csv",
-           "write_rows_parquet"]
+__all__ = [
+    "FORMATS",
+    "SUFFIXES",
+    "default_format",
+    "write_table",
+    "read_table",
+    "read_metadata",
+    "table_path",
+    "TableWriter",
+    "TableError",
+    "write_rows_csv",
+    "write_rows_parquet",
+]
 
 #: table formats and the suffix of their files
 SUFFIXES = {"parquet": ".parquet", "csv": ".csv.gz"}
@@ -41,6 +51,7 @@ def write_rows_csv(path, columns: dict) -> None:
     row has no value) as a plain CSV: a header of the names, then a row each, None empty.
     For study outputs a user reads (sweep, tune); runs use :func:`write_table`."""
     import csv
+
     names = list(columns)
     n = len(columns[names[0]]) if names else 0
     with open(path, "w", newline="") as f:
@@ -85,8 +96,14 @@ def _format_of(path: Path) -> str:
     raise TableError(f"{path}: not a table file (expected {' or '.join(SUFFIXES.values())})")
 
 
-def write_table(stem, columns: dict, *, units: dict | None = None,
-                metadata: dict | None = None, fmt: str | None = None) -> Path:
+def write_table(
+    stem,
+    columns: dict,
+    *,
+    units: dict | None = None,
+    metadata: dict | None = None,
+    fmt: str | None = None,
+) -> Path:
     """Write ``columns`` (name -> 1-D array, equal lengths) to ``stem`` + the format's
     suffix; ``units`` (name -> unit string) and ``metadata`` (JSON-safe, NaN allowed) are
     stored with it. The file is written whole or not at all
@@ -109,8 +126,9 @@ def _arrow_column(pa, c: np.ndarray):
         data = [x.encode() for x in c.tolist()]
         offsets = np.zeros(len(data) + 1, dtype=np.int32)
         offsets[1:] = np.cumsum([len(d) for d in data])
-        return pa.Array.from_buffers(pa.string(), len(data),
-                                     [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(data))])
+        return pa.Array.from_buffers(
+            pa.string(), len(data), [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(data))]
+        )
     if c.dtype.kind == "b":
         c = c.astype(np.int8)
     c = np.ascontiguousarray(c)
@@ -118,12 +136,15 @@ def _arrow_column(pa, c: np.ndarray):
 
 
 def _column_info(cols: dict, units: dict | None) -> dict:
-    return {n: {"dtype": c.dtype.str if c.dtype.kind != "U" else "str",
-                "unit": (units or {}).get(n)} for n, c in cols.items()}
+    return {
+        n: {"dtype": c.dtype.str if c.dtype.kind != "U" else "str", "unit": (units or {}).get(n)}
+        for n, c in cols.items()
+    }
 
 
 def _arrow_table(cols: dict):
     import pyarrow as pa
+
     return pa.table({n: _arrow_column(pa, c) for n, c in cols.items()})
 
 
@@ -134,15 +155,14 @@ _PARQUET_OPTIONS = {"compression": "zstd", "compression_level": 1}
 
 def _write_parquet(path: Path, cols: dict, info: dict) -> None:
     import pyarrow.parquet as pq
-    table = _arrow_table(cols).replace_schema_metadata(
-        {_KEY: json.dumps(info, allow_nan=True)})
+
+    table = _arrow_table(cols).replace_schema_metadata({_KEY: json.dumps(info, allow_nan=True)})
     pq.write_table(table, path, **_PARQUET_OPTIONS)
 
 
 def _csv_head(info: dict) -> str:
     """The metadata line and the header line of a CSV table."""
-    header = ",".join(f"{n} [{u}]" if (u := d["unit"]) else n
-                      for n, d in info["columns"].items())
+    header = ",".join(f"{n} [{u}]" if (u := d["unit"]) else n for n, d in info["columns"].items())
     return f"# {_KEY}: {json.dumps(info, allow_nan=True)}\n{header}\n"
 
 
@@ -151,8 +171,10 @@ def _csv_rows(f, cols: dict) -> None:
     names = list(cols)
     if not names or len(cols[names[0]]) == 0:
         return
-    fmts = ["%s" if cols[n].dtype.kind in "USO" else
-            "%d" if cols[n].dtype.kind in "iub" else "%.17g" for n in names]
+    fmts = [
+        "%s" if cols[n].dtype.kind in "USO" else "%d" if cols[n].dtype.kind in "iub" else "%.17g"
+        for n in names
+    ]
     rows = np.empty((len(cols[names[0]]), len(names)), dtype=object)
     for j, n in enumerate(names):
         rows[:, j] = cols[n]
@@ -191,15 +213,15 @@ class TableWriter:
         self.path = table_path(stem, self.fmt)
         self.units = dict(units or {})
         suffix = SUFFIXES[self.fmt]
-        stem_name = self.path.name[:-len(suffix)]
+        stem_name = self.path.name[: -len(suffix)]
         # temporary names that a run directory sweeps away as stale (run_directory)
         self._tmp = self.path.with_name(stem_name + PARTIAL_SUFFIX + suffix)
         self._body = self.path.with_name(stem_name + PARTIAL_SUFFIX + ".rows" + suffix)
-        self._columns: dict | None = None        # name -> {"dtype", "unit"}
+        self._columns: dict | None = None  # name -> {"dtype", "unit"}
         self._pending: list[dict] = []
         self._n_pending = 0
-        self._writer: Any = None    # pyarrow.parquet.ParquetWriter while writing Parquet
-        self._file: Any = None      # the gzip text stream while writing CSV
+        self._writer: Any = None  # pyarrow.parquet.ParquetWriter while writing Parquet
+        self._file: Any = None  # the gzip text stream while writing CSV
         self.n_rows = 0
 
     def append(self, columns: dict) -> None:
@@ -212,8 +234,9 @@ class TableWriter:
         if self._columns is None:
             self._columns = info
         elif info != self._columns:
-            raise ValueError(f"{self.path}: appended columns differ from the first ones "
-                             "(names or dtypes)")
+            raise ValueError(
+                f"{self.path}: appended columns differ from the first ones (names or dtypes)"
+            )
         n = lengths.pop() if lengths else 0
         self.n_rows += n
         if self.fmt == "csv":
@@ -230,6 +253,7 @@ class TableWriter:
         if not self._pending:
             return
         import pyarrow.parquet as pq
+
         cols = {n: np.concatenate([p[n] for p in self._pending]) for n in self._columns or {}}
         table = _arrow_table(cols)
         if self._writer is None:
@@ -240,8 +264,10 @@ class TableWriter:
     def close(self, metadata: dict | None = None) -> Path:
         """Finish the table with its ``metadata`` and rename it into place; the path."""
         if self._columns is None:
-            raise ValueError(f"{self.path}: no rows were appended (the column names and "
-                             "dtypes come from the first append)")
+            raise ValueError(
+                f"{self.path}: no rows were appended (the column names and "
+                "dtypes come from the first append)"
+            )
         info = {"columns": self._columns, "metadata": metadata or {}}
         try:
             if self.fmt == "parquet":
@@ -289,16 +315,17 @@ def read_metadata(path) -> dict:
     try:
         if fmt == "parquet":
             import pyarrow.parquet as pq
+
             # the file's key-value metadata: the schema's (write_table) or added at the
             # end (TableWriter)
             raw = (pq.ParquetFile(path).metadata.metadata or {}).get(_KEY.encode())
         else:
             with gzip.open(path, "rt") as f:
                 first = f.readline()
-            raw = first[len(f"# {_KEY}: "):] if first.startswith(f"# {_KEY}: ") else None
+            raw = first[len(f"# {_KEY}: ") :] if first.startswith(f"# {_KEY}: ") else None
     except ImportError:
         raise
-    except Exception as exc:   # pyarrow / gzip errors of damaged or foreign files
+    except Exception as exc:  # pyarrow / gzip errors of damaged or foreign files
         raise TableError(f"{path}: cannot read: {exc}") from None
     if raw is None:
         raise TableError(f"{path}: not a table written by scoutsim (no '{_KEY}' metadata)")
@@ -318,8 +345,12 @@ def read_table(path, *, t_range: tuple[float, float] | None = None) -> tuple[dic
     spec = info["columns"]
     if _format_of(path) == "parquet":
         import pyarrow.parquet as pq
-        filters = None if t_range is None else [("t", ">=", float(t_range[0])),
-                                                ("t", "<=", float(t_range[1]))]
+
+        filters = (
+            None
+            if t_range is None
+            else [("t", ">=", float(t_range[0])), ("t", "<=", float(t_range[1]))]
+        )
         table = pq.read_table(path, filters=filters)
         cols = {n: table.column(n).to_numpy(zero_copy_only=False) for n in spec}
     else:
@@ -343,7 +374,9 @@ def _read_csv(path: Path, spec: dict) -> dict:
     strings = [j for j, n in enumerate(names) if spec[n]["dtype"] == "str"]
     if strings:
         raw = np.array([line.split(",") for line in text.splitlines()], dtype=object)
-        return {n: (raw[:, j].astype(str) if j in strings else raw[:, j].astype(float))
-                for j, n in enumerate(names)}
+        return {
+            n: (raw[:, j].astype(str) if j in strings else raw[:, j].astype(float))
+            for j, n in enumerate(names)
+        }
     data = np.loadtxt(text.splitlines(), delimiter=",", ndmin=2)
     return {n: data[:, j] for j, n in enumerate(names)}

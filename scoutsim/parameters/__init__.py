@@ -41,14 +41,14 @@ Modules (each imports only those above it):
 from .controller import ControllerParameters
 from .environment import DEFAULT_FRICTION_COEFFICIENT, Environment, floor_label
 from .files import (
-                    SECTIONS,
-                    SEPARATE_SECTIONS,
-                    from_dict,
-                    load_controller,
-                    load_parameters,
-                    load_robot,
-                    parameter_table,
-                    to_dict,
+    SECTIONS,
+    SEPARATE_SECTIONS,
+    from_dict,
+    load_controller,
+    load_parameters,
+    load_robot,
+    parameter_table,
+    to_dict,
 )
 from .parameter_error import ParameterError
 from .plausibility import ImplausibleParameterWarning, plausibility_warnings_off
@@ -56,19 +56,40 @@ from .robot import PER_LEG_FIELDS, RobotParameters
 from .schema import field_dimension, plausible_range
 from .units import UNITS, quantity_to_si
 from .validation import (
-                    allowed_range,
-                    closed_range,
-                    physical_limit,
-                    validate_controller,
-                    validate_parameters,
-                    validate_robot,
+    allowed_range,
+    closed_range,
+    physical_limit,
+    validate_controller,
+    validate_parameters,
+    validate_robot,
 )
 
 __all__ = [
-    "DEFAULT_FRICTION_COEFFICIENT", "UNITS", "SECTIONS", "SEPARATE_SECTIONS",
-    "Environment", "floor_label", "RobotParameters", "PER_LEG_FIELDS", "ControllerParameters", "ParameterError",
-    "ImplausibleParameterWarning", "plausibility_warnings_off", "quantity_to_si", "field_dimension", "plausible_range",
-    "physical_limit", "allowed_range", "closed_range",
-    "validate_robot", "validate_controller", "validate_parameters",
-    "load_robot", "load_controller", "load_parameters", "parameter_table", "to_dict", "from_dict",
+    "DEFAULT_FRICTION_COEFFICIENT",
+    "UNITS",
+    "SECTIONS",
+    "SEPARATE_SECTIONS",
+    "Environment",
+    "floor_label",
+    "RobotParameters",
+    "PER_LEG_FIELDS",
+    "ControllerParameters",
+    "ParameterError",
+    "ImplausibleParameterWarning",
+    "plausibility_warnings_off",
+    "quantity_to_si",
+    "field_dimension",
+    "plausible_range",
+    "physical_limit",
+    "allowed_range",
+    "closed_range",
+    "validate_robot",
+    "validate_controller",
+    "validate_parameters",
+    "load_robot",
+    "load_controller",
+    "load_parameters",
+    "parameter_table",
+    "to_dict",
+    "from_dict",
 ]

@@ -37,11 +37,14 @@ class Environment:
 
     def __post_init__(self):
         mu = self.friction_coefficient
-        if mu is not None and not (isinstance(mu, numbers.Real) and not isinstance(mu, bool)
-                                   and mu > 0.0):
-            raise ParameterError(f"Environment.friction_coefficient = {mu!r} is not allowed: "
-                                 "must be a number > 0 (inf for a no-slip floor) or None",
-                                 "friction_coefficient")
+        if mu is not None and not (
+            isinstance(mu, numbers.Real) and not isinstance(mu, bool) and mu > 0.0
+        ):
+            raise ParameterError(
+                f"Environment.friction_coefficient = {mu!r} is not allowed: "
+                "must be a number > 0 (inf for a no-slip floor) or None",
+                "friction_coefficient",
+            )
 
     def friction_for(self, robot: RobotParameters) -> float:
         """The toe's Coulomb coefficient mu [-] for ``robot`` on this floor (the default

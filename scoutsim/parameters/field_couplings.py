@@ -26,23 +26,40 @@ def check_robot_couplings(p, origins) -> None:
         if 0.0 < distance <= rest or (mass == 0.0 and distance == 0.0):
             continue
         spec = _schema()["leg_com_distance"]
-        differ = any(isinstance(getattr(p, n), tuple)
-                     for n in ("leg_com_distance", "leg_rest_length", "leg_mass"))
+        differ = any(
+            isinstance(getattr(p, n), tuple)
+            for n in ("leg_com_distance", "leg_rest_length", "leg_mass")
+        )
         l0 = _fmt_bound(rest / spec.factor)
         massless = " (massless legs)" if mass == 0.0 else ""
-        reject(spec, distance, f"must be in {'[' if mass == 0.0 else '('}0, leg_rest_length = "
-               f"{l0}] {spec.unit}{massless}", origins, leg if differ else None)
+        reject(
+            spec,
+            distance,
+            f"must be in {'[' if mass == 0.0 else '('}0, leg_rest_length = "
+            f"{l0}] {spec.unit}{massless}",
+            origins,
+            leg if differ else None,
+        )
     if (masses[0] == 0.0 and inertias[0] == 0.0) != (masses[1] == 0.0 and inertias[1] == 0.0):
         front_massless = masses[1] == 0.0 and inertias[1] == 0.0
-        reject(_schema()["leg_mass"], masses[int(front_massless)], "the model's massless legs "
-               "(leg_mass = leg_inertia = 0) are both legs or neither", origins,
-               int(front_massless))
+        reject(
+            _schema()["leg_mass"],
+            masses[int(front_massless)],
+            "the model's massless legs (leg_mass = leg_inertia = 0) are both legs or neither",
+            origins,
+            int(front_massless),
+        )
     half = 0.5 * p.hip_spacing
     if not -half < p.com_offset < half:
         spec = _schema()["com_offset"]
-        reject(spec, p.com_offset, f"must be in (-hip_spacing / 2, hip_spacing / 2) = "
-               f"({_fmt_bound(-half / spec.factor)}, {_fmt_bound(half / spec.factor)}) "
-               f"{spec.unit} (the torso COM between the hips)", origins)
+        reject(
+            spec,
+            p.com_offset,
+            f"must be in (-hip_spacing / 2, hip_spacing / 2) = "
+            f"({_fmt_bound(-half / spec.factor)}, {_fmt_bound(half / spec.factor)}) "
+            f"{spec.unit} (the torso COM between the hips)",
+            origins,
+        )
 
 
 def check_controller_couplings(c, origins) -> None:
@@ -50,8 +67,12 @@ def check_controller_couplings(c, origins) -> None:
     if c.liftoff_compression >= c.touchdown_compression:
         spec = _schema()["liftoff_compression"]
         td = _fmt_bound(c.touchdown_compression / spec.factor)
-        reject(spec, c.liftoff_compression,
-               f"must be >= 0 and < touchdown_compression = {td} {spec.unit}", origins)
+        reject(
+            spec,
+            c.liftoff_compression,
+            f"must be >= 0 and < touchdown_compression = {td} {spec.unit}",
+            origins,
+        )
 
 
 def check_pair_couplings(robot, controller, origins) -> None:
@@ -59,5 +80,9 @@ def check_pair_couplings(robot, controller, origins) -> None:
     if controller.touchdown_compression >= min(robot.per_leg("leg_rest_length")):
         spec = _schema()["touchdown_compression"]
         l0 = _fmt_bound(min(robot.per_leg("leg_rest_length")) / spec.factor)
-        reject(spec, controller.touchdown_compression,
-               f"must be > liftoff_compression and < leg_rest_length = {l0} {spec.unit}", origins)
+        reject(
+            spec,
+            controller.touchdown_compression,
+            f"must be > liftoff_compression and < leg_rest_length = {l0} {spec.unit}",
+            origins,
+        )

@@ -18,8 +18,10 @@ from .units import _UNIT_INDEX, UNITS
 from .validation import coerce_value, reporting_origins, validate_parameters
 
 #: TOML section -> dataclass whose fields it holds.
-SECTIONS: dict[str, type] = {**dict.fromkeys(ROBOT_SECTIONS, RobotParameters),
-                             **dict.fromkeys(CONTROLLER_SECTIONS, ControllerParameters)}
+SECTIONS: dict[str, type] = {
+    **dict.fromkeys(ROBOT_SECTIONS, RobotParameters),
+    **dict.fromkeys(CONTROLLER_SECTIONS, ControllerParameters),
+}
 
 #: sections of a robot file read by other loaders: name -> the function that reads them
 SEPARATE_SECTIONS: dict[str, str] = {
@@ -37,21 +39,29 @@ def _convert_entry(spec: _Spec, entry: object, where: str) -> tuple[object, str 
     unit = spec.unit
     if isinstance(entry, dict):
         if extra := sorted(set(entry) - {"value", "unit", "source"}):
-            raise ParameterError(f"{spec.label}: unknown key(s) {extra} in entry; allowed keys are "
-                                 f"value, unit, source{where}", spec.name)
+            raise ParameterError(
+                f"{spec.label}: unknown key(s) {extra} in entry; allowed keys are "
+                f"value, unit, source{where}",
+                spec.name,
+            )
         if "value" not in entry:
             raise ParameterError(f"{spec.label}: entry has no 'value'{where}", spec.name)
         unit = entry.get("unit", spec.unit)
         entry = entry["value"]
         if not isinstance(unit, str) or unit.strip() not in _UNIT_INDEX:
-            raise ParameterError(f"{spec.label}: unknown unit {unit!r}; allowed units: "
-                                 f"{', '.join(UNITS[spec.dimension])}{where}", spec.name)
+            raise ParameterError(
+                f"{spec.label}: unknown unit {unit!r}; allowed units: "
+                f"{', '.join(UNITS[spec.dimension])}{where}",
+                spec.name,
+            )
         unit = unit.strip()
     dim, factor = _UNIT_INDEX[unit]
     if dim != spec.dimension:
-        raise ParameterError(f"{spec.label}: unit '{unit}' is a {dim} unit, but {spec.name} is a "
-                             f"{spec.dimension}; allowed units: {', '.join(UNITS[spec.dimension])}{where}",
-                             spec.name)
+        raise ParameterError(
+            f"{spec.label}: unit '{unit}' is a {dim} unit, but {spec.name} is a "
+            f"{spec.dimension}; allowed units: {', '.join(UNITS[spec.dimension])}{where}",
+            spec.name,
+        )
     value = coerce_value(spec, entry, where)
     note = None if unit == spec.unit else f"given as {_fmt(entry)} {unit}"
     return _scaled(spec, value, factor), note
@@ -85,15 +95,19 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
         if section not in SECTIONS:
             raise _unknown(section, f"in parameter file '{path}'", SECTIONS, kind="section")
         if not isinstance(entries, dict):
-            raise ParameterError(f"[{section}] in parameter file '{path}' must be a table, "
-                                 f"got {entries!r}")
+            raise ParameterError(
+                f"[{section}] in parameter file '{path}' must be a table, got {entries!r}"
+            )
         where = f" (in [{section}] of file '{path}')"
         for name, entry in entries.items():
             spec = schema.get(name)
             if spec is None or spec.section != section:
                 if spec is not None:
-                    raise ParameterError(f"parameter '{name}' in [{section}] of file '{path}' belongs in "
-                                         f"section [{spec.section}]", name)
+                    raise ParameterError(
+                        f"parameter '{name}' in [{section}] of file '{path}' belongs in "
+                        f"section [{spec.section}]",
+                        name,
+                    )
                 in_section = [n for n, s in schema.items() if s.section == section]
                 raise _unknown(name, f"in [{section}] of file '{path}'", in_section)
             values[name], note = _convert_entry(spec, entry, where)
@@ -101,8 +115,12 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
     return values, origins
 
 
-def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | None,
-           where_overrides: str = " (from overrides)"):
+def _build(
+    cls: type,
+    path: str | PathLike | None,
+    overrides: typing.Mapping | None,
+    where_overrides: str = " (from overrides)",
+):
     """Defaults -> user file -> overrides; return the instance (checked by its constructor,
     whose messages name the values' origins) and the origins."""
     specs = _fields_of(cls)
@@ -116,8 +134,11 @@ def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | N
         if name not in specs:
             other = _schema().get(name)
             if other is not None:
-                raise ParameterError(f"'{name}' is a [{other.section}] parameter, not a "
-                                     f"{cls.__name__} field{where_overrides}", name)
+                raise ParameterError(
+                    f"'{name}' is a [{other.section}] parameter, not a "
+                    f"{cls.__name__} field{where_overrides}",
+                    name,
+                )
             raise _unknown(name, f"for {cls.__name__}{where_overrides}", specs)
         spec = specs[name]
         values[name] = coerce_value(spec, value, where_overrides)
@@ -127,8 +148,9 @@ def _build(cls: type, path: str | PathLike | None, overrides: typing.Mapping | N
         return cls(**values), origins
 
 
-def load_robot(path: str | PathLike | None = None,
-               overrides: typing.Mapping[str, object] | None = None) -> RobotParameters:
+def load_robot(
+    path: str | PathLike | None = None, overrides: typing.Mapping[str, object] | None = None
+) -> RobotParameters:
     """Load robot parameters: packaged defaults, then a user's TOML file, then overrides.
 
     Parameters
@@ -155,8 +177,9 @@ def load_robot(path: str | PathLike | None = None,
     return _build(RobotParameters, path, overrides)[0]
 
 
-def load_controller(path: str | PathLike | None = None,
-                    overrides: typing.Mapping[str, object] | None = None) -> ControllerParameters:
+def load_controller(
+    path: str | PathLike | None = None, overrides: typing.Mapping[str, object] | None = None
+) -> ControllerParameters:
     """Load controller parameters; as :func:`load_robot` but for ``[controller]``.
 
     Parameters
@@ -175,10 +198,11 @@ def load_controller(path: str | PathLike | None = None,
     return _build(ControllerParameters, path, overrides)[0]
 
 
-def load_parameters(path: str | PathLike | None = None,
-                    robot_overrides: typing.Mapping[str, object] | None = None,
-                    controller_overrides: typing.Mapping[str, object] | None = None,
-                    ) -> tuple[RobotParameters, ControllerParameters]:
+def load_parameters(
+    path: str | PathLike | None = None,
+    robot_overrides: typing.Mapping[str, object] | None = None,
+    controller_overrides: typing.Mapping[str, object] | None = None,
+) -> tuple[RobotParameters, ControllerParameters]:
     """Load robot and controller parameters together and check the rules coupling them.
 
     Parameters
@@ -212,9 +236,17 @@ def parameter_table() -> list[dict]:
     rows = []
     for cls in (RobotParameters, ControllerParameters):
         for name, spec in _fields_of(cls).items():
-            rows.append({"section": spec.section, "name": name, "value": spec.written,
-                         "unit": spec.unit, "si_value": _default_si(spec),
-                         "si_unit": spec.si_unit, "source": spec.source})
+            rows.append(
+                {
+                    "section": spec.section,
+                    "name": name,
+                    "value": spec.written,
+                    "unit": spec.unit,
+                    "si_value": _default_si(spec),
+                    "si_unit": spec.si_unit,
+                    "source": spec.source,
+                }
+            )
     return rows
 
 
@@ -237,8 +269,12 @@ def to_dict(robot: RobotParameters, controller: ControllerParameters) -> dict:
         :func:`from_dict` for the inverse.
     """
     validate_parameters(robot, controller)
-    return {"format": _DICT_FORMAT, "units": "SI",
-            "robot": dataclasses.asdict(robot), "controller": dataclasses.asdict(controller)}
+    return {
+        "format": _DICT_FORMAT,
+        "units": "SI",
+        "robot": dataclasses.asdict(robot),
+        "controller": dataclasses.asdict(controller),
+    }
 
 
 def from_dict(d: typing.Mapping) -> tuple[RobotParameters, ControllerParameters]:
@@ -260,8 +296,10 @@ def from_dict(d: typing.Mapping) -> tuple[RobotParameters, ControllerParameters]
         Wrong format tag, unknown or missing keys, wrong types or invalid values.
     """
     if d.get("format", _DICT_FORMAT) != _DICT_FORMAT or d.get("units", "SI") != "SI":
-        raise ParameterError(f"unsupported parameter dict format {d.get('format')!r} "
-                             f"(units {d.get('units')!r}); expected {_DICT_FORMAT!r} in SI")
+        raise ParameterError(
+            f"unsupported parameter dict format {d.get('format')!r} "
+            f"(units {d.get('units')!r}); expected {_DICT_FORMAT!r} in SI"
+        )
     if extra := sorted(set(d) - {"format", "units", "robot", "controller"}):
         raise ParameterError(f"unknown key(s) {extra} in parameter dict")
     out, origins = [], {}

@@ -48,6 +48,7 @@ def packaged_defaults(*sections: str):
     ``sections``), converted with the entry's unit. The dataclass field list and the file
     must name the same parameters, and each value must be written with its field's type
     (``2``, ``2.0``, ``true``)."""
+
     def fill(cls):
         data = _packaged()
         entries = {n: e for sec in sections for n, e in data[sec].items()}
@@ -57,13 +58,17 @@ def packaged_defaults(*sections: str):
             if name not in entries:
                 raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
             if cls.__dict__.get(name) is not PACKAGED:
-                raise RuntimeError(f"{cls.__name__}.{name} must be declared with the default "
-                                   f"PACKAGED (its value is read from {_PACKAGED_NAME})")
+                raise RuntimeError(
+                    f"{cls.__name__}.{name} must be declared with the default "
+                    f"PACKAGED (its value is read from {_PACKAGED_NAME})"
+                )
             entry = entries[name]
             value = entry["value"]
             if type(value).__name__ != kind:  # the schema reads each field's type from the file
-                raise RuntimeError(f"packaged {_PACKAGED_NAME}: {name} = {value!r} is not a "
-                                   f"{kind}, the type of {cls.__name__}.{name}")
+                raise RuntimeError(
+                    f"packaged {_PACKAGED_NAME}: {name} = {value!r} is not a "
+                    f"{kind}, the type of {cls.__name__}.{name}"
+                )
             if kind == "bool":
                 default = bool(value)
             elif kind == "int":
@@ -72,4 +77,5 @@ def packaged_defaults(*sections: str):
                 default = float(value) * _UNIT_INDEX[entry["unit"]][1]
             setattr(cls, name, default)
         return cls
+
     return fill

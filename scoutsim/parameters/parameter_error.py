@@ -40,7 +40,9 @@ def _fmt_bound(x: float) -> str:
     return f"{x:.12g}"
 
 
-def _unknown(name: str, context: str, candidates: typing.Iterable[str], kind: str = "parameter") -> ParameterError:
+def _unknown(
+    name: str, context: str, candidates: typing.Iterable[str], kind: str = "parameter"
+) -> ParameterError:
     """Error for an unknown key or section, suggesting the closest valid name."""
     candidates = list(candidates)
     close = difflib.get_close_matches(name, candidates, n=1, cutoff=0.6)

@@ -32,11 +32,15 @@ class ImplausibleParameterWarning(UserWarning):
 _OTHER_UNITS: dict[str, dict[str, float]] = {
     "mass": {"lb": 0.45359237, "t": 1.0e3},
     "length": {"in": 0.0254, "ft": 0.3048, "km": 1.0e3},
-    "inertia": {"lb in^2": 0.45359237 * 0.0254 ** 2, "g mm^2": 1.0e-9},
+    "inertia": {"lb in^2": 0.45359237 * 0.0254**2, "g mm^2": 1.0e-9},
     "acceleration": {"g (9.81 m/s^2)": 9.80665},
     "force": {"kgf": 9.80665, "lbf": 4.4482216152605, "kN": 1.0e3},
-    "torque": {"kgf cm": 0.0980665, "lbf in": 0.1129848290276, "oz in": 0.0070615518,
-               "N mm": 1.0e-3},
+    "torque": {
+        "kgf cm": 0.0980665,
+        "lbf in": 0.1129848290276,
+        "oz in": 0.0070615518,
+        "N mm": 1.0e-3,
+    },
     "stiffness": {"N/cm": 1.0e2, "kN/m": 1.0e3, "kgf/mm": 9806.65, "lbf/in": 175.12683524647},
     "damping": {"N s/cm": 1.0e2, "kgf s/mm": 9806.65},
     "time": {"us": 1.0e-6},
@@ -83,9 +87,9 @@ def likely_slip(spec: _Spec, ratio: float, given_unit: str | None = None) -> str
                     best, best_distance = f"a slip between {b} and {a}?", distance
     if best is None:
         for k in (1, 2, 3):
-            for r in (1000.0 ** k, 1000.0 ** -k):
+            for r in (1000.0**k, 1000.0**-k):
                 if abs(math.log(ratio / r)) < _SLIP_TOLERANCE:
-                    return f"a unit-prefix slip (a factor {_fmt_bound(1000.0 ** k)})?"
+                    return f"a unit-prefix slip (a factor {_fmt_bound(1000.0**k)})?"
     return best
 
 
@@ -93,8 +97,10 @@ def _given_unit(spec: _Spec, note: str | None) -> str | None:
     """The unit a value was given in, from its origin's note ("given as 3520 N/mm")."""
     if not note:
         return None
-    return next((u for u in sorted(UNITS[spec.dimension], key=len, reverse=True)
-                 if note.endswith(f" {u}")), None)
+    return next(
+        (u for u in sorted(UNITS[spec.dimension], key=len, reverse=True) if note.endswith(f" {u}")),
+        None,
+    )
 
 
 def slip_hint(spec: _Spec, value: float, note: str | None = None) -> str | None:
@@ -121,14 +127,18 @@ def implausible_message(spec: _Spec, value: float, origins, leg: int | None = No
         span += ", or 0"
     scout = spec.default_si
     if value > 0.0 and scout > 0.0:
-        text = (f"{shown} is {_ratio_text(value / scout)} Scout II's {spec.written:.4g}{unit}, "
-                f"outside the plausible range for a robot of its kind ({span})")
+        text = (
+            f"{shown} is {_ratio_text(value / scout)} Scout II's {spec.written:.4g}{unit}, "
+            f"outside the plausible range for a robot of its kind ({span})"
+        )
         slip = slip_hint(spec, value, note)
         if slip:
             text += f": {slip}"
     else:
-        text = (f"{shown} is outside the plausible range for a robot of its kind ({span}; "
-                f"Scout II: {spec.written:.4g}{unit})")
+        text = (
+            f"{shown} is outside the plausible range for a robot of its kind ({span}; "
+            f"Scout II: {spec.written:.4g}{unit})"
+        )
     return text + where
 
 

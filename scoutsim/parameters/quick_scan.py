@@ -29,9 +29,18 @@ def scan_plan(cls: type) -> tuple:
         lo, hi = closed_range(name)
         p = spec.plausible
         p_lo, p_hi = (-math.inf, math.inf) if p is None else p.bounds
-        plan.append((name, _ACCEPTED_TYPES[spec.kind], name in PER_LEG_FIELDS,
-                     max(lo, -_FLOAT_MAX), min(hi, _FLOAT_MAX), p_lo, p_hi,
-                     p is not None and p.zero))
+        plan.append(
+            (
+                name,
+                _ACCEPTED_TYPES[spec.kind],
+                name in PER_LEG_FIELDS,
+                max(lo, -_FLOAT_MAX),
+                min(hi, _FLOAT_MAX),
+                p_lo,
+                p_hi,
+                p is not None and p.zero,
+            )
+        )
     return tuple(plan)
 
 
@@ -55,7 +64,7 @@ def quick_scan(values: typing.Mapping, plan: tuple) -> list | None:
                     return None
                 if not p_lo <= x <= p_hi and not (p_zero and x == 0):
                     implausible.append((name, x, leg))
-        elif float in types and isinstance(v, float):    # a subclass: NumPy's float64
+        elif float in types and isinstance(v, float):  # a subclass: NumPy's float64
             if not lo <= v <= hi:
                 return None
             if not p_lo <= v <= p_hi and not (p_zero and v == 0):

@@ -27,8 +27,11 @@ def _per_leg_value(name: str, value):
     if given_per_leg(value):
         pair = tuple(value)
         if len(pair) != 2:
-            raise ParameterError(f"robot.{name} = {list(pair)!r} is not allowed: give one value "
-                                 "for both legs or a (back, front) pair", name)
+            raise ParameterError(
+                f"robot.{name} = {list(pair)!r} is not allowed: give one value "
+                "for both legs or a (back, front) pair",
+                name,
+            )
         back, front = (v.item() if hasattr(v, "item") else v for v in pair)
         return back if back == front and type(back) is type(front) else (back, front)
     return value
@@ -189,8 +192,9 @@ class RobotParameters:
         """The (back, front) values of field ``name`` (a field of :data:`PER_LEG_FIELDS`
         given as one value gives it twice)."""
         if name not in PER_LEG_FIELDS:
-            raise ValueError(f"{name!r} is not a per-leg field; per-leg fields: "
-                             f"{', '.join(PER_LEG_FIELDS)}")
+            raise ValueError(
+                f"{name!r} is not a per-leg field; per-leg fields: {', '.join(PER_LEG_FIELDS)}"
+            )
         value = getattr(self, name)
         return value if isinstance(value, tuple) else (value, value)
 
@@ -204,8 +208,9 @@ class RobotParameters:
         one leg's quantities and everything derived from them
         (``robot.leg("front").stall_torque``)."""
         i = leg_index(leg)
-        pairs = {n: getattr(self, n)[i] for n in PER_LEG_FIELDS
-                 if isinstance(getattr(self, n), tuple)}
+        pairs = {
+            n: getattr(self, n)[i] for n in PER_LEG_FIELDS if isinstance(getattr(self, n), tuple)
+        }
         if not pairs:
             return self
         # one leg's values of a robot checked when it was made (leg by leg): a copy with
@@ -223,7 +228,8 @@ class RobotParameters:
                 raise ValueError(
                     f"robot.{derived} is per leg here: {n} differs between the legs (back "
                     f"{v[0]:g}, front {v[1]:g}); ask one leg, robot.leg('back').{derived} "
-                    f"or robot.leg('front').{derived}")
+                    f"or robot.leg('front').{derived}"
+                )
         return tuple(getattr(self, n) for n in names)
 
     # -- derived quantities (docs/specification.md section 4) ------------------------------------------
@@ -256,15 +262,19 @@ class RobotParameters:
     def torque_per_amp(self) -> float:
         """Hip torque per ampere of motor current, N eta K_T [N m/A] (the compiled model's
         counterpart is ``scoutsim._core.model.actuator.torque_per_amp``)."""
-        return self.gear_ratio * self.efficiency * self._same("torque_per_amp",
-                                                              "torque_constant")[0]
+        return (
+            self.gear_ratio * self.efficiency * self._same("torque_per_amp", "torque_constant")[0]
+        )
 
     @property
     def stall_torque(self) -> float:
         """Torque-speed line at zero speed, at one physical leg: N eta K_T V / R_A [N m]
         (tau_max of the paper's eq. (3), written at the leg)."""
-        return self.torque_per_amp * self.battery_voltage \
+        return (
+            self.torque_per_amp
+            * self.battery_voltage
             / self._same("stall_torque", "armature_resistance")[0]
+        )
 
     @property
     def torque_speed_slope(self) -> float:
@@ -272,15 +282,17 @@ class RobotParameters:
         N^2 eta K_T K_w / R_A [N m s/rad] (minus the slope A of the paper's eq. (3), written
         at the leg)."""
         N = self.gear_ratio
-        kt, kw, ra = self._same("torque_speed_slope", "torque_constant", "speed_constant",
-                                "armature_resistance")
+        kt, kw, ra = self._same(
+            "torque_speed_slope", "torque_constant", "speed_constant", "armature_resistance"
+        )
         return N * N * self.efficiency * kt * kw / ra
 
     @property
     def no_load_speed(self) -> float:
         """Leg speed where the torque-speed line crosses zero torque, V / (K_w N) [rad/s]."""
-        return self.battery_voltage / (self._same("no_load_speed", "speed_constant")[0]
-                                       * self.gear_ratio)
+        return self.battery_voltage / (
+            self._same("no_load_speed", "speed_constant")[0] * self.gear_ratio
+        )
 
     @property
     def max_leg_torque(self) -> float:

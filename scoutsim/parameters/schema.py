@@ -25,13 +25,32 @@ CONTROLLER_SECTIONS = ("controller",)
 #: telescopic legs, the hip units (transmission) and the motors with their amplifiers.
 #: The torso, the hip spacing, the battery and gravity are one value for the robot.
 PER_LEG_FIELDS = (
-    "leg_mass", "leg_inertia", "leg_stiffness", "leg_damping", "leg_rest_length",
-    "leg_com_distance", "planetary_ratio", "sprocket_ratio", "gearbox_efficiency",
-    "sprocket_efficiency", "gearbox_idle_loss_torque", "gearbox_load_loss_coefficient",
-    "drive_gear_inertia", "driven_gear_inertia", "joint_stiction", "joint_damping",
-    "belt_stiffness", "belt_damping", "belt_backlash", "leg_friction_force",
-    "leg_friction_side_load_coefficient", "leg_damping_angle_coefficient",
-    "torque_constant", "speed_constant", "armature_resistance", "current_limit",
+    "leg_mass",
+    "leg_inertia",
+    "leg_stiffness",
+    "leg_damping",
+    "leg_rest_length",
+    "leg_com_distance",
+    "planetary_ratio",
+    "sprocket_ratio",
+    "gearbox_efficiency",
+    "sprocket_efficiency",
+    "gearbox_idle_loss_torque",
+    "gearbox_load_loss_coefficient",
+    "drive_gear_inertia",
+    "driven_gear_inertia",
+    "joint_stiction",
+    "joint_damping",
+    "belt_stiffness",
+    "belt_damping",
+    "belt_backlash",
+    "leg_friction_force",
+    "leg_friction_side_load_coefficient",
+    "leg_damping_angle_coefficient",
+    "torque_constant",
+    "speed_constant",
+    "armature_resistance",
+    "current_limit",
 )
 
 
@@ -55,37 +74,57 @@ PLAUSIBLE_FACTOR = 10.0
 #: whose allowed range is already its whole physical span).
 _PLAUSIBLE_RANGES: dict[str, tuple[float, float] | None] = {
     # signed, or bounded by validation to their physical span
-    "com_offset": None, "gearbox_load_loss_coefficient": None,
-    "touchdown_angle_front": None, "touchdown_angle_back": None,
-    "sweep_limit_front": None, "sweep_limit_back": None,
-    "pitch_gain_front": None, "pitch_gain_back": None,
-    "pitch_rate_gain_front": None, "pitch_rate_gain_back": None,
+    "com_offset": None,
+    "gearbox_load_loss_coefficient": None,
+    "touchdown_angle_front": None,
+    "touchdown_angle_back": None,
+    "sweep_limit_front": None,
+    "sweep_limit_back": None,
+    "pitch_gain_front": None,
+    "pitch_gain_back": None,
+    "pitch_rate_gain_front": None,
+    "pitch_rate_gain_back": None,
     # one physical leg per virtual leg (a planar one-legged half) up to a tripod
     "legs_per_virtual_leg": (1, 3),
     # 1: direct drive (no planetary stage); robot hip gearboxes stay below 1000 : 1; a belt
     # or chain stage may take most of the reduction (up to 30 : 1), or speed up
-    "planetary_ratio": (1.0, 1000.0), "sprocket_ratio": (0.1, 30.0),
+    "planetary_ratio": (1.0, 1000.0),
+    "sprocket_ratio": (0.1, 30.0),
     # motors of 10-500 W at 12-48 V: from small high-speed motors to frameless torque motors
-    "torque_constant": (0.003, 1.0), "speed_constant": (0.003, 1.0),
+    "torque_constant": (0.003, 1.0),
+    "speed_constant": (0.003, 1.0),
     "armature_resistance": (0.05, 50.0),
     # effects whose Scout II value is 0 (off): up to strong but real ones
-    "gearbox_idle_loss_torque": (0.0, 5.0),          # N m at the leg; Scout II's hip: ~30 N m
-    "belt_backlash": (0.0, 10.0),                    # deg: gearboxes have arcminutes
-    "leg_friction_force": (0.0, 100.0),              # N: Scout II's weight per leg is ~60 N
+    "gearbox_idle_loss_torque": (0.0, 5.0),  # N m at the leg; Scout II's hip: ~30 N m
+    "belt_backlash": (0.0, 10.0),  # deg: gearboxes have arcminutes
+    "leg_friction_force": (0.0, 100.0),  # N: Scout II's weight per leg is ~60 N
     "leg_friction_side_load_coefficient": (0.0, 1.0),  # a dry friction coefficient
-    "leg_damping_angle_coefficient": (0.0, 100.0),   # 1/rad^2: 17x the damping at 0.4 rad
-    "battery_resistance": (0.0, 1.0),                # ohm: batteries have milliohms
+    "leg_damping_angle_coefficient": (0.0, 100.0),  # 1/rad^2: 17x the damping at 0.4 rad
+    "battery_resistance": (0.0, 1.0),  # ohm: batteries have milliohms
 }
 
 #: Fields whose value 0 is plausible as well (the effect switched off, or idealised away:
 #: massless legs, an undamped leg, a gain of 0); a value > 0 is still held to the range.
-_ZERO_PLAUSIBLE = frozenset({
-    "leg_mass", "leg_inertia", "leg_damping", "leg_com_distance", "drive_gear_inertia",
-    "driven_gear_inertia", "joint_stiction", "joint_damping", "belt_damping",
-    "liftoff_compression",
-    *(f"{kind}_{gain}_{end}" for kind in ("flight", "brake") for gain in ("kp", "kd")
-      for end in ("front", "back")),
-})
+_ZERO_PLAUSIBLE = frozenset(
+    {
+        "leg_mass",
+        "leg_inertia",
+        "leg_damping",
+        "leg_com_distance",
+        "drive_gear_inertia",
+        "driven_gear_inertia",
+        "joint_stiction",
+        "joint_damping",
+        "belt_damping",
+        "liftoff_compression",
+        *(
+            f"{kind}_{gain}_{end}"
+            for kind in ("flight", "brake")
+            for gain in ("kp", "kd")
+            for end in ("front", "back")
+        ),
+    }
+)
 
 
 @dataclass(frozen=True)
@@ -159,8 +198,10 @@ def _plausible(name: str, kind: str, factor: float, written) -> Plausible | None
     else:
         low, high = written / PLAUSIBLE_FACTOR, written * PLAUSIBLE_FACTOR
     if not 0.0 <= low <= written <= high:
-        raise RuntimeError(f"packaged {_PACKAGED_NAME}: {name}'s value {written} is not in its "
-                           f"plausible range [{low}, {high}]")
+        raise RuntimeError(
+            f"packaged {_PACKAGED_NAME}: {name}'s value {written} is not in its "
+            f"plausible range [{low}, {high}]"
+        )
     return Plausible(low * factor, high * factor, name in _ZERO_PLAUSIBLE)
 
 
@@ -169,19 +210,31 @@ def _schema() -> dict[str, _Spec]:
     """Field name -> :class:`_Spec`, in the file's order."""
     data = _packaged()
     if set(data) != {*ROBOT_SECTIONS, *CONTROLLER_SECTIONS}:
-        raise RuntimeError(f"packaged {_PACKAGED_NAME} has sections {sorted(data)}, expected "
-                           f"{sorted({*ROBOT_SECTIONS, *CONTROLLER_SECTIONS})}")
+        raise RuntimeError(
+            f"packaged {_PACKAGED_NAME} has sections {sorted(data)}, expected "
+            f"{sorted({*ROBOT_SECTIONS, *CONTROLLER_SECTIONS})}"
+        )
     schema: dict[str, _Spec] = {}
     for section, entries in data.items():
         for name, entry in entries.items():
             if name in schema:
-                raise RuntimeError(f"packaged {_PACKAGED_NAME}: {name} is in [{section}] and "
-                                   f"[{schema[name].section}]")
+                raise RuntimeError(
+                    f"packaged {_PACKAGED_NAME}: {name} is in [{section}] and "
+                    f"[{schema[name].section}]"
+                )
             dim, factor = _UNIT_INDEX[entry["unit"]]
             kind = type(entry["value"]).__name__  # TOML: float, int or bool
-            schema[name] = _Spec(name, section, kind, entry["unit"], dim, factor,
-                                 entry["value"], entry["source"],
-                                 _plausible(name, kind, factor, entry["value"]))
+            schema[name] = _Spec(
+                name,
+                section,
+                kind,
+                entry["unit"],
+                dim,
+                factor,
+                entry["value"],
+                entry["source"],
+                _plausible(name, kind, factor, entry["value"]),
+            )
     if unknown := set(_PLAUSIBLE_RANGES) - set(schema):
         raise RuntimeError(f"plausible ranges of unknown fields {sorted(unknown)}")
     return schema

@@ -51,17 +51,22 @@ def quantity_to_si(entry: object, dimension: str, unit: str, label: str) -> floa
     ``label`` otherwise."""
     if isinstance(entry, dict):
         if extra := sorted(set(entry) - {"value", "unit", "source"}):
-            raise ParameterError(f"{label}: unknown key(s) {extra}; allowed keys are value, "
-                                 "unit, source", label)
+            raise ParameterError(
+                f"{label}: unknown key(s) {extra}; allowed keys are value, unit, source", label
+            )
         if "value" not in entry:
             raise ParameterError(f"{label}: entry has no 'value'", label)
         unit = entry.get("unit", unit)
         entry = entry["value"]
     if not isinstance(unit, str) or unit.strip() not in UNITS[dimension]:
-        raise ParameterError(f"{label}: unit {unit!r} is not allowed; allowed units: "
-                             f"{', '.join(UNITS[dimension])}", label)
-    if isinstance(entry, bool) or not isinstance(entry, numbers.Real) or \
-            not math.isfinite(float(entry)):
-        raise ParameterError(f"{label} = {entry!r} is not allowed: must be a finite number",
-                             label)
+        raise ParameterError(
+            f"{label}: unit {unit!r} is not allowed; allowed units: {', '.join(UNITS[dimension])}",
+            label,
+        )
+    if (
+        isinstance(entry, bool)
+        or not isinstance(entry, numbers.Real)
+        or not math.isfinite(float(entry))
+    ):
+        raise ParameterError(f"{label} = {entry!r} is not allowed: must be a finite number", label)
     return float(entry) * UNITS[dimension][unit.strip()]

@@ -32,9 +32,19 @@ from .plausibility import warn_implausible
 from .quick_scan import quick_scan, scan_plan
 from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema
 
-__all__ = ["allowed_range", "closed_range", "physical_limit", "coerce_value", "check_robot",
-           "check_controller", "check_pair_couplings", "reporting_origins", "validate_robot",
-           "validate_controller", "validate_parameters"]
+__all__ = [
+    "allowed_range",
+    "closed_range",
+    "physical_limit",
+    "coerce_value",
+    "check_robot",
+    "check_controller",
+    "check_pair_couplings",
+    "reporting_origins",
+    "validate_robot",
+    "validate_controller",
+    "validate_parameters",
+]
 
 
 #: Where the values being checked came from: field -> (where, note) as in
@@ -42,7 +52,8 @@ __all__ = ["allowed_range", "closed_range", "physical_limit", "coerce_value", "c
 #: parameter set from a file, so the messages of the checks run by the constructor name the
 #: file and the unit the value was given in).
 _ORIGINS: contextvars.ContextVar[typing.Mapping] = contextvars.ContextVar(
-    "parameter_origins", default=MappingProxyType({}))
+    "parameter_origins", default=MappingProxyType({})
+)
 
 
 @contextlib.contextmanager
@@ -68,8 +79,7 @@ def _check(obj, couplings, warn: bool = True) -> None:
         # field, or the value is valid (e.g. a NumPy number)
         check_fields(obj, origins)
         specs = _fields_of(cls)
-        implausible = quick_scan({n: coerce_value(specs[n], getattr(obj, n))
-                                  for n in specs}, plan)
+        implausible = quick_scan({n: coerce_value(specs[n], getattr(obj, n)) for n in specs}, plan)
     couplings(obj, origins)
     for name, value, leg in (implausible or []) if warn else ():
         warn_implausible(_schema()[name], value, origins, leg)
@@ -131,7 +141,7 @@ def validate_robot(p):
         range.
     """
     _require(p, ROBOT_SECTIONS, "RobotParameters")
-    _check(p, check_robot_couplings, warn=False)    # (its constructor warned)
+    _check(p, check_robot_couplings, warn=False)  # (its constructor warned)
     return p
 
 

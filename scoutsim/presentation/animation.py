@@ -48,17 +48,28 @@ from ..names import ContactMode, Leg, LegState
 from .run_parts import _model_label, behaviour_text
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
-__all__ = ["animate", "RunAnimation", "save_animation", "frame_times", "LEG_STATE_COLORS",
-           "TOE_MARKERS", "toe_contact", "FORCE_SCALE_M_PER_N", "ANIMATION_SUFFIXES"]
+__all__ = [
+    "animate",
+    "RunAnimation",
+    "save_animation",
+    "frame_times",
+    "LEG_STATE_COLORS",
+    "TOE_MARKERS",
+    "toe_contact",
+    "FORCE_SCALE_M_PER_N",
+    "ANIMATION_SUFFIXES",
+]
 
 #: Leg colour per controller leg state (0 flight, 1 stance-retraction, 2 stance-brake).
 LEG_STATE_COLORS = LEG_STATE_LINE_COLORS
 _STATE_NAMES = LEG_STATE_NAMES
 #: Toe marker per simulated contact: (marker, filled, legend label), by the names of
 #: :func:`toe_contact`.
-TOE_MARKERS = {"ground": ("o", True, "toe on the ground"),
-               "sliding": ("D", True, "toe on the ground, sliding"),
-               "air": ("o", False, "toe in the air")}
+TOE_MARKERS = {
+    "ground": ("o", True, "toe on the ground"),
+    "sliding": ("D", True, "toe on the ground, sliding"),
+    "air": ("o", False, "toe in the air"),
+}
 #: Length of a ground-force arrow per newton [m/N] (the robot's weight, about 203 N, is
 #: drawn 0.2 m long).
 FORCE_SCALE_M_PER_N = 1.0e-3
@@ -71,12 +82,13 @@ class RunAnimation(FuncAnimation):
     """The :class:`~matplotlib.animation.FuncAnimation` of a run (:func:`animate`), with the
     frames' times and the parts it draws."""
 
-    frame_times: np.ndarray     #: the frames' times [s]
-    artists: dict               #: the drawn parts by name (:func:`animate`)
+    frame_times: np.ndarray  #: the frames' times [s]
+    artists: dict  #: the drawn parts by name (:func:`animate`)
 
 
-def frame_times(result, fps: float = 25.0, t0: float | None = None,
-                t1: float | None = None) -> np.ndarray:
+def frame_times(
+    result, fps: float = 25.0, t0: float | None = None, t1: float | None = None
+) -> np.ndarray:
     """Times [s] of the frames: ``t0 + k / fps``, ``k = 0 .. floor((t1 - t0) * fps)``.
 
     ``t0``/``t1`` default to the start and end of the run; they must lie within it and
@@ -92,8 +104,9 @@ def frame_times(result, fps: float = 25.0, t0: float | None = None,
         raise ValueError(f"t0 = {t0!r}, t1 = {t1!r} are not allowed: must be finite")
     eps = 1e-9
     if a < t[0] - eps or b > t[-1] + eps:
-        raise ValueError(f"t0 = {a:g} s, t1 = {b:g} s are not allowed: the run covers "
-                         f"{t[0]:g}-{t[-1]:g} s")
+        raise ValueError(
+            f"t0 = {a:g} s, t1 = {b:g} s are not allowed: the run covers {t[0]:g}-{t[-1]:g} s"
+        )
     if not b > a:
         raise ValueError(f"t0 = {a:g} s, t1 = {b:g} s are not allowed: need t1 > t0")
     n = int(math.floor((b - a) * fps + 1e-9)) + 1
@@ -115,14 +128,24 @@ def _geometry(result) -> tuple[tuple[float, float], float, float]:
     """The hips' positions along the torso axis from the COM (back, front) [m], the torso's
     length and height [m], of the run's robot (Scout II if the run does not say)."""
     from ..parameters import RobotParameters
+
     robot = (result.provenance or {}).get("robot") or {}
     robot = RobotParameters(**robot) if robot else RobotParameters()
-    return ((robot.hip_offset(0), robot.hip_offset(1)), float(robot.torso_length),
-            float(robot.torso_height))
+    return (
+        (robot.hip_offset(0), robot.hip_offset(1)),
+        float(robot.torso_length),
+        float(robot.torso_height),
+    )
 
 
-def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None = None,
-            figsize=(8.0, 4.0), dpi: int = 80) -> RunAnimation:
+def animate(
+    result,
+    fps: float = 25.0,
+    t0: float | None = None,
+    t1: float | None = None,
+    figsize=(8.0, 4.0),
+    dpi: int = 80,
+) -> RunAnimation:
     """A :class:`~matplotlib.animation.FuncAnimation` of ``result`` (module docstring).
 
     Parameters
@@ -139,17 +162,24 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     times = frame_times(result, fps, t0, t1)
     t = np.asarray(result.t, dtype=float)
     idx = np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, t.size - 1)
-    x_com, y_com, pitch = (np.asarray(v, dtype=float)
-                           for v in (result.x, result.height, result.pitch))
+    x_com, y_com, pitch = (
+        np.asarray(v, dtype=float) for v in (result.x, result.height, result.pitch)
+    )
     phis = [np.asarray(result.leg_angle(leg), dtype=float) for leg in Leg]
     lengths = [np.asarray(result.leg_length(leg), dtype=float) for leg in Leg]
-    toe_xy = [np.column_stack([np.asarray(v, dtype=float) for v in result.toe_position(leg)])
-              for leg in Leg]
-    ground = [np.column_stack([np.asarray(v, dtype=float) for v in result.ground_force(leg)])
-              for leg in Leg]
+    toe_xy = [
+        np.column_stack([np.asarray(v, dtype=float) for v in result.toe_position(leg)])
+        for leg in Leg
+    ]
+    ground = [
+        np.column_stack([np.asarray(v, dtype=float) for v in result.ground_force(leg)])
+        for leg in Leg
+    ]
     has_ctrl = (result.provenance or {}).get("controller") is not None
-    states = [np.asarray(result.leg_state(leg)) if has_ctrl
-              else np.full(t.size, LegState.FLIGHT, int) for leg in Leg]
+    states = [
+        np.asarray(result.leg_state(leg)) if has_ctrl else np.full(t.size, LegState.FLIGHT, int)
+        for leg in Leg
+    ]
     contact = [toe_contact(result, leg) for leg in Leg]
     hips, length, height = _geometry(result)
 
@@ -161,25 +191,42 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
     ax.set_ylabel("height y [m]")
     ytop = max(0.65, float(np.max(y_com)) + 0.25)
     ax.set_ylim(-0.08, ytop)
-    floor, = ax.plot([], [], color="0.3", lw=1.5)
-    ticks, = ax.plot([], [], color="0.3", lw=1.0)
-    torso = Polygon(np.zeros((4, 2)), closed=True, facecolor="0.75", edgecolor="k", lw=1.2,
-                    zorder=3)
+    (floor,) = ax.plot([], [], color="0.3", lw=1.5)
+    (ticks,) = ax.plot([], [], color="0.3", lw=1.0)
+    torso = Polygon(
+        np.zeros((4, 2)), closed=True, facecolor="0.75", edgecolor="k", lw=1.2, zorder=3
+    )
     ax.add_patch(torso)
     legs = [ax.plot([], [], lw=3.0, solid_capstyle="round", zorder=4)[0] for _ in range(2)]
-    toes = [ax.plot([], [], marker="o", ms=6, color="k", mec="k", mew=1.2, zorder=5)[0]
-            for _ in range(2)]
-    forces = [ax.annotate("", xy=(0, 0), xytext=(0, 0), zorder=6,
-                          arrowprops=dict(arrowstyle="-|>", color="crimson", lw=1.5))
-              for _ in range(2)]
-    stamp = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=10,
-                    family="monospace")
+    toes = [
+        ax.plot([], [], marker="o", ms=6, color="k", mec="k", mew=1.2, zorder=5)[0]
+        for _ in range(2)
+    ]
+    forces = [
+        ax.annotate(
+            "",
+            xy=(0, 0),
+            xytext=(0, 0),
+            zorder=6,
+            arrowprops=dict(arrowstyle="-|>", color="crimson", lw=1.5),
+        )
+        for _ in range(2)
+    ]
+    stamp = ax.text(
+        0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=10, family="monospace"
+    )
     status = fig.text(0.715, 0.05, "", va="bottom", ha="left", fontsize=7, family="monospace")
     _legends(fig, has_ctrl)
     import textwrap
-    fig.suptitle("\n".join(textwrap.wrap(f"Scout II, {_model_label(result)}: "
-                                          f"{behaviour_text(result)}", 100)),
-                 fontsize=8, y=0.99, va="top")
+
+    fig.suptitle(
+        "\n".join(
+            textwrap.wrap(f"Scout II, {_model_label(result)}: {behaviour_text(result)}", 100)
+        ),
+        fontsize=8,
+        y=0.99,
+        va="top",
+    )
 
     def draw(i):
         k = int(idx[i])
@@ -188,8 +235,16 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
         u, n = np.array([c, s]), np.array([-s, c])  # torso axis, its upward normal
         com = np.array([x, y])
         hl, hh = 0.5 * length, 0.5 * height
-        torso.set_xy(np.array([com + hl * u + hh * n, com - hl * u + hh * n,
-                               com - hl * u - hh * n, com + hl * u - hh * n]))
+        torso.set_xy(
+            np.array(
+                [
+                    com + hl * u + hh * n,
+                    com - hl * u + hh * n,
+                    com - hl * u - hh * n,
+                    com + hl * u - hh * n,
+                ]
+            )
+        )
         x0, x1 = x - _VIEW_HALF_WIDTH_M, x + _VIEW_HALF_WIDTH_M
         ax.set_xlim(x0, x1)
         floor.set_data([x0, x1], [0.0, 0.0])
@@ -213,24 +268,32 @@ def animate(result, fps: float = 25.0, t0: float | None = None, t1: float | None
             toes[leg].set_data([toe[0]], [toe[1]])
             toes[leg].set_marker(marker)
             toes[leg].set_markerfacecolor("k" if filled else "white")
-            f = ground[leg][k].copy()    # tangential, normal [N]
+            f = ground[leg][k].copy()  # tangential, normal [N]
             on = what != "air" and np.all(np.isfinite(f)) and np.hypot(*f) > 1.0
             tip = toe + FORCE_SCALE_M_PER_N * f if on else toe
             forces[leg].xy = (tip[0], tip[1])
             forces[leg].set_position((toe[0], toe[1]))
             forces[leg].set_visible(bool(on))
-            lines.append(f"{leg.label:<6s}{_TOE_WORDS[what]:<10s}"
-                         + (state.label if has_ctrl else ""))
+            lines.append(
+                f"{leg.label:<6s}{_TOE_WORDS[what]:<10s}" + (state.label if has_ctrl else "")
+            )
         status.set_text("\n".join(lines))
         stamp.set_text(f"t = {times[i]:7.3f} s")
         return [torso, floor, ticks, stamp, status, *legs, *toes, *forces]
 
-    anim = RunAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False,
-                        repeat=False)
+    anim = RunAnimation(
+        fig, draw, frames=len(times), interval=1000.0 / fps, blit=False, repeat=False
+    )
     anim.frame_times = times
     # the drawn parts by name, each updated by every frame
-    anim.artists = {"torso": torso, "legs": legs, "toes": toes, "forces": forces,
-                    "status": status, "stamp": stamp}
+    anim.artists = {
+        "torso": torso,
+        "legs": legs,
+        "toes": toes,
+        "forces": forces,
+        "status": status,
+        "stamp": stamp,
+    }
     return anim
 
 
@@ -242,27 +305,55 @@ def _legends(fig, has_ctrl: bool) -> None:
     """The two legends right of the view: the leg's colour (the controller's leg state) and
     the toe's marker (the simulated contact), with the ground-force arrow."""
     from matplotlib.lines import Line2D
+
     if has_ctrl:
         handles = [Line2D([], [], color=c, lw=3) for c in LEG_STATE_COLORS]
         names, title = list(_STATE_NAMES), "leg colour: controller state"
     else:
         handles = [Line2D([], [], color=LEG_STATE_COLORS[LegState.FLIGHT], lw=3)]
         names, title = ["leg (no controller)"], "leg"
-    fig.legend(handles, names, loc="upper left", bbox_to_anchor=(0.72, 0.88),
-                     fontsize=7, title=title, title_fontsize=7, alignment="left",
-                     frameon=False)
-    handles = [Line2D([], [], marker=m, ms=6, ls="none", color="k", mec="k",
-                      mfc="k" if filled else "white") for m, filled, _ in TOE_MARKERS.values()]
+    fig.legend(
+        handles,
+        names,
+        loc="upper left",
+        bbox_to_anchor=(0.72, 0.88),
+        fontsize=7,
+        title=title,
+        title_fontsize=7,
+        alignment="left",
+        frameon=False,
+    )
+    handles = [
+        Line2D(
+            [], [], marker=m, ms=6, ls="none", color="k", mec="k", mfc="k" if filled else "white"
+        )
+        for m, filled, _ in TOE_MARKERS.values()
+    ]
     names = [label for _, _, label in TOE_MARKERS.values()]
     handles.append(Line2D([], [], color="crimson", lw=1.5))
     names.append(f"ground force ({FORCE_SCALE_M_PER_N * 1e3:g} m/kN)")
-    fig.legend(handles, names, loc="upper left", bbox_to_anchor=(0.72, 0.56), fontsize=7,
-               title="toe: simulated contact", title_fontsize=7, alignment="left",
-               frameon=False)
+    fig.legend(
+        handles,
+        names,
+        loc="upper left",
+        bbox_to_anchor=(0.72, 0.56),
+        fontsize=7,
+        title="toe: simulated contact",
+        title_fontsize=7,
+        alignment="left",
+        frameon=False,
+    )
 
 
-def save_animation(result, path, fps: float = 25.0, t0: float | None = None,
-                   t1: float | None = None, dpi: int = 80, progress=None) -> Path:
+def save_animation(
+    result,
+    path,
+    fps: float = 25.0,
+    t0: float | None = None,
+    t1: float | None = None,
+    dpi: int = 80,
+    progress=None,
+) -> Path:
     """Write the animation of ``result`` to ``path``: ``.gif`` (Pillow) or ``.mp4``
     (ffmpeg; RuntimeError if it is not installed). Returns the path. ``progress``: optional
     callback ``(frame, n_frames)``."""
@@ -271,13 +362,18 @@ def save_animation(result, path, fps: float = 25.0, t0: float | None = None,
     if suffix not in ANIMATION_SUFFIXES:
         raise ValueError(f"path = '{path}' is not allowed: the suffix must be .gif or .mp4")
     if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise RuntimeError("writing .mp4 needs the ffmpeg program, which is not on the PATH; "
-                           "install ffmpeg (e.g. `apt-get install ffmpeg` or `conda install "
-                           "ffmpeg`) or write a .gif instead")
+        raise RuntimeError(
+            "writing .mp4 needs the ffmpeg program, which is not on the PATH; "
+            "install ffmpeg (e.g. `apt-get install ffmpeg` or `conda install "
+            "ffmpeg`) or write a .gif instead"
+        )
     anim = animate(result, fps=fps, t0=t0, t1=t1, dpi=dpi)
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = (PillowWriter(fps=fps)  # type: ignore[arg-type]  # stubs: int; a float fps works
-              if suffix == ".gif" else FFMpegWriter(fps=fps))  # type: ignore[arg-type]  # (same)
+    writer = (
+        PillowWriter(fps=fps)  # type: ignore[arg-type]  # stubs: int; a float fps works
+        if suffix == ".gif"
+        else FFMpegWriter(fps=fps)
+    )  # type: ignore[arg-type]  # (same)
     cb = None if progress is None else (lambda i, n: progress(i, n))
     anim.save(str(path), writer=writer, dpi=dpi, progress_callback=cb)
     return path

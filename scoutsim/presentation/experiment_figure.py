@@ -34,8 +34,9 @@ def robot_pose(log, k: int, robot=None) -> dict:
     c, s = math.cos(th), math.sin(th)
     a, b = 0.5 * rob.torso_length, 0.5 * rob.torso_height
     corners = np.array([[-a, -b], [a, -b], [a, b], [-a, b], [-a, -b]])
-    torso = np.column_stack([corners[:, 0] * c - corners[:, 1] * s,
-                             y + corners[:, 0] * s + corners[:, 1] * c])
+    torso = np.column_stack(
+        [corners[:, 0] * c - corners[:, 1] * s, y + corners[:, 0] * s + corners[:, 1] * c]
+    )
     legs = {}
     for i, name in enumerate(LEG_NAMES):
         sl = rob.hip_offset(i)
@@ -49,8 +50,9 @@ def robot_pose(log, k: int, robot=None) -> dict:
             ll = min(hy / math.cos(g), l0)
         else:
             ll = l0
-        legs[name] = dict(hip=(hx, hy), toe=(hx + ll * math.sin(g), hy - ll * math.cos(g)),
-                          state=state)
+        legs[name] = dict(
+            hip=(hx, hy), toe=(hx + ll * math.sin(g), hy - ll * math.cos(g)), state=state
+        )
     return dict(torso=torso, legs=legs)
 
 
@@ -64,12 +66,22 @@ def _draw_snapshots(ax, lg, times, robot, spacing: float = 0.95):
         ax.fill(pose["torso"][:, 0] + x0, pose["torso"][:, 1], color="0.75", ec="k", lw=0.8)
         for name, leg in pose["legs"].items():
             (hx, hy), (tx, ty) = leg["hip"], leg["toe"]
-            ax.plot([hx + x0, tx + x0], [hy, ty], color=state_colors[leg["state"] % 3],
-                    lw=2.2 if name == "back" else 1.6, ls="-" if name == "back" else "--",
-                    solid_capstyle="round")
+            ax.plot(
+                [hx + x0, tx + x0],
+                [hy, ty],
+                color=state_colors[leg["state"] % 3],
+                lw=2.2 if name == "back" else 1.6,
+                ls="-" if name == "back" else "--",
+                solid_capstyle="round",
+            )
             ax.plot([tx + x0], [ty], "o", color="k", ms=2.5)
-        ax.text(x0, float(np.max(pose["torso"][:, 1])) + 0.04, f"({chr(97 + j)})",
-                ha="center", fontsize=8)
+        ax.text(
+            x0,
+            float(np.max(pose["torso"][:, 1])) + 0.04,
+            f"({chr(97 + j)})",
+            ha="center",
+            fontsize=8,
+        )
     ax.axhline(0.0, color="k", lw=0.8)
     for lab, col in zip(LEG_STATE_NAMES, state_colors):
         ax.plot([], [], color=col, lw=2, label=lab)
@@ -79,23 +91,23 @@ def _draw_snapshots(ax, lg, times, robot, spacing: float = 0.95):
     ax.set_xlim(-0.5 * spacing, (len(times) - 0.5) * spacing)
     ax.set_ylim(-0.03, 0.52)
     ax.set_xticks([])
-    ax.set_xlabel("robot at the marked times, laid side by side (forward travel not to "
-                  "scale) [m]", fontsize=8)
+    ax.set_xlabel(
+        "robot at the marked times, laid side by side (forward travel not to scale) [m]", fontsize=8
+    )
     ax.set_ylabel("height [m]")
-    ax.legend(loc="upper left", fontsize=7, ncol=1, frameon=False,
-              bbox_to_anchor=(1.0, 1.0))
+    ax.legend(loc="upper left", fontsize=7, ncol=1, frameon=False, bbox_to_anchor=(1.0, 1.0))
 
 
-def fig5(logs, path=None, transient_s: float = 2.0, robot=None,
-         n_snapshots: int = 6) -> Figure:
+def fig5(logs, path=None, transient_s: float = 2.0, robot=None, n_snapshots: int = 6) -> Figure:
     """Experiment over a run with the studied stride (paper Fig. 5): snapshots of the robot
     through the stride (top, drawn from the logged pitch, height, leg angles and leg states,
     legs coloured by controller state), pitch [deg] and COM height [m] of the run holding
     the representative steady stride, that stride shaded and the snapshot times marked.
     ``robot``: geometry for the drawing (default Scout II)."""
     if not (isinstance(n_snapshots, int) and 1 <= n_snapshots <= 12):
-        raise ValueError(f"n_snapshots = {n_snapshots!r} is not allowed: must be an integer "
-                         "in [1, 12]")
+        raise ValueError(
+            f"n_snapshots = {n_snapshots!r} is not allowed: must be an integer in [1, 12]"
+        )
     exp = _experiment(logs, transient_s)
     rep = exp.representative()
     lg = rep[0] if rep is not None else exp.logs[0]
@@ -115,17 +127,29 @@ def fig5(logs, path=None, transient_s: float = 2.0, robot=None,
     if rep is not None:
         _, st, steady = rep
         for ax in (ax_p, ax_h, ax_pz, ax_hz):
-            ax.axvspan(st.t_start, st.t_end, color="tab:orange", alpha=0.3, lw=0,
-                       label=f"{'steady' if steady else 'not steady'} stride studied "
-                             f"({st.t_start:.3f}-{st.t_end:.3f} s)")
+            ax.axvspan(
+                st.t_start,
+                st.t_end,
+                color="tab:orange",
+                alpha=0.3,
+                lw=0,
+                label=f"{'steady' if steady else 'not steady'} stride studied "
+                f"({st.t_start:.3f}-{st.t_end:.3f} s)",
+            )
         ax_p.legend(loc="upper right", fontsize=8)
         times = st.t_start + (st.t_end - st.t_start) * np.arange(n_snapshots) / n_snapshots
         _draw_snapshots(ax_s, lg, times, robot)
         for j, tj in enumerate(times):
             for ax in (ax_pz, ax_hz):
                 ax.axvline(tj, color="0.4", lw=0.6, ls=":")
-            ax_pz.annotate(f"({chr(97 + j)})", (tj, 1.0), xycoords=("data", "axes fraction"),
-                           ha="center", va="bottom", fontsize=7)
+            ax_pz.annotate(
+                f"({chr(97 + j)})",
+                (tj, 1.0),
+                xycoords=("data", "axes fraction"),
+                ha="center",
+                va="bottom",
+                fontsize=7,
+            )
         # the zoom: the studied stride and a stride either side
         T = st.t_end - st.t_start
         a, b = max(lg.t[0], st.t_start - T), min(lg.t[-1], st.t_end + T)
@@ -150,5 +174,10 @@ def fig5(logs, path=None, transient_s: float = 2.0, robot=None,
     ax_h.set_xlim(lg.t[0], lg.t[-1])
     if exp.synthetic:
         notes.insert(0, "SYNTHETIC data (generated by scoutsim, not robot data)")
-    return _finish(fig, f"Experiment run {lg.name}: snapshots of one stride, pitch and COM "
-                        "height (measured, 15 Hz low-pass; right: zoom)", notes, path)
+    return _finish(
+        fig,
+        f"Experiment run {lg.name}: snapshots of one stride, pitch and COM "
+        "height (measured, 15 Hz low-pass; right: zoom)",
+        notes,
+        path,
+    )

@@ -98,8 +98,9 @@ class _Extent:
 
 def _sel(lg, a: float, b: float) -> np.ndarray:
     t = lg.t
-    return np.arange(int(np.searchsorted(t, a, side="left")),
-                     int(np.searchsorted(t, b, side="right")))
+    return np.arange(
+        int(np.searchsorted(t, a, side="left")), int(np.searchsorted(t, b, side="right"))
+    )
 
 
 def _notes(exp: Source, models: dict, extra=()) -> list[str]:
@@ -124,6 +125,7 @@ def _notes(exp: Source, models: dict, extra=()) -> list[str]:
 
 def _finish(fig: Figure, title: str, notes: list[str], path):
     import textwrap
+
     text = "\n".join(textwrap.wrap("; ".join(notes), 140)) if notes else ""
     fig.suptitle(title + ("\n" + text if text else ""), fontsize=10)
     save_figure(fig, path)
@@ -157,8 +159,10 @@ def _clip_note(exp: Source, mods: dict) -> list[str]:
     faint = [s.label for s in srcs if (r := s.representative()) is not None and not r[2]]
     if not faint:
         return []
-    return [f"{', '.join(faint)}: no steady stride, the last (transient) stride drawn faint "
-            "and clipped to the steady strides' range"]
+    return [
+        f"{', '.join(faint)}: no steady stride, the last (transient) stride drawn faint "
+        "and clipped to the steady strides' range"
+    ]
 
 
 def _state_axis(ax):

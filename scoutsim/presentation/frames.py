@@ -32,8 +32,15 @@ import numpy as np
 from ..names import LegState
 from .style import LEG_STATE_LINE_COLORS
 
-__all__ = ["RobotPose", "draw_pose", "VIEW_HALF_WIDTH_M", "GROUND_MARGIN_M",
-           "TICK_SPACING_M", "FRAME_WIDTH", "FRAME_HEIGHT"]
+__all__ = [
+    "RobotPose",
+    "draw_pose",
+    "VIEW_HALF_WIDTH_M",
+    "GROUND_MARGIN_M",
+    "TICK_SPACING_M",
+    "FRAME_WIDTH",
+    "FRAME_HEIGHT",
+]
 
 #: the view's half width about the torso COM [m] (that of the animation)
 VIEW_HALF_WIDTH_M = 0.75
@@ -53,6 +60,7 @@ _OUTLINE_WIDTH_M = 0.004
 
 def _rgb(color) -> np.ndarray:
     from matplotlib.colors import to_rgb
+
     return np.round(255.0 * np.array(to_rgb(color))).astype(np.uint8)
 
 
@@ -61,7 +69,7 @@ _WHITE_LEVEL, _BELOW_GROUND_LEVEL, _GROUND_LEVEL = 255, 236, 77
 _TORSO = np.array([191, 191, 191], np.uint8)
 _INK = np.array([0, 0, 0], np.uint8)
 _NO_CONTROLLER = np.array([90, 90, 90], np.uint8)
-_LEG_STATE_RGB = None   # the leg-state colours as RGB, made on first use
+_LEG_STATE_RGB = None  # the leg-state colours as RGB, made on first use
 
 
 def _leg_color(state) -> np.ndarray:
@@ -99,16 +107,22 @@ class RobotPose:
     leg_states: tuple | None = None
 
     @classmethod
-    def of(cls, robot, x: float, height: float, pitch: float, toes, contact,
-           leg_states=None) -> RobotPose:
+    def of(
+        cls, robot, x: float, height: float, pitch: float, toes, contact, leg_states=None
+    ) -> RobotPose:
         """The pose of ``robot`` (:class:`~scoutsim.parameters.RobotParameters`: its hips and
         torso box) with the torso at (``x``, ``height``) [m], pitched by ``pitch`` [rad]."""
-        return cls(float(x), float(height), float(pitch),
-                   (robot.hip_offset(0), robot.hip_offset(1)), float(robot.torso_length),
-                   float(robot.torso_height),
-                   tuple((float(tx), float(ty)) for tx, ty in toes),
-                   tuple(bool(c) for c in contact),
-                   None if leg_states is None else tuple(int(s) for s in leg_states))
+        return cls(
+            float(x),
+            float(height),
+            float(pitch),
+            (robot.hip_offset(0), robot.hip_offset(1)),
+            float(robot.torso_length),
+            float(robot.torso_height),
+            tuple((float(tx), float(ty)) for tx, ty in toes),
+            tuple(bool(c) for c in contact),
+            None if leg_states is None else tuple(int(s) for s in leg_states),
+        )
 
 
 class _Raster:
@@ -117,7 +131,7 @@ class _Raster:
 
     def __init__(self, width: int, height: int, x_centre: float):
         self.img = np.full((height, width, 3), _WHITE_LEVEL, np.uint8)
-        self.scale = width / (2.0 * VIEW_HALF_WIDTH_M)           # [pixel/m]
+        self.scale = width / (2.0 * VIEW_HALF_WIDTH_M)  # [pixel/m]
         self.x0 = x_centre - VIEW_HALF_WIDTH_M
         self.y_top = -GROUND_MARGIN_M + height / self.scale
 
@@ -133,8 +147,12 @@ class _Raster:
         i0, i1 = max(int(math.floor(v0)), 0), min(int(math.ceil(v1)) + 1, h)
         if j0 >= j1 or i0 >= i1:
             return None
-        return (slice(i0, i1), slice(j0, j1),
-                np.arange(i0, i1)[:, None] + 0.5, np.arange(j0, j1)[None, :] + 0.5)
+        return (
+            slice(i0, i1),
+            slice(j0, j1),
+            np.arange(i0, i1)[:, None] + 0.5,
+            np.arange(j0, j1)[None, :] + 0.5,
+        )
 
     def row(self, y: float) -> int:
         """The image row whose pixel centres are nearest world height ``y`` [m]."""
@@ -181,44 +199,50 @@ class _Raster:
             return
         rows, cols, v, u = box
         q = np.roll(p, -1, axis=0)
-        cross = [(q[k, 0] - p[k, 0]) * (v - p[k, 1]) - (q[k, 1] - p[k, 1]) * (u - p[k, 0])
-                 for k in range(len(p))]
+        cross = [
+            (q[k, 0] - p[k, 0]) * (v - p[k, 1]) - (q[k, 1] - p[k, 1]) * (u - p[k, 0])
+            for k in range(len(p))
+        ]
         pos = np.logical_and.reduce([c >= 0 for c in cross])
         neg = np.logical_and.reduce([c <= 0 for c in cross])
         self.img[rows, cols][pos | neg] = color
 
 
-def draw_pose(pose: RobotPose, width: int = FRAME_WIDTH,
-              height: int = FRAME_HEIGHT) -> np.ndarray:
+def draw_pose(pose: RobotPose, width: int = FRAME_WIDTH, height: int = FRAME_HEIGHT) -> np.ndarray:
     """The frame of ``pose`` (module docstring): a new (``height``, ``width``, 3) uint8 RGB
     array."""
-    if not (isinstance(width, int) and isinstance(height, int) and width >= 16
-            and height >= 16):
-        raise ValueError(f"frame size {width} x {height} is not allowed: width and height "
-                         "must be whole numbers of pixels >= 16")
+    if not (isinstance(width, int) and isinstance(height, int) and width >= 16 and height >= 16):
+        raise ValueError(
+            f"frame size {width} x {height} is not allowed: width and height "
+            "must be whole numbers of pixels >= 16"
+        )
     drawn = all(math.isfinite(v) for v in (pose.x, pose.height, pose.pitch))
-    x_view = pose.x if drawn else 0.0     # (a state that is not finite: the ground only)
+    x_view = pose.x if drawn else 0.0  # (a state that is not finite: the ground only)
     ras = _Raster(width, height, x_view)
     # the ground (rows and columns of the image: filled directly), its line and ticks
     img = ras.img
     ground = ras.row(0.0)
-    img[max(ground, 0):] = _BELOW_GROUND_LEVEL
-    img[max(ground - 1, 0):max(ground + 1, 0)] = _GROUND_LEVEL
+    img[max(ground, 0) :] = _BELOW_GROUND_LEVEL
+    img[max(ground - 1, 0) : max(ground + 1, 0)] = _GROUND_LEVEL
     tick_end = max(ras.row(-_TICK_LENGTH_M), 0)
     x0, x1 = x_view - VIEW_HALF_WIDTH_M, x_view + VIEW_HALF_WIDTH_M
     for k in range(math.floor(x0 / TICK_SPACING_M), math.ceil(x1 / TICK_SPACING_M) + 1):
         j = ras.column(k * TICK_SPACING_M)
         if 0 <= j < width:
-            img[max(ground, 0):tick_end, j] = _GROUND_LEVEL
+            img[max(ground, 0) : tick_end, j] = _GROUND_LEVEL
     if not drawn:
         return ras.img
     # the torso box
     c, s = math.cos(pose.pitch), math.sin(pose.pitch)
-    u, n = np.array([c, s]), np.array([-s, c])     # the torso axis and its upward normal
+    u, n = np.array([c, s]), np.array([-s, c])  # the torso axis and its upward normal
     com = np.array([pose.x, pose.height])
     hl, hh = 0.5 * pose.torso_length, 0.5 * pose.torso_height
-    corners = [com + hl * u + hh * n, com - hl * u + hh * n, com - hl * u - hh * n,
-               com + hl * u - hh * n]
+    corners = [
+        com + hl * u + hh * n,
+        com - hl * u + hh * n,
+        com - hl * u - hh * n,
+        com + hl * u - hh * n,
+    ]
     ras.convex(corners, _TORSO)
     for k in range(4):
         ras.segment(corners[k], corners[(k + 1) % 4], _OUTLINE_WIDTH_M, _INK)

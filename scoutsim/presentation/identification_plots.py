@@ -41,8 +41,7 @@ def plot_fit(data, fitted_angle, fitted_current, start_angle, path=None) -> Figu
         axs[0].plot(t, np.degrees(data.angle[:, leg]), ".", ms=1.5, alpha=0.5, label=f"{nm}: log")
         axs[0].plot(t, np.degrees(fitted_angle[:, leg]), "-", lw=1, label=f"{nm}: fitted")
         axs[0].plot(t, np.degrees(start_angle[:, leg]), ":", lw=1, label=f"{nm}: start")
-        axs[1].plot(t, np.degrees(data.angle[:, leg] - fitted_angle[:, leg]), lw=0.6,
-                    label=f"{nm}")
+        axs[1].plot(t, np.degrees(data.angle[:, leg] - fitted_angle[:, leg]), lw=0.6, label=f"{nm}")
         if has_current:
             axs[2].plot(t, data.current[:, leg], ".", ms=1.5, alpha=0.5, label=f"{nm}: log")
             axs[2].plot(t, fitted_current[:, leg], "-", lw=1, label=f"{nm}: fitted")

@@ -23,25 +23,25 @@ def plot_log(log, path=None, t_range=None) -> Figure:
     if t_range is not None:
         t0, t1 = (float(v) for v in t_range)
         if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
-            raise ValueError(f"t_range = {t_range!r} is not allowed: must be finite with "
-                             "t1 > t0")
+            raise ValueError(f"t_range = {t_range!r} is not allowed: must be finite with t1 > t0")
         k = np.flatnonzero((t >= t0) & (t <= t1))
         if k.size == 0:
-            raise ValueError(f"t_range = {t_range!r} holds no samples (the log covers "
-                             f"{t[0]:.3f}-{t[-1]:.3f} s)")
+            raise ValueError(
+                f"t_range = {t_range!r} holds no samples (the log covers {t[0]:.3f}-{t[-1]:.3f} s)"
+            )
     else:
         k = np.arange(t.size)
     tt = t[k]
     fig = Figure(figsize=(10, 10), layout="constrained")
     ax_p, ax_h, ax_a, ax_s, ax_tau = fig.subplots(
-        5, 1, sharex=True, gridspec_kw={"height_ratios": [3, 3, 3, 1.6, 3]})
+        5, 1, sharex=True, gridspec_kw={"height_ratios": [3, 3, 3, 1.6, 3]}
+    )
     ax_p.plot(tt, np.asarray(log.pitch)[k] * _DEG, color="k", lw=1.0)
     ax_p.set_ylabel("pitch [deg]")
     ax_h.plot(tt, np.asarray(log.height)[k], color="k", lw=1.0)
     ax_h.set_ylabel("COM height [m]")
     for li, (leg, col) in enumerate(zip(LEG_NAMES, ("tab:blue", "tab:red"))):
-        ax_a.plot(tt, np.asarray(log.leg_angle(leg))[k] * _DEG, color=col, lw=1.0,
-                  label=f"{leg}")
+        ax_a.plot(tt, np.asarray(log.leg_angle(leg))[k] * _DEG, color=col, lw=1.0, label=f"{leg}")
         lv = np.asarray(STATE_LEVELS)[log.leg_state(leg)[k]] + (0.04 if li else -0.04)
         ax_s.plot(tt, lv, color=col, lw=1.0, drawstyle="steps-post", label=leg)
         ax_tau.plot(tt, np.asarray(log.hip_torque(leg))[k], color=col, lw=1.0, label=leg)

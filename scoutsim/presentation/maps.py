@@ -25,6 +25,7 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
     ``default_start``: (speed [m/s], pitch rate [deg/s]) marked with a star;
     ``controller``: its name, in the title."""
     from matplotlib.colors import ListedColormap
+
     models = list(dict.fromkeys(r["model"] for r in rows))
     floors = list(dict.fromkeys(float(r["friction"]) for r in rows))
     speeds = sorted({float(r["speed"]) for r in rows})
@@ -49,36 +50,77 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
                 if ok and r["mean_speed_m_s"] not in (None, ""):
                     vel[a][b].append(float(r["mean_speed_m_s"]))
             frac = np.where(cnt > 0, share / np.maximum(cnt, 1), np.nan)
-            level = np.where(np.isnan(frac), np.nan, np.where(frac >= 1.0, 2, np.where(frac > 0, 1, 0)))
-            ds, dr = (speeds[1] - speeds[0] if len(speeds) > 1 else 0.2,
-                      rates[1] - rates[0] if len(rates) > 1 else 50.0)
-            ax.imshow(level, origin="lower", cmap=cmap, vmin=0, vmax=2, aspect="auto",
-                      extent=(speeds[0] - ds / 2, speeds[-1] + ds / 2, rates[0] - dr / 2,
-                              rates[-1] + dr / 2))
+            level = np.where(
+                np.isnan(frac), np.nan, np.where(frac >= 1.0, 2, np.where(frac > 0, 1, 0))
+            )
+            ds, dr = (
+                speeds[1] - speeds[0] if len(speeds) > 1 else 0.2,
+                rates[1] - rates[0] if len(rates) > 1 else 50.0,
+            )
+            ax.imshow(
+                level,
+                origin="lower",
+                cmap=cmap,
+                vmin=0,
+                vmax=2,
+                aspect="auto",
+                extent=(
+                    speeds[0] - ds / 2,
+                    speeds[-1] + ds / 2,
+                    rates[0] - dr / 2,
+                    rates[-1] + dr / 2,
+                ),
+            )
             for a in range(len(rates)):
                 for b in range(len(speeds)):
                     if vel[a][b]:
-                        ax.text(speeds[b], rates[a], f"{np.mean(vel[a][b]):.2f}", ha="center",
-                                va="center", fontsize=6)
+                        ax.text(
+                            speeds[b],
+                            rates[a],
+                            f"{np.mean(vel[a][b]):.2f}",
+                            ha="center",
+                            va="center",
+                            fontsize=6,
+                        )
             if default_start is not None:
-                ax.plot([default_start[0]], [default_start[1]], marker="*", ms=12, mfc="white",
-                        mec="black")
+                ax.plot(
+                    [default_start[0]],
+                    [default_start[1]],
+                    marker="*",
+                    ms=12,
+                    mfc="white",
+                    mec="black",
+                )
             valid = cnt.sum()
             n_ok = np.nansum(share)
-            ax.set_title(f"{model_label(m)}, {floor_label(mu)}: "
-                         f"{n_ok / valid if valid else float('nan'):.2f}", fontsize=9)
+            ax.set_title(
+                f"{model_label(m)}, {floor_label(mu)}: "
+                f"{n_ok / valid if valid else float('nan'):.2f}",
+                fontsize=9,
+            )
             if i == len(models) - 1:
                 ax.set_xlabel("initial forward speed [m/s]")
             if j == 0:
                 ax.set_ylabel("initial pitch rate [deg/s]")
-    fig.legend(handles=[Patch(color=cmap(2), label="bounds (every height)"),
-                        Patch(color=cmap(1), label="bounds (some heights)"),
-                        Patch(color=cmap(0), label="falls / no steady bound")],
-               loc="outside lower center", ncol=3 if len(floors) > 1 else 1, fontsize=8)
-    fig.suptitle(("" if controller is None else f"{controller} controller\n")
-                 + "Basin of the bounding cycle" + (" " if len(floors) > 1 else "\n")
-                 + "(heights " + ", ".join(f"{h:g}" for h in heights)
-                 + " m; labels: cycle speed m/s)", fontsize=10)
+    fig.legend(
+        handles=[
+            Patch(color=cmap(2), label="bounds (every height)"),
+            Patch(color=cmap(1), label="bounds (some heights)"),
+            Patch(color=cmap(0), label="falls / no steady bound"),
+        ],
+        loc="outside lower center",
+        ncol=3 if len(floors) > 1 else 1,
+        fontsize=8,
+    )
+    fig.suptitle(
+        ("" if controller is None else f"{controller} controller\n")
+        + "Basin of the bounding cycle"
+        + (" " if len(floors) > 1 else "\n")
+        + "(heights "
+        + ", ".join(f"{h:g}" for h in heights)
+        + " m; labels: cycle speed m/s)",
+        fontsize=10,
+    )
     save_figure(fig, path)
     return fig
 
@@ -102,6 +144,7 @@ def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=No
     def edge(name, vals):
         factor, label = sweep.axis_label(name)
         return vals * factor, label
+
     gx, lx = edge(x, ux)
     gy, ly = edge(y, uy)
     fig = Figure(figsize=(6.5, 5), layout="constrained")

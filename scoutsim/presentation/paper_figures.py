@@ -55,8 +55,20 @@ from .phase_plots import plot_phase
 from .saturation_figure import fig11
 from .stride_figures import fig8, fig9, fig10
 
-__all__ = ["robot_pose", "fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "fig_phase",
-           "plot_log", "write_figures", "FIGURE_NAMES", "STATE_LEVELS"]
+__all__ = [
+    "robot_pose",
+    "fig5",
+    "fig8",
+    "fig9",
+    "fig10",
+    "fig11",
+    "fig12",
+    "fig_phase",
+    "plot_log",
+    "write_figures",
+    "FIGURE_NAMES",
+    "STATE_LEVELS",
+]
 
 #: File stems written by :func:`write_figures`.
 FIGURE_NAMES = ("fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "phase")
@@ -66,16 +78,17 @@ def fig_phase(logs, models=None, path=None, transient_s: float = 2.0, n_phase: i
     """Figure of the phase-normalized comparison
     (:func:`scoutsim.validation.phase.phase_compare` + :func:`~.phase_plots.plot_phase`)."""
     exp, mods = _prepare(logs, models, transient_s)
-    return plot_phase(phase_compare(exp, mods, n_phase=n_phase, transient_s=transient_s),
-                      path)
+    return plot_phase(phase_compare(exp, mods, n_phase=n_phase, transient_s=transient_s), path)
 
 
-def write_figures(logs, models=None, out_dir=".", table=None, fmt: str = "png",
-                  transient_s: float = 2.0) -> dict:
+def write_figures(
+    logs, models=None, out_dir=".", table=None, fmt: str = "png", transient_s: float = 2.0
+) -> dict:
     """Write fig5, fig8, fig9, fig10, fig11, fig12 (needs an ErrorTable: ``table``, or
     ``models`` being one) and phase (+ phase_rms.csv) to ``out_dir`` in format ``fmt``
     (png, pdf, svg). Returns name -> path of what was written."""
     from ..validation.errors import ErrorTable
+
     if fmt not in ("png", "pdf", "svg"):
         raise ValueError(f"fmt = {fmt!r} is not allowed: must be png, pdf or svg")
     if table is None and isinstance(models, ErrorTable):
@@ -103,4 +116,3 @@ def write_figures(logs, models=None, out_dir=".", table=None, fmt: str = "png",
     paths["phase"] = p
     paths["phase_rms"] = cmp.to_csv(out / "phase_rms.csv")
     return paths
-

@@ -38,8 +38,7 @@ def plot_phase(comparison: PhaseComparison, path=None) -> Figure:
         if "experiment" in c.mean:
             m = c.mean["experiment"][sig] * f
             s = c.std["experiment"][sig] * f
-            ax.fill_between(pct, m - s, m + s, color="0.8", lw=0,
-                            label="experiment +- 1 std")
+            ax.fill_between(pct, m - s, m + s, color="0.8", lw=0, label="experiment +- 1 std")
             ax.plot(pct, m, color="k", lw=1.6, label="experiment mean")
         for i, k in enumerate(c.models):
             if k not in c.mean:
@@ -47,18 +46,21 @@ def plot_phase(comparison: PhaseComparison, path=None) -> Figure:
             col, ls = model_style(k, i)
             r = c.rms[k][sig]
             rl = "" if not math.isfinite(r) else f" (RMS {r * f:.3g} {unit})"
-            ax.plot(pct, c.mean[k][sig] * f, color=col, ls=ls, lw=1.4,
-                    label=f"{model_label(k)}{rl}")
+            ax.plot(
+                pct, c.mean[k][sig] * f, color=col, ls=ls, lw=1.4, label=f"{model_label(k)}{rl}"
+            )
         ax.set_ylabel(f"{lab} [{unit}]")
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.legend(loc="best", fontsize=7, framealpha=0.85)
-    for ax in axes[len(sigs):]:
+    for ax in axes[len(sigs) :]:
         ax.set_visible(False)
-    for ax in axes[max(0, len(sigs) - ncol):len(sigs)]:
+    for ax in axes[max(0, len(sigs) - ncol) : len(sigs)]:
         ax.set_xlabel("stride phase [% of stride, 0 = back-leg lift-off]")
         ax.set_xlim(0, 100)
-    title = (f"Phase-normalized mean stride: experiment "
-             f"({c.n_strides.get('experiment', 0)} steady strides)")
+    title = (
+        f"Phase-normalized mean stride: experiment "
+        f"({c.n_strides.get('experiment', 0)} steady strides)"
+    )
     title += "".join(f", {model_label(k)} ({c.n_strides.get(k, 0)})" for k in c.models)
     notes = [f"{model_label(k)}: {c.status[k]}" for k in c.models if c.status[k] != "ok"]
     if c.status.get("experiment", "ok") != "ok":

@@ -33,9 +33,20 @@ from .style import LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, save_figure
 from .torque_speed import draw_motor_limits, motor_limits, plot_torque_speed
 from .tune_plots import plot_tune_convergence
 
-__all__ = ["plot_run", "plot_torque_speed", "plot_stride_power", "plot_basin_map",
-           "plot_sweep_map", "plot_tune_convergence", "motor_limits", "draw_motor_limits",
-           "STRIDE_POWER_SOURCES", "STRIDE_POWER_SINKS", "LONG_RUN_S", "DETAIL_STRIDES"]
+__all__ = [
+    "plot_run",
+    "plot_torque_speed",
+    "plot_stride_power",
+    "plot_basin_map",
+    "plot_sweep_map",
+    "plot_tune_convergence",
+    "motor_limits",
+    "draw_motor_limits",
+    "STRIDE_POWER_SOURCES",
+    "STRIDE_POWER_SINKS",
+    "LONG_RUN_S",
+    "DETAIL_STRIDES",
+]
 
 
 #: runs longer than this [s] get an overview (``plot_run(..., overview="auto")``)
@@ -95,21 +106,25 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
     matplotlib.figure.Figure
     """
     if overview not in (True, False, "auto"):
-        raise ValueError(f"overview = {overview!r} is not allowed: must be True, False or "
-                         "'auto'")
+        raise ValueError(f"overview = {overview!r} is not allowed: must be True, False or 'auto'")
     t = np.asarray(result.t, dtype=float)
     if overview == "auto":
         overview = t_range is None and t.size > 1 and float(t[-1] - t[0]) > LONG_RUN_S
     detail = "the window asked for"
     if overview and t_range is None and t.size:
         t_range = (_last_strides_start(result), float(t[-1]))
-        detail = (f"the last {DETAIL_STRIDES} strides"
-                  if len(_strides(result)) >= DETAIL_STRIDES else "the last second")
+        detail = (
+            f"the last {DETAIL_STRIDES} strides"
+            if len(_strides(result)) >= DETAIL_STRIDES
+            else "the last second"
+        )
     if t_range is not None:
         try:
             t0, t1 = (float(v) for v in t_range)
         except (TypeError, ValueError):
-            raise ValueError(f"t_range = {t_range!r} is not allowed: must be (t0, t1) in s") from None
+            raise ValueError(
+                f"t_range = {t_range!r} is not allowed: must be (t0, t1) in s"
+            ) from None
         if not (math.isfinite(t0) and math.isfinite(t1) and t1 > t0):
             raise ValueError(f"t_range = {t_range!r} is not allowed: must be finite with t1 > t0")
         sel = np.flatnonzero((t >= t0) & (t <= t1))
@@ -147,22 +162,30 @@ def _last_strides_start(result) -> float:
 def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     """The four stacked panels of :func:`plot_run` for the samples ``sel`` (times ``ts``)."""
     ax_pitch, ax_height, ax_leg, ax_tau = axes
-    ax_pitch.plot(ts, np.degrees(np.asarray(result.pitch)[sel]), color="k", lw=1.2,
-                  label="pitch theta")
+    ax_pitch.plot(
+        ts, np.degrees(np.asarray(result.pitch)[sel]), color="k", lw=1.2, label="pitch theta"
+    )
     ax_pitch.axhline(0.0, color="0.6", lw=0.6)
     ax_pitch.set_ylabel("pitch [deg]")
 
-    ax_height.plot(ts, np.asarray(result.height)[sel], color="k", lw=1.2,
-                   label="torso COM height y")
+    ax_height.plot(
+        ts, np.asarray(result.height)[sel], color="k", lw=1.2, label="torso COM height y"
+    )
     ax_height.set_ylabel("COM height [m]")
 
     has_controller = (result.provenance or {}).get("controller") is not None
     for li, name in enumerate(LEG_NAMES):
-        ax_leg.plot(ts, np.degrees(np.asarray(result.leg_angle(li))[sel]), color=LEG_COLORS[li],
-                    lw=1.2, label=f"phi {name}")
+        ax_leg.plot(
+            ts,
+            np.degrees(np.asarray(result.leg_angle(li))[sel]),
+            color=LEG_COLORS[li],
+            lw=1.2,
+            label=f"phi {name}",
+        )
         if has_controller:
-            _state_bands(ax_leg, ts, np.asarray(result.leg_state(li))[sel],
-                         0.5 * li, 0.5 * (li + 1))
+            _state_bands(
+                ax_leg, ts, np.asarray(result.leg_state(li))[sel], 0.5 * li, 0.5 * (li + 1)
+            )
     ax_leg.set_ylabel("leg angle phi [deg]")
     handles, labels = ax_leg.get_legend_handles_labels()
     if has_controller:
@@ -170,15 +193,34 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
             handles.append(Patch(facecolor=LEG_STATE_COLORS[state], edgecolor="0.5", lw=0.5))
             labels.append(state.label)
         for li, name in enumerate(LEG_NAMES):
-            ax_leg.text(1.005, 0.25 + 0.5 * li, f"{name}\nstate", transform=ax_leg.transAxes,
-                        fontsize=7, va="center", ha="left", color=LEG_COLORS[li])
+            ax_leg.text(
+                1.005,
+                0.25 + 0.5 * li,
+                f"{name}\nstate",
+                transform=ax_leg.transAxes,
+                fontsize=7,
+                va="center",
+                ha="left",
+                color=LEG_COLORS[li],
+            )
     _legend_above(ax_leg, handles, labels)
 
     for li, name in enumerate(LEG_NAMES):
-        ax_tau.plot(ts, np.asarray(result.hip_torque_commanded(li))[sel], color=LEG_COLORS[li],
-                    lw=1.0, ls="--", label=f"{name} commanded")
-        ax_tau.plot(ts, np.asarray(result.hip_torque_applied(li))[sel], color=LEG_COLORS[li],
-                    lw=1.2, label=f"{name} applied")
+        ax_tau.plot(
+            ts,
+            np.asarray(result.hip_torque_commanded(li))[sel],
+            color=LEG_COLORS[li],
+            lw=1.0,
+            ls="--",
+            label=f"{name} commanded",
+        )
+        ax_tau.plot(
+            ts,
+            np.asarray(result.hip_torque_applied(li))[sel],
+            color=LEG_COLORS[li],
+            lw=1.2,
+            label=f"{name} applied",
+        )
     ax_tau.axhline(0.0, color="0.6", lw=0.6)
     ax_tau.set_ylabel("hip torque per leg [N m]")
     ax_tau.set_xlabel("time [s]")

@@ -30,14 +30,13 @@ def running_range(t, values, window_s: float) -> tuple[np.ndarray, np.ndarray]:
         return v.copy(), v.copy()
     dt = float(np.median(np.diff(t)))
     size = max(1, int(round(window_s / dt))) if dt > 0 else 1
-    return (minimum_filter1d(v, size, mode="nearest"),
-            maximum_filter1d(v, size, mode="nearest"))
+    return (minimum_filter1d(v, size, mode="nearest"), maximum_filter1d(v, size, mode="nearest"))
 
 
 def _strides(result):
     try:
         return list(result.strides)
-    except Exception:   # a run too short or too broken for stride analysis
+    except Exception:  # a run too short or too broken for stride analysis
         return []
 
 
@@ -51,9 +50,10 @@ def draw_overview(fig, result, t0: float, t1: float) -> list:
     strides = _strides(result)
     periods = np.array([s.period_s for s in strides])
     window = float(np.median(periods)) if periods.size >= 2 else DEFAULT_WINDOW_S
-    for ax, v, label in ((ax_p, np.degrees(np.asarray(result.pitch, dtype=float)),
-                          "pitch [deg]"),
-                         (ax_h, np.asarray(result.height, dtype=float), "COM height [m]")):
+    for ax, v, label in (
+        (ax_p, np.degrees(np.asarray(result.pitch, dtype=float)), "pitch [deg]"),
+        (ax_h, np.asarray(result.height, dtype=float), "COM height [m]"),
+    ):
         lo, hi = running_range(t, v, window)
         ax.fill_between(t, lo, hi, color=_BAND, lw=0)
         ax.plot(t, hi, color="k", lw=0.7)
@@ -62,12 +62,21 @@ def draw_overview(fig, result, t0: float, t1: float) -> list:
     if strides:
         ts = np.array([s.t_start for s in strides])
         steady = np.array([bool(s.steady) for s in strides])
-        ax_s.plot(ts[~steady], periods[~steady], "o", ms=3.5, mfc="none", mec="0.35",
-                  mew=0.8, ls="none")
+        ax_s.plot(
+            ts[~steady], periods[~steady], "o", ms=3.5, mfc="none", mec="0.35", mew=0.8, ls="none"
+        )
         ax_s.plot(ts[steady], periods[steady], "o", ms=3.5, color="k", ls="none")
     else:
-        ax_s.text(0.5, 0.5, "no complete stride", transform=ax_s.transAxes, ha="center",
-                  va="center", fontsize=9, color="0.3")
+        ax_s.text(
+            0.5,
+            0.5,
+            "no complete stride",
+            transform=ax_s.transAxes,
+            ha="center",
+            va="center",
+            fontsize=9,
+            color="0.3",
+        )
     ax_s.set_ylabel("stride period [s]")
     fell = result.outcome == "fell"
     for ax in axes:
@@ -78,15 +87,29 @@ def draw_overview(fig, result, t0: float, t1: float) -> list:
         ax.grid(True, lw=0.4, alpha=0.5)
         if t.size:
             ax.set_xlim(float(t[0]), float(t[-1]))
-    handles = [Patch(facecolor=_BAND, edgecolor="k", lw=0.7),
-               Patch(facecolor=_DETAIL, alpha=0.15),
-               Line2D([], [], marker="o", ms=4, color="k", ls="none"),
-               Line2D([], [], marker="o", ms=4, mfc="none", mec="0.35", ls="none")]
-    labels = [f"range over one stride ({window:.3f} s running max / min)",
-              "detail window (below)", "steady stride", "other stride"]
+    handles = [
+        Patch(facecolor=_BAND, edgecolor="k", lw=0.7),
+        Patch(facecolor=_DETAIL, alpha=0.15),
+        Line2D([], [], marker="o", ms=4, color="k", ls="none"),
+        Line2D([], [], marker="o", ms=4, mfc="none", mec="0.35", ls="none"),
+    ]
+    labels = [
+        f"range over one stride ({window:.3f} s running max / min)",
+        "detail window (below)",
+        "steady stride",
+        "other stride",
+    ]
     if fell:
         handles.append(Line2D([], [], color=_FALL, lw=1.0, ls=":"))
         labels.append("fall")
-    fig.legend(handles, labels, loc="outside upper center", ncol=len(labels), fontsize=8,
-               frameon=False, title="whole run", title_fontsize=9)
+    fig.legend(
+        handles,
+        labels,
+        loc="outside upper center",
+        ncol=len(labels),
+        fontsize=8,
+        frameon=False,
+        title="whole run",
+        title_fontsize=9,
+    )
     return list(axes)

@@ -41,15 +41,18 @@ def behaviour_text(result, behaviour: str | None = None) -> str:
     outcome = result.outcome
     outcome = outcome if outcome == "completed" else f"{outcome} at t = {result.t_end:.2f} s"
     t = np.asarray(result.t, dtype=float)
-    shown = (f"t = {t[0]:.2f} - {t[-1]:.2f} s shown of the run's 0 - {result.t_end:.2f} s"
-             if t.size else "")
+    shown = (
+        f"t = {t[0]:.2f} - {t[-1]:.2f} s shown of the run's 0 - {result.t_end:.2f} s"
+        if t.size
+        else ""
+    )
     if behaviour is not None:
         return behaviour + (f" ({shown})" if is_part_of_run(result) else "")
     if is_part_of_run(result):
         return f"run {outcome} ({shown})"
     try:
         return result.behaviour().text
-    except Exception:   # a result too broken for the stride analysis: its outcome
+    except Exception:  # a result too broken for the stride analysis: its outcome
         return outcome
 
 
@@ -57,9 +60,14 @@ def _title(result, width: int = 110, behaviour: str | None = None) -> str:
     """The title of a run's figure: the model and what the run did (:func:`behaviour_text`),
     wrapped at ``width`` characters."""
     import textwrap
-    return "\n".join(textwrap.wrap(f"Scout II, {_model_label(result)}: "
-                                    f"{behaviour_text(result, behaviour)}", width,
-                                    break_on_hyphens=False))
+
+    return "\n".join(
+        textwrap.wrap(
+            f"Scout II, {_model_label(result)}: {behaviour_text(result, behaviour)}",
+            width,
+            break_on_hyphens=False,
+        )
+    )
 
 
 def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
@@ -67,9 +75,18 @@ def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
     many columns as entries; the left end keeps the axis' offset text)."""
     if handles is None:
         handles, labels = ax.get_legend_handles_labels()
-    ax.legend(handles, labels, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(labels),
-              fontsize=fontsize, frameon=False, borderaxespad=0.15, handlelength=1.8,
-              columnspacing=1.2)
+    ax.legend(
+        handles,
+        labels,
+        loc="lower right",
+        bbox_to_anchor=(1.0, 1.0),
+        ncol=len(labels),
+        fontsize=fontsize,
+        frameon=False,
+        borderaxespad=0.15,
+        handlelength=1.8,
+        columnspacing=1.2,
+    )
 
 
 def _runs(values: np.ndarray):
@@ -95,5 +112,12 @@ def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) ->
             verts[k].append([(ta, y0), (tb, y0), (tb, y1), (ta, y1)])
     for k, v in verts.items():
         if v:
-            ax.add_collection(PolyCollection(v, facecolors=LEG_STATE_COLORS[k], edgecolors="none",
-                                             transform=ax.get_xaxis_transform(), zorder=0))
+            ax.add_collection(
+                PolyCollection(
+                    v,
+                    facecolors=LEG_STATE_COLORS[k],
+                    edgecolors="none",
+                    transform=ax.get_xaxis_transform(),
+                    zorder=0,
+                )
+            )

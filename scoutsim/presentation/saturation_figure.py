@@ -26,7 +26,7 @@ def _robot_dict(robot, mods: dict, exp: Source) -> dict:
         if src.result is not None and (src.result.provenance or {}).get("robot"):
             return src.result.provenance["robot"]
     for lg in exp.logs:
-        r = ((lg.meta.get("simulation") or {}).get("robot"))
+        r = (lg.meta.get("simulation") or {}).get("robot")
         if r:
             return r
     return dataclasses.asdict(RobotParameters())
@@ -51,12 +51,22 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
         ax = axes[c]
         pts = [(lg, s) for lg, s in exp.steady]
         if pts:
-            xs = np.concatenate([np.asarray(lg.hip_torque(leg))[_sel(lg, s.t_start, s.t_end)]
-                                 for lg, s in pts])
-            ys = np.concatenate([np.asarray(lg.leg_rate(leg))[_sel(lg, s.t_start, s.t_end)]
-                                 for lg, s in pts])
-            ax.plot(xs, ys, ls="none", marker=".", ms=1.5, color="0.65", alpha=0.5,
-                    label=f"experiment, all {len(pts)} steady strides")
+            xs = np.concatenate(
+                [np.asarray(lg.hip_torque(leg))[_sel(lg, s.t_start, s.t_end)] for lg, s in pts]
+            )
+            ys = np.concatenate(
+                [np.asarray(lg.leg_rate(leg))[_sel(lg, s.t_start, s.t_end)] for lg, s in pts]
+            )
+            ax.plot(
+                xs,
+                ys,
+                ls="none",
+                marker=".",
+                ms=1.5,
+                color="0.65",
+                alpha=0.5,
+                label=f"experiment, all {len(pts)} steady strides",
+            )
         for i, src, lg, st, steady in _shown(exp, mods):
             win = _leg_window(lg, st, leg)
             if win is None:
@@ -67,10 +77,13 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
             y = np.asarray(lg.leg_rate(leg))[k]
             ax.plot(x, y, label=f"{_tag(src, steady)}, one step", **_line_kw(src, i, steady))
         xl, yl = 1.15 * tmax, 1.15 * wmax
-        draw_motor_limits(ax, lims[c], xl, yl, current_ls=(0, (5, 2)),
-                          line_ls=(0, (6, 2, 1, 2)))
+        draw_motor_limits(ax, lims[c], xl, yl, current_ls=(0, (5, 2)), line_ls=(0, (6, 2, 1, 2)))
         ax.set_xlabel("hip torque per leg [N m]")
         ax.set_ylabel("leg angular speed (encoder) [rad/s]")
         ax.set_title(f"{leg} leg")
-    return _finish(fig, "Motor saturation: leg speed against hip torque (Fig. 11)",
-                   _notes(exp, mods, missing), path)
+    return _finish(
+        fig,
+        "Motor saturation: leg speed against hip torque (Fig. 11)",
+        _notes(exp, mods, missing),
+        path,
+    )

@@ -54,8 +54,12 @@ def fig8(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
         ax.set_xlabel("time from back-leg lift-off [s]")
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_p.legend(loc="best", fontsize=8)
-    return _finish(fig, "Pitch and COM height over one stride (Fig. 8)",
-                   _notes(exp, mods, _clip_note(exp, mods)), path)
+    return _finish(
+        fig,
+        "Pitch and COM height over one stride (Fig. 8)",
+        _notes(exp, mods, _clip_note(exp, mods)),
+        path,
+    )
 
 
 def _step_figure(exp, mods, rows, title, path):
@@ -63,8 +67,7 @@ def _step_figure(exp, mods, rows, title, path):
     the leg-state square wave row."""
     fig = Figure(figsize=(11, 2.6 * len(rows) + 2.0), layout="constrained")
     nr = len(rows) + 1
-    axes = fig.subplots(nr, 2, sharex="col",
-                        gridspec_kw={"height_ratios": [3] * len(rows) + [1.4]})
+    axes = fig.subplots(nr, 2, sharex="col", gridspec_kw={"height_ratios": [3] * len(rows) + [1.4]})
     missing = []
     ext = _Extent()
     for i, src, lg, st, steady in _shown(exp, mods):
@@ -104,8 +107,10 @@ def fig9(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     (flight high, stance-retraction low, stance-brake medium) (paper Fig. 9). Angles are as
     the hip encoders log them (motor-side angle for Model II)."""
     exp, mods = _prepare(logs, models, transient_s)
-    rows = [("leg angle [deg]", lambda lg, leg: np.asarray(lg.leg_angle(leg)) * _DEG),
-            ("leg angular rate [deg/s]", lambda lg, leg: np.asarray(lg.leg_rate(leg)) * _DEG)]
+    rows = [
+        ("leg angle [deg]", lambda lg, leg: np.asarray(lg.leg_angle(leg)) * _DEG),
+        ("leg angular rate [deg/s]", lambda lg, leg: np.asarray(lg.leg_rate(leg)) * _DEG),
+    ]
     return _step_figure(exp, mods, rows, "Leg angles and rates over one step (Fig. 9)", path)
 
 
@@ -115,5 +120,6 @@ def fig10(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     square wave (paper Fig. 10)."""
     exp, mods = _prepare(logs, models, transient_s)
     rows = [("hip torque per leg [N m]", lambda lg, leg: np.asarray(lg.hip_torque(leg)))]
-    return _step_figure(exp, mods, rows, "Hip torques over one step, from motor current "
-                                         "(Fig. 10)", path)
+    return _step_figure(
+        exp, mods, rows, "Hip torques over one step, from motor current (Fig. 10)", path
+    )

@@ -12,9 +12,21 @@ from pathlib import Path
 from .. import names as _names
 from ..names import leg_index
 
-__all__ = ["LEG_NAMES", "LEG_COLORS", "LEG_STATE_NAMES", "LEG_STATE_LINE_COLORS",
-           "LEG_STATE_COLORS", "MODEL_LABELS", "MODEL_STYLES", "PNG_DPI", "FIGURE_SUFFIXES",
-           "model_label", "model_style", "save_figure", "leg_index"]
+__all__ = [
+    "LEG_NAMES",
+    "LEG_COLORS",
+    "LEG_STATE_NAMES",
+    "LEG_STATE_LINE_COLORS",
+    "LEG_STATE_COLORS",
+    "MODEL_LABELS",
+    "MODEL_STYLES",
+    "PNG_DPI",
+    "FIGURE_SUFFIXES",
+    "model_label",
+    "model_style",
+    "save_figure",
+    "leg_index",
+]
 
 #: Virtual legs, in the order of their index (:class:`scoutsim.names.Leg`).
 LEG_NAMES = _names.LEG_NAMES
@@ -32,11 +44,14 @@ LEG_STATE_COLORS = ("#d6e9ff", "#ffd9a8", "#c9efc4")
 MODEL_LABELS = {**_names.MODEL_LABELS, "experiment": "experiment"}
 #: Line colour and style per source: experiment solid, Model I dotted, Model II dashed, as
 #: the paper's Figs. 8-10 (ideal and passive dash-dotted).
-MODEL_STYLES = {"experiment": ("k", "-"), "ideal": ("tab:green", "-."),
-                "I": ("tab:blue", ":"), "II": ("tab:red", "--"),
-                "passive": ("tab:purple", "-.")}
-_EXTRA_STYLES = (("tab:orange", "--"), ("tab:brown", ":"), ("tab:olive", "-."),
-                 ("tab:cyan", "--"))
+MODEL_STYLES = {
+    "experiment": ("k", "-"),
+    "ideal": ("tab:green", "-."),
+    "I": ("tab:blue", ":"),
+    "II": ("tab:red", "--"),
+    "passive": ("tab:purple", "-."),
+}
+_EXTRA_STYLES = (("tab:orange", "--"), ("tab:brown", ":"), ("tab:olive", "-."), ("tab:cyan", "--"))
 
 #: Resolution of PNG output [dots per inch]: legible, and quick to render.
 PNG_DPI = 110

@@ -44,9 +44,14 @@ def motor_limits(robot: dict, leg=None) -> dict:
     r = robot if isinstance(robot, RobotParameters) else RobotParameters(**robot)
     if leg is not None:
         r = r.leg(leg)
-    return {"N": r.gear_ratio, "eta": r.efficiency, "tau_current": r.max_leg_torque,
-            "tau_stall": r.stall_torque, "w_no_load": r.no_load_speed,
-            "slope": r.torque_speed_slope}
+    return {
+        "N": r.gear_ratio,
+        "eta": r.efficiency,
+        "tau_current": r.max_leg_torque,
+        "tau_stall": r.stall_torque,
+        "w_no_load": r.no_load_speed,
+        "slope": r.torque_speed_slope,
+    }
 
 
 def _torque_speed_axes(ax, result, li: int) -> None:
@@ -65,11 +70,18 @@ def _torque_speed_axes(ax, result, li: int) -> None:
         for state in LegState:
             m = states == state
             if np.any(m):
-                ax.plot(tau[m], w[m], ls="none", marker=".", ms=2.0, alpha=0.6,
-                        color=LEG_STATE_LINE_COLORS[state], label=state.label)
+                ax.plot(
+                    tau[m],
+                    w[m],
+                    ls="none",
+                    marker=".",
+                    ms=2.0,
+                    alpha=0.6,
+                    color=LEG_STATE_LINE_COLORS[state],
+                    label=state.label,
+                )
     else:
-        ax.plot(tau, w, ls="none", marker=".", ms=2.0, alpha=0.6, color="tab:gray",
-                label="samples")
+        ax.plot(tau, w, ls="none", marker=".", ms=2.0, alpha=0.6, color="tab:gray", label="samples")
 
     tmax = float(np.max(np.abs(tau))) if tau.size else 0.0
     wmax = float(np.max(np.abs(w))) if w.size else 0.0
@@ -94,8 +106,14 @@ def draw_motor_limits(ax, lim, xl, yl, *, note="", current_ls="--", line_ls="-."
         ax.axvline(-ic, color="k", lw=1.0, ls=current_ls)
         ww = np.array([-yl, yl])
         for sign in (1.0, -1.0):
-            ax.plot(sign * lim["tau_stall"] - lim["slope"] * ww, ww, color="0.35", lw=1.0,
-                    ls=line_ls, label=(f"torque-speed lines ±V{note}" if sign > 0 else None))
+            ax.plot(
+                sign * lim["tau_stall"] - lim["slope"] * ww,
+                ww,
+                color="0.35",
+                lw=1.0,
+                ls=line_ls,
+                label=(f"torque-speed lines ±V{note}" if sign > 0 else None),
+            )
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.axvline(0.0, color="0.6", lw=0.5)
     ax.set_xlim(-xl, xl)
@@ -141,8 +159,14 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     for ax, li in zip(axes, legs):
         _torque_speed_axes(ax, result, li)
     import textwrap
-    fig.suptitle("\n".join(textwrap.wrap(f"Torque-speed, {_model_label(result)}: "
-                                          f"{behaviour_text(result)}", 50 * len(legs))),
-                 fontsize=10)
+
+    fig.suptitle(
+        "\n".join(
+            textwrap.wrap(
+                f"Torque-speed, {_model_label(result)}: {behaviour_text(result)}", 50 * len(legs)
+            )
+        ),
+        fontsize=10,
+    )
     save_figure(fig, path)
     return fig

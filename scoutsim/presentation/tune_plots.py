@@ -27,8 +27,15 @@ def plot_tune_convergence(tuning, path=None) -> Figure:
     axes = fig.subplots(1 + k, 1, sharex=True, squeeze=False)[:, 0]
     ax = axes[0]
     ax.plot(n[feasible], score[feasible], "o", ms=3, color="tab:blue", label="feasible")
-    ax.plot(n[~feasible], np.minimum(score[~feasible], 3e4), "o", ms=3, mfc="none",
-            color="tab:red", label="penalised (a constraint broken)")
+    ax.plot(
+        n[~feasible],
+        np.minimum(score[~feasible], 3e4),
+        "o",
+        ms=3,
+        mfc="none",
+        color="tab:red",
+        label="penalised (a constraint broken)",
+    )
     ax.step(n, best, where="post", color="k", lw=1.2, label="best so far")
     if np.all(score > 0):
         ax.set_yscale("log")
@@ -39,11 +46,12 @@ def plot_tune_convergence(tuning, path=None) -> Figure:
     if goal.get("target") is not None:
         what += f" (|v - {goal['target']:g} m/s|)"
     ax.set_ylabel("score")
-    ax.set_title(f"tuning: {what}, best {tuning.best['score']:.4g} at evaluation "
-                 f"{tuning.best['evaluation']}")
+    ax.set_title(
+        f"tuning: {what}, best {tuning.best['score']:.4g} at evaluation {tuning.best['evaluation']}"
+    )
     ax.legend(fontsize=7, loc="upper right")
     order = np.array([r["score"] for r in rows], dtype=float)
-    best_idx = np.array([int(np.argmin(order[:i + 1])) for i in range(len(rows))])
+    best_idx = np.array([int(np.argmin(order[: i + 1])) for i in range(len(rows))])
     for a, p in zip(axes[1:], tuning.parameters):
         v = np.array([r[p.name] for r in rows], dtype=float)
         a.plot(n, v, ".", ms=3, color="0.6")

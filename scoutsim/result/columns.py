@@ -18,16 +18,32 @@ __all__ = ["ColumnViews", "COLUMN_UNITS", "column_unit"]
 #: (prefix, SI unit, exact match). Mode columns and the ``dynamics_solved`` flag (1: the
 #: constrained dynamics solved, 0: singular) are codes without a unit.
 COLUMN_UNITS = (
-    ("t", "s", True), ("x", "m", True), ("y", "m", True), ("theta", "rad", True),
-    ("phi_", "rad", False), ("alpha_", "rad", False), ("dx", "m/s", True),
-    ("dy", "m/s", True), ("dtheta", "rad/s", True), ("dphi_", "rad/s", False),
-    ("dalpha_", "rad/s", False), ("leg_length_", "m", False), ("ground_force_", "N", False),
-    ("leg_axial_force_", "N", False), ("hip_torque_", "N m", False),
-    ("motor_current_", "A", False), ("motor_speed_", "rad/s", False),
-    ("belt_deflection_", "rad", False), ("stiction_holding_torque_", "N m", False),
-    ("toe_x_", "m", False), ("toe_y_", "m", False), ("toe_velocity_x_", "m/s", False),
-    ("strut_force_", "N", False), ("belt_torque_", "N m", False),
-    ("battery_voltage", "V", True), ("energy", "J", True),
+    ("t", "s", True),
+    ("x", "m", True),
+    ("y", "m", True),
+    ("theta", "rad", True),
+    ("phi_", "rad", False),
+    ("alpha_", "rad", False),
+    ("dx", "m/s", True),
+    ("dy", "m/s", True),
+    ("dtheta", "rad/s", True),
+    ("dphi_", "rad/s", False),
+    ("dalpha_", "rad/s", False),
+    ("leg_length_", "m", False),
+    ("ground_force_", "N", False),
+    ("leg_axial_force_", "N", False),
+    ("hip_torque_", "N m", False),
+    ("motor_current_", "A", False),
+    ("motor_speed_", "rad/s", False),
+    ("belt_deflection_", "rad", False),
+    ("stiction_holding_torque_", "N m", False),
+    ("toe_x_", "m", False),
+    ("toe_y_", "m", False),
+    ("toe_velocity_x_", "m/s", False),
+    ("strut_force_", "N", False),
+    ("belt_torque_", "N m", False),
+    ("battery_voltage", "V", True),
+    ("energy", "J", True),
     ("cumulative_energy_", "J", False),
 )
 
@@ -58,8 +74,11 @@ class ColumnViews(RunData):
         cols["energy"] = self.aux[:, L.A_ENERGY]
         cols["dynamics_solved"] = self.aux[:, L.A_KKT_OK]
         for leg in range(2):
-            for base, what in ((L.RM_LEG_STATE_B, "leg_state"), (L.RM_CONTACT_B, "contact_mode"),
-                               (L.RM_MOTOR_B, "motor_joint_mode")):
+            for base, what in (
+                (L.RM_LEG_STATE_B, "leg_state"),
+                (L.RM_CONTACT_B, "contact_mode"),
+                (L.RM_MOTOR_B, "motor_joint_mode"),
+            ):
                 cols[f"{what}_{L.LEG_NAMES[leg]}"] = self.modes[:, base + leg].astype(float)
         if self.energy_series is not None:
             for j, name in enumerate(ENERGY_COLUMNS):
@@ -74,13 +93,18 @@ class ColumnViews(RunData):
         (``<name>_after``) the transition (``STATE_NAMES``, SI)."""
         ev = self.events
         kinds = ev[:, L.EVR_KIND].astype(np.int8)
-        cols = {"t": ev[:, L.EVR_T], "kind": kinds,
-                "kind_name": np.array([L.EVENT_KIND_NAMES.get(int(k), "?") for k in kinds],
-                                      dtype=str),
-                "leg": ev[:, L.EVR_LEG].astype(np.int8),
-                "v1": ev[:, L.EVR_V1], "v2": ev[:, L.EVR_V2], "v3": ev[:, L.EVR_V3],
-                "energy_before": ev[:, L.EVR_E_BEFORE], "energy_after": ev[:, L.EVR_E_AFTER],
-                "violations": ev[:, L.EVR_VIOLATIONS].astype(np.int32)}
+        cols = {
+            "t": ev[:, L.EVR_T],
+            "kind": kinds,
+            "kind_name": np.array([L.EVENT_KIND_NAMES.get(int(k), "?") for k in kinds], dtype=str),
+            "leg": ev[:, L.EVR_LEG].astype(np.int8),
+            "v1": ev[:, L.EVR_V1],
+            "v2": ev[:, L.EVR_V2],
+            "v3": ev[:, L.EVR_V3],
+            "energy_before": ev[:, L.EVR_E_BEFORE],
+            "energy_after": ev[:, L.EVR_E_AFTER],
+            "violations": ev[:, L.EVR_VIOLATIONS].astype(np.int32),
+        }
         if self.event_states is not None:
             for when, slot in (("before", L.EVS_BEFORE), ("after", L.EVS_AFTER)):
                 for i, n in enumerate(L.STATE_NAMES):
@@ -115,7 +139,7 @@ class ColumnViews(RunData):
         for n in ev:
             for when in ("_before", "_after"):
                 if n.endswith(when) and not n.startswith("energy"):
-                    ev_units[n] = column_unit(n[:-len(when)])
+                    ev_units[n] = column_unit(n[: -len(when)])
         out["events"] = (ev, ev_units)
         st = self.step_columns()
         if st is not None:
@@ -130,8 +154,10 @@ class ColumnViews(RunData):
         try:
             import pandas as pd
         except ImportError as exc:
-            raise ImportError("SimulationResult.to_dataframe needs pandas: pip install pandas "
-                              "(or pip install 'scoutsim[dataframe]')") from exc
+            raise ImportError(
+                "SimulationResult.to_dataframe needs pandas: pip install pandas "
+                "(or pip install 'scoutsim[dataframe]')"
+            ) from exc
         cols = self.columns()
         for n in cols:
             if column_unit(n) is None:

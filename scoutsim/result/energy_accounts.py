@@ -28,8 +28,14 @@ __all__ = ["EnergyAccessors", "ENERGY_GROUPS", "ENERGY_WHOLE_ROBOT", "ENERGY_COL
 ENERGY_GROUPS = {
     "transmission": ("conversion", "gear_loss"),
     "joint_friction": ("joint_viscous", "joint_coulomb"),
-    "friction": ("joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
-                 "leg_friction", "toe_slide"),
+    "friction": (
+        "joint_viscous",
+        "joint_coulomb",
+        "belt_damper",
+        "leg_damper",
+        "leg_friction",
+        "toe_slide",
+    ),
 }
 #: destinations without a leg: the battery's internal loss, and the battery's whole output
 #: (the electrical energy into both legs' motors plus that loss)
@@ -37,14 +43,16 @@ ENERGY_WHOLE_ROBOT = ("battery_loss", "battery")
 
 
 #: names of the columns of :attr:`SimulationResult.energy_series` in the tables
-ENERGY_COLUMNS = tuple(f"cumulative_energy_{f}_{leg}" for leg in L.LEG_NAMES
-                       for f in L.EN_LEG_NAMES) + ("cumulative_energy_battery_loss",)
+ENERGY_COLUMNS = tuple(
+    f"cumulative_energy_{f}_{leg}" for leg in L.LEG_NAMES for f in L.EN_LEG_NAMES
+) + ("cumulative_energy_battery_loss",)
 
 
 class EnergyAccessors(RunData):
     """Named accessors of a run's energy accounting."""
 
-    if TYPE_CHECKING:   # the time series' accessors (series.py), for the type checker
+    if TYPE_CHECKING:  # the time series' accessors (series.py), for the type checker
+
         def motor_current(self, leg) -> np.ndarray: ...
         def motor_speed(self, leg) -> np.ndarray: ...
 
@@ -52,8 +60,10 @@ class EnergyAccessors(RunData):
         """Columns of :attr:`energy_series` that make up destination ``name`` of ``leg``
         (None: both legs)."""
         if self.energy_series is None:
-            raise ValueError("this run did not account for its energy: run it with "
-                             "simulate(..., energy=True) (scoutsim run does by default)")
+            raise ValueError(
+                "this run did not account for its energy: run it with "
+                "simulate(..., energy=True) (scoutsim run does by default)"
+            )
         if name in ENERGY_WHOLE_ROBOT:
             if leg is not None:
                 raise ValueError(f"{name!r} is the whole robot's: leg must be None")
@@ -65,7 +75,8 @@ class EnergyAccessors(RunData):
             if f not in L.EN_LEG_NAMES:
                 raise ValueError(
                     f"name = {name!r} is not allowed: must be one of "
-                    f"{list(L.EN_LEG_NAMES) + list(ENERGY_GROUPS) + list(ENERGY_WHOLE_ROBOT)}")
+                    f"{list(L.EN_LEG_NAMES) + list(ENERGY_GROUPS) + list(ENERGY_WHOLE_ROBOT)}"
+                )
         legs = (0, 1) if leg is None else (leg_index(leg),)
         return [lg * L.NEN_LEG + L.EN_LEG_NAMES.index(f) for lg in legs for f in flows]
 
@@ -89,7 +100,7 @@ class EnergyAccessors(RunData):
         (n,) array [J], aligned with :attr:`t`. The touchdown impacts' losses are not in
         it (they happen at instants: :meth:`impacts`).
         """
-        columns = self._energy_columns(name, leg)   # (raises if the run has no accounting)
+        columns = self._energy_columns(name, leg)  # (raises if the run has no accounting)
         assert self.energy_series is not None
         return self.energy_series[:, columns].sum(axis=1)
 
@@ -115,22 +126,27 @@ class EnergyAccessors(RunData):
         model = (self.provenance or {}).get("model")
         robot = (self.provenance or {}).get("robot")
         if model not in ("I", "II") or not robot:
-            raise ValueError(f"electrical_power needs a run of Model I or II with its robot "
-                             f"in the provenance (this one: model {model!r})")
+            raise ValueError(
+                f"electrical_power needs a run of Model I or II with its robot "
+                f"in the provenance (this one: model {model!r})"
+            )
         legs = (0, 1) if leg is None else (leg_index(leg),)
         p = np.zeros(len(self.t))
         for lg in legs:
             i = self.motor_current(lg)
             w = self.motor_speed(lg)
             motor = RobotParameters(**robot).leg(lg)
-            p += robot["legs_per_virtual_leg"] * i * (motor.armature_resistance * i
-                                                      + motor.speed_constant * w)
+            p += (
+                robot["legs_per_virtual_leg"]
+                * i
+                * (motor.armature_resistance * i + motor.speed_constant * w)
+            )
         return p
-
 
     def energy_balance(self):
         """The run's work-energy balance (:class:`~scoutsim.analysis.energy.EnergyBalance`:
         every term [J], the input, the residual); needs a run made with
         ``simulate(energy=True)``."""
         from ..analysis.energy import energy_balance
+
         return energy_balance(self)

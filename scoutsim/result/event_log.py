@@ -16,8 +16,17 @@ from .run_data import RunData
 __all__ = ["EventAccessors", "EVENT_LOG_COLUMNS", "IMPACT_LOG_COLUMNS"]
 
 #: the columns of :meth:`EventAccessors.event_log`, in the order of a record
-EVENT_LOG_COLUMNS = ("t", "kind", "leg", "v1", "v2", "v3", "energy_before", "energy_after",
-                     "violations")
+EVENT_LOG_COLUMNS = (
+    "t",
+    "kind",
+    "leg",
+    "v1",
+    "v2",
+    "v3",
+    "energy_before",
+    "energy_after",
+    "violations",
+)
 #: the columns of :meth:`EventAccessors.impact_log`
 IMPACT_LOG_COLUMNS = ("t", "leg", "normal_impulse", "tangential_impulse", "energy_lost")
 
@@ -66,8 +75,10 @@ class EventAccessors(RunData):
         elif ev.ndim == 1:
             ev = ev.reshape(1, -1)
         if ev.ndim != 2 or ev.shape[1] < L.NEVREC:
-            raise ValueError("these events carry no transition audit (a result saved by an "
-                             "older scoutsim): re-run the simulation")
+            raise ValueError(
+                "these events carry no transition audit (a result saved by an "
+                "older scoutsim): re-run the simulation"
+            )
         m = np.ones(len(ev), dtype=bool)
         if kinds is not None:
             codes = {v: k for k, v in L.EVENT_KIND_NAMES.items()}
@@ -75,29 +86,40 @@ class EventAccessors(RunData):
             for kind in kinds:
                 if isinstance(kind, str):
                     if kind not in codes:
-                        raise ValueError(f"kind = {kind!r} is not allowed: must be one of "
-                                         f"{sorted(codes)}")
+                        raise ValueError(
+                            f"kind = {kind!r} is not allowed: must be one of {sorted(codes)}"
+                        )
                     kind = codes[kind]
                 wanted.append(int(kind))
             m &= np.isin(ev[:, L.EVR_KIND], wanted)
         if leg is not None:
             m &= ev[:, L.EVR_LEG] == leg_index(leg)
         ev = ev[m]
-        return {"t": ev[:, L.EVR_T], "kind": ev[:, L.EVR_KIND].astype(int),
-                "leg": ev[:, L.EVR_LEG].astype(int), "v1": ev[:, L.EVR_V1],
-                "v2": ev[:, L.EVR_V2], "v3": ev[:, L.EVR_V3],
-                "energy_before": ev[:, L.EVR_E_BEFORE], "energy_after": ev[:, L.EVR_E_AFTER],
-                "violations": ev[:, L.EVR_VIOLATIONS]}
+        return {
+            "t": ev[:, L.EVR_T],
+            "kind": ev[:, L.EVR_KIND].astype(int),
+            "leg": ev[:, L.EVR_LEG].astype(int),
+            "v1": ev[:, L.EVR_V1],
+            "v2": ev[:, L.EVR_V2],
+            "v3": ev[:, L.EVR_V3],
+            "energy_before": ev[:, L.EVR_E_BEFORE],
+            "energy_after": ev[:, L.EVR_E_AFTER],
+            "violations": ev[:, L.EVR_VIOLATIONS],
+        }
 
     def event_table(self) -> list[dict]:
         """Events as a list of dicts (time, kind, leg, values)."""
         out = []
         for row in self.events:
             leg = int(row[L.EVR_LEG])
-            out.append({"t": float(row[L.EVR_T]),
-                        "kind": L.EVENT_KIND_NAMES.get(int(row[L.EVR_KIND]), "?"),
-                        "leg": L.LEG_NAMES[leg] if leg >= 0 else None,
-                        "values": [float(v) for v in row[L.EVR_V1:]]})
+            out.append(
+                {
+                    "t": float(row[L.EVR_T]),
+                    "kind": L.EVENT_KIND_NAMES.get(int(row[L.EVR_KIND]), "?"),
+                    "leg": L.LEG_NAMES[leg] if leg >= 0 else None,
+                    "values": [float(v) for v in row[L.EVR_V1 :]],
+                }
+            )
         return out
 
     def impacts(self):
@@ -118,6 +140,10 @@ class EventAccessors(RunData):
         if t1 is not None:
             m &= ev[:, L.EVR_T] < t1
         ev = ev[m]
-        return {"t": ev[:, L.EVR_T], "leg": ev[:, L.EVR_LEG].astype(int),
-                "normal_impulse": ev[:, L.EVR_V1], "tangential_impulse": ev[:, L.EVR_V2],
-                "energy_lost": ev[:, L.EVR_V3]}
+        return {
+            "t": ev[:, L.EVR_T],
+            "leg": ev[:, L.EVR_LEG].astype(int),
+            "normal_impulse": ev[:, L.EVR_V1],
+            "tangential_impulse": ev[:, L.EVR_V2],
+            "energy_lost": ev[:, L.EVR_V3],
+        }

@@ -52,8 +52,7 @@ from ..parameters import (
     parameter_table,
 )
 
-__all__ = ["FailureDiagnosis", "diagnose_failure", "far_parameters", "FAR_FACTOR",
-           "ENERGY_GROWTH"]
+__all__ = ["FailureDiagnosis", "diagnose_failure", "far_parameters", "FAR_FACTOR", "ENERGY_GROWTH"]
 
 #: A parameter counts as far from its Scout II default beyond this factor either way.
 FAR_FACTOR = 100.0
@@ -71,17 +70,19 @@ KINDS = ("singular_dynamics", "non_finite", "energy", "integrator")
 class FarParameter:
     """A parameter of a run far from its Scout II default (SI values)."""
 
-    name: str          #: "section.field", as in the parameter files (e.g. robot.torso_mass)
+    name: str  #: "section.field", as in the parameter files (e.g. robot.torso_mass)
     value: float
     default: float
-    unit: str          #: SI unit ("" for dimensionless)
-    reference: float | None = None   #: scale it was compared with when the default is 0
+    unit: str  #: SI unit ("" for dimensionless)
+    reference: float | None = None  #: scale it was compared with when the default is 0
 
     def text(self) -> str:
         u = f" {self.unit}" if self.unit else ""
         if self.reference is not None:
-            return (f"{self.name} = {self.value:.4g}{u} (default 0; more than {FAR_FACTOR:g} "
-                    f"x the reference {self.reference:.4g}{u})")
+            return (
+                f"{self.name} = {self.value:.4g}{u} (default 0; more than {FAR_FACTOR:g} "
+                f"x the reference {self.reference:.4g}{u})"
+            )
         return f"{self.name} = {self.value:.4g}{u} (default {self.default:.4g}{u})"
 
     def to_dict(self) -> dict:
@@ -123,21 +124,26 @@ class FailureDiagnosis:
         rtol = "--rtol" if cli else "IntegratorSettings(rtol=...)"
         if self.parameters:
             far = "; ".join(p.text() for p in self.parameters)
-            text = (f"parameters far from the Scout II defaults (factor > {FAR_FACTOR:g}): "
-                    f"{far}; check them")
+            text = (
+                f"parameters far from the Scout II defaults (factor > {FAR_FACTOR:g}): "
+                f"{far}; check them"
+            )
             if self.kind == "integrator":
                 text += f" (if they are intended, a different {rtol} may get through)"
             return text
         if self.kind == "integrator":
             if self.rtol is not None and self.rtol <= TIGHT_RTOL:
-                return (f"no parameter is far from its Scout II default; at rtol = "
-                        f"{self.rtol:g} round-off can keep every step's error above the "
-                        f"tolerance: try a larger {rtol}")
+                return (
+                    f"no parameter is far from its Scout II default; at rtol = "
+                    f"{self.rtol:g} round-off can keep every step's error above the "
+                    f"tolerance: try a larger {rtol}"
+                )
             method = "" if cli else " or another IntegratorSettings(method=...)"
-            return (f"no parameter is far from its Scout II default; try a smaller "
-                    f"{rtol}{method}")
-        return (f"no parameter is far from its Scout II default; check the initial state "
-                f"and the combination of parameters, or try a smaller {rtol}")
+            return f"no parameter is far from its Scout II default; try a smaller {rtol}{method}"
+        return (
+            f"no parameter is far from its Scout II default; check the initial state "
+            f"and the combination of parameters, or try a smaller {rtol}"
+        )
 
     def message(self, cli: bool = False) -> str:
         """The whole diagnosis: what happened, then the advice."""
@@ -145,9 +151,14 @@ class FailureDiagnosis:
 
     def to_dict(self) -> dict:
         """JSON-safe dict (for the run summary)."""
-        return {"kind": self.kind, "t_s": float(self.t), "what": self.what,
-                "parameters": [p.to_dict() for p in self.parameters],
-                "advice": self.advice(), "message": self.message()}
+        return {
+            "kind": self.kind,
+            "t_s": float(self.t),
+            "what": self.what,
+            "parameters": [p.to_dict() for p in self.parameters],
+            "advice": self.advice(),
+            "message": self.message(),
+        }
 
 
 @lru_cache(maxsize=1)
@@ -166,8 +177,13 @@ def _reference_scales() -> dict:
     """Scout II scale of each dimension, for parameters whose default is 0."""
     r = RobotParameters()
     weight = r.total_mass * r.gravity
-    return {"force": weight, "torque": r.max_leg_torque, "resistance": r.armature_resistance,
-            "dimensionless": 1.0, "per squared angle": 1.0}
+    return {
+        "force": weight,
+        "torque": r.max_leg_torque,
+        "resistance": r.armature_resistance,
+        "dimensionless": 1.0,
+        "per squared angle": 1.0,
+    }
 
 
 def far_parameters(robot: dict | None, controller: dict | None = None) -> tuple:
@@ -243,9 +259,11 @@ def diagnose_failure(result) -> FailureDiagnosis | None:
         singular = [row for row in events[last] if int(row[L.EVR_VIOLATIONS]) & L.V_SINGULAR]
     if (len(aux) and not flag_is_set(aux[-1, L.A_KKT_OK])) or singular:
         where = f" (at the {_event_name(singular[-1])})" if singular else ""
-        return make("singular_dynamics",
-                    f"at t = {t_end:.6g} s the constrained equations of motion could not be "
-                    f"solved{where}: the system is singular or too ill-conditioned to solve")
+        return make(
+            "singular_dynamics",
+            f"at t = {t_end:.6g} s the constrained equations of motion could not be "
+            f"solved{where}: the system is singular or too ill-conditioned to solve",
+        )
     # 2. non-finite values
     if len(state):
         bad = ~(np.all(np.isfinite(state), axis=1) & np.all(np.isfinite(aux), axis=1))
@@ -253,18 +271,22 @@ def diagnose_failure(result) -> FailureDiagnosis | None:
             k = int(np.argmax(bad))
             cols = result.columns()
             names = [n for n, c in cols.items() if n != "t" and not np.isfinite(c[k])]
-            shown = ", ".join(names[:6]) + (f" and {len(names) - 6} more" if len(names) > 6
-                                            else "")
-            return make("non_finite", f"at t = {float(result.t[k]):.6g} s these values are not "
-                                      f"finite: {shown}")
+            shown = ", ".join(names[:6]) + (f" and {len(names) - 6} more" if len(names) > 6 else "")
+            return make(
+                "non_finite",
+                f"at t = {float(result.t[k]):.6g} s these values are not finite: {shown}",
+            )
     # 3. the energy blew up
     energy = aux[:, L.A_ENERGY] if len(aux) else np.zeros(0)
     if len(energy):
         e0 = float(energy[0])
         k = int(np.argmax(np.abs(energy)))
         if abs(energy[k]) > ENERGY_GROWTH * max(abs(e0), 1.0):
-            return make("energy", f"the mechanical energy rose from {e0:.4g} J to "
-                                  f"{float(energy[k]):.4g} J by t = {float(result.t[k]):.6g} s")
+            return make(
+                "energy",
+                f"the mechanical energy rose from {e0:.4g} J to "
+                f"{float(energy[k]):.4g} J by t = {float(result.t[k]):.6g} s",
+            )
     # 4. the integrator stopped with finite, plausible values
     stats = result.stats or {}
     steps = float(stats.get("steps", float("nan")))
@@ -272,15 +294,20 @@ def diagnose_failure(result) -> FailureDiagnosis | None:
     hmin = float(stats.get("min_step_s", float("nan")))
     method = integ.get("method", "?")
     from .._core.numerics.hybrid import MAX_EVENTS_PER_PERIOD, MAX_STEPS_PER_PERIOD
-    detail = (f"smallest accepted step {hmin:.3g} s" if math.isfinite(hmin)
-              else "no step was accepted")
+
+    detail = (
+        f"smallest accepted step {hmin:.3g} s" if math.isfinite(hmin) else "no step was accepted"
+    )
     if math.isfinite(steps) and math.isfinite(rejected):
         detail += f", {rejected:.0f} of {steps + rejected:.0f} steps rejected"
-    tol = "".join(f", {k} {integ[k]:g}" for k in ("rtol", "atol")
-                  if isinstance(integ.get(k), (int, float)))
-    return make("integrator",
-                f"at t = {t_end:.6g} s the integrator ({method}{tol}) could not go on: no step "
-                f"met the tolerance down to the smallest step size, a step gave non-finite "
-                f"values, or a control period needed more than {MAX_STEPS_PER_PERIOD} steps "
-                f"or {MAX_EVENTS_PER_PERIOD} events ({detail}); the state, forces and energy "
-                f"stayed finite")
+    tol = "".join(
+        f", {k} {integ[k]:g}" for k in ("rtol", "atol") if isinstance(integ.get(k), (int, float))
+    )
+    return make(
+        "integrator",
+        f"at t = {t_end:.6g} s the integrator ({method}{tol}) could not go on: no step "
+        f"met the tolerance down to the smallest step size, a step gave non-finite "
+        f"values, or a control period needed more than {MAX_STEPS_PER_PERIOD} steps "
+        f"or {MAX_EVENTS_PER_PERIOD} events ({detail}); the state, forces and energy "
+        f"stayed finite",
+    )

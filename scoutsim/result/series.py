@@ -145,14 +145,18 @@ class SeriesAccessors(RunData):
         state is not carried (see :class:`~scoutsim.state.HybridState`)."""
         n = len(self.t)
         if not (isinstance(k, (int, np.integer)) and -n <= k < n):
-            raise ValueError(f"k = {k!r} is not allowed: must be an integer sample index in "
-                             f"[{-n}, {n - 1}]")
+            raise ValueError(
+                f"k = {k!r} is not allowed: must be an integer sample index in [{-n}, {n - 1}]"
+            )
         m = self.modes[k].astype(int)
         aux = self.aux[k]
         return HybridState(
-            state=self.state[k], leg_states=(m[L.RM_LEG_STATE_B], m[L.RM_LEG_STATE_F]),
+            state=self.state[k],
+            leg_states=(m[L.RM_LEG_STATE_B], m[L.RM_LEG_STATE_F]),
             contact_modes=(m[L.RM_CONTACT_B], m[L.RM_CONTACT_F]),
             motor_modes=(m[L.RM_MOTOR_B], m[L.RM_MOTOR_F]),
-            slide_directions=tuple(1 if aux[leg * L.NAUX_LEG + L.A_SLIP_V] >= 0.0 else -1
-                                   for leg in range(2)),
-            toe_anchors=tuple(float(aux[leg * L.NAUX_LEG + L.A_TOE_X]) for leg in range(2)))
+            slide_directions=tuple(
+                1 if aux[leg * L.NAUX_LEG + L.A_SLIP_V] >= 0.0 else -1 for leg in range(2)
+            ),
+            toe_anchors=tuple(float(aux[leg * L.NAUX_LEG + L.A_TOE_X]) for leg in range(2)),
+        )

@@ -29,13 +29,19 @@ from .failure import diagnose_failure
 from .run_files import TABLES_FORMAT, ResultFiles
 from .series import SeriesAccessors
 
-__all__ = ["SimulationResult", "COLUMN_UNITS", "column_unit", "ENERGY_GROUPS",
-           "ENERGY_WHOLE_ROBOT", "ENERGY_COLUMNS", "TABLES_FORMAT"]
+__all__ = [
+    "SimulationResult",
+    "COLUMN_UNITS",
+    "column_unit",
+    "ENERGY_GROUPS",
+    "ENERGY_WHOLE_ROBOT",
+    "ENERGY_COLUMNS",
+    "TABLES_FORMAT",
+]
 
 
 @dataclass
-class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnViews,
-                       ResultFiles):
+class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnViews, ResultFiles):
     """Everything one run produced.
 
     Attributes
@@ -75,11 +81,11 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         (:meth:`window`, a streamed run's kept end) keeps the values since the run's start.
     """
 
-
     # -- analysis (computed on demand) -----------------------------------------------------
     def gait(self, **kwargs):
         """Strides and gait metrics (:func:`scoutsim.analysis.gait.gait_metrics`)."""
         from ..analysis.gait import gait_metrics
+
         key = ("gait", tuple(sorted(kwargs.items())))
         if key not in self._cache:
             self._cache[key] = gait_metrics(self, **kwargs)
@@ -135,17 +141,25 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         """The samples (and their cumulative energies), events and steps with
         t0 <= t <= t1 [s], as views (all are in time order); outcome, end time, statistics,
         provenance and the run's energy totals stay the whole run's."""
+
         def rows(t):
-            return slice(int(np.searchsorted(t, t0, side="left")),
-                         int(np.searchsorted(t, t1, side="right")))
+            return slice(
+                int(np.searchsorted(t, t0, side="left")), int(np.searchsorted(t, t1, side="right"))
+            )
+
         k, j = rows(self.t), rows(self.events[:, L.EVR_T])
         return dataclasses.replace(
-            self, t=self.t[k], state=self.state[k], aux=self.aux[k], modes=self.modes[k],
+            self,
+            t=self.t[k],
+            state=self.state[k],
+            aux=self.aux[k],
+            modes=self.modes[k],
             events=self.events[j],
             event_states=None if self.event_states is None else self.event_states[j],
             steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
             energy_series=None if self.energy_series is None else self.energy_series[k],
-            _cache={})
+            _cache={},
+        )
 
     @property
     def fell(self) -> bool:
@@ -156,4 +170,5 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         Matplotlib figure, saved to ``path`` if given: a convenience for
         :func:`scoutsim.presentation.plots.plot_run`."""
         from ..presentation.plots import plot_run
+
         return plot_run(self, path, t_range)

@@ -35,8 +35,15 @@ from .initial_conditions import (
 )
 from .integrator import IntegratorSettings
 
-__all__ = ["assemble", "RunSetup", "PlantOptions", "Bench", "bench_plan",
-           "DEFAULT_PITCH_LIMIT_DEG", "PITCH_LIMIT_RANGE_DEG"]
+__all__ = [
+    "assemble",
+    "RunSetup",
+    "PlantOptions",
+    "Bench",
+    "bench_plan",
+    "DEFAULT_PITCH_LIMIT_DEG",
+    "PITCH_LIMIT_RANGE_DEG",
+]
 
 #: |pitch| [deg] that counts as a fall unless a run says otherwise (docs/specification.md
 #: section 3)
@@ -88,8 +95,10 @@ class PlantOptions:
         lo, hi = PITCH_LIMIT_RANGE_DEG
         v = self.pitch_limit_deg
         if isinstance(v, bool) or not (isinstance(v, (int, float, np.floating)) and lo < v < hi):
-            raise ValueError(f"pitch_limit_deg = {v!r} is not allowed: must be a number of "
-                             f"degrees in ({lo:g}, {hi:g})")
+            raise ValueError(
+                f"pitch_limit_deg = {v!r} is not allowed: must be a number of "
+                f"degrees in ({lo:g}, {hi:g})"
+            )
 
     @property
     def pitch_limit(self) -> float:
@@ -120,22 +129,34 @@ class RunSetup:
     hip_unit: str
 
 
-def bench_plan(robot: RobotParameters, model: str,
-               controller: ControllerParameters | None) -> ControllerPlan:
+def bench_plan(
+    robot: RobotParameters, model: str, controller: ControllerParameters | None
+) -> ControllerPlan:
     """The control of a bench run: the compiled Table I law with ideal sensors, or
     (``controller`` None) no controller: the hip torques are held as the caller sets them
     (``engine.cmd``), the hip encoders read the legs."""
     if controller is not None:
         return plan_controller(controller, model, robot)
-    block = control_block(L.CTRL_HELD,
-                          geom=SensorParameters().geometry_array(robot, False))
-    return ControllerPlan(kind="none", controller=None, parameters=None,
-                          control_period=ControllerParameters().control_period,
-                          C=controller_array(None), block=block, label="held")
+    block = control_block(L.CTRL_HELD, geom=SensorParameters().geometry_array(robot, False))
+    return ControllerPlan(
+        kind="none",
+        controller=None,
+        parameters=None,
+        control_period=ControllerParameters().control_period,
+        C=controller_array(None),
+        block=block,
+        label="held",
+    )
 
 
-def _start(start, model: str, robot: RobotParameters, plan: ControllerPlan,
-           plant: PlantOptions, P: np.ndarray) -> tuple:
+def _start(
+    start,
+    model: str,
+    robot: RobotParameters,
+    plan: ControllerPlan,
+    plant: PlantOptions,
+    P: np.ndarray,
+) -> tuple:
     """(s, mi, mf, ls) of a run from ``start`` (see :func:`assemble`)."""
     if start is None:
         start = default_initial_state(model, robot, plant.passive_touchdown_angles)
@@ -144,23 +165,36 @@ def _start(start, model: str, robot: RobotParameters, plan: ControllerPlan,
         mi, mf, ls = resumed_modes(start)
         return s, mi, mf, ls
     if isinstance(start, InitialState):
-        ctrl = (None if model == "passive" else
-                (plan.parameters if plan.parameters is not None else ControllerParameters()))
-        s = initial_state_vector(start, robot, ctrl, plant.passive_touchdown_angles,
-                                 plant.passive_touchdown_world)
+        ctrl = (
+            None
+            if model == "passive"
+            else (plan.parameters if plan.parameters is not None else ControllerParameters())
+        )
+        s = initial_state_vector(
+            start, robot, ctrl, plant.passive_touchdown_angles, plant.passive_touchdown_world
+        )
     elif isinstance(start, np.ndarray):
         s = np.array(start, dtype=float)
     else:
-        raise TypeError("initial_state must be an InitialState, a HybridState, a state "
-                        f"vector or None, not {type(start).__name__}")
+        raise TypeError(
+            "initial_state must be an InitialState, a HybridState, a state "
+            f"vector or None, not {type(start).__name__}"
+        )
     mi, mf = fresh_modes(s, P)
     return s, mi, mf, np.zeros(2, dtype=np.int64)
 
 
-def assemble(robot: RobotParameters, model: str, start, plan: ControllerPlan, *,
-             plant: PlantOptions = PlantOptions(),
-             integrator: IntegratorSettings | None = None, hold_commands: bool = False,
-             control_period: float | None = None) -> RunSetup:
+def assemble(
+    robot: RobotParameters,
+    model: str,
+    start,
+    plan: ControllerPlan,
+    *,
+    plant: PlantOptions = PlantOptions(),
+    integrator: IntegratorSettings | None = None,
+    hold_commands: bool = False,
+    control_period: float | None = None,
+) -> RunSetup:
     """Put a run together (its callers check the robot and the controller's parameters).
 
     Parameters
@@ -183,15 +217,24 @@ def assemble(robot: RobotParameters, model: str, start, plan: ControllerPlan, *,
     """
     mu = Environment(friction_coefficient=plant.friction_coefficient).friction_for(robot)
     bench = plant.bench
-    P = robot_array(robot, model, friction_coefficient=mu,
-                    passive_touchdown_angles=plant.passive_touchdown_angles,
-                    passive_touchdown_world=plant.passive_touchdown_world,
-                    pitch_limit=plant.pitch_limit, clamp_torso=bench.clamp_torso,
-                    clamp_legs=bench.clamp_legs, motor_circuit=bench.motor_circuit)
+    P = robot_array(
+        robot,
+        model,
+        friction_coefficient=mu,
+        passive_touchdown_angles=plant.passive_touchdown_angles,
+        passive_touchdown_world=plant.passive_touchdown_world,
+        pitch_limit=plant.pitch_limit,
+        clamp_torso=bench.clamp_torso,
+        clamp_legs=bench.clamp_legs,
+        motor_circuit=bench.motor_circuit,
+    )
     if hold_commands:
         plan.block.ints[L.CB_KIND] = L.CTRL_HELD
-    return RunSetup(P=P, plan=plan, start=_start(start, model, robot, plan, plant, P),
-                    control_period=plan.control_period if control_period is None
-                    else float(control_period),
-                    integrator=(integrator or IntegratorSettings()).resolve(model),
-                    hip_unit=HIP_UNIT_NAMES[hip_unit_code(model, robot)])
+    return RunSetup(
+        P=P,
+        plan=plan,
+        start=_start(start, model, robot, plan, plant, P),
+        control_period=plan.control_period if control_period is None else float(control_period),
+        integrator=(integrator or IntegratorSettings()).resolve(model),
+        hip_unit=HIP_UNIT_NAMES[hip_unit_code(model, robot)],
+    )

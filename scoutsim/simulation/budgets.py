@@ -9,8 +9,14 @@ from pathlib import Path
 
 from .._core.model import layout as L
 
-__all__ = ["check_run_memory", "check_stream_disk", "expected_wall_time",
-           "physical_memory_bytes", "STREAM_CHUNK_SECONDS", "WALL_S_PER_SIMULATED_S"]
+__all__ = [
+    "check_run_memory",
+    "check_stream_disk",
+    "expected_wall_time",
+    "physical_memory_bytes",
+    "STREAM_CHUNK_SECONDS",
+    "WALL_S_PER_SIMULATED_S",
+]
 
 
 #: bytes a run holds per control sample: time, state, outputs (float64) and modes (int8)
@@ -32,23 +38,33 @@ def physical_memory_bytes() -> int | None:
         return None
 
 
-def check_run_memory(duration: float, *, record_steps: bool = False, dt: float = 1e-3,
-                     memory_bytes: int | None = None) -> int:
+def check_run_memory(
+    duration: float,
+    *,
+    record_steps: bool = False,
+    dt: float = 1e-3,
+    memory_bytes: int | None = None,
+) -> int:
     """The memory a run of ``duration`` [s] needs for its time series [bytes]; ValueError
     if that is more than half of this machine's memory (``memory_bytes``, default: the
     physical memory), saying how long a run can be (a longer one can be split: resume from
     ``result.hybrid_state(-1)``)."""
-    per_sample = (BYTES_PER_SAMPLE + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
-                  + EVENT_ROWS_PER_S * dt * BYTES_PER_EVENT)
+    per_sample = (
+        BYTES_PER_SAMPLE
+        + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
+        + EVENT_ROWS_PER_S * dt * BYTES_PER_EVENT
+    )
     need = int(int(duration / dt + 2) * per_sample)
     have = physical_memory_bytes() if memory_bytes is None else memory_bytes
     if have is not None and need > have // 2:
         longest = (have // 2) / per_sample * dt
-        raise ValueError(f"duration = {duration:g} s is not allowed on this machine: the run's "
-                         f"time series would need {need / 1e9:.3g} GB of memory, more than half "
-                         f"of its {have / 1e9:.3g} GB; at most about {longest:.4g} s per run "
-                         "(stream it to disk: simulate(..., stream_to=DIR), scoutsim run "
-                         "--stream; simulate(..., check_memory=False) tries anyway)")
+        raise ValueError(
+            f"duration = {duration:g} s is not allowed on this machine: the run's "
+            f"time series would need {need / 1e9:.3g} GB of memory, more than half "
+            f"of its {have / 1e9:.3g} GB; at most about {longest:.4g} s per run "
+            "(stream it to disk: simulate(..., stream_to=DIR), scoutsim run "
+            "--stream; simulate(..., check_memory=False) tries anyway)"
+        )
     return need
 
 
@@ -75,12 +91,14 @@ def expected_wall_time(duration: float, model: str = "II") -> float:
     return duration * WALL_S_PER_SIMULATED_S.get(model, max(WALL_S_PER_SIMULATED_S.values()))
 
 
-def check_stream_disk(duration: float, directory, *, record_steps: bool = False,
-                      dt: float = 1e-3) -> int:
+def check_stream_disk(
+    duration: float, directory, *, record_steps: bool = False, dt: float = 1e-3
+) -> int:
     """The disk space a streamed run of ``duration`` [s] needs for its tables [bytes] (an
     upper bound); ValueError if the file system of ``directory`` has less free space,
     saying how long a run fits."""
     import shutil
+
     per_sample = BYTES_PER_SAMPLE_ON_DISK * (1 + (STEPS_PER_SAMPLE if record_steps else 0))
     need = int((duration / dt + 2) * per_sample)
     d = Path(directory)
@@ -88,10 +106,11 @@ def check_stream_disk(duration: float, directory, *, record_steps: bool = False,
         d = d.parent
     free = shutil.disk_usage(d).free
     if need > free:
-        raise ValueError(f"duration = {duration:g} s is not allowed here: the streamed run's "
-                         f"tables would need up to {need / 1e9:.3g} GB on disk, and {d} has "
-                         f"{free / 1e9:.3g} GB free; at most about {free / per_sample * dt:.4g} "
-                         "s fit (simulate(..., check_memory=False), scoutsim run "
-                         "--no-size-check, tries anyway)")
+        raise ValueError(
+            f"duration = {duration:g} s is not allowed here: the streamed run's "
+            f"tables would need up to {need / 1e9:.3g} GB on disk, and {d} has "
+            f"{free / 1e9:.3g} GB free; at most about {free / per_sample * dt:.4g} "
+            "s fit (simulate(..., check_memory=False), scoutsim run "
+            "--no-size-check, tries anyway)"
+        )
     return need
-

@@ -35,8 +35,13 @@ __all__ = ["HybridEngine", "start_engine", "RETUNABLE"]
 #: fields a caller may change while the engine runs (:meth:`HybridEngine.retune`): the
 #: set-points a schedule may change (``control.bounding.SCHEDULABLE``) and the
 #: stance-brake gains (the start-up from standing, :mod:`scoutsim.control.startup`)
-RETUNABLE = {**SCHEDULABLE, "brake_kp_back": C_KPB_B, "brake_kd_back": C_KDB_B,
-             "brake_kp_front": C_KPB_F, "brake_kd_front": C_KDB_F}
+RETUNABLE = {
+    **SCHEDULABLE,
+    "brake_kp_back": C_KPB_B,
+    "brake_kd_back": C_KDB_B,
+    "brake_kp_front": C_KPB_F,
+    "brake_kd_front": C_KDB_F,
+}
 
 
 class HybridEngine:
@@ -50,9 +55,20 @@ class HybridEngine:
     #: default tolerance: 1.3 steps per control period)
     STEP_ROWS = 8192
 
-    def __init__(self, P, C, start, duration: float, dt: float,
-                 integrator: IntegratorSettings, record_steps: bool = False,
-                 rows: int | None = None, energy: bool = False, *, block):
+    def __init__(
+        self,
+        P,
+        C,
+        start,
+        duration: float,
+        dt: float,
+        integrator: IntegratorSettings,
+        record_steps: bool = False,
+        rows: int | None = None,
+        energy: bool = False,
+        *,
+        block,
+    ):
         """``P``, ``C``: the packed robot and Table I parameters; ``start`` = (s, mi, mf,
         ls): the state, the modes and the leg states the run starts from (kept and
         advanced in place)."""
@@ -63,8 +79,10 @@ class HybridEngine:
         self.dt = dt
         self.integ = integrator
         if integrator.rtol is None or integrator.atol is None:
-            raise ValueError("the engine runs resolved integrator settings "
-                             "(IntegratorSettings.resolved: rtol and atol set)")
+            raise ValueError(
+                "the engine runs resolved integrator settings "
+                "(IntegratorSettings.resolved: rtol and atol set)"
+            )
         self.rtol, self.atol = float(integrator.rtol), float(integrator.atol)
         n_total = int(round(duration / dt)) + 1
         self.k_last = n_total - 1
@@ -87,8 +105,7 @@ class HybridEngine:
         # every integrator step if record_steps (numerics.events.record_step): room for
         # STEP_ROWS steps beyond the headroom one control period may need (np.zeros:
         # pages a run does not reach are never touched); doubled when it runs low
-        self.steps = np.zeros((STEP_HEADROOM + self.STEP_ROWS if record_steps else 0,
-                               L.NSTEPREC))
+        self.steps = np.zeros((STEP_HEADROOM + self.STEP_ROWS if record_steps else 0, L.NSTEPREC))
         self.stepc = np.array([0, 1 if record_steps else 0], dtype=np.int64)
         # the work-energy accounting (layout EN_*; empty: off), the touchdown impacts'
         # losses [J] and the mechanical energy [J] at the first sample
@@ -103,17 +120,33 @@ class HybridEngine:
         self.n_out = self.nev = self.k = 0
         self.event_records_lost = 0
         self.status = L.ST_RUNNING
-        self._entry: Callable | None = None   # the compiled run loop for this engine's method
+        self._entry: Callable | None = None  # the compiled run loop for this engine's method
         self.t_now = 0.0
 
     @classmethod
-    def assembled(cls, setup: RunSetup, duration: float, *, record_steps: bool = False,
-                  rows: int | None = None, energy: bool = False) -> HybridEngine:
+    def assembled(
+        cls,
+        setup: RunSetup,
+        duration: float,
+        *,
+        record_steps: bool = False,
+        rows: int | None = None,
+        energy: bool = False,
+    ) -> HybridEngine:
         """An engine at sample 0 of the assembled run ``setup``
         (:func:`~scoutsim.simulation.assembly.assemble`), ``duration`` [s] long."""
-        return cls(setup.P, setup.plan.C, setup.start, duration, setup.control_period,
-                   setup.integrator, record_steps, rows=rows, energy=energy,
-                   block=setup.plan.block)
+        return cls(
+            setup.P,
+            setup.plan.C,
+            setup.start,
+            duration,
+            setup.control_period,
+            setup.integrator,
+            record_steps,
+            rows=rows,
+            energy=energy,
+            block=setup.plan.block,
+        )
 
     def __getstate__(self):
         # the compiled run loop does not pickle: the next advance() looks it up again
@@ -161,7 +194,7 @@ class HybridEngine:
         evaluation at the state of the last :meth:`read_sensors` (what
         ``SimulationResult.toe_position`` records at a sample)."""
         o = int(leg) * L.NAUX_LEG
-        aux = self.block.last[L.NS:]
+        aux = self.block.last[L.NS :]
         return float(aux[o + L.A_TOE_X]), float(aux[o + L.A_TOE_Y])
 
     def contact_mode(self, leg) -> int:
@@ -185,8 +218,9 @@ class HybridEngine:
         for name, value in values.items():
             slot = RETUNABLE.get(name)
             if slot is None:
-                raise ValueError(f"retune: {name!r} is not allowed: must be one of "
-                                 f"{sorted(RETUNABLE)}")
+                raise ValueError(
+                    f"retune: {name!r} is not allowed: must be one of {sorted(RETUNABLE)}"
+                )
             self.C[slot] = value
 
     def set_leg_state(self, leg: int, state: int) -> None:
@@ -205,9 +239,16 @@ class HybridEngine:
         :meth:`advance`, what the loop reads at the start of the next one, bit for bit
         (measurement model included); after a run that ended (a fall), the readings at
         its final state."""
-        readings_at(self.k, self.s, self.P, self.mi, self.mf, self.cmd,
-                    self.status == L.ST_RUNNING and flag_is_set(self.hwork[HW_EVAL_KEPT]),
-                    self.block)
+        readings_at(
+            self.k,
+            self.s,
+            self.P,
+            self.mi,
+            self.mf,
+            self.cmd,
+            self.status == L.ST_RUNNING and flag_is_set(self.hwork[HW_EVAL_KEPT]),
+            self.block,
+        )
         return self.block.y
 
     def discard_records(self):
@@ -220,27 +261,47 @@ class HybridEngine:
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
-        args = (Plant(self.s, self.P, self.mi, self.mf, self.cmd),
-                Control(self.C, self.ls, self.block),
-                Span(self.k, min(k_stop, self.k_last + 1), self.k_last, float(self.dt),
-                     self.rtol, self.atol),
-                Records(self.out_t, self.out_s, self.out_aux, self.out_ls, self.ev,
-                        self.stats, self.steps, self.stepc, self.energy, self.out_energy),
-                Carry(self.hwork, self.armed, self.sfwork, self.ew),
-                self.n_out, self.nev)
-        if self._entry is None:   # the argument types stay those of the first call
-            self._method = effective_method(METHOD_CODES.get(self.integ.method, METHOD_AUTO),
-                                            int(self.P[L.P_HIP_UNIT]))
+        args = (
+            Plant(self.s, self.P, self.mi, self.mf, self.cmd),
+            Control(self.C, self.ls, self.block),
+            Span(
+                self.k,
+                min(k_stop, self.k_last + 1),
+                self.k_last,
+                float(self.dt),
+                self.rtol,
+                self.atol,
+            ),
+            Records(
+                self.out_t,
+                self.out_s,
+                self.out_aux,
+                self.out_ls,
+                self.ev,
+                self.stats,
+                self.steps,
+                self.stepc,
+                self.energy,
+                self.out_energy,
+            ),
+            Carry(self.hwork, self.armed, self.sfwork, self.ew),
+            self.n_out,
+            self.nev,
+        )
+        if self._entry is None:  # the argument types stay those of the first call
+            self._method = effective_method(
+                METHOD_CODES.get(self.integ.method, METHOD_AUTO), int(self.P[L.P_HIP_UNIT])
+            )
             self._entry = run_entry(self._method, args)
         nev_before = self.nev
-        self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args,
-                                                                            self._method)
+        self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args, self._method)
         if self.energy.size:
             if self.energy_start is None and self.n_out:
                 self.energy_start = float(self.out_aux[0, L.A_ENERGY])
-            new = self.ev[nev_before:min(self.nev, self.ev.shape[0])]
-            self.impact_loss += float(new[np.isin(new[:, L.EVR_KIND], L.IMPACT_KINDS),
-                                          L.EVR_V3].sum())
+            new = self.ev[nev_before : min(self.nev, self.ev.shape[0])]
+            self.impact_loss += float(
+                new[np.isin(new[:, L.EVR_KIND], L.IMPACT_KINDS), L.EVR_V3].sum()
+            )
         if self.nev > self.ev.shape[0]:
             # one control period logged more records than the buffer had left (the loop
             # makes room between periods, 64 rows at least): log_event dropped them but
@@ -258,12 +319,18 @@ class HybridEngine:
         or None if the run did not account for them."""
         if not self.energy.size:
             return None
-        out = {f"{name}_{leg}": float(self.energy[i * L.NEN_LEG + j])
-               for i, leg in enumerate(L.LEG_NAMES) for j, name in enumerate(L.EN_LEG_NAMES)}
+        out = {
+            f"{name}_{leg}": float(self.energy[i * L.NEN_LEG + j])
+            for i, leg in enumerate(L.LEG_NAMES)
+            for j, name in enumerate(L.EN_LEG_NAMES)
+        }
         out["battery_loss"] = float(self.energy[L.EN_BATTERY_LOSS])
         out["impacts"] = self.impact_loss
-        out["mechanical_start"] = (self.energy_start if self.energy_start is not None else
-                                   float(state_energy(self.s, self.P)))
+        out["mechanical_start"] = (
+            self.energy_start
+            if self.energy_start is not None
+            else float(state_energy(self.s, self.P))
+        )
         out["mechanical_end"] = float(state_energy(self.s, self.P))
         return out
 
@@ -272,41 +339,64 @@ class HybridEngine:
             return "interrupted"
         return "completed" if self.status == L.ST_RUNNING else L.STATUS_NAMES[self.status]
 
-    def result(self, provenance: dict, interrupted: bool = False,
-               extra_stats: dict | None = None,
-               last_sample_t: float | None = None) -> SimulationResult:
+    def result(
+        self,
+        provenance: dict,
+        interrupted: bool = False,
+        extra_stats: dict | None = None,
+        last_sample_t: float | None = None,
+    ) -> SimulationResult:
         """The run as a result (``last_sample_t``: the time of the last sample when a
         RunStream has taken the samples out of the buffers)."""
         n = self.n_out
         m = min(self.nev, self.ev.shape[0])
         return SimulationResult(
-            t=_kept(self.out_t, n), state=_kept(self.out_s, n),
-            aux=_kept(self.out_aux, n), modes=_kept(self.out_ls, n),
-            events=self.ev[:m, :L.NEVREC].copy(),      # (contiguous: a few hundred kB)
-            event_states=self.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
+            t=_kept(self.out_t, n),
+            state=_kept(self.out_s, n),
+            aux=_kept(self.out_aux, n),
+            modes=_kept(self.out_ls, n),
+            events=self.ev[:m, : L.NEVREC].copy(),  # (contiguous: a few hundred kB)
+            event_states=self.ev[:m, L.NEVREC :].reshape(m, 2, L.NS).copy(),
             steps=(_kept(self.steps, int(self.stepc[0])) if self.stepc[1] else None),
             outcome=self.outcome(interrupted),
             # (a run stopped before its first sample, e.g. by Ctrl-C: where it started)
-            t_end=float(self.t_now if self.status not in (L.ST_RUNNING,
-                                                          L.ST_CONTROLLER_ERROR) else
-                        self.out_t[n - 1] if n else
-                        last_sample_t if last_sample_t is not None else self.t_now),
+            t_end=float(
+                self.t_now
+                if self.status not in (L.ST_RUNNING, L.ST_CONTROLLER_ERROR)
+                else self.out_t[n - 1]
+                if n
+                else last_sample_t
+                if last_sample_t is not None
+                else self.t_now
+            ),
             stats={name: float(self.stats[i]) for i, name in enumerate(STAT_NAMES)}
-            | ({"event_records_lost": float(self.event_records_lost)}
-               if self.event_records_lost else {})
+            | (
+                {"event_records_lost": float(self.event_records_lost)}
+                if self.event_records_lost
+                else {}
+            )
             | (extra_stats or {}),
-            provenance=provenance, energy_flows=self.energy_flows(),
-            energy_series=(_kept(self.out_energy, n) if self.energy.size else None))
+            provenance=provenance,
+            energy_flows=self.energy_flows(),
+            energy_series=(_kept(self.out_energy, n) if self.energy.size else None),
+        )
 
 
-def start_engine(start: InitialState | HybridState | None, duration: float, *,
-                 robot: RobotParameters | None = None, model: str = "II",
-                 controller: ControllerParameters | None = None, hold_commands: bool = False,
-                 sensors: SensorParameters | None = None,
-                 friction_coefficient: float | None = None,
-                 pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
-                 integrator: IntegratorSettings | None = None, energy: bool = False,
-                 rows: int | None = None) -> HybridEngine:
+def start_engine(
+    start: InitialState | HybridState | None,
+    duration: float,
+    *,
+    robot: RobotParameters | None = None,
+    model: str = "II",
+    controller: ControllerParameters | None = None,
+    hold_commands: bool = False,
+    sensors: SensorParameters | None = None,
+    friction_coefficient: float | None = None,
+    pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
+    integrator: IntegratorSettings | None = None,
+    energy: bool = False,
+    rows: int | None = None,
+) -> HybridEngine:
     """An engine at sample 0 of a run from ``start``, put together as
     :func:`~scoutsim.simulation.simulator.simulate` does it
     (:func:`~scoutsim.simulation.assembly.assemble`), for a caller that drives it sample by
@@ -336,14 +426,15 @@ def start_engine(start: InitialState | HybridState | None, duration: float, *,
     robot = validate_robot(robot if robot is not None else RobotParameters())
     cparams = controller if controller is not None else ControllerParameters()
     validate_parameters(robot, cparams)
-    plant = PlantOptions(friction_coefficient=friction_coefficient,
-                         pitch_limit_deg=pitch_limit_deg)
+    plant = PlantOptions(friction_coefficient=friction_coefficient, pitch_limit_deg=pitch_limit_deg)
     plan = plan_controller(cparams, model, robot, sensors)
     if start is not None and not isinstance(start, (InitialState, HybridState)):
-        raise TypeError("start must be an InitialState, a HybridState or None, not "
-                        f"{type(start).__name__}")
-    setup = assemble(robot, model, start, plan, plant=plant, integrator=integrator,
-                     hold_commands=hold_commands)
+        raise TypeError(
+            f"start must be an InitialState, a HybridState or None, not {type(start).__name__}"
+        )
+    setup = assemble(
+        robot, model, start, plan, plant=plant, integrator=integrator, hold_commands=hold_commands
+    )
     return HybridEngine.assembled(setup, duration, rows=rows, energy=energy)
 
 
@@ -353,4 +444,3 @@ def _kept(buffer: np.ndarray, n: int) -> np.ndarray:
     took 2.4 ms of a 42 ms run), a copy when it ended early (a run that fell at 1 s of
     10 s would otherwise keep the whole buffer alive)."""
     return buffer[:n] if 2 * n >= buffer.shape[0] else buffer[:n].copy()
-

@@ -16,13 +16,23 @@ from ..control.startup import StartupParameters
 from ..parameters import ControllerParameters, RobotParameters
 from ..state import HybridState, InitialState, standing_state
 
-__all__ = ["default_initial_state", "fresh_modes", "resumed_modes", "initial_state_vector",
-           "named_start", "NAMED_STARTS"]
+__all__ = [
+    "default_initial_state",
+    "fresh_modes",
+    "resumed_modes",
+    "initial_state_vector",
+    "named_start",
+    "NAMED_STARTS",
+]
 
 
-def initial_state_vector(init: InitialState, robot: RobotParameters,
-                         ctrl: ControllerParameters | None, passive_angles,
-                         passive_world) -> np.ndarray:
+def initial_state_vector(
+    init: InitialState,
+    robot: RobotParameters,
+    ctrl: ControllerParameters | None,
+    passive_angles,
+    passive_world,
+) -> np.ndarray:
     """The state vector (layout ``STATE_NAMES``, SI) of a start in flight ``init``, checked:
     finite values, |pitch| < 90 deg, leg lengths in (0, l0], both toes above the ground.
     Leg angles ``init`` leaves open are the touchdown angles of the Table I controller
@@ -34,8 +44,10 @@ def initial_state_vector(init: InitialState, robot: RobotParameters,
         if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
             raise ValueError(f"initial_state.{name} = {v!r} is not allowed: must be finite")
     if not (-math.pi / 2 < init.theta < math.pi / 2):
-        raise ValueError(f"initial_state.theta = {math.degrees(init.theta):.1f} deg is not "
-                         "allowed: must be in (-90, 90) deg")
+        raise ValueError(
+            f"initial_state.theta = {math.degrees(init.theta):.1f} deg is not "
+            "allowed: must be in (-90, 90) deg"
+        )
     if ctrl is not None:
         td = (ctrl.touchdown_angle_back, ctrl.touchdown_angle_front)
     elif passive_world:
@@ -49,11 +61,17 @@ def initial_state_vector(init: InitialState, robot: RobotParameters,
     lf = l0f if init.leg_length_front is None else init.leg_length_front
     for name, v, l0 in (("leg_length_back", lb, l0b), ("leg_length_front", lf, l0f)):
         if not (0.0 < v <= l0):
-            raise ValueError(f"initial_state.{name} = {v} m is not allowed: must be in "
-                             f"(0, {l0}] m")
-    s[:L.NQ] = [init.x, init.y, init.theta, phib, phif, phib, phif]
-    s[L.NQ:2 * L.NQ] = [init.dx, init.dy, init.dtheta, init.dphi_back, init.dphi_front,
-                        init.dphi_back, init.dphi_front]
+            raise ValueError(f"initial_state.{name} = {v} m is not allowed: must be in (0, {l0}] m")
+    s[: L.NQ] = [init.x, init.y, init.theta, phib, phif, phib, phif]
+    s[L.NQ : 2 * L.NQ] = [
+        init.dx,
+        init.dy,
+        init.dtheta,
+        init.dphi_back,
+        init.dphi_front,
+        init.dphi_back,
+        init.dphi_front,
+    ]
     s[L.IL_B] = lb
     s[L.IL_F] = lf
     # both toes must start above ground (the run starts in double flight)
@@ -62,14 +80,17 @@ def initial_state_vector(init: InitialState, robot: RobotParameters,
         g = init.theta + s[L.IPHB + leg]
         toe_y = init.y + sL * math.sin(init.theta) - s[L.IL_B + leg] * math.cos(g)
         if toe_y < 0.0:
-            raise ValueError(f"initial_state.y = {init.y} m is not allowed: the {name} toe "
-                             f"starts {-toe_y * 1000:.1f} mm below the ground; the run "
-                             "starts in flight, raise y or change the leg angles")
+            raise ValueError(
+                f"initial_state.y = {init.y} m is not allowed: the {name} toe "
+                f"starts {-toe_y * 1000:.1f} mm below the ground; the run "
+                "starts in flight, raise y or change the leg angles"
+            )
     return s
 
 
-def default_initial_state(model: str = "II", robot: RobotParameters | None = None,
-                          passive_touchdown_angles=(0.0, 0.0)) -> InitialState:
+def default_initial_state(
+    model: str = "II", robot: RobotParameters | None = None, passive_touchdown_angles=(0.0, 0.0)
+) -> InitialState:
     """The documented default start of ``model`` (see :class:`~scoutsim.state.InitialState`).
 
     Parameters
@@ -106,8 +127,9 @@ def default_initial_state(model: str = "II", robot: RobotParameters | None = Non
     ctrl = ControllerParameters()
     l0b, l0f = robot.per_leg("leg_rest_length")
     start = InitialState()
-    drop_controlled = max(l0b * math.cos(ctrl.touchdown_angle_back),
-                          l0f * math.cos(ctrl.touchdown_angle_front))
+    drop_controlled = max(
+        l0b * math.cos(ctrl.touchdown_angle_back), l0f * math.cos(ctrl.touchdown_angle_front)
+    )
     drop_passive = max(l0 * math.cos(a) for l0, a in zip((l0b, l0f), passive_touchdown_angles))
     return start.replace(y=start.y - drop_controlled + drop_passive, dx=1.0)
 
@@ -145,20 +167,26 @@ def named_start(initial_state, startup, model, robot, cparams, user_ctrl):
             raise ValueError("startup is only allowed with initial_state='standing'")
         return initial_state, None
     if initial_state not in NAMED_STARTS:
-        raise ValueError(f"initial_state = {initial_state!r} is not allowed: must be an "
-                         f"InitialState, a HybridState or one of {list(NAMED_STARTS)}")
+        raise ValueError(
+            f"initial_state = {initial_state!r} is not allowed: must be an "
+            f"InitialState, a HybridState or one of {list(NAMED_STARTS)}"
+        )
     if initial_state == "flight":
         if startup is not None:
             raise ValueError("startup is only allowed with initial_state='standing'")
         return None, None
     if user_ctrl is not None:
-        raise ValueError("initial_state = 'standing' is not allowed with a user controller "
-                         f"({type(user_ctrl).__name__}): the start-up runs the built-in "
-                         "Table I controller (pass ControllerParameters or None)")
+        raise ValueError(
+            "initial_state = 'standing' is not allowed with a user controller "
+            f"({type(user_ctrl).__name__}): the start-up runs the built-in "
+            "Table I controller (pass ControllerParameters or None)"
+        )
     if model == "passive" or cparams is None:
-        raise ValueError("initial_state = 'standing' is not allowed with model = "
-                         f"{model!r}: the standing robot is held and set going by the "
-                         "bounding controller (model 'ideal', 'I' or 'II')")
+        raise ValueError(
+            "initial_state = 'standing' is not allowed with model = "
+            f"{model!r}: the standing robot is held and set going by the "
+            "bounding controller (model 'ideal', 'I' or 'II')"
+        )
     if startup is None:
         startup = StartupParameters()
     elif not isinstance(startup, StartupParameters):

@@ -52,27 +52,38 @@ class IntegratorSettings:
 
     def __post_init__(self):
         if self.method not in METHOD_CODES and self.method != "auto":
-            raise ValueError(f"integrator.method = {self.method!r} is not allowed: must be one "
-                             f"of {sorted(METHOD_CODES) + ['auto']}")
+            raise ValueError(
+                f"integrator.method = {self.method!r} is not allowed: must be one "
+                f"of {sorted(METHOD_CODES) + ['auto']}"
+            )
         for name in ("rtol", "atol", "initial_step"):
             v = getattr(self, name)
             if v is None and name != "initial_step":
                 continue
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"integrator.{name} = {v!r} is not allowed: must be a "
-                                 "finite number > 0")
+                raise ValueError(
+                    f"integrator.{name} = {v!r} is not allowed: must be a finite number > 0"
+                )
         if self.rtol is not None and self.rtol < 1e-14:
             raise ValueError(f"integrator.rtol = {self.rtol} is not allowed: must be >= 1e-14")
 
     def resolve(self, model: str = "II") -> IntegratorSettings:
         """The concrete method and tolerances for ``model``."""
         import dataclasses
+
         m = self.method
         if m == "auto":
-            m = ("ark3" if model == "II" and (self.rtol is None or
-                                              self.rtol >= AUTO_ARK_MIN_RTOL) else "dopri5")
+            m = (
+                "ark3"
+                if model == "II" and (self.rtol is None or self.rtol >= AUTO_ARK_MIN_RTOL)
+                else "dopri5"
+            )
         elif m != "dopri5" and model != "II":
-            m = "dopri5"   # the ARK splitting exists for Model II's belts only
+            m = "dopri5"  # the ARK splitting exists for Model II's belts only
         rt, at = DEFAULT_TOLERANCES[m]
-        return dataclasses.replace(self, method=m, rtol=rt if self.rtol is None else self.rtol,
-                                   atol=at if self.atol is None else self.atol)
+        return dataclasses.replace(
+            self,
+            method=m,
+            rtol=rt if self.rtol is None else self.rtol,
+            atol=at if self.atol is None else self.atol,
+        )

@@ -47,10 +47,22 @@ from .engine import HybridEngine, start_engine
 from .initial_conditions import default_initial_state, named_start
 from .integrator import IntegratorSettings
 
-__all__ = ["simulate", "Recording", "PLANT_OPTIONS", "IntegratorSettings", "HybridEngine", "ControllerError", "Sensors",
-           "default_initial_state", "warm_up", "start_engine",
-           "check_run_memory", "check_stream_disk", "expected_wall_time",
-           "physical_memory_bytes"]
+__all__ = [
+    "simulate",
+    "Recording",
+    "PLANT_OPTIONS",
+    "IntegratorSettings",
+    "HybridEngine",
+    "ControllerError",
+    "Sensors",
+    "default_initial_state",
+    "warm_up",
+    "start_engine",
+    "check_run_memory",
+    "check_stream_disk",
+    "expected_wall_time",
+    "physical_memory_bytes",
+]
 
 
 def warm_up() -> float:
@@ -104,29 +116,40 @@ def _fields_dict(obj) -> dict:
     for a robot); a set holding anything else goes through ``asdict``."""
     out = {f.name: getattr(obj, f.name) for f in fields(obj)}
     for v in out.values():
-        if not (v is None or isinstance(v, (int, float, str))
-                or (isinstance(v, tuple) and all(isinstance(x, (int, float)) for x in v))):
+        if not (
+            v is None
+            or isinstance(v, (int, float, str))
+            or (isinstance(v, tuple) and all(isinstance(x, (int, float)) for x in v))
+        ):
             return asdict(obj)
     return out
 
 
-def simulate(robot: RobotParameters | None = None, controller: object | None = None,
-             initial_state: InitialState | HybridState | str | None = None,
-             duration: float = 10.0, *,
-             model: str = "II", environment: Environment | None = None,
-             integrator: IntegratorSettings | None = None,
-             sensors: SensorParameters | None = None,
-             startup: StartupParameters | None = None,
-             friction_coefficient: float | None = None,
-             pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
-             passive_touchdown_angles: tuple[float, float] = (0.0, 0.0),
-             passive_touchdown_world: bool = True,
-             recording: Recording | None = None,
-             progress: bool | None = None, chunk_seconds: float | None = None,
-             record_steps: bool | None = None, check_memory: bool | None = None,
-             stream_to: str | os.PathLike | RunDirectory | None = None, keep_seconds: float | None = None,
-             table_format: str | None = None,
-             energy: bool | None = None) -> SimulationResult:
+def simulate(
+    robot: RobotParameters | None = None,
+    controller: object | None = None,
+    initial_state: InitialState | HybridState | str | None = None,
+    duration: float = 10.0,
+    *,
+    model: str = "II",
+    environment: Environment | None = None,
+    integrator: IntegratorSettings | None = None,
+    sensors: SensorParameters | None = None,
+    startup: StartupParameters | None = None,
+    friction_coefficient: float | None = None,
+    pitch_limit_deg: float = DEFAULT_PITCH_LIMIT_DEG,
+    passive_touchdown_angles: tuple[float, float] = (0.0, 0.0),
+    passive_touchdown_world: bool = True,
+    recording: Recording | None = None,
+    progress: bool | None = None,
+    chunk_seconds: float | None = None,
+    record_steps: bool | None = None,
+    check_memory: bool | None = None,
+    stream_to: str | os.PathLike | RunDirectory | None = None,
+    keep_seconds: float | None = None,
+    table_format: str | None = None,
+    energy: bool | None = None,
+) -> SimulationResult:
     """Simulate the planar Scout II model.
 
     Parameters
@@ -243,27 +266,48 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         before, with ``outcome = "controller_error"`` (a streamed run's tables hold it
         too, marked partial).
     """
-    rec = _recording(recording, dict(
-        progress=progress, chunk_seconds=chunk_seconds, record_steps=record_steps,
-        check_memory=check_memory, stream_to=stream_to, keep_seconds=keep_seconds,
-        table_format=table_format, energy=energy))
-    progress, chunk_seconds, record_steps, check_memory = (rec.progress, rec.chunk_seconds,
-                                                           rec.record_steps, rec.check_memory)
-    stream_to, keep_seconds, table_format, energy = (rec.stream_to, rec.keep_seconds,
-                                                     rec.table_format, rec.energy)
+    rec = _recording(
+        recording,
+        dict(
+            progress=progress,
+            chunk_seconds=chunk_seconds,
+            record_steps=record_steps,
+            check_memory=check_memory,
+            stream_to=stream_to,
+            keep_seconds=keep_seconds,
+            table_format=table_format,
+            energy=energy,
+        ),
+    )
+    progress, chunk_seconds, record_steps, check_memory = (
+        rec.progress,
+        rec.chunk_seconds,
+        rec.record_steps,
+        rec.check_memory,
+    )
+    stream_to, keep_seconds, table_format, energy = (
+        rec.stream_to,
+        rec.keep_seconds,
+        rec.table_format,
+        rec.energy,
+    )
     robot = validate_robot(robot if robot is not None else RobotParameters())
     if environment is not None and friction_coefficient is not None:
-        raise ValueError("friction_coefficient and environment are not allowed together: "
-                         "give the floor's friction in environment=Environment(...)")
+        raise ValueError(
+            "friction_coefficient and environment are not allowed together: "
+            "give the floor's friction in environment=Environment(...)"
+        )
     if environment is None:
         environment = Environment(friction_coefficient=friction_coefficient)
     friction_coefficient = environment.friction_for(robot)
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"duration = {duration!r} s is not allowed: must be a finite number > 0")
-    plant = PlantOptions(friction_coefficient=friction_coefficient,
-                         pitch_limit_deg=pitch_limit_deg,
-                         passive_touchdown_angles=passive_touchdown_angles,
-                         passive_touchdown_world=passive_touchdown_world)
+    plant = PlantOptions(
+        friction_coefficient=friction_coefficient,
+        pitch_limit_deg=pitch_limit_deg,
+        passive_touchdown_angles=passive_touchdown_angles,
+        passive_touchdown_world=passive_touchdown_world,
+    )
     if stream_to is None and (keep_seconds is not None or table_format is not None):
         raise ValueError("keep_seconds and table_format are only allowed with stream_to")
     if check_memory and stream_to is None:
@@ -274,44 +318,63 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
     if plan.kind == "builtin":
         validate_parameters(robot, cparams)
     dt = plan.control_period
-    initial_state, startup = named_start(initial_state, startup, model, robot, cparams,
-                                         plan.controller)
+    initial_state, startup = named_start(
+        initial_state, startup, model, robot, cparams, plan.controller
+    )
     init = initial_state or default_initial_state(model, robot, passive_touchdown_angles)
     resume = isinstance(init, HybridState)
     if not isinstance(init, (HybridState, InitialState)):
-        raise TypeError("initial_state must be an InitialState, a HybridState, 'flight' "
-                        f"or 'standing', not {type(init).__name__}")
+        raise TypeError(
+            "initial_state must be an InitialState, a HybridState, 'flight' "
+            f"or 'standing', not {type(init).__name__}"
+        )
     setup = assemble(robot, model, init, plan, plant=plant, integrator=integrator)
     integ = setup.integrator
     chunk = max(1, int(round(chunk_seconds / dt)))
     stream = None
     if stream_to is not None:
         from .streaming import DEFAULT_KEEP_SECONDS, RunStream
-        stream = RunStream(stream_to, fmt=table_format, keep_seconds=(
-            DEFAULT_KEEP_SECONDS if keep_seconds is None else keep_seconds))
+
+        stream = RunStream(
+            stream_to,
+            fmt=table_format,
+            keep_seconds=(DEFAULT_KEEP_SECONDS if keep_seconds is None else keep_seconds),
+        )
         if check_memory:
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
         # fewer, larger pieces: each costs ~5 ms of table writing
         chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
-    eng = HybridEngine.assembled(setup, duration, record_steps=record_steps,
-                                 rows=None if stream is None else chunk + 2, energy=energy)
+    eng = HybridEngine.assembled(
+        setup,
+        duration,
+        record_steps=record_steps,
+        rows=None if stream is None else chunk + 2,
+        energy=energy,
+    )
     user_ctrl = plan.controller
     bridge = None
     if plan.kind == "python":
         bridge = PythonBridge(user_ctrl, plan.block, eng.cmd, eng.ls, dt)
     if user_ctrl is not None and callable(getattr(user_ctrl, "reset", None)):
         user_ctrl.reset(robot, eng.read_first_sensors())
-        if plan.kind == "compiled":    # a reset may set the controller's initial state
-            plan.block.state[:user_ctrl.initial_state.size] = user_ctrl.initial_state
+        if plan.kind == "compiled":  # a reset may set the controller's initial state
+            plan.block.state[: user_ctrl.initial_state.size] = user_ctrl.initial_state
     wall0 = time.perf_counter()
     bar = None
     if progress:
         from tqdm import tqdm
-        bar = tqdm(total=round(duration, 3), unit="s", unit_scale=False, desc=f"Model {model}",
-                   leave=False, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]")
+
+        bar = tqdm(
+            total=round(duration, 3),
+            unit="s",
+            unit_scale=False,
+            desc=f"Model {model}",
+            leave=False,
+            bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s [{elapsed}<{remaining}]",
+        )
     interrupted = False
-    started = None       # the start-up from standing: its StartupRecord
-    written = True       # a streamed run's tables took every piece so far
+    started = None  # the start-up from standing: its StartupRecord
+    written = True  # a streamed run's tables took every piece so far
     try:
         if startup is not None:
             assert cparams is not None, "a start-up hands over to the built-in controller"
@@ -325,7 +388,7 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
             if bridge is not None and bridge.interrupted:
                 raise KeyboardInterrupt
             if stream is not None and not stream.take(eng):
-                break       # the disk refused a piece (full): outcome "write_failed", below
+                break  # the disk refused a piece (full): outcome "write_failed", below
             if bar is not None:
                 bar.update(round((eng.k - k_prev) * dt, 6))
     except KeyboardInterrupt:
@@ -345,11 +408,19 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         "robot": _fields_dict(robot),
         "controller": (_fields_dict(cparams) if cparams is not None else None),
         "controller_kind": plan.label,
-        "initial_state": _fields_dict(init) | ({"kind": "standing"} if startup is not None else
-                                         {"kind": "hybrid_state"} if resume else {}),
+        "initial_state": _fields_dict(init)
+        | (
+            {"kind": "standing"}
+            if startup is not None
+            else {"kind": "hybrid_state"}
+            if resume
+            else {}
+        ),
         "integrator": _fields_dict(integ),
         "duration_s": duration,
-        "friction_coefficient": (None if math.isinf(friction_coefficient) else friction_coefficient),
+        "friction_coefficient": (
+            None if math.isinf(friction_coefficient) else friction_coefficient
+        ),
         "pitch_limit_deg": pitch_limit_deg,
         "passive_touchdown_angles_rad": list(passive_touchdown_angles),
         "passive_touchdown_world": passive_touchdown_world,
@@ -357,24 +428,28 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
     }
     if startup is not None:
         assert cparams is not None, "a start-up hands over to the built-in controller"
-        provenance["startup"] = (started.to_dict() if started is not None else
-                                 {"parameters": asdict(startup.resolved(cparams))})
+        provenance["startup"] = (
+            started.to_dict()
+            if started is not None
+            else {"parameters": asdict(startup.resolved(cparams))}
+        )
     if sensors is not None and not sensors.is_ideal():
         provenance["sensors"] = sensors.as_dict()
     error: ControllerError | None = None
-    failure: tuple | None = None    # (sample, returned, exception) of a controller's failure
+    failure: tuple | None = None  # (sample, returned, exception) of a controller's failure
     if eng.status == L.ST_CONTROLLER_ERROR and not interrupted:
         status = 0
         if bridge is not None and bridge.failure is not None:
             failure = bridge.failure
-        else:      # a compiled controller: its status, or the torques it wrote
+        else:  # a compiled controller: its status, or the torques it wrote
             failure = (eng.k, tuple(float(v) for v in eng.cmd), None)
             status = int(plan.block.ints[L.CB_STATUS])
         k_fail, returned, exc = failure
         message = failure_message(user_ctrl, k_fail, dt, returned, exc, status)
         provenance["controller_error"] = message
-        error = ControllerError(message, controller=user_ctrl, t=k_fail * dt, sample=k_fail,
-                                returned=returned)
+        error = ControllerError(
+            message, controller=user_ctrl, t=k_fail * dt, sample=k_fail, returned=returned
+        )
     if stream is None:
         result = eng.result(provenance, interrupted, {"wall_time_s": wall})
         if error is not None:
@@ -383,21 +458,27 @@ def simulate(robot: RobotParameters | None = None, controller: object | None = N
         return result
     try:
         if stream.write_error is None:
-            stream.take(eng)   # a Ctrl-C between the compiled call and take(): its rows
+            stream.take(eng)  # a Ctrl-C between the compiled call and take(): its rows
     except BaseException:
         stream.abort()
         raise
-    whole = eng.result(provenance, interrupted, {"wall_time_s": wall},
-                       last_sample_t=stream.last_sample_t)
+    whole = eng.result(
+        provenance, interrupted, {"wall_time_s": wall}, last_sample_t=stream.last_sample_t
+    )
     if stream.write_error is not None:
         whole.outcome = "write_failed"
-        warnings.warn(f"simulate: the streamed run's tables could not be written to "
-                      f"{stream.dir} ({stream.write_error}); the run stopped at t = "
-                      f"{whole.t_end:g} s: the result holds its last "
-                      f"{stream.keep_seconds:g} s, result.provenance['stream'] says what the "
-                      "tables kept", RuntimeWarning, stacklevel=2)
-    kept = stream.finish(whole, partial=interrupted or stream.write_error is not None
-                         or error is not None)
+        warnings.warn(
+            f"simulate: the streamed run's tables could not be written to "
+            f"{stream.dir} ({stream.write_error}); the run stopped at t = "
+            f"{whole.t_end:g} s: the result holds its last "
+            f"{stream.keep_seconds:g} s, result.provenance['stream'] says what the "
+            "tables kept",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    kept = stream.finish(
+        whole, partial=interrupted or stream.write_error is not None or error is not None
+    )
     if error is not None:
         error.result = kept
         raise error from (failure[2] if failure is not None else None)

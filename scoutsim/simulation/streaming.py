@@ -51,11 +51,18 @@ class RunStream:
     command : the command line recorded in the manifest.
     """
 
-    def __init__(self, directory, *, fmt: str | None = None,
-                 keep_seconds: float = DEFAULT_KEEP_SECONDS, command: str = ""):
+    def __init__(
+        self,
+        directory,
+        *,
+        fmt: str | None = None,
+        keep_seconds: float = DEFAULT_KEEP_SECONDS,
+        command: str = "",
+    ):
         if not (np.isfinite(keep_seconds) and keep_seconds >= 0):
-            raise ValueError(f"keep_seconds = {keep_seconds!r} s is not allowed: must be a "
-                             "finite number >= 0")
+            raise ValueError(
+                f"keep_seconds = {keep_seconds!r} s is not allowed: must be a finite number >= 0"
+            )
         self._own = not isinstance(directory, RunDirectory)
         self._opened = False
         self._rd: RunDirectory | None = None if self._own else directory
@@ -64,7 +71,7 @@ class RunStream:
         self.keep_seconds = float(keep_seconds)
         self.command = command
         self._writers: dict[str, TableWriter] = {}
-        self._kept: list[SimulationResult] = []     # chunks within the kept window
+        self._kept: list[SimulationResult] = []  # chunks within the kept window
         self.n_samples = 0
         #: time of the last sample computed [s] (None before the first)
         self.last_sample_t: float | None = None
@@ -78,8 +85,9 @@ class RunStream:
         """Enter the run directory (an earlier run's files there go) when the first rows
         arrive: a run refused before it starts leaves the directory as it was."""
         if self._own:
-            self._rd = RunDirectory(self.dir, command=self.command,
-                                    info={"kind": "run", "streamed": True})
+            self._rd = RunDirectory(
+                self.dir, command=self.command, info={"kind": "run", "streamed": True}
+            )
         self._run_dir.open()
         self._opened = True
 
@@ -100,12 +108,19 @@ class RunStream:
         if n == 0 and m == 0 and nst == 0:
             return True
         chunk = SimulationResult(
-            t=eng.out_t[:n].copy(), state=eng.out_s[:n].copy(), aux=eng.out_aux[:n].copy(),
-            modes=eng.out_ls[:n].copy(), events=eng.ev[:m, :L.NEVREC].copy(),
-            event_states=eng.ev[:m, L.NEVREC:].reshape(m, 2, L.NS).copy(),
+            t=eng.out_t[:n].copy(),
+            state=eng.out_s[:n].copy(),
+            aux=eng.out_aux[:n].copy(),
+            modes=eng.out_ls[:n].copy(),
+            events=eng.ev[:m, : L.NEVREC].copy(),
+            event_states=eng.ev[:m, L.NEVREC :].reshape(m, 2, L.NS).copy(),
             steps=eng.steps[:nst].copy() if eng.stepc[1] else None,
             energy_series=eng.out_energy[:n].copy() if eng.energy.size else None,
-            outcome="running", t_end=float(eng.t_now), stats={}, provenance={})
+            outcome="running",
+            t_end=float(eng.t_now),
+            stats={},
+            provenance={},
+        )
         # kept (and the buffers emptied) before writing: a piece the disk refuses is still
         # in the returned result
         eng.n_out = eng.nev = 0
@@ -121,8 +136,7 @@ class RunStream:
             cols, units = tables[name]
             w = self._writers.get(name)
             if w is None:
-                w = self._writers[name] = TableWriter(self.dir / name, units=units,
-                                                      fmt=self.fmt)
+                w = self._writers[name] = TableWriter(self.dir / name, units=units, fmt=self.fmt)
             try:
                 w.append(cols)
             except OSError as exc:
@@ -139,8 +153,9 @@ class RunStream:
             return
         start = t_last - self.keep_seconds
         # drop whole chunks that end before the window (the first kept one is cut later)
-        while len(self._kept) > 1 and (len(self._kept[0].t) == 0 or
-                                       self._kept[1].t.size and self._kept[1].t[0] <= start):
+        while len(self._kept) > 1 and (
+            len(self._kept[0].t) == 0 or self._kept[1].t.size and self._kept[1].t[0] <= start
+        ):
             self._kept.pop(0)
 
     # -- at the end ---------------------------------------------------------------------
@@ -148,17 +163,21 @@ class RunStream:
         """Close the tables with the whole run's metadata (``whole``: outcome, end time,
         statistics, provenance, no rows), complete the manifest, and return the kept end of
         the run as a result."""
-        whole.provenance["stream"] = {"directory": str(self.dir), "n_samples": self.n_samples,
-                                      "keep_seconds": self.keep_seconds}
-        if not self._opened:      # stopped before its first rows: a directory that says so
+        whole.provenance["stream"] = {
+            "directory": str(self.dir),
+            "n_samples": self.n_samples,
+            "keep_seconds": self.keep_seconds,
+        }
+        if not self._opened:  # stopped before its first rows: a directory that says so
             self._open()
         if self.write_error is not None:
             self._salvage(whole)
             return self._kept_result(whole)
         try:
             for name, w in self._writers.items():
-                meta = whole.series_metadata() if name == "timeseries" else \
-                    {"format": TABLES_FORMAT}
+                meta = (
+                    whole.series_metadata() if name == "timeseries" else {"format": TABLES_FORMAT}
+                )
                 w.close(metadata=meta)
                 self._run_dir.add(w.path.name)
         except BaseException:
@@ -182,18 +201,18 @@ class RunStream:
         for name, w in self._writers.items():
             meta = whole.series_metadata() if name == "timeseries" else {"format": TABLES_FORMAT}
             if name == "timeseries":
-                meta["t_end"] = self.written_until_s    # where its samples end
+                meta["t_end"] = self.written_until_s  # where its samples end
             try:
                 w.close(metadata=meta)
             except Exception:  # noqa: BLE001 - the disk's or pyarrow's error: close() removed
-                continue       # the table's files, the others may still be kept
+                continue  # the table's files, the others may still be kept
             self._run_dir.add(w.path.name)
             info["tables_kept"].append(w.path.name)
         if self._own:
             try:
                 self._run_dir.finish(outcome=whole.outcome, partial=True)
             except OSError:
-                pass                                    # the manifest keeps saying "writing"
+                pass  # the manifest keeps saying "writing"
 
     def abort(self) -> None:
         """Give the tables up (their temporary files are removed; the manifest keeps
@@ -206,19 +225,28 @@ class RunStream:
         window on), with the whole run's outcome, end, statistics and provenance."""
         info = whole.provenance["stream"]
         ch = self._kept
-        if not any(len(c.t) for c in ch):   # nothing computed (stopped before a sample)
+        if not any(len(c.t) for c in ch):  # nothing computed (stopped before a sample)
             info["kept_from_s"] = None
             return whole
         joined = SimulationResult(
-            t=np.concatenate([c.t for c in ch]), state=np.concatenate([c.state for c in ch]),
-            aux=np.concatenate([c.aux for c in ch]), modes=np.concatenate([c.modes for c in ch]),
+            t=np.concatenate([c.t for c in ch]),
+            state=np.concatenate([c.state for c in ch]),
+            aux=np.concatenate([c.aux for c in ch]),
+            modes=np.concatenate([c.modes for c in ch]),
             events=np.concatenate([c.events for c in ch]),
             event_states=np.concatenate([c.event_states for c in ch]),
             steps=None if ch[0].steps is None else np.concatenate([c.steps for c in ch]),
-            energy_series=(None if ch[0].energy_series is None else
-                           np.concatenate([c.energy_series for c in ch])),
-            outcome=whole.outcome, t_end=whole.t_end, stats=whole.stats,
-            provenance=whole.provenance, energy_flows=whole.energy_flows)
+            energy_series=(
+                None
+                if ch[0].energy_series is None
+                else np.concatenate([c.energy_series for c in ch])
+            ),
+            outcome=whole.outcome,
+            t_end=whole.t_end,
+            stats=whole.stats,
+            provenance=whole.provenance,
+            energy_flows=whole.energy_flows,
+        )
         t0 = float(joined.t[np.searchsorted(joined.t, joined.t[-1] - self.keep_seconds)])
         info["kept_from_s"] = t0
         return joined.window(t0, np.inf)

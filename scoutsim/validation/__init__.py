@@ -19,5 +19,15 @@ from .log_strides import log_strides
 from .log_writing import save_log
 from .measurement import LaserGeometry, SensorNoise, fft_lowpass, to_log
 
-__all__ = ["ExperimentLog", "LogError", "load_log", "load_dataset", "save_log",
-           "LaserGeometry", "SensorNoise", "fft_lowpass", "to_log", "log_strides"]
+__all__ = [
+    "ExperimentLog",
+    "LogError",
+    "load_log",
+    "load_dataset",
+    "save_log",
+    "LaserGeometry",
+    "SensorNoise",
+    "fft_lowpass",
+    "to_log",
+    "log_strides",
+]

@@ -54,15 +54,38 @@ from ..parameters import DEFAULT_FRICTION_COEFFICIENT
 from .log_strides import LogGait, experiment_strides, log_strides
 from .torso_sensors import EDGE_S
 
-__all__ = ["ERROR_METRICS", "METRIC_LABELS", "ErrorRow", "ErrorTable", "ModelRun",
-           "percent_errors", "rank_paired_model_values", "assess_errors", "simulate_model", "compare", "CSV_COLUMNS"]
+__all__ = [
+    "ERROR_METRICS",
+    "METRIC_LABELS",
+    "ErrorRow",
+    "ErrorTable",
+    "ModelRun",
+    "percent_errors",
+    "rank_paired_model_values",
+    "assess_errors",
+    "simulate_model",
+    "compare",
+    "CSV_COLUMNS",
+]
 
-ERROR_METRICS = ("stride_frequency_hz", "duty_factor_back", "duty_factor_front",
-                 "pitch_max_deg", "pitch_min_deg", "height_max_m", "height_min_m")
-METRIC_LABELS = {"stride_frequency_hz": "stride frequency", "duty_factor_back":
-                 "duty factor back", "duty_factor_front": "duty factor front",
-                 "pitch_max_deg": "pitch max", "pitch_min_deg": "pitch min",
-                 "height_max_m": "height max", "height_min_m": "height min"}
+ERROR_METRICS = (
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "pitch_min_deg",
+    "height_max_m",
+    "height_min_m",
+)
+METRIC_LABELS = {
+    "stride_frequency_hz": "stride frequency",
+    "duty_factor_back": "duty factor back",
+    "duty_factor_front": "duty factor front",
+    "pitch_max_deg": "pitch max",
+    "pitch_min_deg": "pitch min",
+    "height_max_m": "height max",
+    "height_min_m": "height min",
+}
 #: Columns of errors.csv, in order.
 CSV_COLUMNS = ("model", "metric", "mean_percent_error", "max_percent_error", "n_strides")
 #: Minimum simulated time for a model [s] (the transient lasts 3-5 s).
@@ -151,8 +174,15 @@ class ErrorTable:
             w = csv.writer(fh)
             w.writerow(CSV_COLUMNS)
             for r in self.rows:
-                w.writerow([r.model, r.metric, _cell(r.mean_percent_error),
-                            _cell(r.max_percent_error), r.n_strides])
+                w.writerow(
+                    [
+                        r.model,
+                        r.metric,
+                        _cell(r.mean_percent_error),
+                        _cell(r.max_percent_error),
+                        r.n_strides,
+                    ]
+                )
         return path
 
     def to_detail_csv(self, path) -> Path:
@@ -163,44 +193,73 @@ class ErrorTable:
             w = csv.writer(fh)
             w.writerow(names)
             for r in self.rows:
-                w.writerow([_cell(getattr(r, n)) if isinstance(getattr(r, n), float)
-                            else getattr(r, n) for n in names])
+                w.writerow(
+                    [
+                        _cell(getattr(r, n)) if isinstance(getattr(r, n), float) else getattr(r, n)
+                        for n in names
+                    ]
+                )
         return path
 
     def _lines(self, sep: str, md: bool) -> list[str]:
-        head = ["model", "metric", "mean % err", "max % err", "err of means %", "experiment",
-                "model value", "n strides"]
+        head = [
+            "model",
+            "metric",
+            "mean % err",
+            "max % err",
+            "err of means %",
+            "experiment",
+            "model value",
+            "n strides",
+        ]
         body = []
         for r in self.rows:
-            body.append([r.model, METRIC_LABELS.get(r.metric, r.metric),
-                         _fmt(r.mean_percent_error), _fmt(r.max_percent_error),
-                         _fmt(r.percent_error_of_means), _fmt_val(r.experiment_mean, r.metric),
-                         _fmt_val(r.model_mean, r.metric), str(r.n_strides)])
+            body.append(
+                [
+                    r.model,
+                    METRIC_LABELS.get(r.metric, r.metric),
+                    _fmt(r.mean_percent_error),
+                    _fmt(r.max_percent_error),
+                    _fmt(r.percent_error_of_means),
+                    _fmt_val(r.experiment_mean, r.metric),
+                    _fmt_val(r.model_mean, r.metric),
+                    str(r.n_strides),
+                ]
+            )
         if md:
             out = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
             out += ["| " + " | ".join(b) + " |" for b in body]
             return out
-        w = [max(len(h), *(len(b[i]) for b in body)) if body else len(h)
-             for i, h in enumerate(head)]
+        w = [
+            max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)
+        ]
         out = [sep.join(h.ljust(w[i]) if i < 2 else h.rjust(w[i]) for i, h in enumerate(head))]
         out.append(sep.join("-" * x for x in w))
-        out += [sep.join(c.ljust(w[i]) if i < 2 else c.rjust(w[i]) for i, c in enumerate(b))
-                for b in body]
+        out += [
+            sep.join(c.ljust(w[i]) if i < 2 else c.rjust(w[i]) for i, c in enumerate(b))
+            for b in body
+        ]
         return out
 
     def _header(self) -> list[str]:
-        lines = [f"Simulation vs experiment (Fig. 12): {self.n_experiment_strides} steady "
-                 f"experimental strides from {self.n_runs} run(s); each compared with the "
-                 "model's mean steady stride."]
+        lines = [
+            f"Simulation vs experiment (Fig. 12): {self.n_experiment_strides} steady "
+            f"experimental strides from {self.n_runs} run(s); each compared with the "
+            "model's mean steady stride."
+        ]
         if self.synthetic:
-            lines.append("NOTE: the experiment data are SYNTHETIC (generated by scoutsim), "
-                         "not robot measurements.")
+            lines.append(
+                "NOTE: the experiment data are SYNTHETIC (generated by scoutsim), "
+                "not robot measurements."
+            )
         for m, run in self.models.items():
             if run.status != "ok":
                 lines.append(f"model {m}: {run.status}")
             else:
-                lines.append(f"model {m}: {run.gait.n_steady_strides} steady strides "
-                             f"(simulated {run.t_end:g} s)")
+                lines.append(
+                    f"model {m}: {run.gait.n_steady_strides} steady strides "
+                    f"(simulated {run.t_end:g} s)"
+                )
         lines += list(self.notes)
         return lines
 
@@ -228,8 +287,9 @@ def _fmt_val(v, metric) -> str:
     return f"{v:.4f}" if metric.endswith("_m") else f"{v:.3f}"
 
 
-def assess_errors(experiment_strides: list, model_runs: dict, n_runs: int = 1,
-                  synthetic: bool = False) -> ErrorTable:
+def assess_errors(
+    experiment_strides: list, model_runs: dict, n_runs: int = 1, synthetic: bool = False
+) -> ErrorTable:
     """Error table from pooled experimental steady strides and each model's
     :class:`ModelRun` (see the module docstring for the pairing)."""
     rows = []
@@ -242,41 +302,78 @@ def assess_errors(experiment_strides: list, model_runs: dict, n_runs: int = 1,
             x = np.array([s[metric] for s in experiment_strides], dtype=float)
             xm = float(np.mean(x)) if n else math.nan
             if not ok or n == 0:
-                rows.append(ErrorRow(model, metric, math.nan, math.nan, 0,
-                                     experiment_mean=xm, status=run.status if not ok else
-                                     "no experimental strides"))
+                rows.append(
+                    ErrorRow(
+                        model,
+                        metric,
+                        math.nan,
+                        math.nan,
+                        0,
+                        experiment_mean=xm,
+                        status=run.status if not ok else "no experimental strides",
+                    )
+                )
                 continue
             m = float(run.gait.means[metric])
-            model_strides = np.array([s[metric] for s in run.gait.steady_strides],
-                                     dtype=float)
+            model_strides = np.array([s[metric] for s in run.gait.steady_strides], dtype=float)
             model_strides = model_strides[np.isfinite(model_strides)]
-            paired = (rank_paired_model_values(model_strides, x) if model_strides.size
-                      else np.full(n, m))
+            paired = (
+                rank_paired_model_values(model_strides, x) if model_strides.size else np.full(n, m)
+            )
             e = percent_errors(paired, x)
             good = np.isfinite(e)
-            rows.append(ErrorRow(
-                model, metric,
-                float(np.mean(e[good])) if good.any() else math.nan,
-                float(np.max(e[good])) if good.any() else math.nan,
-                int(np.count_nonzero(good)),
-                percent_error_of_means=float(percent_errors(m, [xm])[0]),
-                experiment_mean=xm, model_mean=m))
-    return ErrorTable(rows=rows, n_runs=n_runs, n_experiment_strides=n, models=model_runs,
-                      synthetic=synthetic)
+            rows.append(
+                ErrorRow(
+                    model,
+                    metric,
+                    float(np.mean(e[good])) if good.any() else math.nan,
+                    float(np.max(e[good])) if good.any() else math.nan,
+                    int(np.count_nonzero(good)),
+                    percent_error_of_means=float(percent_errors(m, [xm])[0]),
+                    experiment_mean=xm,
+                    model_mean=m,
+                )
+            )
+    return ErrorTable(
+        rows=rows, n_runs=n_runs, n_experiment_strides=n, models=model_runs, synthetic=synthetic
+    )
 
 
-def simulate_model(model: str, duration: float, robot=None, controller=None,
-                   friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT, initial_state=None, integrator=None,
-                   like=None, transient_s: float = 2.0, progress: bool = False) -> ModelRun:
+def simulate_model(
+    model: str,
+    duration: float,
+    robot=None,
+    controller=None,
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+    initial_state=None,
+    integrator=None,
+    like=None,
+    transient_s: float = 2.0,
+    progress: bool = False,
+) -> ModelRun:
     """Simulate one model and measure it like the log ``like`` (noise-free)."""
     from ..simulation.simulator import simulate
     from .measurement import to_log_like
-    res = simulate(robot, controller, initial_state, duration, model=model,
-                   integrator=integrator, friction_coefficient=friction_coefficient,
-                   progress=progress)
+
+    res = simulate(
+        robot,
+        controller,
+        initial_state,
+        duration,
+        model=model,
+        integrator=integrator,
+        friction_coefficient=friction_coefficient,
+        progress=progress,
+    )
     if res.outcome == "numerical_failure":
-        return ModelRun(model, res.outcome, float(res.t_end), None,
-                        status=f"numerical failure at t = {res.t_end:.3f} s", result=res)
+        return ModelRun(
+            model,
+            res.outcome,
+            float(res.t_end),
+            None,
+            status=f"numerical failure at t = {res.t_end:.3f} s",
+            result=res,
+        )
     log = to_log_like(res, like)
     gait = log_strides(log, transient_s=transient_s) if len(log.t) > 2 else None
     run = ModelRun(model, res.outcome, float(res.t_end), gait, result=res)
@@ -286,10 +383,18 @@ def simulate_model(model: str, duration: float, robot=None, controller=None,
     return run
 
 
-def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
-            duration: float | None = None, friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-            transient_s: float = 2.0, initial_state=None, integrator=None,
-            progress: bool = False) -> ErrorTable:
+def compare(
+    logs,
+    models=("ideal", "I", "II"),
+    robot=None,
+    controller=None,
+    duration: float | None = None,
+    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
+    transient_s: float = 2.0,
+    initial_state=None,
+    integrator=None,
+    progress: bool = False,
+) -> ErrorTable:
     """Fig. 12 error table of ``models`` against the experiment ``logs`` (module docstring).
 
     Parameters
@@ -309,6 +414,7 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
     """
     from .experiment_log import ExperimentLog
     from .log_format import LogError
+
     if isinstance(logs, ExperimentLog):
         logs = [logs]
     logs = list(logs)
@@ -322,13 +428,16 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
         if g.n_steady_strides == 0:
             notes.append(f"log {lg.name}: no steady strides ({g.n_strides} strides in all)")
         elif g.n_steady_strides < 7:
-            notes.append(f"log {lg.name}: only {g.n_steady_strides} steady strides (the paper "
-                         "used >= 7 per run)")
+            notes.append(
+                f"log {lg.name}: only {g.n_steady_strides} steady strides (the paper "
+                "used >= 7 per run)"
+            )
         exp.extend(g.steady_strides)
         n_strides.append(g.n_strides)
     if not exp:
-        counts = "; ".join(f"{lg.path or lg.name}: {n} strides, none steady"
-                           for lg, n in zip(logs, n_strides))
+        counts = "; ".join(
+            f"{lg.path or lg.name}: {n} strides, none steady" for lg, n in zip(logs, n_strides)
+        )
         raise LogError(
             f"no steady strides in {'the log' if len(logs) == 1 else 'any log'} ({counts}): "
             "a steady stride starts at least "
@@ -337,14 +446,25 @@ def compare(logs, models=("ideal", "I", "II"), robot=None, controller=None,
             "to the final run of strides whose periods agree within 5 % of the median of "
             "the last seven (the gait has settled); without one there is nothing to compare: "
             "give longer or steadier logs",
-            logs[0].path if len(logs) == 1 else None)
+            logs[0].path if len(logs) == 1 else None,
+        )
     if duration is None:
         duration = max([MIN_MODEL_DURATION_S] + [lg.duration for lg in logs])
-    runs = {m: simulate_model(m, duration, robot, controller, friction_coefficient,
-                              initial_state, integrator, like=logs[0], transient_s=transient_s,
-                              progress=progress)
-            for m in models}
-    table = assess_errors(exp, runs, n_runs=len(logs),
-                          synthetic=any(lg.synthetic for lg in logs))
+    runs = {
+        m: simulate_model(
+            m,
+            duration,
+            robot,
+            controller,
+            friction_coefficient,
+            initial_state,
+            integrator,
+            like=logs[0],
+            transient_s=transient_s,
+            progress=progress,
+        )
+        for m in models
+    }
+    table = assess_errors(exp, runs, n_runs=len(logs), synthetic=any(lg.synthetic for lg in logs))
     table.notes = notes + table.notes
     return table

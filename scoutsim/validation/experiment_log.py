@@ -26,6 +26,7 @@ LEGS = LEG_NAMES
 
 def _default_torque_per_amp() -> float:
     from ..parameters import RobotParameters
+
     return RobotParameters().torque_per_amp
 
 
@@ -108,10 +109,13 @@ class ExperimentLog:
                 return x if not fc else fft_lowpass(x, fs, float(fc), tw)
 
             if self.has("laser_front_m") and self.has("laser_back_m"):
-                geo = LaserGeometry(float(self.meta["laser_half_spacing_m"]),
-                                    float(self.meta["laser_mount_offset_m"]))
-                th, y = pitch_height_from_lasers(filt(self.columns["laser_front_m"]),
-                                                 filt(self.columns["laser_back_m"]), geo)
+                geo = LaserGeometry(
+                    float(self.meta["laser_half_spacing_m"]),
+                    float(self.meta["laser_mount_offset_m"]),
+                )
+                th, y = pitch_height_from_lasers(
+                    filt(self.columns["laser_front_m"]), filt(self.columns["laser_back_m"]), geo
+                )
             else:
                 th, y = filt(self.columns["pitch_rad"]), filt(self.columns["height_m"])
             self._cache["torso"] = (th, y)
@@ -192,5 +196,7 @@ class ExperimentLog:
         return save_log(self, path)
 
     def __repr__(self):
-        return (f"ExperimentLog({self.name!r}, {len(self.t)} samples, "
-                f"{self.duration:.3f} s, synthetic={self.synthetic})")
+        return (
+            f"ExperimentLog({self.name!r}, {len(self.t)} samples, "
+            f"{self.duration:.3f} s, synthetic={self.synthetic})"
+        )

@@ -44,8 +44,13 @@ _PLAUSIBLE = {
     "torque_back_nm": (500.0, "N mm (expected N m)"),
     "torque_front_nm": (500.0, "N mm (expected N m)"),
 }
-_NONNEGATIVE = ("laser_front_m", "laser_back_m", "height_m", "leg_length_back_m",
-                "leg_length_front_m")
+_NONNEGATIVE = (
+    "laser_front_m",
+    "laser_back_m",
+    "height_m",
+    "leg_length_back_m",
+    "leg_length_front_m",
+)
 
 #: Relative deviation of a time step from the median step that counts as non-uniform.
 UNIFORM_TOLERANCE = 0.01
@@ -62,6 +67,7 @@ def _check_columns(path, names):
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
     if missing:
         import difflib
+
         hints = []
         unknown = [n for n in names if n not in COLUMN_UNITS]
         for c in missing:
@@ -70,9 +76,12 @@ def _check_columns(path, names):
                 hints.append(f"'{c}' (found '{close[0]}': wrong name or unit?)")
             else:
                 hints.append(f"'{c}'")
-        raise LogError(f"{path}: missing column(s) {', '.join(hints)}; a log needs "
-                       f"{', '.join(REQUIRED_COLUMNS)} (see scoutsim.validation.logs)",
-                       path, missing[0])
+        raise LogError(
+            f"{path}: missing column(s) {', '.join(hints)}; a log needs "
+            f"{', '.join(REQUIRED_COLUMNS)} (see scoutsim.validation.logs)",
+            path,
+            missing[0],
+        )
     for options in ALTERNATIVE_COLUMNS.values():
         if not any(all(c in seen for c in opt) for opt in options):
             present = [c for opt in options for c in opt if c in seen]
@@ -81,9 +90,12 @@ def _check_columns(path, names):
             if present:
                 opt = next(o for o in options if any(c in o for c in present))
                 first_missing = next(c for c in opt if c not in seen)
-            raise LogError(f"{path}: missing column '{first_missing}': a log needs {want}"
-                           + (f" (found only {', '.join(present)})" if present else ""),
-                           path, first_missing)
+            raise LogError(
+                f"{path}: missing column '{first_missing}': a log needs {want}"
+                + (f" (found only {', '.join(present)})" if present else ""),
+                path,
+                first_missing,
+            )
 
 
 def _validate(path, cols: dict, header_line: int | None, repairs: list | None = None):
@@ -101,49 +113,85 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
             k1 = k0
             while k1 + 1 < n and bad[k1 + 1]:
                 k1 += 1
-            what = "NaN/empty/infinite value" if k1 == k0 else \
-                f"gap of {k1 - k0 + 1} NaN/empty/infinite values through data row {k1 + 1}"
-            raise LogError(f"{path}: column '{c}', {_row_text(k0 + 1, header_line)}: {what} "
-                           f"({int(bad.sum())} in the column); fill or cut the gap",
-                           path, c, k0 + 1)
+            what = (
+                "NaN/empty/infinite value"
+                if k1 == k0
+                else f"gap of {k1 - k0 + 1} NaN/empty/infinite values through data row {k1 + 1}"
+            )
+            raise LogError(
+                f"{path}: column '{c}', {_row_text(k0 + 1, header_line)}: {what} "
+                f"({int(bad.sum())} in the column); fill or cut the gap",
+                path,
+                c,
+                k0 + 1,
+            )
     t = cols["t"]
     dt = np.diff(t)
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0)) + 1
-        raise LogError(f"{path}: column 't', {_row_text(k + 1, header_line)}: time does not "
-                       f"increase (t = {t[k]:.9g} s after {t[k - 1]:.9g} s)", path, "t", k + 1)
+        raise LogError(
+            f"{path}: column 't', {_row_text(k + 1, header_line)}: time does not "
+            f"increase (t = {t[k]:.9g} s after {t[k - 1]:.9g} s)",
+            path,
+            "t",
+            k + 1,
+        )
     h = float(np.median(dt))
     dev = np.abs(dt - h) > UNIFORM_TOLERANCE * h
     if dev.any():
         k = int(np.argmax(dev)) + 1
-        raise LogError(f"{path}: column 't', {_row_text(k + 1, header_line)}: non-uniform "
-                       f"sampling (step {dt[k - 1]:.6g} s, median {h:.6g} s); the FFT low-pass "
-                       "needs uniform samples: resample the log", path, "t", k + 1)
+        raise LogError(
+            f"{path}: column 't', {_row_text(k + 1, header_line)}: non-uniform "
+            f"sampling (step {dt[k - 1]:.6g} s, median {h:.6g} s); the FFT low-pass "
+            "needs uniform samples: resample the log",
+            path,
+            "t",
+            k + 1,
+        )
     if h > 0.5:
-        raise LogError(f"{path}: column 't': median step {h:g} s is implausible for a "
-                       "control-rate log (milliseconds instead of seconds?)", path, "t")
+        raise LogError(
+            f"{path}: column 't': median step {h:g} s is implausible for a "
+            "control-rate log (milliseconds instead of seconds?)",
+            path,
+            "t",
+        )
     for c in used:
         v = cols[c]
         if c.startswith("leg_state_"):
             bad = ~np.isin(v, [float(state) for state in LegState])
             if bad.any():
                 k = int(np.argmax(bad))
-                raise LogError(f"{path}: column '{c}', {_row_text(k + 1, header_line)}: value "
-                               f"{v[k]:g} is not a leg state (0 flight, 1 stance-retraction, "
-                               "2 stance-brake)", path, c, k + 1)
+                raise LogError(
+                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: value "
+                    f"{v[k]:g} is not a leg state (0 flight, 1 stance-retraction, "
+                    "2 stance-brake)",
+                    path,
+                    c,
+                    k + 1,
+                )
             continue
         if c in _PLAUSIBLE:
             lim, suggestion = _PLAUSIBLE[c]
             big = np.abs(v) > lim
             if big.any():
                 k = int(np.argmax(big))
-                raise LogError(f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
-                               f"|value| {abs(v[k]):.6g} exceeds {lim:.4g} "
-                               f"{COLUMN_UNITS[c]}; this suggests {suggestion}", path, c, k + 1)
+                raise LogError(
+                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
+                    f"|value| {abs(v[k]):.6g} exceeds {lim:.4g} "
+                    f"{COLUMN_UNITS[c]}; this suggests {suggestion}",
+                    path,
+                    c,
+                    k + 1,
+                )
         if c in _NONNEGATIVE:
             neg = v < 0
             if neg.any():
                 k = int(np.argmax(neg))
-                raise LogError(f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
-                               f"negative length {v[k]:.6g} m", path, c, k + 1)
+                raise LogError(
+                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
+                    f"negative length {v[k]:.6g} m",
+                    path,
+                    c,
+                    k + 1,
+                )
     _check_spikes(path, cols, header_line, repairs)

@@ -64,12 +64,26 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["REQUIRED_COLUMNS", "ALTERNATIVE_COLUMNS", "OPTIONAL_COLUMNS", "COLUMN_UNITS",
-           "DEFAULT_META", "LOG_SUFFIXES", "LogError"]
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "ALTERNATIVE_COLUMNS",
+    "OPTIONAL_COLUMNS",
+    "COLUMN_UNITS",
+    "DEFAULT_META",
+    "LOG_SUFFIXES",
+    "LogError",
+]
 
 #: Columns every log must have.
-REQUIRED_COLUMNS = ("t", "phi_back_rad", "phi_front_rad", "dphi_back_rad_s",
-                    "dphi_front_rad_s", "leg_state_back", "leg_state_front")
+REQUIRED_COLUMNS = (
+    "t",
+    "phi_back_rad",
+    "phi_front_rad",
+    "dphi_back_rad_s",
+    "dphi_front_rad_s",
+    "leg_state_back",
+    "leg_state_front",
+)
 #: Alternatives of which a log must contain one complete set (first is preferred).
 ALTERNATIVE_COLUMNS = {
     "torso": (("laser_front_m", "laser_back_m"), ("pitch_rad", "height_m")),
@@ -79,17 +93,34 @@ OPTIONAL_COLUMNS = ("leg_length_back_m", "leg_length_front_m")
 
 #: Unit of every known column.
 COLUMN_UNITS = {
-    "t": "s", "laser_front_m": "m", "laser_back_m": "m", "pitch_rad": "rad", "height_m": "m",
-    "phi_back_rad": "rad", "phi_front_rad": "rad", "dphi_back_rad_s": "rad/s",
-    "dphi_front_rad_s": "rad/s", "current_back_a": "A", "current_front_a": "A",
-    "torque_back_nm": "N m", "torque_front_nm": "N m", "leg_state_back": "-",
-    "leg_state_front": "-", "leg_length_back_m": "m", "leg_length_front_m": "m",
+    "t": "s",
+    "laser_front_m": "m",
+    "laser_back_m": "m",
+    "pitch_rad": "rad",
+    "height_m": "m",
+    "phi_back_rad": "rad",
+    "phi_front_rad": "rad",
+    "dphi_back_rad_s": "rad/s",
+    "dphi_front_rad_s": "rad/s",
+    "current_back_a": "A",
+    "current_front_a": "A",
+    "torque_back_nm": "N m",
+    "torque_front_nm": "N m",
+    "leg_state_back": "-",
+    "leg_state_front": "-",
+    "leg_length_back_m": "m",
+    "leg_length_front_m": "m",
 }
 
 #: Metadata defaults (see the module docstring).
 DEFAULT_META = {
-    "source": "", "synthetic": False, "notes": "", "laser_half_spacing_m": 0.35,
-    "laser_mount_offset_m": 0.0, "lowpass_hz": 15.0, "lowpass_transition_hz": 5.0,
+    "source": "",
+    "synthetic": False,
+    "notes": "",
+    "laser_half_spacing_m": 0.35,
+    "laser_mount_offset_m": 0.0,
+    "lowpass_hz": 15.0,
+    "lowpass_transition_hz": 5.0,
     "torque_per_amp_nm_a": None,
 }
 
@@ -103,8 +134,7 @@ class LogError(ValueError):
     Attributes ``path``, ``column`` (or None) and ``row`` (1-based data row, or None).
     """
 
-    def __init__(self, message: str, path=None, column: str | None = None,
-                 row: int | None = None):
+    def __init__(self, message: str, path=None, column: str | None = None, row: int | None = None):
         super().__init__(message)
         self.path = None if path is None else str(path)
         self.column = column

@@ -50,7 +50,8 @@ def _read_csv(path: Path):
     header_line = i + 1
     names = [n.strip() for n in lines[i].split(",")]
     import csv as _csv
-    rows = list(_csv.reader(io.StringIO("\n".join(lines[i + 1:]))))
+
+    rows = list(_csv.reader(io.StringIO("\n".join(lines[i + 1 :]))))
     return names, rows, meta, header_line
 
 
@@ -58,9 +59,12 @@ def _read_parquet(path: Path):
     try:
         import pyarrow.parquet as pq
     except ImportError:
-        raise LogError(f"{path}: reading Parquet logs needs the optional dependency pyarrow; "
-                       "install it with `pip install pyarrow` (or `pip install "
-                       "scoutsim[parquet]`), or convert the log to CSV", path) from None
+        raise LogError(
+            f"{path}: reading Parquet logs needs the optional dependency pyarrow; "
+            "install it with `pip install pyarrow` (or `pip install "
+            "scoutsim[parquet]`), or convert the log to CSV",
+            path,
+        ) from None
     try:
         table = pq.read_table(path)
     except Exception as exc:  # pyarrow raises several types
@@ -104,11 +108,18 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
                 cols[n] = np.array([np.nan if v is None else v for v in raw[n]], dtype=float)
             except (TypeError, ValueError):
                 vals = raw[n]
-                k = next(i for i, v in enumerate(vals)
-                         if v is not None and not isinstance(v, (int, float)))
+                k = next(
+                    i
+                    for i, v in enumerate(vals)
+                    if v is not None and not isinstance(v, (int, float))
+                )
                 if n in COLUMN_UNITS:
-                    raise LogError(f"{path}: column '{n}', row {k + 1}: {vals[k]!r} is not a "
-                                   "number", path, n, k + 1) from None
+                    raise LogError(
+                        f"{path}: column '{n}', row {k + 1}: {vals[k]!r} is not a number",
+                        path,
+                        n,
+                        k + 1,
+                    ) from None
         header_line = None
     elif suffix in (".csv", ".csv.gz"):
         names, rows, meta, header_line = _read_csv(path)
@@ -118,10 +129,16 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
         for i, r in enumerate(rows):
             if len(r) != ncol:
                 if len(r) == 0 or (len(r) == 1 and not r[0].strip()):
-                    raise LogError(f"{path}: {_row_text(i + 1, header_line)} is empty",
-                                   path, None, i + 1)
-                raise LogError(f"{path}: {_row_text(i + 1, header_line)} has {len(r)} "
-                               f"fields, the header has {ncol}", path, None, i + 1)
+                    raise LogError(
+                        f"{path}: {_row_text(i + 1, header_line)} is empty", path, None, i + 1
+                    )
+                raise LogError(
+                    f"{path}: {_row_text(i + 1, header_line)} has {len(r)} "
+                    f"fields, the header has {ncol}",
+                    path,
+                    None,
+                    i + 1,
+                )
             for j, cell in enumerate(r):
                 cell = cell.strip()
                 if cell == "" or cell.lower() in ("nan", "na"):
@@ -130,13 +147,20 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
                     data[i, j] = float(cell)
                 except ValueError:
                     if names[j] in COLUMN_UNITS:
-                        raise LogError(f"{path}: column '{names[j]}', "
-                                       f"{_row_text(i + 1, header_line)}: {cell!r} is not a "
-                                       "number", path, names[j], i + 1) from None
+                        raise LogError(
+                            f"{path}: column '{names[j]}', "
+                            f"{_row_text(i + 1, header_line)}: {cell!r} is not a "
+                            "number",
+                            path,
+                            names[j],
+                            i + 1,
+                        ) from None
         cols = {n: data[:, j] for j, n in enumerate(names)}
     else:
-        raise LogError(f"{path}: unknown log format '{suffix or path.name}'; use "
-                       f"{', '.join(LOG_SUFFIXES)}", path)
+        raise LogError(
+            f"{path}: unknown log format '{suffix or path.name}'; use {', '.join(LOG_SUFFIXES)}",
+            path,
+        )
     repairs: list | None = [] if repair_spikes else None
     _validate(path, cols, header_line, repairs)
     return ExperimentLog(columns=cols, meta=meta, path=str(path), repairs=tuple(repairs or ()))
@@ -151,8 +175,7 @@ def _expand(paths) -> list[Path]:
         if p.is_dir():
             found = sorted(f for f in p.iterdir() if f.is_file() and _suffix(f) in LOG_SUFFIXES)
             if not found:
-                raise LogError(f"{p}: directory holds no log files ({', '.join(LOG_SUFFIXES)})",
-                               p)
+                raise LogError(f"{p}: directory holds no log files ({', '.join(LOG_SUFFIXES)})", p)
             out.extend(found)
         else:
             out.append(p)
@@ -173,8 +196,12 @@ def load_dataset(paths, *, repair_spikes: bool = False) -> list[ExperimentLog]:
         if len(problems) == 1:
             raise problems[0]
         first = problems[0]
-        raise LogError(f"{len(problems)} bad log file(s):\n" +
-                       "\n".join(f"  {e}" for e in problems), first.path, first.column, first.row)
+        raise LogError(
+            f"{len(problems)} bad log file(s):\n" + "\n".join(f"  {e}" for e in problems),
+            first.path,
+            first.column,
+            first.row,
+        )
     if not logs:
         raise LogError("no log files given")
     return logs

@@ -55,10 +55,14 @@ SPIKE_HALF_WINDOW = 3
 SPIKE_K = 5.0
 #: column -> (floor in the column's unit, what the signal is)
 SPIKE_FLOOR = {
-    "laser_front_m": (0.02, "laser range"), "laser_back_m": (0.02, "laser range"),
-    "pitch_rad": (0.03, "torso pitch"), "height_m": (0.01, "torso height"),
-    "phi_back_rad": (0.1, "leg angle"), "phi_front_rad": (0.1, "leg angle"),
-    "leg_length_back_m": (0.02, "leg length"), "leg_length_front_m": (0.02, "leg length"),
+    "laser_front_m": (0.02, "laser range"),
+    "laser_back_m": (0.02, "laser range"),
+    "pitch_rad": (0.03, "torso pitch"),
+    "height_m": (0.01, "torso height"),
+    "phi_back_rad": (0.1, "leg angle"),
+    "phi_front_rad": (0.1, "leg angle"),
+    "leg_length_back_m": (0.02, "leg length"),
+    "leg_length_front_m": (0.02, "leg length"),
 }
 #: scaled MAD = 1.4826 MAD estimates the standard deviation of Gaussian noise
 _MAD_TO_SIGMA = 1.4826
@@ -66,8 +70,7 @@ _MAD_TO_SIGMA = 1.4826
 _SPIKE_BLOCK = 1 << 16
 
 
-def isolated_spikes(x, floor: float, half_window: int = SPIKE_HALF_WINDOW,
-                    k: float = SPIKE_K):
+def isolated_spikes(x, floor: float, half_window: int = SPIKE_HALF_WINDOW, k: float = SPIKE_K):
     """Hampel test for isolated spikes (see the comment at :data:`SPIKE_K`).
 
     Parameters
@@ -99,16 +102,15 @@ def isolated_spikes(x, floor: float, half_window: int = SPIKE_HALF_WINDOW,
     median = np.empty(n)
     scale = np.empty(n)
     for a in range(0, n, _SPIKE_BLOCK):
-        nb = np.delete(windows[a:a + _SPIKE_BLOCK], h, axis=1)  # the neighbours only
+        nb = np.delete(windows[a : a + _SPIKE_BLOCK], h, axis=1)  # the neighbours only
         m = np.median(nb, axis=1)
-        median[a:a + m.size] = m
-        scale[a:a + m.size] = _MAD_TO_SIGMA * np.median(np.abs(nb - m[:, None]), axis=1)
+        median[a : a + m.size] = m
+        scale[a : a + m.size] = _MAD_TO_SIGMA * np.median(np.abs(nb - m[:, None]), axis=1)
     allowed = np.maximum(k * scale, floor)
     return np.abs(x - median) > allowed, median, allowed
 
 
-def _check_spikes(path, cols: dict, header_line: int | None,
-                  repairs: list | None = None):
+def _check_spikes(path, cols: dict, header_line: int | None, repairs: list | None = None):
     """LogError at the first isolated spike of a :data:`SPIKE_FLOOR` column; with a list
     ``repairs`` instead, every spike is replaced by its neighbours' median and listed there
     (column, row, value, median)."""
@@ -139,4 +141,7 @@ def _check_spikes(path, cols: dict, header_line: int | None,
             f"{median[k]:.6g} {u}; deleting the row would break the uniform time grid), cut "
             "the log before or after it, or load it with repair_spikes=True (scoutsim "
             "compare / plot --repair-spikes), which does that replacement and reports it",
-            path, c, k + 1)
+            path,
+            c,
+            k + 1,
+        )

@@ -41,8 +41,14 @@ from ..names import LegState
 from .log_format import LogError
 from .torso_sensors import EDGE_S
 
-__all__ = ["log_strides", "experiment_strides", "min_steady_duration", "LogGait",
-           "stance_intervals_log", "STRIDE_METRICS"]
+__all__ = [
+    "log_strides",
+    "experiment_strides",
+    "min_steady_duration",
+    "LogGait",
+    "stance_intervals_log",
+    "STRIDE_METRICS",
+]
 
 
 def stance_intervals_log(log, leg) -> np.ndarray:
@@ -72,8 +78,9 @@ class LogGait:
 
     def __post_init__(self):
         steady = self.steady_strides
-        self.means = {k: (float(np.mean([s[k] for s in steady])) if steady else None)
-                      for k in STRIDE_METRICS}
+        self.means = {
+            k: (float(np.mean([s[k] for s in steady])) if steady else None) for k in STRIDE_METRICS
+        }
 
     @property
     def steady_strides(self) -> list:
@@ -109,16 +116,23 @@ def log_strides(log, transient_s: float = 2.0, period_tolerance: float = 0.05) -
         period = b - a
         i0 = int(np.searchsorted(t, a, side="left"))
         i1 = int(np.searchsorted(t, b, side="right"))
-        out.append(Stride(
-            index=len(out), t_start=a, t_end=b, period_s=period,
-            stride_frequency_hz=1.0 / period,
-            duty_factor_back=stance_overlap(stances[0], a, b) / period,
-            duty_factor_front=stance_overlap(stances[1], a, b) / period,
-            pitch_max_deg=math.degrees(float(np.max(th[i0:i1]))),
-            pitch_min_deg=math.degrees(float(np.min(th[i0:i1]))),
-            height_max_m=float(np.max(y[i0:i1])), height_min_m=float(np.min(y[i0:i1])),
-            mean_speed_m_s=math.nan,
-            steady=bool(a - t0 >= max(transient_s, EDGE_S) and b <= t1 - EDGE_S)))
+        out.append(
+            Stride(
+                index=len(out),
+                t_start=a,
+                t_end=b,
+                period_s=period,
+                stride_frequency_hz=1.0 / period,
+                duty_factor_back=stance_overlap(stances[0], a, b) / period,
+                duty_factor_front=stance_overlap(stances[1], a, b) / period,
+                pitch_max_deg=math.degrees(float(np.max(th[i0:i1]))),
+                pitch_min_deg=math.degrees(float(np.min(th[i0:i1]))),
+                height_max_m=float(np.max(y[i0:i1])),
+                height_min_m=float(np.min(y[i0:i1])),
+                mean_speed_m_s=math.nan,
+                steady=bool(a - t0 >= max(transient_s, EDGE_S) and b <= t1 - EDGE_S),
+            )
+        )
     out = converged_tail(out, period_tolerance)
     return LogGait(strides=out, transient_s=float(transient_s), source=log.name)
 
@@ -138,8 +152,7 @@ def _state_summary(values) -> str:
     return "takes the values " + ", ".join(f"{x:g}" for x in u)
 
 
-def experiment_strides(log, transient_s: float = 2.0,
-                       period_tolerance: float = 0.05) -> LogGait:
+def experiment_strides(log, transient_s: float = 2.0, period_tolerance: float = 0.05) -> LogGait:
     """:func:`log_strides` of an experiment log, refusing a log that cannot give a stride.
 
     Parameters
@@ -174,38 +187,55 @@ def experiment_strides(log, transient_s: float = 2.0,
     need = min_steady_duration(transient_s, period)
     if duration < need:
         start = max(float(transient_s), EDGE_S)
-        why = (f"the transient: transient_s = {transient_s:g} s, --transient"
-               if transient_s >= EDGE_S else
-               f"EDGE_S, the low-pass edge effects; transient_s = {transient_s:g} s")
+        why = (
+            f"the transient: transient_s = {transient_s:g} s, --transient"
+            if transient_s >= EDGE_S
+            else f"EDGE_S, the low-pass edge effects; transient_s = {transient_s:g} s"
+        )
         if lo.size >= 2:
-            total = (f"{start + EDGE_S:g} s plus one stride period ({period:.3f} s, its "
-                     f"shortest) = {need:.3f} s")
+            total = (
+                f"{start + EDGE_S:g} s plus one stride period ({period:.3f} s, its "
+                f"shortest) = {need:.3f} s"
+            )
         else:
-            total = (f"{start + EDGE_S:g} s plus one stride period (it has no complete "
-                     f"stride: {lo.size} back-leg lift-off(s))")
-        raise LogError(f"{where}: column 't': the log lasts {duration:.3f} s "
-                       f"({len(log.t)} samples), too short to hold one steady stride: a "
-                       "steady stride (one back-leg lift-off to the next) must start at least "
-                       f"{start:g} s after the start of the record ({why}) and end at least "
-                       f"{EDGE_S:g} s before its end (EDGE_S, the low-pass edge effects), so "
-                       f"the log must last at least {total}; give a longer log"
-                       + (" or a smaller --transient" if transient_s > EDGE_S else ""),
-                       log.path, "t")
+            total = (
+                f"{start + EDGE_S:g} s plus one stride period (it has no complete "
+                f"stride: {lo.size} back-leg lift-off(s))"
+            )
+        raise LogError(
+            f"{where}: column 't': the log lasts {duration:.3f} s "
+            f"({len(log.t)} samples), too short to hold one steady stride: a "
+            "steady stride (one back-leg lift-off to the next) must start at least "
+            f"{start:g} s after the start of the record ({why}) and end at least "
+            f"{EDGE_S:g} s before its end (EDGE_S, the low-pass edge effects), so "
+            f"the log must last at least {total}; give a longer log"
+            + (" or a smaller --transient" if transient_s > EDGE_S else ""),
+            log.path,
+            "t",
+        )
     if lo.size < 2:
-        raise LogError(f"{where}: column 'leg_state_back': no stride detected in "
-                       f"{duration:.3f} s: a stride runs from one back-leg lift-off "
-                       "(leg_state_back changing from 1 or 2 to 0) to the next, and the log has "
-                       f"{lo.size} (leg_state_back {_state_summary(log.leg_state('back'))}); "
-                       "a log of bounding needs at least two: check that the robot was "
-                       "bounding and that the controller's leg states were logged",
-                       log.path, "leg_state_back")
-    for kind, times in (("touches down", log.touchdown_times("front")),
-                        ("lifts off", log.liftoff_times("front"))):
+        raise LogError(
+            f"{where}: column 'leg_state_back': no stride detected in "
+            f"{duration:.3f} s: a stride runs from one back-leg lift-off "
+            "(leg_state_back changing from 1 or 2 to 0) to the next, and the log has "
+            f"{lo.size} (leg_state_back {_state_summary(log.leg_state('back'))}); "
+            "a log of bounding needs at least two: check that the robot was "
+            "bounding and that the controller's leg states were logged",
+            log.path,
+            "leg_state_back",
+        )
+    for kind, times in (
+        ("touches down", log.touchdown_times("front")),
+        ("lifts off", log.liftoff_times("front")),
+    ):
         if times.size == 0:
-            raise LogError(f"{where}: column 'leg_state_front': no stride detected: the front "
-                           f"leg never {kind} in {duration:.3f} s (leg_state_front "
-                           f"{_state_summary(log.leg_state('front'))}); in a bounding stride "
-                           "each leg touches down and lifts off: check that the robot was "
-                           "bounding and that the controller's leg states were logged",
-                           log.path, "leg_state_front")
+            raise LogError(
+                f"{where}: column 'leg_state_front': no stride detected: the front "
+                f"leg never {kind} in {duration:.3f} s (leg_state_front "
+                f"{_state_summary(log.leg_state('front'))}); in a bounding stride "
+                "each leg touches down and lifts off: check that the robot was "
+                "bounding and that the controller's leg states were logged",
+                log.path,
+                "leg_state_front",
+            )
     return log_strides(log, transient_s=transient_s, period_tolerance=period_tolerance)

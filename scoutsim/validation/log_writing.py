@@ -32,8 +32,10 @@ def save_log(log, path, precision: int = 7) -> Path:
             import pyarrow as pa
             import pyarrow.parquet as pq
         except ImportError:
-            raise ImportError("writing Parquet logs needs the optional dependency pyarrow; "
-                              "install it with `pip install pyarrow`") from None
+            raise ImportError(
+                "writing Parquet logs needs the optional dependency pyarrow; "
+                "install it with `pip install pyarrow`"
+            ) from None
         table = pa.table({n: log.columns[n] for n in names})
         table = table.replace_schema_metadata({_PARQUET_META_KEY: json.dumps(meta).encode()})
         pq.write_table(table, path)

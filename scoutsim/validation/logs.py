@@ -22,19 +22,34 @@ from __future__ import annotations
 from .experiment_log import LEGS, ExperimentLog
 from .log_checks import UNIFORM_TOLERANCE
 from .log_format import (
-                         ALTERNATIVE_COLUMNS,
-                         COLUMN_UNITS,
-                         DEFAULT_META,
-                         LOG_SUFFIXES,
-                         OPTIONAL_COLUMNS,
-                         REQUIRED_COLUMNS,
-                         LogError,
+    ALTERNATIVE_COLUMNS,
+    COLUMN_UNITS,
+    DEFAULT_META,
+    LOG_SUFFIXES,
+    OPTIONAL_COLUMNS,
+    REQUIRED_COLUMNS,
+    LogError,
 )
 from .log_reading import load_dataset, load_log
 from .log_spikes import SPIKE_FLOOR, SPIKE_HALF_WINDOW, SPIKE_K, isolated_spikes
 from .log_writing import save_log
 
-__all__ = ["ExperimentLog", "LogError", "load_log", "load_dataset", "save_log",
-           "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "COLUMN_UNITS", "DEFAULT_META",
-           "LOG_SUFFIXES", "SPIKE_HALF_WINDOW", "SPIKE_K", "SPIKE_FLOOR", "isolated_spikes",
-           "ALTERNATIVE_COLUMNS", "UNIFORM_TOLERANCE", "LEGS"]
+__all__ = [
+    "ExperimentLog",
+    "LogError",
+    "load_log",
+    "load_dataset",
+    "save_log",
+    "REQUIRED_COLUMNS",
+    "OPTIONAL_COLUMNS",
+    "COLUMN_UNITS",
+    "DEFAULT_META",
+    "LOG_SUFFIXES",
+    "SPIKE_HALF_WINDOW",
+    "SPIKE_K",
+    "SPIKE_FLOOR",
+    "isolated_spikes",
+    "ALTERNATIVE_COLUMNS",
+    "UNIFORM_TOLERANCE",
+    "LEGS",
+]

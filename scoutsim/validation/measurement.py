@@ -42,9 +42,19 @@ from .torso_sensors import (
     pitch_height_from_lasers,
 )
 
-__all__ = ["LaserGeometry", "SensorNoise", "laser_ranges", "pitch_height_from_lasers",
-           "fft_lowpass", "lowpass_gain", "torque_from_current", "torque_per_amp", "to_log",
-           "EDGE_S"]
+__all__ = [
+    "LaserGeometry",
+    "SensorNoise",
+    "laser_ranges",
+    "pitch_height_from_lasers",
+    "fft_lowpass",
+    "lowpass_gain",
+    "torque_from_current",
+    "torque_per_amp",
+    "to_log",
+    "EDGE_S",
+]
+
 
 @dataclass(frozen=True)
 class SensorNoise:
@@ -88,10 +98,17 @@ def _on_grid(result):
     return np.flatnonzero(np.abs(k - np.round(k)) < 1e-6)
 
 
-def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
-           geometry: LaserGeometry | None = None, lowpass_hz: float | None = 15.0,
-           lowpass_transition_hz: float = 5.0, source: str | None = None, notes: str = "",
-           synthetic: bool = True) -> ExperimentLog:
+def to_log(
+    result,
+    noise: SensorNoise | dict | None = None,
+    seed=None,
+    geometry: LaserGeometry | None = None,
+    lowpass_hz: float | None = 15.0,
+    lowpass_transition_hz: float = 5.0,
+    source: str | None = None,
+    notes: str = "",
+    synthetic: bool = True,
+) -> ExperimentLog:
     """What the robot would have logged during the simulated run ``result``.
 
     Columns: laser ranges (from the simulated pitch and height, :func:`laser_ranges`), leg
@@ -134,15 +151,22 @@ def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
         rng = np.random.default_rng(seed)
         n = t.shape[0]
         for c in cols:
-            sd = (nz.laser_m if c.startswith("laser_") else
-                  nz.angle_rad if c.startswith("phi_") else
-                  nz.rate_rad_s if c.startswith("dphi_") else
-                  nz.current_a if c.startswith("current_") else 0.0)
+            sd = (
+                nz.laser_m
+                if c.startswith("laser_")
+                else nz.angle_rad
+                if c.startswith("phi_")
+                else nz.rate_rad_s
+                if c.startswith("dphi_")
+                else nz.current_a
+                if c.startswith("current_")
+                else 0.0
+            )
             if sd > 0:
                 cols[c] = cols[c] + rng.normal(0.0, sd, n)
     meta = {
-        "source": source or f"scoutsim {prov.get('scoutsim_version', '')} simulation, "
-                            f"model {prov.get('model')}",
+        "source": source
+        or f"scoutsim {prov.get('scoutsim_version', '')} simulation, model {prov.get('model')}",
         "synthetic": bool(synthetic),
         "notes": notes,
         "laser_half_spacing_m": geometry.half_spacing_m,
@@ -151,13 +175,18 @@ def to_log(result, noise: SensorNoise | dict | None = None, seed=None,
         "lowpass_transition_hz": lowpass_transition_hz,
         "torque_per_amp_nm_a": torque_per_amp(robot) if robot else None,
         "encoder": "motor-side angle alpha" if encoder_on_motor else "leg angle phi",
-        "sensor_noise": None if noise is None else asdict(
-            noise if isinstance(noise, SensorNoise) else SensorNoise(**dict(noise))),
+        "sensor_noise": None
+        if noise is None
+        else asdict(noise if isinstance(noise, SensorNoise) else SensorNoise(**dict(noise))),
         "noise_seed": seed if (seed is None or isinstance(seed, int)) else str(seed),
-        "simulation": {"model": prov.get("model"), "outcome": result.outcome,
-                       "t_end_s": float(result.t_end),
-                       "friction_coefficient": prov.get("friction_coefficient"),
-                       "initial_state": prov.get("initial_state"), "robot": robot},
+        "simulation": {
+            "model": prov.get("model"),
+            "outcome": result.outcome,
+            "t_end_s": float(result.t_end),
+            "friction_coefficient": prov.get("friction_coefficient"),
+            "initial_state": prov.get("initial_state"),
+            "robot": robot,
+        },
     }
     return ExperimentLog(columns=cols, meta=meta, path=None)
 
@@ -168,8 +197,11 @@ def to_log_like(result, like: ExperimentLog | None = None) -> ExperimentLog:
     experiment was."""
     kw: dict[str, Any] = {}
     if like is not None:
-        kw = dict(geometry=LaserGeometry(float(like.meta["laser_half_spacing_m"]),
-                                         float(like.meta["laser_mount_offset_m"])),
-                  lowpass_hz=like.meta.get("lowpass_hz"),
-                  lowpass_transition_hz=float(like.meta.get("lowpass_transition_hz") or 0.0))
+        kw = dict(
+            geometry=LaserGeometry(
+                float(like.meta["laser_half_spacing_m"]), float(like.meta["laser_mount_offset_m"])
+            ),
+            lowpass_hz=like.meta.get("lowpass_hz"),
+            lowpass_transition_hz=float(like.meta.get("lowpass_transition_hz") or 0.0),
+        )
     return to_log(result, **kw)

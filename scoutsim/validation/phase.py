@@ -48,25 +48,52 @@ from .experiment_log import ExperimentLog
 from .log_strides import LogGait, log_strides
 from .measurement import to_log_like
 
-__all__ = ["SIGNALS", "Source", "as_source", "as_sources", "resample_strides",
-           "PhaseComparison", "phase_compare"]
+__all__ = [
+    "SIGNALS",
+    "Source",
+    "as_source",
+    "as_sources",
+    "resample_strides",
+    "PhaseComparison",
+    "phase_compare",
+]
 
 #: name -> (label, SI unit, display unit, factor SI -> display, getter(log))
 SIGNALS = {
     "pitch": ("pitch", "rad", "deg", math.degrees(1.0), lambda lg: lg.pitch),
     "height": ("COM height", "m", "m", 1.0, lambda lg: lg.height),
-    "phi_back": ("back leg angle", "rad", "deg", math.degrees(1.0),
-                 lambda lg: lg.leg_angle("back")),
-    "phi_front": ("front leg angle", "rad", "deg", math.degrees(1.0),
-                  lambda lg: lg.leg_angle("front")),
-    "dphi_back": ("back leg rate", "rad/s", "deg/s", math.degrees(1.0),
-                  lambda lg: lg.leg_rate("back")),
-    "dphi_front": ("front leg rate", "rad/s", "deg/s", math.degrees(1.0),
-                   lambda lg: lg.leg_rate("front")),
+    "phi_back": (
+        "back leg angle",
+        "rad",
+        "deg",
+        math.degrees(1.0),
+        lambda lg: lg.leg_angle("back"),
+    ),
+    "phi_front": (
+        "front leg angle",
+        "rad",
+        "deg",
+        math.degrees(1.0),
+        lambda lg: lg.leg_angle("front"),
+    ),
+    "dphi_back": (
+        "back leg rate",
+        "rad/s",
+        "deg/s",
+        math.degrees(1.0),
+        lambda lg: lg.leg_rate("back"),
+    ),
+    "dphi_front": (
+        "front leg rate",
+        "rad/s",
+        "deg/s",
+        math.degrees(1.0),
+        lambda lg: lg.leg_rate("front"),
+    ),
     "torque_back": ("back hip torque", "N m", "N m", 1.0, lambda lg: lg.hip_torque("back")),
-    "torque_front": ("front hip torque", "N m", "N m", 1.0,
-                     lambda lg: lg.hip_torque("front")),
+    "torque_front": ("front hip torque", "N m", "N m", 1.0, lambda lg: lg.hip_torque("front")),
 }
+
 
 def _label(name: str) -> str:
     return MODEL_LABELS.get(name, str(name))
@@ -134,12 +161,14 @@ def _status(name, result, gait: LogGait | None) -> str:
     return "no steady strides"
 
 
-def as_source(obj, name: str | None = None, like: ExperimentLog | None = None,
-              transient_s: float = 2.0) -> Source:
+def as_source(
+    obj, name: str | None = None, like: ExperimentLog | None = None, transient_s: float = 2.0
+) -> Source:
     """A :class:`Source` from experiment logs (an ExperimentLog or a list of them), a
     SimulationResult, a ModelRun or a Source. Simulations are measured like ``like``."""
     from ..result.simulation_result import SimulationResult
     from .errors import ModelRun
+
     if isinstance(obj, Source):
         return obj
     if isinstance(obj, ExperimentLog):
@@ -159,16 +188,24 @@ def as_source(obj, name: str | None = None, like: ExperimentLog | None = None,
         name = name or (obj.provenance or {}).get("model") or "model"
         lg = to_log_like(obj, like)
         gait = log_strides(lg, transient_s=transient_s) if len(lg.t) > 2 else None
-        return Source(name, [lg] if gait is not None else [],
-                      [gait] if gait is not None else [], _status(name, obj, gait), obj)
-    raise TypeError(f"cannot use {type(obj).__name__} as a source: give an ExperimentLog "
-                    "(or a list of them), a SimulationResult, a ModelRun or a Source")
+        return Source(
+            name,
+            [lg] if gait is not None else [],
+            [gait] if gait is not None else [],
+            _status(name, obj, gait),
+            obj,
+        )
+    raise TypeError(
+        f"cannot use {type(obj).__name__} as a source: give an ExperimentLog "
+        "(or a list of them), a SimulationResult, a ModelRun or a Source"
+    )
 
 
 def as_sources(models, like: ExperimentLog | None = None, transient_s: float = 2.0) -> dict:
     """name -> Source for a dict of models, an ErrorTable (its ``models``), a list of
     SimulationResults (named by their model) or None (no models)."""
     from .errors import ErrorTable
+
     if models is None:
         return {}
     if isinstance(models, ErrorTable):
@@ -190,14 +227,14 @@ def resample_strides(pairs, signal: str, n_phase: int = 101) -> np.ndarray:
     """(k, n_phase) values of ``signal`` (SI) over the phase grid ``linspace(0, 1,
     n_phase)`` of each (log, stride) pair."""
     if signal not in SIGNALS:
-        raise ValueError(f"signal = {signal!r} is not allowed: must be one of "
-                         f"{', '.join(SIGNALS)}")
+        raise ValueError(f"signal = {signal!r} is not allowed: must be one of {', '.join(SIGNALS)}")
     s = np.linspace(0.0, 1.0, n_phase)
     out = np.empty((len(pairs), n_phase))
     get = SIGNALS[signal][4]
     for i, (lg, st) in enumerate(pairs):
-        out[i] = np.interp(st.t_start + s * (st.t_end - st.t_start), lg.t,
-                           np.asarray(get(lg), dtype=float))
+        out[i] = np.interp(
+            st.t_start + s * (st.t_end - st.t_start), lg.t, np.asarray(get(lg), dtype=float)
+        )
     return out
 
 
@@ -239,12 +276,18 @@ class PhaseComparison:
         out = []
         for m in self.models:
             for sig in self.signals:
-                out.append({"model": m, "signal": sig, "unit": SIGNALS[sig][1],
-                            "rms_error": self.rms[m][sig],
-                            "rms_error_percent_of_range": self.rms_percent[m][sig],
-                            "n_strides_model": self.n_strides.get(m, 0),
-                            "n_strides_experiment": self.n_strides.get(self.experiment, 0),
-                            "status": self.status[m]})
+                out.append(
+                    {
+                        "model": m,
+                        "signal": sig,
+                        "unit": SIGNALS[sig][1],
+                        "rms_error": self.rms[m][sig],
+                        "rms_error_percent_of_range": self.rms_percent[m][sig],
+                        "n_strides_model": self.n_strides.get(m, 0),
+                        "n_strides_experiment": self.n_strides.get(self.experiment, 0),
+                        "status": self.status[m],
+                    }
+                )
         return out
 
     def to_csv(self, path) -> Path:
@@ -252,21 +295,35 @@ class PhaseComparison:
         range, stride counts, status; NaN as empty cells."""
         path = Path(path)
         rows = self.rows()
-        names = ["model", "signal", "unit", "rms_error", "rms_error_percent_of_range",
-                 "n_strides_model", "n_strides_experiment", "status"]
+        names = [
+            "model",
+            "signal",
+            "unit",
+            "rms_error",
+            "rms_error_percent_of_range",
+            "n_strides_model",
+            "n_strides_experiment",
+            "status",
+        ]
         with open(path, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=names)
             w.writeheader()
             for r in rows:
-                w.writerow({k: ("" if isinstance(v, float) and not math.isfinite(v) else v)
-                            for k, v in r.items()})
+                w.writerow(
+                    {
+                        k: ("" if isinstance(v, float) and not math.isfinite(v) else v)
+                        for k, v in r.items()
+                    }
+                )
         return path
 
     def format(self) -> str:
         """Plain-text table (display units: deg, deg/s)."""
-        lines = [f"Phase-normalized comparison: {self.n_strides.get(self.experiment, 0)} "
-                 f"experimental steady strides; RMS of (model mean - experiment mean) over "
-                 f"the stride phase"]
+        lines = [
+            f"Phase-normalized comparison: {self.n_strides.get(self.experiment, 0)} "
+            f"experimental steady strides; RMS of (model mean - experiment mean) over "
+            f"the stride phase"
+        ]
         if self.synthetic:
             lines.append("NOTE: the experiment data are SYNTHETIC (generated by scoutsim).")
         head = f"  {'signal':<18}" + "".join(f"{_label(m):>22}" for m in self.models)
@@ -277,8 +334,11 @@ class PhaseComparison:
             for m in self.models:
                 v = self.rms[m][sig]
                 p = self.rms_percent[m][sig]
-                cells.append(f"{'-':>22}" if not math.isfinite(v) else
-                             f"{v * f:>10.4g} {unit:<5} ({p:4.0f}%)")
+                cells.append(
+                    f"{'-':>22}"
+                    if not math.isfinite(v)
+                    else f"{v * f:>10.4g} {unit:<5} ({p:4.0f}%)"
+                )
             lines.append(f"  {lab:<18}" + "".join(cells))
         for m in self.models:
             if self.status[m] != "ok":
@@ -286,8 +346,9 @@ class PhaseComparison:
         return "\n".join(lines)
 
 
-def phase_compare(experiment, models, n_phase: int = 101, transient_s: float = 2.0,
-                  signals=tuple(SIGNALS)) -> PhaseComparison:
+def phase_compare(
+    experiment, models, n_phase: int = 101, transient_s: float = 2.0, signals=tuple(SIGNALS)
+) -> PhaseComparison:
     """Phase-normalized comparison of ``models`` against ``experiment`` (module docstring).
 
     Parameters
@@ -305,8 +366,7 @@ def phase_compare(experiment, models, n_phase: int = 101, transient_s: float = 2
     signals = tuple(signals)
     bad = [s for s in signals if s not in SIGNALS]
     if bad or not signals:
-        raise ValueError(f"signals = {signals!r} is not allowed: choose from "
-                         f"{', '.join(SIGNALS)}")
+        raise ValueError(f"signals = {signals!r} is not allowed: choose from {', '.join(SIGNALS)}")
     if isinstance(experiment, (list, tuple)) and not experiment:
         raise ValueError("experiment is empty: give at least one log")
     exp = as_source(experiment, "experiment", transient_s=transient_s)
@@ -324,8 +384,9 @@ def phase_compare(experiment, models, n_phase: int = 101, transient_s: float = 2
     for k, src in srcs.items():
         pairs = src.steady
         nstr[k] = len(pairs)
-        status[k] = src.status if pairs else (src.status if src.status != "ok"
-                                              else "no steady strides")
+        status[k] = (
+            src.status if pairs else (src.status if src.status != "ok" else "no steady strides")
+        )
         if pairs:
             mean[k], std[k] = {}, {}
             for sig in signals:

@@ -14,8 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LaserGeometry", "laser_ranges", "pitch_height_from_lasers", "fft_lowpass",
-           "lowpass_gain", "EDGE_S"]
+__all__ = [
+    "LaserGeometry",
+    "laser_ranges",
+    "pitch_height_from_lasers",
+    "fft_lowpass",
+    "lowpass_gain",
+    "EDGE_S",
+]
 
 #: Time [s] at each end of a record within which the low-pass has edge effects.
 EDGE_S = 0.3
@@ -36,11 +42,14 @@ class LaserGeometry:
 
     def __post_init__(self):
         if not (math.isfinite(self.half_spacing_m) and self.half_spacing_m > 0):
-            raise ValueError(f"half_spacing_m = {self.half_spacing_m!r} is not allowed: must "
-                             "be a finite number > 0")
+            raise ValueError(
+                f"half_spacing_m = {self.half_spacing_m!r} is not allowed: must "
+                "be a finite number > 0"
+            )
         if not math.isfinite(self.mount_offset_m):
-            raise ValueError(f"mount_offset_m = {self.mount_offset_m!r} is not allowed: must "
-                             "be finite")
+            raise ValueError(
+                f"mount_offset_m = {self.mount_offset_m!r} is not allowed: must be finite"
+            )
 
 
 def laser_ranges(height, pitch, geometry: LaserGeometry | None = None):
@@ -77,8 +86,9 @@ def lowpass_gain(f, cutoff_hz: float = 15.0, transition_hz: float = 5.0):
     return g
 
 
-def fft_lowpass(x, fs: float, cutoff_hz: float = 15.0, transition_hz: float = 5.0,
-                pad_s: float = 1.0) -> np.ndarray:
+def fft_lowpass(
+    x, fs: float, cutoff_hz: float = 15.0, transition_hz: float = 5.0, pad_s: float = 1.0
+) -> np.ndarray:
     """Zero-phase FFT low-pass of a uniformly sampled record (see the module docstring).
 
     Parameters
@@ -90,14 +100,16 @@ def fft_lowpass(x, fs: float, cutoff_hz: float = 15.0, transition_hz: float = 5.
     pad_s : length of the odd-reflection extension at each end [s]
     """
     if not (cutoff_hz > 0 and transition_hz >= 0 and transition_hz < 2 * cutoff_hz):
-        raise ValueError(f"cutoff_hz = {cutoff_hz}, transition_hz = {transition_hz} are not "
-                         "allowed: need cutoff > 0 and 0 <= transition < 2 cutoff")
+        raise ValueError(
+            f"cutoff_hz = {cutoff_hz}, transition_hz = {transition_hz} are not "
+            "allowed: need cutoff > 0 and 0 <= transition < 2 cutoff"
+        )
     x = np.asarray(x, dtype=float)
     n = x.shape[0]
     if n < 3:
         return x.copy()
     p = min(n - 1, int(round(pad_s * fs)))
-    ext = np.concatenate([2 * x[0] - x[p:0:-1], x, 2 * x[-1] - x[-2:-p - 2:-1]])
+    ext = np.concatenate([2 * x[0] - x[p:0:-1], x, 2 * x[-1] - x[-2 : -p - 2 : -1]])
     spec = np.fft.rfft(ext)
     f = np.fft.rfftfreq(ext.shape[0], 1.0 / fs)
-    return np.fft.irfft(spec * lowpass_gain(f, cutoff_hz, transition_hz), ext.shape[0])[p:p + n]
+    return np.fft.irfft(spec * lowpass_gain(f, cutoff_hz, transition_hz), ext.shape[0])[p : p + n]

@@ -33,19 +33,31 @@ def test_cache_command_reports_and_cleans_only_stale_directories_of_ours(tmp_pat
     for path in (stale / "f.nbi", stale):
         os.utime(path, (old, old))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(user))
-    p = subprocess.run([sys.executable, "-m", "scoutsim", "cache"], env=env, cwd=tmp_path,
-                       capture_output=True, text=True, timeout=300)
+    p = subprocess.run(
+        [sys.executable, "-m", "scoutsim", "cache"],
+        env=env,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode == 0, p.stderr
     assert f"cache directory: {root}" in p.stdout
     assert _size_kb(p.stdout) == round(_bytes_under(root) / 1000.0, 1)
     size_before = _size_kb(p.stdout)
     assert "core compiled: no" in p.stdout
-    assert stale.exists()                                 # nothing removed unless asked
-    p = subprocess.run([sys.executable, "-m", "scoutsim", "cache", "--clean"], env=env,
-                       cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert stale.exists()  # nothing removed unless asked
+    p = subprocess.run(
+        [sys.executable, "-m", "scoutsim", "cache", "--clean"],
+        env=env,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode == 0, p.stderr
     assert f"removed {stale}" in p.stdout and "removed 1 directory" in p.stdout
     assert not stale.exists()
     assert (recent / "f.nbi").exists() and (not_ours / "f.nbi").exists()
     assert _size_kb(p.stdout) == round(_bytes_under(root) / 1000.0, 1)
-    assert abs(_size_kb(p.stdout) - (size_before - 1.0)) < 0.11    # the 1000 bytes removed
+    assert abs(_size_kb(p.stdout) - (size_before - 1.0)) < 0.11  # the 1000 bytes removed

@@ -24,6 +24,7 @@ AS_IS = compile_steps.AS_IS
 def _numba_steps():
     """The Numba attributes the replacements replace, as they are now."""
     from numba.core import dispatcher, inline_closurecall, targetconfig
+
     return {
         "TargetConfig.__hash__": targetconfig.TargetConfig.__hash__,
         "InlineWorker.inline_ir": inline_closurecall.InlineWorker.inline_ir,
@@ -37,11 +38,13 @@ def test_the_installed_numba_is_in_the_pinned_range():
     pyproject.toml; the installed one must be one of them."""
     packaging = pytest.importorskip("packaging.requirements")
     import numba
+
     reqs = [packaging.Requirement(r) for r in importlib.metadata.requires("scoutsim") or []]
     pin = next(r for r in reqs if r.name == "numba" and r.marker is None)
     assert pin.specifier.contains(numba.__version__), (numba.__version__, str(pin))
-    assert any(s.operator in ("<", "<=", "~=", "==") for s in pin.specifier), \
+    assert any(s.operator in ("<", "<=", "~=", "==") for s in pin.specifier), (
         f"numba has no upper bound in the pin {pin}"
+    )
 
 
 @pytest.mark.skipif(AS_IS, reason="SCOUTSIM_NUMBA_AS_IS leaves Numba's steps as they are")
@@ -50,10 +53,11 @@ def test_each_replacement_is_applied_on_the_pinned_numba():
     the other guarded uses of Numba's internals (jit.status); one that found other code
     would leave Numba's alone, and say why here."""
     import numba
+
     found = jit.status()
     assert set(compile_steps.STEPS) <= set(found)
     assert {"compile_context", "typed_by_kind", "cache_locator"} <= set(found)
-    if not jit.TYPED_BY_KIND:     # switched off in this process's environment
+    if not jit.TYPED_BY_KIND:  # switched off in this process's environment
         assert found.pop("typed_by_kind").startswith("off:")
     not_applied = {k: v for k, v in found.items() if v != compile_steps.APPLIED}
     assert not not_applied, f"on numba {numba.__version__}: {not_applied}"
@@ -66,6 +70,7 @@ def test_the_replacements_are_in_place_only_inside_the_compile_context():
     place, the outermost one's puts Numba's back and empties the memo of translated
     callees; the context holds Numba's compiler lock."""
     from numba.core.compiler_lock import global_compiler_lock
+
     numba_own = _numba_steps()
     assert not any(getattr(f, "_scoutsim", False) for f in numba_own.values())
     assert not compile_steps.in_place()
@@ -94,7 +99,8 @@ def test_a_core_function_compiles_inside_the_context_and_others_outside():
         def on_start(self, ev):
             seen[ev.data["dispatcher"].py_func.__name__] = (
                 compile_steps.in_place(),
-                all(getattr(f, "_scoutsim", False) for f in _numba_steps().values()))
+                all(getattr(f, "_scoutsim", False) for f in _numba_steps().values()),
+            )
 
         def on_end(self, ev):
             pass
@@ -120,8 +126,13 @@ def test_a_core_function_compiles_inside_the_context_and_others_outside():
     assert all(after[k] is numba_own[k] for k in numba_own)
     # every dispatcher the decorators make compiles in the context
     from scoutsim._core.model import evaluate
-    for d in (evaluate.evaluate_ws, evaluate.evaluate, jit.kernel(core_probe),
-              jit.allocating(inline="always")(core_probe)):
+
+    for d in (
+        evaluate.evaluate_ws,
+        evaluate.evaluate,
+        jit.kernel(core_probe),
+        jit.allocating(inline="always")(core_probe),
+    ):
         assert d.compile.__wrapped__.__func__ is type(d).compile, d
 
 
@@ -147,8 +158,9 @@ def test_the_core_compiled_without_the_replacements_runs_bit_for_bit_the_same(tm
     this process's in every recorded column, bit for bit."""
     env = dict(os.environ, SCOUTSIM_NUMBA_AS_IS="1", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     out = tmp_path / "as_is.npz"
-    p = subprocess.run([sys.executable, "-c", _RUN, str(out)], env=env, capture_output=True,
-                       text=True, timeout=900)
+    p = subprocess.run(
+        [sys.executable, "-c", _RUN, str(out)], env=env, capture_output=True, text=True, timeout=900
+    )
     assert p.returncode == 0, p.stderr[-2000:]
     as_is = np.load(out)
     for model in ("II", "I"):

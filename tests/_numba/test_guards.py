@@ -15,6 +15,7 @@ from scoutsim._numba import compile_steps, disk_cache, jit
 
 def _other_numba_dispatcher(py_func):
     """A dispatcher of another Numba: the methods scoutsim wraps take other arguments."""
+
     class OtherDispatcher:
         def __init__(self, f):
             self.py_func = f
@@ -36,10 +37,10 @@ def test_a_dispatcher_of_another_numba_is_left_as_it_is(monkeypatch):
     d = _other_numba_dispatcher(lambda x: x)
     assert jit._typed_by_kind(d) is d and jit._compiled_in_context(d) is d
     assert "get_call_template" not in vars(d) and "compile" not in vars(d)
-    assert jit._STATUS["typed_by_kind"].startswith("not applied: OtherDispatcher."
-                                                   "get_call_template takes")
-    assert jit._STATUS["compile_context"].startswith("not applied: OtherDispatcher.compile "
-                                                     "takes")
+    assert jit._STATUS["typed_by_kind"].startswith(
+        "not applied: OtherDispatcher.get_call_template takes"
+    )
+    assert jit._STATUS["compile_context"].startswith("not applied: OtherDispatcher.compile takes")
     # Numba's own dispatcher passes the same checks
     monkeypatch.setattr(jit, "_STATUS", {})
     n = njit(lambda x: x + 1.0)
@@ -56,16 +57,18 @@ def test_the_cache_locator_is_left_out_where_numba_has_no_list_of_them(monkeypat
     why); on the pinned Numba it is installed once and
     answers only for the core's own files."""
     from numba.core import caching
+
     classes = caching.CacheImpl._locator_classes
     ours = [c for c in classes if c.__name__ == "_CoreCacheLocator"]
     assert len(ours) == 1 and classes[0] is ours[0]
     monkeypatch.setattr(caching.CacheImpl, "_locator_classes", tuple(classes))
     assert "_locator_classes" in disk_cache.install_cache_locator()
-    assert jit.status()["cache_locator"] == jit.APPLIED     # (installed at import)
+    assert jit.status()["cache_locator"] == jit.APPLIED  # (installed at import)
     assert caching.CacheImpl._locator_classes == tuple(classes)
     monkeypatch.undo()
     # it answers for a core function's file, with the module's directory and digest
     from scoutsim._core.model import kinematics
+
     f = kinematics.project_state.py_func
     loc = ours[0].from_function(f, kinematics.__file__)
     directory = disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/model/kinematics.py")]
@@ -85,7 +88,7 @@ def test_a_step_that_finds_other_code_is_not_applied_and_says_why(monkeypatch):
     from numba.core.dispatcher import Dispatcher
 
     def inline_ir(self, caller_ir, block, i, callee_ir, callee_freevars, arg_typs=None):
-        return None   # copies nothing block by block
+        return None  # copies nothing block by block
 
     def inline_function(self, caller_ir, block, i, function):
         return None
@@ -104,10 +107,12 @@ def test_a_step_that_finds_other_code_is_not_applied_and_says_why(monkeypatch):
 def test_the_outcome_of_every_check_is_recorded_and_other_errors_propagate(monkeypatch):
     """status() lists each replacement as applied or not with the reason its check gave;
     an error that is not "other code" (a bug) is not swallowed."""
+
     def fine():
         class Owner:
             def m(self):
                 return "numba's"
+
         return Owner, "m", lambda self: "ours"
 
     def moved():
@@ -119,7 +124,8 @@ def test_the_outcome_of_every_check_is_recorded_and_other_errors_propagate(monke
     monkeypatch.setattr(compile_steps, "STEPS", {"Owner.m": fine, "Thing.x": moved})
     assert compile_steps.status() == {
         "Owner.m": compile_steps.APPLIED,
-        "Thing.x": "not applied: no numba.core.somewhere.Thing"}
+        "Thing.x": "not applied: no numba.core.somewhere.Thing",
+    }
 
     def bug():
         raise RuntimeError("a bug, not another Numba")
@@ -135,6 +141,7 @@ def test_the_context_puts_back_numbas_own_and_never_replaces_anothers(monkeypatc
     inherited again (the class's own attribute removed); a method someone else replaced
     after the check is not replaced (the status says so), and one replaced again while
     the context is open keeps the other's replacement."""
+
     class Base:
         def inherited(self):
             return "numba's inherited"
@@ -153,25 +160,30 @@ def test_the_context_puts_back_numbas_own_and_never_replaces_anothers(monkeypatc
     ours._scoutsim = True
     own, other_m = Owner.__dict__["own"], Other.__dict__["m"]
     monkeypatch.setattr(compile_steps, "_status", {})
-    monkeypatch.setattr(compile_steps, "_prepared", {
-        "Owner.own": (Owner, "own", own, ours),
-        "Owner.inherited": (Owner, "inherited", compile_steps._INHERITED, ours),
-        "Other.m": (Other, "m", other_m, ours)})
+    monkeypatch.setattr(
+        compile_steps,
+        "_prepared",
+        {
+            "Owner.own": (Owner, "own", own, ours),
+            "Owner.inherited": (Owner, "inherited", compile_steps._INHERITED, ours),
+            "Other.m": (Other, "m", other_m, ours),
+        },
+    )
 
     def theirs(self):
         return "theirs"
 
-    Other.m = theirs                      # replaced by other code after the check
+    Other.m = theirs  # replaced by other code after the check
     with compile_steps.applied():
         assert Owner().own() == Owner().inherited() == "ours"
         assert Other().m() == "theirs"
-        Owner.own = theirs                # replaced again while the context is open
+        Owner.own = theirs  # replaced again while the context is open
     assert Owner().own() == "theirs"
     assert Owner().inherited() == "numba's inherited" and "inherited" not in vars(Owner)
     assert Other().m() == "theirs"
     assert compile_steps._status["Other.m"].startswith("not applied:")
     Owner.own = own
-    Other.m = other_m                     # the other code's replacement taken back
+    Other.m = other_m  # the other code's replacement taken back
     with compile_steps.applied():
         assert Owner().own() == Other().m() == "ours"
     assert Owner.__dict__["own"] is own and Other.__dict__["m"] is other_m
@@ -181,7 +193,7 @@ def test_the_context_puts_back_numbas_own_and_never_replaces_anothers(monkeypatc
 def test_the_run_loop_runs_the_same_without_numbas_fingerprint(monkeypatch):
     """Without Numba's private compute_fingerprint (another release) the run loop's entry is
     looked up by the typed arguments: the same run, bit for bit, and no fingerprint key."""
-    scoutsim.simulate(duration=0.1)     # compiled (or loaded) with the fingerprints
+    scoutsim.simulate(duration=0.1)  # compiled (or loaded) with the fingerprints
     ref = scoutsim.simulate(duration=0.1)
     monkeypatch.setattr(loop, "_compute_fingerprint", None)
     monkeypatch.setattr(loop, "_ENTRIES", {})
@@ -189,5 +201,6 @@ def test_the_run_loop_runs_the_same_without_numbas_fingerprint(monkeypatch):
     for k, v in ref.columns().items():
         assert np.asarray(r.columns()[k]).tobytes() == np.asarray(v).tobytes(), k
     from numba.core import types
+
     assert loop._ENTRIES
     assert all(all(isinstance(t, types.Type) for t in key[1]) for key in loop._ENTRIES)

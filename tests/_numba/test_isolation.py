@@ -66,7 +66,8 @@ _WITHOUT_SCOUTSIM = _FOREIGN + textwrap.dedent("""
 #: of scoutsim's compiled inside foreign code, then the foreign code; Numba's methods
 #: before scoutsim's import and after compared by identity, and what was in place while
 #: the foreign functions compiled
-_WITH_SCOUTSIM = textwrap.dedent("""
+_WITH_SCOUTSIM = (
+    textwrap.dedent("""
     import json, sys
     from numba.core import caching, dispatcher, inline_closurecall, targetconfig, event
     from numba.core.registry import CPUDispatcher
@@ -98,7 +99,9 @@ _WITH_SCOUTSIM = textwrap.dedent("""
             pass
 
     event.register("numba:compile", Probe())
-""") + _FOREIGN + textwrap.dedent("""
+""")
+    + _FOREIGN
+    + textwrap.dedent("""
     from numba import njit
     from scoutsim._core.model.sensor_readings import uniform01
 
@@ -115,11 +118,11 @@ _WITH_SCOUTSIM = textwrap.dedent("""
     out.update(moved=moved, extra_locators=extra, compile_probe=compile_probe)
     print(json.dumps(out))
 """)
+)
 
 
 def _run(script: str) -> dict:
-    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                       timeout=600)
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr[-3000:]
     return json.loads(p.stdout.strip().splitlines()[-1])
 
@@ -130,7 +133,7 @@ def test_foreign_numba_code_is_unaffected_by_scoutsim():
     and afterwards Numba's methods are the very objects they were before scoutsim was
     imported. The only addition to Numba is the cache locator that answers for scoutsim's
     own files."""
-    scoutsim.simulate(duration=0.05)    # the core in the cache: the subprocess loads it
+    scoutsim.simulate(duration=0.05)  # the core in the cache: the subprocess loads it
     without = _run(_WITHOUT_SCOUTSIM)
     with_ = _run(_WITH_SCOUTSIM)
     for k in ("foreign", "branchy", "power", "signatures"):
@@ -139,10 +142,11 @@ def test_foreign_numba_code_is_unaffected_by_scoutsim():
     assert any("Literal" in s for s in without["signatures"])
     # a check of the foreign results themselves (x*k + 0.25 and x**3, summed)
     import numpy as np
+
     a = np.linspace(-1.0, 2.0, 7)
-    expect = sum(2 * (2 * x + 0.25) + (3 * x + 0.25) + (-3 * x + 0.25) + x ** 3 for x in a)
+    expect = sum(2 * (2 * x + 0.25) + (3 * x + 0.25) + (-3 * x + 0.25) + x**3 for x in a)
     assert abs(float.fromhex(without["foreign"]) - expect) < 1e-12
-    assert with_["calls_scoutsim"] == with_["uniform01"]    # scoutsim's, called from foreign code
+    assert with_["calls_scoutsim"] == with_["uniform01"]  # scoutsim's, called from foreign code
     assert with_["moved"] == []
     assert with_["extra_locators"] == ["_CoreCacheLocator"]
     probe = with_["compile_probe"]

@@ -37,14 +37,36 @@ from scoutsim._core.numerics import (
 from scoutsim._numba import disk_cache, jit
 from scoutsim.control import bounding
 
-MODULES = (kinematics, rigid_body, leg, actuator, transmission, contact, kkt, workspace,
-           impact, evaluate, ark, dopri5, events, transitions, stepper, event_location,
-           step_energy, hybrid, loop, bounding)
+MODULES = (
+    kinematics,
+    rigid_body,
+    leg,
+    actuator,
+    transmission,
+    contact,
+    kkt,
+    workspace,
+    impact,
+    evaluate,
+    ark,
+    dopri5,
+    events,
+    transitions,
+    stepper,
+    event_location,
+    step_energy,
+    hybrid,
+    loop,
+    bounding,
+)
 
 
 def dispatchers(module):
-    return {name: obj for name, obj in vars(module).items()
-            if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__}
+    return {
+        name: obj
+        for name, obj in vars(module).items()
+        if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__
+    }
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
@@ -59,9 +81,16 @@ def test_every_compiled_function_declares_its_reference_counting(module):
 
 
 def test_the_hot_loop_runs_without_reference_counting():
-    for f in (evaluate.evaluate_ws, evaluate.evaluate_command_change, kinematics.project_state,
-              ark.step3, hybrid.advance, transitions.settle_ws, events.event_values,
-              bounding.bounding_step):
+    for f in (
+        evaluate.evaluate_ws,
+        evaluate.evaluate_command_change,
+        kinematics.project_state,
+        ark.step3,
+        hybrid.advance,
+        transitions.settle_ws,
+        events.event_values,
+        bounding.bounding_step,
+    ):
         assert f.targetoptions["_nrt"] is False, f.py_func.__name__
     # the functions that allocate keep it
     for f in (loop.run, transitions.touchdown, impact.impact, evaluate.evaluate):
@@ -89,11 +118,14 @@ def test_kernel_and_allocating_set_the_options():
     assert k.py_func is f and a.py_func is f
 
 
-@pytest.mark.skipif(not jit.TYPED_BY_KIND,
-                    reason="SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS turns the per-kind typing off")
+@pytest.mark.skipif(
+    not jit.TYPED_BY_KIND,
+    reason="SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS turns the per-kind typing off",
+)
 def test_a_callee_is_compiled_once_whatever_constants_its_callers_pass():
     """Constants passed from compiled code (True / False, leg index 0 / 1) do not give the
     callee one specialization each: the right-hand side used to be compiled five times."""
+
     def callee(x, flag, leg):
         return x + (1.0 if flag else 0.0) + leg
 
@@ -115,59 +147,88 @@ def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
     outside the core change nothing."""
     import pathlib
     import shutil
+
     pkg = disk_cache._PACKAGE
     copy = tmp_path / "scoutsim"
     shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
     d0 = disk_cache.module_digests(copy)
     assert d0 == disk_cache.module_digests(pkg)
-    assert set(d0) >= {"_core/loop.py", "_numba/jit.py", "_core/model/evaluate.py",
-                       "_core/numerics/hybrid.py"}
+    assert set(d0) >= {
+        "_core/loop.py",
+        "_numba/jit.py",
+        "_core/model/evaluate.py",
+        "_core/numerics/hybrid.py",
+    }
 
     def edit(rel):
         with open(copy / rel, "a") as f:
             f.write("\n# an edit\n")
         return disk_cache.module_digests(copy)
 
-    d1 = edit("analysis/gait.py")     # not part of the compiled core
+    d1 = edit("analysis/gait.py")  # not part of the compiled core
     assert d1 == d0
-    d2 = edit("_core/loop.py")        # nothing imports the run loop
+    d2 = edit("_core/loop.py")  # nothing imports the run loop
     assert {rel for rel in d0 if d2[rel] != d0[rel]} == {"_core/loop.py"}
-    d3 = edit("_core/model/leg.py")   # inlined into the right-hand side, in another file
+    d3 = edit("_core/model/leg.py")  # inlined into the right-hand side, in another file
     changed = {rel for rel in d0 if d3[rel] != d2[rel]}
-    assert {"_core/model/leg.py", "_core/model/contact.py", "_core/model/evaluate.py",
-            "_core/numerics/ark.py", "_core/numerics/hybrid.py", "_core/loop.py"} <= changed
-    assert not changed & {"_core/model/layout.py", "_core/model/kkt.py", "control/bounding.py",
-                          "_numba/jit.py"}
-    d4 = edit("_numba/jit.py")        # the compilation options: every compiled module
-    assert all(d4[rel] != d3[rel] for rel in (
-        "_core/loop.py", "_core/model/evaluate.py", "_core/model/leg.py",
-        "_core/numerics/ark.py", "control/bounding.py"))
-    assert d4["_core/model/layout.py"] == d3["_core/model/layout.py"]   # constants only
+    assert {
+        "_core/model/leg.py",
+        "_core/model/contact.py",
+        "_core/model/evaluate.py",
+        "_core/numerics/ark.py",
+        "_core/numerics/hybrid.py",
+        "_core/loop.py",
+    } <= changed
+    assert not changed & {
+        "_core/model/layout.py",
+        "_core/model/kkt.py",
+        "control/bounding.py",
+        "_numba/jit.py",
+    }
+    d4 = edit("_numba/jit.py")  # the compilation options: every compiled module
+    assert all(
+        d4[rel] != d3[rel]
+        for rel in (
+            "_core/loop.py",
+            "_core/model/evaluate.py",
+            "_core/model/leg.py",
+            "_core/numerics/ark.py",
+            "control/bounding.py",
+        )
+    )
+    assert d4["_core/model/layout.py"] == d3["_core/model/layout.py"]  # constants only
     # a module's directory is named by the module and its digest, under the cache's root
     here = disk_cache.module_digests()
     for rel, path in disk_cache._MODULE_DIRS.items():
         rel = pathlib.Path(rel).relative_to(pkg).as_posix()
-        assert path == disk_cache.module_cache_dir(disk_cache.cache_directory(), rel,
-                                                   here[rel])
-    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "loop.py")].name == \
-        f"_core.loop-{here['_core/loop.py']}"
-    assert disk_cache._MODULE_DIRS[str(pkg / "_core" / "model" / "evaluate.py")].name == \
-        f"_core.model.evaluate-{here['_core/model/evaluate.py']}"
+        assert path == disk_cache.module_cache_dir(disk_cache.cache_directory(), rel, here[rel])
+    assert (
+        disk_cache._MODULE_DIRS[str(pkg / "_core" / "loop.py")].name
+        == f"_core.loop-{here['_core/loop.py']}"
+    )
+    assert (
+        disk_cache._MODULE_DIRS[str(pkg / "_core" / "model" / "evaluate.py")].name
+        == f"_core.model.evaluate-{here['_core/model/evaluate.py']}"
+    )
 
 
 def test_a_function_is_cached_in_its_modules_directory():
     """Numba's cache of a core function is its module's directory (the locator jit.py
     installs), whatever Numba's own cache directory setting."""
     from numba.core.caching import FunctionCache
+
     cache = FunctionCache(evaluate.evaluate_ws.py_func)
     directory = disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))]
     assert cache.cache_path == str(directory)
-    assert cache._impl.locator.get_source_stamp() == \
-        disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
+    assert (
+        cache._impl.locator.get_source_stamp()
+        == disk_cache._MODULE_DIRS[str(pathlib_path(evaluate.__file__))].name.rsplit("-", 1)[1]
+    )
 
 
 def pathlib_path(f):
     import pathlib
+
     return pathlib.Path(f).resolve()
 
 
@@ -200,6 +261,7 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     import subprocess
     import sys
     import time
+
     user = tmp_path / "user-cache"
     root = disk_cache.user_cache_dir(user)
     assert root == user / disk_cache.USER_CACHE_NAME
@@ -207,9 +269,13 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     old_whole_recent = user / f"{disk_cache.USER_CACHE_PREFIX}{'1' * 16}"
     ours_stale = root / f"_core.loop-{'0' * 16}"
     ours_recent = root / f"_core.model.evaluate-{'1' * 16}"
-    not_ours = [user / "numba-0000000000000000", user / "scoutsim-numba-notadigest",
-                user / "another_program_abc123", root / f"notacoremodule-{'0' * 16}",
-                root / "_core.loop-notadigest"]
+    not_ours = [
+        user / "numba-0000000000000000",
+        user / "scoutsim-numba-notadigest",
+        user / "another_program_abc123",
+        root / f"notacoremodule-{'0' * 16}",
+        root / "_core.loop-notadigest",
+    ]
     every = (old_whole_stale, old_whole_recent, ours_stale, ours_recent, *not_ours)
     for d in every:
         (d / "sub").mkdir(parents=True)
@@ -219,21 +285,35 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
     for d in (old_whole_stale, ours_stale, *not_ours):
         for path in (d / "sub" / "f.nbi", d / "sub", d):
             os.utime(path, (old, old))
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(user),
-               PYTHONPATH=os.pathsep.join([str(disk_cache._PACKAGE.parent),
-                                           os.environ.get("PYTHONPATH", "")]))
-    out = subprocess.run([sys.executable, "-c", _REPORT_CACHE_DIR, *map(str, every)],
-                         env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300,
-                         check=True)
+    env = dict(
+        os.environ,
+        NUMBA_CACHE_DIR=str(user),
+        PYTHONPATH=os.pathsep.join(
+            [str(disk_cache._PACKAGE.parent), os.environ.get("PYTHONPATH", "")]
+        ),
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", _REPORT_CACHE_DIR, *map(str, every)],
+        env=env,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     report = json.loads(out.stdout.strip().splitlines()[-1])
     assert report["digests"] == disk_cache.module_digests()
     assert pathlib_path(report["numba_cache_dir"]) == user.resolve()
     assert pathlib_path(report["root"]) == root.resolve()
     loop_dir = pathlib_path(report["loop"])
-    assert loop_dir == disk_cache.module_cache_dir(root, "_core/loop.py",
-                                            report["digests"]["_core/loop.py"]).resolve()
+    assert (
+        loop_dir
+        == disk_cache.module_cache_dir(
+            root, "_core/loop.py", report["digests"]["_core/loop.py"]
+        ).resolve()
+    )
     assert loop_dir.parent == root.resolve()
-    assert report["after_import"] == [str(d) for d in every]     # nothing removed at import
+    assert report["after_import"] == [str(d) for d in every]  # nothing removed at import
     assert sorted(report["removed"]) == sorted([str(ours_stale), str(old_whole_stale)])
     assert not ours_stale.exists() and not old_whole_stale.exists()
     assert (ours_recent / "sub" / "f.nbi").exists()
@@ -257,7 +337,7 @@ def test_compile_progress_says_what_was_compiled():
     assert "compiled 1 function of the core in" in stream.getvalue()
     quiet = io.StringIO()
     with jit.compile_progress(quiet):
-        njit(lambda x: x + 1.0)(1.0)      # not the core's
+        njit(lambda x: x + 1.0)(1.0)  # not the core's
     assert quiet.getvalue() == ""
 
 
@@ -284,9 +364,16 @@ def test_the_per_kind_typing_has_a_switch(tmp_path):
     import os
     import subprocess
     import sys
+
     env = dict(os.environ, SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS="1")
-    p = subprocess.run([sys.executable, "-c", _SPECIALIZED], env=env, cwd=tmp_path,
-                       capture_output=True, text=True, timeout=300)
+    p = subprocess.run(
+        [sys.executable, "-c", _SPECIALIZED],
+        env=env,
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert p.returncode == 0, p.stderr[-2000:]
     out = json.loads(p.stdout.strip().splitlines()[-1])
     assert out["value"] == (1.0 + 1.0 + 0) + (1.0 + 0.0 + 1)
@@ -302,11 +389,16 @@ def test_the_cleaner_removes_directories_of_other_digests_and_of_modules_gone(tm
     for a while (a module this version lacks may be another version's, running now)."""
     import os
     import time
+
     digests = {"_core/loop.py": "0" * 16, "_core/numerics/hybrid.py": "1" * 16}
 
     def make(base):
-        keep = [base / f"_core.loop-{'0' * 16}", base / f"_core.numerics.hybrid-{'1' * 16}",
-                base / "imports.json", base / "not-a-module-dir"]
+        keep = [
+            base / f"_core.loop-{'0' * 16}",
+            base / f"_core.numerics.hybrid-{'1' * 16}",
+            base / "imports.json",
+            base / "not-a-module-dir",
+        ]
         other = base / f"_core.loop-{'2' * 16}"
         gone = [base / f"numerics.hybrid-{'3' * 16}", base / f"loop-{'4' * 16}"]
         base.mkdir()

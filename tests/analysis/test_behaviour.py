@@ -100,10 +100,13 @@ def test_a_controller_of_zero_torque_collapses_onto_the_torso():
     assert "the torso touched the ground" in b.text and "after 0 strides" in b.text
     robot = load_robot()
     th, y = float(r.pitch[-1]), float(r.height[-1])
-    lowest = (y - 0.5 * robot.torso_length * abs(math.sin(th))
-              - 0.5 * robot.torso_height * abs(math.cos(th)))
-    assert abs(lowest) < 1e-6                           # the torso's lowest corner
-    assert abs(math.degrees(th)) < 59.0                 # not the pitch limit
+    lowest = (
+        y
+        - 0.5 * robot.torso_length * abs(math.sin(th))
+        - 0.5 * robot.torso_height * abs(math.cos(th))
+    )
+    assert abs(lowest) < 1e-6  # the torso's lowest corner
+    assert abs(math.degrees(th)) < 59.0  # not the pitch limit
 
 
 def test_touchdown_angles_far_off_stand():
@@ -138,8 +141,7 @@ def test_a_slippery_floor_slides():
 def test_legs_placed_behind_the_hips_hop_in_place():
     """Front legs placed 10 deg behind the hip, back legs 8 deg ahead, from rest: the legs
     keep lifting off, the torso stays where it is."""
-    r = simulate(controller=table_i(8.0, -10.0), initial_state=InitialState(dx=0.0),
-                 duration=4.0)
+    r = simulate(controller=table_i(8.0, -10.0), initial_state=InitialState(dx=0.0), duration=4.0)
     b = r.behaviour()
     assert b.kind == "hopping_in_place" and b.text.startswith("hopped in place")
     assert sum(b.counts["liftoffs"].values()) >= 10
@@ -165,7 +167,7 @@ def test_a_run_shorter_than_the_transient_says_run_longer_and_longer_bounds(boun
     b = r.behaviour()
     assert b.kind == "too_short" and b.advice == RUN_LONGER and b.text.endswith(RUN_LONGER)
     assert "transient" in b.text
-    assert bound.behaviour().kind == "bounding"        # the same start run 4 s
+    assert bound.behaviour().kind == "bounding"  # the same start run 4 s
 
 
 def test_irregular_strides_get_no_run_longer():
@@ -182,15 +184,16 @@ def test_stops_say_what_stopped_them(bound):
     b = r.behaviour()
     assert r.outcome == "numerical_failure" and b.kind == "numerical_failure"
     assert "the integration failed" in b.text and "singular dynamics" in b.text
-    with pytest.raises(scoutsim.ControllerError) as err:    # (with the run so far)
+    with pytest.raises(scoutsim.ControllerError) as err:  # (with the run so far)
         simulate(controller=Raises(), duration=0.5)
     r = err.value.result
     assert r.outcome == "controller_error"
     assert r.behaviour().kind == "controller_error"
     assert r.behaviour().text.startswith(f"the controller failed at t = {r.t_end:.2f} s")
     stopped = dataclasses.replace(bound, outcome="interrupted", _cache={})
-    assert stopped.behaviour().text.startswith("interrupted at t = 4.00 s; until then "
-                                               "steady bounding")
+    assert stopped.behaviour().text.startswith(
+        "interrupted at t = 4.00 s; until then steady bounding"
+    )
     assert {b.kind, "bounding", "fell"} <= set(BEHAVIOUR_KINDS)
 
 
@@ -204,8 +207,10 @@ def test_classification_is_of_the_gait_given(bound):
 
 def test_the_run_table_prints_what_the_run_did_and_run_longer_only_as_advice(bound):
     def table(r):
-        return format_summary(r.summary(), duration=float(r.t_end), wall_s=1.0,
-                              t_end=float(r.t_end))
+        return format_summary(
+            r.summary(), duration=float(r.t_end), wall_s=1.0, t_end=float(r.t_end)
+        )
+
     text = table(bound)
     assert "what the robot did" in text and "steady bounding at" in text
     assert RUN_LONGER not in text

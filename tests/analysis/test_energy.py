@@ -29,8 +29,15 @@ FLOORS = {"coulomb": None, "no_slip": math.inf}
 
 
 def _run(model, robot=None, floor="coulomb", duration=10.0, integrator=REFERENCE, **kw):
-    return scoutsim.simulate(robot, duration=duration, model=model, integrator=integrator,
-                             friction_coefficient=FLOORS[floor], energy=True, **kw)
+    return scoutsim.simulate(
+        robot,
+        duration=duration,
+        model=model,
+        integrator=integrator,
+        friction_coefficient=FLOORS[floor],
+        energy=True,
+        **kw,
+    )
 
 
 @pytest.mark.parametrize("options", [False, True], ids=["default_robot", "every_option"])
@@ -44,7 +51,7 @@ def test_balance_closes(model, floor, options):
     r = _run(model, robot, floor)
     assert r.outcome == "completed"
     b = r.energy_balance()
-    assert b.input_J > 100.0          # the motors did work (about 30-60 W)
+    assert b.input_J > 100.0  # the motors did work (about 30-60 W)
     assert abs(b.relative_residual) < 1e-6, b.table()
     # what each floor and option switches on is in the balance (and nothing else)
     assert (b.term("impacts") > 1.0) == (floor == "no_slip")
@@ -64,8 +71,14 @@ def test_every_dissipation_dissipates():
     battery gives the motors' energy plus its own loss."""
     r = _run("II", scoutsim.RobotParameters().replace(**OPTIONS))
     b = r.energy_balance()
-    for name in ("copper", "joint_friction", "belt_damper", "leg_damper", "leg_friction",
-                 "toe_sliding"):
+    for name in (
+        "copper",
+        "joint_friction",
+        "belt_damper",
+        "leg_damper",
+        "leg_friction",
+        "toe_sliding",
+    ):
         assert b.term(name) > 0.0, name
     assert b.battery_J == pytest.approx(b.input_J + b.battery_loss_J, rel=1e-12)
 
@@ -73,10 +86,10 @@ def test_every_dissipation_dissipates():
 def test_passive_massless_legs_conserve_energy():
     """The massless-leg passive model is conservative: no flow, no loss, no change of
     mechanical energy (docs/specification.md section 2)."""
-    robot = scoutsim.RobotParameters().replace(leg_mass=0.0, leg_inertia=0.0,
-                                               leg_damping=0.0)
-    r = scoutsim.simulate(robot, duration=2.0, model="passive", energy=True,
-                          passive_touchdown_angles=(0.25, 0.25))
+    robot = scoutsim.RobotParameters().replace(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
+    r = scoutsim.simulate(
+        robot, duration=2.0, model="passive", energy=True, passive_touchdown_angles=(0.25, 0.25)
+    )
     b = r.energy_balance()
     assert b.input_J == 0.0
     for name, e, _ in b.terms:
@@ -112,8 +125,9 @@ def test_residual_converges_with_the_tolerance():
     the default rtol 1e-5 / atol 1e-6, 1.4e-6 at 1e-7 / 1e-9, 8e-9 at 1e-9 / 1e-11)."""
     res = []
     for rtol, atol in ((1e-5, None), (1e-7, 1e-9)):
-        r = _run("II", duration=3.0,
-                 integrator=IntegratorSettings(method="ark3", rtol=rtol, atol=atol))
+        r = _run(
+            "II", duration=3.0, integrator=IntegratorSettings(method="ark3", rtol=rtol, atol=atol)
+        )
         res.append(abs(r.energy_balance().relative_residual))
     assert res[0] < 1e-3
     assert res[1] < res[0] / 30.0
@@ -130,8 +144,9 @@ def test_copper_loss_and_electrical_power_from_the_time_series():
         i = r.motor_current(leg)
         w = r.motor_speed(leg)
         copper = npl * robot.armature_resistance * np.trapezoid(i * i, r.t)
-        elec = npl * np.trapezoid(i * (robot.armature_resistance * i
-                                       + robot.speed_constant * w), r.t)
+        elec = npl * np.trapezoid(
+            i * (robot.armature_resistance * i + robot.speed_constant * w), r.t
+        )
         assert r.energy_flows[f"copper_{leg}"] == pytest.approx(copper, rel=0.02)
         assert r.energy_flows[f"electrical_{leg}"] == pytest.approx(elec, rel=0.02)
 
@@ -151,7 +166,7 @@ def test_back_driving_is_a_source_in_the_transmission_term():
     for leg in L.LEG_NAMES:
         p = npl * (1.0 - eta) * kt * r.motor_current(leg) * r.motor_speed(leg)
         back_driven = np.trapezoid(np.minimum(p, 0.0), r.t)
-        assert back_driven < -10.0     # the legs do back-drive their motors
+        assert back_driven < -10.0  # the legs do back-drive their motors
         signed = np.trapezoid(p, r.t)
         assert abs(r.energy_flows[f"conversion_{leg}"] - signed) < 0.1 * abs(back_driven)
 
@@ -178,6 +193,7 @@ def test_transition_audit_reports_the_balance():
     import dataclasses
 
     from scoutsim.analysis.transition_audit import audit_transitions
+
     r = scoutsim.simulate(duration=2.0, energy=True)
     audit = audit_transitions(r)
     assert audit.balance is not None and audit.ok, audit.problems()
@@ -198,7 +214,8 @@ def test_cost_of_transport_from_its_definition():
     d = r.x[-1] - r.x[0]
     assert d > 1.0
     assert b.cost_of_transport == pytest.approx(
-        b.input_J / (robot.total_mass * robot.gravity * d), rel=1e-12)
+        b.input_J / (robot.total_mass * robot.gravity * d), rel=1e-12
+    )
     assert b.mean_input_power_W == pytest.approx(b.input_J / 2.0, rel=1e-12)
 
 
@@ -208,8 +225,23 @@ def test_cli_run_energy_prints_and_saves_the_balance(tmp_path, capsys):
     import json
 
     from scoutsim.cli import main
-    assert main(["run", "--duration", "0.5", "--model", "I", "--energy", "--out",
-                 str(tmp_path), "--no-progress"]) == 0
+
+    assert (
+        main(
+            [
+                "run",
+                "--duration",
+                "0.5",
+                "--model",
+                "I",
+                "--energy",
+                "--out",
+                str(tmp_path),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "work-energy balance" in printed and "| residual |" in printed
     saved = json.loads((tmp_path / "summary.json").read_text())["energy_balance"]

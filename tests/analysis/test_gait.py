@@ -14,25 +14,52 @@ from scoutsim.analysis.gait import gait_metrics, stride_table
 from scoutsim.analysis.stances import stance_intervals
 
 DT = 1e-3
-V = 1.3                   # forward speed [m/s]
-PITCH_AMP = 0.2           # [rad]
-PITCH_F = 5.0             # [Hz]
+V = 1.3  # forward speed [m/s]
+PITCH_AMP = 0.2  # [rad]
+PITCH_F = 5.0  # [Hz]
 H0, H_AMP, H_F = 0.30, 0.02, 3.0
-BACK_STANCE = 0.2         # back stance ends at each back lift-off [s]
-FRONT_BEFORE, FRONT_AFTER = 0.1, 0.15   # front stance straddles each back lift-off [s]
+BACK_STANCE = 0.2  # back stance ends at each back lift-off [s]
+FRONT_BEFORE, FRONT_AFTER = 0.1, 0.15  # front stance straddles each back lift-off [s]
 
-FIRST_KEYS = ["outcome", "mean_speed_m_s", "stride_frequency_hz", "duty_factor_back",
-              "duty_factor_front", "pitch_max_deg", "pitch_min_deg", "height_max_m",
-              "height_min_m", "max_friction_ratio", "n_steady_strides"]
-EXTRA_KEYS = ["t_end_s", "n_strides", "stride_period_cv", "steady_bounding",
-              "motor_saturation_retraction_back", "motor_saturation_retraction_front",
-              "max_belt_deflection_deg", "max_impact_impulse_ratio", "end_of_stance_slides",
-              "model"]
+FIRST_KEYS = [
+    "outcome",
+    "mean_speed_m_s",
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_deg",
+    "pitch_min_deg",
+    "height_max_m",
+    "height_min_m",
+    "max_friction_ratio",
+    "n_steady_strides",
+]
+EXTRA_KEYS = [
+    "t_end_s",
+    "n_strides",
+    "stride_period_cv",
+    "steady_bounding",
+    "motor_saturation_retraction_back",
+    "motor_saturation_retraction_front",
+    "max_belt_deflection_deg",
+    "max_impact_impulse_ratio",
+    "end_of_stance_slides",
+    "model",
+]
 BEHAVIOUR_KEYS = ["behaviour", "behaviour_kind", "behaviour_detail"]
-ENERGY_KEYS = ["electrical_energy_j", "copper_loss_j", "transmission_loss_j", "hip_work_j",
-               "friction_loss_j", "impact_loss_j", "mechanical_energy_change_j",
-               "energy_residual_j", "energy_relative_residual", "mean_electrical_power_w",
-               "cost_of_transport"]
+ENERGY_KEYS = [
+    "electrical_energy_j",
+    "copper_loss_j",
+    "transmission_loss_j",
+    "hip_work_j",
+    "friction_loss_j",
+    "impact_loss_j",
+    "mechanical_energy_change_j",
+    "energy_residual_j",
+    "energy_relative_residual",
+    "mean_electrical_power_w",
+    "cost_of_transport",
+]
 
 
 def back_liftoffs(t_stop=7.6):
@@ -47,13 +74,14 @@ def back_liftoffs(t_stop=7.6):
         k += 1
 
 
-def make_result(duration=8.0, lo=None, outcome="completed", x_wiggle=0.0,
-                extra_events=(), t_cut=None):
+def make_result(
+    duration=8.0, lo=None, outcome="completed", x_wiggle=0.0, extra_events=(), t_cut=None
+):
     """A hand-built SimulationResult: x = V t (+ wiggle), sinusoidal height and pitch,
     back stance [lo - 0.2, lo], front stance [lo - 0.1, lo + 0.15] for each back lift-off."""
     n = int(round(duration / DT)) + 1
     t = np.arange(n) * DT
-    if t_cut is not None:       # a fall: data stop with one off-grid sample at t_cut
+    if t_cut is not None:  # a fall: data stop with one off-grid sample at t_cut
         t = np.append(t[t < t_cut], t_cut)
     w_p, w_h, w_x = 2 * np.pi * PITCH_F, 2 * np.pi * H_F, 2 * np.pi * 3.0
     state = np.zeros((len(t), L.NS))
@@ -81,12 +109,20 @@ def make_result(duration=8.0, lo=None, outcome="completed", x_wiggle=0.0,
     events = np.array(sorted(rows), dtype=float).reshape(-1, L.NEVREC)
     events = events[events[:, 0] <= t_end]
     return SimulationResult(
-        t=t, state=state, aux=np.zeros((len(t), L.NAUX)),
-        modes=np.zeros((len(t), 6), dtype=np.int8), events=events, outcome=outcome,
+        t=t,
+        state=state,
+        aux=np.zeros((len(t), L.NAUX)),
+        modes=np.zeros((len(t), 6), dtype=np.int8),
+        events=events,
+        outcome=outcome,
         t_end=t_end,
-        stats={"max_friction_ratio": 0.42, "max_impact_impulse_ratio": 0.1,
-               "end_of_stance_slides": 3.0},
-        provenance={"model": "I", "robot": dataclasses.asdict(scoutsim.RobotParameters())})
+        stats={
+            "max_friction_ratio": 0.42,
+            "max_impact_impulse_ratio": 0.1,
+            "end_of_stance_slides": 3.0,
+        },
+        provenance={"model": "I", "robot": dataclasses.asdict(scoutsim.RobotParameters())},
+    )
 
 
 def sampling_tol(amp, freq):
@@ -114,16 +150,18 @@ def test_duty_factors_from_event_times():
         # in the middle of it does not end it
         assert s.duty_factor_back == pytest.approx(BACK_STANCE / period, rel=1e-12)
         # front stance straddles both boundaries: 0.15 s after the start, 0.1 s before end
-        assert s.duty_factor_front == pytest.approx((FRONT_AFTER + FRONT_BEFORE) / period,
-                                                    rel=1e-12)
+        assert s.duty_factor_front == pytest.approx(
+            (FRONT_AFTER + FRONT_BEFORE) / period, rel=1e-12
+        )
 
 
 def test_stance_intervals_and_open_stance_at_end():
     lo = back_liftoffs()
-    t_td = lo[-1] + 0.05                                 # back never lifts off again
-    duration = round(lo[-1] + 0.1, 3)                     # ends inside the last front stance
-    r = make_result(duration=duration, lo=lo,
-                    extra_events=[(t_td, L.EK_TOUCHDOWN, L.BACK, 0, 0, 0)])
+    t_td = lo[-1] + 0.05  # back never lifts off again
+    duration = round(lo[-1] + 0.1, 3)  # ends inside the last front stance
+    r = make_result(
+        duration=duration, lo=lo, extra_events=[(t_td, L.EK_TOUCHDOWN, L.BACK, 0, 0, 0)]
+    )
     assert r.t_end == pytest.approx(duration)
     back = stance_intervals(r, "back")
     assert back.shape == (len(lo) + 1, 2)
@@ -160,7 +198,7 @@ def test_mean_speed_linear_and_hermite_accuracy():
 def test_pitch_and_height_extrema():
     g = gait_metrics(make_result(), transient_s=0.0)
     amp_deg = math.degrees(PITCH_AMP)
-    for s in g.strides:   # every stride (>= 0.49 s) holds a full pitch and height cycle
+    for s in g.strides:  # every stride (>= 0.49 s) holds a full pitch and height cycle
         assert amp_deg - sampling_tol(amp_deg, PITCH_F) <= s.pitch_max_deg <= amp_deg + 1e-12
         assert -amp_deg - 1e-12 <= s.pitch_min_deg <= -amp_deg + sampling_tol(amp_deg, PITCH_F)
         assert H0 + H_AMP - sampling_tol(H_AMP, H_F) <= s.height_max_m <= H0 + H_AMP + 1e-12
@@ -209,16 +247,16 @@ def test_steady_selection_and_means():
 def test_summary_keys_and_json():
     r = make_result()
     s = gait_metrics(r).summary(r)
-    assert list(s)[:len(FIRST_KEYS)] == FIRST_KEYS
-    assert list(s)[len(FIRST_KEYS):] == EXTRA_KEYS + BEHAVIOUR_KEYS + ENERGY_KEYS
-    assert all(s[k] is None for k in ENERGY_KEYS)    # made without the energy accounting
+    assert list(s)[: len(FIRST_KEYS)] == FIRST_KEYS
+    assert list(s)[len(FIRST_KEYS) :] == EXTRA_KEYS + BEHAVIOUR_KEYS + ENERGY_KEYS
+    assert all(s[k] is None for k in ENERGY_KEYS)  # made without the energy accounting
     json.dumps(s, allow_nan=False)
     assert s["outcome"] == "completed" and s["model"] == "I"
     assert s["max_friction_ratio"] == 0.42
     assert s["steady_bounding"] is True
     assert s["mean_speed_m_s"] == pytest.approx(V)
     assert s["end_of_stance_slides"] == 3
-    assert r.summary() == s            # through SimulationResult.summary()
+    assert r.summary() == s  # through SimulationResult.summary()
 
 
 def test_no_steady_strides_gives_null():
@@ -257,15 +295,17 @@ def test_motor_saturation_fraction_and_belt_deflection():
     r.modes[1000:2000, L.RM_LEG_STATE_B] = L.LS_RETRACTION
     r.modes[2000:2500, L.RM_LEG_STATE_B] = L.LS_BRAKE
     r.aux[:, L.A_VBATT] = rp.battery_voltage
-    r.aux[:, o + L.A_CURRENT] = -3.0                      # inside the limits
+    r.aux[:, o + L.A_CURRENT] = -3.0  # inside the limits
     r.aux[:, o + L.A_OMEGA_M] = -100.0
     r.aux[1000:1200, o + L.A_CURRENT] = -rp.current_limit  # on the current limit: 200
     # on the torque-speed line: R i + K_w w = -V_b  -> 50 samples
     w = -300.0
     r.aux[1200:1250, o + L.A_OMEGA_M] = w
-    r.aux[1200:1250, o + L.A_CURRENT] = (-rp.battery_voltage - rp.speed_constant * w) / rp.armature_resistance
-    r.aux[1250:1260, o + L.A_CURRENT] = -0.9 * rp.current_limit   # near, but not on, a limit
-    r.aux[2000:2500, o + L.A_CURRENT] = -rp.current_limit          # brake: does not count
+    r.aux[1200:1250, o + L.A_CURRENT] = (
+        -rp.battery_voltage - rp.speed_constant * w
+    ) / rp.armature_resistance
+    r.aux[1250:1260, o + L.A_CURRENT] = -0.9 * rp.current_limit  # near, but not on, a limit
+    r.aux[2000:2500, o + L.A_CURRENT] = -rp.current_limit  # brake: does not count
     g = gait_metrics(r)
     assert g.motor_saturation_fraction(r, "back") == pytest.approx(0.25)
     assert g.motor_saturation_fraction(r, "front") is None  # never in retraction
@@ -306,7 +346,7 @@ def test_real_simulation_model_I():
     r = scoutsim.simulate(duration=1.0, model="I")
     g = gait_metrics(r, transient_s=0.0)
     s = r.summary()
-    assert list(s)[:len(FIRST_KEYS)] == FIRST_KEYS
+    assert list(s)[: len(FIRST_KEYS)] == FIRST_KEYS
     assert set(EXTRA_KEYS) <= set(s)
     json.dumps(s, allow_nan=False)
     assert g.n_strides >= 3
@@ -314,9 +354,8 @@ def test_real_simulation_model_I():
         inside = (r.t >= st.t_start) & (r.t < st.t_end)
         for leg, duty in ((L.BACK, st.duty_factor_back), (L.FRONT, st.duty_factor_front)):
             sampled = np.count_nonzero(r.contact_mode(leg)[inside] != L.FLIGHT) * DT
-            pieces = sum(1 for a, b in stance_intervals(r, leg)
-                         if a < st.t_end and b > st.t_start)
-            assert pieces >= 1                       # a bounding leg stands in every stride
+            pieces = sum(1 for a, b in stance_intervals(r, leg) if a < st.t_end and b > st.t_start)
+            assert pieces >= 1  # a bounding leg stands in every stride
             assert abs(duty * st.period_s - sampled) <= pieces * DT, (st.t_start, leg)
     # the event-based stances agree with the sampled plant contact mode away from the
     # event times (one sample of margin on either side)
@@ -351,8 +390,7 @@ def test_an_interrupted_run_that_was_bounding_is_steady_bounding():
     steady bounding, like the same run completed; a fall or a failure does not."""
     r = scoutsim.simulate(duration=5.0)
     assert r.gait().is_steady_bounding()
-    for outcome, steady in (("interrupted", True), ("fell", False),
-                            ("numerical_failure", False)):
+    for outcome, steady in (("interrupted", True), ("fell", False), ("numerical_failure", False)):
         forced = dataclasses.replace(r, outcome=outcome, _cache={})
         assert gait_metrics(forced).is_steady_bounding() is steady, outcome
         assert forced.summary()["steady_bounding"] is steady

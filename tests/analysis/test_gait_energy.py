@@ -22,36 +22,44 @@ from scoutsim._core.model import layout as L
 
 #: flows that only ever take energy out (each a square or a friction force against its
 #: sliding velocity: R_A i^2, b w^2, c l'^2, -F_t v_toe)
-DISSIPATIONS = ("copper", "joint_viscous", "joint_coulomb", "belt_damper", "leg_damper",
-                "toe_slide")
+DISSIPATIONS = (
+    "copper",
+    "joint_viscous",
+    "joint_coulomb",
+    "belt_damper",
+    "leg_damper",
+    "toe_slide",
+)
 
 
 @pytest.fixture(scope="module")
 def run_II():
     """4 s of Model II bounding (the steady strides start after the 2 s transient), with
     the reference integrator: its balance closes to ~1e-8 of the input."""
-    return scoutsim.simulate(duration=4.0, model="II", energy=True,
-                             integrator=IntegratorSettings(method="dopri5"))
+    return scoutsim.simulate(
+        duration=4.0, model="II", energy=True, integrator=IntegratorSettings(method="dopri5")
+    )
 
 
 @pytest.fixture(scope="module")
 def run_I_noslip():
     """3 s of Model I on a no-slip floor: its touchdowns are impacts that lose energy."""
-    return scoutsim.simulate(duration=3.0, model="I", energy=True,
-                             friction_coefficient=math.inf)
+    return scoutsim.simulate(duration=3.0, model="I", energy=True, friction_coefficient=math.inf)
 
 
 @pytest.fixture(scope="module")
 def run_default():
     """4 s of Model II with the default integrator (ARK3), with and without accounting."""
-    return (scoutsim.simulate(duration=4.0, model="II", energy=True),
-            scoutsim.simulate(duration=4.0, model="II"))
+    return (
+        scoutsim.simulate(duration=4.0, model="II", energy=True),
+        scoutsim.simulate(duration=4.0, model="II"),
+    )
 
 
 def test_cumulative_series_ends_at_the_run_totals_and_dissipations_never_decrease(run_II):
     r = run_II
     assert r.energy_series.shape == (len(r.t), L.NEN)
-    assert np.all(r.energy_series[0] == 0.0)        # nothing accumulated at the start
+    assert np.all(r.energy_series[0] == 0.0)  # nothing accumulated at the start
     for leg in L.LEG_NAMES:
         for name in L.EN_LEG_NAMES:
             assert r.cumulative_energy(name, leg)[-1] == r.energy_flows[f"{name}_{leg}"]
@@ -60,8 +68,9 @@ def test_cumulative_series_ends_at_the_run_totals_and_dissipations_never_decreas
     assert r.cumulative_energy("battery_loss")[-1] == r.energy_flows["battery_loss"]
     # a group is the sum of its flows, both legs the sum of the two
     both = r.cumulative_energy("transmission")
-    parts = sum(r.cumulative_energy(n, leg) for n in ("conversion", "gear_loss")
-                for leg in L.LEG_NAMES)
+    parts = sum(
+        r.cumulative_energy(n, leg) for n in ("conversion", "gear_loss") for leg in L.LEG_NAMES
+    )
     np.testing.assert_allclose(both, parts, rtol=1e-12, atol=1e-9)
 
 
@@ -74,8 +83,11 @@ def test_stride_energies_add_up_to_the_run_totals(run_II, run_I_noslip):
         t = r.t
         first = int(np.searchsorted(t, strides[0].energy_t_start))
         last = int(np.searchsorted(t, strides[-1].energy_t_end))
-        for field, name in (("electrical_energy_j", "electrical"), ("copper_loss_j", "copper"),
-                            ("hip_work_j", "hip_work")):
+        for field, name in (
+            ("electrical_energy_j", "electrical"),
+            ("copper_loss_j", "copper"),
+            ("hip_work_j", "hip_work"),
+        ):
             total = sum(r.energy_flows[f"{name}_{leg}"] for leg in L.LEG_NAMES)
             e = r.cumulative_energy(name)
             inside = sum(s[field] for s in strides)
@@ -83,19 +95,20 @@ def test_stride_energies_add_up_to_the_run_totals(run_II, run_I_noslip):
         imp = r.impacts()
         outside = imp[(imp[:, 0] < t[first]) | (imp[:, 0] >= t[last]), 4].sum()
         assert sum(s.impact_loss_j for s in strides) + outside == pytest.approx(
-            r.energy_flows["impacts"], rel=1e-12)
-    assert run_I_noslip.energy_flows["impacts"] > 1.0          # the no-slip floor's impacts
+            r.energy_flows["impacts"], rel=1e-12
+        )
+    assert run_I_noslip.energy_flows["impacts"] > 1.0  # the no-slip floor's impacts
     assert all(s.impact_loss_j > 0 for s in run_I_noslip.strides)
 
 
 def test_stride_table_has_the_stride_energies(run_II):
     from scoutsim.analysis.gait import stride_table
+
     cols = stride_table(run_II)
     strides = run_II.strides
     assert len(cols["electrical_energy_j"]) == len(strides)
     assert cols["cost_of_transport"][-1] == strides[-1].cost_of_transport
-    assert "electrical_energy_j" not in stride_table(
-        scoutsim.simulate(duration=1.0, model="II"))
+    assert "electrical_energy_j" not in stride_table(scoutsim.simulate(duration=1.0, model="II"))
 
 
 def test_stride_energy_balance_closes(run_II, run_I_noslip):
@@ -109,14 +122,14 @@ def test_stride_energy_balance_closes(run_II, run_I_noslip):
         assert rtol == 1e-8
         for s in r.strides:
             assert s.copper_loss_j + s.transmission_loss_j + s.hip_work_j == pytest.approx(
-                s.electrical_energy_j, rel=1e-12)
+                s.electrical_energy_j, rel=1e-12
+            )
             assert abs(s.energy_residual_j) <= 100 * rtol * s.electrical_energy_j, s.index
             # the residual is what the stride's mechanical balance leaves: the change of
             # mechanical energy read from the recorded samples
             i, j = np.searchsorted(r.t, [s.energy_t_start, s.energy_t_end])
             d_mech = r.energy[j] - r.energy[i]
-            constraint = (r.cumulative_energy("constraint")[j]
-                          - r.cumulative_energy("constraint")[i])
+            constraint = r.cumulative_energy("constraint")[j] - r.cumulative_energy("constraint")[i]
             left = s.hip_work_j - s.friction_loss_j - constraint - s.impact_loss_j - d_mech
             assert left == pytest.approx(s.energy_residual_j, rel=1e-9, abs=1e-12)
 
@@ -183,14 +196,15 @@ def test_cost_of_transport_is_energy_over_weight_and_distance(run_default):
     energy = r.cumulative_energy("electrical")[j] - r.cumulative_energy("electrical")[i]
     distance = r.x[j] - r.x[i]
     assert s["cost_of_transport"] == pytest.approx(
-        energy / (mass * robot.gravity * distance), rel=1e-12)
-    assert s["mean_electrical_power_w"] == pytest.approx(energy / (r.t[j] - r.t[i]),
-                                                         rel=1e-12)
+        energy / (mass * robot.gravity * distance), rel=1e-12
+    )
+    assert s["mean_electrical_power_w"] == pytest.approx(energy / (r.t[j] - r.t[i]), rel=1e-12)
     # the whole run's terms, as the balance gives them
     b = r.energy_balance()
     assert s["electrical_energy_j"] == b.input_J
     assert s["copper_loss_j"] + s["transmission_loss_j"] + s["hip_work_j"] == pytest.approx(
-        s["electrical_energy_j"], rel=1e-12)
+        s["electrical_energy_j"], rel=1e-12
+    )
     assert s["energy_residual_j"] == b.residual_J
     json.dumps(s, allow_nan=False)
 
@@ -207,13 +221,14 @@ def test_energy_series_saved_and_loaded_bit_for_bit(run_default, tmp_path):
     w = scoutsim.SimulationResult.load(tmp_path / "parquet", t_range=(1.0, 2.0))
     assert w.energy_series.tobytes() == r.window(1.0, 2.0).energy_series.tobytes()
     k = np.searchsorted(r.t, 1.0)
-    assert w.energy_series[0].tobytes() == r.energy_series[k].tobytes()   # since the start
+    assert w.energy_series[0].tobytes() == r.energy_series[k].tobytes()  # since the start
 
 
 def test_streamed_run_has_the_same_series(run_default, tmp_path):
     r, _ = run_default
-    kept = scoutsim.simulate(duration=4.0, model="II", energy=True, stream_to=tmp_path / "s",
-                             keep_seconds=1.0)
+    kept = scoutsim.simulate(
+        duration=4.0, model="II", energy=True, stream_to=tmp_path / "s", keep_seconds=1.0
+    )
     whole = scoutsim.SimulationResult.load(tmp_path / "s")
     assert whole.energy_series.tobytes() == r.energy_series.tobytes()
     n = len(kept.t)
@@ -227,9 +242,16 @@ def test_run_without_accounting_has_no_series(run_default, tmp_path):
     # the motion is the same bit for bit
     assert r.state.tobytes() == r_on.state.tobytes()
     s = r.summary()
-    for key in ("electrical_energy_j", "cost_of_transport", "mean_electrical_power_w",
-                "copper_loss_j", "transmission_loss_j", "friction_loss_j", "hip_work_j",
-                "energy_residual_j"):
+    for key in (
+        "electrical_energy_j",
+        "cost_of_transport",
+        "mean_electrical_power_w",
+        "copper_loss_j",
+        "transmission_loss_j",
+        "friction_loss_j",
+        "hip_work_j",
+        "energy_residual_j",
+    ):
         assert s[key] is None
     assert all(st.electrical_energy_j is None for st in r.strides)
     with pytest.raises(ValueError, match="energy=True"):
@@ -243,14 +265,29 @@ def test_cli_run_summary_has_the_cost_of_transport(tmp_path, capsys):
     """``scoutsim run`` accounts for the energy by default (summary.json has what the gait
     costs, the figure of a stride's power is drawn); ``--no-energy`` leaves it out."""
     from scoutsim.cli import main
-    assert main(["run", "--duration", "3", "--out", str(tmp_path / "on"), "--no-progress",
-                 "--plots"]) == 0
+
+    assert (
+        main(["run", "--duration", "3", "--out", str(tmp_path / "on"), "--no-progress", "--plots"])
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "cost of transport" in printed
     saved = json.loads((tmp_path / "on" / "summary.json").read_text())
     assert saved["electrical_energy_j"] > 0 and saved["cost_of_transport"] > 0
     assert (tmp_path / "on" / "stride_power.png").stat().st_size > 0
-    assert main(["run", "--duration", "0.2", "--out", str(tmp_path / "off"),
-                 "--no-progress", "--no-energy"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--duration",
+                "0.2",
+                "--out",
+                str(tmp_path / "off"),
+                "--no-progress",
+                "--no-energy",
+            ]
+        )
+        == 0
+    )
     saved = json.loads((tmp_path / "off" / "summary.json").read_text())
     assert saved["electrical_energy_j"] is None and saved["cost_of_transport"] is None

@@ -39,8 +39,9 @@ def test_zero_pitch_rate_gives_equal_touchdown_angles():
 
 
 def test_orbit_converges_under_tighter_tolerance(orbit50):
-    loose = O.passive_bounding_orbit(1.3, 0.35, math.radians(50.0), rtol=1e-10,
-                                     guess=orbit50.touchdown_angles)
+    loose = O.passive_bounding_orbit(
+        1.3, 0.35, math.radians(50.0), rtol=1e-10, guess=orbit50.touchdown_angles
+    )
     assert np.max(np.abs(np.subtract(loose.touchdown_angles, orbit50.touchdown_angles))) < 1e-7
     assert abs(loose.period - orbit50.period) < 1e-8
 
@@ -49,10 +50,15 @@ def test_apex_map_agrees_with_simulate(orbit50):
     """The orbit module's passive integration is the simulator's passive model: the apex
     state after one stride agrees with a simulate() run (ballistic apex from a 1 kHz sample)."""
     z = orbit50.z
-    r = scoutsim.simulate(O.passive_robot(), None,
-                          InitialState(y=z[0], theta=0.0, dx=z[2], dy=0.0, dtheta=z[3]),
-                          0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
-                          passive_touchdown_angles=orbit50.touchdown_angles)
+    r = scoutsim.simulate(
+        O.passive_robot(),
+        None,
+        InitialState(y=z[0], theta=0.0, dx=z[2], dy=0.0, dtheta=z[3]),
+        0.5,
+        model="passive",
+        integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
+        passive_touchdown_angles=orbit50.touchdown_angles,
+    )
     assert not passive_reference._glitched(r)
     t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
     k = int(np.searchsorted(r.t, t_lo, side="right"))
@@ -71,12 +77,28 @@ def test_continuation_follows_the_family():
 
 
 def test_cli_orbit_passive_json_has_exactly_the_keys(capsys):
-    code = main(["orbit", "--passive", "--speed", "1.3", "--apex-height", "0.35",
-                 "--pitch-rate", "50", "--json"])
+    code = main(
+        [
+            "orbit",
+            "--passive",
+            "--speed",
+            "1.3",
+            "--apex-height",
+            "0.35",
+            "--pitch-rate",
+            "50",
+            "--json",
+        ]
+    )
     assert code == 0
     d = json.loads(capsys.readouterr().out)
-    assert set(d) == {"touchdown_angle_back_deg", "touchdown_angle_front_deg", "period_s",
-                      "eigenvalues", "residual"}
+    assert set(d) == {
+        "touchdown_angle_back_deg",
+        "touchdown_angle_front_deg",
+        "period_s",
+        "eigenvalues",
+        "residual",
+    }
     assert d["residual"] < 1e-9
     assert len(d["eigenvalues"]) == 4 and all(len(e) == 2 for e in d["eigenvalues"])
 
@@ -112,16 +134,17 @@ def long_run():
     # the reference integrator: the run must settle onto the orbit far below the default
     # tolerance's own noise (ARK3 at rtol 1e-5 keeps the section state ~4e-4 from it)
     # (on the default floor, as controlled_fixed_point())
-    return scoutsim.simulate(duration=20.0, model="II",
-                             integrator=IntegratorSettings(method="dopri5"))
+    return scoutsim.simulate(
+        duration=20.0, model="II", integrator=IntegratorSettings(method="dopri5")
+    )
 
 
 def test_controlled_fixed_point_residual_below_1e9(controlled):
     assert controlled.residual < 1e-9
     # the map evaluated afresh at the reported orbit returns to it
-    z0, z1, h1, T = O.controlled_stride_map(controlled.state,
-                                            integrator=IntegratorSettings(rtol=1e-11,
-                                                                          atol=1e-12))
+    z0, z1, h1, T = O.controlled_stride_map(
+        controlled.state, integrator=IntegratorSettings(rtol=1e-11, atol=1e-12)
+    )
     assert np.max(np.abs(z1 - z0)) < 1e-9
     assert T == controlled.period
     # a sampled-data orbit lasts a whole number of control periods
@@ -136,8 +159,9 @@ def test_controlled_orbit_is_where_the_simulation_converges(controlled, long_run
     te = r.event_times("controller_liftoff", "back")
     k = np.round(te / dt).astype(int)
     assert np.all(np.round(np.diff(te[-20:]) / dt) * dt == pytest.approx(controlled.period))
-    dist = np.array([np.max(np.abs(stride_map._z_of(r.hybrid_state(int(kk))) - controlled.z))
-                     for kk in k[-30:]])
+    dist = np.array(
+        [np.max(np.abs(stride_map._z_of(r.hybrid_state(int(kk))) - controlled.z)) for kk in k[-30:]]
+    )
     assert dist[-1] < 1e-3
     assert dist[-1] < 0.2 * dist[0]
     # the plant's lift-off intervals approach the period alternately, with the ratio of the
@@ -151,30 +175,43 @@ def test_controlled_orbit_is_where_the_simulation_converges(controlled, long_run
 
 def test_controlled_orbit_is_stable_and_converges_under_tighter_tolerance(controlled):
     assert controlled.stable
-    tight = O.controlled_fixed_point(controlled.state,
-                                     integrator=IntegratorSettings(rtol=1e-12, atol=1e-13))
+    tight = O.controlled_fixed_point(
+        controlled.state, integrator=IntegratorSettings(rtol=1e-12, atol=1e-13)
+    )
     assert tight.period == controlled.period
     assert np.max(np.abs(tight.z - controlled.z)) < 1e-8
-    assert np.max(np.abs(np.sort(np.abs(tight.multipliers)) -
-                         np.sort(np.abs(controlled.multipliers)))) < 1e-3
+    assert (
+        np.max(np.abs(np.sort(np.abs(tight.multipliers)) - np.sort(np.abs(controlled.multipliers))))
+        < 1e-3
+    )
 
 
 def test_resumed_run_continues_the_original():
     tight = IntegratorSettings(rtol=1e-10, atol=1e-11)
     r = scoutsim.simulate(duration=2.5, model="II", friction_coefficient=0.8, integrator=tight)
     k = 2000
-    r2 = scoutsim.simulate(initial_state=r.hybrid_state(k), duration=0.5, model="II",
-                           friction_coefficient=0.8, integrator=tight)
+    r2 = scoutsim.simulate(
+        initial_state=r.hybrid_state(k),
+        duration=0.5,
+        model="II",
+        friction_coefficient=0.8,
+        integrator=tight,
+    )
     n = len(r2.t)
-    assert np.array_equal(r2.modes, r.modes[k:k + n])
-    assert np.max(np.abs(r2.state - r.state[k:k + n])) < 1e-8
+    assert np.array_equal(r2.modes, r.modes[k : k + n])
+    assert np.max(np.abs(r2.state - r.state[k : k + n])) < 1e-8
 
 
 def test_cli_orbit_controlled_json(capsys):
     assert main(["orbit", "--json", "--duration", "8"]) == 0
     d = json.loads(capsys.readouterr().out)
-    for key in ("touchdown_angle_back_deg", "touchdown_angle_front_deg", "period_s",
-                "eigenvalues", "residual"):
+    for key in (
+        "touchdown_angle_back_deg",
+        "touchdown_angle_front_deg",
+        "period_s",
+        "eigenvalues",
+        "residual",
+    ):
         assert key in d
     assert d["residual"] < 1e-9
     # the touchdown angles from the world vertical are the commanded angles relative to
@@ -187,15 +224,23 @@ def test_apex_map_agrees_with_simulate_for_unequal_legs():
     """The same agreement (two independent formulations of the passive model: SciPy here,
     the compiled simulator) for a robot whose legs differ in stiffness and rest length and
     whose torso COM is 2 cm ahead of the hips' midpoint, over one stride from an apex."""
-    robot = O.passive_robot(scoutsim.RobotParameters(
-        com_offset=0.02, leg_stiffness=(3520.0, 3900.0), leg_rest_length=(0.323, 0.31)))
+    robot = O.passive_robot(
+        scoutsim.RobotParameters(
+            com_offset=0.02, leg_stiffness=(3520.0, 3900.0), leg_rest_length=(0.323, 0.31)
+        )
+    )
     z = np.array([0.35, 0.0, 1.3, 0.8])
     td = (0.3, 0.25)
     m = O.passive_apex_map(z, td, robot=robot)
-    r = scoutsim.simulate(robot, None,
-                          InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
-                          0.5, model="passive", integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
-                          passive_touchdown_angles=td)
+    r = scoutsim.simulate(
+        robot,
+        None,
+        InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
+        0.5,
+        model="passive",
+        integrator=IntegratorSettings(rtol=1e-12, atol=1e-12),
+        passive_touchdown_angles=td,
+    )
     assert not passive_reference._glitched(r)
     t_lo = max(r.event_times("liftoff", "back")[0], r.event_times("liftoff", "front")[0])
     k = int(np.searchsorted(r.t, t_lo, side="right"))

@@ -50,19 +50,24 @@ def test_without_an_error_row_a_dead_worker_raises_and_names_the_cause():
 def test_a_worker_killed_once_costs_nothing(tmp_path):
     marker = str(tmp_path / "died")
     out = map_tasks(_square_or_die_once, [(i, marker) for i in range(12)], workers=2)
-    assert Path(marker).exists()           # the worker did die once
+    assert Path(marker).exists()  # the worker did die once
     assert out == [i * i for i in range(12)]
 
 
-def test_an_unreachable_scheduler_is_named_after_the_scheduler_timeout(monkeypatch,
-                                                                      dask_client_timeouts):
+def test_an_unreachable_scheduler_is_named_after_the_scheduler_timeout(
+    monkeypatch, dask_client_timeouts
+):
     """Dask's own default would wait 30 s, then raise a traceback: the connection is given
     SCHEDULER_TIMEOUT_S and its failure is named (the seconds it took are not measured
     here: speed lives in benchmarks/)."""
     import scoutsim.analysis.parallel as parallel
+
     monkeypatch.setattr(parallel, "SCHEDULER_TIMEOUT_S", 2.0)
-    with pytest.raises(SchedulerUnreachableError, match=r"tcp://127\.0\.0\.1:9.*no Dask "
-                                                         r"scheduler answered there within 2 s"):
+    with pytest.raises(
+        SchedulerUnreachableError,
+        match=r"tcp://127\.0\.0\.1:9.*no Dask "
+        r"scheduler answered there within 2 s",
+    ):
         map_tasks(_square_or_die_once, [(1, "x"), (2, "x")], scheduler="tcp://127.0.0.1:9")
     assert dask_client_timeouts == [2.0]
 
@@ -76,10 +81,14 @@ def test_on_a_dask_cluster_a_task_that_kills_its_worker_fails_alone(n_workers, t
     worker of two threads, the task running beside the killer is given up every time.)"""
     distributed = pytest.importorskip("distributed")
     import dask
-    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), \
-            distributed.LocalCluster(n_workers=n_workers, threads_per_worker=threads,
-                                     processes=True, dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+
+    with (
+        dask.config.set({"distributed.scheduler.allowed-failures": 1}),
+        distributed.LocalCluster(
+            n_workers=n_workers, threads_per_worker=threads, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         out = map_tasks(_square_or_die, list(range(8)), scheduler=client, error_row=_failed)
     assert out[3][:2] == ("failed", "KilledWorker")
     assert [o for i, o in enumerate(out) if i != 3] == [i * i for i in range(8) if i != 3]
@@ -96,7 +105,7 @@ def test_a_ctrl_c_while_workers_spawn_is_held_and_delivered_when_they_are_starte
 
     go, sent = threading.Event(), threading.Event()
 
-    def other_thread():                    # started before the block: SIGINT not blocked
+    def other_thread():  # started before the block: SIGINT not blocked
         go.wait()
         signal.pthread_kill(threading.get_ident(), signal.SIGINT)
         sent.set()
@@ -108,7 +117,7 @@ def test_a_ctrl_c_while_workers_spawn_is_held_and_delivered_when_they_are_starte
         with _sigint_held_while_spawning():
             go.set()
             assert sent.wait(10)
-            for _ in range(10_000):        # bytecodes at which a raised Ctrl-C would land
+            for _ in range(10_000):  # bytecodes at which a raised Ctrl-C would land
                 steps += 1
     helper.join()
     assert steps == 10_000

@@ -38,8 +38,7 @@ class _Holder:
 
 def test_a_module_level_function_and_a_compiled_controller_can_be_sent():
     assert unsendable_reason(_double) is None
-    c = CompiledController(_hold, params=[2.0], state=[1.0, 2.0], control_period=2e-3,
-                           name="hold")
+    c = CompiledController(_hold, params=[2.0], state=[1.0, 2.0], control_period=2e-3, name="hold")
     c.extra = "a subclass's attribute"
     assert unsendable_reason(c) is None
     copy = pickle.loads(pickle.dumps(c))
@@ -47,20 +46,24 @@ def test_a_module_level_function_and_a_compiled_controller_can_be_sent():
     assert copy.control_period == 2e-3 and copy.extra == c.extra
     assert np.array_equal(copy.params, c.params)
     assert np.array_equal(copy.initial_state, c.initial_state)
-    assert copy.address == c.address       # the same function: compiled once per process
+    assert copy.address == c.address  # the same function: compiled once per process
 
 
 def _local():
     def inner(task):
         return task
+
     return inner
 
 
-@pytest.mark.parametrize("obj, words", [
-    (lambda task: task, "lambda"),
-    (_local(), "defined inside a function"),
-    (_Holder(threading.Lock()), "does not pickle"),
-])
+@pytest.mark.parametrize(
+    "obj, words",
+    [
+        (lambda task: task, "lambda"),
+        (_local(), "defined inside a function"),
+        (_Holder(threading.Lock()), "does not pickle"),
+    ],
+)
 def test_what_cannot_be_sent_is_named(obj, words):
     assert words in unsendable_reason(obj)
     with pytest.raises(NotSendableError, match=f"the thing cannot be sent.*{words}.*workers=1"):

@@ -14,14 +14,17 @@ from scoutsim.analysis.sweep import (
     sweep,
 )
 
-GRID = {"controller.touchdown_angle_front": [math.radians(19), math.radians(21)],
-        "controller.touchdown_angle_back": [math.radians(17), math.radians(19)]}
+GRID = {
+    "controller.touchdown_angle_front": [math.radians(19), math.radians(21)],
+    "controller.touchdown_angle_back": [math.radians(17), math.radians(19)],
+}
 
 
 def test_grid_and_random_points():
     pts = grid_points(GRID)
     assert len(pts) == 4 and pts[1]["controller.touchdown_angle_back"] == pytest.approx(
-        math.radians(19))
+        math.radians(19)
+    )
     r1 = random_points({"robot.leg_damping": (40, 70)}, 5, seed=3)
     r2 = random_points({"robot.leg_damping": (40, 70)}, 5, seed=3)
     assert r1 == r2 and all(40 <= p["robot.leg_damping"] <= 70 for p in r1)
@@ -39,8 +42,11 @@ def test_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
     pts = [{"robot.torso_mass": 20.865}, {"robot.torso_mass": -1.0}]
     res = sweep(pts, model="I", duration=0.4, workers=1, out=tmp_path)
     assert res.rows[0]["outcome"] in ("completed", "fell") and res.rows[0]["error"] == ""
-    assert res.rows[1]["outcome"] == "invalid_parameters" and \
-        res.rows[1]["status"] == "invalid" and "torso_mass" in res.rows[1]["error"]
+    assert (
+        res.rows[1]["outcome"] == "invalid_parameters"
+        and res.rows[1]["status"] == "invalid"
+        and "torso_mass" in res.rows[1]["error"]
+    )
     assert (tmp_path / "sweep.csv").exists()
 
 
@@ -66,17 +72,21 @@ def test_parquet_round_trip(tmp_path):
     t = pq.read_table(tmp_path / "sweep.parquet").to_pydict()
     for name in list(GRID) + list(SUMMARY_COLUMNS):
         assert name in t
-    assert t["controller.touchdown_angle_front"] == [r["controller.touchdown_angle_front"]
-                                                     for r in res.rows]
+    assert t["controller.touchdown_angle_front"] == [
+        r["controller.touchdown_angle_front"] for r in res.rows
+    ]
 
 
 def test_dask_cluster_gives_the_same_table_as_local(tmp_path):
     distributed = pytest.importorskip("distributed")
     pts = grid_points(GRID)
     local = sweep(pts, model="II", duration=0.5, workers=1)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         remote = sweep(pts, model="II", duration=0.5, scheduler=client)
     assert json.dumps(local.rows, sort_keys=True) == json.dumps(remote.rows, sort_keys=True)
 
@@ -84,6 +94,7 @@ def test_dask_cluster_gives_the_same_table_as_local(tmp_path):
 def test_a_kept_executor_gives_the_same_table_and_stays_open():
     import concurrent.futures as cf
     import multiprocessing
+
     pts = grid_points(GRID)
     local = sweep(pts, model="II", duration=0.5, workers=1)
     with cf.ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
@@ -96,8 +107,12 @@ def test_a_kept_executor_gives_the_same_table_and_stays_open():
 
 def test_map_plot(tmp_path):
     res = sweep(grid_points(GRID), model="I", duration=0.3, workers=1)
-    fig = res.plot_map("controller.touchdown_angle_front", "controller.touchdown_angle_back",
-                       "t_end_s", path=tmp_path / "map.png")
+    fig = res.plot_map(
+        "controller.touchdown_angle_front",
+        "controller.touchdown_angle_back",
+        "t_end_s",
+        path=tmp_path / "map.png",
+    )
     ax = fig.axes[0]
     assert "[deg]" in ax.get_xlabel() and "[deg]" in ax.get_ylabel()
     assert (tmp_path / "map.png").stat().st_size > 1000
@@ -105,10 +120,17 @@ def test_map_plot(tmp_path):
 
 def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
     from scoutsim.analysis.sweep import ORBIT_COLUMNS
-    pts = [{"controller.touchdown_angle_front": math.radians(24.0),
-            "controller.touchdown_angle_back": math.radians(16.0)},
-           {"controller.touchdown_angle_front": math.radians(14.0),
-            "controller.touchdown_angle_back": math.radians(28.0)}]
+
+    pts = [
+        {
+            "controller.touchdown_angle_front": math.radians(24.0),
+            "controller.touchdown_angle_back": math.radians(16.0),
+        },
+        {
+            "controller.touchdown_angle_front": math.radians(14.0),
+            "controller.touchdown_angle_back": math.radians(28.0),
+        },
+    ]
     res = sweep(pts, duration=6.0, workers=1, out=tmp_path, orbit=True)
     bound, fell = res.rows
     assert bound["steady_bounding"] and bound["orbit_status"] == "ok"
@@ -122,13 +144,14 @@ def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
 
 
 def test_an_interrupted_point_is_not_recorded_and_the_resumed_table_is_the_same(
-        tmp_path, interrupt_run):
+    tmp_path, interrupt_run
+):
     """Ctrl-C during a point: simulate() returns the data so far with outcome
     "interrupted"; the sweep stops there without recording that point, and a resumed
     sweep gives the table of an uninterrupted one."""
     pts = grid_points(GRID)
     full = sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "full")
-    interrupt_run(3)                    # (the calls after the third run as usual)
+    interrupt_run(3)  # (the calls after the third run as usual)
     with pytest.raises(KeyboardInterrupt):
         sweep(pts, model="II", duration=0.5, workers=1, out=tmp_path / "cut")
     lines = (tmp_path / "cut" / "points.jsonl").read_text().splitlines()
@@ -145,6 +168,7 @@ def test_a_range_reaching_far_from_scout_ii_is_warned_of_once_not_per_point():
     import warnings
 
     from scoutsim.parameters import ImplausibleParameterWarning, plausible_range
+
     high = plausible_range("leg_stiffness")[1]
     pts = [{"robot.leg_stiffness": v} for v in (3000.0, 3520.0, 1.2 * high, 1.5 * high)]
     with warnings.catch_warnings(record=True) as caught:
@@ -160,8 +184,7 @@ def test_a_sweep_from_a_named_start_runs_it_and_refuses_an_unknown_name(tmp_path
     rest, set going by the start-up): each point runs from it and the row says which;
     an unknown name is refused before any point runs, naming the allowed ones."""
     pts = [{"controller.touchdown_angle_back_deg": 20.0}]
-    res = sweep(pts, model="ideal", duration=0.6, workers=1, out=tmp_path,
-                initial_state="standing")
+    res = sweep(pts, model="ideal", duration=0.6, workers=1, out=tmp_path, initial_state="standing")
     assert res.rows[0]["status"] == "ok", res.rows[0]
     assert res.settings["initial_state"] == "standing"
     with pytest.raises(ValueError, match=r"initial_state = 'sitting'.*\['flight', 'standing'\]"):

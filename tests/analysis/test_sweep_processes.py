@@ -21,9 +21,17 @@ from scoutsim.io.run_directory import IncompleteRunError, check_run_directory
 
 # 20 points of 40 s (about 0.2 s of computing each): long enough to stop between points,
 # short enough for the test suite
-ARGS = ["sweep", "--grid", "controller.touchdown_angle_front_deg=19:21:4",
-        "--grid", "controller.touchdown_angle_back_deg=17:19:5", "--duration", "40",
-        "--no-progress", "--quiet"]
+ARGS = [
+    "sweep",
+    "--grid",
+    "controller.touchdown_angle_front_deg=19:21:4",
+    "--grid",
+    "controller.touchdown_angle_back_deg=17:19:5",
+    "--duration",
+    "40",
+    "--no-progress",
+    "--quiet",
+]
 N_POINTS = 20
 #: hang guard [s] for the workers of a dead parent to exit by themselves (they look every
 #: PARENT_POLL_S = 0.5 s, plus the rest of a run): generous, not a claim about speed
@@ -33,9 +41,12 @@ HANG_GUARD_S = 300.0
 
 
 def _start(out, workers):
-    return subprocess.Popen([sys.executable, "-m", "scoutsim", *ARGS, "--out", str(out),
-                             "--workers", str(workers)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, start_new_session=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "scoutsim", *ARGS, "--out", str(out), "--workers", str(workers)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
 
 
 def _run(out, workers):
@@ -47,7 +58,7 @@ def _run(out, workers):
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    scoutsim.simulate(model="II", duration=0.01)     # the core is compiled before any clock
+    scoutsim.simulate(model="II", duration=0.01)  # the core is compiled before any clock
     out = tmp_path_factory.mktemp("reference")
     _run(out, 2)
     return out
@@ -76,7 +87,7 @@ def _alive(pid: int) -> bool:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
     except OSError:
         return False
-    return state not in ("Z", "X")       # a zombie has exited (nobody has reaped it yet)
+    return state not in ("Z", "X")  # a zombie has exited (nobody has reaped it yet)
 
 
 def _cmdline(pid: int) -> str:
@@ -100,8 +111,9 @@ def _assert_no_survivors(pids: set[int]):
     survivors = [p for p in pids if _alive(p)]
     for p in survivors:
         os.kill(p, signal.SIGKILL)
-    assert not survivors, f"processes {survivors} were still running {ORPHAN_GUARD_S} s " \
-                          "after their parent ended"
+    assert not survivors, (
+        f"processes {survivors} were still running {ORPHAN_GUARD_S} s after their parent ended"
+    )
 
 
 def _checkpoint_rows(out) -> list[dict]:
@@ -112,7 +124,7 @@ def _checkpoint_rows(out) -> list[dict]:
         try:
             rows.append(json.loads(line)["row"])
         except ValueError:
-            pass                     # a last line cut by SIGKILL (skipped on resume)
+            pass  # a last line cut by SIGKILL (skipped on resume)
     return rows
 
 
@@ -145,7 +157,7 @@ def _assert_stopped_consistently(out):
     assert all(r["outcome"] in ("completed", "fell") for r in rows), rows
     try:
         manifest = check_run_directory(out)
-    except IncompleteRunError:             # a sweep killed while it ran: "writing"
+    except IncompleteRunError:  # a sweep killed while it ran: "writing"
         manifest = None
     if manifest is None or manifest["status"] != "complete":
         assert not (out / "sweep.csv").exists() and not (out / "sweep.parquet").exists()
@@ -162,23 +174,24 @@ def _assert_resumes_to(out, reference):
 def test_the_reference_sweep_is_complete(reference):
     assert len(_checkpoint_rows(reference)) == N_POINTS
     manifest = check_run_directory(reference)
-    assert manifest["status"] == "complete" and {"sweep.csv", "sweep.parquet",
-                                                 "map.png"} <= set(manifest["files"])
+    assert manifest["status"] == "complete" and {"sweep.csv", "sweep.parquet", "map.png"} <= set(
+        manifest["files"]
+    )
 
 
-@pytest.mark.parametrize("workers,moment", [(1, "between points"), (2, "workers starting"),
-                                            (2, "between points")])
-def test_ctrl_c_stops_keeps_finished_points_and_resumes(tmp_path, reference, workers,
-                                                         moment):
+@pytest.mark.parametrize(
+    "workers,moment", [(1, "between points"), (2, "workers starting"), (2, "between points")]
+)
+def test_ctrl_c_stops_keeps_finished_points_and_resumes(tmp_path, reference, workers, moment):
     out = tmp_path / "out"
     proc = _start(out, workers)
     if moment == "workers starting":
         _wait_for_workers_starting(proc, workers)
-        assert not _checkpoint_rows(out)       # (no point finished yet: the workers start)
+        assert not _checkpoint_rows(out)  # (no point finished yet: the workers start)
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
-    os.killpg(proc.pid, signal.SIGINT)     # as Ctrl-C in a terminal: the whole group
+    os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C in a terminal: the whole group
     code = proc.wait(timeout=HANG_GUARD_S)
     stderr = proc.stderr.read().decode()
     assert code == 130, stderr
@@ -192,8 +205,7 @@ def test_ctrl_c_stops_keeps_finished_points_and_resumes(tmp_path, reference, wor
 
 
 @pytest.mark.parametrize("moment", ["workers starting", "between points"])
-def test_sigkill_of_the_parent_leaves_no_orphans_and_the_sweep_resumes(tmp_path, reference,
-                                                                       moment):
+def test_sigkill_of_the_parent_leaves_no_orphans_and_the_sweep_resumes(tmp_path, reference, moment):
     out = tmp_path / "out"
     proc = _start(out, 2)
     if moment == "workers starting":
@@ -202,7 +214,7 @@ def test_sigkill_of_the_parent_leaves_no_orphans_and_the_sweep_resumes(tmp_path,
     else:
         _wait_for_points(out, 3, proc)
     kids = _descendants(proc.pid)
-    assert len(kids) >= 2                  # two workers (+ the tracker)
+    assert len(kids) >= 2  # two workers (+ the tracker)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=HANG_GUARD_S)
     _assert_no_survivors(kids)
@@ -226,7 +238,8 @@ def test_a_killed_worker_costs_nothing_and_the_table_is_the_same(tmp_path, refer
 
 
 def test_a_torn_checkpoint_line_is_skipped_and_the_next_record_starts_its_own_line(
-        tmp_path, reference):
+    tmp_path, reference
+):
     out = tmp_path / "out"
     out.mkdir()
     lines = (reference / "points.jsonl").read_bytes().splitlines(keepends=True)

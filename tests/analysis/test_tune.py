@@ -32,18 +32,23 @@ def test_cma_es_finds_the_minimum_of_a_known_bowl(monkeypatch):
     centre = (math.radians(22.5), math.radians(17.25))
 
     def bowl(task, scenario, robot, cparams, params):
-        d = ((cparams.touchdown_angle_front - centre[0]) ** 2
-             + (cparams.touchdown_angle_back - centre[1]) ** 2)
-        return {"score": d, "objective": d, "feasible": True, "violations": "",
-                "outcome": "completed"}
+        d = (cparams.touchdown_angle_front - centre[0]) ** 2 + (
+            cparams.touchdown_angle_back - centre[1]
+        ) ** 2
+        return {
+            "score": d,
+            "objective": d,
+            "feasible": True,
+            "violations": "",
+            "outcome": "completed",
+        }
 
     monkeypatch.setattr(E, "_scenario_row", bowl)
     res = T.tune(ANGLES, target=1.3, budget=240, workers=1, seed=3)
     assert res.best["controller.touchdown_angle_front_deg"] == pytest.approx(22.5, abs=1e-3)
     assert res.best["controller.touchdown_angle_back_deg"] == pytest.approx(17.25, abs=1e-3)
-    assert res.best_values["controller.touchdown_angle_front"] == pytest.approx(centre[0],
-                                                                                abs=2e-5)
-    for r in res.rows:      # every candidate inside its bounds
+    assert res.best_values["controller.touchdown_angle_front"] == pytest.approx(centre[0], abs=2e-5)
+    for r in res.rows:  # every candidate inside its bounds
         assert 18 <= r["controller.touchdown_angle_front_deg"] <= 26
         assert 16 <= r["controller.touchdown_angle_back_deg"] <= 24
 
@@ -54,7 +59,8 @@ def test_tuned_angles_give_the_target_speed_in_an_independent_run():
     assert res.best["feasible"]
     ctrl = ControllerParameters().replace(
         touchdown_angle_front=math.radians(res.best["controller.touchdown_angle_front_deg"]),
-        touchdown_angle_back=math.radians(res.best["controller.touchdown_angle_back_deg"]))
+        touchdown_angle_back=math.radians(res.best["controller.touchdown_angle_back_deg"]),
+    )
     s = scoutsim.simulate(None, ctrl, None, 6.0, model="II").summary()
     assert s["steady_bounding"]
     assert abs(s["mean_speed_m_s"] - target) < 0.02
@@ -67,8 +73,9 @@ def test_a_budget_reached_in_two_calls_gives_the_table_of_one(tmp_path):
     two = T.tune(ANGLES, budget=16, out=tmp_path / "two", **kw)
     assert two.settings["n_resumed"] == 8
     assert _table(one) == _table(two)
-    assert (tmp_path / "one" / "tune.csv").read_bytes() == \
-        (tmp_path / "two" / "tune.csv").read_bytes()
+    assert (tmp_path / "one" / "tune.csv").read_bytes() == (
+        tmp_path / "two" / "tune.csv"
+    ).read_bytes()
 
 
 def test_an_interrupted_generation_resumes_to_the_uninterrupted_table(tmp_path, monkeypatch):
@@ -77,7 +84,7 @@ def test_an_interrupted_generation_resumes_to_the_uninterrupted_table(tmp_path, 
     real = T.tune_task
     calls = []
 
-    def cut(task):       # Ctrl-C during the 7th evaluation (the middle of generation 1)
+    def cut(task):  # Ctrl-C during the 7th evaluation (the middle of generation 1)
         calls.append(task["evaluation"])
         if len(calls) == 7:
             raise KeyboardInterrupt
@@ -87,7 +94,7 @@ def test_an_interrupted_generation_resumes_to_the_uninterrupted_table(tmp_path, 
     with pytest.raises(KeyboardInterrupt):
         T.tune(ANGLES, out=tmp_path / "cut", **kw)
     kept = (tmp_path / "cut" / T.EVALUATIONS).read_text().splitlines()
-    assert len(kept) == 6                           # every finished evaluation is kept
+    assert len(kept) == 6  # every finished evaluation is kept
     manifest = json.loads((tmp_path / "cut" / "manifest.json").read_text())
     assert manifest["status"] == "partial"
     monkeypatch.setattr(T, "tune_task", real)
@@ -100,16 +107,20 @@ def test_dask_cluster_gives_the_same_evaluations_as_local_processes():
     distributed = pytest.importorskip("distributed")
     kw = dict(target=1.3, duration=2.0, population=4, budget=8)
     local = T.tune(ANGLES, workers=2, **kw)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         remote = T.tune(ANGLES, scheduler=client, **kw)
     assert _table(local) == _table(remote)
 
 
 def test_controller_file_round_trips_bit_for_bit(tmp_path):
-    c = ControllerParameters().replace(touchdown_angle_front=0.1 + 1e-13,
-                                       pitch_rate_gain_back=-0.0731)
+    c = ControllerParameters().replace(
+        touchdown_angle_front=0.1 + 1e-13, pitch_rate_gain_back=-0.0731
+    )
     path = write_controller_file(tmp_path / "c.toml", "pitch-feedback", c, header="a\nb")
     f = read_controller_file(path)
     assert f.law == "pitch-feedback" and f.controller == c and f.robot is None
@@ -117,13 +128,18 @@ def test_controller_file_round_trips_bit_for_bit(tmp_path):
     assert scoutsim.load_parameters(path)[1] == c
 
 
-@pytest.mark.parametrize("body, field", [
-    ("[controller]\ntouchdown_angle_front = 0.3\n", "controller_law"),
-    ('[controller_law]\nname = "raibert"\n[controller]\n', "controller_law"),
-    ('[controller_law]\nname = "table-i"\n[controller]\ntouchdown_angle_frnt = 1\n',
-     "touchdown_angle_frnt"),
-    ('[controller_law]\nname = "table-i"\n', "controller"),
-])
+@pytest.mark.parametrize(
+    "body, field",
+    [
+        ("[controller]\ntouchdown_angle_front = 0.3\n", "controller_law"),
+        ('[controller_law]\nname = "raibert"\n[controller]\n', "controller_law"),
+        (
+            '[controller_law]\nname = "table-i"\n[controller]\ntouchdown_angle_frnt = 1\n',
+            "touchdown_angle_frnt",
+        ),
+        ('[controller_law]\nname = "table-i"\n', "controller"),
+    ],
+)
 def test_a_bad_controller_file_is_refused_naming_the_field(tmp_path, body, field):
     p = tmp_path / "c.toml"
     p.write_text(body)
@@ -142,32 +158,41 @@ def _example_controller():
 def test_a_compiled_controllers_parameter_array_is_tuned():
     ex = _example_controller()
     ctrl = ex.make_controller()
-    i = ex.TD + 1                                       # its front touchdown angle [rad]
+    i = ex.TD + 1  # its front touchdown angle [rad]
     name = f"controller.params[{i}]=0.30:0.45"
-    res = T.tune([name], controller=ctrl, target=1.3, budget=8, population=4,
-                 duration=3.0, workers=1)
+    res = T.tune(
+        [name], controller=ctrl, target=1.3, budget=8, population=4, duration=3.0, workers=1
+    )
     col = f"controller.params[{i}]"
     vals = [r[col] for r in res.rows]
     assert all(0.30 <= v <= 0.45 for v in vals)
     assert res.params[i] == res.best[col]
     assert np.array_equal(np.delete(res.params, i), np.delete(ctrl.params, i))
     # the best row is the run of the best array
-    again = scoutsim.simulate(None, scoutsim.CompiledController(
-        ex.bound_with_pitch_rate, res.params), None, 3.0, model="II")
+    again = scoutsim.simulate(
+        None,
+        scoutsim.CompiledController(ex.bound_with_pitch_rate, res.params),
+        None,
+        3.0,
+        model="II",
+    )
     assert again.summary()["outcome"] == res.best["outcome"]
     assert float((again.x[-1] - again.x[0]) / again.t[-1]) == res.best["average_speed_m_s"]
 
 
-@pytest.mark.parametrize("text, words", [
-    ("controller.touchdown_angle_frnt_deg", ["touchdown_angle_frnt", "did you mean"]),
-    ("robot.torso_mass_deg", ["torso_mass_deg", "not an angle"]),
-    ("controller.touchdown_angle_front_deg=26:18", ["LOW must be below HIGH"]),
-    ("controller.touchdown_angle_front_deg=-100:20", ["allowed values", "-90"]),
-    ("controller.touchdown_angle_front_deg=a:b", ["NAME=LOW:HIGH"]),
-    ("controller.flight_kp_front", ["flight_kp_front", "needs a range"]),
-    ("controller.params[2]=0:1", ["params[2]", "CompiledController"]),
-    ("robot.legs_per_virtual_leg=1:3", ["legs_per_virtual_leg", "whole number"]),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("controller.touchdown_angle_frnt_deg", ["touchdown_angle_frnt", "did you mean"]),
+        ("robot.torso_mass_deg", ["torso_mass_deg", "not an angle"]),
+        ("controller.touchdown_angle_front_deg=26:18", ["LOW must be below HIGH"]),
+        ("controller.touchdown_angle_front_deg=-100:20", ["allowed values", "-90"]),
+        ("controller.touchdown_angle_front_deg=a:b", ["NAME=LOW:HIGH"]),
+        ("controller.flight_kp_front", ["flight_kp_front", "needs a range"]),
+        ("controller.params[2]=0:1", ["params[2]", "CompiledController"]),
+        ("robot.legs_per_virtual_leg=1:3", ["legs_per_virtual_leg", "whole number"]),
+    ],
+)
 def test_bad_parameter_names_and_ranges_are_named(text, words):
     with pytest.raises(ValueError) as err:
         T.parse_parameter(text)
@@ -189,8 +214,9 @@ def test_a_parameter_given_twice_and_a_budget_below_one_generation_are_refused()
 def test_the_settings_bundles_take_the_same_keywords_as_tune():
     """tune(names, target=..., budget=...) sets the fields of TuneGoal / TuneSearch; a
     keyword that is no field is refused, naming it."""
-    goal, runs, search = T.bundles(T.TuneGoal(objective="cot"), None, None,
-                                   {"budget": 8, "models": ["I"], "min_speed": 1.0})
+    goal, runs, search = T.bundles(
+        T.TuneGoal(objective="cot"), None, None, {"budget": 8, "models": ["I"], "min_speed": 1.0}
+    )
     assert goal == T.TuneGoal(objective="cot", min_speed=1.0)
     assert runs == T.TuneRuns(models=["I"]) and search == T.TuneSearch(budget=8)
     with pytest.raises(ValueError, match="budget = 3"):
@@ -202,19 +228,30 @@ def test_the_settings_bundles_take_the_same_keywords_as_tune():
 def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
     """The score orders what CMA-ES compares: feasible < constraint broken < fell, and a
     later fall before an earlier one."""
-    task = {"goal": {"objective": "speed", "target": 1.3, "aggregate": "worst",
-                     "max_belt_deflection": None, "max_current": None, "min_speed": None},
-            "duration": 4.0, "controller": {"kind": "table-i"}}
+    task = {
+        "goal": {
+            "objective": "speed",
+            "target": 1.3,
+            "aggregate": "worst",
+            "max_belt_deflection": None,
+            "max_current": None,
+            "min_speed": None,
+        },
+        "duration": 4.0,
+        "controller": {"kind": "table-i"},
+    }
     scen = {"model": "II", "friction": 1.0, "initial_state": None}
     robot = scoutsim.RobotParameters()
 
     def score(front_deg, back_deg, duration=4.0):
-        c = ControllerParameters().replace(touchdown_angle_front=math.radians(front_deg),
-                                           touchdown_angle_back=math.radians(back_deg))
+        c = ControllerParameters().replace(
+            touchdown_angle_front=math.radians(front_deg),
+            touchdown_angle_back=math.radians(back_deg),
+        )
         return E._scenario_row(task | {"duration": duration}, scen, robot, c, None)
 
     steady = score(21, 19)
-    short = score(21, 19, duration=2.5)          # no steady strides yet: not steady
+    short = score(21, 19, duration=2.5)  # no steady strides yet: not steady
     fell = score(21, 23)
     assert steady["feasible"] and steady["score"] < 1
     assert not short["feasible"] and "not steady" in short["violations"]
@@ -222,12 +259,14 @@ def test_falls_rank_behind_unsteady_runs_behind_feasible_ones(monkeypatch):
     assert fell["outcome"] == "fell" and fell["score"] > 10 * T.PENALTY
 
 
-def test_an_evaluation_that_cannot_be_run_stops_the_tuning_and_keeps_the_rest(tmp_path,
-                                                                              monkeypatch):
+def test_an_evaluation_that_cannot_be_run_stops_the_tuning_and_keeps_the_rest(
+    tmp_path, monkeypatch
+):
     """A task its worker cannot run (here: raises outside tune_task's own handling, as a
     Dask worker without the package would) is never scored: the tuning stops naming it,
     the finished evaluations stay, and the same call goes on once it can run."""
     import concurrent.futures as cf
+
     kw = dict(target=1.3, duration=2.0, population=4, budget=8)
     whole = T.tune(ANGLES, workers=1, **kw)
     real = T.tune_task
@@ -238,8 +277,10 @@ def test_an_evaluation_that_cannot_be_run_stops_the_tuning_and_keeps_the_rest(tm
         return real(task)
 
     monkeypatch.setattr(T, "tune_task", broken)
-    with cf.ThreadPoolExecutor(1) as pool, \
-            pytest.raises(T.EvaluationNotRunError, match="evaluation 5 .*cannot load"):
+    with (
+        cf.ThreadPoolExecutor(1) as pool,
+        pytest.raises(T.EvaluationNotRunError, match="evaluation 5 .*cannot load"),
+    ):
         T.tune(ANGLES, scheduler=pool, out=tmp_path, **kw)
     assert len((tmp_path / T.EVALUATIONS).read_text().splitlines()) == 7
     monkeypatch.setattr(T, "tune_task", real)
@@ -256,24 +297,40 @@ def test_cost_of_transport_objective_and_a_current_constraint():
     b = res.best
     ctrl = ControllerParameters().replace(
         touchdown_angle_front=res.best_values["controller.touchdown_angle_front"],
-        touchdown_angle_back=res.best_values["controller.touchdown_angle_back"])
+        touchdown_angle_back=res.best_values["controller.touchdown_angle_back"],
+    )
     r = scoutsim.simulate(None, ctrl, None, 6.0, model="II", energy=True)
     assert b["feasible"] and b["objective"] == r.summary()["cost_of_transport"]
     peak = max(float(np.max(np.abs(r.motor_current(leg)))) for leg in (0, 1))
-    limited = T.tune(ANGLES, objective="cot", budget=4, population=4, duration=6.0,
-                     workers=1, max_current=0.9 * peak)
+    limited = T.tune(
+        ANGLES,
+        objective="cot",
+        budget=4,
+        population=4,
+        duration=6.0,
+        workers=1,
+        max_current=0.9 * peak,
+    )
     first = limited.rows[0]
     assert "current" in first["violations"] and not first["feasible"]
     assert first["score"] > T.PENALTY
 
 
 def test_stability_objective_is_the_spectral_radius_of_the_orbit():
-    task = {"goal": {"objective": "stability", "target": None, "aggregate": "worst",
-                     "max_belt_deflection": None, "max_current": None, "min_speed": None},
-            "duration": 6.0, "controller": {"kind": "table-i"}}
+    task = {
+        "goal": {
+            "objective": "stability",
+            "target": None,
+            "aggregate": "worst",
+            "max_belt_deflection": None,
+            "max_current": None,
+            "min_speed": None,
+        },
+        "duration": 6.0,
+        "controller": {"kind": "table-i"},
+    }
     scen = {"model": "II", "friction": 1.0, "initial_state": None}
-    row = E._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(),
-                          None)
+    row = E._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(), None)
     # the Table I bound is a stable orbit (docs/orbits.md): radius below 1
     assert row["feasible"] and 0 < row["spectral_radius"] < 1
     assert row["score"] == row["objective"] == row["spectral_radius"]

@@ -27,8 +27,13 @@ USER_MODULE = "scoutsim_user_controllers"
 USER_SOURCE = '"""A user\'s controllers, in a module of their own (written by the test)."""\nimport numpy as np\n\nfrom scoutsim.control import CompiledController\nfrom scoutsim.control import sensors as S\n\nTD, SWEEP = 0, 2                      # touchdown angles, sweep limits [rad] (back, front)\nKP, KD, KPB, KDB, TDC, LOC, L0, STALL, SLOPE, TMAX = range(4, 14)\nN = 14\nFLIGHT, RETRACTION, BRAKE = 0, 1, 2\n\n\ndef bound(t, y, p, state, torque, leg_states):\n    """Table I\'s structure written by a user: flight servo, retraction, brake."""\n    for leg in range(2):\n        angle = y[S.HIP_ANGLE + leg]\n        rate = y[S.HIP_RATE + leg]\n        compression = p[L0] - y[S.LEG_LENGTH + leg]\n        st = leg_states[leg]\n        if st == FLIGHT and compression > p[TDC]:\n            st = RETRACTION\n        elif st != FLIGHT and compression < p[LOC]:\n            st = FLIGHT\n        if st == RETRACTION and angle < p[SWEEP + leg]:\n            st = BRAKE\n        leg_states[leg] = st\n        if st == FLIGHT:\n            torque[leg] = p[KP] * (p[TD + leg] - angle) - p[KD] * rate\n        elif st == RETRACTION:\n            torque[leg] = min(0.0, max(-p[STALL] + p[SLOPE] * rate, -p[TMAX]))\n        else:\n            torque[leg] = p[KPB] * (p[SWEEP + leg] - angle) - p[KDB] * rate\n    return 0\n\n\ndef params_of(robot, c):\n    p = np.zeros(N)\n    p[TD:TD + 2] = c.touchdown_angle_back, c.touchdown_angle_front\n    p[SWEEP:SWEEP + 2] = c.sweep_limit_back, c.sweep_limit_front\n    p[KP], p[KD], p[KPB], p[KDB] = c.flight_kp_back, c.flight_kd_back, c.brake_kp_back, c.brake_kd_back\n    p[TDC], p[LOC] = c.touchdown_compression, c.liftoff_compression\n    p[L0], p[STALL], p[SLOPE], p[TMAX] = (robot.leg_rest_length, robot.stall_torque,\n                                          -robot.torque_speed_slope, robot.max_leg_torque)\n    return p\n\n\nclass PyBound:\n    """The same law as a Python controller (command(t, sensors))."""\n\n    control_period = 1e-3\n\n    def __init__(self, p, controller_parameters=None):\n        self.p = np.array(p, dtype=float)\n        self.controller_parameters = controller_parameters\n        self.leg_states = np.zeros(2, dtype=np.int64)\n\n    def reset(self, robot, sensors):\n        self.leg_states[:] = 0\n\n    def command(self, t, sensors):\n        torque = np.zeros(2)\n        bound(t, sensors.vector, self.p, None, torque, self.leg_states)\n        return float(torque[0]), float(torque[1])\n\n\ndef make_compiled(robot, params):\n    c = CompiledController(bound, params=params_of(robot, params), name="user_bound")\n    c.controller_parameters = params    # (legs start at the touchdown angles)\n    return c\n\n\ndef make_python(robot, params):\n    return PyBound(params_of(robot, params), params)\n\n\ndef make_broken(robot, params):\n    """A factory with a bug."""\n    raise RuntimeError("the factory\'s own bug")\n\n\nclass Raises(PyBound):\n    """A Python controller whose command has a bug (an AttributeError)."""\n\n    def command(self, t, sensors):\n        return sensors.no_such_reading, 0.0\n\n\nclass GivesUp(PyBound):\n    """A Python controller that returns torques that are not finite after 0.2 s."""\n\n    def command(self, t, sensors):\n        tau = super().command(t, sensors)\n        return (float("nan"), tau[1]) if t >= 0.2 else tau\n\n\ndef make_raises(robot, params):\n    return Raises(params_of(robot, params), params)\n\n\ndef make_gives_up(robot, params):\n    return GivesUp(params_of(robot, params), params)\n'
 
 #: two starts from which the Table I law bounds steadily within 6 s
-GRID = dict(models=("II",), speeds=(1.0, 1.3), pitch_rates=(math.radians(100.0),), heights=(0.36,),
-            duration=6.0)
+GRID = dict(
+    models=("II",),
+    speeds=(1.0, 1.3),
+    pitch_rates=(math.radians(100.0),),
+    heights=(0.36,),
+    duration=6.0,
+)
 KINDS = ["compiled", "python", "factory:make_compiled", "factory:make_python"]
 
 
@@ -37,12 +42,15 @@ def user(tmp_path_factory):
     """The user's module, importable here and in every worker process started after."""
     import importlib
     import os
+
     where = tmp_path_factory.mktemp("user")
     (where / f"{USER_MODULE}.py").write_text(USER_SOURCE)
     with pytest.MonkeyPatch.context() as mp:
         mp.syspath_prepend(str(where))
-        mp.setenv("PYTHONPATH", os.pathsep.join(
-            [str(where)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
+        mp.setenv(
+            "PYTHONPATH",
+            os.pathsep.join([str(where)] + [p for p in [os.environ.get("PYTHONPATH")] if p]),
+        )
         yield importlib.import_module(USER_MODULE)
         sys.modules.pop(USER_MODULE, None)
 
@@ -52,9 +60,12 @@ def dask_client(user):
     """A local Dask cluster of two worker processes (started after the user's module is on
     PYTHONPATH), shared by the tests of this module."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         yield client
 
 
@@ -73,7 +84,8 @@ def _same(a, b):
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_basin_map_of_a_users_controller_is_the_same_on_workers_and_on_dask(
-        user, dask_client, kind):
+    user, dask_client, kind
+):
     """workers=2 and a Dask cluster give the rows of one process; the user's Table I law
     bounds from the starts the built-in Table I controller bounds from."""
     c = _controller(user, kind)
@@ -88,8 +100,7 @@ def test_basin_map_of_a_users_controller_is_the_same_on_workers_and_on_dask(
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(
-        user, dask_client, kind):
+def test_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(user, dask_client, kind):
     """A controller object is swept over a robot field; a factory over a controller field
     in degrees, which it receives (its table equals the built-in law's)."""
     c = _controller(user, kind)
@@ -109,14 +120,16 @@ def test_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_tuning_a_users_controller_is_the_same_on_workers_and_on_dask(
-        user, dask_client, kind):
+def test_tuning_a_users_controller_is_the_same_on_workers_and_on_dask(user, dask_client, kind):
     """One generation of four candidates: the same evaluations everywhere."""
     pytest.importorskip("cmaes")
     from scoutsim.analysis.tune import tune
+
     c = _controller(user, kind)
-    name = {"compiled": f"controller.params[{user.TD + 1}]=0.30:0.45",
-            "python": "robot.leg_damping=40:70"}.get(kind, "controller.touchdown_angle_front_deg")
+    name = {
+        "compiled": f"controller.params[{user.TD + 1}]=0.30:0.45",
+        "python": "robot.leg_damping=40:70",
+    }.get(kind, "controller.touchdown_angle_front_deg")
     kw = dict(controller=c, target=1.3, duration=1.0, population=4, budget=4)
     one = tune([name], workers=1, **kw)
     two = tune([name], workers=2, **kw)
@@ -128,8 +141,9 @@ def test_tuning_a_users_controller_is_the_same_on_workers_and_on_dask(
 
 def test_a_controller_spec_built_in_the_worker_gets_the_studys_robot(user, dask_client):
     """ControllerSpec objects (what the command line passes) run like the string."""
-    spec = ControllerSpec(f"{USER_MODULE}:make_compiled", scoutsim.RobotParameters(),
-                          scoutsim.ControllerParameters())
+    spec = ControllerSpec(
+        f"{USER_MODULE}:make_compiled", scoutsim.RobotParameters(), scoutsim.ControllerParameters()
+    )
     one = B.basin_of_attraction(controller=spec, workers=1, **GRID)
     two = B.basin_of_attraction(controller=spec, workers=2, **GRID)
     dask = B.basin_of_attraction(controller=spec, scheduler=dask_client, **GRID)
@@ -142,17 +156,23 @@ def test_a_controller_spec_built_in_the_worker_gets_the_studys_robot(user, dask_
 # -----------------------------------------------------------------------------------------
 def _closure_controller(user):
     import numba
+
     law = numba.njit(user.bound)
 
     def local_bound(t, y, p, state, torque, leg_states):
         return law(t, y, p, state, torque, leg_states)
-    return CompiledController(local_bound, params=user.params_of(
-        scoutsim.RobotParameters(), scoutsim.ControllerParameters()), name="local_bound")
+
+    return CompiledController(
+        local_bound,
+        params=user.params_of(scoutsim.RobotParameters(), scoutsim.ControllerParameters()),
+        name="local_bound",
+    )
 
 
 def _local_class_controller(user):
     class Local(user.PyBound):
         pass
+
     return Local(user.params_of(scoutsim.RobotParameters(), scoutsim.ControllerParameters()))
 
 
@@ -164,24 +184,47 @@ def no_point_runs(monkeypatch):
     def map_tasks(*args, **kwargs):
         calls.append(args)
         raise AssertionError("a point was sent to run")
+
     from scoutsim.analysis import tune
+
     for module in (B, SW, tune):
         monkeypatch.setattr(module, "map_tasks", map_tasks)
     return calls
 
 
-@pytest.mark.parametrize("make, why", [(_closure_controller, "defined inside a function"),
-                                       (_local_class_controller, "defined inside a function")])
+@pytest.mark.parametrize(
+    "make, why",
+    [
+        (_closure_controller, "defined inside a function"),
+        (_local_class_controller, "defined inside a function"),
+    ],
+)
 def test_a_controller_that_cannot_be_sent_is_refused_before_any_point(
-        user, make, why, no_point_runs, tmp_path):
+    user, make, why, no_point_runs, tmp_path
+):
     pytest.importorskip("cmaes")
     from scoutsim.analysis.tune import tune
+
     c = make(user)
-    runs = [lambda: B.basin_of_attraction(controller=c, workers=2, **GRID),
-            lambda: SW.sweep(SW.grid_points({"robot.leg_damping": [50.0, 60.0]}),
-                             controller=c, workers=2, duration=1.0, out=tmp_path / "sw"),
-            lambda: tune(["robot.leg_damping=40:70"], controller=c, target=1.3,
-                         duration=1.0, population=4, budget=4, workers=2)]
+    runs = [
+        lambda: B.basin_of_attraction(controller=c, workers=2, **GRID),
+        lambda: SW.sweep(
+            SW.grid_points({"robot.leg_damping": [50.0, 60.0]}),
+            controller=c,
+            workers=2,
+            duration=1.0,
+            out=tmp_path / "sw",
+        ),
+        lambda: tune(
+            ["robot.leg_damping=40:70"],
+            controller=c,
+            target=1.3,
+            duration=1.0,
+            population=4,
+            budget=4,
+            workers=2,
+        ),
+    ]
     for run in runs:
         with pytest.raises(NotSendableError) as info:
             run()
@@ -189,8 +232,10 @@ def test_a_controller_that_cannot_be_sent_is_refused_before_any_point(
         assert scoutsim.control.protocol.controller_name(c) in text
         assert why in text and "workers=1" in text and "MODULE:FACTORY" in text
     assert no_point_runs == []
-    assert not (tmp_path / "sw" / SW.CHECKPOINT).exists() or \
-        (tmp_path / "sw" / SW.CHECKPOINT).read_text() == ""
+    assert (
+        not (tmp_path / "sw" / SW.CHECKPOINT).exists()
+        or (tmp_path / "sw" / SW.CHECKPOINT).read_text() == ""
+    )
 
 
 def test_a_controller_that_cannot_be_sent_runs_in_one_process(user):
@@ -202,11 +247,13 @@ def test_a_controller_that_cannot_be_sent_runs_in_one_process(user):
 # -----------------------------------------------------------------------------------------
 # errors of the study
 # -----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("factory, words", [("make_broken", "the factory's own bug"),
-                                            ("make_raises", "no_such_reading")])
+@pytest.mark.parametrize(
+    "factory, words", [("make_broken", "the factory's own bug"), ("make_raises", "no_such_reading")]
+)
 @pytest.mark.parametrize("workers", [1, 2])
 def test_a_point_the_study_cannot_run_is_an_error_not_a_start_that_did_not_bound(
-        user, factory, words, workers):
+    user, factory, words, workers
+):
     """A factory that raises, a controller whose code raises: StudyError by default; with
     on_error="record" rows with status "error", counted apart and left out of the
     fraction (None: no valid start), with a warning."""
@@ -224,8 +271,7 @@ def test_a_point_the_study_cannot_run_is_an_error_not_a_start_that_did_not_bound
     with pytest.raises(StudyError, match=words):
         SW.sweep(points, controller=c, workers=workers, duration=1.0)
     with pytest.warns(RuntimeWarning, match="could not be run"):
-        res = SW.sweep(points, controller=c, workers=workers, duration=1.0,
-                       on_error="record")
+        res = SW.sweep(points, controller=c, workers=workers, duration=1.0, on_error="record")
     assert [r["status"] for r in res.rows] == ["error", "error"]
     assert res.settings["n_errors"] == 2 and len(res.errors()) == 2
 
@@ -235,8 +281,15 @@ def test_an_evaluation_the_tuning_cannot_run_stops_it_or_is_recorded_apart(user,
     the checkpoint; recorded, it scores as infeasible and is counted apart."""
     pytest.importorskip("cmaes")
     from scoutsim.analysis.tune import EVALUATIONS, tune
-    kw = dict(controller=f"{USER_MODULE}:make_raises", target=1.3, duration=0.5,
-              population=4, budget=4, workers=1)
+
+    kw = dict(
+        controller=f"{USER_MODULE}:make_raises",
+        target=1.3,
+        duration=0.5,
+        population=4,
+        budget=4,
+        workers=1,
+    )
     with pytest.raises(StudyError, match="no_such_reading"):
         tune(["controller.touchdown_angle_front_deg"], out=tmp_path, **kw)
     assert (tmp_path / EVALUATIONS).read_text() == ""
@@ -249,8 +302,7 @@ def test_an_evaluation_the_tuning_cannot_run_stops_it_or_is_recorded_apart(user,
 def test_a_controller_that_gives_up_did_not_bound(user):
     """Torques that are not finite stop the run: the controller's own failure, a start
     that did not bound (status ok), not an error of the study."""
-    res = B.basin_of_attraction(controller=f"{USER_MODULE}:make_gives_up", workers=1,
-                                **GRID)
+    res = B.basin_of_attraction(controller=f"{USER_MODULE}:make_gives_up", workers=1, **GRID)
     assert [(r["status"], r["outcome"]) for r in res.rows] == [("ok", "controller_error")] * 2
     (s,) = res.summary().values()
     assert res.fraction("II") == 0.0 and s["n_errors"] == 0 and s["n_valid"] == 2
@@ -258,6 +310,7 @@ def test_a_controller_that_gives_up_did_not_bound(user):
 
 def test_a_factory_that_cannot_be_imported_is_refused_before_any_point(no_point_runs):
     from scoutsim.control.factory import FactoryError
+
     with pytest.raises(FactoryError, match="no_such_module_here"):
         B.basin_of_attraction(controller="no_such_module_here:make", workers=2, **GRID)
     assert no_point_runs == []
@@ -268,6 +321,7 @@ def test_basin_pitch_rates_are_si_and_the_older_degree_keyword_still_works():
     deg/s, converted once at the edge); the older pitch_rates_deg_s gives the same rows,
     with a DeprecationWarning; the rows give the rate in deg/s."""
     from scoutsim.analysis.basin import basin_of_attraction
+
     kw = dict(models=("ideal",), speeds=(1.2,), heights=(0.33,), duration=0.3, workers=1)
     si = basin_of_attraction(pitch_rates=(math.radians(150.0),), **kw)
     with pytest.warns(DeprecationWarning, match="pitch_rates"):

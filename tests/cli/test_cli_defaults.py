@@ -31,8 +31,11 @@ def _help_default(action):
     """The default an option's help text states (a string), or None if it states none."""
     if not action.help or action.help is argparse.SUPPRESS:
         return None
-    text = action.help % {"default": action.default, "prog": ""} if "%(" in action.help \
+    text = (
+        action.help % {"default": action.default, "prog": ""}
+        if "%(" in action.help
         else action.help
+    )
     m = _DEFAULT.search(text)
     if m is None:
         return None
@@ -49,8 +52,11 @@ def _number(text):
 def _agrees(stated: str, value, action) -> bool:
     """Whether the help's stated default ``stated`` describes the parsed ``value``."""
     if isinstance(action, argparse.BooleanOptionalAction):
-        return stated == ("--" + action.dest.replace("_", "-") if value
-                          else "--no-" + action.dest.replace("_", "-"))
+        return stated == (
+            "--" + action.dest.replace("_", "-")
+            if value
+            else "--no-" + action.dest.replace("_", "-")
+        )
     if isinstance(value, bool):
         return stated.lower() in (str(value).lower(), "on" if value else "off")
     if isinstance(value, (int, float)):
@@ -63,8 +69,10 @@ def _agrees(stated: str, value, action) -> bool:
         items = [s.strip() for s in stated.split(",")]
         if len(items) != len(value):
             return False
-        return all((_number(s) == v) if isinstance(v, (int, float)) else s == str(v)
-                   for s, v in zip(items, value))
+        return all(
+            (_number(s) == v) if isinstance(v, (int, float)) else s == str(v)
+            for s, v in zip(items, value)
+        )
     if isinstance(value, str):
         return stated.split()[0] == value
     return False
@@ -103,11 +111,13 @@ def test_parsed_default_is_what_the_help_says(command, dest, stated):
         return
     assert _agrees(stated, value, action), (
         f"scoutsim {command} --help says the default of {dest} is {stated!r}, the parser "
-        f"gives {value!r}")
+        f"gives {value!r}"
+    )
 
 
-@pytest.mark.parametrize("command,expected", [("run", 10.0), ("basin", 10.0),
-                                              ("sweep", 10.0), ("tune", 20.0)])
+@pytest.mark.parametrize(
+    "command,expected", [("run", 10.0), ("basin", 10.0), ("sweep", 10.0), ("tune", 20.0)]
+)
 def test_duration_defaults_are_their_own(command, expected):
     """Each simulating command's --duration is its own (run, basin and sweep 10 s as the
     README says, tune 20 s): none leaks into another through the shared options."""
@@ -123,10 +133,15 @@ def test_durations_come_from_the_library_defaults():
     from scoutsim.analysis.basin import basin_of_attraction
     from scoutsim.analysis.sweep import SweepBase
     from scoutsim.analysis.tune import TuneRuns
+
     parser, _ = _subparsers()
-    assert parser.parse_args(["run"]).duration == \
-        inspect.signature(simulate).parameters["duration"].default
-    assert parser.parse_args(["basin"]).duration == \
-        inspect.signature(basin_of_attraction).parameters["duration"].default
+    assert (
+        parser.parse_args(["run"]).duration
+        == inspect.signature(simulate).parameters["duration"].default
+    )
+    assert (
+        parser.parse_args(["basin"]).duration
+        == inspect.signature(basin_of_attraction).parameters["duration"].default
+    )
     assert parser.parse_args(["sweep"]).duration == SweepBase.duration
     assert parser.parse_args(["tune"]).duration == TuneRuns.duration

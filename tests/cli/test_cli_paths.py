@@ -20,7 +20,7 @@ from scoutsim.cli import main
 from scoutsim.io.run_directory import check_run_directory
 from scoutsim.validation.log_reading import load_log
 
-DT = 1e-3   # the Table I control period [s]: the rigs sample at it
+DT = 1e-3  # the Table I control period [s]: the rigs sample at it
 
 
 def _rows(path):
@@ -36,8 +36,9 @@ def test_version_option_prints_the_package_version(capsys):
     process and as `python -m scoutsim`."""
     assert main(["--version"]) == 0
     assert capsys.readouterr().out.strip() == f"scoutsim {scoutsim.__version__}"
-    proc = subprocess.run([sys.executable, "-m", "scoutsim", "--version"],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "scoutsim", "--version"], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip() == f"scoutsim {scoutsim.__version__}"
 
@@ -50,10 +51,18 @@ def _swing_balance(robot, toe_mass):
     coefficient (m d + m_t l0) g [N m] and the viscous coefficient at the leg
     N^2 eta K_T K_w / R_A + N^2 b_J [N m s/rad]."""
     N = robot.gear_ratio
-    kg = (robot.leg_mass * robot.leg_com_distance + toe_mass * robot.leg_rest_length) \
-        * robot.gravity
-    b = (N * N * robot.efficiency * robot.torque_constant * robot.speed_constant
-         / robot.armature_resistance + N * N * robot.joint_damping)
+    kg = (
+        robot.leg_mass * robot.leg_com_distance + toe_mass * robot.leg_rest_length
+    ) * robot.gravity
+    b = (
+        N
+        * N
+        * robot.efficiency
+        * robot.torque_constant
+        * robot.speed_constant
+        / robot.armature_resistance
+        + N * N * robot.joint_damping
+    )
     return kg, b
 
 
@@ -64,8 +73,23 @@ def test_rig_free_swing_with_shorted_leads_creeps_at_the_back_emf_balance(tmp_pa
     where gravity balances back-EMF, joint damping and stiction,
     (m d + m_t l0) g sin(phi) = b |dphi| + N tau_s."""
     out = tmp_path / "rig"
-    code = main(["rig", "free-swing", "--motor", "short", "--toe-mass", "2", "--release",
-                 "60,0", "--duration", "2", "--no-noise", "--out", str(out)])
+    code = main(
+        [
+            "rig",
+            "free-swing",
+            "--motor",
+            "short",
+            "--toe-mass",
+            "2",
+            "--release",
+            "60,0",
+            "--duration",
+            "2",
+            "--no-noise",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     path = out / "free-swing.csv.gz"
     assert f"free-swing rig: completed, 2001 samples; wrote {path}" in capsys.readouterr().out
@@ -81,24 +105,25 @@ def test_rig_free_swing_with_shorted_leads_creeps_at_the_back_emf_balance(tmp_pa
 
     robot = RobotParameters()
     N = robot.gear_ratio
-    k = c["t"] > 1.0                          # after the transient of the release
+    k = c["t"] > 1.0  # after the transient of the release
     phi, rate = c["phi_back_rad"][k], c["dphi_back_rad_s"][k]
-    np.testing.assert_allclose(c["current_back_a"][k],
-                               -robot.speed_constant * N * rate / robot.armature_resistance,
-                               rtol=1e-3)
+    np.testing.assert_allclose(
+        c["current_back_a"][k],
+        -robot.speed_constant * N * rate / robot.armature_resistance,
+        rtol=1e-3,
+    )
     kg, b = _swing_balance(robot, toe_mass=2.0)
-    np.testing.assert_allclose(rate, -(kg * np.sin(phi) - N * robot.joint_stiction) / b,
-                               rtol=0.01)
+    np.testing.assert_allclose(rate, -(kg * np.sin(phi) - N * robot.joint_stiction) / b, rtol=0.01)
 
 
 def test_rig_free_swing_open_leads_carry_no_current_and_noise_follows_the_seed(tmp_path):
     """Open leads (the default): no current flows (noise-free log: exactly 0). With the
     default sensor noise the current channel is white noise of the stated 0.05 A; the same
     --seed gives the same log, another seed another one."""
+
     def log(name, *extra):
         out = tmp_path / name
-        assert main(["rig", "free-swing", "--duration", "0.5", "--out", str(out),
-                     *extra]) == 0
+        assert main(["rig", "free-swing", "--duration", "0.5", "--out", str(out), *extra]) == 0
         return load_log(out / "free-swing.csv.gz")
 
     clean = log("clean", "--no-noise")
@@ -132,14 +157,20 @@ def test_rig_stall_belt_creeps_to_the_edge_of_the_stiction_band(tmp_path, capsys
     printed = capsys.readouterr().out
     robot = RobotParameters()
     N = robot.gear_ratio
-    tau = N * robot.gearbox_efficiency * robot.sprocket_efficiency * robot.torque_constant \
+    tau = (
+        N
+        * robot.gearbox_efficiency
+        * robot.sprocket_efficiency
+        * robot.torque_constant
         * robot.current_limit
+    )
     lo = (tau - N * robot.joint_stiction) / robot.belt_stiffness
     hi = (tau + N * robot.joint_stiction) / robot.belt_stiffness
     lag = (robot.belt_damping + N * N * robot.joint_damping) / robot.belt_stiffness
     assert f"hip torque {tau:.2f} N m per physical leg" in printed
-    assert (f"static band of the motor stiction {math.degrees(lo):.3f} .. "
-            f"{math.degrees(hi):.3f} deg") in printed
+    assert (
+        f"static band of the motor stiction {math.degrees(lo):.3f} .. {math.degrees(hi):.3f} deg"
+    ) in printed
     assert f"c_b/k_b = {robot.belt_damping / robot.belt_stiffness:.3f} s" in printed
 
     log = load_log(out / "stall.csv.gz")
@@ -173,8 +204,9 @@ def test_rig_flight_steps_servo_follows_the_default_schedule(tmp_path):
         droop = robot.leg_mass * robot.gravity * robot.leg_com_distance / kp
         for j, (t0, t1) in enumerate(zip((0.0, 0.4, 0.8, 1.2), (0.4, 0.8, 1.2, 1.6))):
             k = (t >= t0 + 1e-6) & (t < t1 - 1e-6)
-            np.testing.assert_allclose(c[f"touchdown_cmd_{leg}_rad"][k],
-                                       math.radians(angles[j]), atol=1e-6)
+            np.testing.assert_allclose(
+                c[f"touchdown_cmd_{leg}_rad"][k], math.radians(angles[j]), atol=1e-6
+            )
             last = np.flatnonzero(k)[-1]
             assert abs(c[f"phi_{leg}_rad"][last] - math.radians(angles[j])) < droop + 2e-3
 
@@ -187,16 +219,31 @@ def test_rig_takes_the_robot_file_and_refuses_bad_options(tmp_path, capsys):
     robot_file = tmp_path / "robot.toml"
     robot_file.write_text('[transmission]\nbelt_stiffness = { value = 9.0, unit = "N m/deg" }\n')
     out = tmp_path / "out"
-    assert main(["rig", "free-swing", "--duration", "0.2", "--robot", str(robot_file),
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "rig",
+                "free-swing",
+                "--duration",
+                "0.2",
+                "--robot",
+                str(robot_file),
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     meta = load_log(out / "free-swing.csv.gz").meta
     assert meta["true_parameters"]["belt_stiffness"] == pytest.approx(9.0 * 180.0 / math.pi)
     capsys.readouterr()
 
     bad = tmp_path / "bad"
-    for argv, text in ((["free-swing", "--release", "abc"], "--release 'abc'"),
-                       (["free-swing", "--release", "100,0"], "release_angle_back"),
-                       (["flight-steps", "--duration", "0.5"], "step_times")):
+    for argv, text in (
+        (["free-swing", "--release", "abc"], "--release 'abc'"),
+        (["free-swing", "--release", "100,0"], "release_angle_back"),
+        (["flight-steps", "--duration", "0.5"], "step_times"),
+    ):
         assert main(["rig", *argv, "--out", str(bad)]) == 2
         err = capsys.readouterr().err
         assert text in err and "Traceback" not in err
@@ -208,9 +255,14 @@ def test_rig_takes_the_robot_file_and_refuses_bad_options(tmp_path, capsys):
 # -----------------------------------------------------------------------------------------
 #: the "true" hip unit of `identify --example`: Table II times these factors
 #: (docs/identification.md, section 3)
-EXAMPLE_FACTORS = {"drive_gear_inertia": 1.5, "driven_gear_inertia": 0.7,
-                   "joint_stiction": 1.6, "joint_damping": 0.6, "belt_stiffness": 1.3,
-                   "belt_damping": 0.8}
+EXAMPLE_FACTORS = {
+    "drive_gear_inertia": 1.5,
+    "driven_gear_inertia": 0.7,
+    "joint_stiction": 1.6,
+    "joint_damping": 0.6,
+    "belt_stiffness": 1.3,
+    "belt_damping": 0.8,
+}
 
 
 def test_identify_example_recovers_the_known_hip_unit(tmp_path, capsys):
@@ -221,14 +273,29 @@ def test_identify_example_recovers_the_known_hip_unit(tmp_path, capsys):
     four are identified close to the truth; the residuals are as large as the stated
     sensor noise (scale ~ 1)."""
     out = tmp_path / "idf"
-    code = main(["identify", "--example", "--starts", "2", "--local", "1", "--no-plots",
-                 "--no-progress", "--out", str(out)])
+    code = main(
+        [
+            "identify",
+            "--example",
+            "--starts",
+            "2",
+            "--local",
+            "1",
+            "--no-plots",
+            "--no-progress",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     printed = capsys.readouterr().out
     assert "virtual logs of the free-swing and flight-steps rig(s)" in printed
     assert f"wrote {out / 'identified.json'}" in printed
-    assert {p.name for p in out.iterdir()} == {"free-swing.csv.gz", "flight-steps.csv.gz",
-                                               "identified.json"}
+    assert {p.name for p in out.iterdir()} == {
+        "free-swing.csv.gz",
+        "flight-steps.csv.gz",
+        "identified.json",
+    }
     rep = json.loads((out / "identified.json").read_text())
     assert rep["rigs"] == ["free-swing", "flight-steps"]
     table2 = RobotParameters()
@@ -243,8 +310,12 @@ def test_identify_example_recovers_the_known_hip_unit(tmp_path, capsys):
     combo = rep["combinations"]["reflected_gear_inertia"]
     assert combo["true"] == pytest.approx(reflected, rel=1e-12)
     assert combo["value"] == pytest.approx(reflected, rel=1e-3)
-    for name, rel in (("joint_stiction", 5e-3), ("joint_damping", 5e-3),
-                      ("belt_stiffness", 0.05), ("belt_damping", 0.05)):
+    for name, rel in (
+        ("joint_stiction", 5e-3),
+        ("joint_damping", 5e-3),
+        ("belt_stiffness", 0.05),
+        ("belt_damping", 0.05),
+    ):
         assert par[name]["identifiable"], name
         assert par[name]["value"] == pytest.approx(par[name]["true"], rel=rel), name
     assert rep["residual_scale"] == pytest.approx(1.0, abs=0.05)
@@ -257,16 +328,32 @@ def test_rig_log_then_identify_rig_flight_steps_finds_the_joint_damping(tmp_path
     (docs/identification.md), so it comes back identifiable and within 1 % of the file's
     value; --json prints identified.json; the fit figure is written."""
     robot_file = tmp_path / "robot.toml"
-    robot_file.write_text('[transmission]\njoint_damping = '
-                          '{ value = 3.72e-7, unit = "N m/(deg/s)" }\n')
-    true = 3.72e-7 * 180.0 / math.pi                       # N m s/rad
+    robot_file.write_text(
+        '[transmission]\njoint_damping = { value = 3.72e-7, unit = "N m/(deg/s)" }\n'
+    )
+    true = 3.72e-7 * 180.0 / math.pi  # N m s/rad
     logs = tmp_path / "logs"
     assert main(["rig", "flight-steps", "--robot", str(robot_file), "--out", str(logs)]) == 0
     capsys.readouterr()
     out = tmp_path / "fit"
-    code = main(["identify", str(logs / "flight-steps.csv.gz"), "--rig", "flight-steps",
-                 "--params", "joint_damping", "--starts", "2", "--local", "1", "--json",
-                 "--no-progress", "--out", str(out)])
+    code = main(
+        [
+            "identify",
+            str(logs / "flight-steps.csv.gz"),
+            "--rig",
+            "flight-steps",
+            "--params",
+            "joint_damping",
+            "--starts",
+            "2",
+            "--local",
+            "1",
+            "--json",
+            "--no-progress",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     printed = json.loads(capsys.readouterr().out)
     assert printed == json.loads((out / "identified.json").read_text())
@@ -284,8 +371,9 @@ def test_rig_log_then_identify_rig_flight_steps_finds_the_joint_damping(tmp_path
 # scoutsim sweep
 # -----------------------------------------------------------------------------------------
 def _sweep(out, *argv):
-    return main(["sweep", *argv, "--model", "I", "--workers", "1", "--no-progress",
-                 "--out", str(out)])
+    return main(
+        ["sweep", *argv, "--model", "I", "--workers", "1", "--no-progress", "--out", str(out)]
+    )
 
 
 def test_sweep_orbit_records_each_bounding_points_periodic_orbit(tmp_path, capsys):
@@ -294,14 +382,29 @@ def test_sweep_orbit_records_each_bounding_points_periodic_orbit(tmp_path, capsy
     inverse of the run's steady stride frequency; "stable" means spectral radius < 1; the
     Newton residual is below the sweep's orbit tolerance; the printed count agrees."""
     from scoutsim.analysis.sweep import ORBIT_COLUMNS, ORBIT_TOL
+
     out = tmp_path / "sw"
-    code = main(["sweep", "--grid", "controller.touchdown_angle_front_deg=21:21:1",
-                 "--model", "II", "--duration", "5", "--orbit", "--workers", "1",
-                 "--no-progress", "--out", str(out)])
+    code = main(
+        [
+            "sweep",
+            "--grid",
+            "controller.touchdown_angle_front_deg=21:21:1",
+            "--model",
+            "II",
+            "--duration",
+            "5",
+            "--orbit",
+            "--workers",
+            "1",
+            "--no-progress",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     printed = capsys.readouterr().out
     (row,) = _rows(out / "sweep.csv")
-    assert list(row)[-len(ORBIT_COLUMNS):] == list(ORBIT_COLUMNS)
+    assert list(row)[-len(ORBIT_COLUMNS) :] == list(ORBIT_COLUMNS)
     assert row["steady_bounding"] == "True" and row["orbit_status"] == "ok"
     period = float(row["orbit_period_s"])
     assert period / DT == pytest.approx(round(period / DT), abs=1e-9)
@@ -315,8 +418,17 @@ def test_sweep_orbit_records_each_bounding_points_periodic_orbit(tmp_path, capsy
 def test_sweep_orbit_skips_a_point_that_is_not_bounding(tmp_path, capsys):
     """A run too short for steady bounding gets no orbit, with the reason, not an error."""
     out = tmp_path / "sw"
-    assert _sweep(out, "--grid", "controller.touchdown_angle_front_deg=21:21:1",
-                  "--duration", "0.3", "--orbit") == 0
+    assert (
+        _sweep(
+            out,
+            "--grid",
+            "controller.touchdown_angle_front_deg=21:21:1",
+            "--duration",
+            "0.3",
+            "--orbit",
+        )
+        == 0
+    )
     (row,) = _rows(out / "sweep.csv")
     assert row["outcome"] == "completed" and row["steady_bounding"] == "False"
     assert row["orbit_status"] == "no orbit: not steady bounding"
@@ -359,10 +471,23 @@ def test_sweep_random_sample_runs_each_drawn_point(tmp_path, capsys):
     another; each row is the run of its point (its average speed is that of a direct
     simulate() with that parameter); no map for a random sample; the directory is
     complete."""
+
     def sample(name, seed):
         out = tmp_path / name
-        assert _sweep(out, "--random", "controller.touchdown_angle_front_deg=19:23",
-                      "--samples", "3", "--seed", str(seed), "--duration", "0.3") == 0
+        assert (
+            _sweep(
+                out,
+                "--random",
+                "controller.touchdown_angle_front_deg=19:23",
+                "--samples",
+                "3",
+                "--seed",
+                str(seed),
+                "--duration",
+                "0.3",
+            )
+            == 0
+        )
         return out, _rows(out / "sweep.csv")
 
     out, rows = sample("a", 5)
@@ -375,14 +500,21 @@ def test_sweep_random_sample_runs_each_drawn_point(tmp_path, capsys):
     assert set(check_run_directory(out)["files"]) >= {"sweep.csv"}
     assert check_run_directory(out)["status"] == "complete"
 
-    assert [r["controller.touchdown_angle_front_deg"] for r in sample("b", 5)[1]] == \
-        [r["controller.touchdown_angle_front_deg"] for r in rows]
+    assert [r["controller.touchdown_angle_front_deg"] for r in sample("b", 5)[1]] == [
+        r["controller.touchdown_angle_front_deg"] for r in rows
+    ]
     assert [float(r["controller.touchdown_angle_front_deg"]) for r in sample("c", 6)[1]] != values
 
-    direct = scoutsim.simulate(None, ControllerParameters(touchdown_angle_front=math.radians(values[0])),
-                               None, 0.3, model="I")
+    direct = scoutsim.simulate(
+        None,
+        ControllerParameters(touchdown_angle_front=math.radians(values[0])),
+        None,
+        0.3,
+        model="I",
+    )
     assert float(rows[0]["average_speed_m_s"]) == pytest.approx(
-        (direct.x[-1] - direct.x[0]) / direct.t[-1], rel=1e-12)
+        (direct.x[-1] - direct.x[0]) / direct.t[-1], rel=1e-12
+    )
 
 
 # -----------------------------------------------------------------------------------------
@@ -410,14 +542,23 @@ def test_orbit_model_I_prints_a_periodic_orbit(tmp_path, capsys):
     modes = run.hybrid_state(k_lo)
     z = orb["state"]
     s = np.array([0.0] + [z[name] for name in L.STATE_NAMES[1:]])
-    start = HybridState(state=s, leg_states=modes.leg_states,
-                        contact_modes=modes.contact_modes, motor_modes=modes.motor_modes,
-                        slide_directions=modes.slide_directions,
-                        toe_anchors=(z["anchor_back_rel"], z["anchor_front_rel"]))
-    r = scoutsim.simulate(None, None, start, period + 0.05, model="I",
-                          integrator=IntegratorSettings(rtol=1e-11, atol=1e-12))
-    np.testing.assert_allclose(r.event_times("controller_liftoff", "back"), [period],
-                               atol=1e-12)
+    start = HybridState(
+        state=s,
+        leg_states=modes.leg_states,
+        contact_modes=modes.contact_modes,
+        motor_modes=modes.motor_modes,
+        slide_directions=modes.slide_directions,
+        toe_anchors=(z["anchor_back_rel"], z["anchor_front_rel"]),
+    )
+    r = scoutsim.simulate(
+        None,
+        None,
+        start,
+        period + 0.05,
+        model="I",
+        integrator=IntegratorSettings(rtol=1e-11, atol=1e-12),
+    )
+    np.testing.assert_allclose(r.event_times("controller_liftoff", "back"), [period], atol=1e-12)
     assert r.hybrid_state(n).leg_states == modes.leg_states
     np.testing.assert_allclose(r.state[n, 1:], s[1:], rtol=0, atol=1e-8)
     assert (r.x[n] - r.x[0]) / period == pytest.approx(orb["mean_speed_m_s"], rel=1e-8)
@@ -429,8 +570,10 @@ def test_run_model_ideal_limits_torque_only_by_the_current_limit(tmp_path, capsy
     commanded one clipped there and the current i = tau / (N eta K_T) clipped at i_max;
     it has no belt, so the motor-side angle is the leg angle."""
     out = tmp_path / "ideal"
-    assert main(["run", "--model", "ideal", "--duration", "0.6", "--out", str(out),
-                 "--no-progress"]) == 0
+    assert (
+        main(["run", "--model", "ideal", "--duration", "0.6", "--out", str(out), "--no-progress"])
+        == 0
+    )
     assert json.loads((out / "summary.json").read_text())["model"] == "ideal"
     r = scoutsim.SimulationResult.load(out)
     assert r.provenance["model"] == "ideal" and r.outcome == "completed"
@@ -440,11 +583,15 @@ def test_run_model_ideal_limits_torque_only_by_the_current_limit(tmp_path, capsy
     clipped = 0
     for leg in ("back", "front"):
         cmd = r.hip_torque_commanded(leg)
-        np.testing.assert_allclose(r.hip_torque_applied(leg), np.clip(cmd, -tau_max, tau_max),
-                                   rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(r.motor_current(leg), np.clip(cmd / per_amp,
-                                   -robot.current_limit, robot.current_limit),
-                                   rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            r.hip_torque_applied(leg), np.clip(cmd, -tau_max, tau_max), rtol=1e-12, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            r.motor_current(leg),
+            np.clip(cmd / per_amp, -robot.current_limit, robot.current_limit),
+            rtol=1e-12,
+            atol=1e-12,
+        )
         np.testing.assert_array_equal(r.motor_angle(leg), r.leg_angle(leg))
         clipped += int(np.sum(np.abs(cmd) > tau_max))
-    assert clipped > 0          # the limit was reached, so the clipping was exercised
+    assert clipped > 0  # the limit was reached, so the clipping was exercised

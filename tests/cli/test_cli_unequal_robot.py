@@ -36,8 +36,20 @@ def robot_file(tmp_path_factory):
 
 @pytest.mark.parametrize("model", ["II", "I", "ideal", "passive"])
 def test_run_every_model(robot_file, tmp_path, capsys, model):
-    code = main(["run", "--robot", robot_file, "--model", model, "--duration", "1",
-                 "--out", str(tmp_path / "out"), "--json"])
+    code = main(
+        [
+            "run",
+            "--robot",
+            robot_file,
+            "--model",
+            model,
+            "--duration",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+            "--json",
+        ]
+    )
     assert code == 0
     summary = json.loads(capsys.readouterr().out)
     # (the passive robot with massive legs folds: nothing holds its legs)
@@ -48,36 +60,108 @@ def test_run_every_model(robot_file, tmp_path, capsys, model):
 
 
 def test_run_from_standing(robot_file, tmp_path):
-    assert main(["run", "--robot", robot_file, "--start", "standing", "--duration", "1.5",
-                 "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--robot",
+                robot_file,
+                "--start",
+                "standing",
+                "--duration",
+                "1.5",
+                "--out",
+                str(tmp_path / "out"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
 
 
-@pytest.mark.parametrize("command", [
-    ["sweep", "--grid", "controller.touchdown_angle_front_deg=20:21:2", "--workers", "1",
-     "--no-progress"],
-    ["basin", "--model", "II", "--speeds", "1.3", "--pitch-rates", "0", "--workers", "1",
-     "--no-plots", "--no-progress"],
-    ["tune", "--objective", "speed", "--target", "1.3", "--budget", "4",
-     "--param", "controller.touchdown_angle_front_deg=19:22"],
-], ids=["sweep", "basin", "tune"])
+@pytest.mark.parametrize(
+    "command",
+    [
+        [
+            "sweep",
+            "--grid",
+            "controller.touchdown_angle_front_deg=20:21:2",
+            "--workers",
+            "1",
+            "--no-progress",
+        ],
+        [
+            "basin",
+            "--model",
+            "II",
+            "--speeds",
+            "1.3",
+            "--pitch-rates",
+            "0",
+            "--workers",
+            "1",
+            "--no-plots",
+            "--no-progress",
+        ],
+        [
+            "tune",
+            "--objective",
+            "speed",
+            "--target",
+            "1.3",
+            "--budget",
+            "4",
+            "--param",
+            "controller.touchdown_angle_front_deg=19:22",
+        ],
+    ],
+    ids=["sweep", "basin", "tune"],
+)
 def test_studies(robot_file, tmp_path, command):
-    assert main([*command, "--robot", robot_file, "--duration", "1.5",
-                 "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                *command,
+                "--robot",
+                robot_file,
+                "--duration",
+                "1.5",
+                "--out",
+                str(tmp_path / "out"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
 
 
 def test_orbit_rig_and_the_refused_fit(robot_file, tmp_path, capsys):
-    assert main(["orbit", "--robot", robot_file, "--duration", "6", "--json",
-                 "--no-progress"]) == 0
+    assert main(["orbit", "--robot", robot_file, "--duration", "6", "--json", "--no-progress"]) == 0
     orbit = json.loads(capsys.readouterr().out)
     assert orbit["spectral_radius"] < 1.0
     log = tmp_path / "rig"
-    assert main(["rig", "free-swing", "--robot", robot_file, "--duration", "1",
-                 "--out", str(log)]) == 0
+    assert (
+        main(["rig", "free-swing", "--robot", robot_file, "--duration", "1", "--out", str(log)])
+        == 0
+    )
     logs = sorted(log.glob("*.csv*"))
     assert logs
     capsys.readouterr()
-    code = main(["identify", str(logs[0]), "--robot", robot_file, "--starts", "1",
-                 "--local", "1", "--out", str(tmp_path / "fit"), "--quiet"])
+    code = main(
+        [
+            "identify",
+            str(logs[0]),
+            "--robot",
+            robot_file,
+            "--starts",
+            "1",
+            "--local",
+            "1",
+            "--out",
+            str(tmp_path / "fit"),
+            "--quiet",
+        ]
+    )
     assert code != 0
     err = capsys.readouterr().err
     assert "joint_stiction" in err and "one hip unit" in err

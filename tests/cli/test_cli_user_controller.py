@@ -57,43 +57,83 @@ def user_dir(tmp_path_factory):
 
 def scoutsim(user_dir, *args, cwd):
     env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(user_dir)] + [p for p in
-                                        env.get("PYTHONPATH", "").split(os.pathsep) if p])
-    return subprocess.run([sys.executable, "-m", "scoutsim", *args, "--quiet"], cwd=cwd,
-                          env=env, capture_output=True, text=True, timeout=900)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(user_dir)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
+    )
+    return subprocess.run(
+        [sys.executable, "-m", "scoutsim", *args, "--quiet"],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
 
 
 def run_controller(out) -> str:
     """How the saved run's provenance names the controller that ran."""
     from scoutsim import SimulationResult
+
     return SimulationResult.load(out).provenance["controller_kind"]
 
 
 def test_run_takes_a_compiled_controller_from_a_module(user_dir, tmp_path):
     """run: the factory's CompiledController runs, and the provenance names it."""
-    p = scoutsim(user_dir, "run", "--controller", "usermod:compiled", "--duration", "0.5",
-                 "--model", "I", "--out", str(tmp_path / "o"), cwd=tmp_path)
+    p = scoutsim(
+        user_dir,
+        "run",
+        "--controller",
+        "usermod:compiled",
+        "--duration",
+        "0.5",
+        "--model",
+        "I",
+        "--out",
+        str(tmp_path / "o"),
+        cwd=tmp_path,
+    )
     assert p.returncode == 0, p.stderr
     assert run_controller(tmp_path / "o") == "hold"
 
 
 def test_run_takes_a_python_controller_from_a_module(user_dir, tmp_path):
-    p = scoutsim(user_dir, "run", "--controller", "usermod:pitch", "--duration", "0.5",
-                 "--out", str(tmp_path / "o"), cwd=tmp_path)
+    p = scoutsim(
+        user_dir,
+        "run",
+        "--controller",
+        "usermod:pitch",
+        "--duration",
+        "0.5",
+        "--out",
+        str(tmp_path / "o"),
+        cwd=tmp_path,
+    )
     assert p.returncode == 0, p.stderr
     assert "PitchFeedback" in run_controller(tmp_path / "o")
 
 
-@pytest.mark.parametrize("spec,expected", [
-    ("nosuchmodule:make", "cannot import module 'nosuchmodule'"),
-    ("usermod:nosuch", "has no attribute 'nosuch'"),
-    ("usermod:not_a_controller", "returned int, not a controller"),
-])
+@pytest.mark.parametrize(
+    "spec,expected",
+    [
+        ("nosuchmodule:make", "cannot import module 'nosuchmodule'"),
+        ("usermod:nosuch", "has no attribute 'nosuch'"),
+        ("usermod:not_a_controller", "returned int, not a controller"),
+    ],
+)
 def test_a_bad_factory_is_a_usage_error(user_dir, tmp_path, spec, expected):
     """An unimportable module, a missing factory or a factory that returns no controller:
     exit 2 and a message saying which, before anything runs."""
-    p = scoutsim(user_dir, "run", "--controller", spec, "--duration", "0.5",
-                 "--out", str(tmp_path / "o"), cwd=tmp_path)
+    p = scoutsim(
+        user_dir,
+        "run",
+        "--controller",
+        spec,
+        "--duration",
+        "0.5",
+        "--out",
+        str(tmp_path / "o"),
+        cwd=tmp_path,
+    )
     assert p.returncode == 2
     assert expected in p.stderr
     assert not (tmp_path / "o" / "summary.json").exists()
@@ -105,10 +145,30 @@ def test_basin_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
     tables = {}
     for workers in ("1", "2"):
         out = tmp_path / f"b{workers}"
-        p = scoutsim(user_dir, "basin", "--controller", "usermod:pitch", "--model", "ideal",
-                     "--floors", "1", "--speeds", "1.2,1.4", "--pitch-rates", "0",
-                     "--heights", "0.33", "--duration", "1", "--workers", workers,
-                     "--no-plots", "--out", str(out), cwd=tmp_path)
+        p = scoutsim(
+            user_dir,
+            "basin",
+            "--controller",
+            "usermod:pitch",
+            "--model",
+            "ideal",
+            "--floors",
+            "1",
+            "--speeds",
+            "1.2,1.4",
+            "--pitch-rates",
+            "0",
+            "--heights",
+            "0.33",
+            "--duration",
+            "1",
+            "--workers",
+            workers,
+            "--no-plots",
+            "--out",
+            str(out),
+            cwd=tmp_path,
+        )
         assert p.returncode == 0, p.stderr
         with open(out / "basin.csv") as fh:
             rows = list(csv.DictReader(fh))
@@ -121,10 +181,23 @@ def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
     tables = {}
     for workers in ("1", "2"):
         out = tmp_path / f"s{workers}"
-        p = scoutsim(user_dir, "sweep", "--controller", "usermod:compiled", "--model", "I",
-                     "--grid", "controller.touchdown_angle_front_deg=17:19:2",
-                     "--duration", "0.5", "--workers", workers, "--out", str(out),
-                     cwd=tmp_path)
+        p = scoutsim(
+            user_dir,
+            "sweep",
+            "--controller",
+            "usermod:compiled",
+            "--model",
+            "I",
+            "--grid",
+            "controller.touchdown_angle_front_deg=17:19:2",
+            "--duration",
+            "0.5",
+            "--workers",
+            workers,
+            "--out",
+            str(out),
+            cwd=tmp_path,
+        )
         assert p.returncode == 0, p.stderr
         with open(out / "sweep.csv") as fh:
             rows = list(csv.DictReader(fh))
@@ -134,10 +207,29 @@ def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
 
 
 def test_tune_runs_a_module_controller(user_dir, tmp_path):
-    p = scoutsim(user_dir, "tune", "--controller", "usermod:table_i", "--model", "ideal",
-                 "--param", "controller.touchdown_angle_front_deg", "--objective",
-                 "max-speed", "--budget", "4", "--population", "4", "--duration", "1",
-                 "--workers", "2", "--out", str(tmp_path / "t"), cwd=tmp_path)
+    p = scoutsim(
+        user_dir,
+        "tune",
+        "--controller",
+        "usermod:table_i",
+        "--model",
+        "ideal",
+        "--param",
+        "controller.touchdown_angle_front_deg",
+        "--objective",
+        "max-speed",
+        "--budget",
+        "4",
+        "--population",
+        "4",
+        "--duration",
+        "1",
+        "--workers",
+        "2",
+        "--out",
+        str(tmp_path / "t"),
+        cwd=tmp_path,
+    )
     assert p.returncode == 0, p.stderr
     with open(tmp_path / "t" / "tune.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -155,8 +247,16 @@ def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     """orbit: the factory's parameters are the ones whose orbit is found (its front
     touchdown angle differs from the default orbit's), and a controller object with state
     of its own is refused with the reason."""
-    own = scoutsim(user_dir, "orbit", "--controller", "usermod:table_i", "--model", "ideal",
-                   "--json", cwd=tmp_path)
+    own = scoutsim(
+        user_dir,
+        "orbit",
+        "--controller",
+        "usermod:table_i",
+        "--model",
+        "ideal",
+        "--json",
+        cwd=tmp_path,
+    )
     assert own.returncode == 0, own.stderr
     default = scoutsim(user_dir, "orbit", "--model", "ideal", "--json", cwd=tmp_path)
     assert default.returncode == 0, default.stderr

@@ -15,10 +15,20 @@ TABLE_I = ControllerParameters()
 L0 = ROBOT.leg_rest_length
 #: eq. (3) at the leg (through the gears, N and eta): offset and slope of the torque-speed
 #: line, and eq. (4)'s current-limit torque
-TAU_MAX = ROBOT.gear_ratio * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.battery_voltage \
+TAU_MAX = (
+    ROBOT.gear_ratio
+    * ROBOT.efficiency
+    * ROBOT.torque_constant
+    * ROBOT.battery_voltage
     / ROBOT.armature_resistance
-A = -(ROBOT.gear_ratio ** 2) * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.speed_constant \
+)
+A = (
+    -(ROBOT.gear_ratio**2)
+    * ROBOT.efficiency
+    * ROBOT.torque_constant
+    * ROBOT.speed_constant
     / ROBOT.armature_resistance
+)
 TAU_LIMIT = ROBOT.gear_ratio * ROBOT.efficiency * ROBOT.torque_constant * ROBOT.current_limit
 
 
@@ -29,8 +39,11 @@ def controller(params=TABLE_I, compression=(0.0, 0.0), angle=(0.3, 0.3)):
 
 
 def sensors(angle, rate, compression):
-    return Sensors(hip_angle=np.array(angle, dtype=float), hip_rate=np.array(rate, dtype=float),
-                   leg_length=L0 - np.array(compression, dtype=float))
+    return Sensors(
+        hip_angle=np.array(angle, dtype=float),
+        hip_rate=np.array(rate, dtype=float),
+        leg_length=L0 - np.array(compression, dtype=float),
+    )
 
 
 def in_stance_retraction(rate_back):
@@ -46,7 +59,7 @@ def in_stance_retraction(rate_back):
 @pytest.mark.parametrize("rate", [-8.5, -7.5, -6.5, -5.8])
 def test_stance_retraction_commands_the_motor_torque_speed_line_eqs_2_3(rate):
     tau = -TAU_MAX + A * rate
-    assert -TAU_LIMIT < tau < 0.0          # inside the limits at these rates
+    assert -TAU_LIMIT < tau < 0.0  # inside the limits at these rates
     assert in_stance_retraction(rate) == pytest.approx(tau, rel=1e-12)
 
 
@@ -62,7 +75,7 @@ def test_stance_retraction_never_commands_a_positive_torque_eq_5():
     positive torque: none is commanded (eq. 5), however large the line's value, which at
     1.5 x no-load exceeds the current limit (eq. 4 applies to the "excessively large
     torques" of small rates, paper footnote 2, not to a change of sign)."""
-    no_load_rate = TAU_MAX / A                  # where the line crosses zero (negative)
+    no_load_rate = TAU_MAX / A  # where the line crosses zero (negative)
     assert no_load_rate < 0.0
     assert -TAU_MAX + A * 1.5 * no_load_rate > TAU_LIMIT
     for rate in (1.05 * no_load_rate, 1.5 * no_load_rate):
@@ -83,14 +96,18 @@ def test_flight_and_stance_brake_are_pd_servos(state):
     if state == "flight":
         angle, rate, comp = (0.1, 0.5), (1.0, -2.0), 0.0
         expected_state = L.LS_FLIGHT
-        gains = [(p.flight_kp_back, p.flight_kd_back, p.touchdown_angle_back),
-                 (p.flight_kp_front, p.flight_kd_front, p.touchdown_angle_front)]
+        gains = [
+            (p.flight_kp_back, p.flight_kd_back, p.touchdown_angle_back),
+            (p.flight_kp_front, p.flight_kd_front, p.touchdown_angle_front),
+        ]
     else:
         # touchdown and the sweep limit in the same sample: straight to stance-brake
         angle, rate, comp = (-0.05, -0.02), (-1.5, 0.5), 2.0 * p.touchdown_compression
         expected_state = L.LS_BRAKE
-        gains = [(p.brake_kp_back, p.brake_kd_back, p.sweep_limit_back),
-                 (p.brake_kp_front, p.brake_kd_front, p.sweep_limit_front)]
+        gains = [
+            (p.brake_kp_back, p.brake_kd_back, p.sweep_limit_back),
+            (p.brake_kp_front, p.brake_kd_front, p.sweep_limit_front),
+        ]
     tau = c.command(0.0, sensors(angle, rate, (comp, comp)))
     assert tuple(c.leg_states) == (expected_state, expected_state)
     for leg in (L.BACK, L.FRONT):
@@ -101,20 +118,20 @@ def test_flight_and_stance_brake_are_pd_servos(state):
 def test_leg_state_machine_follows_fig_3_with_hysteresis():
     p = TABLE_I.replace(touchdown_compression=6e-3, liftoff_compression=4e-3)
     c = controller(p)
-    between = 5e-3                 # between the lift-off and touchdown thresholds
+    between = 5e-3  # between the lift-off and touchdown thresholds
     seq = [  # (compression of the back leg [m], back hip angle [rad]) -> expected state
-        ((between, 0.2), L.LS_FLIGHT),      # not yet touchdown: above lift-off is not enough
-        ((7e-3, 0.2), L.LS_RETRACTION),     # touchdown detected
+        ((between, 0.2), L.LS_FLIGHT),  # not yet touchdown: above lift-off is not enough
+        ((7e-3, 0.2), L.LS_RETRACTION),  # touchdown detected
         ((between, 0.1), L.LS_RETRACTION),  # hysteresis: stays in stance
-        ((between, -0.01), L.LS_BRAKE),     # sweep limit (0) passed
-        ((between, 0.05), L.LS_BRAKE),      # the brake holds: no way back to retraction
-        ((3.9e-3, 0.05), L.LS_FLIGHT),      # lift-off detected
-        ((between, 0.05), L.LS_FLIGHT),     # hysteresis: stays in flight
+        ((between, -0.01), L.LS_BRAKE),  # sweep limit (0) passed
+        ((between, 0.05), L.LS_BRAKE),  # the brake holds: no way back to retraction
+        ((3.9e-3, 0.05), L.LS_FLIGHT),  # lift-off detected
+        ((between, 0.05), L.LS_FLIGHT),  # hysteresis: stays in flight
     ]
     for (comp, ang), expected in seq:
         c.command(0.0, sensors((ang, 0.3), (0.0, 0.0), (comp, 0.0)))
         assert c.leg_states[L.BACK] == expected, (comp, ang)
-        assert c.leg_states[L.FRONT] == L.LS_FLIGHT      # the front leg never touched down
+        assert c.leg_states[L.FRONT] == L.LS_FLIGHT  # the front leg never touched down
 
 
 def test_a_leg_already_compressed_at_the_start_starts_in_stance():
@@ -134,6 +151,7 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
     from scoutsim._core.model.sensor_readings import true_readings
     from scoutsim.control.bounding import bounding_step, controller_array
     from scoutsim.control.sensors import SensorParameters
+
     r = scoutsim.simulate(duration=1.0, model="II")
     geom = SensorParameters().geometry_array(ROBOT, sense_motor_angle)
     ds, aux = np.zeros(L.NS), np.zeros(L.NAUX)
@@ -155,12 +173,11 @@ def test_the_controller_has_no_torso_feedback(sense_motor_angle):
         before = [r.leg_state(L.BACK)[k - 1], r.leg_state(L.FRONT)[k - 1]]
         s = r.state[k].copy()
         other = s.copy()
-        other[torso] = s[torso] + rng.uniform(-1.0, 1.0, size=6)     # [m, rad, m/s, rad/s]
+        other[torso] = s[torso] + rng.uniform(-1.0, 1.0, size=6)  # [m, rad, m/s, rad/s]
         cmd, ls, tr = step(s, before)
         cmd2, ls2, tr2 = step(other, before)
-        assert np.all(seen[-1] != seen[-2])     # the controller was shown the torso moved
-        assert np.array_equal(cmd, cmd2) and np.array_equal(ls, ls2) \
-            and np.array_equal(tr, tr2), k
+        assert np.all(seen[-1] != seen[-2])  # the controller was shown the torso moved
+        assert np.array_equal(cmd, cmd2) and np.array_equal(ls, ls2) and np.array_equal(tr, tr2), k
         visited.update(ls)
         bent = s.copy()
         bent[hip] += 0.05
@@ -189,6 +206,7 @@ def test_a_command_before_reset_is_refused():
 @pytest.mark.parametrize("motor_side", [True, False])
 def test_the_sensors_read_the_motor_or_the_leg_side(motor_side):
     from scoutsim._core.model.sensor_readings import read_encoders
+
     s = np.arange(L.NS, dtype=float) + 1.0
     y = np.zeros(L.NSN)
     read_encoders(s, motor_side, y)

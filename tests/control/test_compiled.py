@@ -16,7 +16,7 @@ from scoutsim._numba.jit import cache_directory
 from scoutsim.control import CompiledController, Controller, ControllerError
 from scoutsim.control import sensors as S
 
-AIR = InitialState(y=1.0, dx=0.0, dtheta=0.0)    # in the air: a short, simple run
+AIR = InitialState(y=1.0, dx=0.0, dtheta=0.0)  # in the air: a short, simple run
 
 
 def pitch_pd(t, y, params, state, torque, leg_states):
@@ -35,8 +35,10 @@ class PitchPD(Controller):
 
     def command(self, t, s):
         p = PARAMS
-        return tuple(p[0] * (p[2 + leg] + p[4] * s.pitch - s.hip_angle[leg])
-                     - p[1] * s.hip_rate[leg] for leg in range(2))
+        return tuple(
+            p[0] * (p[2 + leg] + p[4] * s.pitch - s.hip_angle[leg]) - p[1] * s.hip_rate[leg]
+            for leg in range(2)
+        )
 
 
 @pytest.fixture(scope="module")
@@ -114,8 +116,9 @@ def nan_at_20(t, y, params, state, torque, leg_states):
     return 0
 
 
-@pytest.mark.parametrize("fn, sample, shown", [(stops_at_30, 30, "returned status 7"),
-                                               (nan_at_20, 20, "(0.0, nan)")])
+@pytest.mark.parametrize(
+    "fn, sample, shown", [(stops_at_30, 30, "returned status 7"), (nan_at_20, 20, "(0.0, nan)")]
+)
 def test_a_compiled_controller_that_stops_or_returns_nan(fn, sample, shown):
     """A nonzero status or a torque that is not finite stops the run with a
     ControllerError naming the controller, the sample time and what it returned; the
@@ -141,6 +144,7 @@ def test_a_function_numba_cannot_compile_is_refused_when_made():
 def test_ctrl_c_in_a_python_controller_keeps_the_run():
     """A KeyboardInterrupt raised in command() at t = 0.04 s ends the run as
     "interrupted" with the samples before it (as a Ctrl-C does)."""
+
     class Interrupted(Controller):
         def command(self, t, s):
             if t >= 0.04 - 1e-12:
@@ -154,6 +158,7 @@ def test_ctrl_c_in_a_python_controller_keeps_the_run():
 def test_the_control_period_is_the_controllers():
     """A controller with a 2 ms period is sampled (and its run recorded) every 2 ms; a
     period out of range is refused naming the field."""
+
     class Slow(Controller):
         control_period = 2e-3
 

@@ -19,8 +19,9 @@ def servo(t, y, params, state, torque, leg_states):
     """Hip servo to params[2:4] with gains params[0:2]; counts its samples in state[0]."""
     state[0] += 1.0
     for leg in range(2):
-        torque[leg] = params[0] * (params[2 + leg] - y[S.HIP_ANGLE + leg]) \
-            - params[1] * y[S.HIP_RATE + leg]
+        torque[leg] = (
+            params[0] * (params[2 + leg] - y[S.HIP_ANGLE + leg]) - params[1] * y[S.HIP_RATE + leg]
+        )
     return 0
 
 
@@ -33,11 +34,12 @@ class Gains(CompiledController):
 
 
 def test_a_copy_runs_the_same_run_bit_for_bit():
-    c = CompiledController(servo, params=[250.0, 5.0, 0.33, 0.37], state=[0.0],
-                           control_period=2e-3, name="servo")
+    c = CompiledController(
+        servo, params=[250.0, 5.0, 0.33, 0.37], state=[0.0], control_period=2e-3, name="servo"
+    )
     copy = pickle.loads(pickle.dumps(c))
     assert (copy.name, copy.control_period, copy.command_function) == ("servo", 2e-3, servo)
-    assert copy._cfunc is c._cfunc          # wrapped again, not compiled again
+    assert copy._cfunc is c._cfunc  # wrapped again, not compiled again
     a = scoutsim.simulate(None, c, AIR, 0.1, model="II")
     b = scoutsim.simulate(None, copy, AIR, 0.1, model="II")
     assert np.array_equal(a.t, b.t) and np.array_equal(a.x, b.x)

@@ -12,10 +12,19 @@ from scoutsim.control.bounding import bounding_step, controller_array
 from scoutsim.parameters import ControllerParameters, RobotParameters
 
 PARAMS = ControllerParameters().replace(
-    touchdown_angle_back=0.31, touchdown_angle_front=0.37,
-    sweep_limit_back=-0.05, sweep_limit_front=0.02,
-    flight_kp_back=210.0, flight_kd_back=3.0, flight_kp_front=270.0, flight_kd_front=7.0,
-    brake_kp_back=330.0, brake_kd_back=4.0, brake_kp_front=290.0, brake_kd_front=6.0)
+    touchdown_angle_back=0.31,
+    touchdown_angle_front=0.37,
+    sweep_limit_back=-0.05,
+    sweep_limit_front=0.02,
+    flight_kp_back=210.0,
+    flight_kd_back=3.0,
+    flight_kp_front=270.0,
+    flight_kd_front=7.0,
+    brake_kp_back=330.0,
+    brake_kd_back=4.0,
+    brake_kp_front=290.0,
+    brake_kd_front=6.0,
+)
 
 
 def _step(angles, rates, compression, states):
@@ -55,7 +64,6 @@ def test_stance_brake_uses_each_legs_gains_and_sweep_limit():
 def test_sweep_limit_is_each_legs_own():
     """Stance-retraction -> stance-brake when phi passes the leg's own sweep limit: at
     phi = -0.03 the back leg (limit -0.05) keeps retracting, the front (limit 0.02) brakes."""
-    cmd, ls = _step((-0.03, -0.03), (-1.0, -1.0), (0.03, 0.03),
-                    (L.LS_RETRACTION, L.LS_RETRACTION))
+    cmd, ls = _step((-0.03, -0.03), (-1.0, -1.0), (0.03, 0.03), (L.LS_RETRACTION, L.LS_RETRACTION))
     assert ls[L.BACK] == L.LS_RETRACTION
     assert ls[L.FRONT] == L.LS_BRAKE

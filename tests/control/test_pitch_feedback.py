@@ -24,8 +24,7 @@ from scoutsim.parameters import ControllerParameters, ParameterError, load_contr
 MODELS = ("ideal", "I", "II")
 #: the controller's detections of touchdown, sweep limit and lift-off: logged as events by
 #: the built-in Table I law only (the plant's own events are the same for both)
-CONTROLLER_EVENTS = [k for k, name in L.EVENT_KIND_NAMES.items()
-                     if name.startswith("controller_")]
+CONTROLLER_EVENTS = [k for k, name in L.EVENT_KIND_NAMES.items() if name.startswith("controller_")]
 #: a gain setting's rate gain [s] that is far from zero, of the packaged sign
 RATE_GAIN = ControllerParameters().pitch_rate_gain_front
 
@@ -44,6 +43,7 @@ def _level_start(speed: float, height: float = 0.33) -> InitialState:
 
 
 # -- the sign of the correction, against the robot's mechanics ----------------------------
+
 
 def _before_front_touchdown(model: str):
     """A flight state of the Table I cycle 30 ms before a front touchdown (the nose is
@@ -80,19 +80,20 @@ def test_the_command_moves_the_flight_set_points_forward_when_the_nose_falls():
     (positive torque: toe ahead) harder than at zero pitch rate, by kp * k_omega * rate."""
     c = PitchFeedbackController()
     p = c.controller_parameters
-    still = dict(hip_angle=(0.2, 0.2), hip_rate=(0.0, 0.0), leg_length=(0.323, 0.323),
-                 pitch=0.0)
+    still = dict(hip_angle=(0.2, 0.2), hip_rate=(0.0, 0.0), leg_length=(0.323, 0.323), pitch=0.0)
     level = c.command(0.0, scoutsim.Sensors(**still, pitch_rate=0.0))
-    falling = PitchFeedbackController().command(0.0, scoutsim.Sensors(**still,
-                                                                      pitch_rate=-2.0))
+    falling = PitchFeedbackController().command(0.0, scoutsim.Sensors(**still, pitch_rate=-2.0))
     assert falling[0] - level[0] == pytest.approx(
-        p.flight_kp_back * p.pitch_rate_gain_back * -2.0, rel=1e-12)
+        p.flight_kp_back * p.pitch_rate_gain_back * -2.0, rel=1e-12
+    )
     assert falling[1] - level[1] == pytest.approx(
-        p.flight_kp_front * p.pitch_rate_gain_front * -2.0, rel=1e-12)
+        p.flight_kp_front * p.pitch_rate_gain_front * -2.0, rel=1e-12
+    )
     assert falling[0] > level[0] and falling[1] > level[1]
 
 
 # -- zero gains: the Table I controller --------------------------------------------------
+
 
 @pytest.mark.parametrize("model", MODELS)
 def test_zero_gains_reproduce_table_i_bit_for_bit(model):
@@ -100,9 +101,14 @@ def test_zero_gains_reproduce_table_i_bit_for_bit(model):
     bit, also with Table I values that are not the defaults (the legs start at their
     touchdown angles; Model II's encoders read the leg side when told so)."""
     table = ControllerParameters().replace(
-        touchdown_angle_back=math.radians(17.0), touchdown_angle_front=math.radians(23.0),
-        sense_motor_angle=(model != "II"), pitch_gain_back=0.0, pitch_gain_front=0.0,
-        pitch_rate_gain_back=0.0, pitch_rate_gain_front=0.0)
+        touchdown_angle_back=math.radians(17.0),
+        touchdown_angle_front=math.radians(23.0),
+        sense_motor_angle=(model != "II"),
+        pitch_gain_back=0.0,
+        pitch_gain_front=0.0,
+        pitch_rate_gain_back=0.0,
+        pitch_rate_gain_front=0.0,
+    )
     for start in (InitialState(), _level_start(1.0, 0.36)):
         a = scoutsim.simulate(None, table, start, 2.0, model=model)
         b = scoutsim.simulate(None, PitchFeedbackController(table), start, 2.0, model=model)
@@ -115,17 +121,25 @@ def test_zero_gains_reproduce_table_i_bit_for_bit(model):
 
 def test_table_i_ignores_the_feedback_gains():
     """The Table I controller runs the same with and without feedback gains set."""
-    gains = ControllerParameters().replace(pitch_gain_back=0.7, pitch_gain_front=-0.4,
-                                           pitch_rate_gain_back=0.03,
-                                           pitch_rate_gain_front=-0.02)
-    zero = gains.replace(pitch_gain_back=0.0, pitch_gain_front=0.0, pitch_rate_gain_back=0.0,
-                         pitch_rate_gain_front=0.0)
+    gains = ControllerParameters().replace(
+        pitch_gain_back=0.7,
+        pitch_gain_front=-0.4,
+        pitch_rate_gain_back=0.03,
+        pitch_rate_gain_front=-0.02,
+    )
+    zero = gains.replace(
+        pitch_gain_back=0.0,
+        pitch_gain_front=0.0,
+        pitch_rate_gain_back=0.0,
+        pitch_rate_gain_front=0.0,
+    )
     a = scoutsim.simulate(None, gains, None, 1.0, model="I")
     b = scoutsim.simulate(None, zero, None, 1.0, model="I")
     assert np.array_equal(a.state, b.state) and np.array_equal(a.events, b.events, equal_nan=True)
 
 
 # -- level starts ------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("model", MODELS)
 def test_level_starts_at_zero_pitch_rate_bound_with_pitch_feedback(model):
@@ -153,13 +167,16 @@ def test_rate_gains_of_the_other_sign_do_not_recover_a_level_start(model):
 
 # -- parameters ----------------------------------------------------------------------------
 
+
 def test_gains_load_from_a_robot_file_with_units(tmp_path):
     f = tmp_path / "robot.toml"
-    f.write_text("[controller]\n"
-                 'pitch_gain_back = { value = 0.5, unit = "deg/deg" }\n'
-                 'pitch_gain_front = { value = -0.25, unit = "rad/rad" }\n'
-                 'pitch_rate_gain_back = { value = -0.04, unit = "deg/(deg/s)" }\n'
-                 "pitch_rate_gain_front = -0.06\n")
+    f.write_text(
+        "[controller]\n"
+        'pitch_gain_back = { value = 0.5, unit = "deg/deg" }\n'
+        'pitch_gain_front = { value = -0.25, unit = "rad/rad" }\n'
+        'pitch_rate_gain_back = { value = -0.04, unit = "deg/(deg/s)" }\n'
+        "pitch_rate_gain_front = -0.06\n"
+    )
     c = load_controller(f)
     assert (c.pitch_gain_back, c.pitch_gain_front) == (0.5, -0.25)
     assert (c.pitch_rate_gain_back, c.pitch_rate_gain_front) == (-0.04, -0.06)
@@ -167,16 +184,25 @@ def test_gains_load_from_a_robot_file_with_units(tmp_path):
     assert ctrl.controller_parameters is c
 
 
-@pytest.mark.parametrize("entry, words", [
-    ('pitch_rate_gain_back = { value = 2.0, unit = "deg/(deg/s)" }',
-     ["controller.pitch_rate_gain_back", "2.0 deg/(deg/s)", "[-0.45, 0.45]"]),
-    ('pitch_gain_front = { value = 12.0, unit = "deg/deg" }',
-     ["controller.pitch_gain_front", "12.0", "[-9, 9]"]),
-    ('pitch_rate_gain_front = { value = 0.05, unit = "deg/s" }',
-     ["controller.pitch_rate_gain_front", "deg/s", "angular rate unit"]),
-    ('pitch_gain_back = "large"', ["controller.pitch_gain_back", "wrong type"]),
-    ('pitch_gain_back = nan', ["controller.pitch_gain_back", "nan"]),
-])
+@pytest.mark.parametrize(
+    "entry, words",
+    [
+        (
+            'pitch_rate_gain_back = { value = 2.0, unit = "deg/(deg/s)" }',
+            ["controller.pitch_rate_gain_back", "2.0 deg/(deg/s)", "[-0.45, 0.45]"],
+        ),
+        (
+            'pitch_gain_front = { value = 12.0, unit = "deg/deg" }',
+            ["controller.pitch_gain_front", "12.0", "[-9, 9]"],
+        ),
+        (
+            'pitch_rate_gain_front = { value = 0.05, unit = "deg/s" }',
+            ["controller.pitch_rate_gain_front", "deg/s", "angular rate unit"],
+        ),
+        ('pitch_gain_back = "large"', ["controller.pitch_gain_back", "wrong type"]),
+        ("pitch_gain_back = nan", ["controller.pitch_gain_back", "nan"]),
+    ],
+)
 def test_bad_gains_are_refused_naming_the_field(tmp_path, entry, words):
     f = tmp_path / "robot.toml"
     f.write_text(f"[controller]\n{entry}\n")
@@ -187,6 +213,7 @@ def test_bad_gains_are_refused_naming_the_field(tmp_path, entry, words):
 
 
 # -- parallel workers and the command line ---------------------------------------------------
+
 
 def test_pickled_controller_is_rebuilt_with_its_parameters_and_runs_the_same():
     c = _feedback(pitch_gain_back=0.3, pitch_rate_gain_front=-0.04)
@@ -202,9 +229,23 @@ def test_cli_basin_and_run_take_the_controller(tmp_path):
     """``scoutsim basin --controller pitch-feedback`` in worker processes gives the rows
     of one process, and its level start bounds; ``scoutsim run --controller`` runs it and
     refuses it on the passive model."""
-    args = ["basin", "--controller", "pitch-feedback", "--model", "I", "--speeds", "0.8",
-            "--pitch-rates", "0", "--heights", "0.33,0.38", "--floors", "1.0",
-            "--no-progress", "--no-plots"]
+    args = [
+        "basin",
+        "--controller",
+        "pitch-feedback",
+        "--model",
+        "I",
+        "--speeds",
+        "0.8",
+        "--pitch-rates",
+        "0",
+        "--heights",
+        "0.33,0.38",
+        "--floors",
+        "1.0",
+        "--no-progress",
+        "--no-plots",
+    ]
     assert main(args + ["--out", str(tmp_path / "a"), "--workers", "2"]) == 0
     assert main(args + ["--out", str(tmp_path / "b"), "--workers", "1"]) == 0
     rows = []
@@ -215,9 +256,40 @@ def test_cli_basin_and_run_take_the_controller(tmp_path):
     assert all(r["steady_bounding"] == "True" for r in rows[0])
     summary = json.loads((tmp_path / "a" / "basin.json").read_text())
     assert summary["controller"] == "pitch-feedback"
-    assert main(["run", "--controller", "pitch-feedback", "--model", "I", "--duration", "0.5",
-                 "--no-progress", "--no-plots", "--out", str(tmp_path / "run")]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "--controller",
+                "pitch-feedback",
+                "--model",
+                "I",
+                "--duration",
+                "0.5",
+                "--no-progress",
+                "--no-plots",
+                "--out",
+                str(tmp_path / "run"),
+            ]
+        )
+        == 0
+    )
     back = scoutsim.SimulationResult.load(tmp_path / "run")
     assert back.provenance["controller_kind"] == "PitchFeedbackController"
-    assert main(["run", "--controller", "pitch-feedback", "--model", "passive",
-                 "--duration", "0.5", "--no-progress", "--out", str(tmp_path / "p")]) == 2
+    assert (
+        main(
+            [
+                "run",
+                "--controller",
+                "pitch-feedback",
+                "--model",
+                "passive",
+                "--duration",
+                "0.5",
+                "--no-progress",
+                "--out",
+                str(tmp_path / "p"),
+            ]
+        )
+        == 2
+    )

@@ -73,7 +73,7 @@ def test_the_lasers_read_the_validation_chains_geometry(ideal):
     front, back = laser_ranges(r.height, r.pitch, LaserGeometry(0.5 * ROBOT.torso_length))
     np.testing.assert_allclose(y[:, L.SN_RANGE_B], back, rtol=0, atol=1e-15)
     np.testing.assert_allclose(y[:, L.SN_RANGE_F], front, rtol=0, atol=1e-15)
-    assert np.ptp(y[:, L.SN_RANGE_F] - y[:, L.SN_RANGE_B]) > 0.05   # the torso pitches
+    assert np.ptp(y[:, L.SN_RANGE_F] - y[:, L.SN_RANGE_B]) > 0.05  # the torso pitches
 
 
 class Hold:
@@ -97,7 +97,7 @@ def test_the_accelerometer_reads_the_velocitys_rate_of_change():
     h = Hold()
     r = scoutsim.simulate(None, h, InitialState(y=0.42, dx=0.5, dtheta=0.0), 0.4, model="I")
     y = np.array(h.y)
-    n = len(y)             # (a run that falls records its last state off the grid)
+    n = len(y)  # (a run that falls records its last state off the grid)
     t, th = r.t[:n], r.pitch[:n]
     fx, fz = y[:, L.SN_ACCEL_X], y[:, L.SN_ACCEL_Z]
     ax = fx * np.cos(th) - fz * np.sin(th)
@@ -105,12 +105,13 @@ def test_the_accelerometer_reads_the_velocitys_rate_of_change():
     qx = np.diff(r.forward_speed[:n]) / np.diff(t)
     qy = np.diff(r.state[:n, L.NQ + L.IY]) / np.diff(t)
     events = r.events[:, L.EVR_T]
-    calm = np.array([not np.any((events > a - 1e-9) & (events <= b + 1e-9))
-                     for a, b in zip(t[:-1], t[1:])])
-    calm[0] = False        # the first reading is taken under the zero command before the run
+    calm = np.array(
+        [not np.any((events > a - 1e-9) & (events <= b + 1e-9)) for a, b in zip(t[:-1], t[1:])]
+    )
+    calm[0] = False  # the first reading is taken under the zero command before the run
     stance = (r.contact_mode("back")[1:n] != 0) | (r.contact_mode("front")[1:n] != 0)
     assert (calm & stance).sum() > 50 and (calm & ~stance).sum() > 50
-    assert np.max(np.abs(qy[calm])) > 5.0       # the legs catch the torso
+    assert np.max(np.abs(qy[calm])) > 5.0  # the legs catch the torso
     ex = np.abs(0.5 * (ax[:-1] + ax[1:]) - qx)[calm]
     ey = np.abs(0.5 * (ay[:-1] + ay[1:]) - qy)[calm]
     assert np.median(ex) < 5e-5 and np.median(ey) < 5e-5
@@ -234,12 +235,16 @@ def test_the_builtin_controller_reads_the_sensors_too():
     reading at the touchdown angle), a Python copy of the law agrees bit for bit."""
     bias = math.radians(2.0)
     sensors = SensorParameters(hip_angle=SensorChannel(bias=bias))
-    a = scoutsim.simulate(duration=0.05, model="ideal", sensors=sensors,
-                          initial_state=InitialState(y=1.0, dx=0.0, dtheta=0.0))
-    b = scoutsim.simulate(duration=0.05, model="ideal",
-                          initial_state=InitialState(y=1.0, dx=0.0, dtheta=0.0))
-    np.testing.assert_allclose(a.leg_angle("back")[-1], b.leg_angle("back")[-1] - bias,
-                               atol=2e-3)
+    a = scoutsim.simulate(
+        duration=0.05,
+        model="ideal",
+        sensors=sensors,
+        initial_state=InitialState(y=1.0, dx=0.0, dtheta=0.0),
+    )
+    b = scoutsim.simulate(
+        duration=0.05, model="ideal", initial_state=InitialState(y=1.0, dx=0.0, dtheta=0.0)
+    )
+    np.testing.assert_allclose(a.leg_angle("back")[-1], b.leg_angle("back")[-1] - bias, atol=2e-3)
     r, _, _ = _run("ideal", 0.3, sensors=sensors)
     builtin = scoutsim.simulate(duration=0.3, model="ideal", sensors=sensors)
     assert np.array_equal(r.state, builtin.state)
@@ -254,23 +259,25 @@ def test_sensors_name_every_channel():
         value = getattr(s, name)
         assert np.array_equal(np.atleast_1d(value), np.arange(slot, slot + n))
     with pytest.raises(ValueError):
-        s.hip_angle[0] = 1.0          # readings are read-only
+        s.hip_angle[0] = 1.0  # readings are read-only
     hand = Sensors(hip_angle=(0.1, 0.2), hip_rate=(0.0, 0.0), leg_length=(0.3, 0.3), pitch=0.05)
     assert hand.pitch == 0.05 and math.isnan(hand.battery_voltage)
 
 
 def test_a_robot_file_describes_its_sensors(tmp_path):
     f = tmp_path / "robot.toml"
-    f.write_text('[robot]\ntorso_mass = 21.0\n\n[sensors]\nseed = 5\n\n'
-                 '[sensors.pitch]\nnoise = { value = 0.5, unit = "deg" }\ndelay = 2\n\n'
-                 '[sensors.hip_angle]\ncounts_per_revolution = 1000\n\n'
-                 '[sensors.leg_length]\nbias = [{ value = 1, unit = "mm" }, 0.0]\n')
+    f.write_text(
+        "[robot]\ntorso_mass = 21.0\n\n[sensors]\nseed = 5\n\n"
+        '[sensors.pitch]\nnoise = { value = 0.5, unit = "deg" }\ndelay = 2\n\n'
+        "[sensors.hip_angle]\ncounts_per_revolution = 1000\n\n"
+        '[sensors.leg_length]\nbias = [{ value = 1, unit = "mm" }, 0.0]\n'
+    )
     s = load_sensors(f)
     assert s.seed == 5 and s.pitch.delay == 2
     assert s.pitch.noise == pytest.approx(math.radians(0.5))
     assert s.hip_angle.resolution == pytest.approx(2 * math.pi / (1000 * ROBOT.gear_ratio))
     assert s.leg_length.bias == pytest.approx((1e-3, 0.0))
-    robot, _ = scoutsim.load_parameters(f)     # the other loaders leave [sensors] alone
+    robot, _ = scoutsim.load_parameters(f)  # the other loaders leave [sensors] alone
     assert robot.torso_mass == 21.0
 
 
@@ -280,26 +287,32 @@ def test_a_robot_files_sensors_show_in_the_readings(tmp_path, ideal):
     them."""
     _, _, y0 = ideal
     f = tmp_path / "robot.toml"
-    f.write_text('[sensors]\nseed = 9\n[sensors.pitch]\nbias = { value = 1, unit = "deg" }\n'
-                 '[sensors.pitch_rate]\nnoise = { value = 2, unit = "deg/s" }\n')
+    f.write_text(
+        '[sensors]\nseed = 9\n[sensors.pitch]\nbias = { value = 1, unit = "deg" }\n'
+        '[sensors.pitch_rate]\nnoise = { value = 2, unit = "deg/s" }\n'
+    )
     _, _, y = _run(sensors=scoutsim.load_sensors(f))
-    np.testing.assert_allclose(y[:, L.SN_PITCH] - y0[:, L.SN_PITCH], math.radians(1.0),
-                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        y[:, L.SN_PITCH] - y0[:, L.SN_PITCH], math.radians(1.0), rtol=0, atol=1e-15
+    )
     e = y[:, L.SN_PITCH_RATE] - y0[:, L.SN_PITCH_RATE]
     assert abs(e.std() / math.radians(2.0) - 1.0) < 4 / math.sqrt(2 * e.size)
     _, _, again = _run(sensors=scoutsim.load_sensors(f))
     assert np.array_equal(again, y)
 
 
-@pytest.mark.parametrize("text, field", [
-    ('[sensors.pitch]\nnoise = -1.0\n', "sensors.pitch.noise"),
-    ('[sensors.pitch]\ndelay = 1.5\n', "sensors.pitch.delay"),
-    ('[sensors.pitch]\ndelay = 1000\n', "sensors.pitch.delay"),
-    ('[sensors.pitch]\nnoise = { value = 1, unit = "m" }\n', "sensors.pitch.noise"),
-    ('[sensors.pich]\nnoise = 1.0\n', "pich"),
-    ('[sensors]\nseed = -3\n', "sensors.seed"),
-    ('[sensors.leg_length]\nbias = [0.0, 0.0, 0.0]\n', "sensors.leg_length.bias"),
-])
+@pytest.mark.parametrize(
+    "text, field",
+    [
+        ("[sensors.pitch]\nnoise = -1.0\n", "sensors.pitch.noise"),
+        ("[sensors.pitch]\ndelay = 1.5\n", "sensors.pitch.delay"),
+        ("[sensors.pitch]\ndelay = 1000\n", "sensors.pitch.delay"),
+        ('[sensors.pitch]\nnoise = { value = 1, unit = "m" }\n', "sensors.pitch.noise"),
+        ("[sensors.pich]\nnoise = 1.0\n", "pich"),
+        ("[sensors]\nseed = -3\n", "sensors.seed"),
+        ("[sensors.leg_length]\nbias = [0.0, 0.0, 0.0]\n", "sensors.leg_length.bias"),
+    ],
+)
 def test_bad_sensor_entries_name_the_field(tmp_path, text, field):
     f = tmp_path / "bad.toml"
     f.write_text(text)

@@ -34,8 +34,11 @@ from scoutsim.names import EventKind, Leg
 TOUCHDOWN = (math.radians(16.0), math.radians(28.0))
 SWEEP = (math.radians(-4.0), math.radians(4.0))
 PARAMS = ControllerParameters().replace(
-    touchdown_angle_back=TOUCHDOWN[Leg.BACK], touchdown_angle_front=TOUCHDOWN[Leg.FRONT],
-    sweep_limit_back=SWEEP[Leg.BACK], sweep_limit_front=SWEEP[Leg.FRONT])
+    touchdown_angle_back=TOUCHDOWN[Leg.BACK],
+    touchdown_angle_front=TOUCHDOWN[Leg.FRONT],
+    sweep_limit_back=SWEEP[Leg.BACK],
+    sweep_limit_front=SWEEP[Leg.FRONT],
+)
 #: how far from its set-point the flight servo (Table I gains) may leave a leg at
 #: touchdown [rad]: its swing toward the set-point is not quite over when the leg lands
 #: (about 1 deg at most in these runs); a sixth of the set-points' separation
@@ -56,8 +59,7 @@ def _records(r, kind, leg):
     ``kind`` and ``leg``: the exact state at each (just before a plant transition)."""
     rows = np.flatnonzero((r.events[:, L.EVR_KIND] == kind) & (r.events[:, L.EVR_LEG] == leg))
     before = r.event_states[rows, L.EVS_BEFORE]
-    return (r.events[rows, L.EVR_T], before[:, L.IALB + leg],
-            before[:, L.NQ + L.IALB + leg])
+    return (r.events[rows, L.EVR_T], before[:, L.IALB + leg], before[:, L.NQ + L.IALB + leg])
 
 
 @pytest.mark.parametrize("leg", list(Leg), ids=lambda leg: leg.label)
@@ -77,7 +79,7 @@ def test_each_leg_lands_at_its_own_touchdown_angle(bound, leg):
 def test_each_leg_brakes_at_its_own_sweep_limit(bound, leg):
     own, other = SWEEP[leg], SWEEP[1 - leg]
     _, angle, rate = _records(bound, EventKind.CONTROLLER_SWEEP, leg)
-    assert np.all(rate < 0.0)   # retracting
+    assert np.all(rate < 0.0)  # retracting
     # below the limit at this sample, at or above it one sample before; twice the period's
     # motion at the sensed rate as the margin for the rate's change within the period
     step = 2.0 * np.abs(rate) * PARAMS.control_period

@@ -9,8 +9,9 @@ import sys
 import numpy as np
 import pytest
 
-gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
-                                "gymnasium (pip install 'scoutsim[rl]')")
+gymnasium = pytest.importorskip(
+    "gymnasium", reason="the learning environment needs gymnasium (pip install 'scoutsim[rl]')"
+)
 
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 
@@ -28,14 +29,17 @@ NOISY = SensorParameters(
     pitch=SensorChannel(noise=math.radians(0.3), bias=math.radians(0.5), delay=2),
     hip_rate=SensorChannel(noise=0.05, delay=1),
     hip_angle=SensorChannel(resolution=1e-4),
-    motor_current=SensorChannel(noise=0.1, delay=3))
+    motor_current=SensorChannel(noise=0.1, delay=3),
+)
 
 
 def _pd_policy(obs):
     """A deterministic policy of the readings (so that noise in them changes the run):
     a PD servo of each hip towards 20 deg."""
-    tau = 250.0 * (math.radians(20.0) - obs[L.SN_ANGLE_B:L.SN_ANGLE_B + 2]) \
-        - 5.0 * obs[L.SN_RATE_B:L.SN_RATE_B + 2]
+    tau = (
+        250.0 * (math.radians(20.0) - obs[L.SN_ANGLE_B : L.SN_ANGLE_B + 2])
+        - 5.0 * obs[L.SN_RATE_B : L.SN_RATE_B + 2]
+    )
     return np.clip(tau, -31.0, 31.0)
 
 
@@ -44,8 +48,12 @@ def _episode(env, seed, n, policy):
     out = [obs]
     for _ in range(n):
         obs, reward, terminated, truncated, info = env.step(policy(obs))
-        out += [obs, np.array([reward, terminated, truncated, info["x_position"],
-                               info["electrical_energy"]])]
+        out += [
+            obs,
+            np.array(
+                [reward, terminated, truncated, info["x_position"], info["electrical_energy"]]
+            ),
+        ]
         if terminated or truncated:
             break
     return np.concatenate(out)
@@ -60,14 +68,16 @@ def test_check_env_passes_for_each_model(model, action_type):
 
 def test_make_vec_with_four_envs_steps_in_sync_and_async_mode():
     for mode, n in (("sync", 4), ("async", 2)):
-        envs = gymnasium.make_vec(ID, num_envs=n, vectorization_mode=mode,
-                                  action_type="setpoints", start="random")
+        envs = gymnasium.make_vec(
+            ID, num_envs=n, vectorization_mode=mode, action_type="setpoints", start="random"
+        )
         try:
             obs, _ = envs.reset(seed=5)
             assert obs.shape == (n, L.NSN)
             for _ in range(5):
                 obs, reward, terminated, truncated, info = envs.step(
-                    np.tile(TABLE_I_SETPOINTS, (n, 1)))
+                    np.tile(TABLE_I_SETPOINTS, (n, 1))
+                )
             assert obs.shape == (n, L.NSN) and reward.shape == (n,)
             assert not terminated.any() and not truncated.any()
             # a random start each: the envs run different episodes
@@ -86,8 +96,7 @@ def test_same_seed_gives_the_same_episode_bit_for_bit_and_another_seed_another()
     assert a.shape != c.shape or not np.array_equal(a, c, equal_nan=True)
     # the noise alone (a fixed start) differs with the seed too
     env = gymnasium.make(ID, model="II", sensors=NOISY)
-    assert not np.array_equal(_episode(env, 1, 3, _pd_policy),
-                              _episode(env, 2, 3, _pd_policy))
+    assert not np.array_equal(_episode(env, 1, 3, _pd_policy), _episode(env, 2, 3, _pd_policy))
 
 
 @pytest.mark.parametrize("model", ["ideal", "I", "II"])
@@ -122,20 +131,29 @@ def test_table_i_setpoints_bound_and_stay_up_for_three_seconds(model):
 
 
 def test_reward_terms_in_info_add_up_to_the_reward():
-    env = gymnasium.make(ID, model="I", action_type="setpoints", target_speed=1.5,
-                         forward_reward_weight=0.7, energy_cost_weight=0.03,
-                         healthy_reward=0.5)
+    env = gymnasium.make(
+        ID,
+        model="I",
+        action_type="setpoints",
+        target_speed=1.5,
+        forward_reward_weight=0.7,
+        energy_cost_weight=0.03,
+        healthy_reward=0.5,
+    )
     env.reset(seed=3)
     rng = np.random.default_rng(0)
     for _ in range(50):
         action = TABLE_I_SETPOINTS + rng.normal(0.0, 0.03, 4)
         _, reward, terminated, _, info = env.step(action)
-        assert reward == pytest.approx(info["reward_forward"] + info["reward_energy"]
-                                       + info["reward_healthy"], rel=1e-15, abs=1e-15)
+        assert reward == pytest.approx(
+            info["reward_forward"] + info["reward_energy"] + info["reward_healthy"],
+            rel=1e-15,
+            abs=1e-15,
+        )
         assert info["reward_forward"] == pytest.approx(
-            -0.7 * abs(info["x_velocity"] - 1.5), rel=1e-15)
-        assert info["reward_energy"] == pytest.approx(-0.03 * info["electrical_energy"],
-                                                      rel=1e-15)
+            -0.7 * abs(info["x_velocity"] - 1.5), rel=1e-15
+        )
+        assert info["reward_energy"] == pytest.approx(-0.03 * info["electrical_energy"], rel=1e-15)
         if terminated:
             break
 
@@ -159,9 +177,8 @@ def test_a_step_is_simulate_with_the_same_controller_motion_and_energy_balance(m
     assert np.array_equal(x, r.state[n::n, 0])
     cumulative = r.cumulative_energy("electrical")[::n]
     np.testing.assert_allclose(energy, np.diff(cumulative), rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(reward_energy, -w * np.diff(cumulative), rtol=1e-12,
-                               atol=1e-12)
-    assert sum(energy) > 100.0   # (the motors work: some 500 W over 1 s)
+    np.testing.assert_allclose(reward_energy, -w * np.diff(cumulative), rtol=1e-12, atol=1e-12)
+    assert sum(energy) > 100.0  # (the motors work: some 500 W over 1 s)
 
 
 def test_observations_are_the_readings_a_controller_sees_delays_and_noise_included():
@@ -184,8 +201,7 @@ def test_observations_are_the_readings_a_controller_sees_delays_and_noise_includ
             return 0.0, 0.0
 
     rec = Recorder()
-    scoutsim.simulate(duration=0.4, model="II", controller=rec,
-                      sensors=NOISY.replace(seed=seed))
+    scoutsim.simulate(duration=0.4, model="II", controller=rec, sensors=NOISY.replace(seed=seed))
     n = env.samples_per_step
     assert np.array_equal(np.array(obs), np.array(rec.readings[::n]))
 
@@ -206,8 +222,9 @@ def test_standing_start_stays_standing_under_table_i_setpoints():
     # each virtual leg (two physical legs' springs) carries half the weight
     k_virtual = robot.legs_per_virtual_leg * robot.leg_stiffness
     sag = robot.total_mass * robot.gravity / (2.0 * k_virtual)
-    np.testing.assert_allclose(obs[L.SN_LENGTH_B:L.SN_LENGTH_B + 2],
-                               robot.leg_rest_length - sag, rtol=0.02)
+    np.testing.assert_allclose(
+        obs[L.SN_LENGTH_B : L.SN_LENGTH_B + 2], robot.leg_rest_length - sag, rtol=0.02
+    )
     for _ in range(50):
         _, _, terminated, _, info = env.step(TABLE_I_SETPOINTS)
         assert not terminated
@@ -231,8 +248,14 @@ def test_action_spaces_are_the_physical_limits_and_options_pass_through():
     env = BoundEnv(model="I", current_limit=10.0, friction_coefficient=math.inf)
     r = env.robot
     # current-limited torque at the leg: N eta K_T i_max
-    limit = (r.planetary_ratio * r.sprocket_ratio * r.gearbox_efficiency
-             * r.sprocket_efficiency * r.torque_constant * 10.0)
+    limit = (
+        r.planetary_ratio
+        * r.sprocket_ratio
+        * r.gearbox_efficiency
+        * r.sprocket_efficiency
+        * r.torque_constant
+        * 10.0
+    )
     assert env.action_space.high == pytest.approx([limit, limit], rel=1e-14)
     assert np.array_equal(env.action_space.low, -env.action_space.high)
     env = BoundEnv(action_type="setpoints", touchdown_angle_back=math.radians(17.0))
@@ -248,24 +271,27 @@ def test_action_spaces_are_the_physical_limits_and_options_pass_through():
 
 def test_scoutsim_alone_does_not_import_gymnasium_and_envs_says_what_to_install():
     code = "import sys, scoutsim; print('gymnasium' in sys.modules)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
-    code = ("import sys; sys.modules['gymnasium'] = None\n"
-            "try:\n    import scoutsim.envs\nexcept ImportError as e:\n    print(e)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True)
+    code = (
+        "import sys; sys.modules['gymnasium'] = None\n"
+        "try:\n    import scoutsim.envs\nexcept ImportError as e:\n    print(e)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "pip install" in out.stdout and "rl" in out.stdout
 
 
 def test_a_robot_file_sets_robot_controller_and_sensors(tmp_path):
     f = tmp_path / "robot.toml"
-    f.write_text('[robot]\ntorso_mass = 21.0\n\n[controller]\n'
-                 'touchdown_angle_front = { value = 22.0, unit = "deg" }\n\n'
-                 '[sensors]\nseed = 5\n[sensors.pitch]\n'
-                 'noise = { value = 0.5, unit = "deg" }\n')
-    env = gymnasium.make(ID, robot_file=str(f), action_type="setpoints",
-                         current_limit=11.0).unwrapped
+    f.write_text(
+        "[robot]\ntorso_mass = 21.0\n\n[controller]\n"
+        'touchdown_angle_front = { value = 22.0, unit = "deg" }\n\n'
+        "[sensors]\nseed = 5\n[sensors.pitch]\n"
+        'noise = { value = 0.5, unit = "deg" }\n'
+    )
+    env = gymnasium.make(
+        ID, robot_file=str(f), action_type="setpoints", current_limit=11.0
+    ).unwrapped
     assert env.robot.torso_mass == 21.0 and env.robot.current_limit == 11.0
     assert env.controller.touchdown_angle_front == pytest.approx(math.radians(22.0))
     assert env.sensors.pitch.noise == pytest.approx(math.radians(0.5))

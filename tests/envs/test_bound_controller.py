@@ -9,8 +9,9 @@ import textwrap
 import numpy as np
 import pytest
 
-gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
-                                "gymnasium (pip install 'scoutsim[rl]')")
+gymnasium = pytest.importorskip(
+    "gymnasium", reason="the learning environment needs gymnasium (pip install 'scoutsim[rl]')"
+)
 
 import scoutsim  # noqa: E402
 import scoutsim.envs  # noqa: E402,F401
@@ -52,6 +53,7 @@ def gaits(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     import importlib
+
     return importlib.import_module(name)
 
 
@@ -68,18 +70,19 @@ def _episode(env, n=40):
 
 def test_the_factory_makes_the_table_i_parameters_for_the_envs_robot(gaits):
     spec = f"{gaits.__name__}:soft"
-    env = BoundEnv(model="ideal", action_type="setpoints", controller=spec,
-                   current_limit=11.0)
+    env = BoundEnv(model="ideal", action_type="setpoints", controller=spec, current_limit=11.0)
     robot, params = gaits.SEEN[-1]
     # called with the environment's robot (the keyword applied) and the Table I defaults
     assert robot == env.robot and robot.current_limit == 11.0
     assert params == scoutsim.ControllerParameters()
-    assert env.controller == params.replace(flight_kp_back=params.flight_kp_back / 3,
-                                            flight_kp_front=params.flight_kp_front / 3)
+    assert env.controller == params.replace(
+        flight_kp_back=params.flight_kp_back / 3, flight_kp_front=params.flight_kp_front / 3
+    )
     assert env.controller_spec == spec
     # the episode is that of the parameters passed as an object, not Table I's
-    same = BoundEnv(model="ideal", action_type="setpoints", controller=env.controller,
-                    current_limit=11.0)
+    same = BoundEnv(
+        model="ideal", action_type="setpoints", controller=env.controller, current_limit=11.0
+    )
     table_i = BoundEnv(model="ideal", action_type="setpoints", current_limit=11.0)
     a = _episode(env)
     assert np.array_equal(a, _episode(same))
@@ -89,8 +92,7 @@ def test_the_factory_makes_the_table_i_parameters_for_the_envs_robot(gaits):
 def test_keywords_apply_over_the_factorys_parameters(gaits):
     env = BoundEnv(model="ideal", controller=f"{gaits.__name__}:soft", flight_kp_back=7.0)
     assert env.controller.flight_kp_back == 7.0
-    assert env.controller.flight_kp_front == \
-        scoutsim.ControllerParameters().flight_kp_front / 3
+    assert env.controller.flight_kp_front == scoutsim.ControllerParameters().flight_kp_front / 3
 
 
 def test_a_bounding_controller_with_the_builtin_law_gives_its_parameters(gaits):
@@ -109,25 +111,34 @@ def test_a_factory_the_environment_cannot_run_gets_a_clear_error(gaits):
 
 def test_the_string_travels_to_async_workers(gaits):
     spec = f"{gaits.__name__}:soft"
-    envs = gymnasium.make_vec(ID, num_envs=2, vectorization_mode="async", model="ideal",
-                              action_type="setpoints", controller=spec)
+    envs = gymnasium.make_vec(
+        ID,
+        num_envs=2,
+        vectorization_mode="async",
+        model="ideal",
+        action_type="setpoints",
+        controller=spec,
+    )
     try:
         obs, _ = envs.reset(seed=0)
         for _ in range(3):
             obs, _, terminated, truncated, _ = envs.step(np.tile(TABLE_I_SETPOINTS, (2, 1)))
         assert not (terminated.any() or truncated.any())
         controllers = envs.get_attr("controller")
-        assert all(c.flight_kp_back == scoutsim.ControllerParameters().flight_kp_back / 3
-                   for c in controllers)
+        assert all(
+            c.flight_kp_back == scoutsim.ControllerParameters().flight_kp_back / 3
+            for c in controllers
+        )
     finally:
         envs.close()
 
 
-
 def test_with_a_robot_file_the_factory_gets_its_controller_section(gaits, tmp_path):
     f = tmp_path / "robot.toml"
-    f.write_text('[robot]\ntorso_mass = 21.0\n\n[controller]\n'
-                 'touchdown_angle_front = { value = 22.0, unit = "deg" }\n')
+    f.write_text(
+        "[robot]\ntorso_mass = 21.0\n\n[controller]\n"
+        'touchdown_angle_front = { value = 22.0, unit = "deg" }\n'
+    )
     env = BoundEnv(model="ideal", robot_file=str(f), controller=f"{gaits.__name__}:soft")
     robot, params = gaits.SEEN[-1]
     assert robot == env.robot and robot.torso_mass == 21.0

@@ -7,8 +7,9 @@ diagnosis), while a fall stays a termination."""
 import numpy as np
 import pytest
 
-gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
-                                "gymnasium (pip install 'scoutsim[rl]')")
+gymnasium = pytest.importorskip(
+    "gymnasium", reason="the learning environment needs gymnasium (pip install 'scoutsim[rl]')"
+)
 
 import scoutsim.envs  # noqa: E402,F401
 from scoutsim._core.model import layout as L  # noqa: E402
@@ -41,8 +42,9 @@ def test_a_numerical_failure_is_a_truncation_without_healthy_reward():
     start (the run loop stops with "numerical_failure") while the robot stands at its
     healthy start height and pitch: the step is truncated, not terminated, and earns no
     healthy reward."""
-    env = gymnasium.make(ID, model="I", action_type="setpoints", healthy_reward=5.0,
-                         torso_inertia=1.3e6)
+    env = gymnasium.make(
+        ID, model="I", action_type="setpoints", healthy_reward=5.0, torso_inertia=1.3e6
+    )
     env.reset(seed=0)
     _, reward, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
     assert (terminated, truncated) == (False, True)
@@ -61,8 +63,9 @@ def test_a_numerical_failure_is_a_truncation_without_healthy_reward():
 
 
 def test_the_time_limit_is_a_truncation_of_healthy_steps_told_apart_by_info():
-    env = gymnasium.make(ID, model="ideal", action_type="setpoints", max_episode_steps=3,
-                         healthy_reward=5.0)
+    env = gymnasium.make(
+        ID, model="ideal", action_type="setpoints", max_episode_steps=3, healthy_reward=5.0
+    )
     env.reset(seed=0)
     for _ in range(3):
         _, _, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
@@ -84,8 +87,9 @@ def test_a_controller_error_is_a_truncation_without_healthy_reward(monkeypatch):
 
 
 def test_a_failure_in_a_vector_env_is_reported_per_env():
-    envs = gymnasium.make_vec(ID, num_envs=2, vectorization_mode="sync", model="I",
-                              torso_inertia=1.3e6)
+    envs = gymnasium.make_vec(
+        ID, num_envs=2, vectorization_mode="sync", model="I", torso_inertia=1.3e6
+    )
     try:
         envs.reset(seed=0)
         _, _, terminated, truncated, info = envs.step(np.zeros((2, 2)))
@@ -100,8 +104,9 @@ def test_an_integrator_stop_mid_episode_ends_healthy_steps_with_a_truncation():
     """A motor of no armature resistance (1e-300 ohm) makes Model II's electrical dynamics
     too fast for any step: the integrator stops about 0.2 s in. Every step before is a
     healthy one; the one that failed is a truncation with the integrator's diagnosis."""
-    env = gymnasium.make(ID, model="II", action_type="setpoints", healthy_reward=1.0,
-                         armature_resistance=1e-300)
+    env = gymnasium.make(
+        ID, model="II", action_type="setpoints", healthy_reward=1.0, armature_resistance=1e-300
+    )
     env.reset(seed=0)
     healthy = []
     for _ in range(100):
@@ -123,8 +128,9 @@ def test_a_failure_with_the_robot_already_down_is_a_termination(monkeypatch):
     """The task's rule comes first: a step that ends with the robot down (COM below the
     healthy height) is terminated, whatever stopped the simulator; info still names the
     numerical failure."""
-    env = stopping_env(monkeypatch, L.ST_NUMERICAL_FAILURE,
-                       torso_height=0.1)     # below the healthy range's 0.2 m
+    env = stopping_env(
+        monkeypatch, L.ST_NUMERICAL_FAILURE, torso_height=0.1
+    )  # below the healthy range's 0.2 m
     _, _, terminated, truncated, info = env.step(TABLE_I_SETPOINTS)
     assert (terminated, truncated) == (True, False)
     assert info["numerical_failure"] and info["reward_healthy"] == 0.0

@@ -11,8 +11,9 @@ import pickle
 import numpy as np
 import pytest
 
-gymnasium = pytest.importorskip("gymnasium", reason="the learning environment needs "
-                                "gymnasium (pip install 'scoutsim[rl]')")
+gymnasium = pytest.importorskip(
+    "gymnasium", reason="the learning environment needs gymnasium (pip install 'scoutsim[rl]')"
+)
 
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 
@@ -58,11 +59,13 @@ def test_render_follows_gymnasium_conventions():
     # render_fps is the policy rate: one frame per step plays in real time
     assert BoundEnv.metadata["render_modes"] == ["rgb_array"]
     assert BoundEnv(model="ideal").metadata["render_fps"] == pytest.approx(1 / 0.01)
-    assert BoundEnv(model="ideal", policy_period=0.004).metadata["render_fps"] == \
-        pytest.approx(1 / 0.004)
+    assert BoundEnv(model="ideal", policy_period=0.004).metadata["render_fps"] == pytest.approx(
+        1 / 0.004
+    )
     # an (H, W, 3) uint8 frame, of the size asked for
-    env = gymnasium.make(ID, model="ideal", render_mode="rgb_array", render_width=200,
-                         render_height=100)
+    env = gymnasium.make(
+        ID, model="ideal", render_mode="rgb_array", render_width=200, render_height=100
+    )
     with pytest.raises(gymnasium.error.ResetNeeded):
         env.unwrapped.render()
     env.reset(seed=0)
@@ -75,11 +78,12 @@ def test_toes_drawn_where_the_leg_kinematics_put_them_filled_on_the_ground():
     along its world angle, hip + l (sin(theta + phi), -cos(theta + phi)), a toe in stance is
     on the ground, and the frame draws each toe there: a filled disc in contact, a ring in
     flight (its centre left as the background)."""
-    env = gymnasium.make(ID, model="ideal", action_type="setpoints",
-                         render_mode="rgb_array").unwrapped
+    env = gymnasium.make(
+        ID, model="ideal", action_type="setpoints", render_mode="rgb_array"
+    ).unwrapped
     env.reset(seed=0)
     robot, seen = env.robot, set()
-    for _ in range(40):          # 0.4 s: both legs land and lift off
+    for _ in range(40):  # 0.4 s: both legs land and lift off
         env.step(TABLE_I_SETPOINTS)
         eng, frame = env.engine, env.render()
         s = eng.s
@@ -90,8 +94,9 @@ def test_toes_drawn_where_the_leg_kinematics_put_them_filled_on_the_ground():
             g = theta + s[state_index(f"phi_{name}")]
             length = s[state_index(f"leg_length_{name}")]
             tx, ty = eng.toe_position(leg)
-            assert (tx, ty) == pytest.approx((hx + length * math.sin(g),
-                                              hy - length * math.cos(g)), abs=1e-9)
+            assert (tx, ty) == pytest.approx(
+                (hx + length * math.sin(g), hy - length * math.cos(g)), abs=1e-9
+            )
             on_ground = eng.contact_mode(leg) != ContactMode.FLIGHT
             if on_ground:
                 assert ty == pytest.approx(0.0, abs=1e-9)
@@ -103,8 +108,9 @@ def test_toes_drawn_where_the_leg_kinematics_put_them_filled_on_the_ground():
 
 
 def test_the_view_follows_the_robot_and_legs_show_the_controller_leg_state():
-    env = gymnasium.make(ID, model="ideal", action_type="setpoints",
-                         render_mode="rgb_array").unwrapped
+    env = gymnasium.make(
+        ID, model="ideal", action_type="setpoints", render_mode="rgb_array"
+    ).unwrapped
     env.reset(seed=0)
     first = env.render()
     states = set()
@@ -122,6 +128,7 @@ def test_the_view_follows_the_robot_and_legs_show_the_controller_leg_state():
             mid = 0.5 * (hip + np.array(eng.toe_position(leg)))
             r, k = _pixel(frame, eng.x, *mid)
             from matplotlib.colors import to_rgb
+
             want = np.round(255 * np.array(to_rgb(LEG_STATE_LINE_COLORS[eng.ls[leg]])))
             assert np.array_equal(frame[r, k], want)
             states.add(int(eng.ls[leg]))
@@ -131,9 +138,16 @@ def test_the_view_follows_the_robot_and_legs_show_the_controller_leg_state():
 
 
 def test_draw_pose_puts_the_robot_at_its_pose_and_survives_a_state_that_is_not_finite():
-    pose = RobotPose(x=2.0, height=0.3, pitch=0.0, hip_offsets=(-0.25, 0.25),
-                     torso_length=0.55, torso_height=0.1, toes=((1.75, 0.0), (2.3, 0.05)),
-                     contact=(True, False))
+    pose = RobotPose(
+        x=2.0,
+        height=0.3,
+        pitch=0.0,
+        hip_offsets=(-0.25, 0.25),
+        torso_length=0.55,
+        torso_height=0.1,
+        toes=((1.75, 0.0), (2.3, 0.05)),
+        contact=(True, False),
+    )
     frame = draw_pose(pose, 300, 150)
     # the torso box is grey at its centre, white above it
     assert np.array_equal(frame[_pixel(frame, 2.0, 2.0, 0.3)], [191, 191, 191])
@@ -145,7 +159,7 @@ def test_draw_pose_puts_the_robot_at_its_pose_and_survives_a_state_that_is_not_f
     assert np.array_equal(frame[nose_above], [255, 255, 255])
     blank = draw_pose(RobotPose(**{**pose.__dict__, "height": math.nan}), 300, 150)
     assert blank.shape == (150, 300, 3)
-    assert not np.any(np.all(blank == 191, axis=2))      # no torso drawn
+    assert not np.any(np.all(blank == 191, axis=2))  # no torso drawn
     with pytest.raises(ValueError, match="width"):
         draw_pose(pose, 8, 150)
 
@@ -153,14 +167,21 @@ def test_draw_pose_puts_the_robot_at_its_pose_and_survives_a_state_that_is_not_f
 @pytest.mark.parametrize("render_mode", [None, "rgb_array"])
 def test_sync_and_async_vector_envs_from_the_id_step_and_render(render_mode):
     for mode in ("sync", "async"):
-        envs = gymnasium.make_vec(ID, num_envs=2, vectorization_mode=mode, model="ideal",
-                                  action_type="setpoints", start="random",
-                                  render_mode=render_mode)
+        envs = gymnasium.make_vec(
+            ID,
+            num_envs=2,
+            vectorization_mode=mode,
+            model="ideal",
+            action_type="setpoints",
+            start="random",
+            render_mode=render_mode,
+        )
         try:
             obs, _ = envs.reset(seed=3)
             for _ in range(3):
                 obs, reward, terminated, truncated, info = envs.step(
-                    np.tile(TABLE_I_SETPOINTS, (2, 1)))
+                    np.tile(TABLE_I_SETPOINTS, (2, 1))
+                )
             assert obs.shape[0] == 2 and not (terminated.any() or truncated.any())
             assert not info["numerical_failure"].any()
             frames = envs.render()
@@ -168,14 +189,15 @@ def test_sync_and_async_vector_envs_from_the_id_step_and_render(render_mode):
                 assert frames is None or all(f is None for f in frames)
             else:
                 assert len(frames) == 2 and frames[0].shape == (240, 480, 3)
-                assert not np.array_equal(frames[0], frames[1])    # two random starts
+                assert not np.array_equal(frames[0], frames[1])  # two random starts
         finally:
             envs.close()
 
 
 def test_async_vector_env_of_made_envs_renders():
     envs = gymnasium.vector.AsyncVectorEnv(
-        [lambda: gymnasium.make(ID, model="ideal", render_mode="rgb_array")] * 2)
+        [lambda: gymnasium.make(ID, model="ideal", render_mode="rgb_array")] * 2
+    )
     try:
         envs.reset(seed=1)
         envs.step(np.zeros((2, 2)))

@@ -38,8 +38,9 @@ PRESSED_AT_JAM = (107,)
 
 @pytest.fixture(scope="module")
 def envs():
-    return {(model, keep): fuzz.make_env(model, keep) for model in fuzz.MODELS
-            for keep in (False, True)}
+    return {
+        (model, keep): fuzz.make_env(model, keep) for model in fuzz.MODELS for keep in (False, True)
+    }
 
 
 def _failures(env, torques, seeds):
@@ -63,7 +64,8 @@ def test_random_starts_end_without_numerical_failure(envs, model, torques):
 @pytest.mark.parametrize("torques", fuzz.TORQUES)
 @pytest.mark.parametrize("model", fuzz.MODELS)
 def test_episodes_that_go_on_while_the_robot_is_down_end_without_numerical_failure(
-        envs, model, torques):
+    envs, model, torques
+):
     """The episodes go on until the simulator's fall (the robot on its back, legs
     swinging through every angle): the jammed seeds, the one pressed at a jam and a spread
     of 60 others."""
@@ -92,10 +94,10 @@ def test_jammed_slide_ends_in_an_impact_on_the_friction_cone_edge():
 
     mu = 1.0
     # the environment's random start of reset(seed=12)
-    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
-                         dtheta=2.0582517952283736)
-    r = simulate(controller=Zero(), initial_state=start, duration=1.0, model="II",
-                 friction_coefficient=mu)
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045, dtheta=2.0582517952283736)
+    r = simulate(
+        controller=Zero(), initial_state=start, duration=1.0, model="II", friction_coefficient=mu
+    )
     assert r.outcome == "fell"
     jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
     assert len(jams) >= 1
@@ -103,7 +105,7 @@ def test_jammed_slide_ends_in_an_impact_on_the_friction_cone_edge():
     for row in jams:
         pn, pt, lost = row[L.EVR_V1], row[L.EVR_V2], row[L.EVR_V3]
         assert pn > 0.0
-        assert abs(pt) <= mu * pn * (1.0 + tol)       # within the friction cone
+        assert abs(pt) <= mu * pn * (1.0 + tol)  # within the friction cone
         assert lost >= 0.0
     # the first is the slide reaching its jam level: the impulse acts along the leg's
     # normal, which at the friction angle is the cone's edge

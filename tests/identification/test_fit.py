@@ -27,7 +27,7 @@ SHORT_SWING = FreeSwing(duration=1.5)
 
 @pytest.fixture(scope="module")
 def true_robot():
-    return example_robot()          # Table II x (1.5, 0.7, 1.6, 0.6, 1.3, 0.8)
+    return example_robot()  # Table II x (1.5, 0.7, 1.6, 0.6, 1.3, 0.8)
 
 
 @pytest.fixture(scope="module")
@@ -41,16 +41,23 @@ def test_fit_from_table_ii_recovers_what_a_free_swing_determines(true_robot, swi
     combination, the stiction and the damping are recovered within their intervals."""
     log = rig_log(swing_run, seed=7)
     # the parameters not fitted (belt) are known; the fitted ones start from Table II
-    start = RobotParameters().replace(belt_stiffness=true_robot.belt_stiffness,
-                                      belt_damping=true_robot.belt_damping)
-    res = identify([log], ["drive_gear_inertia", "driven_gear_inertia", "joint_stiction",
-                           "joint_damping"], robot=start, n_starts=4, n_local=1, seed=1)
+    start = RobotParameters().replace(
+        belt_stiffness=true_robot.belt_stiffness, belt_damping=true_robot.belt_damping
+    )
+    res = identify(
+        [log],
+        ["drive_gear_inertia", "driven_gear_inertia", "joint_stiction", "joint_damping"],
+        robot=start,
+        n_starts=4,
+        n_local=1,
+        seed=1,
+    )
     for name in ("joint_stiction", "joint_damping"):
         p = res.parameters[name]
         assert p.identifiable, (name, p.reason)
         assert p.interval[0] <= getattr(true_robot, name) <= p.interval[1], name
         assert p.interval[1] / p.interval[0] < 1.1
-        assert p.start == getattr(RobotParameters(), name)        # started from Table II
+        assert p.start == getattr(RobotParameters(), name)  # started from Table II
     assert not res.parameters["driven_gear_inertia"].identifiable
     assert not res.parameters["drive_gear_inertia"].identifiable
     comb = res.combinations["reflected_gear_inertia"]
@@ -74,7 +81,7 @@ def test_interval_coverage_over_noise_draws_is_about_the_stated_rate(true_robot,
     n_draws = 24
     hit95 = dict.fromkeys(names, 0)
     hit68 = 0
-    z68 = 0.9945            # two-sided 68.0 % normal quantile
+    z68 = 0.9945  # two-sided 68.0 % normal quantile
     for k in range(n_draws):
         log = rig_log(swing_run, seed=1000 + k)
         res = identify([log], names, robot=true_robot, n_starts=0, n_local=1)
@@ -122,9 +129,23 @@ def test_log_without_needed_signals_is_a_clear_error(tmp_path):
 
 def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     path = rig_log(swing_run, seed=3).save(tmp_path / "swing.csv.gz")
-    code = main(["identify", str(path), "--rig", "free-swing", "--params",
-                 "joint_stiction,joint_damping", "--starts", "2", "--local", "1",
-                 "--out", str(tmp_path / "out"), "--no-plots"])
+    code = main(
+        [
+            "identify",
+            str(path),
+            "--rig",
+            "free-swing",
+            "--params",
+            "joint_stiction,joint_damping",
+            "--starts",
+            "2",
+            "--local",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+            "--no-plots",
+        ]
+    )
     assert code == 0
     d = json.loads((tmp_path / "out" / "identified.json").read_text())
     p = d["parameters"]["joint_stiction"]
@@ -135,8 +156,7 @@ def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     # a bad log: exit code 2 and the reason
     bad = tmp_path / "bad.csv"
     bad.write_text("t,phi_back_rad\n0,0\n0.001,0\n")
-    assert main(["identify", str(bad), "--rig", "free-swing", "--out",
-                 str(tmp_path / "o2")]) == 2
+    assert main(["identify", str(bad), "--rig", "free-swing", "--out", str(tmp_path / "o2")]) == 2
     assert "missing column" in capsys.readouterr().err
 
 
@@ -147,10 +167,15 @@ def test_gearbox_idle_loss_is_identified_by_the_same_machinery(true_robot):
     interval together with the joint damping."""
     robot = true_robot.replace(gearbox_idle_loss_torque=0.3)
     log = rig_log(run_rig(SHORT_SWING, robot), seed=3)
-    start = robot.replace(gearbox_idle_loss_torque=0.0,
-                          joint_damping=0.5 * robot.joint_damping)
-    res = identify([log], ["gearbox_idle_loss_torque", "joint_damping"], robot=start,
-                   n_starts=4, n_local=1, seed=1)
+    start = robot.replace(gearbox_idle_loss_torque=0.0, joint_damping=0.5 * robot.joint_damping)
+    res = identify(
+        [log],
+        ["gearbox_idle_loss_torque", "joint_damping"],
+        robot=start,
+        n_starts=4,
+        n_local=1,
+        seed=1,
+    )
     for name in ("gearbox_idle_loss_torque", "joint_damping"):
         p = res.parameters[name]
         assert p.identifiable, (name, p.reason)

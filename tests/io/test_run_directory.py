@@ -45,8 +45,10 @@ def test_a_directory_holds_one_run(tmp_path):
         rd.write("b.txt", lambda p: p.write_text("22"))
         rd.finish(outcome="completed", partial=False)
     m = check_run_directory(tmp_path)
-    assert m["status"] == "complete" and m["files"] == {"a.txt": {"bytes": 1},
-                                                        "b.txt": {"bytes": 2}}
+    assert m["status"] == "complete" and m["files"] == {
+        "a.txt": {"bytes": 1},
+        "b.txt": {"bytes": 2},
+    }
     with RunDirectory(tmp_path, command="second") as rd:
         assert read_manifest(tmp_path)["status"] == "writing"
         with pytest.raises(IncompleteRunError, match="cut off"):
@@ -56,7 +58,7 @@ def test_a_directory_holds_one_run(tmp_path):
     # the first run's b.txt is gone, the user's file stays
     assert sorted(x.name for x in tmp_path.iterdir()) == ["a.txt", MANIFEST, "notes.txt"]
     assert check_run_directory(tmp_path)["status"] == "partial"
-    (tmp_path / "a.txt").write_text("")          # a listed file that changed size
+    (tmp_path / "a.txt").write_text("")  # a listed file that changed size
     with pytest.raises(IncompleteRunError, match="a.txt"):
         check_run_directory(tmp_path)
 
@@ -142,12 +144,18 @@ class _Run:
 
     def __init__(self, out, duration, *options, hold=None):
         self.release = Path(out).parent / "release"
-        start = ([sys.executable, "-c", _HELD_RUN, hold, str(self.release)] if hold else
-                 [sys.executable, "-m", "scoutsim"])
-        self.proc = subprocess.Popen(start + ["run", "--duration", str(duration), "--out",
-                                              str(out), "--no-progress", *options],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                     text=True)
+        start = (
+            [sys.executable, "-c", _HELD_RUN, hold, str(self.release)]
+            if hold
+            else [sys.executable, "-m", "scoutsim"]
+        )
+        self.proc = subprocess.Popen(
+            start
+            + ["run", "--duration", str(duration), "--out", str(out), "--no-progress", *options],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         self._lines: list[str] = []
         self._ended = False
         self._cond = threading.Condition()
@@ -171,8 +179,7 @@ class _Run:
     def wait_for(self, text: str) -> None:
         """Wait until the process has said ``text`` on stderr."""
         with self._cond:
-            self._cond.wait_for(lambda: self._ended or text in "".join(self._lines),
-                                HANG_GUARD_S)
+            self._cond.wait_for(lambda: self._ended or text in "".join(self._lines), HANG_GUARD_S)
         assert text in self.stderr, f"the run never said {text!r}; stderr:\n{self.stderr}"
 
     def signal(self, signum) -> None:
@@ -201,21 +208,24 @@ def _assert_consistent(out):
     return manifest["status"]
 
 
-@pytest.mark.parametrize("moment, expected", [
-    ("starting", "nothing"),           # at once: the interpreter starts, nothing written
-    ("simulating", "nothing"),         # the run is computed in memory, nothing written yet
-    ("writing", "incomplete"),         # tables and summary written, the CSV not yet renamed
-])
+@pytest.mark.parametrize(
+    "moment, expected",
+    [
+        ("starting", "nothing"),  # at once: the interpreter starts, nothing written
+        ("simulating", "nothing"),  # the run is computed in memory, nothing written yet
+        ("writing", "incomplete"),  # tables and summary written, the CSV not yet renamed
+    ],
+)
 def test_sigkill_at_any_moment_leaves_a_consistent_directory(tmp_path, moment, expected):
     """SIGKILL cannot be caught: at each moment of a run the directory it leaves is either
     refused as incomplete or holds nothing that could pass for a run."""
-    scoutsim.simulate(duration=0.01)      # the core is compiled before the child starts
+    scoutsim.simulate(duration=0.01)  # the core is compiled before the child starts
     out = tmp_path / "out"
     run = _Run(out, 3, "--csv", hold=None if moment == "starting" else moment)
     if moment != "starting":
         run.wait_for(f"held: {moment}")
     if moment == "writing":
-        assert (out / "timeseries.csv.partial.csv").exists()   # under its temporary name
+        assert (out / "timeseries.csv.partial.csv").exists()  # under its temporary name
     run.signal(signal.SIGKILL)
     assert run.wait() == -signal.SIGKILL
     assert _assert_consistent(out) == expected
@@ -235,7 +245,8 @@ def test_sigint_while_simulating_writes_the_data_so_far_as_partial(tmp_path):
 
 @pytest.mark.parametrize("fault", ["directory in the way", "disk full"])
 def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
-        tmp_path, monkeypatch, capsys, fault):
+    tmp_path, monkeypatch, capsys, fault
+):
     """A directory where summary.json goes, or a full disk: a clear message instead of a
     traceback, and the computed run saved to the temporary directory (not lost)."""
     import errno
@@ -244,14 +255,17 @@ def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
 
     import scoutsim.io.tables
     from scoutsim.cli import main
+
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
     (tmp_path / "tmp").mkdir()
     out = tmp_path / "out"
     if fault == "directory in the way":
         (out / "summary.json").mkdir(parents=True)
     else:
+
         def full(*args, **kwargs):
             raise OSError(errno.ENOSPC, "No space left on device", str(out / "x"))
+
         monkeypatch.setattr(scoutsim.io.tables, "write_table", full)
     assert main(["run", "--duration", "0.5", "--no-progress", "--out", str(out)]) == 74
     err = capsys.readouterr().err
@@ -260,13 +274,14 @@ def test_outputs_that_cannot_be_written_exit_74_and_the_run_is_saved_elsewhere(
     rescued = Path(re.search(r"saved instead to (\S+\.npz)", err).group(1))
     r = SimulationResult.load(rescued)
     assert r.t_end == pytest.approx(0.5) and r.outcome == "completed"
-    with pytest.raises(IncompleteRunError):     # the directory does not pass for a run
+    with pytest.raises(IncompleteRunError):  # the directory does not pass for a run
         check_run_directory(out)
 
 
 @pytest.mark.parametrize("content", [b"", b"PK\x03\x04 cut here"])
 def test_plot_of_an_empty_or_truncated_npz_is_a_clear_error(tmp_path, capsys, content):
     from scoutsim.cli import main
+
     bad = tmp_path / "result.npz"
     bad.write_bytes(content)
     assert main(["plot", str(bad), "--out", str(tmp_path / "x.png")]) == 2

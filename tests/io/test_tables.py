@@ -21,21 +21,24 @@ pytest.importorskip("pyarrow")
 def _columns(n=7):
     rng = np.random.default_rng(3)
     x = rng.normal(size=n) * 10.0 ** rng.integers(-300, 300, size=n)
-    x[:3] = [math.inf, -0.0, 5e-324]       # extremes that must survive
+    x[:3] = [math.inf, -0.0, 5e-324]  # extremes that must survive
     y = rng.normal(size=n)
     y[1] = math.nan
-    return {"t": np.arange(n) * 1e-3, "x": x, "y": y,
-            "code": np.arange(n, dtype=np.int8) - 3,
-            "bits": (np.arange(n, dtype=np.int32) * 1000003),
-            "name": np.array([f"kind_{i}" for i in range(n)])}
+    return {
+        "t": np.arange(n) * 1e-3,
+        "x": x,
+        "y": y,
+        "code": np.arange(n, dtype=np.int8) - 3,
+        "bits": (np.arange(n, dtype=np.int32) * 1000003),
+        "name": np.array([f"kind_{i}" for i in range(n)]),
+    }
 
 
 @pytest.mark.parametrize("fmt", FORMATS)
 def test_round_trip_is_bit_exact_with_dtypes_units_and_metadata(tmp_path, fmt):
     cols = _columns()
     meta = {"outcome": "completed", "stats": {"a": 1.5, "b": math.nan}}
-    path = write_table(tmp_path / "table", cols, units={"t": "s", "x": "m"}, metadata=meta,
-                       fmt=fmt)
+    path = write_table(tmp_path / "table", cols, units={"t": "s", "x": "m"}, metadata=meta, fmt=fmt)
     assert path.name == "table" + {"parquet": ".parquet", "csv": ".csv.gz"}[fmt]
     back, meta_back = read_table(path)
     assert list(back) == list(cols)
@@ -59,8 +62,9 @@ def test_empty_table(tmp_path, fmt):
 
 
 def test_csv_header_names_units(tmp_path):
-    path = write_table(tmp_path / "c", {"t": np.zeros(2), "n": np.ones(2, np.int8)},
-                       units={"t": "s"}, fmt="csv")
+    path = write_table(
+        tmp_path / "c", {"t": np.zeros(2), "n": np.ones(2, np.int8)}, units={"t": "s"}, fmt="csv"
+    )
     with gzip.open(path, "rt") as f:
         lines = f.read().splitlines()
     assert lines[0].startswith("# scoutsim: ") and lines[1] == "t [s],n"
@@ -95,21 +99,25 @@ def test_a_table_written_in_pieces_reads_back_as_the_whole(tmp_path, fmt, monkey
     w = TableWriter(tmp_path / "piecewise", units={"t": "s"}, fmt=fmt)
     for a, b in ((0, 1), (1, 23), (23, 23), (23, 57)):
         w.append({n: c[a:b] for n, c in cols.items()})
-        assert not w.path.exists()               # nothing looks whole before close()
+        assert not w.path.exists()  # nothing looks whole before close()
     path = w.close(metadata=meta)
-    whole, meta_whole = read_table(write_table(tmp_path / "whole", cols, units={"t": "s"},
-                                               metadata=meta, fmt=fmt))
+    whole, meta_whole = read_table(
+        write_table(tmp_path / "whole", cols, units={"t": "s"}, metadata=meta, fmt=fmt)
+    )
     back, meta_back = read_table(path)
     assert meta_back == meta_whole and read_metadata(path) == read_metadata(
-        tmp_path / ("whole" + path.name[len("piecewise"):]))
+        tmp_path / ("whole" + path.name[len("piecewise") :])
+    )
     for n in cols:
         assert back[n].dtype == whole[n].dtype, n
         assert back[n].tobytes() == whole[n].tobytes(), n
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([path.name, "whole" +
-                                                                path.name[len("piecewise"):]])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [path.name, "whole" + path.name[len("piecewise") :]]
+    )
     if fmt == "parquet":
         import pyarrow.parquet as pq
-        assert pq.ParquetFile(path).metadata.num_row_groups == 2   # rows 0-22, 23-56
+
+        assert pq.ParquetFile(path).metadata.num_row_groups == 2  # rows 0-22, 23-56
 
 
 @pytest.mark.parametrize("fmt", FORMATS)

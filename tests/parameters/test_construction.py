@@ -49,27 +49,64 @@ REPO = Path(__file__).resolve().parents[2]
 #: a compression threshold that must be crossed to touch down. (leg_com_distance: the
 #: centre of mass of a leg with mass lies on the leg, beyond the hip.)
 POSITIVE = {
-    "torso_mass", "torso_inertia", "leg_stiffness", "hip_spacing", "leg_rest_length",
-    "leg_com_distance", "gravity", "torso_length", "torso_height", "planetary_ratio",
-    "sprocket_ratio", "gearbox_efficiency", "sprocket_efficiency", "belt_stiffness",
-    "torque_constant", "speed_constant", "armature_resistance", "current_limit",
-    "battery_voltage", "control_period", "touchdown_compression",
+    "torso_mass",
+    "torso_inertia",
+    "leg_stiffness",
+    "hip_spacing",
+    "leg_rest_length",
+    "leg_com_distance",
+    "gravity",
+    "torso_length",
+    "torso_height",
+    "planetary_ratio",
+    "sprocket_ratio",
+    "gearbox_efficiency",
+    "sprocket_efficiency",
+    "belt_stiffness",
+    "torque_constant",
+    "speed_constant",
+    "armature_resistance",
+    "current_limit",
+    "battery_voltage",
+    "control_period",
+    "touchdown_compression",
 }
 #: >= 0, with 0 meaning the effect is absent (the paper's idealisations: massless legs, no
 #: damping, no friction, no backlash, no losses, an ideal battery, a gain switched off)
 NON_NEGATIVE = {
-    "leg_mass", "leg_inertia", "leg_damping", "gearbox_idle_loss_torque",
-    "gearbox_load_loss_coefficient", "drive_gear_inertia", "driven_gear_inertia",
-    "joint_stiction", "joint_damping", "belt_damping", "belt_backlash", "leg_friction_force",
-    "leg_friction_side_load_coefficient", "leg_damping_angle_coefficient",
-    "battery_resistance", "liftoff_compression",
-    *(f"{kind}_{gain}_{end}" for kind in ("flight", "brake") for gain in ("kp", "kd")
-      for end in ("front", "back")),
+    "leg_mass",
+    "leg_inertia",
+    "leg_damping",
+    "gearbox_idle_loss_torque",
+    "gearbox_load_loss_coefficient",
+    "drive_gear_inertia",
+    "driven_gear_inertia",
+    "joint_stiction",
+    "joint_damping",
+    "belt_damping",
+    "belt_backlash",
+    "leg_friction_force",
+    "leg_friction_side_load_coefficient",
+    "leg_damping_angle_coefficient",
+    "battery_resistance",
+    "liftoff_compression",
+    *(
+        f"{kind}_{gain}_{end}"
+        for kind in ("flight", "brake")
+        for gain in ("kp", "kd")
+        for end in ("front", "back")
+    ),
 }
 #: signed: an offset, an angle, a feedback gain
 SIGNED = {
-    "com_offset", "touchdown_angle_front", "touchdown_angle_back", "sweep_limit_front",
-    "sweep_limit_back", "pitch_gain_front", "pitch_gain_back", "pitch_rate_gain_front",
+    "com_offset",
+    "touchdown_angle_front",
+    "touchdown_angle_back",
+    "sweep_limit_front",
+    "sweep_limit_back",
+    "pitch_gain_front",
+    "pitch_gain_back",
+    "pitch_rate_gain_front",
     "pitch_rate_gain_back",
 }
 #: not real numbers: a count of legs and a switch
@@ -77,8 +114,11 @@ OTHER = {"legs_per_virtual_leg", "sense_motor_angle"}
 
 
 def _owner(name: str) -> type:
-    return RobotParameters if name in {f.name for f in dataclasses.fields(RobotParameters)} \
+    return (
+        RobotParameters
+        if name in {f.name for f in dataclasses.fields(RobotParameters)}
         else ControllerParameters
+    )
 
 
 def _build(name: str, value):
@@ -97,19 +137,21 @@ def _refused(name: str, value) -> str:
 def test_the_physical_classes_cover_every_field():
     """Every field of both parameter classes has its physical meaning written above, so a
     new field cannot go unchecked here."""
-    fields = {f.name for cls in (RobotParameters, ControllerParameters)
-              for f in dataclasses.fields(cls)}
+    fields = {
+        f.name for cls in (RobotParameters, ControllerParameters) for f in dataclasses.fields(cls)
+    }
     classes = (POSITIVE, NON_NEGATIVE, SIGNED, OTHER)
     assert set().union(*classes) == fields
-    assert sum(map(len, classes)) == len(fields)      # no field in two classes
+    assert sum(map(len, classes)) == len(fields)  # no field in two classes
 
 
 def test_a_negative_leg_mass_is_refused_on_construction_naming_field_and_range():
     with pytest.raises(ParameterError) as err:
         RobotParameters(leg_mass=-1)
     assert err.value.field == "leg_mass"
-    assert re.fullmatch(r"robot\.leg_mass = -1(\.0)? kg is not allowed: must be >= 0",
-                        str(err.value)), str(err.value)
+    assert re.fullmatch(
+        r"robot\.leg_mass = -1(\.0)? kg is not allowed: must be >= 0", str(err.value)
+    ), str(err.value)
 
 
 @pytest.mark.parametrize("name", sorted(POSITIVE))
@@ -117,7 +159,7 @@ def test_a_negative_leg_mass_is_refused_on_construction_naming_field_and_range()
 def test_a_quantity_that_must_be_positive_refuses_zero_and_negative(name, sign):
     default = getattr(_owner(name)(), name)
     message = _refused(name, sign * default)
-    assert ">" in message or " in (" in message     # the allowed range is stated
+    assert ">" in message or " in (" in message  # the allowed range is stated
 
 
 @pytest.mark.parametrize("name", sorted(NON_NEGATIVE))
@@ -126,7 +168,7 @@ def test_a_quantity_that_is_absent_at_zero_refuses_negative_and_takes_zero(name)
     _refused(name, -(default or 1.0))
     with warnings.catch_warnings():
         warnings.simplefilter("error", ImplausibleParameterWarning)
-        assert getattr(_build(name, 0.0), name) == 0.0     # allowed, and plausible
+        assert getattr(_build(name, 0.0), name) == 0.0  # allowed, and plausible
 
 
 @pytest.mark.parametrize("name", sorted(POSITIVE | NON_NEGATIVE | SIGNED))
@@ -167,8 +209,10 @@ def test_an_angle_in_degrees_read_as_radians_is_refused_naming_the_slip():
 
 def test_replace_checks_as_construction_does():
     robot, controller = RobotParameters(), ControllerParameters()
-    for make in (lambda: dataclasses.replace(robot, leg_stiffness=-3520.0),
-                 lambda: robot.replace(leg_stiffness=-3520.0)):
+    for make in (
+        lambda: dataclasses.replace(robot, leg_stiffness=-3520.0),
+        lambda: robot.replace(leg_stiffness=-3520.0),
+    ):
         with pytest.raises(ParameterError, match="leg_stiffness"):
             make()
     with pytest.raises(ParameterError, match="control_period"):
@@ -234,8 +278,9 @@ def _warning(make) -> str:
 def test_a_leg_stiffness_a_thousand_times_off_warns_naming_n_per_mm(factor, said):
     """3520 N/m is 3.52 N/mm: a factor 1000 either way is the N/mm - N/m slip."""
     text = _warning(lambda: RobotParameters(leg_stiffness=3520.0 * factor))
-    assert text.startswith(f"robot.leg_stiffness = {3520.0 * factor!r} N/m is {said} "
-                           "Scout II's 3520 N/m"), text
+    assert text.startswith(
+        f"robot.leg_stiffness = {3520.0 * factor!r} N/m is {said} Scout II's 3520 N/m"
+    ), text
     assert "N/mm" in text
 
 
@@ -287,12 +332,15 @@ def _shipped_robot_files() -> list[tuple[str, str]]:
     with a parameter section."""
     out = []
     for top in ("scoutsim", "examples", "tests", "docs"):
-        out += [(str(p.relative_to(REPO)), p.read_text(encoding="utf-8"))
-                for p in sorted((REPO / top).rglob("*.toml"))]
+        out += [
+            (str(p.relative_to(REPO)), p.read_text(encoding="utf-8"))
+            for p in sorted((REPO / top).rglob("*.toml"))
+        ]
     for doc in [REPO / "README.md", *sorted((REPO / "docs").rglob("*.md"))]:
         if doc.exists():
-            for i, block in enumerate(re.findall(r"```toml\n(.*?)```", doc.read_text(
-                    encoding="utf-8"), flags=re.S)):
+            for i, block in enumerate(
+                re.findall(r"```toml\n(.*?)```", doc.read_text(encoding="utf-8"), flags=re.S)
+            ):
                 if re.search(r"^\[(robot|transmission|motor|controller)\]", block, re.M):
                     out.append((f"{doc.relative_to(REPO)} block {i + 1}", block))
     return out

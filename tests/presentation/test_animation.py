@@ -56,6 +56,7 @@ def test_bad_inputs(result, tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="fps"):
         frame_times(result, 0)
     import scoutsim.presentation.animation as A
+
     monkeypatch.setattr(A.shutil, "which", lambda name: None)
     with pytest.raises(RuntimeError, match="ffmpeg"):
         save_animation(result, tmp_path / "a.mp4", t0=0.0, t1=0.1)
@@ -63,8 +64,9 @@ def test_bad_inputs(result, tmp_path, monkeypatch):
 
 def test_cli_animate_writes_gif(saved, tmp_path, capsys):
     out = tmp_path / "run.gif"
-    code = main(["animate", str(saved), "--out", str(out), "--fps", "10", "--t0", "0.2",
-                 "--t1", "0.5"])
+    code = main(
+        ["animate", str(saved), "--out", str(out), "--fps", "10", "--t0", "0.2", "--t1", "0.5"]
+    )
     assert code == 0 and "wrote" in capsys.readouterr().out
     with Image.open(out) as im:
         assert im.n_frames == 4
@@ -72,6 +74,7 @@ def test_cli_animate_writes_gif(saved, tmp_path, capsys):
 
 def test_cli_plot_result_and_log(saved, result, tmp_path, capsys, monkeypatch):
     from scoutsim.validation import save_log, to_log
+
     out = tmp_path / "run.pdf"
     assert main(["plot", str(saved), "--out", str(out), "--t0", "0.1", "--t1", "0.9"]) == 0
     assert out.read_bytes().startswith(b"%PDF")
@@ -82,17 +85,20 @@ def test_cli_plot_result_and_log(saved, result, tmp_path, capsys, monkeypatch):
     capsys.readouterr()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["plot", "missing.npz"], "not found"),
-    (["plot", "{npz}", "--out", "x.jpg"], "suffix"),
-    (["plot", "{npz}", "--t0", "0.5", "--t1", "0.2"], "t1 > t0"),
-    (["plot", "{npz}", "--t0", "100", "--t1", "200"], "must overlap the run"),
-    (["plot", "{txt}"], "neither a saved run"),
-    (["animate", "{npz}", "--out", "x.avi"], "suffix"),
-    (["animate", "{txt}", "--out", "x.gif"], "not a saved run"),
-    (["animate", "{npz}", "--out", "x.gif", "--t0", "0.5", "--t1", "5"], "covers"),
-    (["animate", "{bad_npz}", "--out", "x.gif"], "cannot read result"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["plot", "missing.npz"], "not found"),
+        (["plot", "{npz}", "--out", "x.jpg"], "suffix"),
+        (["plot", "{npz}", "--t0", "0.5", "--t1", "0.2"], "t1 > t0"),
+        (["plot", "{npz}", "--t0", "100", "--t1", "200"], "must overlap the run"),
+        (["plot", "{txt}"], "neither a saved run"),
+        (["animate", "{npz}", "--out", "x.avi"], "suffix"),
+        (["animate", "{txt}", "--out", "x.gif"], "not a saved run"),
+        (["animate", "{npz}", "--out", "x.gif", "--t0", "0.5", "--t1", "5"], "covers"),
+        (["animate", "{bad_npz}", "--out", "x.gif"], "cannot read result"),
+    ],
+)
 def test_cli_bad_inputs_exit_2(argv, message, saved, tmp_path, capsys):
     txt = tmp_path / "notes.txt"
     txt.write_text("hello\n")
@@ -113,6 +119,7 @@ def test_result_without_robot_in_provenance_is_drawn_with_the_default_robot(resu
     import dataclasses
 
     from scoutsim.parameters import RobotParameters
+
     provenance = {k: v for k, v in result.provenance.items() if k != "robot"}
     bare = dataclasses.replace(result, provenance=provenance, _cache={})
     assert "robot" not in bare.provenance and "robot" in result.provenance
@@ -122,8 +129,7 @@ def test_result_without_robot_in_provenance_is_drawn_with_the_default_robot(resu
     for i in range(len(without.frame_times)):
         corners = without._func(i)[0].get_xy()[:4]
         sides = np.hypot(*np.diff(np.vstack([corners, corners[:1]]), axis=0).T)
-        np.testing.assert_allclose(sides, [robot.torso_length, robot.torso_height] * 2,
-                                   rtol=1e-12)
+        np.testing.assert_allclose(sides, [robot.torso_length, robot.torso_height] * 2, rtol=1e-12)
         np.testing.assert_array_equal(corners, with_robot._func(i)[0].get_xy()[:4])
     for anim in (with_robot, without):
         anim._draw_was_started = True  # drawn by hand: no "deleted without rendering" warning
@@ -137,6 +143,7 @@ def test_leg_colour_is_the_controller_state_and_toe_marker_the_simulated_contact
 
     from scoutsim.names import ContactMode, LegState
     from scoutsim.presentation.animation import LEG_STATE_COLORS, TOE_MARKERS
+
     leg = 0
     state, contact = result.leg_state(leg), result.contact_mode(leg)
     late = np.flatnonzero((state == LegState.FLIGHT) & (contact != ContactMode.FLIGHT))

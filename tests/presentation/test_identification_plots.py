@@ -10,9 +10,14 @@ from scoutsim.presentation.identification_plots import plot_fit
 def _data(current):
     t = np.linspace(10.0, 11.0, 201)
     angle = np.column_stack([np.sin(t), 0.5 * np.cos(t)])
-    return SimpleNamespace(log=SimpleNamespace(t=t), angle=angle,
-                           current=(np.ones_like(angle) if current else None), legs=(0, 1),
-                           rig=SimpleNamespace(name="free-swing"), name="log 1")
+    return SimpleNamespace(
+        log=SimpleNamespace(t=t),
+        angle=angle,
+        current=(np.ones_like(angle) if current else None),
+        legs=(0, 1),
+        rig=SimpleNamespace(name="free-swing"),
+        name="log 1",
+    )
 
 
 def test_fit_figure_shows_log_fit_and_residual_in_degrees(tmp_path, png_draws_each_axes_data):

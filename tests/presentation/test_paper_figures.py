@@ -29,9 +29,12 @@ UNIT = re.compile(r"\[[^\]]+\]")
 def sims():
     """Model II (6 s, bounds) and Model I from the earlier default start (falls at
     about 1.4 s) at mu = 0.8."""
-    return {"II": simulate(duration=6.0, model="II", friction_coefficient=0.8),
-            "I": simulate(initial_state=FALLING_START, duration=2.0, model="I",
-                          friction_coefficient=0.8)}
+    return {
+        "II": simulate(duration=6.0, model="II", friction_coefficient=0.8),
+        "I": simulate(
+            initial_state=FALLING_START, duration=2.0, model="I", friction_coefficient=0.8
+        ),
+    }
 
 
 @pytest.fixture(scope="module")
@@ -72,8 +75,9 @@ def _pyplot_fignums():
 
 
 @pytest.mark.parametrize("name", ["fig8", "fig9", "fig10", "fig11", "fig_phase"])
-def test_comparison_figures_render_with_units(name, exp_logs, sims, tmp_path,
-                                              png_draws_each_axes_data):
+def test_comparison_figures_render_with_units(
+    name, exp_logs, sims, tmp_path, png_draws_each_axes_data
+):
     before = _pyplot_fignums()
     path = tmp_path / f"{name}.png"
     fig = getattr(figures, name)(exp_logs, sims, path=path)
@@ -84,11 +88,15 @@ def test_comparison_figures_render_with_units(name, exp_logs, sims, tmp_path,
     title = fig._suptitle.get_text()
     assert "SYNTHETIC" in title
     # Model I fell: the figure says so (title or legend)
-    texts = title + " ".join(t.get_text() for ax in fig.get_axes()
-                             if ax.get_legend() for t in ax.get_legend().get_texts())
+    texts = title + " ".join(
+        t.get_text()
+        for ax in fig.get_axes()
+        if ax.get_legend()
+        for t in ax.get_legend().get_texts()
+    )
     assert "fell" in texts
     assert _pyplot_fignums() == before  # no pyplot figure registered
-    png_draws_each_axes_data(path, fig)    # (last: it draws the figure again)
+    png_draws_each_axes_data(path, fig)  # (last: it draws the figure again)
 
 
 def test_fig5_highlights_one_stride(exp_logs, tmp_path):
@@ -112,10 +120,12 @@ def test_fig5_highlights_one_stride(exp_logs, tmp_path):
 @pytest.mark.parametrize("with_length", [True, False])
 def test_robot_pose_puts_stance_toes_on_the_ground(exp_logs, with_length):
     from scoutsim.validation import ExperimentLog
+
     lg = exp_logs[0]
     if not with_length:
-        lg = ExperimentLog({k: v for k, v in lg.columns.items()
-                            if not k.startswith("leg_length")}, dict(lg.meta))
+        lg = ExperimentLog(
+            {k: v for k, v in lg.columns.items() if not k.startswith("leg_length")}, dict(lg.meta)
+        )
     rob = RobotParameters()
     checked = 0
     for k in range(0, len(lg.t), 97):
@@ -157,6 +167,7 @@ def test_fig9_has_leg_state_square_wave(exp_logs, sims):
 
 def test_fig11_draws_motor_limits(exp_logs, sims):
     from scoutsim.presentation.plots import motor_limits
+
     fig = figures.fig11(exp_logs, sims)
     lim = motor_limits(sims["II"].provenance["robot"])
     ax = fig.get_axes()[0]
@@ -195,8 +206,7 @@ def test_write_figures_writes_everything(exp_logs, table, tmp_path):
 def test_experiment_without_strides_is_drawn_and_said(sims, tmp_path):
     short = [to_log(sims["I"])]  # falls before any steady stride
     fig = figures.fig8(short, {"II": sims["II"]})
-    assert "transient" in " ".join(t.get_text() for t in
-                                   fig.get_axes()[0].get_legend().get_texts())
+    assert "transient" in " ".join(t.get_text() for t in fig.get_axes()[0].get_legend().get_texts())
     fig5 = figures.fig5(short)
     _check_labels(fig5)
 
@@ -224,6 +234,7 @@ def test_plot_log(exp_logs, tmp_path):
 
 def test_cli_compare_writes_figures(exp_logs, tmp_path, capsys):
     from scoutsim.cli import main
+
     p = save_log(exp_logs[0], tmp_path / "exp.csv.gz")
     out = tmp_path / "cmp"
     code = main(["compare", str(p), "--models", "II", "--out", str(out), "--no-progress"])

@@ -46,7 +46,7 @@ def test_plot_run_has_four_labelled_panels_with_units(result_II):
         assert ax.get_legend() is not None
     # panels share the time axis
     assert axes[0].get_shared_x_axes().joined(axes[0], axes[3])
-    title = " ".join(fig._suptitle.get_text().split())      # (wrapped over lines)
+    title = " ".join(fig._suptitle.get_text().split())  # (wrapped over lines)
     assert "Model II" in title and result_II.behaviour().text in title
 
 
@@ -74,6 +74,7 @@ def test_plot_run_leg_state_bands_cover_the_states_the_controller_visited(result
     bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
     colors = {tuple(np.round(c.get_facecolor()[0][:3], 3)) for c in bands}
     from matplotlib.colors import to_rgb
+
     visited = set(np.unique(result_II.leg_state(0))) | set(np.unique(result_II.leg_state(1)))
     assert visited == {0, 1, 2}, "a 1 s run passes through all three leg states"
     expected = {tuple(np.round(to_rgb(LEG_STATE_COLORS[k]), 3)) for k in visited}
@@ -95,7 +96,7 @@ def test_plot_run_saves_png_pdf_svg_headless(result_II, tmp_path, png_draws_each
         assert data.startswith(magic)
         if suffix == ".png":
             png_draws_each_axes_data(path, fig)
-        else:                        # the file is whole
+        else:  # the file is whole
             assert data.rstrip().endswith(b"%%EOF" if suffix == ".pdf" else b"</svg>")
     assert _pyplot_fignums() == before, "no figures registered with pyplot"
 
@@ -117,7 +118,7 @@ def test_plot_run_time_range_limits_axis_and_data(result_II):
 
 def test_motor_limits_match_spec_numbers():
     lim = motor_limits(scoutsim.simulate(duration=0.01, model="I").provenance["robot"])
-    assert lim["N"] == pytest.approx(102.19, abs=0.01)          # 72.38 x 48/34
+    assert lim["N"] == pytest.approx(102.19, abs=0.01)  # 72.38 x 48/34
     assert lim["eta"] == pytest.approx(0.6528)
     assert lim["tau_current"] == pytest.approx(lim["N"] * 0.6528 * 0.0389 * 12.0)
     assert lim["w_no_load"] == pytest.approx(36.0 / (0.0389 * lim["N"]))
@@ -134,8 +135,11 @@ def test_torque_speed_draws_current_limit_and_torque_speed_lines(result_I, tmp_p
         assert "[N m]" in ax.get_xlabel() and "[rad/s]" in ax.get_ylabel()
         assert leg in ax.get_title()
         lines = ax.get_lines()
-        verticals = sorted(float(ln.get_xdata()[0]) for ln in lines
-                           if ln.get_linestyle() == "--" and len(set(ln.get_xdata())) == 1)
+        verticals = sorted(
+            float(ln.get_xdata()[0])
+            for ln in lines
+            if ln.get_linestyle() == "--" and len(set(ln.get_xdata())) == 1
+        )
         assert verticals == pytest.approx([-lim["tau_current"], lim["tau_current"]])
         ts_lines = [ln for ln in lines if ln.get_linestyle() == "-."]
         assert len(ts_lines) == 2
@@ -163,6 +167,7 @@ def test_torque_speed_single_leg_and_bad_leg(result_II):
 
 def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     from scoutsim.presentation.plots import DETAIL_STRIDES
+
     fig = plot_run(result_II, overview=True)
     axes = fig.get_axes()
     assert len(axes) == 7
@@ -174,8 +179,7 @@ def test_plot_run_overview_shows_the_whole_run_and_the_last_strides(result_II):
     strides = result_II.strides
     assert t0 == pytest.approx(strides[-DETAIL_STRIDES]["t_start"])
     # "auto": only runs longer than LONG_RUN_S get the overview
-    assert len(plot_run(result_II, overview="auto").get_axes()) == \
-        (7 if t[-1] - t[0] > 4.0 else 4)
+    assert len(plot_run(result_II, overview="auto").get_axes()) == (7 if t[-1] - t[0] > 4.0 else 4)
     with pytest.raises(ValueError, match="overview"):
         plot_run(result_II, overview="yes")
 
@@ -185,17 +189,24 @@ def test_plot_stride_power_shows_each_destination_with_its_energy(tmp_path):
     hip work (their stride energies in the legend, adding up to the battery's), then the
     hip work with friction and dampers and the mechanical energy's rate of change."""
     from scoutsim.presentation.plots import plot_stride_power
+
     r = scoutsim.simulate(duration=1.0, model="II", energy=True)
     fig = plot_stride_power(r, tmp_path / "p.png", stride=1)
     assert (tmp_path / "p.png").read_bytes()[:8] == PNG_MAGIC
     ax_in, ax_out = fig.get_axes()
     assert "[W]" in ax_in.get_ylabel() and "[W]" in ax_out.get_ylabel()
     labels = [t.get_text() for t in ax_in.get_legend().get_texts()]
-    energy = {lab.split(":")[0]: float(lab.split(":")[1].split()[0]) for lab in labels
-              if lab.endswith(" J")}
+    energy = {
+        lab.split(":")[0]: float(lab.split(":")[1].split()[0])
+        for lab in labels
+        if lab.endswith(" J")
+    }
     assert energy["battery output"] == pytest.approx(
-        energy["copper losses R_A i^2"] + energy["transmission losses (signed)"]
-        + energy["hip work (mechanical)"], abs=0.15)            # legend rounds to 0.1 J
+        energy["copper losses R_A i^2"]
+        + energy["transmission losses (signed)"]
+        + energy["hip work (mechanical)"],
+        abs=0.15,
+    )  # legend rounds to 0.1 J
     assert any("friction" in t.get_text() for t in ax_out.get_legend().get_texts())
     with pytest.raises(ValueError, match="energy=True"):
         plot_stride_power(scoutsim.simulate(duration=1.0, model="II"))
@@ -203,6 +214,7 @@ def test_plot_stride_power_shows_each_destination_with_its_energy(tmp_path):
 
 def _drawn(fig):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+
     FigureCanvasAgg(fig).draw()
     return fig
 
@@ -240,8 +252,10 @@ def test_plot_run_overview_draws_the_range_over_one_stride_and_every_stride():
 def test_plot_run_title_of_a_fall_says_so():
     """A robot that fell is not "bounding ... completed": the title says when and how."""
     import math
-    r = scoutsim.simulate(initial_state=scoutsim.InitialState(theta=math.radians(40.0), y=0.5),
-                          duration=1.0)
+
+    r = scoutsim.simulate(
+        initial_state=scoutsim.InitialState(theta=math.radians(40.0), y=0.5), duration=1.0
+    )
     title = " ".join(plot_run(r)._suptitle.get_text().split())
     assert "fell at t = " in title and "pitch passed 60 deg" in title
     assert "bounding" not in title and "completed" not in title
@@ -255,19 +269,27 @@ def test_plot_stride_power_has_a_legend_for_the_leg_state_colours():
 
     from scoutsim.names import LegState
     from scoutsim.presentation.plots import plot_stride_power
+
     r = scoutsim.simulate(duration=1.0, model="II", energy=True)
     fig = plot_stride_power(r)
     ax_in, ax_out = fig.get_axes()
     legend = ax_in.get_legend()
-    patches = {t.get_text(): h for t, h in zip(legend.get_texts(), legend.legend_handles)
-               if isinstance(h, Patch) and h.get_visible()}
+    patches = {
+        t.get_text(): h
+        for t, h in zip(legend.get_texts(), legend.legend_handles)
+        if isinstance(h, Patch) and h.get_visible()
+    }
     for state in LegState:
         assert to_rgba(patches[state.label].get_facecolor()) == to_rgba(LEG_STATE_COLORS[state])
-    band_colours = {to_rgba(tuple(c)) for coll in ax_out.collections
-                    if isinstance(coll, PolyCollection) for c in coll.get_facecolors()}
+    band_colours = {
+        to_rgba(tuple(c))
+        for coll in ax_out.collections
+        if isinstance(coll, PolyCollection)
+        for c in coll.get_facecolors()
+    }
     assert band_colours <= {to_rgba(c) for c in LEG_STATE_COLORS}
     _drawn(fig)
-    for ax in (ax_in, ax_out):         # the legends right of the panels, off the traces
+    for ax in (ax_in, ax_out):  # the legends right of the panels, off the traces
         assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
 
 
@@ -288,16 +310,19 @@ def test_scoutsim_plot_of_a_window_titles_it_by_the_saved_summary(tmp_path, monk
 
     import scoutsim.presentation.plots as plots
     from scoutsim.cli import main
+
     out = tmp_path / "run"
-    assert main(["run", "--duration", "0.5", "--out", str(out), "--no-progress",
-                 "--quiet"]) == 0
+    assert main(["run", "--duration", "0.5", "--out", str(out), "--no-progress", "--quiet"]) == 0
     seen = {}
     real = plots.plot_run
 
     def spy(result, path=None, **kwargs):
         seen.update(kwargs)
         return real(result, path, **kwargs)
+
     monkeypatch.setattr(plots, "plot_run", spy)
-    assert main(["plot", str(out), "--t0", "0.1", "--t1", "0.3",
-                 "--out", str(tmp_path / "w.png")]) == 0
+    assert (
+        main(["plot", str(out), "--t0", "0.1", "--t1", "0.3", "--out", str(tmp_path / "w.png")])
+        == 0
+    )
     assert seen["behaviour"] == json.loads((out / "summary.json").read_text())["behaviour"]

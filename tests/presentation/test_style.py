@@ -44,6 +44,7 @@ def test_save_figure_by_suffix(tmp_path):
 
 def test_package_exports_load_lazily():
     import scoutsim.presentation as P
+
     assert P.plot_run.__module__ == "scoutsim.presentation.plots"
     assert P.fig12.__module__ == "scoutsim.presentation.error_figure"
     with pytest.raises(AttributeError):

@@ -32,22 +32,25 @@ def _write(tmp_path, text, name="robot.toml"):
 
 # -- (a) physical bounds of the parameters ------------------------------------------------------
 
-@pytest.mark.parametrize("name, value, label, allowed", [
-    ("torso_mass", 1e308, "robot.torso_mass", "in (0, 100000] kg"),
-    ("leg_mass", 2e5, "robot.leg_mass", "in [0, 100000] kg"),
-    ("torso_inertia", 1e300, "robot.torso_inertia", "in (0, 1e+09] kg m^2"),
-    ("hip_spacing", 5.52e5, "robot.hip_spacing", "in (0, 100] m"),
-    ("leg_rest_length", 1e300, "robot.leg_rest_length", "in (0, 100] m"),
-    ("gravity", 1e300, "robot.gravity", "in (0, 1000] m/s^2"),
-    ("leg_stiffness", 1e300, "robot.leg_stiffness", "in (0, 1e+10] N/m"),
-    ("leg_damping", 1e300, "robot.leg_damping", "in [0, 100000000] N s/m"),
-    ("planetary_ratio", 1e300, "transmission.planetary_ratio", "in (0, 10000]"),
-    ("belt_damping", 1e300, "transmission.belt_damping", "in [0, 174532925] N m/(deg/s)"),
-    ("speed_constant", 3.89e4, "motor.speed_constant", "in (0, 1000] V s/rad"),
-    ("battery_voltage", 1e300, "motor.battery_voltage", "in (0, 10000] V"),
-])
-def test_absurd_parameter_values_are_refused_naming_field_and_range(name, value, label,
-                                                                     allowed):
+
+@pytest.mark.parametrize(
+    "name, value, label, allowed",
+    [
+        ("torso_mass", 1e308, "robot.torso_mass", "in (0, 100000] kg"),
+        ("leg_mass", 2e5, "robot.leg_mass", "in [0, 100000] kg"),
+        ("torso_inertia", 1e300, "robot.torso_inertia", "in (0, 1e+09] kg m^2"),
+        ("hip_spacing", 5.52e5, "robot.hip_spacing", "in (0, 100] m"),
+        ("leg_rest_length", 1e300, "robot.leg_rest_length", "in (0, 100] m"),
+        ("gravity", 1e300, "robot.gravity", "in (0, 1000] m/s^2"),
+        ("leg_stiffness", 1e300, "robot.leg_stiffness", "in (0, 1e+10] N/m"),
+        ("leg_damping", 1e300, "robot.leg_damping", "in [0, 100000000] N s/m"),
+        ("planetary_ratio", 1e300, "transmission.planetary_ratio", "in (0, 10000]"),
+        ("belt_damping", 1e300, "transmission.belt_damping", "in [0, 174532925] N m/(deg/s)"),
+        ("speed_constant", 3.89e4, "motor.speed_constant", "in (0, 1000] V s/rad"),
+        ("battery_voltage", 1e300, "motor.battery_voltage", "in (0, 10000] V"),
+    ],
+)
+def test_absurd_parameter_values_are_refused_naming_field_and_range(name, value, label, allowed):
     with pytest.raises(ParameterError) as err:
         load_robot(overrides={name: value})
     msg = str(err.value)
@@ -57,9 +60,12 @@ def test_absurd_parameter_values_are_refused_naming_field_and_range(name, value,
 
 def test_integer_beyond_the_float_range_is_refused_naming_the_field():
     for name in ("planetary_ratio", "legs_per_virtual_leg"):
-        with pytest.raises(ParameterError, match=rf"\.{name} = an integer of 401 digits .*"
-                                                 r"must be finite") as err:
-            load_robot(overrides={name: 10 ** 400})
+        with pytest.raises(
+            ParameterError,
+            match=rf"\.{name} = an integer of 401 digits .*"
+            r"must be finite",
+        ) as err:
+            load_robot(overrides={name: 10**400})
         assert err.value.field == name
 
 
@@ -71,6 +77,7 @@ def test_physical_bounds_admit_every_value_the_package_uses():
     from scoutsim.identification.parameter_vector import default_bounds
     from scoutsim.identification.rigs import HIP_PARAMETERS
     from scoutsim.validation.make_example import VIRTUAL_SCOUT_EFFECTS
+
     base = RobotParameters()
     limited = [f.name for f in dataclasses.fields(base) if physical_limit(f.name) is not None]
     assert "torso_mass" in limited and "battery_voltage" in limited
@@ -79,9 +86,14 @@ def test_physical_bounds_admit_every_value_the_package_uses():
         assert physical_limit(name) >= 100 * default, name
     used = [{n: default_bounds(n, getattr(base, n))[1]} for n in HIP_PARAMETERS]
     used += [{n: f * getattr(base, n)} for n, f in EXAMPLE_FACTORS.items()]
-    used += [VIRTUAL_SCOUT_EFFECTS, {"current_limit": 400.0},
-             {"belt_stiffness": 100 * base.belt_stiffness,
-              "drive_gear_inertia": base.drive_gear_inertia / 100}]
+    used += [
+        VIRTUAL_SCOUT_EFFECTS,
+        {"current_limit": 400.0},
+        {
+            "belt_stiffness": 100 * base.belt_stiffness,
+            "drive_gear_inertia": base.drive_gear_inertia / 100,
+        },
+    ]
     for overrides in used:
         load_robot(overrides=overrides)
 
@@ -89,8 +101,10 @@ def test_physical_bounds_admit_every_value_the_package_uses():
 def test_absurd_mass_in_a_robot_file_is_refused_before_the_run(tmp_path, capsys):
     path = _write(tmp_path, "[robot]\ntorso_mass = 1e308\n")
     out = tmp_path / "out"
-    assert main(["run", "--duration", "1", "--robot", str(path), "--out", str(out),
-                 "--no-progress"]) == 2
+    assert (
+        main(["run", "--duration", "1", "--robot", str(path), "--out", str(out), "--no-progress"])
+        == 2
+    )
     err = capsys.readouterr().err
     for piece in ("robot.torso_mass = 1e+308 kg", "must be in (0, 100000] kg", str(path)):
         assert piece in err
@@ -98,6 +112,7 @@ def test_absurd_mass_in_a_robot_file_is_refused_before_the_run(tmp_path, capsys)
 
 
 # -- (b) the diagnosis of a numerical failure ---------------------------------------------------
+
 
 def test_failure_caused_by_a_parameter_names_the_parameter():
     """A torso inertia of 1.3e6 kg m^2 (a radius of gyration of 250 m for 21 kg: within
@@ -149,8 +164,9 @@ def test_integrator_stop_with_scout_parameters_points_at_the_tolerance(short_run
     assert "stayed finite" in f.what
     assert "try a smaller --rtol" in f.advice(cli=True)
     assert "IntegratorSettings(rtol=...)" in f.advice()
-    prov = dict(short_run.provenance, integrator=dict(short_run.provenance["integrator"],
-                                                      rtol=1e-13))
+    prov = dict(
+        short_run.provenance, integrator=dict(short_run.provenance["integrator"], rtol=1e-13)
+    )
     tight = _forced_failure(short_run, provenance=prov).failure
     assert "try a larger --rtol" in tight.advice(cli=True)
 
@@ -185,8 +201,23 @@ def test_a_run_that_did_not_fail_has_no_failure(short_run):
 def test_scoutsim_run_prints_the_diagnosis_not_a_fixed_rtol_hint(tmp_path, capsys):
     path = _write(tmp_path, "[robot]\ntorso_inertia = 1.3e6\n")
     out = tmp_path / "out"
-    assert main(["run", "--duration", "0.1", "--robot", str(path), "--out", str(out),
-                 "--no-progress", "--model", "I"]) == 1
+    assert (
+        main(
+            [
+                "run",
+                "--duration",
+                "0.1",
+                "--robot",
+                str(path),
+                "--out",
+                str(out),
+                "--no-progress",
+                "--model",
+                "I",
+            ]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert "the integration failed numerically" in err
     assert "equations of motion could not be solved" in err
@@ -197,6 +228,7 @@ def test_scoutsim_run_prints_the_diagnosis_not_a_fixed_rtol_hint(tmp_path, capsy
 
 
 # -- the passive model's default start -------------------------------------------------------
+
 
 def _start_toe_heights(r):
     cols = r.columns()
@@ -226,7 +258,7 @@ def test_passive_default_start_follows_the_robot_and_the_leg_placement():
 
 def _lands_from_flight(r):
     assert r.outcome in ("completed", "fell")
-    assert np.all(r.modes[0, L.RM_CONTACT_B:L.RM_CONTACT_B + 2] == L.FLIGHT)
+    assert np.all(r.modes[0, L.RM_CONTACT_B : L.RM_CONTACT_B + 2] == L.FLIGHT)
     assert min(_start_toe_heights(r)) > 0.0
     assert len(r.event_times("touchdown")) >= 1
     audit = audit_transitions(r)
@@ -238,11 +270,14 @@ def test_simulate_passive_runs_from_its_default_start():
     _lands_from_flight(r)
     assert r.provenance["initial_state"] == dataclasses.asdict(default_initial_state("passive"))
     assert min(_start_toe_heights(r)) == pytest.approx(
-        0.33 - 0.323 * math.cos(math.radians(19.0)), abs=1e-12)
+        0.33 - 0.323 * math.cos(math.radians(19.0)), abs=1e-12
+    )
 
 
 def test_scoutsim_run_passive_runs_from_its_default_start(tmp_path):
     out = tmp_path / "out"
-    assert main(["run", "--model", "passive", "--duration", "1", "--out", str(out),
-                 "--no-progress"]) == 0
+    assert (
+        main(["run", "--model", "passive", "--duration", "1", "--out", str(out), "--no-progress"])
+        == 0
+    )
     _lands_from_flight(SimulationResult.load(out))

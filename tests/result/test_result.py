@@ -16,8 +16,10 @@ def run():
 def test_every_column_has_a_unit_or_is_a_mode_code(run):
     for name in run.columns():
         unit = column_unit(name)
-        is_mode = (name.startswith(("leg_state_", "contact_mode_", "motor_joint_mode_"))
-                   or name == "dynamics_solved")
+        is_mode = (
+            name.startswith(("leg_state_", "contact_mode_", "motor_joint_mode_"))
+            or name == "dynamics_solved"
+        )
         assert (unit is None) == is_mode, name
 
 
@@ -44,14 +46,17 @@ def test_plot_is_the_run_figure(run, tmp_path, png_draws_each_axes_data):
 def test_a_window_of_a_saved_run_loads_the_same_from_tables_and_npz(tmp_path):
     import scoutsim
     from scoutsim import SimulationResult
+
     r = scoutsim.simulate(duration=3.0)
     r.save_tables(tmp_path)
     r.save(tmp_path / "r.npz")
     ref = r.window(1.0, 2.0)
     assert ref.t[0] == 1.0 and ref.t[-1] == 2.0 and len(ref.t) == 1001
     assert np.all((ref.events[:, 0] >= 1.0) & (ref.events[:, 0] <= 2.0))
-    for loaded in (SimulationResult.load(tmp_path, t_range=(1.0, 2.0)),
-                   SimulationResult.load(tmp_path / "r.npz", t_range=(1.0, 2.0))):
+    for loaded in (
+        SimulationResult.load(tmp_path, t_range=(1.0, 2.0)),
+        SimulationResult.load(tmp_path / "r.npz", t_range=(1.0, 2.0)),
+    ):
         assert np.array_equal(loaded.state, ref.state)
         np.testing.assert_array_equal(loaded.events, ref.events)
         assert loaded.t_end == r.t_end and loaded.outcome == r.outcome

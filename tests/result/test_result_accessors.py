@@ -16,7 +16,7 @@ from scoutsim.io.run_directory import check_run_directory
 from scoutsim.simulation.simulator import ControllerError
 
 MODELS = ("II", "I", "ideal")
-LEGS = (("back", -1.0), ("front", 1.0))    # leg, side of the hip (behind / ahead of the COM)
+LEGS = (("back", -1.0), ("front", 1.0))  # leg, side of the hip (behind / ahead of the COM)
 ROBOT = RobotParameters()
 
 
@@ -125,6 +125,7 @@ def test_motor_joint_mode_is_a_stiction_mode_and_stuck_outside_model_ii(runs):
     """motor_joint_mode takes MotorJointMode codes, stuck at some samples of Model II's
     bounding, and is always stuck (0) in Model I and the ideal actuator."""
     from scoutsim.names import MotorJointMode
+
     for leg, _ in LEGS:
         m = runs["II"].motor_joint_mode(leg)
         assert set(np.unique(m)) <= {int(v) for v in MotorJointMode}
@@ -137,6 +138,7 @@ def test_event_log_names_the_event_records(runs):
     """event_log: the records' columns by name, selected by kind and leg, agree with
     event_times and impacts; impact_log is the touchdowns in a half-open window."""
     from scoutsim.names import EventKind
+
     r = runs["II"]
     log = r.event_log()
     assert len(log["t"]) == len(r.events)
@@ -146,8 +148,9 @@ def test_event_log_names_the_event_records(runs):
         td = r.event_log(kinds=("touchdown", EventKind.LIFTOFF), leg=leg)
         assert set(td["kind"]) == {EventKind.TOUCHDOWN, EventKind.LIFTOFF}
         assert np.all(td["leg"] == (0 if leg == "back" else 1))
-        np.testing.assert_array_equal(td["t"][td["kind"] == EventKind.TOUCHDOWN],
-                                      r.event_times("touchdown", leg))
+        np.testing.assert_array_equal(
+            td["t"][td["kind"] == EventKind.TOUCHDOWN], r.event_times("touchdown", leg)
+        )
     imp = r.impacts()
     t0, t1 = float(imp[3, 0]), float(imp[8, 0])
     window = r.impact_log(t0, t1)
@@ -178,7 +181,7 @@ def test_leg_length_puts_the_toe_on_the_ground_in_stance_and_relaxes_in_flight(r
         assert np.max(np.abs(toe_y[stance])) < 1e-12
         assert np.all(toe_y[~stance] > 0.0)
         assert np.all(length <= l0)
-        k = np.flatnonzero(~stance[:-1] & ~stance[1:])    # both ends of the period in flight
+        k = np.flatnonzero(~stance[:-1] & ~stance[1:])  # both ends of the period in flight
         relaxed = l0 - (l0 - length[k]) * np.exp(-rate * np.diff(r.t)[k])
         np.testing.assert_allclose(length[k + 1], relaxed, rtol=0, atol=1e-8)
 
@@ -195,20 +198,22 @@ def test_leg_axial_force_is_the_spring_damper_law_and_balances_the_toe(runs, mod
     for leg, side in LEGS:
         _, (vx, vy) = _hip(r, side)
         a = r.pitch + r.leg_angle(leg)
-        ldot = -np.sin(a) * vx + np.cos(a) * vy          # hip velocity along toe -> hip
-        law = n_p * (ROBOT.leg_stiffness * (ROBOT.leg_rest_length - r.leg_length(leg))
-                     - ROBOT.leg_damping * ldot)
+        ldot = -np.sin(a) * vx + np.cos(a) * vy  # hip velocity along toe -> hip
+        law = n_p * (
+            ROBOT.leg_stiffness * (ROBOT.leg_rest_length - r.leg_length(leg))
+            - ROBOT.leg_damping * ldot
+        )
         force = r.leg_axial_force(leg)
         stick = r.contact_mode(leg) == L.STICK
         assert stick.sum() > 100
         np.testing.assert_allclose(force[stick], law[stick], rtol=0, atol=1e-9)
         gt, gn = r.ground_force(leg)
         stance = _stance(r, leg)
-        np.testing.assert_allclose(force[stance],
-                                   (gn * np.cos(a) - gt * np.sin(a))[stance], rtol=0,
-                                   atol=1e-9)
+        np.testing.assert_allclose(
+            force[stance], (gn * np.cos(a) - gt * np.sin(a))[stance], rtol=0, atol=1e-9
+        )
         assert np.all(force[~stance] == 0.0)
-        assert force.max() > 100.0                        # the legs carried the robot
+        assert force.max() > 100.0  # the legs carried the robot
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -255,18 +260,17 @@ def test_ground_force_over_whole_strides_carries_the_weight(runs, model):
     t = r.t
     k = np.rint(r.event_times("controller_liftoff", "back") / 1e-3).astype(int)
     a, b = k[3], k[-1]
-    assert len(k) - 4 >= 10                                  # at least 10 whole strides
+    assert len(k) - 4 >= 10  # at least 10 whole strides
     span = t[b] - t[a]
-    weight = (ROBOT.torso_mass + 2 * ROBOT.legs_per_virtual_leg * ROBOT.leg_mass) \
-        * ROBOT.gravity
-    gt = sum(r.ground_force(leg)[0] for leg, _ in LEGS)[a:b + 1]
-    gn = sum(r.ground_force(leg)[1] for leg, _ in LEGS)[a:b + 1]
+    weight = (ROBOT.torso_mass + 2 * ROBOT.legs_per_virtual_leg * ROBOT.leg_mass) * ROBOT.gravity
+    gt = sum(r.ground_force(leg)[0] for leg, _ in LEGS)[a : b + 1]
+    gn = sum(r.ground_force(leg)[1] for leg, _ in LEGS)[a : b + 1]
     px, py = _momentum(r)
-    mean_gn = np.trapezoid(gn, t[a:b + 1]) / span
+    mean_gn = np.trapezoid(gn, t[a : b + 1]) / span
     assert mean_gn == pytest.approx(weight, rel=0.01)
     assert mean_gn - (py[b] - py[a]) / span == pytest.approx(weight, rel=0.005)
-    mean_gt = np.trapezoid(gt, t[a:b + 1]) / span
-    mean_abs_gt = np.trapezoid(np.abs(gt), t[a:b + 1]) / span
+    mean_gt = np.trapezoid(gt, t[a : b + 1]) / span
+    mean_abs_gt = np.trapezoid(np.abs(gt), t[a : b + 1]) / span
     assert abs(mean_gt - (px[b] - px[a]) / span) < 0.02 * mean_abs_gt
 
 
@@ -290,17 +294,22 @@ def test_momentum_is_conserved_horizontally_and_falls_freely_in_double_flight(ru
 def _lowest_point(r):
     """Height [m] of the lowest torso corner or hip (the 0.70 m x 0.12 m box)."""
     th, y = r.pitch, r.height
-    points = [y + a * np.sin(th) + b * np.cos(th)
-              for a in (-ROBOT.torso_length / 2, ROBOT.torso_length / 2)
-              for b in (-ROBOT.torso_height / 2, ROBOT.torso_height / 2)]
+    points = [
+        y + a * np.sin(th) + b * np.cos(th)
+        for a in (-ROBOT.torso_length / 2, ROBOT.torso_length / 2)
+        for b in (-ROBOT.torso_height / 2, ROBOT.torso_height / 2)
+    ]
     points += [y + s * ROBOT.half_hip_spacing * np.sin(th) for _, s in LEGS]
     return np.min(points, axis=0)
 
 
-@pytest.mark.parametrize("start, how", [
-    (InitialState(y=0.8, dtheta=math.radians(400.0)), "pitch"),     # tumbles nose up
-    (InitialState(y=0.6, theta=math.radians(-45.0), dtheta=0.0), "ground"),   # nose first
-])
+@pytest.mark.parametrize(
+    "start, how",
+    [
+        (InitialState(y=0.8, dtheta=math.radians(400.0)), "pitch"),  # tumbles nose up
+        (InitialState(y=0.6, theta=math.radians(-45.0), dtheta=0.0), "ground"),  # nose first
+    ],
+)
 def test_fell_is_true_when_the_run_ends_by_the_fall_rule(start, how):
     """The fall rule (docs/specification.md section 3): |pitch| reaches the 60 deg limit,
     or the torso box or a hip touches the ground. fell is True, the run ends there (last
@@ -333,14 +342,16 @@ def test_environment_sets_the_floor_friction():
     friction_coefficient shortcut, bit for bit; the provenance records mu; the ground
     force stays in the cone |G_t| <= mu G_n (reaching its edge), while on a no-slip floor
     it leaves that cone."""
-    env = scoutsim.simulate(None, None, None, 1.5, model="I",
-                            environment=Environment(friction_coefficient=0.3))
+    env = scoutsim.simulate(
+        None, None, None, 1.5, model="I", environment=Environment(friction_coefficient=0.3)
+    )
     short = scoutsim.simulate(None, None, None, 1.5, model="I", friction_coefficient=0.3)
     for name in ("t", "state", "aux", "modes"):
         np.testing.assert_array_equal(getattr(env, name), getattr(short, name), err_msg=name)
     assert env.provenance["friction_coefficient"] == 0.3
-    no_slip = scoutsim.simulate(None, None, None, 1.5, model="I",
-                                environment=Environment(friction_coefficient=math.inf))
+    no_slip = scoutsim.simulate(
+        None, None, None, 1.5, model="I", environment=Environment(friction_coefficient=math.inf)
+    )
     assert no_slip.provenance["friction_coefficient"] is None
     ratio_env, ratio_no_slip = [], []
     for leg, _ in LEGS:
@@ -355,8 +366,9 @@ def test_environment_sets_the_floor_friction():
 def test_environment_and_friction_coefficient_together_are_refused():
     """Both ways of giving the floor at once: a ValueError that names both."""
     with pytest.raises(ValueError) as info:
-        scoutsim.simulate(None, None, None, 0.1, environment=Environment(0.5),
-                          friction_coefficient=0.5)
+        scoutsim.simulate(
+            None, None, None, 0.1, environment=Environment(0.5), friction_coefficient=0.5
+        )
     message = str(info.value)
     assert "friction_coefficient" in message and "environment" in message
 
@@ -391,7 +403,7 @@ class ReturnsAt(Swing):
         return super().command(t, sensors)
 
 
-START = InitialState(y=1.0, dx=0.0, dtheta=0.0)     # in the air: a short, simple run
+START = InitialState(y=1.0, dx=0.0, dtheta=0.0)  # in the air: a short, simple run
 
 
 def _prefix_of(kept, whole):
@@ -399,8 +411,7 @@ def _prefix_of(kept, whole):
     of the same controller's run without the failure, bit for bit."""
     n = len(kept.t)
     for name in ("t", "state", "aux", "modes"):
-        np.testing.assert_array_equal(getattr(kept, name), getattr(whole, name)[:n],
-                                      err_msg=name)
+        np.testing.assert_array_equal(getattr(kept, name), getattr(whole, name)[:n], err_msg=name)
 
 
 def test_a_controller_that_raises_stops_the_run_with_its_data():
@@ -425,12 +436,15 @@ def test_a_controller_that_raises_stops_the_run_with_its_data():
     _prefix_of(r, whole)
 
 
-@pytest.mark.parametrize("value, shown", [
-    ((float("nan"), 0.0), "(nan, 0.0)"),
-    ((0.0, float("inf")), "(0.0, inf)"),
-    ((1.0, 2.0, 3.0), "(1.0, 2.0, 3.0)"),
-    (None, "None"),
-])
+@pytest.mark.parametrize(
+    "value, shown",
+    [
+        ((float("nan"), 0.0), "(nan, 0.0)"),
+        ((0.0, float("inf")), "(0.0, inf)"),
+        ((1.0, 2.0, 3.0), "(1.0, 2.0, 3.0)"),
+        (None, "None"),
+    ],
+)
 def test_a_controller_that_returns_no_finite_torques_stops_the_run(value, shown):
     """command() returning NaN, inf, three torques or nothing at t = 0.031 s: the
     ControllerError names the controller, the sample time and what it returned; the
@@ -460,8 +474,14 @@ def test_a_controller_failure_in_a_streamed_run_keeps_the_tables(tmp_path):
     failure, with the outcome "controller_error"; the directory is marked partial."""
     whole = scoutsim.simulate(None, Swing(), START, 0.1, model="I")
     with pytest.raises(ControllerError) as info:
-        scoutsim.simulate(None, ReturnsAt(0.04, (math.nan, math.nan)), START, 0.1,
-                          model="I", stream_to=tmp_path / "run")
+        scoutsim.simulate(
+            None,
+            ReturnsAt(0.04, (math.nan, math.nan)),
+            START,
+            0.1,
+            model="I",
+            stream_to=tmp_path / "run",
+        )
     back = SimulationResult.load(tmp_path / "run")
     assert back.outcome == "controller_error" and len(back.t) == 40
     _prefix_of(back, whole)
@@ -473,6 +493,7 @@ def test_a_controller_failure_in_a_streamed_run_keeps_the_tables(tmp_path):
 def test_ctrl_c_inside_a_controller_is_still_an_interruption():
     """KeyboardInterrupt raised from command() is the user's Ctrl-C, not a controller
     error: the run returns with the data so far, outcome "interrupted"."""
+
     class CtrlC(Swing):
         def command(self, t, sensors):
             if t >= 0.02 - 1e-12:

@@ -43,22 +43,21 @@ def test_a_streamed_run_writes_the_tables_of_the_run_held_in_memory(tmp_path, fm
     (tmp_path / "memory").mkdir()
     whole.save_tables(tmp_path / "memory", fmt=fmt)
     kept = simulate(**kw, stream_to=tmp_path / "streamed", keep_seconds=4.0, table_format=fmt)
-    _same_tables(tmp_path / "memory", tmp_path / "streamed",
-                 ("timeseries", "events", "steps"))
+    _same_tables(tmp_path / "memory", tmp_path / "streamed", ("timeseries", "events", "steps"))
     manifest = check_run_directory(tmp_path / "streamed")
     assert manifest["status"] == "complete" and len(manifest["files"]) == 3
     # the returned result: the last 4 s, and the whole run's outcome, end and statistics
     i0 = int(np.searchsorted(whole.t, whole.t[-1] - 4.0))
     assert kept.t[0] == whole.t[i0] == 21.0 and np.array_equal(kept.state, whole.state[i0:])
-    assert np.array_equal(kept.aux, whole.aux[i0:]) and np.array_equal(kept.modes,
-                                                                       whole.modes[i0:])
+    assert np.array_equal(kept.aux, whole.aux[i0:]) and np.array_equal(kept.modes, whole.modes[i0:])
     j0 = int(np.searchsorted(whole.events[:, 0], kept.t[0]))
     np.testing.assert_array_equal(kept.events, whole.events[j0:])
     np.testing.assert_array_equal(kept.event_states, whole.event_states[j0:])
     assert kept.steps[0, 0] >= kept.t[0] and np.array_equal(kept.steps[-1], whole.steps[-1])
     assert (kept.outcome, kept.t_end) == (whole.outcome, whole.t_end)
-    assert {k: v for k, v in kept.stats.items() if k != "wall_time_s"} == \
-        {k: v for k, v in whole.stats.items() if k != "wall_time_s"}
+    assert {k: v for k, v in kept.stats.items() if k != "wall_time_s"} == {
+        k: v for k, v in whole.stats.items() if k != "wall_time_s"
+    }
     assert kept.provenance["stream"]["n_samples"] == len(whole.t) == 25001
     back = SimulationResult.load(tmp_path / "streamed")
     assert np.array_equal(back.state, whole.state) and back.t_end == whole.t_end
@@ -68,10 +67,15 @@ def test_a_streamed_fall_ends_where_the_run_in_memory_ends(tmp_path):
     import math
 
     from scoutsim import InitialState
+
     # a start pitched 4 deg nose-up on a mu = 0.8 floor: Model I falls (as in
     # tests/validation/test_validation.py)
-    kw = dict(duration=30.0, model="I", friction_coefficient=0.8,
-              initial_state=InitialState(theta=math.radians(4.0), dtheta=0.0))
+    kw = dict(
+        duration=30.0,
+        model="I",
+        friction_coefficient=0.8,
+        initial_state=InitialState(theta=math.radians(4.0), dtheta=0.0),
+    )
     whole = simulate(**kw)
     assert whole.outcome == "fell"
     kept = simulate(**kw, stream_to=tmp_path / "s")
@@ -99,7 +103,7 @@ def test_ctrl_c_in_a_streamed_run_writes_what_was_computed_as_partial(tmp_path, 
     assert check_run_directory(tmp_path / "s")["status"] == "partial"
     back = SimulationResult.load(tmp_path / "s")
     n = len(back.t)
-    assert n == 20000                      # two 10 s pieces: samples k = 0 .. 19 999
+    assert n == 20000  # two 10 s pieces: samples k = 0 .. 19 999
     assert np.array_equal(back.state, whole.state[:n]) and back.outcome == "interrupted"
 
 
@@ -113,8 +117,7 @@ def test_memory_of_a_streamed_run_does_not_grow_with_its_duration(tmp_path):
         tracemalloc.stop()
         return out
 
-    streamed = {d: peak(d, stream_to=tmp_path / f"s{d:g}", keep_seconds=2.0)
-                for d in (40.0, 160.0)}
+    streamed = {d: peak(d, stream_to=tmp_path / f"s{d:g}", keep_seconds=2.0) for d in (40.0, 160.0)}
     in_memory = {d: peak(d) for d in (40.0, 160.0)}
     # streamed, the peak is that of one 10 s piece and its tables (about 20 MB on
     # the machine it was measured on) whatever the duration; held in memory it grows with the
@@ -124,8 +127,11 @@ def test_memory_of_a_streamed_run_does_not_grow_with_its_duration(tmp_path):
 
 
 def test_disk_space_is_checked_before_a_streamed_run_starts(tmp_path):
-    with pytest.raises(ValueError, match=r"duration = 1e\+09 s is not allowed here: .* on "
-                                         r"disk.* GB free; at most about"):
+    with pytest.raises(
+        ValueError,
+        match=r"duration = 1e\+09 s is not allowed here: .* on "
+        r"disk.* GB free; at most about",
+    ):
         check_stream_disk(1e9, tmp_path / "not yet")
     (tmp_path / "old").mkdir()
     (tmp_path / "old" / "keep.txt").write_text("an earlier run")
@@ -141,6 +147,7 @@ def test_keep_seconds_only_with_stream_to():
 
 def test_cli_stream_writes_the_tables_of_the_run_in_memory(tmp_path, capsys):
     from scoutsim.cli import main
+
     base = ["run", "--duration", "12", "--no-progress"]
     assert main([*base, "--out", str(tmp_path / "memory")]) == 0
     assert main([*base, "--stream", "--keep", "3", "--out", str(tmp_path / "streamed")]) == 0
@@ -156,9 +163,11 @@ def test_cli_stream_writes_the_tables_of_the_run_in_memory(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("streamed", [False, True])
-def test_ctrl_c_before_the_first_sample_returns_an_empty_interrupted_run(tmp_path, monkeypatch,
-                                                                         streamed):
+def test_ctrl_c_before_the_first_sample_returns_an_empty_interrupted_run(
+    tmp_path, monkeypatch, streamed
+):
     """Ctrl-C as the run starts (found by a sweep's process test: it raised TypeError)."""
+
     def advance(self, *args):
         raise KeyboardInterrupt
 
@@ -176,6 +185,7 @@ def _disk_full_at_the_second_piece(monkeypatch):
     import errno
 
     from scoutsim.io.tables import TableWriter
+
     real = TableWriter.append
     calls = {"timeseries": 0}
 
@@ -196,36 +206,51 @@ def test_a_full_disk_stops_a_streamed_run_and_keeps_what_was_written(tmp_path, m
         kept = simulate(duration=40.0, stream_to=tmp_path / "s", keep_seconds=15.0)
     # the run stopped after its second 10 s piece; the result holds it
     assert kept.outcome == "write_failed" and kept.t_end == pytest.approx(19.999)
-    i0 = int(np.searchsorted(whole.t, 19.999 - 15.0 - 1e-9))     # the last 15 s, 4.999 on
-    assert kept.t[0] == pytest.approx(4.999) and np.array_equal(kept.state,
-                                                                whole.state[i0:20000])
+    i0 = int(np.searchsorted(whole.t, 19.999 - 15.0 - 1e-9))  # the last 15 s, 4.999 on
+    assert kept.t[0] == pytest.approx(4.999) and np.array_equal(kept.state, whole.state[i0:20000])
     info = kept.provenance["stream"]
     assert info["write_error"] == "No space left on device"
     assert info["written_until_s"] == pytest.approx(9.999)
     assert sorted(info["tables_kept"]) == ["events.parquet", "timeseries.parquet"]
     manifest = check_run_directory(tmp_path / "s")
     assert manifest["status"] == "partial" and manifest["outcome"] == "write_failed"
-    back = SimulationResult.load(tmp_path / "s")       # the first piece, whole
+    back = SimulationResult.load(tmp_path / "s")  # the first piece, whole
     assert np.array_equal(back.state, whole.state[:10000]) and back.t_end == pytest.approx(9.999)
 
 
 def test_cli_full_disk_in_a_streamed_run_exits_74_and_saves_the_kept_end(
-        tmp_path, monkeypatch, capsys):
+    tmp_path, monkeypatch, capsys
+):
     import re
     import tempfile
 
     from scoutsim.cli import main
+
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     _disk_full_at_the_second_piece(monkeypatch)
     out = tmp_path / "out"
     with pytest.warns(RuntimeWarning):
-        code = main(["run", "--duration", "40", "--stream", "--keep", "5", "--no-progress",
-                     "--out", str(out)])
+        code = main(
+            [
+                "run",
+                "--duration",
+                "40",
+                "--stream",
+                "--keep",
+                "5",
+                "--no-progress",
+                "--out",
+                str(out),
+            ]
+        )
     assert code == 74
     err = capsys.readouterr().err
     assert "No space left on device; the run stopped at t = 19.999 s" in err
-    assert re.search(r"keeps (events|timeseries)\.parquet, (events|timeseries)\.parquet "
-                     r"\(samples up to t = 9\.999 s\)", err)
+    assert re.search(
+        r"keeps (events|timeseries)\.parquet, (events|timeseries)\.parquet "
+        r"\(samples up to t = 9\.999 s\)",
+        err,
+    )
     rescued = SimulationResult.load(re.search(r"saved instead to (\S+\.npz)", err).group(1))
     assert rescued.t[0] == pytest.approx(14.999) and rescued.t_end == pytest.approx(19.999)
     assert check_run_directory(out)["status"] == "partial"
@@ -249,10 +274,24 @@ def test_a_window_of_a_streamed_run_loads_without_the_rest(tmp_path, fmt):
 
 def test_plot_of_a_streamed_run_draws_its_kept_end_unless_told(tmp_path, capsys):
     from scoutsim.cli import main
+
     simulate(duration=30.0, stream_to=tmp_path / "s", keep_seconds=4.0)
     assert main(["plot", str(tmp_path / "s"), "--out", str(tmp_path / "end.png")]) == 0
     assert "streamed run: plotting its last 4 s (t = 26 - 30 s" in capsys.readouterr().out
-    assert main(["plot", str(tmp_path / "s"), "--t0", "3", "--t1", "5", "--out",
-                 str(tmp_path / "early.png")]) == 0
+    assert (
+        main(
+            [
+                "plot",
+                str(tmp_path / "s"),
+                "--t0",
+                "3",
+                "--t1",
+                "5",
+                "--out",
+                str(tmp_path / "early.png"),
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "end.png").stat().st_size > 0 and (tmp_path / "early.png").exists()
     assert main(["plot", str(tmp_path / "s"), "--t0", "40", "--t1", "50"]) == 2

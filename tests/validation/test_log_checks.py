@@ -56,14 +56,19 @@ def _bounding_log(periods, fs=1000.0, duty_back=0.6):
     k = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, len(periods) - 1)
     phase = (t - edges[k]) / np.asarray(periods)[k]
     n = t.size
-    cols = {"t": t, "laser_front_m": 0.28 + 0.01 * np.sin(2 * np.pi * phase),
-            "laser_back_m": 0.28 - 0.01 * np.sin(2 * np.pi * phase),
-            "phi_back_rad": 0.2 * np.sin(2 * np.pi * phase),
-            "phi_front_rad": -0.2 * np.sin(2 * np.pi * phase),
-            "dphi_back_rad_s": np.zeros(n), "dphi_front_rad_s": np.zeros(n),
-            "current_back_a": np.zeros(n), "current_front_a": np.zeros(n),
-            "leg_state_back": (phase < duty_back).astype(float),
-            "leg_state_front": (phase >= 0.5).astype(float)}
+    cols = {
+        "t": t,
+        "laser_front_m": 0.28 + 0.01 * np.sin(2 * np.pi * phase),
+        "laser_back_m": 0.28 - 0.01 * np.sin(2 * np.pi * phase),
+        "phi_back_rad": 0.2 * np.sin(2 * np.pi * phase),
+        "phi_front_rad": -0.2 * np.sin(2 * np.pi * phase),
+        "dphi_back_rad_s": np.zeros(n),
+        "dphi_front_rad_s": np.zeros(n),
+        "current_back_a": np.zeros(n),
+        "current_front_a": np.zeros(n),
+        "leg_state_back": (phase < duty_back).astype(float),
+        "leg_state_front": (phase >= 0.5).astype(float),
+    }
     return ExperimentLog(cols, {"source": "test"})
 
 
@@ -77,7 +82,7 @@ def test_a_single_laser_spike_is_refused_naming_file_column_row_and_median(examp
     err = _load_error(_with(example, laser_front_m=(ROW, 4.9)), p)
     msg = str(err)
     v = example.columns["laser_front_m"]
-    median = np.median(np.r_[v[ROW - 4:ROW - 1], v[ROW:ROW + 3]])
+    median = np.median(np.r_[v[ROW - 4 : ROW - 1], v[ROW : ROW + 3]])
     assert err.column == "laser_front_m" and err.row == ROW
     assert str(p) in msg and "column 'laser_front_m'" in msg, msg
     assert re.search(rf"row {ROW} \(line \d+\): value 4\.9 m is an isolated spike", msg), msg
@@ -88,18 +93,21 @@ def test_a_single_laser_spike_is_refused_naming_file_column_row_and_median(examp
     load_log(save_log(example, tmp_path / "clean.csv.gz"))
 
 
-@pytest.mark.parametrize("column, delta, refused", [
-    ("laser_front_m", 0.03, True),       # floor 2 cm
-    ("laser_front_m", -0.03, True),
-    ("laser_front_m", 0.01, False),
-    ("laser_back_m", 0.03, True),
-    ("laser_back_m", -0.01, False),
-    ("phi_back_rad", 0.15, True),        # floor 0.1 rad
-    ("phi_back_rad", 0.05, False),
-    ("phi_front_rad", -0.15, True),
-    ("leg_length_front_m", 0.03, True),  # floor 2 cm
-    ("leg_length_front_m", 0.01, False),
-])
+@pytest.mark.parametrize(
+    "column, delta, refused",
+    [
+        ("laser_front_m", 0.03, True),  # floor 2 cm
+        ("laser_front_m", -0.03, True),
+        ("laser_front_m", 0.01, False),
+        ("laser_back_m", 0.03, True),
+        ("laser_back_m", -0.01, False),
+        ("phi_back_rad", 0.15, True),  # floor 0.1 rad
+        ("phi_back_rad", 0.05, False),
+        ("phi_front_rad", -0.15, True),
+        ("leg_length_front_m", 0.03, True),  # floor 2 cm
+        ("leg_length_front_m", 0.01, False),
+    ],
+)
 def test_spike_floors_per_column(example, tmp_path, column, delta, refused):
     v = example.columns[column]
     log = _with(example, **{column: (ROW, v[ROW - 1] + delta)})
@@ -121,8 +129,12 @@ def test_pitch_and_height_columns_are_checked(tmp_path):
     cols["pitch_rad"] = 0.08 * np.sin(2 * np.pi * 4.4 * t) + rng.normal(0, 1e-3, n)
     cols["height_m"] = 0.3 + 0.005 * np.sin(2 * np.pi * 4.4 * t) + rng.normal(0, 1e-3, n)
     log = ExperimentLog(cols, {})
-    for column, delta, refused in (("pitch_rad", 0.05, True), ("pitch_rad", -0.015, False),
-                                   ("height_m", 0.015, True), ("height_m", 0.005, False)):
+    for column, delta, refused in (
+        ("pitch_rad", 0.05, True),
+        ("pitch_rad", -0.015, False),
+        ("height_m", 0.015, True),
+        ("height_m", 0.005, False),
+    ):
         bad = _with(log, **{column: (1000, cols[column][999] + delta)})
         p = save_log(bad, tmp_path / f"{column}{delta}.csv")
         if refused:
@@ -135,28 +147,29 @@ def test_pitch_and_height_columns_are_checked(tmp_path):
 def test_bursts_of_up_to_three_samples_are_spikes_longer_steps_are_not(example, tmp_path):
     v = example.columns["laser_back_m"].copy()
     burst = v.copy()
-    burst[ROW - 1:ROW + 2] = 0.5                     # rows ROW..ROW+2
+    burst[ROW - 1 : ROW + 2] = 0.5  # rows ROW..ROW+2
     err = _load_error(_with(example, laser_back_m=burst), tmp_path / "burst.csv")
     assert err.row == ROW and "(3 such sample(s) in the column)" in str(err), str(err)
     # a plateau of 20 samples (something under the beam) and a lasting 5 cm step of the
     # laser, and a 0.3 rad step of a leg angle, are real changes, not isolated samples
     plateau = v.copy()
-    plateau[ROW - 1:ROW + 19] += 0.05
+    plateau[ROW - 1 : ROW + 19] += 0.05
     step = v.copy()
-    step[ROW - 1:] += 0.05
+    step[ROW - 1 :] += 0.05
     phi = example.columns["phi_back_rad"].copy()
-    phi[ROW - 1:] += 0.3
-    for name, log in (("plateau", _with(example, laser_back_m=plateau)),
-                      ("step", _with(example, laser_back_m=step)),
-                      ("phi_step", _with(example, phi_back_rad=phi))):
+    phi[ROW - 1 :] += 0.3
+    for name, log in (
+        ("plateau", _with(example, laser_back_m=plateau)),
+        ("step", _with(example, laser_back_m=step)),
+        ("phi_step", _with(example, phi_back_rad=phi)),
+    ):
         load_log(save_log(log, tmp_path / f"{name}.csv"))
 
 
 @pytest.mark.parametrize("row", [1, 10001])
 def test_spikes_at_the_ends_of_the_record(example, tmp_path, row):
     v = example.columns["laser_front_m"]
-    err = _load_error(_with(example, laser_front_m=(row, v[row - 1] + 0.5)),
-                      tmp_path / "end.csv")
+    err = _load_error(_with(example, laser_front_m=(row, v[row - 1] + 0.5)), tmp_path / "end.csv")
     assert err.column == "laser_front_m" and err.row == row, str(err)
 
 
@@ -164,14 +177,18 @@ def test_rates_and_currents_are_not_spike_checked(example, tmp_path):
     # currents follow the controller's commands, which can switch for one control period
     # (a clean Model I simulation has a one-sample 15 A pulse), and rates jump at impacts:
     # a one-sample pulse there is plausible, so it must not refuse the log
-    log = _with(example, current_back_a=(ROW, example.columns["current_back_a"][ROW - 1] + 50.0),
-                dphi_front_rad_s=(ROW, example.columns["dphi_front_rad_s"][ROW - 1] + 30.0))
+    log = _with(
+        example,
+        current_back_a=(ROW, example.columns["current_back_a"][ROW - 1] + 50.0),
+        dphi_front_rad_s=(ROW, example.columns["dphi_front_rad_s"][ROW - 1] + 30.0),
+    )
     load_log(save_log(log, tmp_path / "pulse.csv"))
 
 
 def _worst_spike_ratio(log):
     """Largest |x - neighbours' median| / allowed deviation over the spike-checked columns."""
     from scoutsim.validation.log_spikes import SPIKE_FLOOR, isolated_spikes
+
     worst = 0.0
     for c, (floor, _) in SPIKE_FLOOR.items():
         if c in log.columns:
@@ -183,6 +200,7 @@ def _worst_spike_ratio(log):
 
 def test_example_logs_pass_with_margin(tmp_path):
     from scoutsim.validation.make_example import make_example
+
     shipped = [load_log(p) for p in example_paths()]
     made = [load_log(p) for p in make_example(tmp_path)]
     for log in shipped + made:
@@ -212,29 +230,30 @@ def _compare_error(log, **kw):
 
 def test_a_03_s_log_is_refused_as_too_short(example, tmp_path):
     p = save_log(_with(example, rows=slice(0, 301)), tmp_path / "short.csv")
-    log = load_log(p)            # a valid file ...
-    err = _compare_error(log)    # ... but it cannot hold a stride
+    log = load_log(p)  # a valid file ...
+    err = _compare_error(log)  # ... but it cannot hold a stride
     msg = str(err)
     assert err.column == "t" and str(p) in msg, msg
     assert "the log lasts 0.300 s (301 samples), too short to hold one steady stride" in msg
-    assert ("at least 2.3 s plus one stride period (it has no complete stride: 1 back-leg "
-            "lift-off(s))") in msg, msg
+    assert (
+        "at least 2.3 s plus one stride period (it has no complete stride: 1 back-leg lift-off(s))"
+    ) in msg, msg
     assert "--transient" in msg
 
 
 def test_a_log_with_strides_but_too_short_for_a_steady_one(example):
-    log = _with(example, rows=slice(0, 2401))        # 2.4 s: strides, but none steady
+    log = _with(example, rows=slice(0, 2401))  # 2.4 s: strides, but none steady
     lo = log.liftoff_times("back")
     need = 2.0 + 0.3 + float(np.min(np.diff(lo)))
     err = _compare_error(log)
     assert err.column == "t"
-    assert ("lasts 2.400 s (2401 samples)" in str(err)
-            and f"= {need:.3f} s" in str(err)), str(err)
+    assert "lasts 2.400 s (2401 samples)" in str(err) and f"= {need:.3f} s" in str(err), str(err)
 
 
 def test_a_smaller_transient_accepts_a_short_log(example):
     from scoutsim.validation.log_strides import experiment_strides
-    log = _with(example, rows=slice(4000, 5501))     # 1.5 s from the steady part
+
+    log = _with(example, rows=slice(4000, 5501))  # 1.5 s from the steady part
     assert experiment_strides(log, transient_s=0.0).n_steady_strides >= 3
     with pytest.raises(LogError, match="lasts 1.500 s"):
         experiment_strides(log, transient_s=2.0)
@@ -269,58 +288,81 @@ def test_no_steady_stride_in_any_log_is_refused():
 
 def test_a_steady_synthetic_log_passes_the_stride_checks():
     from scoutsim.validation.log_strides import experiment_strides
+
     g = experiment_strides(_bounding_log([0.25] * 30))
     assert g.n_steady_strides >= 20
 
 
-@pytest.mark.parametrize("kind, words", [
-    ("short", "too short to hold one steady stride"),
-    ("constant", "no stride detected"),
-])
+@pytest.mark.parametrize(
+    "kind, words",
+    [
+        ("short", "too short to hold one steady stride"),
+        ("constant", "no stride detected"),
+    ],
+)
 def test_cli_compare_refuses_with_a_message_and_exit_2(example, tmp_path, capsys, kind, words):
     from scoutsim.cli import main
+
     if kind == "short":
         log = _with(example, rows=slice(0, 301))
     else:
-        log = _with(example, **{k: np.full(len(example.t), float(np.median(v)))
-                                for k, v in example.columns.items() if k != "t"})
+        log = _with(
+            example,
+            **{
+                k: np.full(len(example.t), float(np.median(v)))
+                for k, v in example.columns.items()
+                if k != "t"
+            },
+        )
     p = save_log(log, tmp_path / f"{kind}.csv.gz")
-    code = main(["compare", str(p), "--models", "II", "--out", str(tmp_path / "out"),
-                 "--no-progress", "--no-plots"])
+    code = main(
+        [
+            "compare",
+            str(p),
+            "--models",
+            "II",
+            "--out",
+            str(tmp_path / "out"),
+            "--no-progress",
+            "--no-plots",
+        ]
+    )
     cap = capsys.readouterr()
     assert code == 2, cap
     assert cap.err.startswith(f"scoutsim compare: error: {p}: column '"), cap.err
     assert words in cap.err and "Traceback" not in cap.err, cap.err
-    assert cap.out == ""                               # no (empty) table
+    assert cap.out == ""  # no (empty) table
     assert not (tmp_path / "out" / "errors.csv").exists()
 
 
-def test_repair_spikes_replaces_them_by_the_neighbours_median_and_lists_them(example,
-                                                                             tmp_path):
+def test_repair_spikes_replaces_them_by_the_neighbours_median_and_lists_them(example, tmp_path):
     """load_log(repair_spikes=True): what the refusal suggests, done and reported; the
     repaired log is the clean one but for that sample (its neighbours' median)."""
-    p = save_log(_with(example, laser_front_m=(ROW, 4.9), phi_back_rad=(ROW + 2000, 1.5)),
-                 tmp_path / "spikes.csv.gz")
+    p = save_log(
+        _with(example, laser_front_m=(ROW, 4.9), phi_back_rad=(ROW + 2000, 1.5)),
+        tmp_path / "spikes.csv.gz",
+    )
     log = load_log(p, repair_spikes=True)
     clean = load_log(save_log(example, tmp_path / "clean.csv.gz"))
     v = clean.columns["laser_front_m"]
-    median = np.median(np.r_[v[ROW - 4:ROW - 1], v[ROW:ROW + 3]])
-    assert [(c, r) for c, r, _, _ in log.repairs] == [("laser_front_m", ROW),
-                                                      ("phi_back_rad", ROW + 2000)]
+    median = np.median(np.r_[v[ROW - 4 : ROW - 1], v[ROW : ROW + 3]])
+    assert [(c, r) for c, r, _, _ in log.repairs] == [
+        ("laser_front_m", ROW),
+        ("phi_back_rad", ROW + 2000),
+    ]
     assert log.repairs[0][2] == 4.9 and log.repairs[0][3] == pytest.approx(median)
     fixed = log.columns["laser_front_m"]
     assert fixed[ROW - 1] == pytest.approx(median)
     assert np.array_equal(np.delete(fixed, ROW - 1), np.delete(v, ROW - 1))
-    assert load_log(save_log(example, tmp_path / "again.csv.gz"),
-                    repair_spikes=True).repairs == ()
+    assert load_log(save_log(example, tmp_path / "again.csv.gz"), repair_spikes=True).repairs == ()
 
 
 def test_cli_repair_spikes_reports_each_on_stderr(example, tmp_path, capsys):
     from scoutsim.cli import main
+
     p = save_log(_with(example, laser_front_m=(ROW, 4.9)), tmp_path / "spike.csv.gz")
     assert main(["plot", str(p), "--out", str(tmp_path / "x.png")]) == 2
     assert "--repair-spikes" in capsys.readouterr().err
     assert main(["plot", str(p), "--repair-spikes", "--out", str(tmp_path / "x.png")]) == 0
     err = capsys.readouterr().err
-    assert f"column 'laser_front_m', row {ROW}: spike 4.9 replaced by its neighbours' median" \
-        in err
+    assert f"column 'laser_front_m', row {ROW}: spike 4.9 replaced by its neighbours' median" in err

@@ -30,15 +30,15 @@ def sim():
 @pytest.fixture(scope="module")
 def perturbed():
     robot = RobotParameters()
-    robot = robot.replace(leg_damping=1.2 * robot.leg_damping,
-                          torso_inertia=0.9 * robot.torso_inertia)
+    robot = robot.replace(
+        leg_damping=1.2 * robot.leg_damping, torso_inertia=0.9 * robot.torso_inertia
+    )
     return simulate(robot, duration=6.0, model="II", friction_coefficient=0.8)
 
 
 @pytest.fixture(scope="module")
 def fallen():
-    return simulate(initial_state=FALLING_START, duration=2.0, model="I",
-                    friction_coefficient=0.8)
+    return simulate(initial_state=FALLING_START, duration=2.0, model="I", friction_coefficient=0.8)
 
 
 def test_self_comparison_is_zero(sim):
@@ -87,14 +87,16 @@ def test_csv_and_figure(sim, perturbed, fallen, tmp_path, png_draws_each_axes_da
     c = phase_compare(sim, {"I": fallen, "II": perturbed}, n_phase=51)
     p = c.to_csv(tmp_path / "rms.csv")
     lines = p.read_text().splitlines()
-    assert lines[0] == ("model,signal,unit,rms_error,rms_error_percent_of_range,"
-                        "n_strides_model,n_strides_experiment,status")
+    assert lines[0] == (
+        "model,signal,unit,rms_error,rms_error_percent_of_range,"
+        "n_strides_model,n_strides_experiment,status"
+    )
     assert len(lines) == 1 + 2 * len(SIGNALS)
     fig = plot_phase(c, tmp_path / "phase.png")
     axes = [ax for ax in fig.get_axes() if ax.get_visible()]
     assert len(axes) == len(SIGNALS)
     assert all("[" in ax.get_ylabel() for ax in axes)
-    png_draws_each_axes_data(tmp_path / "phase.png", fig)   # (last: it draws again)
+    png_draws_each_axes_data(tmp_path / "phase.png", fig)  # (last: it draws again)
     assert "fell" in fig._suptitle.get_text()
 
 

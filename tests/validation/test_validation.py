@@ -52,15 +52,22 @@ def sim_log(sim):
 @pytest.fixture(scope="module")
 def perturbed():
     robot = RobotParameters()
-    robot = robot.replace(leg_damping=1.2 * robot.leg_damping,
-                          torso_inertia=0.9 * robot.torso_inertia)
+    robot = robot.replace(
+        leg_damping=1.2 * robot.leg_damping, torso_inertia=0.9 * robot.torso_inertia
+    )
     return simulate(robot, duration=DURATION, model="II", friction_coefficient=0.8)
 
 
 def _run(model, result, like):
     """A ModelRun of an already simulated result, measured like ``like``."""
-    g = log_strides(to_log(result, geometry=LaserGeometry(like.meta["laser_half_spacing_m"],
-                                                          like.meta["laser_mount_offset_m"])))
+    g = log_strides(
+        to_log(
+            result,
+            geometry=LaserGeometry(
+                like.meta["laser_half_spacing_m"], like.meta["laser_mount_offset_m"]
+            ),
+        )
+    )
     return ModelRun(model, result.outcome, result.t_end, g, result=result)
 
 
@@ -104,8 +111,9 @@ def test_to_log_is_what_the_robot_logs(sim, sim_log):
     assert len(lg.t) == len(sim.t)
     np.testing.assert_array_equal(lg.leg_state("back"), sim.leg_state("back"))
     # torque from current, N eta K_T i
-    np.testing.assert_allclose(lg.hip_torque("front"), sim.hip_torque_applied("front"),
-                               rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        lg.hip_torque("front"), sim.hip_torque_applied("front"), rtol=1e-9, atol=1e-9
+    )
     # measured pitch: the 15 Hz filtered true pitch (inside the record)
     inner = slice(500, -500)
     err = np.abs(lg.pitch - sim.pitch)[inner]
@@ -156,13 +164,20 @@ def test_steady_model_is_compared_with_every_experimental_stride(sim, sim_log):
     run = _run("II", sim, sim_log)
     from scoutsim.analysis.strides import Stride
     from scoutsim.validation.log_strides import LogGait
+
     exp = log_strides(sim_log).steady_strides
     for metric in ERROR_METRICS:
         x = np.array([s[metric] for s in exp])
         m = float(np.median(x))
-        one = Stride(index=0, t_start=0.0, t_end=1.0, period_s=1.0,
-                     **{k: (m if k == metric else run.gait.means[k]) for k in ERROR_METRICS},
-                     mean_speed_m_s=math.nan, steady=True)
+        one = Stride(
+            index=0,
+            t_start=0.0,
+            t_end=1.0,
+            period_s=1.0,
+            **{k: (m if k == metric else run.gait.means[k]) for k in ERROR_METRICS},
+            mean_speed_m_s=math.nan,
+            steady=True,
+        )
         steady = ModelRun("II", "completed", 10.0, LogGait(strides=[one] * 5, transient_s=0.0))
         row = assess_errors(exp, {"II": steady}).row("II", metric)
         scatter = 100 * np.abs(x - m) / np.abs(x)
@@ -172,6 +187,7 @@ def test_steady_model_is_compared_with_every_experimental_stride(sim, sim_log):
 
 def test_rank_pairing():
     from scoutsim.validation.errors import rank_paired_model_values
+
     x = np.array([3.0, 1.0, 2.0])
     # equal sizes: rank to rank, aligned with the experiment's order
     assert list(rank_paired_model_values([20.0, 30.0, 10.0], x)) == [30.0, 10.0, 20.0]
@@ -197,8 +213,7 @@ def test_perturbed_parameters_give_nonzero_errors(perturbed, sim):
 
 
 def test_fallen_model_is_reported_not_crashing(sim_log):
-    fell = simulate(initial_state=FALLING_START, duration=3.0, model="I",
-                    friction_coefficient=0.8)
+    fell = simulate(initial_state=FALLING_START, duration=3.0, model="I", friction_coefficient=0.8)
     assert fell.outcome == "fell"
     exp = log_strides(sim_log).steady_strides
     run = ModelRun("I", fell.outcome, fell.t_end, log_strides(to_log(fell)), result=fell)
@@ -236,11 +251,19 @@ def _write(tmp_path, name, text):
 
 def _small_log(n=50, **over):
     t = np.arange(n) * 1e-3
-    cols = {"t": t, "laser_front_m": np.full(n, 0.3), "laser_back_m": np.full(n, 0.3),
-            "phi_back_rad": np.zeros(n), "phi_front_rad": np.zeros(n),
-            "dphi_back_rad_s": np.zeros(n), "dphi_front_rad_s": np.zeros(n),
-            "current_back_a": np.zeros(n), "current_front_a": np.zeros(n),
-            "leg_state_back": np.zeros(n), "leg_state_front": np.ones(n)}
+    cols = {
+        "t": t,
+        "laser_front_m": np.full(n, 0.3),
+        "laser_back_m": np.full(n, 0.3),
+        "phi_back_rad": np.zeros(n),
+        "phi_front_rad": np.zeros(n),
+        "dphi_back_rad_s": np.zeros(n),
+        "dphi_front_rad_s": np.zeros(n),
+        "current_back_a": np.zeros(n),
+        "current_front_a": np.zeros(n),
+        "leg_state_back": np.zeros(n),
+        "leg_state_front": np.ones(n),
+    }
     cols.update(over)
     return ExperimentLog(cols, {"source": "test"})
 
@@ -266,6 +289,7 @@ def test_round_trip_parquet(tmp_path):
 
 def test_parquet_without_pyarrow_says_how_to_install(tmp_path, monkeypatch):
     import builtins
+
     real_import = builtins.__import__
 
     def fake_import(name, *a, **k):
@@ -280,17 +304,30 @@ def test_parquet_without_pyarrow_says_how_to_install(tmp_path, monkeypatch):
         load_log(p)
 
 
-@pytest.mark.parametrize("mutate, column, row, words", [
-    (lambda c: c.pop("phi_back_rad"), "phi_back_rad", None, "missing column"),
-    (lambda c: c.pop("laser_back_m"), "laser_back_m", None, "missing column"),
-    (lambda c: c.__setitem__("t", np.r_[np.arange(10) * 1e-3, 0.005, np.arange(11, 50) * 1e-3]),
-     "t", 11, "does not increase"),
-    (lambda c: c["laser_front_m"].__setitem__(slice(20, 25), np.nan), "laser_front_m", 21,
-     "gap of 5"),
-    (lambda c: c["phi_front_rad"].__setitem__(7, 21.0), "phi_front_rad", 8, "degrees"),
-    (lambda c: c["laser_back_m"].__setitem__(3, 300.0), "laser_back_m", 4, "millimetres"),
-    (lambda c: c["leg_state_back"].__setitem__(30, 3.0), "leg_state_back", 31, "leg state"),
-])
+@pytest.mark.parametrize(
+    "mutate, column, row, words",
+    [
+        (lambda c: c.pop("phi_back_rad"), "phi_back_rad", None, "missing column"),
+        (lambda c: c.pop("laser_back_m"), "laser_back_m", None, "missing column"),
+        (
+            lambda c: c.__setitem__(
+                "t", np.r_[np.arange(10) * 1e-3, 0.005, np.arange(11, 50) * 1e-3]
+            ),
+            "t",
+            11,
+            "does not increase",
+        ),
+        (
+            lambda c: c["laser_front_m"].__setitem__(slice(20, 25), np.nan),
+            "laser_front_m",
+            21,
+            "gap of 5",
+        ),
+        (lambda c: c["phi_front_rad"].__setitem__(7, 21.0), "phi_front_rad", 8, "degrees"),
+        (lambda c: c["laser_back_m"].__setitem__(3, 300.0), "laser_back_m", 4, "millimetres"),
+        (lambda c: c["leg_state_back"].__setitem__(30, 3.0), "leg_state_back", 31, "leg state"),
+    ],
+)
 def test_bad_logs_name_file_column_and_row(tmp_path, mutate, column, row, words):
     lg = _small_log()
     cols = {k: v.copy() for k, v in lg.columns.items()}
@@ -352,10 +389,22 @@ def test_pitch_height_columns_alternative(tmp_path):
 # -----------------------------------------------------------------------------------------
 def test_cli_compare_writes_errors_csv(sim_log, tmp_path, capsys):
     from scoutsim.cli import main
+
     p = save_log(sim_log, tmp_path / "self.csv.gz")
     out = tmp_path / "cmp"
-    code = main(["compare", str(p), "--models", "II", "--out", str(out), "--no-progress",
-                 "--friction", "0.8"])
+    code = main(
+        [
+            "compare",
+            str(p),
+            "--models",
+            "II",
+            "--out",
+            str(out),
+            "--no-progress",
+            "--friction",
+            "0.8",
+        ]
+    )
     stdout = capsys.readouterr().out
     assert code == 0
     with open(out / "errors.csv") as fh:
@@ -372,6 +421,7 @@ def test_cli_compare_writes_errors_csv(sim_log, tmp_path, capsys):
 
 def test_cli_compare_bad_log_exits_2(tmp_path, capsys):
     from scoutsim.cli import main
+
     bad = _write(tmp_path, "bad.csv", "t,x\n0,1\n")
     code = main(["compare", str(bad), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
@@ -385,8 +435,10 @@ def test_cli_compare_example(tmp_path, capsys):
     neither model has, so neither matches it exactly. The paper's claims on these errors
     are tested in tests/test_paper_claims.py."""
     from scoutsim.cli import main
-    code = main(["compare", "--example", "--models", "II,I", "--out", str(tmp_path),
-                 "--no-progress"])
+
+    code = main(
+        ["compare", "--example", "--models", "II,I", "--out", str(tmp_path), "--no-progress"]
+    )
     stdout = capsys.readouterr().out
     assert code == 0
     assert "SYNTHETIC" in stdout

@@ -84,7 +84,7 @@ def motor_current(cmd_torque, omega_m, vb, leg, P):
         return 0.0
     circuit = int(P[P_CIRCUIT])
     if circuit == CIRCUIT_OPEN:
-        return 0.0      # bench rig, motor leads open
+        return 0.0  # bench rig, motor leads open
     if circuit == CIRCUIT_SHORT:
         return -P[P_KW + leg] * omega_m / P[P_RA + leg]  # bench rig, leads shorted
     imax = P[P_IMAX + leg]
@@ -112,12 +112,12 @@ LOSS_SPEED_REG = 1.0
 @kernel(inline="always")
 def _loss_branch(tau0, d, idle, cl):
     """Delivered torque for output motion in direction d = +-1 (see delivered_torque)."""
-    if tau0 * d > 0.0:                      # motoring: forward power flow
+    if tau0 * d > 0.0:  # motoring: forward power flow
         mag = (abs(tau0) - idle) / (1.0 + cl)
         if mag < 0.0:
             mag = 0.0
         return mag if tau0 > 0.0 else -mag
-    return -d * (abs(tau0) + idle) / (1.0 - cl)   # back-driven: reverse power flow
+    return -d * (abs(tau0) + idle) / (1.0 - cl)  # back-driven: reverse power flow
 
 
 @kernel(inline="always")
@@ -143,8 +143,9 @@ def delivered_torque(cur, omega_m, leg, P):
         return _loss_branch(tau0, 1.0, idle, cl)
     if w <= -1.0:
         return _loss_branch(tau0, -1.0, idle, cl)
-    return (0.5 * (1.0 + w) * _loss_branch(tau0, 1.0, idle, cl)
-            + 0.5 * (1.0 - w) * _loss_branch(tau0, -1.0, idle, cl))
+    return 0.5 * (1.0 + w) * _loss_branch(tau0, 1.0, idle, cl) + 0.5 * (1.0 - w) * _loss_branch(
+        tau0, -1.0, idle, cl
+    )
 
 
 @kernel(inline="always")

@@ -106,8 +106,11 @@ def slide_axial_share(g, direction, P):
 def slide_is_jammed(g, direction, P):
     """True if a slide of a massed leg's toe in ``direction`` at leg angle ``g`` [rad] would
     be jammed (:func:`slide_axial_share` at or below JAM_AXIAL_SHARE) on a Coulomb floor."""
-    return (toe_can_slip(P) and not is_set(P[P_MASSLESS])
-            and slide_axial_share(g, direction, P) <= JAM_AXIAL_SHARE)
+    return (
+        toe_can_slip(P)
+        and not is_set(P[P_MASSLESS])
+        and slide_axial_share(g, direction, P) <= JAM_AXIAL_SHARE
+    )
 
 
 @kernel(inline="always")
@@ -122,15 +125,15 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
     and velocity). ``sg, cg``: sin/cos of the leg's angle from the vertical;
     ``tau_hip`` [N m]: the torque the hip applies to one physical leg (for the side-load
     friction of the leg). Returns the new row count."""
-    q = wk[WK_Q:WK_Q + NQ]
-    dq = wk[WK_DQ:WK_DQ + NQ]
-    l = wk[WK_L:WK_L + 2]
-    Q = wk[WK_Q_:WK_Q_ + NQ]
-    r = wk[WK_R:WK_R + MAX_ROWS]
-    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
-    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
-    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
-    R = wA[WA_R:WA_R + MAX_ROWS]
+    q = wk[WK_Q : WK_Q + NQ]
+    dq = wk[WK_DQ : WK_DQ + NQ]
+    l = wk[WK_L : WK_L + 2]
+    Q = wk[WK_Q_ : WK_Q_ + NQ]
+    r = wk[WK_R : WK_R + MAX_ROWS]
+    rkind = wk[WK_RKIND : WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG : WK_RLEG + MAX_ROWS]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    R = wA[WA_R : WA_R + MAX_ROWS]
     sth = wk[WK_META + MT_STH]
     cth = wk[WK_META + MT_CTH]
     massless = is_set(P[P_MASSLESS])
@@ -173,8 +176,7 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         Q[IY] += fy
         Q[ITH] += jt_th_x * fx + jt_th_y * fy
         Q[kk] += jt_ph_x * fx + jt_ph_y * fy
-        new_row(R, r, rkind, rleg, nr, -(bx * cg + by * sg + 2.0 * ld * dg), ROW_TOE_ACROSS,
-                leg)
+        new_row(R, r, rkind, rleg, nr, -(bx * cg + by * sg + 2.0 * ld * dg), ROW_TOE_ACROSS, leg)
         R[nr, IX] = cg
         R[nr, IY] = sg
         R[nr, ITH] = sL * sph + ll
@@ -182,8 +184,16 @@ def leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA):
         nr += 1
         if mode == STRUT:
             w = P[P_STRUT_OMEGA]
-            new_row(R, r, rkind, rleg, nr, -(bx * sg - by * cg) + ll * dg * dg
-                    + 2.0 * w * ld + w * w * (ll - l0), ROW_TOE_ALONG, leg)
+            new_row(
+                R,
+                r,
+                rkind,
+                rleg,
+                nr,
+                -(bx * sg - by * cg) + ll * dg * dg + 2.0 * w * ld + w * w * (ll - l0),
+                ROW_TOE_ALONG,
+                leg,
+            )
             R[nr, IX] = sg
             R[nr, IY] = -cg
             R[nr, ITH] = -sL * cph

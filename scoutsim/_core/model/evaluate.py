@@ -153,7 +153,7 @@ from .workspace import (
     WK_Y,
 )
 
-NSTIFF = 4            # rank of the stiff-Jacobian factorization of evaluate_ws
+NSTIFF = 4  # rank of the stiff-Jacobian factorization of evaluate_ws
 #: Motor-side damping rate [1/s] from which evaluate_ws puts it into the stiff factors (the
 #: two motor columns). Below it the explicit part of the ARK methods is stable and accurate
 #: at steps up to the 1 ms control period (|h lambda| <= 1, inside the explicit stability
@@ -188,12 +188,12 @@ def fill_outputs(P, mi, cmd, aux, wk):
     accelerations, the rows' kinds and legs, and the summary ``MT_*``); the ground force
     of a pinned toe is summed afresh, so a second call after a new solve
     (:func:`evaluate_command_change`) is exact."""
-    q = wk[WK_Q:WK_Q + NQ]
-    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
-    b = wk[WK_B:WK_B + MAX_KKT]
-    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
-    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
-    meta = wk[WK_META:WK_META + NMETA]
+    q = wk[WK_Q : WK_Q + NQ]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    b = wk[WK_B : WK_B + MAX_KKT]
+    rkind = wk[WK_RKIND : WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG : WK_RLEG + MAX_ROWS]
+    meta = wk[WK_META : WK_META + NMETA]
     gear = geared(P)
     nact = 7 if gear else 5
     nr = int(meta[MT_NROWS])
@@ -263,7 +263,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     model = int(P[P_MODEL])
     gear = geared(P)
     nact = 7 if gear else 5
-    meta = wk[WK_META:WK_META + NMETA]
+    meta = wk[WK_META : WK_META + NMETA]
     ok = is_set(meta[MT_KKT_OK])
     if not ok:
         aux[A_KKT_OK] = FLAG_OFF
@@ -271,14 +271,14 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     schur = is_set(meta[MT_SCHUR])
     nr = int(meta[MT_NROWS])
     n = nact + nr
-    dq = wk[WK_DQ:WK_DQ + NQ]
-    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
-    b = wk[WK_B:WK_B + MAX_KKT]
-    b2 = wk[WK_B2:WK_B2 + MAX_KKT]
-    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
-    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    dq = wk[WK_DQ : WK_DQ + NQ]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    b = wk[WK_B : WK_B + MAX_KKT]
+    b2 = wk[WK_B2 : WK_B2 + MAX_KKT]
+    rkind = wk[WK_RKIND : WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG : WK_RLEG + MAX_ROWS]
     A = wA[0:MAX_KKT]
-    M = wA[WA_M:WA_M + NQ]
+    M = wA[WA_M : WA_M + NQ]
     npl = P[P_NP]
     vb = battery_voltage(dq, cmd, P)
     for i in range(n):
@@ -294,8 +294,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
         LG[2 * LG_TAPP + leg] = tapp
     free0 = gear and mi[MI_MOTOR_B] != STUCK
     free1 = gear and mi[MI_MOTOR_B + 1] != STUCK
-    kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
-                      WK_B2, wk, WK_Y)
+    kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk, WK_B2, wk, WK_Y)
     for i in range(n):
         b[i] += b2[i]
     fill_derivative(ds, dq, b, LG, nact, gear, ok)
@@ -309,15 +308,15 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     """The rank-NSTIFF factorization of the stiff part of the Jacobian (see
     :func:`evaluate_ws`), from the evaluation just made, held in the workspace ``wk, wA,
     piv`` (the projected state, per-leg scalars, KKT factors and summary ``MT_*``)."""
-    q = wk[WK_Q:WK_Q + NQ]
-    dq = wk[WK_DQ:WK_DQ + NQ]
-    l = wk[WK_L:WK_L + 2]
-    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
-    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
-    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
-    meta = wk[WK_META:WK_META + NMETA]
+    q = wk[WK_Q : WK_Q + NQ]
+    dq = wk[WK_DQ : WK_DQ + NQ]
+    l = wk[WK_L : WK_L + 2]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    rkind = wk[WK_RKIND : WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG : WK_RLEG + MAX_ROWS]
+    meta = wk[WK_META : WK_META + NMETA]
     A = wA[0:MAX_KKT]
-    M = wA[WA_M:WA_M + NQ]
+    M = wA[WA_M : WA_M + NQ]
     gear = geared(P)
     nact = 7 if gear else 5
     nr = int(meta[MT_NROWS])
@@ -337,7 +336,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     npl = P[P_NP]
     massless = is_set(P[P_MASSLESS])
     dth = dq[ITH]
-    b2 = wk[WK_B2:WK_B2 + MAX_KKT]
+    b2 = wk[WK_B2 : WK_B2 + MAX_KKT]
     for leg in range(2):
         cb = P[P_CB + leg]
         # the spring's stiffness where it is engaged (0 inside a backlash's play)
@@ -346,8 +345,9 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             b2[i] = 0.0
         b2[IALB + leg] = 1.0
         b2[IPHB + leg] = -1.0
-        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
-                          WK_B2, wk, WK_Y)
+        kkt_reduced_solve(
+            A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk, WK_B2, wk, WK_Y
+        )
         # U: response of ddq to a unit belt torque pair, -npl G w
         for i in range(nact):
             stiff[NQ + i, leg] = -npl * b2[i]
@@ -381,8 +381,7 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
             dgb = -hvx / D2 - 2.0 * bb * dgv / D2
             e0 = -dga
             e1 = dgb
-            e2 = (dga * sL * sth + dgb * sL * cth
-                  + (bb * sL * cth + aa * sL * sth) * dth / D2)
+            e2 = dga * sL * sth + dgb * sL * cth + (bb * sL * cth + aa * sL * sth) * dth / D2
             stiff[IX, vcol] = kb * d0 - cb * e0
             stiff[IY, vcol] = kb * d1 - cb * e1
             stiff[ITH, vcol] = kb * d2 - cb * e2
@@ -411,12 +410,13 @@ def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
         N = P[P_N + leg]
         dm *= N * N
         if npl * dm < STIFF_MOTOR_RATE * M[IALB + leg, IALB + leg]:
-            continue    # not stiff: left to the explicit part (column stays zero)
+            continue  # not stiff: left to the explicit part (column stays zero)
         for i in range(n):
             b2[i] = 0.0
         b2[IALB + leg] = 1.0
-        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
-                          WK_B2, wk, WK_Y)
+        kkt_reduced_solve(
+            A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk, WK_B2, wk, WK_Y
+        )
         for i in range(nact):
             stiff[NQ + i, 2 + leg] = -npl * b2[i]
         stiff[NQ + IALB + leg, NSTIFF + 2 + leg] = dm
@@ -445,30 +445,30 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     model = int(P[P_MODEL])
     gear = geared(P)
     nact = 7 if gear else 5
-    q = wk[WK_Q:WK_Q + NQ]
-    dq = wk[WK_DQ:WK_DQ + NQ]
-    l = wk[WK_L:WK_L + 2]
+    q = wk[WK_Q : WK_Q + NQ]
+    dq = wk[WK_DQ : WK_DQ + NQ]
+    l = wk[WK_L : WK_L + 2]
     for i in range(NQ):
         q[i] = s[i]
         dq[i] = s[NQ + i]
     l[0] = s[IL_B]
     l[1] = s[IL_B + 1]
     sth, cth, sgl0, cgl0, sgl1, cgl1 = project(q, dq, l, P, mi, mf)
-    meta = wk[WK_META:WK_META + NMETA]
+    meta = wk[WK_META : WK_META + NMETA]
     meta[MT_STH] = sth
     meta[MT_CTH] = cth
 
-    Q = wk[WK_Q_:WK_Q_ + NQ]
-    h = wk[WK_H:WK_H + NQ]
-    r = wk[WK_R:WK_R + MAX_ROWS]
-    LG = wk[WK_LEG:WK_LEG + NWK_LEG]
+    Q = wk[WK_Q_ : WK_Q_ + NQ]
+    h = wk[WK_H : WK_H + NQ]
+    r = wk[WK_R : WK_R + MAX_ROWS]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
     for i in range(NQ):
         Q[i] = 0.0
     for i in range(2 * NLG):
         LG[i] = 0.0
     A = wA[0:MAX_KKT]
-    R = wA[WA_R:WA_R + MAX_ROWS]
-    M = wA[WA_M:WA_M + NQ]
+    R = wA[WA_R : WA_R + MAX_ROWS]
+    M = wA[WA_M : WA_M + NQ]
     massless = is_set(P[P_MASSLESS])
 
     # rigid bodies: mass matrix, velocity terms, gravity, potential energy
@@ -492,13 +492,16 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
             LG[2 * LG_TBELT + leg] = tb
 
     # contact forces and constraint rows, then the stuck motor joints and the rig clamps
-    rkind = wk[WK_RKIND:WK_RKIND + MAX_ROWS]
-    rleg = wk[WK_RLEG:WK_RLEG + MAX_ROWS]
+    rkind = wk[WK_RKIND : WK_RKIND + MAX_ROWS]
+    rleg = wk[WK_RLEG : WK_RLEG + MAX_ROWS]
     nr = 0
     for leg in range(2):
         # the torque the hip applies to the leg (through the belt of a geared unit)
-        tau_hip = (LG[2 * LG_TBELT + leg] if gear else
-                   (LG[2 * LG_TAPP + leg] if model != MODEL_PASSIVE else 0.0))
+        tau_hip = (
+            LG[2 * LG_TBELT + leg]
+            if gear
+            else (LG[2 * LG_TAPP + leg] if model != MODEL_PASSIVE else 0.0)
+        )
         sg = sgl0 if leg == 0 else sgl1
         cg = cgl0 if leg == 0 else cgl1
         nr = leg_contact(leg, P, mi, mf, sg, cg, tau_hip, nr, wk, wA)
@@ -511,7 +514,7 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
         ekin = kinetic_energy_at(M, dq)
 
     # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
-    b = wk[WK_B:WK_B + MAX_KKT]
+    b = wk[WK_B : WK_B + MAX_KKT]
     for i in range(nact):
         b[i] = Q[i] - h[i]
     for rr in range(nr):
@@ -527,8 +530,9 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     else:
         ok, nred = kkt_reduced_factor(A, piv, M, R, rkind, nact, nr, free0, free1)
     if ok:
-        kkt_reduced_solve(A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk,
-                          WK_B, wk, WK_Y)
+        kkt_reduced_solve(
+            A, piv, M, rkind, rleg, (nact, nr, free0, free1, schur), wk, WK_B, wk, WK_Y
+        )
     meta[MT_SCHUR] = FLAG_ON if schur else FLAG_OFF
     meta[MT_NROWS] = nr
     meta[MT_KKT_OK] = FLAG_ON if ok else FLAG_OFF

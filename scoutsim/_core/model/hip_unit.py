@@ -78,16 +78,17 @@ def _dispatch_source() -> str:
     rigid = [c for c, u in enumerate(UNITS) if not u.GEARED]
     springs = [c for c, u in enumerate(UNITS) if u.GEARED]
     test = " and ".join(f"unit != {c}" for c in rigid)
-    lines = ["def geared(P):",
-             "    unit = int(P[P_HIP_UNIT])",
-             f"    return {test}",
-             "",
-             "def belt_spring(delta, leg, P):"]
+    lines = [
+        "def geared(P):",
+        "    unit = int(P[P_HIP_UNIT])",
+        f"    return {test}",
+        "",
+        "def belt_spring(delta, leg, P):",
+    ]
     if len(springs) > 1:
         lines.append("    unit = int(P[P_HIP_UNIT])")
     for c in reversed(springs[1:]):
-        lines += [f"    if unit == {c}:",
-                  f"        return _unit_{c}.spring(delta, leg, P)"]
+        lines += [f"    if unit == {c}:", f"        return _unit_{c}.spring(delta, leg, P)"]
     lines.append(f"    return _unit_{springs[0]}.spring(delta, leg, P)")
     return "\n".join(lines) + "\n"
 

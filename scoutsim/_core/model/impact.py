@@ -64,16 +64,16 @@ def impact(s, P, mi, mf, out):
     gear = geared(P)
     nact = 7 if gear else 5
     q = s[0:NQ].copy()
-    dq = s[NQ:2 * NQ].copy()
-    l = s[IL_B:IL_B + 2].copy()
+    dq = s[NQ : 2 * NQ].copy()
+    l = s[IL_B : IL_B + 2].copy()
     # stiction does not act impulsively: treat motor joints as free while projecting
     mi2 = mi.copy()
-    mi2[MI_MOTOR_B] = SLIP_POS   # any mode but STUCK
+    mi2[MI_MOTOR_B] = SLIP_POS  # any mode but STUCK
     mi2[MI_MOTOR_B + 1] = SLIP_POS
     project(q, dq, l, P, mi2, mf)
     M = np.empty((NQ, NQ))
     mass_matrix(q, P, M)
-    dq0 = s[NQ:2 * NQ].copy()
+    dq0 = s[NQ : 2 * NQ].copy()
     if not gear:
         dq0[IALB] = dq0[IPHB]
         dq0[IALF] = dq0[IPHF]

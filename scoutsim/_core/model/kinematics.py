@@ -160,4 +160,4 @@ def project(q, dq, l, P, mi, mf):
 def project_state(s, P, mi, mf):
     """Project the dependent coordinates of a full state vector in place."""
     # views: project() writes the dependent coordinates straight into s
-    project(s[0:NQ], s[NQ:2 * NQ], s[IL_B:IL_B + 2], P, mi, mf)
+    project(s[0:NQ], s[NQ : 2 * NQ], s[IL_B : IL_B + 2], P, mi, mf)

@@ -20,7 +20,7 @@ from ..._numba.jit import allocating, kernel
 from .flags import is_set
 from .layout import IPHB, NQ, P_CLAMP_LEGS, P_CLAMP_TORSO, ROW_CLAMP_LEG, ROW_CLAMP_TORSO, ROW_GEAR
 
-MAX_ROWS = 11         # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
+MAX_ROWS = 11  # at most 2 rows per leg (strut) + 1 per motor joint, + 5 rig clamps
 MAX_KKT = NQ + MAX_ROWS
 
 
@@ -348,8 +348,14 @@ def kkt_schur_solve(A, nc, y, yo):
         # t = R z - r, then S nu = t (forward / back substitution with the Cholesky factor)
         for c in range(nc):
             row = 5 + c
-            acc = (A[row, 0] * z0 + A[row, 1] * z1 + A[row, 2] * z2 + A[row, 3] * z3
-                   + A[row, 4] * z4 - y[yo + row])
+            acc = (
+                A[row, 0] * z0
+                + A[row, 1] * z1
+                + A[row, 2] * z2
+                + A[row, 3] * z3
+                + A[row, 4] * z4
+                - y[yo + row]
+            )
             for e in range(c):
                 acc -= A[row, 10 + e] * y[yo + 5 + e]
             y[yo + row] = acc / A[row, 10 + c]

@@ -20,11 +20,19 @@ def default_friction(robot: RobotParameters) -> float:
     return Environment().friction_for(robot)
 
 
-def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: float | None = None,
-                passive_touchdown_angles=(0.0, 0.0), passive_touchdown_world: bool = True,
-                pitch_limit: float = math.radians(60.0), strut_omega: float = 200.0,
-                clamp_torso: bool = False, clamp_legs: bool = False,
-                motor_circuit: str = "amplifier") -> np.ndarray:
+def robot_array(
+    robot: RobotParameters,
+    model: str,
+    *,
+    friction_coefficient: float | None = None,
+    passive_touchdown_angles=(0.0, 0.0),
+    passive_touchdown_world: bool = True,
+    pitch_limit: float = math.radians(60.0),
+    strut_omega: float = 200.0,
+    clamp_torso: bool = False,
+    clamp_legs: bool = False,
+    motor_circuit: str = "amplifier",
+) -> np.ndarray:
     """Parameter array P for the compiled model.
 
     Parameters
@@ -50,20 +58,28 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     if friction_coefficient is None:
         friction_coefficient = default_friction(robot)
     if model not in L.MODEL_NAMES:
-        raise ValueError(f"model = {model!r} is not allowed: must be one of "
-                         f"{sorted(L.MODEL_NAMES)}")
+        raise ValueError(
+            f"model = {model!r} is not allowed: must be one of {sorted(L.MODEL_NAMES)}"
+        )
     if not (friction_coefficient >= 0.0):
-        raise ValueError(f"friction_coefficient = {friction_coefficient} is not allowed: "
-                         "must be >= 0 (inf = no slip)")
+        raise ValueError(
+            f"friction_coefficient = {friction_coefficient} is not allowed: "
+            "must be >= 0 (inf = no slip)"
+        )
     if not (0.0 < pitch_limit < math.pi / 2):
-        raise ValueError(f"pitch_limit = {math.degrees(pitch_limit)} deg is not allowed: "
-                         "must be in (0, 90) deg")
+        raise ValueError(
+            f"pitch_limit = {math.degrees(pitch_limit)} deg is not allowed: must be in (0, 90) deg"
+        )
     if motor_circuit not in L.CIRCUIT_NAMES:
-        raise ValueError(f"motor_circuit = {motor_circuit!r} is not allowed: must be one of "
-                         f"{sorted(L.CIRCUIT_NAMES)}")
+        raise ValueError(
+            f"motor_circuit = {motor_circuit!r} is not allowed: must be one of "
+            f"{sorted(L.CIRCUIT_NAMES)}"
+        )
     if clamp_legs and not clamp_torso:
-        raise ValueError("clamp_legs = True is not allowed without clamp_torso = True (the "
-                         "stall rig holds the torso and the legs)")
+        raise ValueError(
+            "clamp_legs = True is not allowed without clamp_torso = True (the "
+            "stall rig holds the torso and the legs)"
+        )
     P = np.zeros(L.NP_)
     P[L.P_MT] = robot.torso_mass
     P[L.P_IT] = robot.torso_inertia
@@ -77,29 +93,42 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_RB] = robot.battery_resistance
     for leg in (L.BACK, L.FRONT):
         one = robot.leg(leg)
-        for slot, value in ((L.P_ML, one.leg_mass), (L.P_IL, one.leg_inertia),
-                            (L.P_K, one.leg_stiffness), (L.P_C, one.leg_damping),
-                            (L.P_L0, one.leg_rest_length), (L.P_D, one.leg_com_distance),
-                            (L.P_N, one.gear_ratio), (L.P_ETA, one.efficiency),
-                            (L.P_TAU_IDLE, one.gearbox_idle_loss_torque),
-                            (L.P_C_LOAD, one.gearbox_load_loss_coefficient),
-                            (L.P_BACKLASH, one.belt_backlash),
-                            (L.P_LEG_FRIC, one.leg_friction_force),
-                            (L.P_LEG_FRIC_SIDE, one.leg_friction_side_load_coefficient),
-                            (L.P_LEG_C_ANGLE, one.leg_damping_angle_coefficient),
-                            (L.P_J1, one.drive_gear_inertia), (L.P_J2, one.driven_gear_inertia),
-                            (L.P_TAU_S, one.joint_stiction), (L.P_B_J, one.joint_damping),
-                            (L.P_KB, one.belt_stiffness), (L.P_CB, one.belt_damping),
-                            (L.P_KT, one.torque_constant), (L.P_KW, one.speed_constant),
-                            (L.P_RA, one.armature_resistance), (L.P_IMAX, one.current_limit)):
+        for slot, value in (
+            (L.P_ML, one.leg_mass),
+            (L.P_IL, one.leg_inertia),
+            (L.P_K, one.leg_stiffness),
+            (L.P_C, one.leg_damping),
+            (L.P_L0, one.leg_rest_length),
+            (L.P_D, one.leg_com_distance),
+            (L.P_N, one.gear_ratio),
+            (L.P_ETA, one.efficiency),
+            (L.P_TAU_IDLE, one.gearbox_idle_loss_torque),
+            (L.P_C_LOAD, one.gearbox_load_loss_coefficient),
+            (L.P_BACKLASH, one.belt_backlash),
+            (L.P_LEG_FRIC, one.leg_friction_force),
+            (L.P_LEG_FRIC_SIDE, one.leg_friction_side_load_coefficient),
+            (L.P_LEG_C_ANGLE, one.leg_damping_angle_coefficient),
+            (L.P_J1, one.drive_gear_inertia),
+            (L.P_J2, one.driven_gear_inertia),
+            (L.P_TAU_S, one.joint_stiction),
+            (L.P_B_J, one.joint_damping),
+            (L.P_KB, one.belt_stiffness),
+            (L.P_CB, one.belt_damping),
+            (L.P_KT, one.torque_constant),
+            (L.P_KW, one.speed_constant),
+            (L.P_RA, one.armature_resistance),
+            (L.P_IMAX, one.current_limit),
+        ):
             P[slot + leg] = value
     P[L.P_MODEL] = L.MODEL_NAMES[model]
     P[L.P_HIP_UNIT] = hip_unit_code(model, robot)
     no_slip = not math.isfinite(friction_coefficient)
     P[L.P_NO_SLIP] = FLAG_ON if no_slip else FLAG_OFF
-    P[L.P_MU] = 0.0 if no_slip else friction_coefficient   # read only where toes can slip
-    massless = all(m == 0.0 and i == 0.0 for m, i in zip(robot.per_leg("leg_mass"),
-                                                          robot.per_leg("leg_inertia")))
+    P[L.P_MU] = 0.0 if no_slip else friction_coefficient  # read only where toes can slip
+    massless = all(
+        m == 0.0 and i == 0.0
+        for m, i in zip(robot.per_leg("leg_mass"), robot.per_leg("leg_inertia"))
+    )
     P[L.P_MASSLESS] = FLAG_ON if massless else FLAG_OFF
     P[L.P_TD_WORLD] = FLAG_ON if passive_touchdown_world else FLAG_OFF
     P[L.P_TD_B] = passive_touchdown_angles[0]
@@ -111,15 +140,21 @@ def robot_array(robot: RobotParameters, model: str, *, friction_coefficient: flo
     P[L.P_CIRCUIT] = float(L.CIRCUIT_NAMES[motor_circuit])
     for leg in (L.BACK, L.FRONT):
         one = robot.leg(leg)
-        if model == "II" and not (one.driven_gear_inertia + one.gear_ratio ** 2
-                                  * one.drive_gear_inertia > 0.0):
-            raise ValueError(f"robot.driven_gear_inertia / drive_gear_inertia = 0 ({L.LEG_NAMES[leg]} "
-                             "leg) is not allowed in Model II: the reflected gear inertia "
-                             "J_2 + N^2 J_1 must be > 0")
+        if model == "II" and not (
+            one.driven_gear_inertia + one.gear_ratio**2 * one.drive_gear_inertia > 0.0
+        ):
+            raise ValueError(
+                f"robot.driven_gear_inertia / drive_gear_inertia = 0 ({L.LEG_NAMES[leg]} "
+                "leg) is not allowed in Model II: the reflected gear inertia "
+                "J_2 + N^2 J_1 must be > 0"
+            )
     if massless and model != "passive":
-        raise ValueError("massless legs (leg_mass = leg_inertia = 0) carry no hip torque: "
-                         "use model='passive'")
+        raise ValueError(
+            "massless legs (leg_mass = leg_inertia = 0) carry no hip torque: use model='passive'"
+        )
     if massless and math.isfinite(friction_coefficient):
-        raise ValueError("friction_coefficient: Coulomb slip is not defined for massless "
-                         "legs (a massless leg carries only axial force); use inf")
+        raise ValueError(
+            "friction_coefficient: Coulomb slip is not defined for massless "
+            "legs (a massless leg carries only axial force); use inf"
+        )
     return P

@@ -94,7 +94,7 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
     npl = P[P_NP]
     for i in range(out.shape[0]):
         out[i] = 0.0
-    dq = wk[WK_DQ:WK_DQ + NQ]
+    dq = wk[WK_DQ : WK_DQ + NQ]
     p_el_total = 0.0
     for leg in range(2):
         o = leg * NAUX_LEG
@@ -109,8 +109,9 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
             p_el = npl * cur * (P[P_RA + leg] * cur + P[P_KW + leg] * om)
             out[e + EN_ELECTRICAL] = p_el
             out[e + EN_COPPER] = npl * P[P_RA + leg] * cur * cur
-            out[e + EN_CONVERSION] = npl * (P[P_KW + leg] - P[P_ETA + leg] * P[P_KT + leg]) \
-                * cur * om
+            out[e + EN_CONVERSION] = (
+                npl * (P[P_KW + leg] - P[P_ETA + leg] * P[P_KT + leg]) * cur * om
+            )
             out[e + EN_GEAR_LOSS] = npl * (tau0 - tout) * om / N
             out[e + EN_HIP_WORK] = npl * tout * om / N
             p_el_total += p_el

@@ -203,4 +203,6 @@ def kinetic_energy(q, dq, P):
 def state_energy(s, P):
     """Total mechanical energy of a full state vector s [J]: kinetic plus potential (gravity,
     leg springs, Model II belts); the same quantity as the ``energy`` output."""
-    return kinetic_energy(s[0:NQ], s[NQ:2 * NQ], P) + potential_energy(s[0:NQ], s[IL_B:IL_B + 2], P)
+    return kinetic_energy(s[0:NQ], s[NQ : 2 * NQ], P) + potential_energy(
+        s[0:NQ], s[IL_B : IL_B + 2], P
+    )

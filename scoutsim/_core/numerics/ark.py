@@ -47,36 +47,78 @@ U1 = 2 * NQ
 VELOCITY_ATOL_FACTOR = 10.0
 
 NSTAGE = 6
-Z_ROWS = NSTAGE + 2 * NSTIFF + 3 + 4   # rows of the scratch array Z (2 NSTIFF columns)
+Z_ROWS = NSTAGE + 2 * NSTIFF + 3 + 4  # rows of the scratch array Z (2 NSTIFF columns)
 Z_COLS = 2 * NSTIFF
 GAMMA = 0.25
 C = np.array([0.0, 1.0 / 2.0, 83.0 / 250.0, 31.0 / 50.0, 17.0 / 20.0, 1.0])
-AE = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [1.0 / 2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [13861.0 / 62500.0, 6889.0 / 62500.0, 0.0, 0.0, 0.0, 0.0],
-    [-116923316275.0 / 2393684061468.0, -2731218467317.0 / 15368042101831.0,
-     9408046702089.0 / 11113171139209.0, 0.0, 0.0, 0.0],
-    [-451086348788.0 / 2902428689909.0, -2682348792572.0 / 7519795681897.0,
-     12662868775082.0 / 11960479115383.0, 3355817975965.0 / 11060851509271.0, 0.0, 0.0],
-    [647845179188.0 / 3216320057751.0, 73281519250.0 / 8382639484533.0,
-     552539513391.0 / 3454668386233.0, 3354512671639.0 / 8306763924573.0,
-     4040.0 / 17871.0, 0.0],
-])
-AI = np.array([
-    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [1.0 / 4.0, 1.0 / 4.0, 0.0, 0.0, 0.0, 0.0],
-    [8611.0 / 62500.0, -1743.0 / 31250.0, 1.0 / 4.0, 0.0, 0.0, 0.0],
-    [5012029.0 / 34652500.0, -654441.0 / 2922500.0, 174375.0 / 388108.0, 1.0 / 4.0, 0.0, 0.0],
-    [15267082809.0 / 155376265600.0, -71443401.0 / 120774400.0,
-     730878875.0 / 902184768.0, 2285395.0 / 8070912.0, 1.0 / 4.0, 0.0],
-    [82889.0 / 524892.0, 0.0, 15625.0 / 83664.0, 69875.0 / 102672.0, -2260.0 / 8211.0,
-     1.0 / 4.0],
-])
-B = np.array([82889.0 / 524892.0, 0.0, 15625.0 / 83664.0, 69875.0 / 102672.0,
-              -2260.0 / 8211.0, 1.0 / 4.0])
-BHAT = np.array([4586570599.0 / 29645900160.0, 0.0, 178811875.0 / 945068544.0,
-                 814220225.0 / 1159782912.0, -3700637.0 / 11593932.0, 61727.0 / 225920.0])
+AE = np.array(
+    [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0 / 2.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [13861.0 / 62500.0, 6889.0 / 62500.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            -116923316275.0 / 2393684061468.0,
+            -2731218467317.0 / 15368042101831.0,
+            9408046702089.0 / 11113171139209.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            -451086348788.0 / 2902428689909.0,
+            -2682348792572.0 / 7519795681897.0,
+            12662868775082.0 / 11960479115383.0,
+            3355817975965.0 / 11060851509271.0,
+            0.0,
+            0.0,
+        ],
+        [
+            647845179188.0 / 3216320057751.0,
+            73281519250.0 / 8382639484533.0,
+            552539513391.0 / 3454668386233.0,
+            3354512671639.0 / 8306763924573.0,
+            4040.0 / 17871.0,
+            0.0,
+        ],
+    ]
+)
+AI = np.array(
+    [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0 / 4.0, 1.0 / 4.0, 0.0, 0.0, 0.0, 0.0],
+        [8611.0 / 62500.0, -1743.0 / 31250.0, 1.0 / 4.0, 0.0, 0.0, 0.0],
+        [5012029.0 / 34652500.0, -654441.0 / 2922500.0, 174375.0 / 388108.0, 1.0 / 4.0, 0.0, 0.0],
+        [
+            15267082809.0 / 155376265600.0,
+            -71443401.0 / 120774400.0,
+            730878875.0 / 902184768.0,
+            2285395.0 / 8070912.0,
+            1.0 / 4.0,
+            0.0,
+        ],
+        [
+            82889.0 / 524892.0,
+            0.0,
+            15625.0 / 83664.0,
+            69875.0 / 102672.0,
+            -2260.0 / 8211.0,
+            1.0 / 4.0,
+        ],
+    ]
+)
+B = np.array(
+    [82889.0 / 524892.0, 0.0, 15625.0 / 83664.0, 69875.0 / 102672.0, -2260.0 / 8211.0, 1.0 / 4.0]
+)
+BHAT = np.array(
+    [
+        4586570599.0 / 29645900160.0,
+        0.0,
+        178811875.0 / 945068544.0,
+        814220225.0 / 1159782912.0,
+        -3700637.0 / 11593932.0,
+        61727.0 / 225920.0,
+    ]
+)
 # error weights b - bhat
 EW = B - BHAT
 # coefficients of U z_j in stage i: (AI - AE)[i, j]
@@ -117,15 +159,13 @@ AD3 = AI3 - AE3
 @kernel
 def step(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK4(3)6L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE, AD, B, EW, GAMMA),
-                    NSTAGE)
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE, AD, B, EW, GAMMA), NSTAGE)
 
 
 @kernel
 def step3(y, h, P, mi, mf, cmd, w, eval_end, want_sf):
     """ARK3(2)4L[2]SA step (see :func:`step_tab`)."""
-    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE3, AD3, B3, EW3, GAMMA3),
-                    4)
+    return step_tab(y, h, P, mi, mf, cmd, w, eval_end, want_sf, (AE3, AD3, B3, EW3, GAMMA3), 4)
 
 
 @kernel(inline="always")
@@ -147,11 +187,10 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
     # damping is stiff (model.evaluate.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
-    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0
-                   or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
+    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0 or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
     hg = h * GAMMA
-    VU = Z[NSTAGE:NSTAGE + R]            # V^T U
-    Si = Z[NSTAGE + R:NSTAGE + 2 * R]    # (I - h gamma V^T U)^-1
+    VU = Z[NSTAGE : NSTAGE + R]  # V^T U
+    Si = Z[NSTAGE + R : NSTAGE + 2 * R]  # (I - h gamma V^T U)^-1
     for a in range(R):
         for b in range(R):
             acc = 0.0
@@ -162,7 +201,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
         for i in range(NS):
             acc += SF0[i, NSTIFF + a] * y[i]
         Z[0, a] = acc
-    if not invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3:NSTAGE + 2 * R + 7]):
+    if not invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3 : NSTAGE + 2 * R + 7]):
         return np.inf, False, nfev
     w = Z[NSTAGE + 2 * R]
     m = Z[NSTAGE + 2 * R + 1]
@@ -196,8 +235,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
             for b in range(R):
                 acc += VU[a, b] * pp[b]
             Z[st, a] = acc
-        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False,
-                           ew[3], False):
+        if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False, ew[3], False):
             ok = False
         nfev += 1
     # error estimate, filtered through W^-1 (Hairer & Wanner IV.8: the raw difference
@@ -224,8 +262,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
         err += (e / sc) ** 2
     err = np.sqrt(err / NS)
     if ok and (eval_end or err <= 1.0):
-        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew, want_sf,
-                           SF1, True):
+        if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew, want_sf, SF1, True):
             ok = False
         nfev += 1
     return err, ok, nfev

@@ -33,8 +33,7 @@ def dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw):
     ``work``: :class:`~scoutsim._core.numerics.work.StepWork`, ``evw``: its ``EventWork``)."""
     ybuf, aux_tmp, ew = evw.ybuf, evw.aux_tmp, work.ew
     method_dense(method, s, work.y_new, h, work.K, th, ybuf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, work.tmp, aux_tmp, ew, False, ew[3],
-                True)
+    evaluate_ws(ybuf, P, mi, mf, cmd, work.tmp, aux_tmp, ew, False, ew[3], True)
     project_state(ybuf, P, mi, mf)
     event_values(ybuf, aux_tmp, P, mi, evw.e_tmp)
 
@@ -71,8 +70,7 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     (he, event slot, evaluations); y_new holds the step to he. ``work``: the step's
     :class:`~scoutsim._core.numerics.work.StepWork`; ``evw``: its ``EventWork`` (the armed events,
     their values ``e_old`` at the step's start, the probe buffers)."""
-    armed, e_start, ybuf, aux_tmp, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.aux_tmp, \
-        evw.e_tmp
+    armed, e_start, ybuf, aux_tmp, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.aux_tmp, evw.e_tmp
     y_new, tmp, ew = work.y_new, work.tmp, work.ew
     nf = 0
     a = 0.0
@@ -88,8 +86,7 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     side = 0
     k = kmin
     for _ in range(60):
-        fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp,
-                                      armed)
+        fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed)
         nf += 1
         if kk >= 0:
             k = kk

@@ -159,19 +159,21 @@ def event_values(s, aux, P, mi, out):
             if not massless:
                 out[contact_event(leg, EVC_STOP_OR_REST)] = (l0 - s[IL_B + leg]) / l0
             if coulomb:
-                out[contact_event(leg, EVC_CONE)] = (P[P_MU] * aux[o + A_GN]
-                                                     - abs(aux[o + A_GT])) / W
+                out[contact_event(leg, EVC_CONE)] = (
+                    P[P_MU] * aux[o + A_GN] - abs(aux[o + A_GT])
+                ) / W
         elif mode == SLIDE:
             out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             if coulomb:
-                out[contact_event(leg, EVC_STOP_OR_REST)] = (aux[o + A_SLIP_V]
-                                                             * mi[MI_SLIDE_DIR_B + leg])
+                out[contact_event(leg, EVC_STOP_OR_REST)] = (
+                    aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg]
+                )
                 # the slide's ground force turning perpendicular to the leg: a jam
                 if not massless:
                     out[contact_event(leg, EVC_CONE)] = (
-                        slide_axial_share(s[ITH] + s[IPHB + leg],
-                                          mi[MI_SLIDE_DIR_B + leg], P)
-                        - JAM_AXIAL_SHARE)
+                        slide_axial_share(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P)
+                        - JAM_AXIAL_SHARE
+                    )
         elif mode == STRUT:
             out[contact_event(leg, EVC_GROUND)] = aux[o + A_GN] / W
             out[contact_event(leg, EVC_STOP_OR_REST)] = aux[o + A_STRUT] / W
@@ -201,7 +203,7 @@ def log_event(ev, nev, t, kind, leg, v1, v2, v3):
         ev[nev, EVR_E_AFTER] = np.nan
         ev[nev, EVR_VIOLATIONS] = 0.0
         if ev.shape[1] >= NEVBUF:
-            for i in range(2 * NS):   # unknown until the transition is stamped
+            for i in range(2 * NS):  # unknown until the transition is stamped
                 ev[nev, EVR_STATE_BEFORE + i] = np.nan
     return nev + 1
 
@@ -247,8 +249,9 @@ def jammed_slide_moving(s, P, mi, aux, leg):
     if mi[MI_CONTACT_B + leg] != SLIDE:
         return False
     d = mi[MI_SLIDE_DIR_B + leg]
-    return (aux[leg * NAUX_LEG + A_SLIP_V] * d > SLIDE_SPEED_TOL
-            and slide_is_jammed(s[ITH] + s[IPHB + leg], d, P))
+    return aux[leg * NAUX_LEG + A_SLIP_V] * d > SLIDE_SPEED_TOL and slide_is_jammed(
+        s[ITH] + s[IPHB + leg], d, P
+    )
 
 
 @kernel
@@ -272,8 +275,11 @@ def mode_violations(s, ds, aux, P, mi):
         if mode == STICK or mode == STRUT:
             if gn < -ftol:
                 bits |= V_GROUND_PULLS
-            if mode == STICK and coulomb and (abs(aux[o + A_GT]) >
-                                              P[P_MU] * gn * (1.0 + 1e-6) + ftol):
+            if (
+                mode == STICK
+                and coulomb
+                and (abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-6) + ftol)
+            ):
                 bits |= V_OUTSIDE_CONE
             if mode == STRUT and aux[o + A_STRUT] < -ftol:
                 bits |= V_STRUT_COMPRESSED
@@ -284,9 +290,11 @@ def mode_violations(s, ds, aux, P, mi):
         elif mode == SLIDE:
             if coulomb and aux[o + A_SLIP_V] * mi[MI_SLIDE_DIR_B + leg] < -SLIDE_SPEED_TOL:
                 bits |= V_SLIDE_DIRECTION
-            if ((aux[o + A_FAX] < -ftol or gn < -ftol)
-                    and not slide_toe_pressed(s, ds, aux, P, leg)
-                    and not jammed_slide_moving(s, P, mi, aux, leg)):
+            if (
+                (aux[o + A_FAX] < -ftol or gn < -ftol)
+                and not slide_toe_pressed(s, ds, aux, P, leg)
+                and not jammed_slide_moving(s, P, mi, aux, leg)
+            ):
                 # (a moving toe whose slide is jammed jams at this instant: its slide's
                 # forces mean nothing)
                 bits |= V_SLIDE_NOT_PUSHING
@@ -320,11 +328,10 @@ def stamp_transition(ev, nev0, nev, e_before, e_after, bits, s_before, s_after):
     stamp_states(ev, nev0, nev, s_before, s_after)
 
 
-
 #: toe_enters_ground results
-TOE_STAYS = 0          # the toe does not move into the ground
-TOE_PRESSED = 1        # at rest vertically at ground level, accelerating into the ground
-TOE_ENTERS = 2         # moving into the ground faster than TOE_REST_SPEED
+TOE_STAYS = 0  # the toe does not move into the ground
+TOE_PRESSED = 1  # at rest vertically at ground level, accelerating into the ground
+TOE_ENTERS = 2  # moving into the ground faster than TOE_REST_SPEED
 
 
 @kernel
@@ -349,8 +356,13 @@ def toe_vertical_motion(s, ds, P, leg, ld):
         ldd = -P[P_K + leg] * ld / c
     # toe height y + sL sin(th) - l cos(g)
     vy = s[NQ + IY] + sL * math.cos(th) * dth - ld * cg + ll * sg * dg
-    ay = (ds[NQ + IY] + sL * (math.cos(th) * ddth - math.sin(th) * dth * dth)
-          - ldd * cg + 2.0 * ld * sg * dg + ll * (cg * dg * dg + sg * ddg))
+    ay = (
+        ds[NQ + IY]
+        + sL * (math.cos(th) * ddth - math.sin(th) * dth * dth)
+        - ldd * cg
+        + 2.0 * ld * sg * dg
+        + ll * (cg * dg * dg + sg * ddg)
+    )
     return vy, ay
 
 
@@ -401,6 +413,5 @@ def slide_toe_pressed(s, ds, aux, P, leg):
     if c > 0.0:
         ld += fax / c
     elif fax < 0.0:
-        return False   # an undamped leg pulling: beyond its stop
+        return False  # an undamped leg pulling: beyond its stop
     return toe_enters_ground(s, ds, P, leg, ld) == TOE_PRESSED
-

@@ -73,9 +73,9 @@ from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
 from .transitions import apply_event, record_friction, settle_ws
 
 # slots of run()'s hwork array, carried between calls
-HW_STEP = 0           # step-size guess [s]
-HW_STIFF_VALID = 1    # 1: the ARK stiff factors sfwork are valid
-HW_EVAL_KEPT = 2      # 1: the evaluation workspace holds the last evaluation of the state
+HW_STEP = 0  # step-size guess [s]
+HW_STIFF_VALID = 1  # 1: the ARK stiff factors sfwork are valid
+HW_EVAL_KEPT = 2  # 1: the evaluation workspace holds the last evaluation of the state
 NHW = 3
 
 #: a pending event counts as reached at another event's instant when its (normalised)
@@ -85,8 +85,8 @@ SIMULTANEOUS_EVENT_TOL = 1e-12
 #: a transition is armed: the stick rule of settle() accepts |F_t| <= mu F_n (1 + 1e-9) +
 #: 1e-9 W, i.e. values down to about -2e-9
 CONE_ARM_TOL = 1e-8
-MAX_EVENTS_PER_PERIOD = 2000     # chattering guard: more events in one control period
-MAX_STEPS_PER_PERIOD = 200000    # stall guard: more steps in one control period
+MAX_EVENTS_PER_PERIOD = 2000  # chattering guard: more events in one control period
+MAX_STEPS_PER_PERIOD = 200000  # stall guard: more steps in one control period
 #: free rows a step-record buffer must have at the start of a control period: the most
 #: steps one period can record (accepted steps and steps cut at events, within the guards)
 STEP_HEADROOM = MAX_STEPS_PER_PERIOD + MAX_EVENTS_PER_PERIOD + 2
@@ -116,9 +116,10 @@ def arm_jams(mi, e_now, armed):
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; ``ew_e``
 #: an evaluation workspace of its own and ``y_e, ds_e, aux_e, p_e`` its scratch:
 #: :func:`~scoutsim._core.numerics.step_energy.accumulate_energy`)
-AdvanceScratch = namedtuple("AdvanceScratch",
-                            "e_end pending mi_before s_before steps stepc energy ew_e y_e "
-                            "ds_e aux_e p_e imp")
+AdvanceScratch = namedtuple(
+    "AdvanceScratch",
+    "e_end pending mi_before s_before steps stepc energy ew_e y_e ds_e aux_e p_e imp",
+)
 
 
 @kernel
@@ -135,8 +136,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
     outputs (and SF0 usable stiff factors). Returns (t, nev, status)."""
     s, P, mi, mf, cmd = plant
     ev, stats = log
-    K, y_new, aux_new, ew, SF0, SF1 = work.K, work.y_new, work.aux_new, work.ew, work.SF0, \
-        work.SF1
+    K, y_new, aux_new, ew, SF0, SF1 = work.K, work.y_new, work.aux_new, work.ew, work.SF0, work.SF1
     armed, e_old, e_new = evw.armed, evw.e_old, evw.e_new
     imp = sc.imp
     K0 = K[0]
@@ -184,7 +184,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             continue
         if err > 1.0:
             stats[S_NREJECT] += 1
-            fac = 0.9 * err ** expo
+            fac = 0.9 * err**expo
             if fac < 0.2:
                 fac = 0.2
             h *= fac
@@ -201,9 +201,15 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         for i in range(NEV):
             e_end[i] = e_new[i]
         for k in range(NEV):
-            hop = (not armed[k] and e_end[k] < 0.0 and is_contact_event(k)
-                   and event_slot(k) == EVC_GROUND and mi[MI_CONTACT_B + event_leg(k)] == FLIGHT
-                   and e_old[k] > -SIMULTANEOUS_EVENT_TOL and not is_set(P[P_MASSLESS]))
+            hop = (
+                not armed[k]
+                and e_end[k] < 0.0
+                and is_contact_event(k)
+                and event_slot(k) == EVC_GROUND
+                and mi[MI_CONTACT_B + event_leg(k)] == FLIGHT
+                and e_old[k] > -SIMULTANEOUS_EVENT_TOL
+                and not is_set(P[P_MASSLESS])
+            )
             if (armed[k] or hop) and e_end[k] < 0.0:
                 # Illinois on the continuous extension, bracket [0, 1]
                 a = 0.0
@@ -262,15 +268,16 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 # a transition applied there is applied to the wrong state (a joint "at
                 # rest" that still turns). Check the event function on the redone step and,
                 # if it is not at its zero, locate the zero on the steps themselves.
-                he, kmin, nf = refine_event(kmin, s, h, thmin, e_end, method, P, mi, mf, cmd,
-                                            work, evw)
+                he, kmin, nf = refine_event(
+                    kmin, s, h, thmin, e_end, method, P, mi, mf, cmd, work, evw
+                )
                 stats[S_NFEV] += nf
                 if sc.energy.shape[0] > 0:
                     accumulate_energy(method, s, y_new, he, K, P, mi, mf, cmd, sc)
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
-                if sc.stepc[1] != 0:   # (tested here: no call when steps are not recorded)
+                if sc.stepc[1] != 0:  # (tested here: no call when steps are not recorded)
                     record_step(sc.steps, sc.stepc, t, s, mi)
             stats[S_NSTEP] += 1
             project_state(s, P, mi, mf)
@@ -329,8 +336,16 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                             break
                 if kcur < 0:
                     break
-            stamp_transition(ev, nev0, nev, e_before, aux[A_ENERGY],
-                             mode_violations(s, K0, aux, P, mi), s_before, s)
+            stamp_transition(
+                ev,
+                nev0,
+                nev,
+                e_before,
+                aux[A_ENERGY],
+                mode_violations(s, K0, aux, P, mi),
+                s_before,
+                s,
+            )
             for i in range(NEV):
                 armed[i] = e_old[i] > 0.0
             for leg in range(2):
@@ -382,7 +397,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             t = t + h
         if sc.stepc[1] != 0:
             record_step(sc.steps, sc.stepc, t, s, mi)
-        fac = 5.0 if err == 0.0 else 0.9 * err ** expo
+        fac = 5.0 if err == 0.0 else 0.9 * err**expo
         if fac > 5.0:
             fac = 5.0
         if fac < 0.2:

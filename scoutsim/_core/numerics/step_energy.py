@@ -14,7 +14,7 @@ from ..model.power_flows import power_flows
 from .stepper import method_dense
 
 #: Gauss-Legendre nodes and weights on [0, 1] (3 points, exact for polynomials of degree 5)
-GAUSS_NODES = (0.5 - 0.15 ** 0.5, 0.5, 0.5 + 0.15 ** 0.5)
+GAUSS_NODES = (0.5 - 0.15**0.5, 0.5, 0.5 + 0.15**0.5)
 GAUSS_WEIGHTS = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
 
 
@@ -30,8 +30,7 @@ def accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc):
     for g in range(3):
         method_dense(method, s, y_new, h, K, GAUSS_NODES[g], y)
         project_state(y, P, mi, mf)
-        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew, False, ew[3],
-                    True)
+        evaluate_ws(y, P, mi, mf, cmd, sc.ds_e, sc.aux_e, ew, False, ew[3], True)
         power_flows(y, sc.ds_e, sc.aux_e, P, mi, ew[0], ew[1], p)
         w = GAUSS_WEIGHTS[g] * h
         for i in range(p.shape[0]):

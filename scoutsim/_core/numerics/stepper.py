@@ -21,10 +21,10 @@ from .dopri5 import dense, step
 # integration methods (``run(..., method)``)
 # (the user-level choice, e.g. ARK3 for Model II at the default tolerance, is made by
 # ``simulation.IntegratorSettings.resolve``; run() itself maps AUTO to DOPRI5)
-METHOD_AUTO = -1      # DOPRI5
-METHOD_DOPRI5 = 0     # explicit Dormand-Prince 5(4): the reference
-METHOD_ARK4 = 1       # additive RK 4(3), belt spring-dampers implicit (ark.py; Model II)
-METHOD_ARK3 = 2       # additive RK 3(2) (ark.py, ARK3(2)4L[2]SA), same splitting
+METHOD_AUTO = -1  # DOPRI5
+METHOD_DOPRI5 = 0  # explicit Dormand-Prince 5(4): the reference
+METHOD_ARK4 = 1  # additive RK 4(3), belt spring-dampers implicit (ark.py; Model II)
+METHOD_ARK3 = 2  # additive RK 3(2) (ark.py, ARK3(2)4L[2]SA), same splitting
 
 
 # --- the method, chosen when the integrator is compiled ---------------------------------
@@ -45,19 +45,25 @@ def method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
 def _method_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
     m = getattr(method, "literal_value", None)
     if m == METHOD_ARK4:
+
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             return ark.step(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
+
         return inline_only(impl)
     if m == METHOD_ARK3:
+
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             return ark.step3(s, h, P, mi, mf, cmd, work, eval_end, want_sf)
+
         return inline_only(impl)
     if m == METHOD_DOPRI5:
+
         def impl(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf):
             err, ok = step(s, h, P, mi, mf, cmd, work)
             return err, ok, 6
+
         return inline_only(impl)
-    return None   # not a method constant: no implementation (a typing error names it)
+    return None  # not a method constant: no implementation (a typing error names it)
 
 
 def method_dense(method, s, y_new, h, K, th, out):
@@ -70,12 +76,16 @@ def method_dense(method, s, y_new, h, K, th, out):
 def _method_dense(method, s, y_new, h, K, th, out):
     m = getattr(method, "literal_value", None)
     if m == METHOD_ARK4 or m == METHOD_ARK3:
+
         def impl(method, s, y_new, h, K, th, out):
             ark.dense(s, y_new, h, K, th, out)
+
         return inline_only(impl)
     if m == METHOD_DOPRI5:
+
         def impl(method, s, y_new, h, K, th, out):
             dense(s, h, K, th, out)
+
         return inline_only(impl)
     return None
 
@@ -92,5 +102,4 @@ def do_step(method, s, h, P, mi, mf, cmd, work, eval_end, want_sf=True):
 @kernel(inline="always")
 def eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0):
     """f(s) into K0 (and, for the ARK method, the stiff factors into SF0)."""
-    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew,
-                       method >= METHOD_ARK4, SF0, True)
+    return evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, method >= METHOD_ARK4, SF0, True)

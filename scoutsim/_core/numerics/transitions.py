@@ -103,7 +103,6 @@ def stance_leg_rate(s, P, leg):
     return -(hvx * math.sin(g) - hvy * math.cos(g))
 
 
-
 @kernel
 def start_stub_slide(t, s, P, mi, mf, aux, ev, nev, leg):
     """A toe pressed into the ground at the leg's stop slides (toe_enters_ground):
@@ -122,8 +121,9 @@ def start_stub_slide(t, s, P, mi, mf, aux, ev, nev, leg):
         mi[MI_SLIDE_DIR_B + leg] = -1 if aux[o + A_GT] > 0.0 else 1
         if slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P):
             return stick_toe(t, mi, mf, aux, ev, nev, leg)
-    return log_event(ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX],
-                     SLIDE_CAUSE_STUB)
+    return log_event(
+        ev, nev, t, EK_SLIDE_START, leg, aux[o + A_GN], aux[o + A_FAX], SLIDE_CAUSE_STUB
+    )
 
 
 @kernel
@@ -161,9 +161,11 @@ def release_pin(t, s, P, mi, aux, ev, nev, stats, leg):
     rule: releasing a toe its leg still pushes would drive it into the ground). Returns
     the event count."""
     o = leg * NAUX_LEG
-    if (aux[o + A_FAX] > 1e-9 * body_weight(P) and not is_set(P[P_MASSLESS])
-            and not slide_is_jammed(s[ITH] + s[IPHB + leg], -1 if aux[o + A_GT] > 0.0 else 1,
-                                    P)):
+    if (
+        aux[o + A_FAX] > 1e-9 * body_weight(P)
+        and not is_set(P[P_MASSLESS])
+        and not slide_is_jammed(s[ITH] + s[IPHB + leg], -1 if aux[o + A_GT] > 0.0 else 1, P)
+    ):
         stats[S_NEND_SLIDE] += 1
         return slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_LEG_PUSHES)
     # (a slide that would be jammed cannot carry the leg's push: the toe is released)
@@ -200,8 +202,9 @@ def released_toe_pressed(s, P, mi, mf, cmd, ds, aux, ew, leg):
 @allocating
 def settle(t, s, P, mi, mf, cmd, ds, aux, ev, nev, stats):
     """:func:`settle_ws` with its own evaluation workspace."""
-    return settle_ws(t, s, P, mi, mf, cmd, ds, aux, EventLog(ev, stats), nev, eval_workspace(),
-                     False)
+    return settle_ws(
+        t, s, P, mi, mf, cmd, ds, aux, EventLog(ev, stats), nev, eval_workspace(), False
+    )
 
 
 @kernel
@@ -225,8 +228,12 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
     gn_tol = -1e-9 * W
     coulomb = toe_can_slip(P)
     for it in range(12):
-        if it == 0 and command_only and P[P_LEG_FRIC_SIDE + BACK] == 0.0 \
-                and P[P_LEG_FRIC_SIDE + FRONT] == 0.0:
+        if (
+            it == 0
+            and command_only
+            and P[P_LEG_FRIC_SIDE + BACK] == 0.0
+            and P[P_LEG_FRIC_SIDE + FRONT] == 0.0
+        ):
             # (a side-load leg friction depends on the hip torque, so on the command, in
             # the leg force: then a fresh evaluation)
             evaluate_command_change(P, mi, cmd, ds, aux, ew[0], ew[1], ew[2])
@@ -250,12 +257,14 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     nev = release_pin(t, s, P, mi, aux, ev, nev, stats, leg)
                     changed = True
                 elif coulomb and abs(aux[o + A_GT]) > P[P_MU] * gn * (1.0 + 1e-9) + 1e-9 * W:
-                    if not slide_is_jammed(s[ITH] + s[IPHB + leg],
-                                           -1 if aux[o + A_GT] > 0.0 else 1, P):
+                    if not slide_is_jammed(
+                        s[ITH] + s[IPHB + leg], -1 if aux[o + A_GT] > 0.0 else 1, P
+                    ):
                         nev = slide_from_pin(t, mi, aux, ev, nev, leg, SLIDE_CAUSE_CONE)
                         changed = True
-                    elif (aux[o + A_FAX] <= 0.0
-                          and not released_toe_pressed(s, P, mi, mf, cmd, ds, aux, ew, leg)):
+                    elif aux[o + A_FAX] <= 0.0 and not released_toe_pressed(
+                        s, P, mi, mf, cmd, ds, aux, ew, leg
+                    ):
                         # the slide the cone asks for is jammed (its ground force would be
                         # perpendicular to the leg) and the toe is not pressed into the
                         # ground, neither by its leg nor by the motion: it is released.
@@ -281,8 +290,9 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     # that jams"); lifting it off instead sends a toe that moves into the
                     # ground back to a stub slide, round and round
                     pass
-                elif ((gn < gn_tol or aux[o + A_FAX] <= 0.0)
-                        and not slide_toe_pressed(s, ds, aux, P, leg)):
+                elif (gn < gn_tol or aux[o + A_FAX] <= 0.0) and not slide_toe_pressed(
+                    s, ds, aux, P, leg
+                ):
                     # (a slide at the stop whose toe is pressed into the ground starts with
                     # its leg force at zero, to rounding, and loads as the leg is swept on)
                     nev = lift_off(t, s, mi, ev, nev, leg)
@@ -295,8 +305,10 @@ def settle_ws(t, s, P, mi, mf, cmd, ds, aux, log, nev, ew, command_only=False):
                     # (the massless toe on its compliant leg carries none).
                     mi[MI_SLIDE_DIR_B + leg] = -mi[MI_SLIDE_DIR_B + leg]
                     changed = True
-                elif (slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P)
-                      and abs(aux[o + A_SLIP_V]) <= SLIDE_SPEED_TOL):
+                elif (
+                    slide_is_jammed(s[ITH] + s[IPHB + leg], mi[MI_SLIDE_DIR_B + leg], P)
+                    and abs(aux[o + A_SLIP_V]) <= SLIDE_SPEED_TOL
+                ):
                     # a toe at rest whose slide is jammed (docs/model.md "A sliding toe
                     # that jams") cannot start it: it is pinned where it is (no impulse:
                     # it is at rest). A moving one jams through its event (hybrid.arm_jams
@@ -335,8 +347,12 @@ def touchdown(t, s, P, mi, mf, leg, aux, ev, nev, stats, imp):
     s_pre = s.copy()
     mi_pre = mi.copy()
     ok = impact(s, P, mi, mf, imp)
-    if (ok and not is_set(P[P_MASSLESS]) and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
-            and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL):
+    if (
+        ok
+        and not is_set(P[P_MASSLESS])
+        and s[IL_B + leg] >= P[P_L0 + leg] * (1.0 - 1e-12)
+        and stance_leg_rate(s, P, leg) > LEG_STOP_SPEED_TOL
+    ):
         # the toe lands with the leg at its stop while the hip moves away from it: the
         # massless toe cannot slide out beyond the stop, so the stop takes an impulse as
         # well (the leg lands as a rigid strut, docs/specification.md section 3); settle() makes it a spring leg
@@ -389,8 +405,16 @@ def jam(t, s, P, mi, mf, leg, aux, ev, nev, imp):
     mf[MF_ANCHOR_B + leg] = aux[o + A_TOE_X]
     mi[MI_CONTACT_B + leg] = STICK
     ok = impact(s, P, mi, mf, imp)
-    nev = log_event(ev, nev, t, EK_JAM, leg, imp[leg * NIMP_LEG + IMP_NORMAL],
-                    imp[leg * NIMP_LEG + IMP_TANGENT], imp[IMP_ENERGY_LOST])
+    nev = log_event(
+        ev,
+        nev,
+        t,
+        EK_JAM,
+        leg,
+        imp[leg * NIMP_LEG + IMP_NORMAL],
+        imp[leg * NIMP_LEG + IMP_TANGENT],
+        imp[IMP_ENERGY_LOST],
+    )
     return nev, ok
 
 
@@ -460,4 +484,3 @@ def record_friction(aux, P, mi, stats):
                 r = abs(aux[o + A_GT]) / gn
                 if r > stats[S_MAX_FRICTION]:
                     stats[S_MAX_FRICTION] = r
-

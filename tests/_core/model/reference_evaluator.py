@@ -133,6 +133,7 @@ LOSS_BLEND_BAND = 1.0
 
 # --- constraints (docs/specification.md sections 1-3, docs/model.md "Constraints") ---
 
+
 def project(q, dq, l, P, mi, mf):
     """Make the dependent coordinates consistent with the active constraints, in place
     (docs/model.md, "Constraints": they are projected before every evaluation): a pinned
@@ -149,7 +150,7 @@ def project(q, dq, l, P, mi, mf):
     dth = dq[2]
     for leg in range(2):
         l0 = P[P_L0 + leg]
-        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+        sL = HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
         hx = q[0] + sL * math.cos(th)
         hy = q[1] + sL * math.sin(th)
         hvx = dq[0] - sL * math.sin(th) * dth
@@ -170,10 +171,10 @@ def project(q, dq, l, P, mi, mf):
             l[leg] = hy / math.cos(th + q[3 + leg])
         elif P[P_MASSLESS] > 0.5:
             td = P[P_TD_B + leg]
-            if P[P_TD_WORLD] > 0.5:     # g = td fixed in the world
+            if P[P_TD_WORLD] > 0.5:  # g = td fixed in the world
                 q[3 + leg] = td - th
                 dq[3 + leg] = -dth
-            else:                       # phi = td fixed on the torso
+            else:  # phi = td fixed on the torso
                 q[3 + leg] = td
                 dq[3 + leg] = 0.0
             l[leg] = l0
@@ -187,6 +188,7 @@ def project(q, dq, l, P, mi, mf):
 
 
 # --- actuator (docs/specification.md section 4) ------------------------------------------
+
 
 def torque_per_amp(leg, P):
     """Torque at the gear output per ampere, N eta K_T [N m / A]."""
@@ -252,7 +254,7 @@ def delivered_torque(cur, om, leg, P):
         return moving(1.0)
     if s <= -1.0:
         return moving(-1.0)
-    forward = 0.5 * (1.0 + s)      # share of the forward direction in the blend
+    forward = 0.5 * (1.0 + s)  # share of the forward direction in the blend
     return forward * moving(1.0) + (1.0 - forward) * moving(-1.0)
 
 
@@ -280,15 +282,17 @@ def battery_voltage(dq, cmd, P):
     def residual(v):
         return v - voc + rb * power(v) / v
 
-    return brentq(residual, 0.5 * voc, 2.0 * voc, xtol=1e-13, rtol=4 * np.finfo(float).eps,
-                  maxiter=500)
+    return brentq(
+        residual, 0.5 * voc, 2.0 * voc, xtol=1e-13, rtol=4 * np.finfo(float).eps, maxiter=500
+    )
 
 
 # --- telescopic leg (docs/specification.md section 2, docs/model.md) ----------------------
 
+
 def leg_damper(phi, leg, P):
     """Leg damper [N s/m per physical leg] at leg angle phi: c (1 + a phi^2)."""
-    return P[P_C + leg] * (1.0 + P[P_LEG_C_ANGLE + leg] * phi ** 2)
+    return P[P_C + leg] * (1.0 + P[P_LEG_C_ANGLE + leg] * phi**2)
 
 
 def leg_friction_level(tau_hip, ll, leg, P):
@@ -309,14 +313,21 @@ def flight_rate(k, c, l0, ll, fc):
     an undamped leg (it snaps to l0)."""
     if c <= 0.0 or ll >= l0:
         return 0.0
-    upper = k * (l0 - ll) / c      # the rate without friction: the force is <= 0 there
+    upper = k * (l0 - ll) / c  # the rate without friction: the force is <= 0 there
     if upper == 0.0:
         return 0.0
-    return brentq(lambda v: leg_force(k, c, l0, ll, v, fc), 0.0, upper, xtol=1e-300,
-                  rtol=4 * np.finfo(float).eps, maxiter=500)
+    return brentq(
+        lambda v: leg_force(k, c, l0, ll, v, fc),
+        0.0,
+        upper,
+        xtol=1e-300,
+        rtol=4 * np.finfo(float).eps,
+        maxiter=500,
+    )
 
 
 # --- hip unit (docs/specification.md section 5) ------------------------------------------
+
 
 def belt_spring_deflection(delta, leg, P):
     """What the belt spring is stretched by at gear-leg angle difference delta [rad]: the
@@ -327,14 +338,16 @@ def belt_spring_deflection(delta, leg, P):
 
 # --- rigid bodies (docs/specification.md sections 1, 2, 5; docs/model.md) ---------------
 
+
 def _leg_com(q, P, leg):
     """Leg-body COM position, its Jacobian (2 x NQ) and the angle g = theta + phi."""
-    sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+    sL = HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
     th = q[2]
     g = th + q[3 + leg]
     d = P[P_D + leg]
-    pos = np.array([q[0] + sL * math.cos(th) + d * math.sin(g),
-                    q[1] + sL * math.sin(th) - d * math.cos(g)])
+    pos = np.array(
+        [q[0] + sL * math.cos(th) + d * math.sin(g), q[1] + sL * math.sin(th) - d * math.cos(g)]
+    )
     J = np.zeros((2, NQ))
     J[0, 0] = 1.0
     J[1, 1] = 1.0
@@ -383,12 +396,13 @@ def velocity_terms(q, dq, P):
     th = q[2]
     dth = dq[2]
     for leg in range(2):
-        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+        sL = HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
         _, J, g = _leg_com(q, P, leg)
         dg = dth + dq[3 + leg]
         # hip: sL (cos th, sin th) turning at dth; COM: d (sin g, -cos g) turning at dg
-        a0 = (sL * dth ** 2 * np.array([-math.cos(th), -math.sin(th)])
-              + P[P_D + leg] * dg ** 2 * np.array([-math.sin(g), math.cos(g)]))
+        a0 = sL * dth**2 * np.array([-math.cos(th), -math.sin(th)]) + P[
+            P_D + leg
+        ] * dg**2 * np.array([-math.sin(g), math.cos(g)])
         h += P[P_NP] * P[P_ML + leg] * J.T @ a0
     return h
 
@@ -404,7 +418,12 @@ def potential_energy(q, l, P):
         e += npl * P[P_ML + leg] * grav * pos[1]
         e += 0.5 * npl * P[P_K + leg] * (P[P_L0 + leg] - l[leg]) ** 2
         if int(P[P_MODEL]) == MODEL_II:
-            e += 0.5 * npl * P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P) ** 2
+            e += (
+                0.5
+                * npl
+                * P[P_KB + leg]
+                * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P) ** 2
+            )
     return e
 
 
@@ -419,8 +438,8 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     model = int(P[P_MODEL])
     nact = 7 if model == MODEL_II else 5
     q = s[0:NQ].copy()
-    dq = s[NQ:2 * NQ].copy()
-    l = s[IL_B:IL_B + 2].copy()
+    dq = s[NQ : 2 * NQ].copy()
+    l = s[IL_B : IL_B + 2].copy()
     project(q, dq, l, P, mi, mf)
 
     M = mass_matrix(q, P)
@@ -439,7 +458,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         mlg = npl * P[P_ML + leg] * grav
         d = P[P_D + leg]
         g = th + q[3 + leg]
-        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+        sL = HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
         Q[1] -= mlg
         Q[2] -= mlg * (sL * math.cos(th) + d * math.sin(g))
         Q[3 + leg] -= mlg * d * math.sin(g)
@@ -463,8 +482,9 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
                 tf += P[P_TAU_S + leg] * mm
             tau_fric[leg] = tf
             Q[5 + leg] -= npl * P[P_N + leg] * tf
-            tb = (P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P)
-                  + P[P_CB + leg] * (dq[5 + leg] - dq[3 + leg]))
+            tb = P[P_KB + leg] * belt_spring_deflection(q[5 + leg] - q[3 + leg], leg, P) + P[
+                P_CB + leg
+            ] * (dq[5 + leg] - dq[3 + leg])
             tau_belt[leg] = tb
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
@@ -474,7 +494,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     # contact forces and constraint rows
     R = np.zeros((MAX_ROWS, NQ))
     r = np.zeros(MAX_ROWS)
-    row_kind = np.zeros(MAX_ROWS, dtype=np.int64)   # layout.ROW_*
+    row_kind = np.zeros(MAX_ROWS, dtype=np.int64)  # layout.ROW_*
     row_leg = np.zeros(MAX_ROWS, dtype=np.int64)
     nr = 0
     Fax = np.zeros(2)
@@ -486,7 +506,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
     toe_vx = np.zeros(2)
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        sL = (HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET])
+        sL = HIP_SIGN[leg] * P[P_L] - P[P_COM_OFFSET]
         l0 = P[P_L0 + leg]
         k = P[P_K + leg]
         g = th + q[3 + leg]
@@ -511,11 +531,14 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         # leg damper and sliding-joint friction (both as Table III unless the effects
         # beyond the paper are switched on)
         c_l = leg_damper(q[kk], leg, P)
-        tau_hip = (tau_belt[leg] if model == MODEL_II else
-                   (tau_app[leg] if model != MODEL_PASSIVE else 0.0))
+        tau_hip = (
+            tau_belt[leg]
+            if model == MODEL_II
+            else (tau_app[leg] if model != MODEL_PASSIVE else 0.0)
+        )
         fc_l = leg_friction_level(tau_hip, ll, leg, P)
         if mode == STICK or mode == STRUT:
-            ld = -(hvx * sg - hvy * cg)           # dl/dt = -dhip . u
+            ld = -(hvx * sg - hvy * cg)  # dl/dt = -dhip . u
             ldot[leg] = ld
             F = npl * leg_force(k, c_l, l0, ll, ld, fc_l)
             if mode == STRUT:
@@ -556,7 +579,7 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
             F = npl * leg_force(k, c_l, l0, ll, ld, fc_l)
             Fax[leg] = F
             sig = 0.0
-            if P[P_NO_SLIP] < 0.5:     # a Coulomb floor: the toe slides against mu F_n
+            if P[P_NO_SLIP] < 0.5:  # a Coulomb floor: the toe slides against mu F_n
                 sig = P[P_MU] * mi[MI_SLIDE_DIR_B + leg]
             gn = F / (cg + sig * sg)
             gt = -sig * gn
@@ -626,14 +649,14 @@ def evaluate_reference(s, P, mi, mf, cmd, ds, aux):
         lam = -b[nact + rr] if ok else 0.0
         leg = row_leg[rr]
         g = th + q[3 + leg]
-        if row_kind[rr] == ROW_TOE_ACROSS:      # perpendicular ground force lam * n
+        if row_kind[rr] == ROW_TOE_ACROSS:  # perpendicular ground force lam * n
             Gt[leg] += lam * math.cos(g)
             Gn[leg] += lam * math.sin(g)
-        elif row_kind[rr] == ROW_TOE_ALONG:    # strut force lam * u (tension positive)
+        elif row_kind[rr] == ROW_TOE_ALONG:  # strut force lam * u (tension positive)
             strut[leg] = lam
             Gt[leg] += lam * math.sin(g)
             Gn[leg] -= lam * math.cos(g)
-        elif row_kind[rr] == ROW_GEAR:    # holding torque at one motor
+        elif row_kind[rr] == ROW_GEAR:  # holding torque at one motor
             hold[leg] = lam / (npl * P[P_N + leg])
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]

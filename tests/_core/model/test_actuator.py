@@ -21,8 +21,9 @@ CLOAD = 0.05
 
 @pytest.fixture(scope="module")
 def lossy_run():
-    robot = load_robot(overrides={"gearbox_idle_loss_torque": IDLE,
-                                  "gearbox_load_loss_coefficient": CLOAD})
+    robot = load_robot(
+        overrides={"gearbox_idle_loss_torque": IDLE, "gearbox_load_loss_coefficient": CLOAD}
+    )
     return robot, simulate(robot, duration=0.5, model="I")
 
 
@@ -35,9 +36,13 @@ def test_defaults_are_zero():
 
 def test_zero_losses_reproduce_constant_efficiency_bit_for_bit():
     base = simulate(load_robot(), duration=0.5, model="I")
-    zero = simulate(load_robot(overrides={"gearbox_idle_loss_torque": 0.0,
-                                          "gearbox_load_loss_coefficient": 0.0}),
-                    duration=0.5, model="I")
+    zero = simulate(
+        load_robot(
+            overrides={"gearbox_idle_loss_torque": 0.0, "gearbox_load_loss_coefficient": 0.0}
+        ),
+        duration=0.5,
+        model="I",
+    )
     assert base.state.shape == zero.state.shape
     assert np.array_equal(base.state, zero.state)
     robot = load_robot()
@@ -45,12 +50,14 @@ def test_zero_losses_reproduce_constant_efficiency_bit_for_bit():
         i = base.motor_current(leg)
         np.testing.assert_array_equal(
             base.hip_torque_applied(leg),
-            robot.gear_ratio * robot.efficiency * robot.torque_constant * i)
+            robot.gear_ratio * robot.efficiency * robot.torque_constant * i,
+        )
 
 
 def test_delivered_torque_function_directions():
-    robot = load_robot(overrides={"gearbox_idle_loss_torque": IDLE,
-                                  "gearbox_load_loss_coefficient": CLOAD})
+    robot = load_robot(
+        overrides={"gearbox_idle_loss_torque": IDLE, "gearbox_load_loss_coefficient": CLOAD}
+    )
     P = robot_array(robot, "I")
     k0 = robot.gear_ratio * robot.efficiency * robot.torque_constant
     for cur in (-3.0, -0.1, 0.1, 3.0):
@@ -83,8 +90,9 @@ def test_losses_reduce_delivered_torque_in_motoring_samples(lossy_run):
         assert np.all(np.abs(tau[motoring]) <= np.abs(tau0[motoring]) + 1e-12)
         unclipped = motoring & (np.abs(tau0) > IDLE + 1e-9)
         diff = np.abs(tau0[unclipped]) - np.abs(tau[unclipped])
-        np.testing.assert_allclose(diff, IDLE + CLOAD * np.abs(tau[unclipped]),
-                                   rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            diff, IDLE + CLOAD * np.abs(tau[unclipped]), rtol=1e-9, atol=1e-12
+        )
         clipped = motoring & (np.abs(tau0) <= IDLE)
         assert np.all(tau[clipped] == 0.0)
         checked += unclipped.sum()
@@ -109,12 +117,15 @@ def test_efficiency_falls_at_low_torque(lossy_run):
     assert np.all(np.diff(eff[order]) >= -1e-12)
 
 
-@pytest.mark.parametrize("name,value", [
-    ("gearbox_idle_loss_torque", -0.1),
-    ("gearbox_load_loss_coefficient", -0.01),
-    ("gearbox_load_loss_coefficient", 1.0),
-    ("gearbox_idle_loss_torque", float("inf")),
-])
+@pytest.mark.parametrize(
+    "name,value",
+    [
+        ("gearbox_idle_loss_torque", -0.1),
+        ("gearbox_load_loss_coefficient", -0.01),
+        ("gearbox_load_loss_coefficient", 1.0),
+        ("gearbox_idle_loss_torque", float("inf")),
+    ],
+)
 def test_validation_refuses_bad_loss_values(name, value):
     with pytest.raises(ParameterError, match=name) as err:
         load_robot(overrides={name: value})

@@ -50,13 +50,22 @@ ROBOTS = {
     "default": scoutsim.RobotParameters(),
     "single_leg": scoutsim.RobotParameters(legs_per_virtual_leg=1, leg_com_distance=0.1),
     "unequal": scoutsim.RobotParameters(
-        com_offset=0.035, leg_mass=(1.0, 0.7), leg_inertia=(0.0052, 0.0031),
-        leg_com_distance=(0.16, 0.12), leg_rest_length=(0.323, 0.31),
-        leg_stiffness=(3520.0, 4100.0), leg_damping=(55.0, 62.0),
-        planetary_ratio=(5.0, 4.2), sprocket_ratio=(20.0, 22.0),
-        drive_gear_inertia=(2.0e-6, 3.1e-6), driven_gear_inertia=(0.012, 0.009),
-        belt_stiffness=(401.0, 350.0), belt_damping=(0.2, 0.35),
-        joint_damping=(4e-5, 7e-5), joint_stiction=(0.02, 0.035)),
+        com_offset=0.035,
+        leg_mass=(1.0, 0.7),
+        leg_inertia=(0.0052, 0.0031),
+        leg_com_distance=(0.16, 0.12),
+        leg_rest_length=(0.323, 0.31),
+        leg_stiffness=(3520.0, 4100.0),
+        leg_damping=(55.0, 62.0),
+        planetary_ratio=(5.0, 4.2),
+        sprocket_ratio=(20.0, 22.0),
+        drive_gear_inertia=(2.0e-6, 3.1e-6),
+        driven_gear_inertia=(0.012, 0.009),
+        belt_stiffness=(401.0, 350.0),
+        belt_damping=(0.2, 0.35),
+        joint_damping=(4e-5, 7e-5),
+        joint_stiction=(0.02, 0.035),
+    ),
 }
 
 
@@ -70,6 +79,8 @@ def _hip_offsets(robot):
     """The hips' positions along the torso axis from the torso COM [m], from the fields."""
     half = robot.hip_spacing / 2.0
     return (-half - robot.com_offset, half - robot.com_offset)
+
+
 MODELS = ("II", "I")
 N_STATES = 8
 
@@ -103,8 +114,7 @@ def _assert_close(actual, desired, what, rtol=RTOL):
     actual = np.asarray(actual, dtype=float)
     desired = np.asarray(desired, dtype=float)
     scale = max(np.max(np.abs(desired)), 1e-300)
-    np.testing.assert_allclose(actual, desired, rtol=rtol, atol=1e-2 * rtol * scale,
-                               err_msg=what)
+    np.testing.assert_allclose(actual, desired, rtol=rtol, atol=1e-2 * rtol * scale, err_msg=what)
 
 
 def _is_close(actual, desired, rtol=RTOL):
@@ -198,7 +208,7 @@ def test_kinetic_energy(robot_name, model):
     for q, dq in STATES:
         dq_ = dq.copy()
         if model != "II":
-            dq_[5:7] = dq_[3:5]      # alpha is a copy of phi (no gear inertia anyway)
+            dq_[5:7] = dq_[3:5]  # alpha is a copy of phi (no gear inertia anyway)
         Ms = sym.mass_matrix(q, prm)
         t_quad = 0.5 * dq_ @ Ms @ dq_
         t_sym = sym.kinetic_energy(q, dq_, prm)
@@ -223,7 +233,8 @@ def test_potential_energy(robot_name, model):
         q0[5:7] = q0[3:5]
         l0 = np.array(robot.per_leg("leg_rest_length"))
         assert rigid_body.potential_energy(q0, l0, P) == pytest.approx(
-            sym.potential_energy(q0, l0, prm), rel=RTOL)
+            sym.potential_energy(q0, l0, prm), rel=RTOL
+        )
     # the spring terms are really present in the comparison
     q = STATES[0][0]
     l_short = np.array([0.28, 0.30])
@@ -243,8 +254,9 @@ def test_gravity_force_is_gradient_of_potential():
         for i in range(7):
             e = np.zeros(7)
             e[i] = eps
-            fd[i] = -(sym.potential_energy(q + e, l, prm0)
-                      - sym.potential_energy(q - e, l, prm0)) / (2 * eps)
+            fd[i] = -(
+                sym.potential_energy(q + e, l, prm0) - sym.potential_energy(q - e, l, prm0)
+            ) / (2 * eps)
         np.testing.assert_allclose(sym.gravity_force(q, prm), fd, rtol=1e-7, atol=1e-6)
 
 
@@ -278,15 +290,13 @@ def test_gravity_force_passive(robot_name):
         rigid_body.mass_matrix(q, P, M)
         qg_compiled = M[:5, :5] @ ds[7:12]
         qg_sym = sym.gravity_force(q, prm)
-        _assert_close(qg_compiled, qg_sym[:5], f"gravity force, {robot_name}, q={q}",
-                      rtol=RTOL)
+        _assert_close(qg_compiled, qg_sym[:5], f"gravity force, {robot_name}, q={q}", rtol=RTOL)
         ddq_sym = np.linalg.solve(sym.mass_matrix(q, prm)[:5, :5], qg_sym[:5])
         _assert_close(ds[7:12], ddq_sym, "flight ddq at rest", rtol=RTOL)
-        assert np.all(ds[12:14] == ds[10:12])       # alpha copies phi
+        assert np.all(ds[12:14] == ds[10:12])  # alpha copies phi
         assert abs(qg_sym[2]) > 0.1 or abs(qg_sym[3]) > 0.1
         # energy output = V at rest
-        assert aux[L.A_ENERGY] == pytest.approx(
-            sym.potential_energy(q, s[14:16], prm), rel=1e-12)
+        assert aux[L.A_ENERGY] == pytest.approx(sym.potential_energy(q, s[14:16], prm), rel=1e-12)
 
 
 @pytest.mark.parametrize("robot_name", sorted(ROBOTS))
@@ -305,7 +315,7 @@ def test_flight_dynamics_with_velocity(robot_name, model):
     npl = robot.legs_per_virtual_leg
     for q, dq in STATES:
         q = q.copy()
-        dq = 0.5 * dq          # keep the motor speed inside the torque-speed line
+        dq = 0.5 * dq  # keep the motor speed inside the torque-speed line
         q[5:7] = q[3:5]
         dq[5:7] = dq[3:5]
         s = _flight_state(q, dq, robot)
@@ -393,13 +403,16 @@ def _independent_stance_ddq(s, mi, robot, model):
         # hip unit forces (docs/specification.md section 5), zero command: belt spring/damper, joint friction
         for leg in range(2):
             Nr = _leg(robot, "planetary_ratio", leg) * _leg(robot, "sprocket_ratio", leg)
-            tb = _leg(robot, "belt_stiffness", leg) * (q[5 + leg] - q[3 + leg]) \
-                + _leg(robot, "belt_damping", leg) * (dq[5 + leg] - dq[3 + leg])
+            tb = _leg(robot, "belt_stiffness", leg) * (q[5 + leg] - q[3 + leg]) + _leg(
+                robot, "belt_damping", leg
+            ) * (dq[5 + leg] - dq[3 + leg])
             Q[3 + leg] += npl * tb
             Q[5 + leg] -= npl * tb
             om = Nr * dq[5 + leg]
-            tf = _leg(robot, "joint_damping", leg) * om \
+            tf = (
+                _leg(robot, "joint_damping", leg) * om
                 + _leg(robot, "joint_stiction", leg) * mi[L.MI_MOTOR_B + leg]
+            )
             Q[5 + leg] -= npl * Nr * tf
     rows, rhs, ldot, forces = [], [], {}, {}
     for leg in range(2):
@@ -409,11 +422,12 @@ def _independent_stance_ddq(s, mi, robot, model):
         gl = q[2] + q[3 + leg]
         u = np.array([math.sin(gl), -math.cos(gl)])
         v0 = sym.toe_velocity(q, dq, l[leg], 0.0, prm, leg)
-        ld = -v0 @ u                              # pinned toe: v0 + ld u = 0 (axially)
+        ld = -v0 @ u  # pinned toe: v0 + ld u = 0 (axially)
         ldot[leg] = ld
-        F = npl * (_leg(robot, "leg_stiffness", leg) * (_leg(robot, "leg_rest_length", leg)
-                                                         - l[leg])
-                   - _leg(robot, "leg_damping", leg) * ld)
+        F = npl * (
+            _leg(robot, "leg_stiffness", leg) * (_leg(robot, "leg_rest_length", leg) - l[leg])
+            - _leg(robot, "leg_damping", leg) * ld
+        )
         J = _toe_jacobian(q, l[leg], prm, leg)
         Q += J.T @ (-F * u)
         bias = sym.toe_acceleration(q, dq, np.zeros(7), l[leg], ld, 0.0, prm, leg)
@@ -428,7 +442,7 @@ def _independent_stance_ddq(s, mi, robot, model):
     b[:nact] = Q[:nact]
     for r, (row, rr) in enumerate(zip(rows, rhs)):
         A[nact + r, :nact] = row[:nact]
-        A[:nact, nact + r] = -row[:nact]          # M ddq - R^T lam = Q
+        A[:nact, nact + r] = -row[:nact]  # M ddq - R^T lam = Q
         b[nact + r] = rr
     x = np.linalg.solve(A, b)
     ground = {}
@@ -472,26 +486,31 @@ def test_stance_constrained_dynamics(robot_name, model, legs):
             # part is the massless toe's first-order slide and is not constrained)
             n = sym.leg_normal(q, leg)
             for ddl in (0.0, 37.0):
-                a = sym.toe_acceleration(q, dq, ds[7:14], l[leg], ds[L.IL_B + leg], ddl,
-                                         prm, leg)
+                a = sym.toe_acceleration(q, dq, ds[7:14], l[leg], ds[L.IL_B + leg], ddl, prm, leg)
                 assert abs(n @ a) < 1e-9, (leg, n @ a)
         # full independent solution: accelerations, leg rates and ground forces
         ddq_ref, ldot_ref, ground = _independent_stance_ddq(s, mi, robot, model)
         nact = len(ddq_ref)
-        _assert_close(ds[7:7 + nact], ddq_ref, f"stance ddq {model} legs={legs}", rtol=RTOL)
+        _assert_close(ds[7 : 7 + nact], ddq_ref, f"stance ddq {model} legs={legs}", rtol=RTOL)
         for leg in legs:
             assert ds[L.IL_B + leg] == pytest.approx(ldot_ref[leg], rel=1e-10, abs=1e-12)
             o = leg * L.NAUX_LEG
-            _assert_close([aux[o + L.A_GT], aux[o + L.A_GN]], ground[leg],
-                          f"ground force leg {leg}", rtol=RTOL)
+            _assert_close(
+                [aux[o + L.A_GT], aux[o + L.A_GN]],
+                ground[leg],
+                f"ground force leg {leg}",
+                rtol=RTOL,
+            )
         # the constraint matters: without it the toe would accelerate off its anchor
         Ms = sym.mass_matrix(q, prm)
         for leg in legs:
             n = sym.leg_normal(q, leg)
             ddq_free = ds[7:14].copy()
-            free = np.linalg.solve(Ms[:nact, :nact], Ms[:nact, :nact] @ ds[7:7 + nact]
-                                   - ((_toe_jacobian(q, l[leg], prm, leg).T @ n)[:nact]
-                                      * (n @ ground[leg])))
+            free = np.linalg.solve(
+                Ms[:nact, :nact],
+                Ms[:nact, :nact] @ ds[7 : 7 + nact]
+                - ((_toe_jacobian(q, l[leg], prm, leg).T @ n)[:nact] * (n @ ground[leg])),
+            )
             ddq_free[:nact] = free
             a = sym.toe_acceleration(q, dq, ddq_free, l[leg], ds[L.IL_B + leg], 0.0, prm, leg)
             assert abs(n @ a) > 1e-3

@@ -25,10 +25,14 @@ MASSLESS = RobotParameters(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0)
 #: Every effect beyond the paper's models switched on (docs/model.md, "Effects beyond the
 #: paper's models"; values of the order of the virtual Scout II's, with a play small enough
 #: that the belt is both slack and stretched within a short run).
-EFFECTS = dict(belt_backlash=math.radians(0.5), leg_friction_force=6.0,
-               leg_friction_side_load_coefficient=0.05,
-               leg_damping_angle_coefficient=0.5 / math.radians(30.0) ** 2,
-               gearbox_idle_loss_torque=0.3, gearbox_load_loss_coefficient=0.05)
+EFFECTS = dict(
+    belt_backlash=math.radians(0.5),
+    leg_friction_force=6.0,
+    leg_friction_side_load_coefficient=0.05,
+    leg_damping_angle_coefficient=0.5 / math.radians(30.0) ** 2,
+    gearbox_idle_loss_torque=0.3,
+    gearbox_load_loss_coefficient=0.05,
+)
 EFFECTS_ROBOT = RobotParameters(**EFFECTS)
 #: ... and a battery with internal resistance (specification.md section 4)
 BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
@@ -36,20 +40,35 @@ BATTERY_ROBOT = RobotParameters(battery_resistance=0.1, **EFFECTS)
 #: effects beyond the paper's models too), with its torso COM ahead of the hips' midpoint
 #: and a battery with internal resistance: each leg's law must read its own leg's values.
 UNEQUAL_ROBOT = RobotParameters(
-    com_offset=0.03, battery_resistance=0.1,
-    leg_mass=(1.0, 0.8), leg_inertia=(0.0052, 0.004), leg_com_distance=(0.16, 0.14),
-    leg_rest_length=(0.323, 0.31), leg_stiffness=(3520.0, 3900.0), leg_damping=(55.0, 62.0),
-    planetary_ratio=(5.0, 4.6), sprocket_ratio=(20.4, 21.0),
-    gearbox_efficiency=(0.8, 0.75), sprocket_efficiency=(0.816, 0.85),
-    drive_gear_inertia=(2.4e-6, 2.0e-6), driven_gear_inertia=(0.0118, 0.0135),
-    joint_stiction=(0.021, 0.03), joint_damping=(3.5e-5, 5e-5),
-    belt_stiffness=(401.0, 370.0), belt_damping=(0.23, 0.3),
-    torque_constant=(0.0302, 0.028), speed_constant=(0.0302, 0.029),
-    armature_resistance=(0.611, 0.7), current_limit=(12.0, 11.0),
-    belt_backlash=(math.radians(0.5), math.radians(0.8)), leg_friction_force=(6.0, 4.0),
+    com_offset=0.03,
+    battery_resistance=0.1,
+    leg_mass=(1.0, 0.8),
+    leg_inertia=(0.0052, 0.004),
+    leg_com_distance=(0.16, 0.14),
+    leg_rest_length=(0.323, 0.31),
+    leg_stiffness=(3520.0, 3900.0),
+    leg_damping=(55.0, 62.0),
+    planetary_ratio=(5.0, 4.6),
+    sprocket_ratio=(20.4, 21.0),
+    gearbox_efficiency=(0.8, 0.75),
+    sprocket_efficiency=(0.816, 0.85),
+    drive_gear_inertia=(2.4e-6, 2.0e-6),
+    driven_gear_inertia=(0.0118, 0.0135),
+    joint_stiction=(0.021, 0.03),
+    joint_damping=(3.5e-5, 5e-5),
+    belt_stiffness=(401.0, 370.0),
+    belt_damping=(0.23, 0.3),
+    torque_constant=(0.0302, 0.028),
+    speed_constant=(0.0302, 0.029),
+    armature_resistance=(0.611, 0.7),
+    current_limit=(12.0, 11.0),
+    belt_backlash=(math.radians(0.5), math.radians(0.8)),
+    leg_friction_force=(6.0, 4.0),
     leg_friction_side_load_coefficient=(0.05, 0.08),
     leg_damping_angle_coefficient=(0.5 / math.radians(30.0) ** 2, 0.3 / math.radians(30.0) ** 2),
-    gearbox_idle_loss_torque=(0.3, 0.2), gearbox_load_loss_coefficient=(0.05, 0.07))
+    gearbox_idle_loss_torque=(0.3, 0.2),
+    gearbox_load_loss_coefficient=(0.05, 0.07),
+)
 
 #: Factor on the velocities of the slow copy of each sampled state: it puts the motor
 #: speeds into the blending band of the transmission losses (|w_m| < 1 rad/s) and the
@@ -62,17 +81,23 @@ def _cases(robot, model, mu, rig=None, **kw):
     bench-rig options of robot_array (clamps, motor circuit) for the evaluations (the
     run itself is free)."""
     r = scoutsim.simulate(robot, duration=0.4, model=model, friction_coefficient=mu, **kw)
-    P = robot_array(robot, model, friction_coefficient=mu,
-                    passive_touchdown_angles=kw.get("passive_touchdown_angles", (0.0, 0.0)),
-                    passive_touchdown_world=True, pitch_limit=1.0, **(rig or {}))
+    P = robot_array(
+        robot,
+        model,
+        friction_coefficient=mu,
+        passive_touchdown_angles=kw.get("passive_touchdown_angles", (0.0, 0.0)),
+        passive_touchdown_world=True,
+        pitch_limit=1.0,
+        **(rig or {}),
+    )
     out = []
     for n in range(0, len(r.t), 5):
         s = r.state[n].copy()
         mi = np.zeros(L.NMI, dtype=np.int64)
         mf = np.zeros(L.NMF)
-        mi[L.MI_CONTACT_B:L.MI_CONTACT_B + 2] = r.modes[n, L.RM_CONTACT_B:L.RM_CONTACT_B + 2]
-        mi[L.MI_MOTOR_B:L.MI_MOTOR_B + 2] = r.modes[n, L.RM_MOTOR_B:L.RM_MOTOR_B + 2]
-        mi[L.MI_SLIDE_DIR_B:L.MI_SLIDE_DIR_B + 2] = 1 if n % 2 else -1
+        mi[L.MI_CONTACT_B : L.MI_CONTACT_B + 2] = r.modes[n, L.RM_CONTACT_B : L.RM_CONTACT_B + 2]
+        mi[L.MI_MOTOR_B : L.MI_MOTOR_B + 2] = r.modes[n, L.RM_MOTOR_B : L.RM_MOTOR_B + 2]
+        mi[L.MI_SLIDE_DIR_B : L.MI_SLIDE_DIR_B + 2] = 1 if n % 2 else -1
         for leg in range(2):
             mf[leg] = r.aux[n, leg * L.NAUX_LEG + L.A_TOE_X]
         cmd = np.array([r.aux[n, L.A_TAU_CMD], r.aux[n, L.NAUX_LEG + L.A_TAU_CMD]])
@@ -83,7 +108,7 @@ def _cases(robot, model, mu, rig=None, **kw):
 def _slow(s):
     """The state s with its velocities scaled by SLOW (positions and leg lengths kept)."""
     s = s.copy()
-    s[L.NQ:2 * L.NQ] *= SLOW
+    s[L.NQ : 2 * L.NQ] *= SLOW
     return s
 
 
@@ -125,17 +150,34 @@ def _regimes(P, mi, cmd, ds, aux):
         ld = ds[L.IL_B + leg]
         band = ref.LEG_FRICTION_BAND
         if contact in (L.STICK, L.SLIDE):
-            out.add("leg rate > band" if ld > band else "leg rate < -band" if ld < -band
-                    else "leg rate in band" if ld != 0.0 else "leg rate 0")
+            out.add(
+                "leg rate > band"
+                if ld > band
+                else "leg rate < -band"
+                if ld < -band
+                else "leg rate in band"
+                if ld != 0.0
+                else "leg rate 0"
+            )
         elif contact == L.FLIGHT and P[L.P_MASSLESS] < 0.5:
-            out.add("flight rate > band" if ld > band else "flight rate in band" if ld > 0.0
-                    else "flight rate 0")
+            out.add(
+                "flight rate > band"
+                if ld > band
+                else "flight rate in band"
+                if ld > 0.0
+                else "flight rate 0"
+            )
         if model == L.MODEL_PASSIVE or int(P[L.P_CIRCUIT]) != L.CIRCUIT_AMPLIFIER:
             continue
         om = aux[o + L.A_OMEGA_M]
         blend = ref.LOSS_BLEND_BAND
-        out.add("motor speed > 1" if om >= blend else "motor speed < -1" if om <= -blend
-                else "motor speed in blend band")
+        out.add(
+            "motor speed > 1"
+            if om >= blend
+            else "motor speed < -1"
+            if om <= -blend
+            else "motor speed in blend band"
+        )
         i = aux[o + L.A_CURRENT]
         i_cmd = cmd[leg] / (P[L.P_N + leg] * P[L.P_ETA + leg] * P[L.P_KT + leg])
         if abs(om) >= blend and i != 0.0:
@@ -156,10 +198,22 @@ def _regimes(P, mi, cmd, ds, aux):
 
 
 #: regimes every parity run with the effects beyond the paper switched on must exercise
-LEG_REGIMES = {"leg rate > band", "leg rate < -band", "leg rate in band", "flight rate > band",
-               "flight rate in band"}
-MOTOR_REGIMES = {"motor speed > 1", "motor speed < -1", "motor speed in blend band",
-                 "motoring", "back-driven", "current at i_max", "current as commanded"}
+LEG_REGIMES = {
+    "leg rate > band",
+    "leg rate < -band",
+    "leg rate in band",
+    "flight rate > band",
+    "flight rate in band",
+}
+MOTOR_REGIMES = {
+    "motor speed > 1",
+    "motor speed < -1",
+    "motor speed in blend band",
+    "motoring",
+    "back-driven",
+    "current at i_max",
+    "current as commanded",
+}
 
 
 def _parity(P, cases):
@@ -189,16 +243,26 @@ CONFIGS = [
     (RobotParameters(), "II", 0.8, {}),
     (RobotParameters(), "I", 0.8, {}),
     (RobotParameters(), "ideal", math.inf, {}),
-    (MASSLESS, "passive", math.inf,
-     dict(initial_state=InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.3),
-          passive_touchdown_angles=(0.05, 0.05))),
+    (
+        MASSLESS,
+        "passive",
+        math.inf,
+        dict(
+            initial_state=InitialState(y=0.36, theta=0.0, dx=0.5, dtheta=0.3),
+            passive_touchdown_angles=(0.05, 0.05),
+        ),
+    ),
     (EFFECTS_ROBOT, "II", 0.8, {}),
     (EFFECTS_ROBOT, "I", 0.8, {}),
     (EFFECTS_ROBOT, "ideal", 0.8, {}),
     (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="short"))),
     (EFFECTS_ROBOT, "II", 0.8, dict(rig=dict(motor_circuit="open", clamp_torso=True))),
-    (EFFECTS_ROBOT, "I", 0.8, dict(rig=dict(motor_circuit="short", clamp_torso=True,
-                                            clamp_legs=True))),
+    (
+        EFFECTS_ROBOT,
+        "I",
+        0.8,
+        dict(rig=dict(motor_circuit="short", clamp_torso=True, clamp_legs=True)),
+    ),
     (UNEQUAL_ROBOT, "II", 0.8, {}),
     (UNEQUAL_ROBOT, "I", 0.8, {}),
     (UNEQUAL_ROBOT, "ideal", 0.8, {}),
@@ -262,7 +326,7 @@ def test_motor_current_is_odd_in_command_and_speed(evaluator):
     (beyond it neither limit lets the other hold) and commands up to beyond the
     current limit (Model I)."""
     P = robot_array(RobotParameters(), "I", friction_coefficient=0.8)
-    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]   # (equal legs: the back's)
+    w_both = (P[L.P_VB] + P[L.P_RA] * P[L.P_IMAX]) / P[L.P_KW]  # (equal legs: the back's)
     for w in np.linspace(-2.0, 2.0, 41) * w_both:
         for tau in (-40.0, -5.0, 0.0, 5.0, 40.0):
             i_plus = _flight_currents(evaluator, P, w, tau)
@@ -312,7 +376,7 @@ def test_stiff_factors_capture_belt_eigenvalues():
             D.evaluate(sm, P, mi, mf, cmd, dm, aux)
             J[:, j] = (dp - dm) / (2 * e)
         lam_full = np.sort(np.linalg.eigvals(J).real)[:2]
-        Js = st[:, :D.NSTIFF] @ st[:, D.NSTIFF:].T
+        Js = st[:, : D.NSTIFF] @ st[:, D.NSTIFF :].T
         lam_s = np.sort(np.linalg.eigvals(Js).real)[:2]
         assert np.all(lam_full < -3000.0)
         assert np.allclose(lam_s, lam_full, rtol=0.05)
@@ -323,9 +387,12 @@ def test_ark_method_matches_reference_model_ii():
     """The experimental linearly implicit ARK4(3) path reproduces DOPRI5 (Model II)."""
     out = {}
     for m in ("dopri5", "ark4"):
-        out[m] = scoutsim.simulate(duration=1.0, model="II", friction_coefficient=0.8,
-                                   integrator=scoutsim.IntegratorSettings(method=m, rtol=1e-8,
-                                                                          atol=1e-9))
+        out[m] = scoutsim.simulate(
+            duration=1.0,
+            model="II",
+            friction_coefficient=0.8,
+            integrator=scoutsim.IntegratorSettings(method=m, rtol=1e-8, atol=1e-9),
+        )
     a, b = out["dopri5"], out["ark4"]
     assert a.outcome == b.outcome == "completed"
     assert len(a.events) == len(b.events)
@@ -340,7 +407,8 @@ def test_ark_method_matches_reference_model_ii():
 #: those runs keep every effect but that one. In Model II the belt, not the command,
 #: loads the leg.
 NO_SIDE_LOAD_ROBOT = RobotParameters(
-    battery_resistance=0.1, **{**EFFECTS, "leg_friction_side_load_coefficient": 0.0})
+    battery_resistance=0.1, **{**EFFECTS, "leg_friction_side_load_coefficient": 0.0}
+)
 COMMAND_CONFIGS = CONFIGS[:3] + [
     (EFFECTS_ROBOT, "II", 0.8, {}),
     (BATTERY_ROBOT, "II", 0.8, {}),
@@ -373,7 +441,7 @@ def test_command_change_equals_fresh_evaluation(robot, model, mu, kw):
             ok2 = D.evaluate_command_change(P, mi2, new, d2, a2, wk, wA, piv)
             ok1 = D.evaluate_ws(s, P, mi2, mf, new, d1, a1, (wk, wA, piv, st), False, st, True)
             assert ok1 == ok2
-            changed += not np.allclose(d0, d1)   # the new command does act
+            changed += not np.allclose(d0, d1)  # the new command does act
             worst = max(worst, _mismatch(d1, d2), _mismatch(a1, a2))
     # (a stuck motor or a saturated current can leave the derivative as it was)
     assert changed > len(cases) // 2

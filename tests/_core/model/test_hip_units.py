@@ -30,8 +30,9 @@ def test_every_unit_declares_its_hooks():
     assert not hip_unit.UNITS[0].GEARED
 
 
-@pytest.mark.parametrize("model,geared", [
-    ("II", True), ("I", False), ("ideal", False), ("passive", False)])
+@pytest.mark.parametrize(
+    "model,geared", [("II", True), ("I", False), ("ideal", False), ("passive", False)]
+)
 def test_the_hip_unit_follows_the_model(model, geared):
     code = int(robot_array(scoutsim.RobotParameters(), model)[L.P_HIP_UNIT])
     assert hip_unit.is_geared(code) is geared

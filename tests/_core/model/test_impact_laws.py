@@ -40,15 +40,18 @@ from scoutsim.parameters import DEFAULT_FRICTION_COEFFICIENT
 #: the robot the runs use; every mass property below is read from its fields
 ROBOT = scoutsim.RobotParameters()
 
-DURATION = 3.0          # [s] of bounding from the default start: about 20 touchdowns
+DURATION = 3.0  # [s] of bounding from the default start: about 20 touchdowns
 NO_SLIP = math.inf
 #: a Coulomb floor stiff enough to hold the front toe's landing impulse (|P_t| / P_n about
 #: 2.9) but not the back toe's (negative normal impulse): both branches of the landing rule
 HIGH_MU = 3.0
 
 RUNS = {
-    ("II", NO_SLIP): None, ("I", NO_SLIP): None, ("ideal", NO_SLIP): None,
-    ("II", DEFAULT_FRICTION_COEFFICIENT): None, ("I", DEFAULT_FRICTION_COEFFICIENT): None,
+    ("II", NO_SLIP): None,
+    ("I", NO_SLIP): None,
+    ("ideal", NO_SLIP): None,
+    ("II", DEFAULT_FRICTION_COEFFICIENT): None,
+    ("I", DEFAULT_FRICTION_COEFFICIENT): None,
     ("II", HIGH_MU): None,
 }
 NO_SLIP_MODELS = ("II", "I", "ideal")
@@ -66,6 +69,7 @@ _CONTROLLER_KINDS = (L.EK_CTRL_TOUCHDOWN, L.EK_CTRL_LIFTOFF, L.EK_CTRL_SWEEP)
 
 # --- the robot's mechanics, written from docs/specification.md sections 1, 2, 5 ----------
 
+
 def _cross(a, b):
     return a[0] * b[1] - a[1] * b[0]
 
@@ -76,7 +80,7 @@ def _leg(s, leg, rp=None):
     rp = rp or ROBOT
     x, y, th = s[0], s[1], s[2]
     dx, dy, dth = s[7], s[8], s[9]
-    side = -1.0 if leg == 0 else 1.0         # back hip behind the COM, front hip ahead
+    side = -1.0 if leg == 0 else 1.0  # back hip behind the COM, front hip ahead
     half = 0.5 * rp.hip_spacing
     g = th + s[3 + leg]
     dg = dth + s[10 + leg]
@@ -112,13 +116,19 @@ def _bodies(s, model, rp=None):
     for leg in (0, 1):
         k = _leg(s, leg, rp)
         d = rp.leg_com_distance
-        out.append((npl * rp.leg_mass, npl * rp.leg_inertia, k["hip"] + d * k["u"],
-                    k["vhip"] + d * k["dg"] * k["n"], k["dg"]))
+        out.append(
+            (
+                npl * rp.leg_mass,
+                npl * rp.leg_inertia,
+                k["hip"] + d * k["u"],
+                k["vhip"] + d * k["dg"] * k["n"],
+                k["dg"],
+            )
+        )
         if model == "II":
             dal = s[12 + leg]
             out.append((0.0, npl * rp.driven_gear_inertia, None, None, s[9] + dal))
-            out.append((0.0, npl * rp.drive_gear_inertia, None, None,
-                        s[9] + rp.gear_ratio * dal))
+            out.append((0.0, npl * rp.drive_gear_inertia, None, None, s[9] + rp.gear_ratio * dal))
     return out
 
 
@@ -148,7 +158,7 @@ def _kinetic_energy(s, model):
 def _with_rates(s, dq):
     s2 = np.array(s, dtype=float)
     s2[7:14] = 0.0
-    s2[7:7 + len(dq)] = dq
+    s2[7 : 7 + len(dq)] = dq
     return s2
 
 
@@ -168,7 +178,7 @@ def _solve_impact(s, model, pinned, struts=()):
         jw = np.array([per_unit[j][b][4] for j in range(nq)])
         mass += inertia * np.outer(jw, jw)
         if per_unit[0][b][2] is not None:
-            jv = np.array([per_unit[j][b][3] for j in range(nq)]).T   # (2, nq)
+            jv = np.array([per_unit[j][b][3] for j in range(nq)]).T  # (2, nq)
             mass += m * jv.T @ jv
     rows, owners = [], []
     for leg in pinned:
@@ -190,7 +200,7 @@ def _solve_impact(s, model, pinned, struts=()):
     kkt[:nq, :nq] = mass
     kkt[:nq, nq:] = a.T
     kkt[nq:, :nq] = a
-    dq0 = np.asarray(s[7:7 + nq], dtype=float)
+    dq0 = np.asarray(s[7 : 7 + nq], dtype=float)
     rhs = np.concatenate([mass @ dq0, np.zeros(nr)])
     sol = np.linalg.solve(kkt, rhs)
     dq1, mult = sol[:nq], -sol[nq:]
@@ -206,20 +216,21 @@ def _solve_impact(s, model, pinned, struts=()):
 
 # --- the touchdowns of a run ------------------------------------------------------------
 
+
 @dataclass
 class Landing:
     """One touchdown record and the transition it belongs to."""
 
     t: float
     leg: int
-    normal: float          # recorded v1 [N s]
-    tangential: float      # recorded v2 [N s]
-    loss: float            # recorded v3 [J]
+    normal: float  # recorded v1 [N s]
+    tangential: float  # recorded v2 [N s]
+    loss: float  # recorded v3 [J]
     before: np.ndarray
     after: np.ndarray
-    modes_before: dict     # contact mode of each leg just before the transition
-    kinds: tuple           # (kind, leg, v3) of every record of the transition
-    n_touchdowns: int      # touchdowns in the same transition (2: simultaneous)
+    modes_before: dict  # contact mode of each leg just before the transition
+    kinds: tuple  # (kind, leg, v3) of every record of the transition
+    n_touchdowns: int  # touchdowns in the same transition (2: simultaneous)
 
     @property
     def other(self):
@@ -230,8 +241,10 @@ class Landing:
         return np.array([self.tangential, self.normal])
 
     def slid_without_pin_impulse(self):
-        return any(k == L.EK_SLIDE_START and leg == self.leg
-                   and int(v3) == L.SLIDE_CAUSE_NO_PIN_IMPULSE for k, leg, v3 in self.kinds)
+        return any(
+            k == L.EK_SLIDE_START and leg == self.leg and int(v3) == L.SLIDE_CAUSE_NO_PIN_IMPULSE
+            for k, leg, v3 in self.kinds
+        )
 
 
 def _landings(result):
@@ -241,8 +254,11 @@ def _landings(result):
     plant = [i for i in range(len(ev)) if int(ev[i, L.EVR_KIND]) not in _CONTROLLER_KINDS]
     groups = []
     for i in plant:
-        if (groups and ev[i, L.EVR_T] == ev[groups[-1][0], L.EVR_T]
-                and np.array_equal(es[i, L.EVS_BEFORE], es[groups[-1][0], L.EVS_BEFORE])):
+        if (
+            groups
+            and ev[i, L.EVR_T] == ev[groups[-1][0], L.EVR_T]
+            and np.array_equal(es[i, L.EVS_BEFORE], es[groups[-1][0], L.EVS_BEFORE])
+        ):
             groups[-1].append(i)
         else:
             groups.append([i])
@@ -252,12 +268,20 @@ def _landings(result):
         kinds = tuple((int(ev[i, L.EVR_KIND]), int(ev[i, L.EVR_LEG]), ev[i, L.EVR_V3]) for i in g)
         tds = [i for i in g if int(ev[i, L.EVR_KIND]) == L.EK_TOUCHDOWN]
         for i in tds:
-            out.append(Landing(
-                t=float(ev[i, L.EVR_T]), leg=int(ev[i, L.EVR_LEG]),
-                normal=float(ev[i, L.EVR_V1]), tangential=float(ev[i, L.EVR_V2]),
-                loss=float(ev[i, L.EVR_V3]), before=es[i, L.EVS_BEFORE].copy(),
-                after=es[i, L.EVS_AFTER].copy(), modes_before=dict(mode), kinds=kinds,
-                n_touchdowns=len(tds)))
+            out.append(
+                Landing(
+                    t=float(ev[i, L.EVR_T]),
+                    leg=int(ev[i, L.EVR_LEG]),
+                    normal=float(ev[i, L.EVR_V1]),
+                    tangential=float(ev[i, L.EVR_V2]),
+                    loss=float(ev[i, L.EVR_V3]),
+                    before=es[i, L.EVS_BEFORE].copy(),
+                    after=es[i, L.EVS_AFTER].copy(),
+                    modes_before=dict(mode),
+                    kinds=kinds,
+                    n_touchdowns=len(tds),
+                )
+            )
         for k, leg, _ in kinds:
             if k in (L.EK_TOUCHDOWN, L.EK_STICK, L.EK_STRUT_END):
                 mode[leg] = "stick"
@@ -273,8 +297,11 @@ def _landings(result):
 def _single_toe(landings):
     """Landings where the landing toe is the only one that can take an impulse (the other
     leg in flight, or sliding: its massless toe on a compliant leg carries none)."""
-    return [d for d in landings if d.n_touchdowns == 1
-            and d.modes_before[d.other] in ("flight", "slide")]
+    return [
+        d
+        for d in landings
+        if d.n_touchdowns == 1 and d.modes_before[d.other] in ("flight", "slide")
+    ]
 
 
 def _pinned_landings(landings):
@@ -296,14 +323,14 @@ def _is_strut_landing(d, model):
 def runs():
     out = {}
     for model, mu in RUNS:
-        r = scoutsim.simulate(ROBOT, duration=DURATION, model=model,
-                              friction_coefficient=mu)
+        r = scoutsim.simulate(ROBOT, duration=DURATION, model=model, friction_coefficient=mu)
         assert r.outcome == "completed"
         out[(model, mu)] = _landings(r)
     return out
 
 
 # --- no-slip floor: the pin -------------------------------------------------------------
+
 
 @pytest.mark.parametrize("model", NO_SLIP_MODELS)
 def test_no_slip_touchdown_stops_toe_across_leg_and_positions_do_not_jump(runs, model):
@@ -353,6 +380,7 @@ def test_no_slip_impulse_acts_across_leg_only_and_toe_slides_into_spring(runs, m
 
 # --- momentum and energy ----------------------------------------------------------------
 
+
 @pytest.mark.parametrize("model", NO_SLIP_MODELS)
 def test_angular_momentum_about_contact_point_is_conserved(runs, model):
     """A single-toe impulse acts at the contact point, so the angular momentum of the whole
@@ -387,8 +415,11 @@ def test_touchdown_with_other_toe_pinned_gives_it_an_impulse_across_its_leg(runs
     its moment about the landing toe is the change of angular momentum about that point.
     The other toe stays stopped across its leg."""
     model = "II"
-    landings = [d for d in runs[(model, NO_SLIP)]
-                if d.n_touchdowns == 1 and d.modes_before[d.other] == "stick"]
+    landings = [
+        d
+        for d in runs[(model, NO_SLIP)]
+        if d.n_touchdowns == 1 and d.modes_before[d.other] == "stick"
+    ]
     assert len(landings) >= 3
     for d in landings:
         c1 = _leg(d.before, d.leg)["toe"]
@@ -399,7 +430,8 @@ def test_touchdown_with_other_toe_pinned_gives_it_an_impulse_across_its_leg(runs
         assert abs(p2 @ k2["u"]) <= REL_TOL * np.linalg.norm(dp)
         dh = _angular_momentum(d.after, model, c1) - _angular_momentum(d.before, model, c1)
         assert abs(dh - _cross(k2["toe"] - c1, p2)) <= REL_TOL * abs(
-            _angular_momentum(d.before, model, c1))
+            _angular_momentum(d.before, model, c1)
+        )
         assert abs(_toe_velocity_across(d.after, d.other)) < VEL_TOL
 
 
@@ -415,6 +447,7 @@ def test_kinetic_energy_lost_equals_recorded_loss_and_is_not_negative(runs, mode
 
 
 # --- Model II: the rigid belt -----------------------------------------------------------
+
 
 def test_model_ii_belt_is_rigid_through_the_impact(runs):
     """Section 3: the belt damper is so stiff against the gear-train inertia that the gear
@@ -432,6 +465,7 @@ def test_model_ii_belt_is_rigid_through_the_impact(runs):
 
 # --- the whole impact, solved independently ---------------------------------------------
 
+
 @pytest.mark.parametrize("model", NO_SLIP_MODELS)
 def test_independent_impact_solve_gives_recorded_velocities_and_impulse(runs, model):
     """The post-impact state is the rigid-body impact of section 3: solved here from a mass
@@ -440,15 +474,19 @@ def test_independent_impact_solve_gives_recorded_velocities_and_impulse(runs, mo
     recorded post-impact velocities and the recorded impulse of the landing toe."""
     nq = 7 if model == "II" else 5
     for d in runs[(model, NO_SLIP)]:
-        pinned = [k for k in (0, 1) if k == d.leg or d.modes_before[k] in ("stick", "strut")
-                  or (d.n_touchdowns == 2)]
+        pinned = [
+            k
+            for k in (0, 1)
+            if k == d.leg or d.modes_before[k] in ("stick", "strut") or (d.n_touchdowns == 2)
+        ]
         struts = [k for k in (0, 1) if d.modes_before[k] == "strut"]
         dq1, impulses = _solve_impact(d.before, model, pinned, struts)
-        assert np.allclose(d.after[7:7 + nq], dq1, rtol=0.0, atol=VEL_TOL)
+        assert np.allclose(d.after[7 : 7 + nq], dq1, rtol=0.0, atol=VEL_TOL)
         assert np.allclose(impulses[d.leg], d.recorded_impulse, rtol=REL_TOL, atol=1e-12)
 
 
 # --- Coulomb floor: the friction cone ---------------------------------------------------
+
 
 @pytest.mark.parametrize("model, mu", COULOMB_RUNS)
 def test_coulomb_touchdown_pins_only_inside_friction_cone(runs, model, mu):
@@ -462,8 +500,9 @@ def test_coulomb_touchdown_pins_only_inside_friction_cone(runs, model, mu):
     n_pinned = n_sliding = 0
     nq = 7 if model == "II" else 5
     for d in landings:
-        pinned = [d.leg] + [k for k in (0, 1)
-                            if k != d.leg and d.modes_before[k] in ("stick", "strut")]
+        pinned = [d.leg] + [
+            k for k in (0, 1) if k != d.leg and d.modes_before[k] in ("stick", "strut")
+        ]
         struts = [k for k in (0, 1) if k != d.leg and d.modes_before[k] == "strut"]
         _, impulses = _solve_impact(d.before, model, pinned, struts)
         pt, pn = impulses[d.leg]
@@ -477,7 +516,7 @@ def test_coulomb_touchdown_pins_only_inside_friction_cone(runs, model, mu):
             n_sliding += 1
             assert d.slid_without_pin_impulse()
             assert (d.normal, d.tangential, d.loss) == (0.0, 0.0, 0.0)
-            assert np.array_equal(d.after[7:7 + nq], d.before[7:7 + nq])
+            assert np.array_equal(d.after[7 : 7 + nq], d.before[7 : 7 + nq])
             assert _kinetic_energy(d.after, model) == _kinetic_energy(d.before, model)
     assert n_sliding > 0
     if mu == HIGH_MU:

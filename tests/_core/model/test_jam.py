@@ -29,10 +29,10 @@ def test_share_is_the_cosine_between_the_sliding_ground_force_and_the_leg():
     (G_t, G_n) and the leg axis, hip - toe; and G_n share sqrt(1 + mu^2) = F."""
     mu = 1.0
     P = robot_array(RobotParameters(), "II", friction_coefficient=mu)
-    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
-                         dtheta=2.0582517952283736)
-    r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
-                 friction_coefficient=mu)
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045, dtheta=2.0582517952283736)
+    r = simulate(
+        controller=_Zero(), initial_state=start, duration=0.6, model="II", friction_coefficient=mu
+    )
     n = 0
     for k in range(len(r.t)):
         for leg in range(2):
@@ -42,14 +42,14 @@ def test_share_is_the_cosine_between_the_sliding_ground_force_and_the_leg():
             gt, gn, f = r.aux[k, o + L.A_GT], r.aux[k, o + L.A_GN], r.aux[k, o + L.A_FAX]
             if gn < 1.0:
                 continue
-            direction = -1 if gt > 0.0 else 1      # friction opposes the slide
+            direction = -1 if gt > 0.0 else 1  # friction opposes the slide
             g = r.state[k, L.ITH] + r.state[k, L.IPHB + leg]
             share = slide_axial_share(g, direction, P)
-            axis = np.array([-math.sin(g), math.cos(g)])     # toe -> hip
+            axis = np.array([-math.sin(g), math.cos(g)])  # toe -> hip
             cosine = np.dot([gt, gn], axis) / math.hypot(gt, gn)
             assert abs(share - cosine) <= 1e-9
             assert abs(gn * share * math.sqrt(1.0 + mu * mu) - f) <= 1e-9 * max(1.0, abs(f))
-            assert share > JAM_AXIAL_SHARE      # no slide goes on beyond its jam level
+            assert share > JAM_AXIAL_SHARE  # no slide goes on beyond its jam level
             n += 1
     assert n > 20
 
@@ -75,13 +75,19 @@ def test_work_energy_balance_closes_through_a_jam():
     touchdown's) closes to 1e-7 J, as it does for runs without one (docs/model.md
     "Work-energy balance")."""
     from scoutsim.simulation.simulator import IntegratorSettings
-    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045,
-                         dtheta=2.0582517952283736)
-    r = simulate(controller=_Zero(), initial_state=start, duration=0.6, model="II",
-                 friction_coefficient=1.0, energy=True,
-                 integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))
+
+    start = InitialState(y=0.34340258828578274, dx=1.0757281538159045, dtheta=2.0582517952283736)
+    r = simulate(
+        controller=_Zero(),
+        initial_state=start,
+        duration=0.6,
+        model="II",
+        friction_coefficient=1.0,
+        energy=True,
+        integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11),
+    )
     jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
-    assert len(jams) >= 1 and jams[0, L.EVR_V3] > 1e-5      # a jam that dissipates
+    assert len(jams) >= 1 and jams[0, L.EVR_V3] > 1e-5  # a jam that dissipates
     b = r.energy_balance()
     assert abs(b.residual_J) < 1e-7
 
@@ -102,9 +108,15 @@ def test_toe_pressed_into_the_ground_at_the_friction_angle_stays_pinned():
     audit names); every jam's impulse dissipates and lies within the cone (to the jam
     level); and the run goes on to the robot's fall instead of a numerical failure."""
     from scoutsim.analysis.transition_audit import audit_transitions
+
     mu = 1.0
-    r = simulate(controller=_Zero(), initial_state=InitialState(**_PRESSED_START),
-                 duration=1.0, model="II", friction_coefficient=mu)
+    r = simulate(
+        controller=_Zero(),
+        initial_state=InitialState(**_PRESSED_START),
+        duration=1.0,
+        model="II",
+        friction_coefficient=mu,
+    )
     assert r.outcome == "fell"
     problems = audit_transitions(r).problems()
     assert all(p.endswith("pinned toe outside the friction cone") for p in problems), problems
@@ -131,9 +143,16 @@ def test_work_energy_balance_closes_through_a_locked_jam():
     start above; DOPRI5 at rtol 1e-10): the residual of the work-energy balance stays below
     1e-7 J, as for runs without a jam."""
     from scoutsim.simulation.simulator import IntegratorSettings
-    r = simulate(controller=_Zero(), initial_state=InitialState(**_PRESSED_START),
-                 duration=1.0, model="II", friction_coefficient=1.0, energy=True,
-                 integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11))
+
+    r = simulate(
+        controller=_Zero(),
+        initial_state=InitialState(**_PRESSED_START),
+        duration=1.0,
+        model="II",
+        friction_coefficient=1.0,
+        energy=True,
+        integrator=IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11),
+    )
     assert r.outcome == "fell"
     jams = r.events[r.events[:, L.EVR_KIND] == L.EK_JAM]
     assert len(jams) >= 2 and jams[:, L.EVR_V3].sum() > 1e-2

@@ -23,20 +23,25 @@ TORQUE_PER_AMP = N * ETA * ROBOT.torque_constant
 def runs():
     """3 s of Model I and Model II bounding on the default (Coulomb) floor, and Model I
     with a battery resistance (the voltage then sags with the current drawn)."""
-    return {"I": scoutsim.simulate(duration=3.0, model="I"),
-            "II": scoutsim.simulate(duration=3.0, model="II"),
-            "I_battery": scoutsim.simulate(ROBOT.replace(battery_resistance=0.2),
-                                           duration=3.0, model="I")}
+    return {
+        "I": scoutsim.simulate(duration=3.0, model="I"),
+        "II": scoutsim.simulate(duration=3.0, model="II"),
+        "I_battery": scoutsim.simulate(
+            ROBOT.replace(battery_resistance=0.2), duration=3.0, model="I"
+        ),
+    }
 
 
 def _current_law(tau_cmd, w, vb, robot):
     """Section 4: i = tau / (N eta K_T), limited to |i| <= i_max and to the torque-speed
     line (-V_b - K_w w) / R_A <= i <= (V_b - K_w w) / R_A."""
     i = tau_cmd / TORQUE_PER_AMP
-    lo = np.maximum(-robot.current_limit, (-vb - robot.speed_constant * w)
-                    / robot.armature_resistance)
-    hi = np.minimum(robot.current_limit, (vb - robot.speed_constant * w)
-                    / robot.armature_resistance)
+    lo = np.maximum(
+        -robot.current_limit, (-vb - robot.speed_constant * w) / robot.armature_resistance
+    )
+    hi = np.minimum(
+        robot.current_limit, (vb - robot.speed_constant * w) / robot.armature_resistance
+    )
     return np.clip(i, lo, hi), lo, hi
 
 
@@ -54,8 +59,9 @@ def test_amplifier_current_follows_the_torque_speed_line_and_the_limit(runs, nam
         w = r.motor_speed(leg)
         expected, lo, hi = _current_law(r.hip_torque_commanded(leg), w, vb, robot)
         assert np.allclose(i, expected, rtol=1e-12, atol=1e-9)
-        at_line = (np.isclose(i, lo) & (lo > -robot.current_limit)) | \
-                  (np.isclose(i, hi) & (hi < robot.current_limit))
+        at_line = (np.isclose(i, lo) & (lo > -robot.current_limit)) | (
+            np.isclose(i, hi) & (hi < robot.current_limit)
+        )
         at_limit = np.isclose(np.abs(i), robot.current_limit)
         assert at_line.mean() > 0.05 and at_limit.mean() > 0.05
         assert (~at_line & ~at_limit).mean() > 0.05
@@ -65,12 +71,18 @@ def test_battery_voltage_sags_with_the_power_drawn(runs):
     """Section 4: V_b = V_oc - R_b I_b, the battery current I_b = P / V_b carrying the
     power P = sum over the four motors of i (R_A i + K_w w_m)."""
     r = runs["I_battery"]
-    p = sum(ROBOT.legs_per_virtual_leg * r.motor_current(leg)
-            * (ROBOT.armature_resistance * r.motor_current(leg)
-               + ROBOT.speed_constant * r.motor_speed(leg)) for leg in L.LEG_NAMES)
+    p = sum(
+        ROBOT.legs_per_virtual_leg
+        * r.motor_current(leg)
+        * (
+            ROBOT.armature_resistance * r.motor_current(leg)
+            + ROBOT.speed_constant * r.motor_speed(leg)
+        )
+        for leg in L.LEG_NAMES
+    )
     vb = r.battery_voltage
     assert np.allclose(vb, ROBOT.battery_voltage - 0.2 * p / vb, rtol=1e-9, atol=1e-9)
-    assert vb.min() < ROBOT.battery_voltage - 1.0     # it does sag
+    assert vb.min() < ROBOT.battery_voltage - 1.0  # it does sag
 
 
 @pytest.mark.parametrize("name", ["I", "II"])
@@ -79,8 +91,9 @@ def test_delivered_torque_is_n_eta_kt_i(runs, name):
     paper's constant maximum efficiency), in both directions of power flow."""
     r = runs[name]
     for leg in L.LEG_NAMES:
-        assert np.allclose(r.hip_torque_applied(leg), TORQUE_PER_AMP * r.motor_current(leg),
-                           rtol=1e-12, atol=1e-12)
+        assert np.allclose(
+            r.hip_torque_applied(leg), TORQUE_PER_AMP * r.motor_current(leg), rtol=1e-12, atol=1e-12
+        )
 
 
 def test_sliding_toe_friction_opposes_its_motion(runs):
@@ -143,6 +156,7 @@ def test_motor_current_is_odd_beyond_both_limits():
     (command, speed), i(-tau, -w) = -i(tau, w), at every command and speed."""
     from scoutsim._core.model.actuator import motor_current
     from scoutsim._core.model.packing import robot_array
+
     P = robot_array(ROBOT, "I")
     vb = ROBOT.battery_voltage
     w_edge = (vb + ROBOT.armature_resistance * ROBOT.current_limit) / ROBOT.speed_constant
@@ -150,7 +164,8 @@ def test_motor_current_is_odd_beyond_both_limits():
         for tau in (-80.0, -31.0, -5.0, 0.0, 5.0, 31.0, 80.0):
             i = motor_current(tau, w, vb, 0, P)
             assert motor_current(-tau, -w, vb, 0, P) == -i
-            if w > w_edge:     # the line's current, beyond the limit, whatever the command
-                assert i == pytest.approx((vb - ROBOT.speed_constant * w)
-                                          / ROBOT.armature_resistance, rel=1e-12)
+            if w > w_edge:  # the line's current, beyond the limit, whatever the command
+                assert i == pytest.approx(
+                    (vb - ROBOT.speed_constant * w) / ROBOT.armature_resistance, rel=1e-12
+                )
                 assert i < -ROBOT.current_limit

@@ -76,13 +76,16 @@ def test_axial_leg_force_is_spring_damper_and_friction(runs, model):
     for k, leg in enumerate(L.LEG_NAMES):
         phi, ll, ld, mode = _leg_kinematics(r, k)
         loaded = (mode == L.STICK) | (mode == L.SLIDE)
-        tau_hip = (r.aux[:, k * L.NAUX_LEG + L.A_TAU_BELT] if model == "II"
-                   else r.hip_torque_applied(leg))
+        tau_hip = (
+            r.aux[:, k * L.NAUX_LEG + L.A_TAU_BELT] if model == "II" else r.hip_torque_applied(leg)
+        )
         spring = ROBOT.leg_stiffness * (ROBOT.leg_rest_length - ll)
         damper = ROBOT.leg_damping * ld
-        angle = ROBOT.leg_damping * ROBOT.leg_damping_angle_coefficient * phi ** 2 * ld
-        level = (ROBOT.leg_friction_force
-                 + ROBOT.leg_friction_side_load_coefficient * np.abs(tau_hip) / ll)
+        angle = ROBOT.leg_damping * ROBOT.leg_damping_angle_coefficient * phi**2 * ld
+        level = (
+            ROBOT.leg_friction_force
+            + ROBOT.leg_friction_side_load_coefficient * np.abs(tau_hip) / ll
+        )
         friction = level * np.clip(ld / LEG_FRICTION_SPEED, -1.0, 1.0)
         expected = npl * (spring - damper - angle - friction)
         f = np.asarray(r.leg_axial_force(leg))
@@ -91,8 +94,15 @@ def test_axial_leg_force_is_spring_damper_and_friction(runs, model):
         for part in (damper, angle, friction):
             assert np.max(np.abs(npl * part[loaded])) > 2.0
         # the side-load part of the friction acts too
-        assert np.max(npl * ROBOT.leg_friction_side_load_coefficient
-                      * np.abs(tau_hip[loaded]) / ll[loaded]) > 1.0
+        assert (
+            np.max(
+                npl
+                * ROBOT.leg_friction_side_load_coefficient
+                * np.abs(tau_hip[loaded])
+                / ll[loaded]
+            )
+            > 1.0
+        )
         n += loaded.sum()
     assert n > 1000
 

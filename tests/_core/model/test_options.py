@@ -43,8 +43,8 @@ def test_leg_friction_shifts_the_flight_leg_rest_to_fc_over_k():
     r = scoutsim.simulate(robot, duration=3.0, model="I")
     dt = r.provenance["control_period_s"]
     v_r = 1e-3
-    rest = fc / ROBOT.leg_stiffness                                  # 2.84 mm
-    upper = (fc + ROBOT.leg_damping * v_r) / ROBOT.leg_stiffness     # 2.857 mm
+    rest = fc / ROBOT.leg_stiffness  # 2.84 mm
+    upper = (fc + ROBOT.leg_damping * v_r) / ROBOT.leg_stiffness  # 2.857 mm
     fast, creep = [], []
     for k, leg in enumerate(L.LEG_NAMES):
         flight = r.modes[:, L.RM_CONTACT_B + k] == L.FLIGHT
@@ -106,10 +106,10 @@ def test_gearbox_losses_oppose_the_power_flow():
         motoring = away & (tau0 * w > 0.0)
         back = away & (tau0 * w <= 0.0)
         mag = np.maximum(np.abs(tau0) - ti, 0.0) / (1.0 + c)
-        assert np.allclose(out[motoring], (np.sign(tau0) * mag)[motoring], rtol=1e-12,
-                           atol=1e-12)
-        assert np.allclose(out[back], (-np.sign(w) * (np.abs(tau0) + ti) / (1.0 - c))[back],
-                           rtol=1e-12)
+        assert np.allclose(out[motoring], (np.sign(tau0) * mag)[motoring], rtol=1e-12, atol=1e-12)
+        assert np.allclose(
+            out[back], (-np.sign(w) * (np.abs(tau0) + ti) / (1.0 - c))[back], rtol=1e-12
+        )
         n_motor += motoring.sum()
         n_back += back.sum()
     assert n_motor > 100 and n_back > 100

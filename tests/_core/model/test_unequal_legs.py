@@ -33,16 +33,28 @@ from scoutsim.state import InitialState, standing_leg_compressions, standing_sta
 
 #: every per-leg quantity different between the legs, the torso COM 3 cm ahead of midway
 UNEQUAL = dict(
-    com_offset=0.03, leg_mass=(1.0, 0.75), leg_inertia=(0.0052, 0.0036),
-    leg_com_distance=(0.16, 0.13), leg_rest_length=(0.323, 0.305),
-    leg_stiffness=(3520.0, 3950.0), leg_damping=(55.0, 62.0),
-    planetary_ratio=(5.0, 4.6), sprocket_ratio=(20.4, 21.0),
-    gearbox_efficiency=(0.8, 0.77), sprocket_efficiency=(0.816, 0.84),
-    drive_gear_inertia=(2.4e-6, 2.1e-6), driven_gear_inertia=(0.0118, 0.013),
-    joint_stiction=(0.021, 0.028), joint_damping=(3.5e-5, 4.6e-5),
-    belt_stiffness=(401.0, 372.0), belt_damping=(0.23, 0.28),
-    torque_constant=(0.0302, 0.0295), speed_constant=(0.0302, 0.0295),
-    armature_resistance=(0.611, 0.66), current_limit=(12.0, 11.2))
+    com_offset=0.03,
+    leg_mass=(1.0, 0.75),
+    leg_inertia=(0.0052, 0.0036),
+    leg_com_distance=(0.16, 0.13),
+    leg_rest_length=(0.323, 0.305),
+    leg_stiffness=(3520.0, 3950.0),
+    leg_damping=(55.0, 62.0),
+    planetary_ratio=(5.0, 4.6),
+    sprocket_ratio=(20.4, 21.0),
+    gearbox_efficiency=(0.8, 0.77),
+    sprocket_efficiency=(0.816, 0.84),
+    drive_gear_inertia=(2.4e-6, 2.1e-6),
+    driven_gear_inertia=(0.0118, 0.013),
+    joint_stiction=(0.021, 0.028),
+    joint_damping=(3.5e-5, 4.6e-5),
+    belt_stiffness=(401.0, 372.0),
+    belt_damping=(0.23, 0.28),
+    torque_constant=(0.0302, 0.0295),
+    speed_constant=(0.0302, 0.0295),
+    armature_resistance=(0.611, 0.66),
+    current_limit=(12.0, 11.2),
+)
 ROBOT = scoutsim.RobotParameters(**UNEQUAL)
 REFERENCE = IntegratorSettings(method="dopri5")
 
@@ -90,14 +102,16 @@ def test_per_leg_values_read_back_and_name_the_leg():
 
 def test_a_robot_file_gives_pairs_in_its_units(tmp_path):
     f = tmp_path / "robot.toml"
-    f.write_text('[robot]\nleg_rest_length = [0.323, 0.30]\n'
-                 'leg_mass = { value = [1000, 800], unit = "g" }\ncom_offset = 0.02\n'
-                 '[motor]\ncurrent_limit = [12.0, 12.0]\n')
+    f.write_text(
+        "[robot]\nleg_rest_length = [0.323, 0.30]\n"
+        'leg_mass = { value = [1000, 800], unit = "g" }\ncom_offset = 0.02\n'
+        "[motor]\ncurrent_limit = [12.0, 12.0]\n"
+    )
     r = load_robot(f)
     assert r.leg_rest_length == (0.323, 0.30)
     assert r.leg_mass == (1.0, 0.8)
     assert r.com_offset == 0.02
-    assert r.current_limit == 12.0          # an equal pair is the one value
+    assert r.current_limit == 12.0  # an equal pair is the one value
 
 
 def test_equal_pairs_are_the_scalar_robot_bit_for_bit():
@@ -114,8 +128,7 @@ def test_equal_pairs_are_the_scalar_robot_bit_for_bit():
 def test_balance_closes_for_unequal_legs(model):
     """Input = losses + change of mechanical energy over 4 s of bounding of the unequal
     robot (Coulomb floor, reference integrator), as for Scout II (test_energy.py)."""
-    r = scoutsim.simulate(ROBOT, duration=4.0, model=model, integrator=REFERENCE,
-                          energy=True)
+    r = scoutsim.simulate(ROBOT, duration=4.0, model=model, integrator=REFERENCE, energy=True)
     assert r.outcome == "completed"
     b = r.energy_balance()
     assert b.input_J > 40.0
@@ -126,11 +139,13 @@ def test_balance_closes_for_unequal_legs(model):
 def test_passive_massless_unequal_legs_conserve_energy():
     """Massless undamped legs of different stiffness and rest length under a torso whose
     COM is off centre: the passive model is conservative."""
-    robot = ROBOT.replace(leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0,
-                          leg_com_distance=(0.16, 0.13))
-    r = scoutsim.simulate(robot, duration=2.0, model="passive", energy=True,
-                          passive_touchdown_angles=(0.25, 0.2))
-    assert r.outcome in ("completed", "fell")      # (a fall ends the run; no loss before)
+    robot = ROBOT.replace(
+        leg_mass=0.0, leg_inertia=0.0, leg_damping=0.0, leg_com_distance=(0.16, 0.13)
+    )
+    r = scoutsim.simulate(
+        robot, duration=2.0, model="passive", energy=True, passive_touchdown_angles=(0.25, 0.2)
+    )
+    assert r.outcome in ("completed", "fell")  # (a fall ends the run; no loss before)
     assert len(r.event_times("touchdown")) >= 4
     e = r.energy
     assert np.max(np.abs(e - e[0])) < 1e-6 * abs(e[0])
@@ -146,24 +161,48 @@ def test_mirrored_robot_moves_as_the_mirror_image(massless):
     image of the original passive trajectory, through touchdowns and lift-offs, to the
     integration tolerance."""
     robot = ROBOT.replace(leg_mass=0.0, leg_inertia=0.0) if massless else ROBOT
-    start = InitialState(x=0.1, y=0.37, theta=0.06, dx=0.8, dy=-0.2, dtheta=0.7,
-                         phi_back=0.15, phi_front=-0.05, dphi_back=-1.0, dphi_front=2.0)
-    mirror_start = InitialState(x=-0.1, y=0.37, theta=-0.06, dx=-0.8, dy=-0.2, dtheta=-0.7,
-                                phi_back=0.05, phi_front=-0.15, dphi_back=-2.0,
-                                dphi_front=1.0)
+    start = InitialState(
+        x=0.1,
+        y=0.37,
+        theta=0.06,
+        dx=0.8,
+        dy=-0.2,
+        dtheta=0.7,
+        phi_back=0.15,
+        phi_front=-0.05,
+        dphi_back=-1.0,
+        dphi_front=2.0,
+    )
+    mirror_start = InitialState(
+        x=-0.1,
+        y=0.37,
+        theta=-0.06,
+        dx=-0.8,
+        dy=-0.2,
+        dtheta=-0.7,
+        phi_back=0.05,
+        phi_front=-0.15,
+        dphi_back=-2.0,
+        dphi_front=1.0,
+    )
     td = (0.25, 0.15)
     integ = IntegratorSettings(method="dopri5", rtol=1e-10, atol=1e-11)
     kw = dict(duration=0.6, model="passive", integrator=integ, friction_coefficient=math.inf)
     a = scoutsim.simulate(robot, initial_state=start, passive_touchdown_angles=td, **kw)
-    b = scoutsim.simulate(_mirrored(robot), initial_state=mirror_start,
-                          passive_touchdown_angles=(-td[1], -td[0]), **kw)
+    b = scoutsim.simulate(
+        _mirrored(robot),
+        initial_state=mirror_start,
+        passive_touchdown_angles=(-td[1], -td[0]),
+        **kw,
+    )
     assert a.outcome == b.outcome == "completed"
     assert len(a.event_times("touchdown")) >= 2
     np.testing.assert_array_equal(a.t, b.t)
     np.testing.assert_allclose(b.state, _mirror_states(a.state), rtol=0, atol=1e-6)
     # and the robot is really asymmetric: its own mirror start moves otherwise
-    c = scoutsim.simulate(robot, initial_state=mirror_start,
-                          passive_touchdown_angles=(-td[1], -td[0]), **kw)
+    c = scoutsim.simulate(
+        robot, initial_state=mirror_start, passive_touchdown_angles=(-td[1], -td[0]), **kw
+    )
     assert np.max(np.abs(c.state - _mirror_states(a.state))) > 1e-3
 
 
@@ -174,15 +213,15 @@ def test_the_standing_state_is_a_static_equilibrium(model):
     carry the weight (their forces sum to m g) with no moment about the robot's COM."""
     st = standing_state(ROBOT, model)
     s = np.array(st.state)
-    assert abs(s[L.ITH]) > 1e-3                       # the unequal robot stands pitched
+    assert abs(s[L.ITH]) > 1e-3  # the unequal robot stands pitched
     P = robot_array(ROBOT, model, friction_coefficient=math.inf)
     mi = np.zeros(L.NMI, dtype=np.int64)
-    mi[L.MI_CONTACT_B:L.MI_CONTACT_B + 2] = L.STICK
+    mi[L.MI_CONTACT_B : L.MI_CONTACT_B + 2] = L.STICK
     mf = np.array(st.toe_anchors, dtype=float)
     ds = np.zeros(L.NS)
     aux = np.zeros(L.NAUX)
     assert ev.evaluate(s, P, mi, mf, np.zeros(2), ds, aux)
-    assert np.max(np.abs(ds[L.NQ:2 * L.NQ])) < 1e-9
+    assert np.max(np.abs(ds[L.NQ : 2 * L.NQ])) < 1e-9
     gn = [aux[leg * L.NAUX_LEG + L.A_GN] for leg in range(2)]
     assert sum(gn) == pytest.approx(ROBOT.total_mass * ROBOT.gravity, rel=1e-12)
     comps = standing_leg_compressions(ROBOT)
@@ -198,15 +237,18 @@ def test_unequal_robot_starts_from_standing_and_bounds():
     lighter) at rest at its standing leg angles, then steps and pushes it into the bound
     (the start-up's set-points are Scout II's: the robot above, whose every leg quantity
     differs, starts but does not reach its bound within 4 s)."""
-    robot = scoutsim.RobotParameters(com_offset=0.015, leg_mass=(1.0, 0.9),
-                                     leg_inertia=(0.0052, 0.0045),
-                                     leg_com_distance=(0.16, 0.15))
+    robot = scoutsim.RobotParameters(
+        com_offset=0.015,
+        leg_mass=(1.0, 0.9),
+        leg_inertia=(0.0052, 0.0045),
+        leg_com_distance=(0.16, 0.15),
+    )
     assert abs(standing_state(robot).state[L.ITH]) > 1e-3
     r = scoutsim.simulate(robot, duration=4.0, model="II", initial_state="standing")
     assert r.outcome == "completed"
     stand = r.t < 0.15
-    assert np.max(np.abs(r.state[stand, L.NQ:2 * L.NQ])) < 1e-6     # at rest while it stands
+    assert np.max(np.abs(r.state[stand, L.NQ : 2 * L.NQ])) < 1e-6  # at rest while it stands
     late = r.t > 2.0
-    for leg in ("back", "front"):                 # bounding: each leg lands every stride
+    for leg in ("back", "front"):  # bounding: each leg lands every stride
         assert np.count_nonzero(r.event_times("touchdown", leg) > 2.0) >= 4
     assert np.min(r.state[late, L.NQ + L.IX]) > 0.0

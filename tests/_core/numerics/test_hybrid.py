@@ -13,9 +13,16 @@ TIGHT = IntegratorSettings(rtol=1e-10, atol=1e-10)
 
 
 def passive(init, duration, td_deg=0.0, integ=TIGHT, robot=MASSLESS, **kw):
-    return scoutsim.simulate(robot, None, init, duration, model="passive",
-                             passive_touchdown_angles=(math.radians(td_deg),) * 2,
-                             integrator=integ, **kw)
+    return scoutsim.simulate(
+        robot,
+        None,
+        init,
+        duration,
+        model="passive",
+        passive_touchdown_angles=(math.radians(td_deg),) * 2,
+        integrator=integ,
+        **kw,
+    )
 
 
 def test_energy_conserved_passive_pronking_5s():
@@ -44,12 +51,18 @@ def test_energy_conserved_passive_bounding_with_pitch():
 def test_energy_lost_only_in_touchdown_impacts():
     """Massive undamped legs, no actuators: energy changes only by the reported impact losses."""
     robot = RobotParameters(leg_damping=0.0)
-    r = scoutsim.simulate(robot, None, InitialState(y=0.36, dx=1.0, theta=0.0, dtheta=0.0), 0.6,
-                          friction_coefficient=math.inf,
-                          model="passive", integrator=TIGHT)
+    r = scoutsim.simulate(
+        robot,
+        None,
+        InitialState(y=0.36, dx=1.0, theta=0.0, dtheta=0.0),
+        0.6,
+        friction_coefficient=math.inf,
+        model="passive",
+        integrator=TIGHT,
+    )
     imp = r.impacts()
     assert len(imp) >= 2
-    assert np.all(imp[:, 4] > 0.0)          # each impact loses kinetic energy
+    assert np.all(imp[:, 4] > 0.0)  # each impact loses kinetic energy
     E = r.energy
     lost = E[0] - E[-1]
     assert lost == pytest.approx(imp[:, 4].sum(), rel=1e-6, abs=1e-7)
@@ -81,8 +94,9 @@ def test_gait_metrics_converge_with_tolerance():
     """Stride metrics at rtol 1e-6 and 1e-10 agree to 1e-4 relative (Model I, first strides)."""
     out = []
     for rtol in (1e-6, 1e-10):
-        r = scoutsim.simulate(duration=1.5, model="I",
-                              integrator=IntegratorSettings(rtol=rtol, atol=rtol))
+        r = scoutsim.simulate(
+            duration=1.5, model="I", integrator=IntegratorSettings(rtol=rtol, atol=rtol)
+        )
         out.append(r)
     a, b = out
     ta = a.events[np.isin(a.events[:, 1], [1, 2]), 0]

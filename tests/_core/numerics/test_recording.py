@@ -44,8 +44,7 @@ def run_ii():
 def test_recording_steps_changes_nothing(run_ii):
     plain = scoutsim.simulate(duration=3.0, model="II")
     for name in ("t", "state", "aux", "modes", "events", "event_states"):
-        np.testing.assert_array_equal(getattr(run_ii, name), getattr(plain, name),
-                                      err_msg=name)
+        np.testing.assert_array_equal(getattr(run_ii, name), getattr(plain, name), err_msg=name)
     assert plain.steps is None
 
 
@@ -83,18 +82,19 @@ def test_touchdown_states_toe_on_ground_configuration_kept_energies_logged(run_i
         # leg length alone: the configuration is kept, the other leg's length too
         assert abs(toe_height(before)) < 1e-9, j
         assert abs(toe_height(after)) < 1e-14, j
-        np.testing.assert_array_equal(after[:L.NQ], before[:L.NQ])
+        np.testing.assert_array_equal(after[: L.NQ], before[: L.NQ])
         assert after[L.IL_B + 1 - leg] == before[L.IL_B + 1 - leg]
         kin = []
         for state, col in ((before, L.EVR_E_BEFORE), (after, L.EVR_E_AFTER)):
-            q, dq, l = state[:L.NQ], state[L.NQ:2 * L.NQ], state[L.IL_B:L.IL_B + 2]
+            q, dq, l = state[: L.NQ], state[L.NQ : 2 * L.NQ], state[L.IL_B : L.IL_B + 2]
             kin.append(sym.kinetic_energy(q, dq, prm))
             e = kin[-1] + sym.potential_energy(q, l, prm)
             assert e == pytest.approx(ev[j, col], rel=1e-10), (j, col)
         # the kinetic energy the impact dissipated (logged as v3) is the drop between the
         # two states, when this is the only touchdown at that instant
-        alone = np.sum((ev[:, L.EVR_T] == ev[j, L.EVR_T])
-                       & (ev[:, L.EVR_KIND] == L.EK_TOUCHDOWN)) == 1
+        alone = (
+            np.sum((ev[:, L.EVR_T] == ev[j, L.EVR_T]) & (ev[:, L.EVR_KIND] == L.EK_TOUCHDOWN)) == 1
+        )
         if alone:
             assert kin[0] - kin[1] == pytest.approx(ev[j, L.EVR_V3], rel=1e-9, abs=1e-12)
 
@@ -109,7 +109,7 @@ def test_steps_tile_the_run(run_ii):
     assert on_grid.all()
     # a 1 kHz run of 3 s at the default tolerance takes more than one step per period
     assert len(st) > len(run_ii.t)
-    modes = st[:, L.STP_CONTACT_B:L.STP_CONTACT_B + 2]
+    modes = st[:, L.STP_CONTACT_B : L.STP_CONTACT_B + 2]
     assert set(np.unique(modes)) <= set(range(len(L.CONTACT_NAMES)))
 
 
@@ -120,11 +120,10 @@ def test_a_sample_is_the_last_step_unless_settling_changed_a_mode_there(run_ii, 
     transition logged at the sample time; the new mode projects the state). Measured: the
     3 s Model II run has no such sample, the 3 s Model I run one (a slide start moving a
     leg length at 2.941 s)."""
-    r = run_ii if model == "II" else scoutsim.simulate(duration=3.0, model="I",
-                                                       record_steps=True)
+    r = run_ii if model == "II" else scoutsim.simulate(duration=3.0, model="I", record_steps=True)
     st = r.steps
     idx = np.searchsorted(st[:, L.STP_T], r.t[1:], side="right") - 1
-    same = np.all(st[idx, L.STP_STATE:L.STP_STATE + L.NS] == r.state[1:], axis=1)
+    same = np.all(st[idx, L.STP_STATE : L.STP_STATE + L.NS] == r.state[1:], axis=1)
     controller = [L.EK_CTRL_TOUCHDOWN, L.EK_CTRL_LIFTOFF, L.EK_CTRL_SWEEP]
     plant = r.events[~np.isin(r.events[:, L.EVR_KIND], controller), L.EVR_T]
     settled_here = np.isin(r.t[1:], plant)
@@ -133,8 +132,7 @@ def test_a_sample_is_the_last_step_unless_settling_changed_a_mode_there(run_ii, 
 
 def test_step_recording_survives_chunking_and_buffer_growth(monkeypatch):
     whole = scoutsim.simulate(duration=1.5, model="I", record_steps=True, chunk_seconds=1.5)
-    chunked = scoutsim.simulate(duration=1.5, model="I", record_steps=True,
-                                chunk_seconds=0.001)
+    chunked = scoutsim.simulate(duration=1.5, model="I", record_steps=True, chunk_seconds=0.001)
     np.testing.assert_array_equal(whole.steps, chunked.steps)
     np.testing.assert_array_equal(whole.state, chunked.state)
     # a buffer with room for 16 steps beyond the headroom grows after the first periods
@@ -142,7 +140,7 @@ def test_step_recording_survives_chunking_and_buffer_growth(monkeypatch):
     grown = scoutsim.simulate(duration=1.5, model="I", record_steps=True)
     assert len(grown.steps) > 16
     np.testing.assert_array_equal(grown.steps, whole.steps)
-    assert len(whole.steps) == whole.stats["steps"]   # (this run has no zero-length event step)
+    assert len(whole.steps) == whole.stats["steps"]  # (this run has no zero-length event step)
 
 
 def test_saved_result_keeps_event_states_and_steps(run_ii, tmp_path):

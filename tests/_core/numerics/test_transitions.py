@@ -42,7 +42,7 @@ def _touchdown_state(P, leg, dphi, dalpha, dx=1.0, dy=-0.6, dtheta=0.5):
     l0 = P[L.P_L0]
     sL = (2 * leg - 1) * P[L.P_L]
     g = th + phi[leg]
-    s[L.IY] = -sL * math.sin(th) + l0 * math.cos(g)       # toe height exactly 0
+    s[L.IY] = -sL * math.sin(th) + l0 * math.cos(g)  # toe height exactly 0
     s[L.ITH] = th
     s[L.IPHB], s[L.IPHF] = phi
     s[L.IALB], s[L.IALF] = phi
@@ -53,14 +53,21 @@ def _touchdown_state(P, leg, dphi, dalpha, dx=1.0, dy=-0.6, dtheta=0.5):
     return s
 
 
-@pytest.mark.parametrize("mode_before,dphi,dalpha", [
-    (L.STUCK, 2.0, 0.0), (L.STUCK, -3.0, 0.0),
-    (L.SLIP_POS, 1.1, 1.1), (L.SLIP_POS, 6.0, 5.0),
-    (L.SLIP_NEG, -1.5, -1.2), (L.SLIP_NEG, -6.0, -6.5),
-])
+@pytest.mark.parametrize(
+    "mode_before,dphi,dalpha",
+    [
+        (L.STUCK, 2.0, 0.0),
+        (L.STUCK, -3.0, 0.0),
+        (L.SLIP_POS, 1.1, 1.1),
+        (L.SLIP_POS, 6.0, 5.0),
+        (L.SLIP_NEG, -1.5, -1.2),
+        (L.SLIP_NEG, -6.0, -6.5),
+    ],
+)
 @pytest.mark.parametrize("leg", [0, 1])
-def test_touchdown_impact_rigid_belt_and_slip_mode_follows_new_gear_rate(mode_before, dphi,
-                                                                          dalpha, leg):
+def test_touchdown_impact_rigid_belt_and_slip_mode_follows_new_gear_rate(
+    mode_before, dphi, dalpha, leg
+):
     P = robot_array(RobotParameters(), "II")
     s = _touchdown_state(P, leg, dphi, dalpha)
     mi = np.zeros(L.NMI, dtype=np.int64)
@@ -75,7 +82,7 @@ def test_touchdown_impact_rigid_belt_and_slip_mode_follows_new_gear_rate(mode_be
     before = s.copy()
     out = np.zeros(L.NIMP)
     assert impact(s, P, mi, mf, out)
-    dq0, dq1 = before[L.NQ:2 * L.NQ], s[L.NQ:2 * L.NQ]
+    dq0, dq1 = before[L.NQ : 2 * L.NQ], s[L.NQ : 2 * L.NQ]
     for lg in (0, 1):
         # rigid belt: after the impact the gear rate equals the leg rate
         assert dq1[L.IALB + lg] == pytest.approx(dq1[L.IPHB + lg], abs=1e-10)
@@ -84,8 +91,8 @@ def test_touchdown_impact_rigid_belt_and_slip_mode_follows_new_gear_rate(mode_be
         assert w != 0.0
         assert mi[L.MI_MOTOR_B + lg] == (L.SLIP_POS if w > 0 else L.SLIP_NEG)
     # the kinetic energy lost is the one logged, and it is a loss
-    ke0 = kinetic_energy(before[:L.NQ], dq0, P)
-    ke1 = kinetic_energy(s[:L.NQ], dq1, P)
+    ke0 = kinetic_energy(before[: L.NQ], dq0, P)
+    ke1 = kinetic_energy(s[: L.NQ], dq1, P)
     assert out[L.IMP_ENERGY_LOST] == pytest.approx(ke0 - ke1, rel=1e-9, abs=1e-12)
     assert out[L.IMP_ENERGY_LOST] >= 0.0
 
@@ -100,10 +107,12 @@ def test_touchdown_that_reverses_a_slipping_gear_train_leaves_it_slipping_backwa
     mi[L.MI_CONTACT_B] = L.STICK
     mi[L.MI_MOTOR_B] = mi[L.MI_MOTOR_F] = L.SLIP_POS
     sL = -P[L.P_L]
-    mf[L.MF_ANCHOR_B] = s[L.IX] + sL * math.cos(s[L.ITH]) + P[L.P_L0] * math.sin(s[L.ITH] + s[L.IPHB])
+    mf[L.MF_ANCHOR_B] = (
+        s[L.IX] + sL * math.cos(s[L.ITH]) + P[L.P_L0] * math.sin(s[L.ITH] + s[L.IPHB])
+    )
     out = np.zeros(L.NIMP)
     assert impact(s, P, mi, mf, out)
-    assert s[L.NQ + L.IALB] < 0.0          # reversed by the impulse
+    assert s[L.NQ + L.IALB] < 0.0  # reversed by the impulse
     assert mi[L.MI_MOTOR_B] == L.SLIP_NEG
 
 
@@ -113,8 +122,13 @@ DETECT_5_4 = ControllerParameters().replace(touchdown_compression=5e-3, liftoff_
 
 @pytest.fixture(scope="module")
 def model_ii_no_slip():
-    return scoutsim.simulate(controller=DETECT_5_4, initial_state=NOSE_UP, duration=20.0,
-                             model="II", friction_coefficient=math.inf)
+    return scoutsim.simulate(
+        controller=DETECT_5_4,
+        initial_state=NOSE_UP,
+        duration=20.0,
+        model="II",
+        friction_coefficient=math.inf,
+    )
 
 
 def test_model_ii_no_slip_bounds_steadily_from_the_nose_up_start(model_ii_no_slip):
@@ -154,16 +168,18 @@ def _starts(n):
     rates = np.radians([-100.0, -30.0, 40.0, 110.0, 180.0])
     heights = (0.33, 0.37)
     grid = list(itertools.product(speeds, rates, heights))
-    return [InitialState(y=float(h), theta=0.0, dx=float(v), dtheta=float(w))
-            for v, w, h in grid[:n]]
+    return [
+        InitialState(y=float(h), theta=0.0, dx=float(v), dtheta=float(w)) for v, w, h in grid[:n]
+    ]
 
 
 def _audit_many_starts(model, floor):
     n_transitions = 0
     bad = {}
     for init in _starts(50):
-        r = scoutsim.simulate(initial_state=init, duration=3.0, model=model,
-                              friction_coefficient=floor)
+        r = scoutsim.simulate(
+            initial_state=init, duration=3.0, model=model, friction_coefficient=floor
+        )
         a = audit_transitions(r)
         n_transitions += a.n_transitions
         if a.problems():
@@ -191,8 +207,9 @@ def test_no_toe_in_flight_is_ever_below_the_ground(floor):
     worst = 0.0
     for model in ("ideal", "I", "II"):
         for init in _starts(50):
-            r = scoutsim.simulate(initial_state=init, duration=3.0, model=model,
-                                  friction_coefficient=floor)
+            r = scoutsim.simulate(
+                initial_state=init, duration=3.0, model=model, friction_coefficient=floor
+            )
             for leg in (L.BACK, L.FRONT):
                 flight = r.contact_mode(leg) == L.FLIGHT
                 toe_y = r.aux[flight, leg * L.NAUX_LEG + L.A_TOE_Y]
@@ -207,10 +224,14 @@ def test_a_toe_stub_becomes_a_slide_that_loads_the_leg():
     compressed as it is swept through (the leg force is never negative beyond rounding), and
     it lifts off again; no toe goes below the ground."""
     init = InitialState(y=0.37, theta=0.0, dx=0.5, dtheta=math.radians(-30.0))
-    r = scoutsim.simulate(initial_state=init, duration=3.0, model="ideal",
-                          friction_coefficient=math.inf)
-    stubs = [e for e in r.events if int(e[L.EVR_KIND]) == L.EK_SLIDE_START
-             and e[L.EVR_V3] == L.SLIDE_CAUSE_STUB]
+    r = scoutsim.simulate(
+        initial_state=init, duration=3.0, model="ideal", friction_coefficient=math.inf
+    )
+    stubs = [
+        e
+        for e in r.events
+        if int(e[L.EVR_KIND]) == L.EK_SLIDE_START and e[L.EVR_V3] == L.SLIDE_CAUSE_STUB
+    ]
     assert stubs
     assert audit_transitions(r).problems() == []
     t0, leg = stubs[0][L.EVR_T], int(stubs[0][L.EVR_LEG])
@@ -221,21 +242,27 @@ def test_a_toe_stub_becomes_a_slide_that_loads_the_leg():
     fax = r.aux[during, o + L.A_FAX]
     assert np.all(fax >= -1e-6 * 24.745 * 9.81)
     assert np.all(r.aux[during, o + L.A_GN] >= -1e-6 * 24.745 * 9.81)
-    assert fax.max() > 10.0                    # the swept leg is loaded
+    assert fax.max() > 10.0  # the swept leg is loaded
     assert np.all(r.state[during, L.IL_B + leg] <= 0.323)
 
 
 def test_transition_invariants_hold_for_the_massless_passive_model():
     from scoutsim.analysis.passive_orbits import passive_bounding_orbit
     from scoutsim.analysis.passive_reference import passive_robot
+
     orb = passive_bounding_orbit(1.3, 0.35, math.radians(50.0))
     z = orb.z
-    r = scoutsim.simulate(passive_robot(), None,
-                          InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]), 3.0,
-                          model="passive", passive_touchdown_angles=orb.touchdown_angles)
+    r = scoutsim.simulate(
+        passive_robot(),
+        None,
+        InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
+        3.0,
+        model="passive",
+        passive_touchdown_angles=orb.touchdown_angles,
+    )
     a = audit_transitions(r)
     assert a.n_transitions >= 20
-    assert a.total_logged_loss_J == pytest.approx(0.0, abs=1e-12)   # massless legs: no impact
+    assert a.total_logged_loss_J == pytest.approx(0.0, abs=1e-12)  # massless legs: no impact
     assert a.problems() == []
 
 
@@ -243,17 +270,29 @@ def test_stale_slip_direction_is_reconciled_without_an_impulse():
     """A resumed state whose back motor joint is recorded as slipping forward while the
     gear train turns backwards: the joint must slip on backwards with its rate kept (the
     old rule stuck it: an impulse stiction cannot give, a drop of energy nobody logged)."""
-    r = scoutsim.simulate(initial_state=NOSE_UP, duration=1.0, model="II",
-                          friction_coefficient=math.inf)
-    k = next(k for k in range(len(r.t))
-             if r.modes[k, L.RM_MOTOR_B] == L.SLIP_NEG and r.state[k, L.NQ + L.IALB] < -1.0)
+    r = scoutsim.simulate(
+        initial_state=NOSE_UP, duration=1.0, model="II", friction_coefficient=math.inf
+    )
+    k = next(
+        k
+        for k in range(len(r.t))
+        if r.modes[k, L.RM_MOTOR_B] == L.SLIP_NEG and r.state[k, L.NQ + L.IALB] < -1.0
+    )
     hs = r.hybrid_state(k)
-    stale = HybridState(state=hs.state, leg_states=hs.leg_states,
-                        contact_modes=hs.contact_modes, motor_modes=(L.SLIP_POS, hs.motor_modes[1]),
-                        slide_directions=hs.slide_directions, toe_anchors=hs.toe_anchors)
-    a = scoutsim.simulate(initial_state=hs, duration=0.05, model="II", friction_coefficient=math.inf)
-    b = scoutsim.simulate(initial_state=stale, duration=0.05, model="II",
-                          friction_coefficient=math.inf)
+    stale = HybridState(
+        state=hs.state,
+        leg_states=hs.leg_states,
+        contact_modes=hs.contact_modes,
+        motor_modes=(L.SLIP_POS, hs.motor_modes[1]),
+        slide_directions=hs.slide_directions,
+        toe_anchors=hs.toe_anchors,
+    )
+    a = scoutsim.simulate(
+        initial_state=hs, duration=0.05, model="II", friction_coefficient=math.inf
+    )
+    b = scoutsim.simulate(
+        initial_state=stale, duration=0.05, model="II", friction_coefficient=math.inf
+    )
     assert b.modes[0, L.RM_MOTOR_B] == L.SLIP_NEG
     assert b.state[0, L.NQ + L.IALB] == a.state[0, L.NQ + L.IALB]
     assert np.array_equal(a.state, b.state)
@@ -266,13 +305,19 @@ def test_simultaneous_touchdowns_are_decided_alike_whatever_rounding_does(eps):
     beyond rounding (on another CPU a tie once decided it differently)."""
     from scoutsim.analysis.passive_orbits import passive_bounding_orbit
     from scoutsim.analysis.passive_reference import passive_apex_map, passive_robot
+
     pronk = passive_bounding_orbit(1.3, 0.35, 0.0)
     z = np.array(pronk.z) + np.array([0.0, eps, 0.0, eps])
     m = passive_apex_map(z, pronk.touchdown_angles)
     assert np.max(np.abs(m.z - pronk.z)) < 1e-9
     r = scoutsim.simulate(
-        passive_robot(), None, InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]), 2.0,
-        model="passive", passive_touchdown_angles=pronk.touchdown_angles)
+        passive_robot(),
+        None,
+        InitialState(y=z[0], theta=z[1], dx=z[2], dy=0.0, dtheta=z[3]),
+        2.0,
+        model="passive",
+        passive_touchdown_angles=pronk.touchdown_angles,
+    )
     assert r.outcome == "completed"
     td_b, td_f = r.event_times("touchdown", "back"), r.event_times("touchdown", "front")
     assert len(td_b) == len(td_f) >= 5
