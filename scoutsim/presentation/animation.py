@@ -369,11 +369,12 @@ def save_animation(
         )
     anim = animate(result, fps=fps, t0=t0, t1=t1, dpi=dpi)
     path.parent.mkdir(parents=True, exist_ok=True)
-    writer = (
-        PillowWriter(fps=fps)  # type: ignore[arg-type]  # stubs: int; a float fps works
-        if suffix == ".gif"
-        else FFMpegWriter(fps=fps)
-    )  # type: ignore[arg-type]  # (same)
+    # Matplotlib's stubs say fps: int; both writers take a float fps as it is
+    writer: PillowWriter | FFMpegWriter
+    if suffix == ".gif":
+        writer = PillowWriter(fps=fps)  # type: ignore[arg-type]
+    else:
+        writer = FFMpegWriter(fps=fps)  # type: ignore[arg-type]
     cb = None if progress is None else (lambda i, n: progress(i, n))
     anim.save(str(path), writer=writer, dpi=dpi, progress_callback=cb)
     return path
