@@ -57,7 +57,7 @@ from scoutsim import (
     default_initial_state,
 )
 from scoutsim.analysis.gait import GaitMetrics
-from scoutsim.analysis.interpolation import _extrema, _hermite
+from scoutsim.analysis.interpolation import extrema, hermite
 from scoutsim.analysis.stances import stance_overlap
 from scoutsim.analysis.strides import Stride, converged_tail
 
@@ -610,13 +610,13 @@ def mujoco_gait(run, transient_s=2.0, period_tolerance=0.05, merge_gap=None):
         )
     lo = stances[0][:, 1]
     lo = lo[lo < run["t_end"]] if run["outcome"] == "completed" else lo
-    xs = _hermite(t, rec[:, 1], rec[:, 4], lo)
+    xs = hermite(t, rec[:, 1], rec[:, 4], lo)
     strides = []
     for k in range(len(lo) - 1):
         a, b = float(lo[k]), float(lo[k + 1])
         per = b - a
-        pmax, pmin = _extrema(t, rec[:, 3], rec[:, 6], a, b)
-        hmax, hmin = _extrema(t, rec[:, 2], rec[:, 5], a, b)
+        pmax, pmin = extrema(t, rec[:, 3], rec[:, 6], a, b)
+        hmax, hmin = extrema(t, rec[:, 2], rec[:, 5], a, b)
         strides.append(
             Stride(
                 index=len(strides),

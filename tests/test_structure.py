@@ -194,3 +194,25 @@ def test_tests_mirror_the_package():
     assert dirs
     stray = [str(d) for d in dirs if not (ROOT / d).is_dir()]
     assert not stray, stray
+
+
+def test_no_module_imports_another_modules_private_names():
+    """What a module shares with the rest of the package has a public name: an import of a
+    ``_name`` from another module of the package (a helper used across files under a name
+    that says "only here") fails, naming the file, the line and the name."""
+    found = []
+    for p in _sources():
+        pkg = ".".join(p.relative_to(ROOT.parent).with_suffix("").parts[:-1])
+        for node in ast.walk(ast.parse(p.read_text())):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            inside = node.level > 0 or (node.module or "").split(".")[0] == ROOT.name
+            if not inside or node.module == "__future__":
+                continue
+            found += [
+                f"{p.relative_to(ROOT)}:{node.lineno} {a.name} (from {'.' * node.level}"
+                f"{node.module or ''}; in {pkg})"
+                for a in node.names
+                if a.name.startswith("_") and not a.name.startswith("__")
+            ]
+    assert not found, found

@@ -40,7 +40,7 @@ import threading
 import time
 from pathlib import Path
 
-_PACKAGE = Path(__file__).resolve().parents[1]
+PACKAGE = Path(__file__).resolve().parents[1]
 #: the sources of the compiled core (a change in any of them invalidates the cache of the
 #: modules that import it)
 CORE_SOURCES = (
@@ -56,7 +56,7 @@ def _core_files(package: Path) -> list[Path]:
     return sorted({f for pattern in CORE_SOURCES for f in package.glob(pattern)})
 
 
-def core_digest(package: Path = _PACKAGE) -> str:
+def core_digest(package: Path = PACKAGE) -> str:
     """Digest of the compiled core's sources (names and contents) under ``package``."""
     h = hashlib.sha256()
     for f in _core_files(package):
@@ -91,7 +91,7 @@ def _imported(rel: str, source: bytes, known: set[str]) -> set[str]:
                 if node.level - 1 > len(pkg):
                     continue
                 base = pkg[: len(pkg) - (node.level - 1)]
-            elif node.module and node.module.split(".")[0] == _PACKAGE.name:
+            elif node.module and node.module.split(".")[0] == PACKAGE.name:
                 base = []
             else:
                 continue
@@ -105,7 +105,7 @@ def _imported(rel: str, source: bytes, known: set[str]) -> set[str]:
         elif isinstance(node, ast.Import):
             for alias in node.names:
                 mod = alias.name.split(".")
-                if mod[0] == _PACKAGE.name:
+                if mod[0] == PACKAGE.name:
                     for i in range(2, len(mod) + 1):
                         add(mod[1:i])
     out.discard(rel)
@@ -157,7 +157,7 @@ def _import_graph(sources: dict[str, bytes], memo: Path | None) -> dict[str, set
     return deps
 
 
-def module_digests(package: Path = _PACKAGE, memo: Path | None = None) -> dict[str, str]:
+def module_digests(package: Path = PACKAGE, memo: Path | None = None) -> dict[str, str]:
     """For every module of the compiled core (its path relative to ``package``), a digest of
     its source and of the sources of every core module it imports, directly or through
     others: what its compiled functions can depend on (the constants they read, the
@@ -275,10 +275,10 @@ def _cache_root() -> tuple[Path, float | None]:
     user = os.environ.get("NUMBA_CACHE_DIR")
     if user:
         return user_cache_dir(user), STALE_USER_CACHE_S
-    for base in (_PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
+    for base in (PACKAGE / "__pycache__", Path.home() / ".cache" / "scoutsim"):
         if _writable(base):
             return base / "numba", None
-    return _PACKAGE / "__pycache__" / "numba", None
+    return PACKAGE / "__pycache__" / "numba", None
 
 
 def _remove_old_layout(root: Path, stale_after: float | None) -> list[Path]:
@@ -298,7 +298,7 @@ def _remove_old_layout(root: Path, stale_after: float | None) -> list[Path]:
 _ROOT, _STALE_AFTER = _cache_root()
 _DIGESTS = module_digests(memo=_ROOT / "imports.json")
 #: cache directory of each core source file (resolved path) of this package
-_MODULE_DIRS = {str(_PACKAGE / rel): module_cache_dir(_ROOT, rel, d) for rel, d in _DIGESTS.items()}
+_MODULE_DIRS = {str(PACKAGE / rel): module_cache_dir(_ROOT, rel, d) for rel, d in _DIGESTS.items()}
 
 
 def install_cache_locator() -> str | None:
@@ -401,5 +401,5 @@ def clean_once():
 def core_is_compiled() -> bool:
     """True if the compiled run loop (and with it the whole core it calls) is in the cache,
     i.e. a simulation will not have to compile first (this process may still load it)."""
-    d = _MODULE_DIRS[str(_PACKAGE / "_core" / "loop.py")]
+    d = _MODULE_DIRS[str(PACKAGE / "_core" / "loop.py")]
     return d.is_dir() and any(d.glob("loop.run-*.nbi"))

@@ -49,7 +49,7 @@ from numba import njit
 from . import compile_steps, disk_cache
 
 # (where the command line asks whether the core is compiled)
-from .disk_cache import _PACKAGE, cache_directory, core_is_compiled  # noqa: F401
+from .disk_cache import PACKAGE, cache_directory, core_is_compiled  # noqa: F401
 
 #: what the guarded hooks of this module found on the installed Numba (:func:`status`)
 _STATUS: dict[str, str] = {}
@@ -107,11 +107,11 @@ class compile_progress:
 
     def _compiled(self, py_func):
         module = py_func.__module__ or ""
-        if not module.startswith(_PACKAGE.name + "."):
+        if not module.startswith(PACKAGE.name + "."):
             return
         self.done += 1
         if self.tty:
-            name = f"{module[len(_PACKAGE.name) + 1 :]}.{py_func.__qualname__}"
+            name = f"{module[len(PACKAGE.name) + 1 :]}.{py_func.__qualname__}"
             self.stream.write(
                 f"\r\033[K{self.prefix}compiled {self.done} functions in "
                 f"{time.perf_counter() - self.t0:.0f} s (last: {name})"

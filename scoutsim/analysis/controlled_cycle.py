@@ -74,14 +74,14 @@ def _liftoff_states(result):
     """Torso state at each back-leg lift-off: positions by cubic Hermite on (q, dq) of the
     1 kHz samples, velocities linearly (their derivative, the acceleration, is not stored;
     error O(h^2 a'), about 1e-4 m/s)."""
-    from .interpolation import _hermite
+    from .interpolation import hermite
 
     t = result.t
     te = result.event_times("liftoff", "back")
     te = te[(te > t[0]) & (te < t[-1])]
     cols = []
     for q, dq in ((result.height, result.vertical_speed), (result.pitch, result.pitch_rate)):
-        cols.append(_hermite(t, q, dq, te))
+        cols.append(hermite(t, q, dq, te))
     for dq in (result.forward_speed, result.vertical_speed, result.pitch_rate):
         cols.append(np.interp(te, t, dq))
     return te, np.column_stack(cols)

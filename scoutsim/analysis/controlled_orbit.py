@@ -24,7 +24,13 @@ from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import HybridState
 from .poincare import MapError, floquet_multipliers
-from .stride_map import CONTROLLED_Z_NAMES, _discrete, _hs_of, controlled_stride_map, section_state
+from .stride_map import (
+    CONTROLLED_Z_NAMES,
+    controlled_stride_map,
+    discrete_modes,
+    hs_of,
+    section_state,
+)
 
 __all__ = ["ControlledOrbit", "controlled_fixed_point"]
 
@@ -119,7 +125,7 @@ def controlled_fixed_point(
         )
     if not isinstance(start, HybridState):
         start = section_state(start)
-    disc = _discrete(start)
+    disc = discrete_modes(start)
     z0, z1, h1, T = controlled_stride_map(start, **kw)
     z = z0
     hist = []
@@ -130,10 +136,10 @@ def controlled_fixed_point(
         res = float(np.max(np.abs(F)))
         hist.append(res)
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
-        if _discrete(h1) != disc:
+        if discrete_modes(h1) != disc:
             raise MapError(
                 f"the discrete state at the section changed ({disc} -> "
-                f"{_discrete(h1)}): not a period-1 orbit of this section"
+                f"{discrete_modes(h1)}): not a period-1 orbit of this section"
             )
         if res < tol or it == max_iter:
             break
@@ -142,7 +148,7 @@ def controlled_fixed_point(
             e = jacobian_step * max(1.0, abs(z[j]))
             zp = z.copy()
             zp[j] += e
-            _, zj1, _, Tj = controlled_stride_map(_hs_of(zp, disc), **kw)
+            _, zj1, _, Tj = controlled_stride_map(hs_of(zp, disc), **kw)
             if Tj != T:
                 raise MapError(
                     f"the stride length changed from {T} s to {Tj} s under a "
@@ -151,7 +157,7 @@ def controlled_fixed_point(
                 )
             J[:, j] = (zj1 - z1) / e
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
-        z0, z1, h1, T = controlled_stride_map(_hs_of(z + dz, disc), **kw)
+        z0, z1, h1, T = controlled_stride_map(hs_of(z + dz, disc), **kw)
         z = z0
     if hist[-1] >= tol:
         raise MapError(
@@ -164,8 +170,8 @@ def controlled_fixed_point(
             e = jacobian_step * max(1.0, abs(z[j]))
             zp = z.copy()
             zp[j] += e
-            J[:, j] = (controlled_stride_map(_hs_of(zp, disc), **kw)[1] - z1) / e
-    hs = _hs_of(z, disc)
+            J[:, j] = (controlled_stride_map(hs_of(zp, disc), **kw)[1] - z1) / e
+    hs = hs_of(z, disc)
     r = simulate(
         robot,
         controller,

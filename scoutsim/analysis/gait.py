@@ -42,16 +42,16 @@ from ..names import LegState, leg_index
 from ..parameters import RobotParameters
 from .behaviour import classify_behaviour
 from .stances import stance_intervals, stance_overlap
-from .stride_energy import _input_and_weight, stride_energy
+from .stride_energy import input_and_weight, stride_energy
 from .strides import (
     MIN_STEADY_STRIDES,
     PERIOD_TOLERANCE,
     STRIDE_ENERGY_METRICS,
     STRIDE_METRICS,
     Stride,
-    _json_float,
-    _strides,
     converged_tail,
+    json_float,
+    split_strides,
 )
 
 __all__ = [
@@ -123,8 +123,8 @@ SATURATION_TOLERANCE_A = 1e-6
 
 
 def _json_number(v):
-    """Like :func:`_json_float`, but integral values become int (counts in ``stats``)."""
-    v = _json_float(v)
+    """Like :func:`json_float`, but integral values become int (counts in ``stats``)."""
+    v = json_float(v)
     if v is not None and v.is_integer():
         return int(v)
     return v
@@ -313,7 +313,7 @@ class GaitMetrics:
         b = np.concatenate(
             [np.asarray(result.belt_deflection(0)), np.asarray(result.belt_deflection(1))]
         )
-        return _json_float(math.degrees(float(np.max(np.abs(b)))))
+        return json_float(math.degrees(float(np.max(np.abs(b)))))
 
     # -- export ---------------------------------------------------------------------------
     def summary(self, result) -> dict:
@@ -340,21 +340,21 @@ class GaitMetrics:
         prov = result.provenance or {}
         out: dict[str, Any] = {"outcome": self.outcome}
         for k in SUMMARY_KEYS[1:9]:
-            out[k] = _json_float(self.means[k])
-        out["max_friction_ratio"] = _json_float(stats.get("max_friction_ratio"))
+            out[k] = json_float(self.means[k])
+        out["max_friction_ratio"] = json_float(stats.get("max_friction_ratio"))
         out["n_steady_strides"] = self.n_steady_strides
-        out["t_end_s"] = _json_float(self.t_end)
+        out["t_end_s"] = json_float(self.t_end)
         out["n_strides"] = self.n_strides
-        out["stride_period_cv"] = _json_float(self.stride_period_cv)
+        out["stride_period_cv"] = json_float(self.stride_period_cv)
         out["steady_bounding"] = bool(self.is_steady_bounding())
-        out["motor_saturation_retraction_back"] = _json_float(
+        out["motor_saturation_retraction_back"] = json_float(
             self.motor_saturation_fraction(result, 0)
         )
-        out["motor_saturation_retraction_front"] = _json_float(
+        out["motor_saturation_retraction_front"] = json_float(
             self.motor_saturation_fraction(result, 1)
         )
         out["max_belt_deflection_deg"] = self.max_belt_deflection_deg(result)
-        out["max_impact_impulse_ratio"] = _json_float(stats.get("max_impact_impulse_ratio"))
+        out["max_impact_impulse_ratio"] = json_float(stats.get("max_impact_impulse_ratio"))
         out["end_of_stance_slides"] = _json_number(stats.get("end_of_stance_slides"))
         out["model"] = prov.get("model")
         what = self.behaviour(result).to_dict()
@@ -415,24 +415,24 @@ class GaitMetrics:
             distance = sum(st.distance_m for st in steady)
             if electrical:
                 out["mean_electrical_power_w"] = sum(st.electrical_energy_j for st in steady) / span
-            input_name, weight = _input_and_weight(result)
+            input_name, weight = input_and_weight(result)
             if input_name is not None and distance > 0:
                 energy = sum(
                     st.electrical_energy_j if electrical else st.hip_work_j for st in steady
                 )
                 out["cost_of_transport"] = energy / (weight * distance)
-        return {k: _json_float(v) for k, v in out.items()}
+        return {k: json_float(v) for k, v in out.items()}
 
     def to_dict(self) -> dict:
         """JSON-safe dict: transient, outcome, counts, means, period CV and all strides."""
         return {
             "transient_s": float(self.transient_s),
             "outcome": self.outcome,
-            "t_end_s": _json_float(self.t_end),
+            "t_end_s": json_float(self.t_end),
             "n_strides": self.n_strides,
             "n_steady_strides": self.n_steady_strides,
-            "means": {k: _json_float(v) for k, v in self.means.items()},
-            "stride_period_cv": _json_float(self.stride_period_cv),
+            "means": {k: json_float(v) for k, v in self.means.items()},
+            "stride_period_cv": json_float(self.stride_period_cv),
             "strides": [s.to_dict() for s in self.strides],
         }
 
@@ -472,7 +472,7 @@ def gait_metrics(
             f"period_tolerance = {period_tolerance!r} is not allowed: must be in (0, 1)"
         )
     stances = (stance_intervals(result, 0), stance_intervals(result, 1))
-    strides = converged_tail(_strides(result, float(transient_s), stances), period_tolerance)
+    strides = converged_tail(split_strides(result, float(transient_s), stances), period_tolerance)
     return GaitMetrics(
         strides=strides,
         transient_s=float(transient_s),

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def _hermite(t, y, dy, te):
+def hermite(t, y, dy, te):
     """Cubic Hermite interpolation of samples ``y`` with derivatives ``dy`` at times ``te``.
 
     Parameters
@@ -58,9 +58,9 @@ def _hermite(t, y, dy, te):
     return np.where(ok, out, y[np.minimum(i + 1, n - 1)])
 
 
-def _extrema(t, y, dy, a, b):
+def extrema(t, y, dy, a, b):
     """(max, min) of samples of y strictly inside (a, b) plus y(a), y(b) interpolated."""
-    ends = _hermite(t, y, dy, np.array([a, b]))
+    ends = hermite(t, y, dy, np.array([a, b]))
     i0 = np.searchsorted(t, a, side="right")
     i1 = np.searchsorted(t, b, side="left")
     vals = np.concatenate([ends, y[i0:i1]])

@@ -125,7 +125,7 @@ class _RecordingPickler(pickle.Pickler):
         return NotImplemented
 
 
-def _importable(module: str) -> bool:
+def is_importable(module: str) -> bool:
     """Whether a fresh process could import ``module`` by name (its top-level package
     found by the import system on this ``sys.path``, not only present in ``sys.modules``)."""
     top = module.partition(".")[0]
@@ -166,7 +166,7 @@ def unsendable_reason(obj) -> str | None:
                     "it is, or holds, a function or class defined in an interactive "
                     "session (__main__ has no file a worker process could import)"
                 )
-        elif not _importable(module):
+        elif not is_importable(module):
             return (
                 f"it is, or holds, a function or class of module {module!r}, which a "
                 "worker process cannot import by name (not found on sys.path)"

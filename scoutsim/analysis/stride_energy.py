@@ -16,7 +16,7 @@ import numpy as np
 __all__ = ["stride_energy"]
 
 
-def _input_and_weight(result):
+def input_and_weight(result):
     """(the balance's input flow, m g [N]) of the run: "electrical" for Model I / II,
     "hip_work" for the ideal actuator; (None, None) for the passive model or without the
     robot in the provenance."""
@@ -66,7 +66,7 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
     hip = delta("hip_work")
     friction = delta("friction")
     distance = float(result.x[j] - result.x[i])
-    input_name, weight = _input_and_weight(result)
+    input_name, weight = input_and_weight(result)
     electrical = input_name == "electrical"
     out = {
         "energy_t_start": float(t[i]),

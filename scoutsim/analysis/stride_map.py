@@ -59,14 +59,14 @@ def _z_of(hs) -> np.ndarray:
     return np.concatenate([s[[state_index(n) for n in _STATE_Z_NAMES]], rel])
 
 
-def _hs_of(z, discrete):
+def hs_of(z, discrete):
     """The HybridState of section coordinates ``z`` at x = 0 with the discrete modes
-    ``discrete`` (:func:`_discrete`)."""
+    ``discrete`` (:func:`discrete_modes`)."""
     s = state_vector(x=0.0, **dict(zip(_STATE_Z_NAMES, z)))
     return HybridState(state=s, toe_anchors=(float(z[-2]), float(z[-1])), **discrete)
 
 
-def _discrete(hs) -> dict:
+def discrete_modes(hs) -> dict:
     return dict(
         leg_states=hs.leg_states,
         contact_modes=hs.contact_modes,

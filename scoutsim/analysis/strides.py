@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .interpolation import _extrema, _hermite
+from .interpolation import extrema, hermite
 from .stances import stance_overlap
 from .stride_energy import stride_energy
 
@@ -67,7 +67,7 @@ STRIDE_ENERGY_METRICS = (
 )
 
 
-def _json_float(v):
+def json_float(v):
     """float(v), or None if v is None, NaN or infinite (JSON has no NaN/inf)."""
     if v is None:
         return None
@@ -176,7 +176,7 @@ class Stride:
             elif f.name == "steady":
                 d[f.name] = bool(v)
             else:
-                d[f.name] = _json_float(v)
+                d[f.name] = json_float(v)
         return d
 
     # mapping protocol, so that a stride also behaves like the dict it describes
@@ -189,7 +189,7 @@ class Stride:
         return getattr(self, key)
 
 
-def _strides(result, transient_s, stances):
+def split_strides(result, transient_s, stances):
     t = np.asarray(result.t, dtype=float)
     lo = np.sort(result.event_times("liftoff", "back").astype(float))
     if len(lo) < 2 or len(t) == 0:
@@ -201,7 +201,7 @@ def _strides(result, transient_s, stances):
     hy = np.asarray(result.height, dtype=float)
     dhy = np.asarray(result.vertical_speed, dtype=float)
     t_end_run = float(result.t_end)
-    xs = _hermite(t, x, dx, lo)
+    xs = hermite(t, x, dx, lo)
     cumulative = {}
     out = []
     for k in range(len(lo) - 1):
@@ -209,8 +209,8 @@ def _strides(result, transient_s, stances):
         period = b - a
         if not period > 0.0:
             continue  # duplicate event time: not a stride
-        pmax, pmin = _extrema(t, th, dth, a, b)
-        hmax, hmin = _extrema(t, hy, dhy, a, b)
+        pmax, pmin = extrema(t, th, dth, a, b)
+        hmax, hmin = extrema(t, hy, dhy, a, b)
         out.append(
             Stride(
                 index=len(out),

@@ -40,7 +40,7 @@ import pickle
 from ..control.factory import ControllerSpec, is_factory_spec, load_factory
 from ..control.protocol import controller_name
 from ..parameters import ControllerParameters
-from .parallel import _importable, check_sendable, leaves_process
+from .parallel import check_sendable, is_importable, leaves_process
 
 __all__ = [
     "study_controller",
@@ -81,7 +81,7 @@ def check_controller_travels(controller, workers, scheduler, n_points: int) -> N
     check_sendable(controller, what, CONTROLLER_ADVICE)
     if isinstance(controller, ControllerSpec):
         module = controller.spec.partition(":")[0]
-        if not _importable(module):
+        if not is_importable(module):
             from .parallel import NotSendableError
 
             raise NotSendableError(

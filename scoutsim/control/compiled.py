@@ -119,7 +119,7 @@ def call_controller(typingctx, address, t, sensors, params, state, torque, leg_s
 _CALLBACKS: dict = {}
 
 
-def _wrap(command):
+def wrap_command(command):
     """The C callback (``numba.cfunc``) of a Numba-compilable ``command(t, y, params, state,
     torque, leg_states)``: compiles ``command`` and the wrapper, nothing else; once per
     process and function (:data:`_CALLBACKS`)."""
@@ -136,7 +136,7 @@ def _wrap(command):
 
 
 def _compile_callback(command):
-    """:func:`_wrap` without the cache."""
+    """:func:`wrap_command` without the cache."""
     from numba import carray, cfunc, njit
 
     inner = njit(command)
@@ -214,7 +214,7 @@ class CompiledController(Controller):
         function) and set ``_cfunc``, ``address`` and ``compile_time_s``."""
         t0 = time.perf_counter()
         try:
-            self._cfunc = _wrap(self.command_function)
+            self._cfunc = wrap_command(self.command_function)
         except Exception as exc:
             raise TypeError(
                 f"CompiledController({self.name}): the command function does not "

@@ -40,7 +40,7 @@ import numpy as np
 from .._core.model import layout as L
 from ..parameters import ControllerParameters, RobotParameters, validate_controller
 from .bounding import C_TD_B, NC, bounding_step, controller_array
-from .compiled import CompiledController, _wrap
+from .compiled import CompiledController, wrap_command
 
 __all__ = [
     "PitchFeedbackController",
@@ -98,7 +98,7 @@ def pitch_feedback_command(t, y, params, state, torque, leg_states):
 def _compiled_command():
     """The law's C callback, compiled once per process (every controller shares it; each
     has its own parameters)."""
-    return _wrap(pitch_feedback_command)
+    return wrap_command(pitch_feedback_command)
 
 
 class PitchFeedbackController(CompiledController):

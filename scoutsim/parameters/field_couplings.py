@@ -7,8 +7,8 @@ within a controller (lift-off below touchdown compression), and between the two
 from __future__ import annotations
 
 from .field_rules import reject
-from .parameter_error import _fmt_bound
-from .schema import _schema
+from .parameter_error import format_bound
+from .schema import field_schema
 
 
 def _pair(value) -> tuple:
@@ -25,12 +25,12 @@ def check_robot_couplings(p, origins) -> None:
         mass, distance, rest = masses[leg], distances[leg], rests[leg]
         if 0.0 < distance <= rest or (mass == 0.0 and distance == 0.0):
             continue
-        spec = _schema()["leg_com_distance"]
+        spec = field_schema()["leg_com_distance"]
         differ = any(
             isinstance(getattr(p, n), tuple)
             for n in ("leg_com_distance", "leg_rest_length", "leg_mass")
         )
-        l0 = _fmt_bound(rest / spec.factor)
+        l0 = format_bound(rest / spec.factor)
         massless = " (massless legs)" if mass == 0.0 else ""
         reject(
             spec,
@@ -43,7 +43,7 @@ def check_robot_couplings(p, origins) -> None:
     if (masses[0] == 0.0 and inertias[0] == 0.0) != (masses[1] == 0.0 and inertias[1] == 0.0):
         front_massless = masses[1] == 0.0 and inertias[1] == 0.0
         reject(
-            _schema()["leg_mass"],
+            field_schema()["leg_mass"],
             masses[int(front_massless)],
             "the model's massless legs (leg_mass = leg_inertia = 0) are both legs or neither",
             origins,
@@ -51,12 +51,12 @@ def check_robot_couplings(p, origins) -> None:
         )
     half = 0.5 * p.hip_spacing
     if not -half < p.com_offset < half:
-        spec = _schema()["com_offset"]
+        spec = field_schema()["com_offset"]
         reject(
             spec,
             p.com_offset,
             f"must be in (-hip_spacing / 2, hip_spacing / 2) = "
-            f"({_fmt_bound(-half / spec.factor)}, {_fmt_bound(half / spec.factor)}) "
+            f"({format_bound(-half / spec.factor)}, {format_bound(half / spec.factor)}) "
             f"{spec.unit} (the torso COM between the hips)",
             origins,
         )
@@ -65,8 +65,8 @@ def check_robot_couplings(p, origins) -> None:
 def check_controller_couplings(c, origins) -> None:
     """Lift-off compression below touchdown compression."""
     if c.liftoff_compression >= c.touchdown_compression:
-        spec = _schema()["liftoff_compression"]
-        td = _fmt_bound(c.touchdown_compression / spec.factor)
+        spec = field_schema()["liftoff_compression"]
+        td = format_bound(c.touchdown_compression / spec.factor)
         reject(
             spec,
             c.liftoff_compression,
@@ -78,8 +78,8 @@ def check_controller_couplings(c, origins) -> None:
 def check_pair_couplings(robot, controller, origins) -> None:
     """Touchdown compression below the (shorter) leg's rest length."""
     if controller.touchdown_compression >= min(robot.per_leg("leg_rest_length")):
-        spec = _schema()["touchdown_compression"]
-        l0 = _fmt_bound(min(robot.per_leg("leg_rest_length")) / spec.factor)
+        spec = field_schema()["touchdown_compression"]
+        l0 = format_bound(min(robot.per_leg("leg_rest_length")) / spec.factor)
         reject(
             spec,
             controller.touchdown_compression,

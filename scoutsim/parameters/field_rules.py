@@ -12,9 +12,9 @@ import typing
 from dataclasses import dataclass
 
 from ..names import LEG_NAMES
-from .parameter_error import ParameterError, _fmt, _fmt_bound
+from .parameter_error import ParameterError, format_bound, format_value
 from .plausibility import slip_hint
-from .schema import PER_LEG_FIELDS, _fields_of, _schema, _Spec, given_per_leg
+from .schema import PER_LEG_FIELDS, FieldSpec, field_schema, fields_of, given_per_leg
 
 _HALF_PI = 0.5 * math.pi
 
@@ -34,8 +34,8 @@ class _Range:
         return self.hi is None or x < self.hi or (x == self.hi and self.hi_closed)
 
     def describe(self, factor: float, unit: str) -> str:
-        lo = None if self.lo is None else _fmt_bound(self.lo / factor)
-        hi = None if self.hi is None else _fmt_bound(self.hi / factor)
+        lo = None if self.lo is None else format_bound(self.lo / factor)
+        hi = None if self.hi is None else format_bound(self.hi / factor)
         if hi is None:
             text = f"{'>=' if self.lo_closed else '>'} {lo}"
         elif lo is None:
@@ -225,7 +225,7 @@ def closed_range(name: str) -> tuple[float, float]:
     :class:`RobotParameters` or :class:`ControllerParameters`: an open end replaced by the
     nearest float inside it; -inf / inf where it has none (e.g. a touchdown angle: just
     inside (-90, 90) deg)."""
-    if name not in _schema():
+    if name not in field_schema():
         raise KeyError(f"no parameter named {name!r}")
     lo, hi, lo_closed, hi_closed = allowed_range(name)
     lo = -math.inf if lo is None else (float(lo) if lo_closed else math.nextafter(lo, math.inf))
@@ -237,7 +237,7 @@ def _is_bool(x: object) -> bool:
     return isinstance(x, bool) or type(x).__name__ in ("bool_", "bool")
 
 
-def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
+def _coerce(spec: FieldSpec, value: object, where: str = "") -> float | int | bool:
     """Return ``value`` as the field's Python type, or raise on a wrong type."""
     if spec.kind == "bool":
         if _is_bool(value):
@@ -260,7 +260,7 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
         if math.isfinite(x) and x.is_integer():
             return int(x)
         raise ParameterError(
-            f"{spec.label} = {_fmt(value)} is not allowed: must be an integer "
+            f"{spec.label} = {format_value(value)} is not allowed: must be an integer "
             f"{_RULES[spec.name].describe(1.0, '1')}{where}",
             spec.name,
         )
@@ -273,7 +273,7 @@ def _coerce(spec: _Spec, value: object, where: str = "") -> float | int | bool:
     )
 
 
-def coerce_value(spec: _Spec, value: object, where: str = ""):
+def coerce_value(spec: FieldSpec, value: object, where: str = ""):
     """:func:`_coerce` for any field: a per-leg field (:data:`PER_LEG_FIELDS`) also takes a
     (back, front) pair (list, tuple or 1-d array of two), returned as a tuple."""
     if given_per_leg(value):
@@ -296,14 +296,14 @@ def coerce_value(spec: _Spec, value: object, where: str = ""):
 
 
 def reject(
-    spec: _Spec, value: typing.Any, rule: str, origins, leg: int | None = None
+    spec: FieldSpec, value: typing.Any, rule: str, origins, leg: int | None = None
 ) -> typing.NoReturn:
     """Raise the ParameterError of a field whose value breaks ``rule``, naming the field (and
     the leg), the value in its display unit, where it came from (``origins``) and a likely
     unit slip."""
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
-    shown = _fmt(value / spec.factor) if spec.kind == "float" else _fmt(value)
+    shown = format_value(value / spec.factor) if spec.kind == "float" else format_value(value)
     slip = slip_hint(spec, value, note) if isinstance(value, float) else None
     slip = f" ({slip})" if slip else ""
     note = f" ({note})" if note else ""
@@ -316,7 +316,7 @@ def reject(
 def check_fields(obj: typing.Any, origins) -> None:
     """Type, finiteness and single-field range of every field of ``obj``."""
     cls: typing.Any = type(obj)
-    for name, spec in _fields_of(cls).items():
+    for name, spec in fields_of(cls).items():
         where = origins.get(name, ("", None))[0]
         given = getattr(obj, name)
         coerce_value(spec, given, where)  # raises on a wrong type or a pair not allowed
@@ -355,10 +355,10 @@ def check_fields(obj: typing.Any, origins) -> None:
                 )
 
 
-def _describe_limit(rule: _Range | None, limit: _Limit, spec: _Spec) -> str:
+def _describe_limit(rule: _Range | None, limit: _Limit, spec: FieldSpec) -> str:
     """The whole allowed interval of a field with a physical bound, in its display unit."""
     assert rule is not None and rule.lo is not None, "a field with a physical bound has a range"
-    lo = _fmt_bound(rule.lo / spec.factor)
+    lo = format_bound(rule.lo / spec.factor)
     hi = f"{limit.hi / spec.factor:.9g}"
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     return f"in {'[' if rule.lo_closed else '('}{lo}, {hi}]{unit}"

@@ -11,10 +11,10 @@ from os import PathLike
 
 from .controller import ControllerParameters
 from .field_couplings import check_pair_couplings
-from .parameter_error import ParameterError, _fmt, _unknown
+from .parameter_error import ParameterError, format_value, unknown_name_error
 from .robot import RobotParameters
-from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema, _Spec
-from .units import _UNIT_INDEX, UNITS
+from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, FieldSpec, field_schema, fields_of
+from .units import UNIT_INDEX, UNITS
 from .validation import coerce_value, reporting_origins, validate_parameters
 
 #: TOML section -> dataclass whose fields it holds.
@@ -30,7 +30,7 @@ SEPARATE_SECTIONS: dict[str, str] = {
 }
 
 
-def _convert_entry(spec: _Spec, entry: object, where: str) -> tuple[object, str | None]:
+def _convert_entry(spec: FieldSpec, entry: object, where: str) -> tuple[object, str | None]:
     """Convert one TOML entry (plain value or ``{value, unit, source}``) to SI.
 
     Returns the SI value and, when the user's unit differs from the display unit, a note
@@ -48,14 +48,14 @@ def _convert_entry(spec: _Spec, entry: object, where: str) -> tuple[object, str 
             raise ParameterError(f"{spec.label}: entry has no 'value'{where}", spec.name)
         unit = entry.get("unit", spec.unit)
         entry = entry["value"]
-        if not isinstance(unit, str) or unit.strip() not in _UNIT_INDEX:
+        if not isinstance(unit, str) or unit.strip() not in UNIT_INDEX:
             raise ParameterError(
                 f"{spec.label}: unknown unit {unit!r}; allowed units: "
                 f"{', '.join(UNITS[spec.dimension])}{where}",
                 spec.name,
             )
         unit = unit.strip()
-    dim, factor = _UNIT_INDEX[unit]
+    dim, factor = UNIT_INDEX[unit]
     if dim != spec.dimension:
         raise ParameterError(
             f"{spec.label}: unit '{unit}' is a {dim} unit, but {spec.name} is a "
@@ -63,18 +63,18 @@ def _convert_entry(spec: _Spec, entry: object, where: str) -> tuple[object, str 
             spec.name,
         )
     value = coerce_value(spec, entry, where)
-    note = None if unit == spec.unit else f"given as {_fmt(entry)} {unit}"
+    note = None if unit == spec.unit else f"given as {format_value(entry)} {unit}"
     return _scaled(spec, value, factor), note
 
 
-def _scaled(spec: _Spec, value, factor: float):
+def _scaled(spec: FieldSpec, value, factor: float):
     """``value`` (one value or a (back, front) pair) times the unit factor (floats only)."""
     if spec.kind != "float":
         return value
     return tuple(v * factor for v in value) if isinstance(value, tuple) else value * factor
 
 
-def _default_si(spec: _Spec) -> float | int | bool:
+def _default_si(spec: FieldSpec) -> float | int | bool:
     """SI value of the packaged default of one field."""
     return spec.default_si
 
@@ -86,14 +86,16 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"malformed TOML in parameter file '{path}': {exc}") from exc
-    schema = _schema()
+    schema = field_schema()
     values: dict[str, object] = {}
     origins: dict[str, tuple[str, str | None]] = {}
     for section, entries in data.items():
         if section in SEPARATE_SECTIONS:
             continue
         if section not in SECTIONS:
-            raise _unknown(section, f"in parameter file '{path}'", SECTIONS, kind="section")
+            raise unknown_name_error(
+                section, f"in parameter file '{path}'", SECTIONS, kind="section"
+            )
         if not isinstance(entries, dict):
             raise ParameterError(
                 f"[{section}] in parameter file '{path}' must be a table, got {entries!r}"
@@ -109,7 +111,7 @@ def _read_file(path: str | PathLike) -> tuple[dict[str, object], dict[str, tuple
                         name,
                     )
                 in_section = [n for n, s in schema.items() if s.section == section]
-                raise _unknown(name, f"in [{section}] of file '{path}'", in_section)
+                raise unknown_name_error(name, f"in [{section}] of file '{path}'", in_section)
             values[name], note = _convert_entry(spec, entry, where)
             origins[name] = (where, note)
     return values, origins
@@ -123,7 +125,7 @@ def _build(
 ):
     """Defaults -> user file -> overrides; return the instance (checked by its constructor,
     whose messages name the values' origins) and the origins."""
-    specs = _fields_of(cls)
+    specs = fields_of(cls)
     values: dict[str, typing.Any] = {name: _default_si(spec) for name, spec in specs.items()}
     origins: dict[str, tuple[str, str | None]] = {}
     if path is not None:
@@ -132,17 +134,17 @@ def _build(
         origins.update({k: v for k, v in file_origins.items() if k in specs})
     for name, value in (overrides or {}).items():
         if name not in specs:
-            other = _schema().get(name)
+            other = field_schema().get(name)
             if other is not None:
                 raise ParameterError(
                     f"'{name}' is a [{other.section}] parameter, not a "
                     f"{cls.__name__} field{where_overrides}",
                     name,
                 )
-            raise _unknown(name, f"for {cls.__name__}{where_overrides}", specs)
+            raise unknown_name_error(name, f"for {cls.__name__}{where_overrides}", specs)
         spec = specs[name]
         values[name] = coerce_value(spec, value, where_overrides)
-        note = f"given as {_fmt(value)} {spec.si_unit}" if spec.factor != 1.0 else None
+        note = f"given as {format_value(value)} {spec.si_unit}" if spec.factor != 1.0 else None
         origins[name] = (where_overrides, note)
     with reporting_origins(origins):
         return cls(**values), origins
@@ -235,7 +237,7 @@ def parameter_table() -> list[dict]:
     """
     rows = []
     for cls in (RobotParameters, ControllerParameters):
-        for name, spec in _fields_of(cls).items():
+        for name, spec in fields_of(cls).items():
             rows.append(
                 {
                     "section": spec.section,
@@ -305,7 +307,7 @@ def from_dict(d: typing.Mapping) -> tuple[RobotParameters, ControllerParameters]
     out, origins = [], {}
     for key, cls in (("robot", RobotParameters), ("controller", ControllerParameters)):
         part = d.get(key, {})
-        if missing := sorted(set(_fields_of(cls)) - set(part)):
+        if missing := sorted(set(fields_of(cls)) - set(part)):
             raise ParameterError(f"parameter dict [{key}] lacks {missing}")
         obj, o = _build(cls, None, part, where_overrides=" (from parameter dict)")
         out.append(obj)

@@ -10,22 +10,22 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from .units import _UNIT_INDEX
+from .units import UNIT_INDEX
 
-_PACKAGED_NAME = "scout2.toml"
+PACKAGED_NAME = "scout2.toml"
 
 #: the package that ships ``data/scout2.toml``: ``scoutsim``, the parent of this one
 _DATA_PACKAGE = (__package__ or "scoutsim.parameters").rpartition(".")[0]
 
 
 @lru_cache(maxsize=1)
-def _packaged() -> dict:
+def packaged_table() -> dict:
     """Parsed packaged ``scout2.toml`` (importlib.resources, with a file-system fallback)."""
     try:
-        text = resources.files(_DATA_PACKAGE).joinpath("data", _PACKAGED_NAME).read_text("utf-8")
+        text = resources.files(_DATA_PACKAGE).joinpath("data", PACKAGED_NAME).read_text("utf-8")
     except (OSError, TypeError, ValueError, ModuleNotFoundError):
         # e.g. a namespace package under an editable install
-        text = (Path(__file__).resolve().parents[1] / "data" / _PACKAGED_NAME).read_text("utf-8")
+        text = (Path(__file__).resolve().parents[1] / "data" / PACKAGED_NAME).read_text("utf-8")
     return tomllib.loads(text)
 
 
@@ -50,23 +50,23 @@ def packaged_defaults(*sections: str):
     (``2``, ``2.0``, ``true``)."""
 
     def fill(cls):
-        data = _packaged()
+        data = packaged_table()
         entries = {n: e for sec in sections for n, e in data[sec].items()}
         if extra := sorted(set(entries) - set(cls.__annotations__)):
-            raise RuntimeError(f"packaged {_PACKAGED_NAME}: {cls.__name__} has no field {extra}")
+            raise RuntimeError(f"packaged {PACKAGED_NAME}: {cls.__name__} has no field {extra}")
         for name, kind in cls.__annotations__.items():
             if name not in entries:
-                raise RuntimeError(f"packaged {_PACKAGED_NAME} lacks {name} (sections {sections})")
+                raise RuntimeError(f"packaged {PACKAGED_NAME} lacks {name} (sections {sections})")
             if cls.__dict__.get(name) is not PACKAGED:
                 raise RuntimeError(
                     f"{cls.__name__}.{name} must be declared with the default "
-                    f"PACKAGED (its value is read from {_PACKAGED_NAME})"
+                    f"PACKAGED (its value is read from {PACKAGED_NAME})"
                 )
             entry = entries[name]
             value = entry["value"]
             if type(value).__name__ != kind:  # the schema reads each field's type from the file
                 raise RuntimeError(
-                    f"packaged {_PACKAGED_NAME}: {name} = {value!r} is not a "
+                    f"packaged {PACKAGED_NAME}: {name} = {value!r} is not a "
                     f"{kind}, the type of {cls.__name__}.{name}"
                 )
             if kind == "bool":
@@ -74,7 +74,7 @@ def packaged_defaults(*sections: str):
             elif kind == "int":
                 default = int(value)
             else:
-                default = float(value) * _UNIT_INDEX[entry["unit"]][1]
+                default = float(value) * UNIT_INDEX[entry["unit"]][1]
             setattr(cls, name, default)
         return cls
 

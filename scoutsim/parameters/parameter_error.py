@@ -24,7 +24,7 @@ class ParameterError(ValueError):
         self.field = field
 
 
-def _fmt(x: object) -> str:
+def format_value(x: object) -> str:
     """Short, noise-free text for a value (``-1.0``, ``95.0``, ``nan``, ``2``, ``true``)."""
     if isinstance(x, bool):
         return "true" if x else "false"
@@ -36,11 +36,11 @@ def _fmt(x: object) -> str:
     return repr(x)
 
 
-def _fmt_bound(x: float) -> str:
+def format_bound(x: float) -> str:
     return f"{x:.12g}"
 
 
-def _unknown(
+def unknown_name_error(
     name: str, context: str, candidates: typing.Iterable[str], kind: str = "parameter"
 ) -> ParameterError:
     """Error for an unknown key or section, suggesting the closest valid name."""

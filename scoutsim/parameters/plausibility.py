@@ -16,8 +16,8 @@ import math
 import warnings
 
 from ..names import LEG_NAMES
-from .parameter_error import _fmt, _fmt_bound
-from .schema import _Spec
+from .parameter_error import format_bound, format_value
+from .schema import FieldSpec
 from .units import UNITS
 
 
@@ -65,7 +65,7 @@ def _ratio_text(r: float) -> str:
     return f"{shown}x" if r >= 1.0 else f"1/{shown} of"
 
 
-def likely_slip(spec: _Spec, ratio: float, given_unit: str | None = None) -> str | None:
+def likely_slip(spec: FieldSpec, ratio: float, given_unit: str | None = None) -> str | None:
     """The unit slip that best explains a value ``ratio`` times Scout II's, as text ("a slip
     between N/mm and N/m?"), or None if no slip is near (within a factor 1.5) or the value
     is within a factor 3 of Scout II's. Candidates: the field's units in ``scout2.toml``,
@@ -89,11 +89,11 @@ def likely_slip(spec: _Spec, ratio: float, given_unit: str | None = None) -> str
         for k in (1, 2, 3):
             for r in (1000.0**k, 1000.0**-k):
                 if abs(math.log(ratio / r)) < _SLIP_TOLERANCE:
-                    return f"a unit-prefix slip (a factor {_fmt_bound(1000.0**k)})?"
+                    return f"a unit-prefix slip (a factor {format_bound(1000.0**k)})?"
     return best
 
 
-def _given_unit(spec: _Spec, note: str | None) -> str | None:
+def _given_unit(spec: FieldSpec, note: str | None) -> str | None:
     """The unit a value was given in, from its origin's note ("given as 3520 N/mm")."""
     if not note:
         return None
@@ -103,7 +103,7 @@ def _given_unit(spec: _Spec, note: str | None) -> str | None:
     )
 
 
-def slip_hint(spec: _Spec, value: float, note: str | None = None) -> str | None:
+def slip_hint(spec: FieldSpec, value: float, note: str | None = None) -> str | None:
     """:func:`likely_slip` of ``value`` [SI] against Scout II's value, or None (a value or
     a Scout II value that is not > 0, or no slip near)."""
     scout = spec.default_si
@@ -112,14 +112,14 @@ def slip_hint(spec: _Spec, value: float, note: str | None = None) -> str | None:
     return likely_slip(spec, value / scout, _given_unit(spec, note))
 
 
-def implausible_message(spec: _Spec, value: float, origins, leg: int | None = None) -> str:
+def implausible_message(spec: FieldSpec, value: float, origins, leg: int | None = None) -> str:
     """The warning's text for ``value`` [SI] of the field ``spec`` (of leg ``leg`` when the
     legs differ); ``origins`` as in validation (the file and the unit it was given in)."""
     where, note = origins.get(spec.name, ("", None))
     unit = "" if spec.unit in ("1", "bool") else f" {spec.unit}"
     scale = spec.factor if spec.kind == "float" else 1.0
     label = spec.label if leg is None else f"{spec.label} ({LEG_NAMES[leg]} leg)"
-    shown = f"{label} = {_fmt(value / scale)}{unit}{f' ({note})' if note else ''}"
+    shown = f"{label} = {format_value(value / scale)}{unit}{f' ({note})' if note else ''}"
     p = spec.plausible
     assert p is not None, "only a field with a plausible range warns"
     span = f"{p.low / scale:.6g} to {p.high / scale:.6g}{unit}"
@@ -148,7 +148,7 @@ def implausible_message(spec: _Spec, value: float, origins, leg: int | None = No
 _WARNED_FROM_A_FILE: set = set()
 
 
-def warn_implausible(spec: _Spec, value: float, origins, leg: int | None = None) -> None:
+def warn_implausible(spec: FieldSpec, value: float, origins, leg: int | None = None) -> None:
     """Warn of an implausible value (:func:`implausible_message`). The warning is issued
     from this line for every caller, so the default filter shows each distinct message once
     per process; a value warned of with its file is not warned of again without one."""

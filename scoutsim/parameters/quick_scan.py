@@ -11,7 +11,7 @@ import typing
 from functools import cache
 
 from .field_rules import closed_range
-from .schema import PER_LEG_FIELDS, _fields_of
+from .schema import PER_LEG_FIELDS, fields_of
 
 _FLOAT_MAX = sys.float_info.max
 _ACCEPTED_TYPES = {"float": (float, int), "int": (int,), "bool": (bool,)}
@@ -25,7 +25,7 @@ def scan_plan(cls: type) -> tuple:
     finite (so the comparison also refuses nan and inf): :func:`closed_range` and the
     schema's plausible range, read once."""
     plan = []
-    for name, spec in _fields_of(cls).items():
+    for name, spec in fields_of(cls).items():
         lo, hi = closed_range(name)
         p = spec.plausible
         p_lo, p_hi = (-math.inf, math.inf) if p is None else p.bounds

@@ -12,8 +12,8 @@ import typing
 from dataclasses import dataclass
 from functools import cache, lru_cache
 
-from .packaged import _PACKAGED_NAME, _packaged
-from .units import _UNIT_INDEX, UNITS
+from .packaged import PACKAGED_NAME, packaged_table
+from .units import UNIT_INDEX, UNITS
 
 #: TOML sections of :class:`~scoutsim.parameters.RobotParameters` and of
 #: :class:`~scoutsim.parameters.ControllerParameters` (``files.SECTIONS`` maps each to its
@@ -144,7 +144,7 @@ class Plausible:
 
 
 @dataclass(frozen=True)
-class _Spec:
+class FieldSpec:
     """Schema of one field, taken from the packaged TOML."""
 
     name: str
@@ -174,7 +174,7 @@ class _Spec:
 def field_dimension(name: str) -> str | None:
     """Physical dimension ("angle", "mass", ...) of a RobotParameters / ControllerParameters
     field (from the packaged scout2.toml), or None for an unknown name."""
-    spec = _schema().get(name)
+    spec = field_schema().get(name)
     return None if spec is None else spec.dimension
 
 
@@ -183,7 +183,7 @@ def plausible_range(name: str) -> tuple[float, float] | None:
     has (a value outside is allowed, with an
     :class:`~scoutsim.parameters.ImplausibleParameterWarning`); None if every allowed value
     is plausible. Fields where 0 switches an effect off also take 0."""
-    spec = _schema()[name]
+    spec = field_schema()[name]
     return None if spec.plausible is None else (spec.plausible.low, spec.plausible.high)
 
 
@@ -199,32 +199,32 @@ def _plausible(name: str, kind: str, factor: float, written) -> Plausible | None
         low, high = written / PLAUSIBLE_FACTOR, written * PLAUSIBLE_FACTOR
     if not 0.0 <= low <= written <= high:
         raise RuntimeError(
-            f"packaged {_PACKAGED_NAME}: {name}'s value {written} is not in its "
+            f"packaged {PACKAGED_NAME}: {name}'s value {written} is not in its "
             f"plausible range [{low}, {high}]"
         )
     return Plausible(low * factor, high * factor, name in _ZERO_PLAUSIBLE)
 
 
 @lru_cache(maxsize=1)
-def _schema() -> dict[str, _Spec]:
-    """Field name -> :class:`_Spec`, in the file's order."""
-    data = _packaged()
+def field_schema() -> dict[str, FieldSpec]:
+    """Field name -> :class:`FieldSpec`, in the file's order."""
+    data = packaged_table()
     if set(data) != {*ROBOT_SECTIONS, *CONTROLLER_SECTIONS}:
         raise RuntimeError(
-            f"packaged {_PACKAGED_NAME} has sections {sorted(data)}, expected "
+            f"packaged {PACKAGED_NAME} has sections {sorted(data)}, expected "
             f"{sorted({*ROBOT_SECTIONS, *CONTROLLER_SECTIONS})}"
         )
-    schema: dict[str, _Spec] = {}
+    schema: dict[str, FieldSpec] = {}
     for section, entries in data.items():
         for name, entry in entries.items():
             if name in schema:
                 raise RuntimeError(
-                    f"packaged {_PACKAGED_NAME}: {name} is in [{section}] and "
+                    f"packaged {PACKAGED_NAME}: {name} is in [{section}] and "
                     f"[{schema[name].section}]"
                 )
-            dim, factor = _UNIT_INDEX[entry["unit"]]
+            dim, factor = UNIT_INDEX[entry["unit"]]
             kind = type(entry["value"]).__name__  # TOML: float, int or bool
-            schema[name] = _Spec(
+            schema[name] = FieldSpec(
                 name,
                 section,
                 kind,
@@ -241,8 +241,8 @@ def _schema() -> dict[str, _Spec]:
 
 
 @cache
-def _fields_of(cls: type) -> dict[str, _Spec]:
-    """Field name -> :class:`_Spec` of every parameter field of the dataclass ``cls``, in its
+def fields_of(cls: type) -> dict[str, FieldSpec]:
+    """Field name -> :class:`FieldSpec` of every parameter field of the dataclass ``cls``, in its
     order (a subclass's own extra fields are not parameters)."""
-    schema = _schema()
+    schema = field_schema()
     return {f.name: schema[f.name] for f in dataclasses.fields(cls) if f.name in schema}

@@ -39,10 +39,10 @@ UNITS: dict[str, dict[str, float]] = {
 }
 
 #: unit string -> (dimension, SI factor); every unit string belongs to one dimension only.
-_UNIT_INDEX: dict[str, tuple[str, float]] = {
+UNIT_INDEX: dict[str, tuple[str, float]] = {
     unit: (dim, factor) for dim, group in UNITS.items() for unit, factor in group.items()
 }
-assert len(_UNIT_INDEX) == sum(map(len, UNITS.values())), "unit strings must be unique"
+assert len(UNIT_INDEX) == sum(map(len, UNITS.values())), "unit strings must be unique"
 
 
 def quantity_to_si(entry: object, dimension: str, unit: str, label: str) -> float:

@@ -30,7 +30,7 @@ from .field_couplings import (
 from .field_rules import allowed_range, check_fields, closed_range, coerce_value, physical_limit
 from .plausibility import warn_implausible
 from .quick_scan import quick_scan, scan_plan
-from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, _fields_of, _schema
+from .schema import CONTROLLER_SECTIONS, ROBOT_SECTIONS, field_schema, fields_of
 
 __all__ = [
     "allowed_range",
@@ -78,11 +78,11 @@ def _check(obj, couplings, warn: bool = True) -> None:
         # a value the comparison alone does not pass: the full check raises, naming the
         # field, or the value is valid (e.g. a NumPy number)
         check_fields(obj, origins)
-        specs = _fields_of(cls)
+        specs = fields_of(cls)
         implausible = quick_scan({n: coerce_value(specs[n], getattr(obj, n)) for n in specs}, plan)
     couplings(obj, origins)
     for name, value, leg in (implausible or []) if warn else ():
-        warn_implausible(_schema()[name], value, origins, leg)
+        warn_implausible(field_schema()[name], value, origins, leg)
 
 
 def check_robot(p) -> None:
@@ -103,9 +103,9 @@ def _sections_of(cls: type) -> tuple | None:
     class)."""
     if not dataclasses.is_dataclass(cls):
         return None
-    names = set(_fields_of(cls))
+    names = set(fields_of(cls))
     for sections in (ROBOT_SECTIONS, CONTROLLER_SECTIONS):
-        if names == {n for n, s in _schema().items() if s.section in sections}:
+        if names == {n for n, s in field_schema().items() if s.section in sections}:
             return sections
     return None
 

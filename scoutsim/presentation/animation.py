@@ -45,7 +45,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Polygon
 
 from ..names import ContactMode, Leg, LegState
-from .run_parts import _model_label, behaviour_text
+from .run_parts import behaviour_text, run_model_label
 from .style import LEG_STATE_LINE_COLORS, LEG_STATE_NAMES
 
 __all__ = [
@@ -221,7 +221,7 @@ def animate(
 
     fig.suptitle(
         "\n".join(
-            textwrap.wrap(f"Scout II, {_model_label(result)}: {behaviour_text(result)}", 100)
+            textwrap.wrap(f"Scout II, {run_model_label(result)}: {behaviour_text(result)}", 100)
         ),
         fontsize=8,
         y=0.99,

@@ -2,7 +2,7 @@
 (:class:`~scoutsim.validation.phase.Source`), the stride shown for each (its steady stride
 closest to the median period, or a transient one drawn faint), the paper's line styles, the
 view limited to the steady curves, one step of a leg [s], the leg-state square wave, the
-notes in the title, and the figure written by suffix; ``_DEG`` [deg/rad] turns the SI
+notes in the title, and the figure written by suffix; ``DEG`` [deg/rad] turns the SI
 angles into the degrees of the axes.
 """
 
@@ -24,10 +24,10 @@ __all__ = ["STATE_LEVELS"]
 #: high, stance-retraction low, stance-brake medium), indexed by the state code
 #: (:class:`scoutsim.names.LegState`).
 STATE_LEVELS = (1.0, 0.0, 0.5)
-_DEG = math.degrees(1.0)
+DEG = math.degrees(1.0)
 
 
-def _experiment(logs, transient_s: float) -> Source:
+def experiment_source(logs, transient_s: float) -> Source:
     if isinstance(logs, Source):
         return logs
     if logs is None or (isinstance(logs, (list, tuple)) and not logs):
@@ -37,8 +37,8 @@ def _experiment(logs, transient_s: float) -> Source:
     return src
 
 
-def _prepare(logs, models, transient_s: float):
-    exp = _experiment(logs, transient_s)
+def prepare_sources(logs, models, transient_s: float):
+    exp = experiment_source(logs, transient_s)
     like = exp.logs[0] if exp.logs else None
     return exp, as_sources(models, like, transient_s)
 
@@ -47,7 +47,7 @@ def _sources(exp: Source, models: dict) -> list:
     return [exp] + list(models.values())
 
 
-def _shown(exp: Source, models: dict):
+def shown_sources(exp: Source, models: dict):
     """(index, source, log, stride, steady) of every source that has a stride to show."""
     for i, src in enumerate(_sources(exp, models)):
         rep = src.representative()
@@ -55,14 +55,14 @@ def _shown(exp: Source, models: dict):
             yield (i, src) + tuple(rep)
 
 
-def _tag(src: Source, steady: bool) -> str:
+def source_tag(src: Source, steady: bool) -> str:
     if steady:
         return src.label
     why = src.status.replace("no steady strides", "").strip().strip("()")
     return f"{src.label} (transient stride{': ' + why if why else ''})"
 
 
-def _line_kw(src: Source, i: int, steady: bool) -> dict:
+def line_kw(src: Source, i: int, steady: bool) -> dict:
     """Style of a source's curve: the paper's styles; a non-steady (transient) stride thin
     and faint."""
     col, ls = model_style(src.name, i)
@@ -70,7 +70,7 @@ def _line_kw(src: Source, i: int, steady: bool) -> dict:
     return dict(color=col, ls=ls, lw=lw if steady else 0.9, alpha=1.0 if steady else 0.55)
 
 
-class _Extent:
+class Extent:
     """Data range of the steady curves of each axes; the view is limited to it so that a
     long transient stride of a model that fell does not squash the steady ones."""
 
@@ -96,14 +96,14 @@ class _Extent:
                 ax.set_ylim(y0 - d, y1 + d)
 
 
-def _sel(lg, a: float, b: float) -> np.ndarray:
+def select_window(lg, a: float, b: float) -> np.ndarray:
     t = lg.t
     return np.arange(
         int(np.searchsorted(t, a, side="left")), int(np.searchsorted(t, b, side="right"))
     )
 
 
-def _notes(exp: Source, models: dict, extra=()) -> list[str]:
+def figure_notes(exp: Source, models: dict, extra=()) -> list[str]:
     """The notes under a figure's title: synthetic experiment data, and for every source
     without steady strides why (a model's run: what it did instead of bounding,
     :meth:`SimulationResult.behaviour <scoutsim.result.simulation_result.SimulationResult.behaviour>`)."""
@@ -123,7 +123,7 @@ def _notes(exp: Source, models: dict, extra=()) -> list[str]:
     return out
 
 
-def _finish(fig: Figure, title: str, notes: list[str], path):
+def finish_figure(fig: Figure, title: str, notes: list[str], path):
     import textwrap
 
     text = "\n".join(textwrap.wrap("; ".join(notes), 140)) if notes else ""
@@ -132,7 +132,7 @@ def _finish(fig: Figure, title: str, notes: list[str], path):
     return fig
 
 
-def _leg_window(lg, stride, leg: str):
+def leg_window(lg, stride, leg: str):
     """(t_a, t_b) of one step of ``leg``: back = the stride; front = from the first front
     lift-off at or after the stride's start to the next front lift-off (None if absent)."""
     if leg == "back":
@@ -146,13 +146,13 @@ def _leg_window(lg, stride, leg: str):
     return None
 
 
-def _state_wave(ax, t, states, kw, label=None):
+def state_wave(ax, t, states, kw, label=None):
     codes = np.clip(np.asarray(states, dtype=int), min(LegState), max(LegState))
     lv = np.asarray(STATE_LEVELS)[codes]
     ax.plot(t, lv, drawstyle="steps-post", label=label, **kw)
 
 
-def _clip_note(exp: Source, mods: dict) -> list[str]:
+def clip_note(exp: Source, mods: dict) -> list[str]:
     srcs = _sources(exp, mods)
     if not any((r := s.representative()) is not None and r[2] for s in srcs):
         return []
@@ -165,7 +165,7 @@ def _clip_note(exp: Source, mods: dict) -> list[str]:
     ]
 
 
-def _state_axis(ax):
+def state_axis(ax):
     ax.set_yticks([0.0, 0.5, 1.0], ["retraction", "brake", "flight"], fontsize=7)
     ax.set_ylim(-0.2, 1.2)
     ax.set_ylabel("leg state [-]")

@@ -10,7 +10,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..names import LEG_NAMES
-from .figure_parts import _DEG, STATE_LEVELS, _state_axis
+from .figure_parts import DEG, STATE_LEVELS, state_axis
 from .style import save_figure
 
 __all__ = ["plot_log"]
@@ -36,18 +36,18 @@ def plot_log(log, path=None, t_range=None) -> Figure:
     ax_p, ax_h, ax_a, ax_s, ax_tau = fig.subplots(
         5, 1, sharex=True, gridspec_kw={"height_ratios": [3, 3, 3, 1.6, 3]}
     )
-    ax_p.plot(tt, np.asarray(log.pitch)[k] * _DEG, color="k", lw=1.0)
+    ax_p.plot(tt, np.asarray(log.pitch)[k] * DEG, color="k", lw=1.0)
     ax_p.set_ylabel("pitch [deg]")
     ax_h.plot(tt, np.asarray(log.height)[k], color="k", lw=1.0)
     ax_h.set_ylabel("COM height [m]")
     for li, (leg, col) in enumerate(zip(LEG_NAMES, ("tab:blue", "tab:red"))):
-        ax_a.plot(tt, np.asarray(log.leg_angle(leg))[k] * _DEG, color=col, lw=1.0, label=f"{leg}")
+        ax_a.plot(tt, np.asarray(log.leg_angle(leg))[k] * DEG, color=col, lw=1.0, label=f"{leg}")
         lv = np.asarray(STATE_LEVELS)[log.leg_state(leg)[k]] + (0.04 if li else -0.04)
         ax_s.plot(tt, lv, color=col, lw=1.0, drawstyle="steps-post", label=leg)
         ax_tau.plot(tt, np.asarray(log.hip_torque(leg))[k], color=col, lw=1.0, label=leg)
     ax_a.set_ylabel("leg angle [deg]")
     ax_a.legend(loc="upper right", fontsize=8)
-    _state_axis(ax_s)
+    state_axis(ax_s)
     ax_tau.set_ylabel("hip torque per leg [N m]")
     ax_tau.set_xlabel("time [s]")
     for ax in (ax_p, ax_h, ax_a, ax_s, ax_tau):

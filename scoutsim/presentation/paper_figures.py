@@ -49,7 +49,7 @@ from pathlib import Path
 from ..validation.phase import phase_compare
 from .error_figure import fig12
 from .experiment_figure import fig5, robot_pose
-from .figure_parts import STATE_LEVELS, _prepare
+from .figure_parts import STATE_LEVELS, prepare_sources
 from .log_figure import plot_log
 from .phase_plots import plot_phase
 from .saturation_figure import fig11
@@ -77,7 +77,7 @@ FIGURE_NAMES = ("fig5", "fig8", "fig9", "fig10", "fig11", "fig12", "phase")
 def fig_phase(logs, models=None, path=None, transient_s: float = 2.0, n_phase: int = 101):
     """Figure of the phase-normalized comparison
     (:func:`scoutsim.validation.phase.phase_compare` + :func:`~.phase_plots.plot_phase`)."""
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     return plot_phase(phase_compare(exp, mods, n_phase=n_phase, transient_s=transient_s), path)
 
 
@@ -95,7 +95,7 @@ def write_figures(
         table = models
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     paths = {}
 
     def emit(name, fn, *a, **kw):

@@ -26,8 +26,8 @@ from matplotlib.patches import Patch
 
 from ..names import LegState
 from .maps import plot_basin_map, plot_sweep_map
-from .run_overview import _strides, draw_overview
-from .run_parts import _legend_above, _state_bands, _title
+from .run_overview import draw_overview, overview_strides
+from .run_parts import legend_above, run_title, state_bands
 from .stride_power import STRIDE_POWER_SINKS, STRIDE_POWER_SOURCES, plot_stride_power
 from .style import LEG_COLORS, LEG_NAMES, LEG_STATE_COLORS, save_figure
 from .torque_speed import draw_motor_limits, motor_limits, plot_torque_speed
@@ -115,7 +115,7 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
         t_range = (_last_strides_start(result), float(t[-1]))
         detail = (
             f"the last {DETAIL_STRIDES} strides"
-            if len(_strides(result)) >= DETAIL_STRIDES
+            if len(overview_strides(result)) >= DETAIL_STRIDES
             else "the last second"
         )
     if t_range is not None:
@@ -144,7 +144,7 @@ def plot_run(result, path=None, t_range=None, overview=False, behaviour=None) ->
         fig = Figure(figsize=(10, 10), layout="constrained")
         axes = fig.subplots(4, 1, sharex=True)
     _draw_run_panels(axes, result, t[sel], sel, t0, t1)
-    fig.suptitle(_title(result, behaviour=behaviour))
+    fig.suptitle(run_title(result, behaviour=behaviour))
     save_figure(fig, path)
     return fig
 
@@ -153,7 +153,7 @@ def _last_strides_start(result) -> float:
     """Start [s] of the last DETAIL_STRIDES strides of a run (1 s before its end if it has
     fewer)."""
     t_end = float(result.t[-1])
-    strides = _strides(result)
+    strides = overview_strides(result)
     if len(strides) >= DETAIL_STRIDES:
         return float(strides[-DETAIL_STRIDES]["t_start"])
     return max(float(result.t[0]), t_end - 1.0)
@@ -183,9 +183,7 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
             label=f"phi {name}",
         )
         if has_controller:
-            _state_bands(
-                ax_leg, ts, np.asarray(result.leg_state(li))[sel], 0.5 * li, 0.5 * (li + 1)
-            )
+            state_bands(ax_leg, ts, np.asarray(result.leg_state(li))[sel], 0.5 * li, 0.5 * (li + 1))
     ax_leg.set_ylabel("leg angle phi [deg]")
     handles, labels = ax_leg.get_legend_handles_labels()
     if has_controller:
@@ -203,7 +201,7 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
                 ha="left",
                 color=LEG_COLORS[li],
             )
-    _legend_above(ax_leg, handles, labels)
+    legend_above(ax_leg, handles, labels)
 
     for li, name in enumerate(LEG_NAMES):
         ax_tau.plot(
@@ -224,14 +222,14 @@ def _draw_run_panels(axes, result, ts, sel, t0, t1) -> None:
     ax_tau.axhline(0.0, color="0.6", lw=0.6)
     ax_tau.set_ylabel("hip torque per leg [N m]")
     ax_tau.set_xlabel("time [s]")
-    _legend_above(ax_tau)
+    legend_above(ax_tau)
 
     if result.outcome == "fell" and t0 <= result.t_end <= t1:
         for ax in axes:
             ax.axvline(result.t_end, color="crimson", lw=1.0, ls=":")
         ax_pitch.plot([], [], color="crimson", lw=1.0, ls=":", label="fall")
-    _legend_above(ax_pitch)
-    _legend_above(ax_height)
+    legend_above(ax_pitch)
+    legend_above(ax_height)
 
     for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)

@@ -33,7 +33,7 @@ def running_range(t, values, window_s: float) -> tuple[np.ndarray, np.ndarray]:
     return (minimum_filter1d(v, size, mode="nearest"), maximum_filter1d(v, size, mode="nearest"))
 
 
-def _strides(result):
+def overview_strides(result):
     try:
         return list(result.strides)
     except Exception:  # a run too short or too broken for stride analysis
@@ -47,7 +47,7 @@ def draw_overview(fig, result, t0: float, t1: float) -> list:
     axes = fig.subplots(1, 3, sharex=True)
     ax_p, ax_h, ax_s = axes
     t = np.asarray(result.t, dtype=float)
-    strides = _strides(result)
+    strides = overview_strides(result)
     periods = np.array([s.period_s for s in strides])
     window = float(np.median(periods)) if periods.size >= 2 else DEFAULT_WINDOW_S
     for ax, v, label in (

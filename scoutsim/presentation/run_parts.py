@@ -14,7 +14,7 @@ from ..names import LegState
 from .style import LEG_STATE_COLORS, model_label
 
 
-def _model_label(result) -> str:
+def run_model_label(result) -> str:
     """Display name of the run's model ("Model II"; :func:`~.style.model_label`)."""
     return model_label((result.provenance or {}).get("model"))
 
@@ -56,21 +56,21 @@ def behaviour_text(result, behaviour: str | None = None) -> str:
         return outcome
 
 
-def _title(result, width: int = 110, behaviour: str | None = None) -> str:
+def run_title(result, width: int = 110, behaviour: str | None = None) -> str:
     """The title of a run's figure: the model and what the run did (:func:`behaviour_text`),
     wrapped at ``width`` characters."""
     import textwrap
 
     return "\n".join(
         textwrap.wrap(
-            f"Scout II, {_model_label(result)}: {behaviour_text(result, behaviour)}",
+            f"Scout II, {run_model_label(result)}: {behaviour_text(result, behaviour)}",
             width,
             break_on_hyphens=False,
         )
     )
 
 
-def _legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
+def legend_above(ax, handles=None, labels=None, fontsize: float = 8) -> None:
     """The axes' legend in one row above the axes at their right end, outside the data (as
     many columns as entries; the left end keeps the axis' offset text)."""
     if handles is None:
@@ -99,7 +99,7 @@ def _runs(values: np.ndarray):
     return [(int(a), int(b), int(values[a])) for a, b in zip(starts, stops)]
 
 
-def _state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) -> None:
+def state_bands(ax, t: np.ndarray, states: np.ndarray, y0: float, y1: float) -> None:
     """Shade the controller leg state over time in the axes-fraction strip [y0, y1].
 
     A sample's state holds from its time until the next sample (zero-order hold, as the

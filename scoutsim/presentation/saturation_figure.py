@@ -13,7 +13,16 @@ from matplotlib.figure import Figure
 from ..names import LEG_NAMES
 from ..parameters import RobotParameters
 from ..validation.phase import Source
-from .figure_parts import _finish, _leg_window, _line_kw, _notes, _prepare, _sel, _shown, _tag
+from .figure_parts import (
+    figure_notes,
+    finish_figure,
+    leg_window,
+    line_kw,
+    prepare_sources,
+    select_window,
+    shown_sources,
+    source_tag,
+)
 from .torque_speed import draw_motor_limits, motor_limits
 
 __all__ = ["fig11"]
@@ -39,7 +48,7 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
     :func:`scoutsim.presentation.torque_speed.motor_limits` (current limit, torque-speed
     lines at the battery voltage). ``robot``: RobotParameters or dict for the limits
     (default: the models' parameters, else Scout II)."""
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     robot_dict = _robot_dict(robot, mods, exp)
     lims = [motor_limits(robot_dict, leg) for leg in (0, 1)]
     fig = Figure(figsize=(11, 5.0), layout="constrained")
@@ -52,10 +61,16 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
         pts = [(lg, s) for lg, s in exp.steady]
         if pts:
             xs = np.concatenate(
-                [np.asarray(lg.hip_torque(leg))[_sel(lg, s.t_start, s.t_end)] for lg, s in pts]
+                [
+                    np.asarray(lg.hip_torque(leg))[select_window(lg, s.t_start, s.t_end)]
+                    for lg, s in pts
+                ]
             )
             ys = np.concatenate(
-                [np.asarray(lg.leg_rate(leg))[_sel(lg, s.t_start, s.t_end)] for lg, s in pts]
+                [
+                    np.asarray(lg.leg_rate(leg))[select_window(lg, s.t_start, s.t_end)]
+                    for lg, s in pts
+                ]
             )
             ax.plot(
                 xs,
@@ -67,23 +82,23 @@ def fig11(logs, models=None, path=None, robot=None, transient_s: float = 2.0) ->
                 alpha=0.5,
                 label=f"experiment, all {len(pts)} steady strides",
             )
-        for i, src, lg, st, steady in _shown(exp, mods):
-            win = _leg_window(lg, st, leg)
+        for i, src, lg, st, steady in shown_sources(exp, mods):
+            win = leg_window(lg, st, leg)
             if win is None:
                 missing.append(f"{src.label}: no complete {leg} step")
                 continue
-            k = _sel(lg, *win)
+            k = select_window(lg, *win)
             x = np.asarray(lg.hip_torque(leg))[k]
             y = np.asarray(lg.leg_rate(leg))[k]
-            ax.plot(x, y, label=f"{_tag(src, steady)}, one step", **_line_kw(src, i, steady))
+            ax.plot(x, y, label=f"{source_tag(src, steady)}, one step", **line_kw(src, i, steady))
         xl, yl = 1.15 * tmax, 1.15 * wmax
         draw_motor_limits(ax, lims[c], xl, yl, current_ls=(0, (5, 2)), line_ls=(0, (6, 2, 1, 2)))
         ax.set_xlabel("hip torque per leg [N m]")
         ax.set_ylabel("leg angular speed (encoder) [rad/s]")
         ax.set_title(f"{leg} leg")
-    return _finish(
+    return finish_figure(
         fig,
         "Motor saturation: leg speed against hip torque (Fig. 11)",
-        _notes(exp, mods, missing),
+        figure_notes(exp, mods, missing),
         path,
     )

@@ -11,19 +11,19 @@ from matplotlib.figure import Figure
 
 from ..names import LEG_NAMES
 from .figure_parts import (
-    _DEG,
-    _clip_note,
-    _Extent,
-    _finish,
-    _leg_window,
-    _line_kw,
-    _notes,
-    _prepare,
-    _sel,
-    _shown,
-    _state_axis,
-    _state_wave,
-    _tag,
+    DEG,
+    Extent,
+    clip_note,
+    figure_notes,
+    finish_figure,
+    leg_window,
+    line_kw,
+    prepare_sources,
+    select_window,
+    shown_sources,
+    source_tag,
+    state_axis,
+    state_wave,
 )
 
 __all__ = ["fig8", "fig9", "fig10"]
@@ -32,18 +32,18 @@ __all__ = ["fig8", "fig9", "fig10"]
 def fig8(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     """Pitch [deg] and COM height [m] over one stride, experiment and each model, time from
     the back-leg lift-off that starts the stride [s] (paper Fig. 8)."""
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     fig = Figure(figsize=(11, 4.5), layout="constrained")
     ax_p, ax_h = fig.subplots(1, 2)
-    ext = _Extent()
-    for i, src, lg, st, steady in _shown(exp, mods):
-        k = _sel(lg, st.t_start, st.t_end)
+    ext = Extent()
+    for i, src, lg, st, steady in shown_sources(exp, mods):
+        k = select_window(lg, st.t_start, st.t_end)
         tt = lg.t[k] - st.t_start
-        lab = f"{_tag(src, steady)}, period {st.period_s:.3f} s"
-        th = np.asarray(lg.pitch)[k] * _DEG
+        lab = f"{source_tag(src, steady)}, period {st.period_s:.3f} s"
+        th = np.asarray(lg.pitch)[k] * DEG
         y = np.asarray(lg.height)[k]
-        ax_p.plot(tt, th, label=lab, **_line_kw(src, i, steady))
-        ax_h.plot(tt, y, label=lab, **_line_kw(src, i, steady))
+        ax_p.plot(tt, th, label=lab, **line_kw(src, i, steady))
+        ax_h.plot(tt, y, label=lab, **line_kw(src, i, steady))
         if steady:
             ext.add(ax_p, tt, th)
             ext.add(ax_h, tt, y)
@@ -54,10 +54,10 @@ def fig8(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
         ax.set_xlabel("time from back-leg lift-off [s]")
         ax.grid(True, lw=0.4, alpha=0.5)
     ax_p.legend(loc="best", fontsize=8)
-    return _finish(
+    return finish_figure(
         fig,
         "Pitch and COM height over one stride (Fig. 8)",
-        _notes(exp, mods, _clip_note(exp, mods)),
+        figure_notes(exp, mods, clip_note(exp, mods)),
         path,
     )
 
@@ -69,22 +69,22 @@ def _step_figure(exp, mods, rows, title, path):
     nr = len(rows) + 1
     axes = fig.subplots(nr, 2, sharex="col", gridspec_kw={"height_ratios": [3] * len(rows) + [1.4]})
     missing = []
-    ext = _Extent()
-    for i, src, lg, st, steady in _shown(exp, mods):
-        kw = _line_kw(src, i, steady)
+    ext = Extent()
+    for i, src, lg, st, steady in shown_sources(exp, mods):
+        kw = line_kw(src, i, steady)
         for c, leg in enumerate(LEG_NAMES):
-            win = _leg_window(lg, st, leg)
+            win = leg_window(lg, st, leg)
             if win is None:
                 missing.append(f"{src.label}: no complete {leg} step")
                 continue
-            k = _sel(lg, *win)
+            k = select_window(lg, *win)
             tt = lg.t[k] - win[0]
             for r, (_, get) in enumerate(rows):
                 v = np.asarray(get(lg, leg))[k]
-                axes[r, c].plot(tt, v, label=_tag(src, steady) if (r == 0) else None, **kw)
+                axes[r, c].plot(tt, v, label=source_tag(src, steady) if (r == 0) else None, **kw)
                 if steady:
                     ext.add(axes[r, c], tt, v)
-            _state_wave(axes[-1, c], tt, lg.leg_state(leg)[k], kw)
+            state_wave(axes[-1, c], tt, lg.leg_state(leg)[k], kw)
             if steady:
                 ext.add(axes[-1, c], tt)
     ext.apply()
@@ -94,11 +94,11 @@ def _step_figure(exp, mods, rows, title, path):
             axes[r, c].set_ylabel(ylab)
             axes[r, c].grid(True, lw=0.4, alpha=0.5)
             axes[r, c].axhline(0.0, color="0.6", lw=0.5)
-        _state_axis(axes[-1, c])
+        state_axis(axes[-1, c])
         axes[-1, c].grid(True, lw=0.4, alpha=0.5)
         axes[-1, c].set_xlabel(f"time from {leg}-leg lift-off [s]")
     axes[0, 0].legend(loc="best", fontsize=7)
-    return _finish(fig, title, _notes(exp, mods, missing + _clip_note(exp, mods)), path)
+    return finish_figure(fig, title, figure_notes(exp, mods, missing + clip_note(exp, mods)), path)
 
 
 def fig9(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
@@ -106,10 +106,10 @@ def fig9(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     torso over one step, each leg from its own lift-off, with the leg-state square wave
     (flight high, stance-retraction low, stance-brake medium) (paper Fig. 9). Angles are as
     the hip encoders log them (motor-side angle for Model II)."""
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     rows = [
-        ("leg angle [deg]", lambda lg, leg: np.asarray(lg.leg_angle(leg)) * _DEG),
-        ("leg angular rate [deg/s]", lambda lg, leg: np.asarray(lg.leg_rate(leg)) * _DEG),
+        ("leg angle [deg]", lambda lg, leg: np.asarray(lg.leg_angle(leg)) * DEG),
+        ("leg angular rate [deg/s]", lambda lg, leg: np.asarray(lg.leg_rate(leg)) * DEG),
     ]
     return _step_figure(exp, mods, rows, "Leg angles and rates over one step (Fig. 9)", path)
 
@@ -118,7 +118,7 @@ def fig10(logs, models=None, path=None, transient_s: float = 2.0) -> Figure:
     """Back and front hip torques per physical leg [N m] over one step: the experiment's
     estimated from motor current (N eta K_T i), the models' likewise; with the leg-state
     square wave (paper Fig. 10)."""
-    exp, mods = _prepare(logs, models, transient_s)
+    exp, mods = prepare_sources(logs, models, transient_s)
     rows = [("hip torque per leg [N m]", lambda lg, leg: np.asarray(lg.hip_torque(leg)))]
     return _step_figure(
         exp, mods, rows, "Hip torques over one step, from motor current (Fig. 10)", path

@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from ..names import Leg, LegState
-from .run_parts import _model_label, _state_bands, behaviour_text
+from .run_parts import behaviour_text, run_model_label, state_bands
 from .style import LEG_STATE_COLORS, save_figure
 
 __all__ = ["plot_stride_power", "STRIDE_POWER_SOURCES", "STRIDE_POWER_SINKS"]
@@ -155,7 +155,7 @@ def plot_stride_power(result, path=None, stride=None) -> Figure:
     for ax in (ax_in, ax_out):
         ax.axhline(0.0, color="k", lw=0.5)
         for leg, (y0, y1) in zip(Leg, ((0.0, 0.5), (0.5, 1.0))):
-            _state_bands(ax, t[i : j + 1], result.leg_state(leg)[i : j + 1], y0, y1)
+            state_bands(ax, t[i : j + 1], result.leg_state(leg)[i : j + 1], y0, y1)
             ax.text(
                 1.005,
                 0.5 * (leg + 0.5),
@@ -196,7 +196,7 @@ def plot_stride_power(result, path=None, stride=None) -> Figure:
     cot = "" if st.cost_of_transport is None else f", cost of transport {st.cost_of_transport:.2f}"
     title = (
         f"Power over stride {st.index} ({tk[0]:.3f} - {tk[-1]:.3f} s"
-        f"{'' if st.steady else ', not a steady stride'}), {_model_label(result)}{cot}"
+        f"{'' if st.steady else ', not a steady stride'}), {run_model_label(result)}{cot}"
     )
     try:
         what = result.behaviour()

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from ..names import Leg, LegState
 from ..parameters import RobotParameters
-from .run_parts import _model_label, behaviour_text
+from .run_parts import behaviour_text, run_model_label
 from .style import LEG_NAMES, LEG_STATE_LINE_COLORS, leg_index, save_figure
 
 __all__ = ["plot_torque_speed", "motor_limits", "draw_motor_limits"]
@@ -163,7 +163,7 @@ def plot_torque_speed(result, leg="both", path=None) -> Figure:
     fig.suptitle(
         "\n".join(
             textwrap.wrap(
-                f"Torque-speed, {_model_label(result)}: {behaviour_text(result)}", 50 * len(legs)
+                f"Torque-speed, {run_model_label(result)}: {behaviour_text(result)}", 50 * len(legs)
             )
         ),
         fontsize=10,

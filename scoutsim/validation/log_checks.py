@@ -22,8 +22,8 @@ import math
 import numpy as np
 
 from ..names import LegState
-from .log_format import ALTERNATIVE_COLUMNS, COLUMN_UNITS, REQUIRED_COLUMNS, LogError, _row_text
-from .log_spikes import _check_spikes
+from .log_format import ALTERNATIVE_COLUMNS, COLUMN_UNITS, REQUIRED_COLUMNS, LogError, row_text
+from .log_spikes import check_spikes
 
 __all__ = ["UNIFORM_TOLERANCE"]
 
@@ -56,7 +56,7 @@ _NONNEGATIVE = (
 UNIFORM_TOLERANCE = 0.01
 
 
-def _check_columns(path, names):
+def check_columns(path, names):
     seen = set()
     for j, n in enumerate(names):
         if n == "":
@@ -98,9 +98,9 @@ def _check_columns(path, names):
             )
 
 
-def _validate(path, cols: dict, header_line: int | None, repairs: list | None = None):
+def validate_values(path, cols: dict, header_line: int | None, repairs: list | None = None):
     """Check values; raise LogError at the first problem (isolated spikes: repaired into
-    ``repairs`` if it is a list, :func:`_check_spikes`)."""
+    ``repairs`` if it is a list, :func:`check_spikes`)."""
     n = len(cols["t"])
     if n < 2:
         raise LogError(f"{path}: only {n} data row(s); a log needs at least 2", path, "t")
@@ -119,7 +119,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
                 else f"gap of {k1 - k0 + 1} NaN/empty/infinite values through data row {k1 + 1}"
             )
             raise LogError(
-                f"{path}: column '{c}', {_row_text(k0 + 1, header_line)}: {what} "
+                f"{path}: column '{c}', {row_text(k0 + 1, header_line)}: {what} "
                 f"({int(bad.sum())} in the column); fill or cut the gap",
                 path,
                 c,
@@ -130,7 +130,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
     if np.any(dt <= 0):
         k = int(np.argmax(dt <= 0)) + 1
         raise LogError(
-            f"{path}: column 't', {_row_text(k + 1, header_line)}: time does not "
+            f"{path}: column 't', {row_text(k + 1, header_line)}: time does not "
             f"increase (t = {t[k]:.9g} s after {t[k - 1]:.9g} s)",
             path,
             "t",
@@ -141,7 +141,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
     if dev.any():
         k = int(np.argmax(dev)) + 1
         raise LogError(
-            f"{path}: column 't', {_row_text(k + 1, header_line)}: non-uniform "
+            f"{path}: column 't', {row_text(k + 1, header_line)}: non-uniform "
             f"sampling (step {dt[k - 1]:.6g} s, median {h:.6g} s); the FFT low-pass "
             "needs uniform samples: resample the log",
             path,
@@ -162,7 +162,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
             if bad.any():
                 k = int(np.argmax(bad))
                 raise LogError(
-                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: value "
+                    f"{path}: column '{c}', {row_text(k + 1, header_line)}: value "
                     f"{v[k]:g} is not a leg state (0 flight, 1 stance-retraction, "
                     "2 stance-brake)",
                     path,
@@ -176,7 +176,7 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
             if big.any():
                 k = int(np.argmax(big))
                 raise LogError(
-                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
+                    f"{path}: column '{c}', {row_text(k + 1, header_line)}: "
                     f"|value| {abs(v[k]):.6g} exceeds {lim:.4g} "
                     f"{COLUMN_UNITS[c]}; this suggests {suggestion}",
                     path,
@@ -188,10 +188,10 @@ def _validate(path, cols: dict, header_line: int | None, repairs: list | None = 
             if neg.any():
                 k = int(np.argmax(neg))
                 raise LogError(
-                    f"{path}: column '{c}', {_row_text(k + 1, header_line)}: "
+                    f"{path}: column '{c}', {row_text(k + 1, header_line)}: "
                     f"negative length {v[k]:.6g} m",
                     path,
                     c,
                     k + 1,
                 )
-    _check_spikes(path, cols, header_line, repairs)
+    check_spikes(path, cols, header_line, repairs)

@@ -125,7 +125,7 @@ DEFAULT_META = {
 }
 
 LOG_SUFFIXES = (".csv", ".csv.gz", ".parquet", ".pq")
-_PARQUET_META_KEY = b"scoutsim.log"
+PARQUET_META_KEY = b"scoutsim.log"
 
 
 class LogError(ValueError):
@@ -141,7 +141,7 @@ class LogError(ValueError):
         self.row = row
 
 
-def _suffix(path: Path) -> str:
+def log_suffix(path: Path) -> str:
     name = path.name.lower()
     for s in LOG_SUFFIXES:
         if name.endswith(s):
@@ -149,7 +149,7 @@ def _suffix(path: Path) -> str:
     return path.suffix.lower()
 
 
-def _row_text(row: int, header_line: int | None) -> str:
+def row_text(row: int, header_line: int | None) -> str:
     if header_line is None:
         return f"row {row}"
     return f"row {row} (line {header_line + row})"

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from .experiment_log import ExperimentLog
-from .log_checks import _check_columns, _validate
-from .log_format import _PARQUET_META_KEY, COLUMN_UNITS, LOG_SUFFIXES, LogError, _row_text, _suffix
+from .log_checks import check_columns, validate_values
+from .log_format import COLUMN_UNITS, LOG_SUFFIXES, PARQUET_META_KEY, LogError, log_suffix, row_text
 
 __all__ = ["load_log", "load_dataset"]
 
@@ -29,7 +29,7 @@ def _parse_meta_value(text: str):
 
 def _read_csv(path: Path):
     """(header names, list of row-string-lists, metadata, line number of the header)."""
-    opener = gzip.open if _suffix(path) == ".csv.gz" else open
+    opener = gzip.open if log_suffix(path) == ".csv.gz" else open
     try:
         with opener(path, "rt", encoding="utf-8", newline="") as fh:
             text = fh.read()
@@ -70,7 +70,7 @@ def _read_parquet(path: Path):
     except Exception as exc:  # pyarrow raises several types
         raise LogError(f"{path}: cannot read the Parquet file: {exc}", path) from None
     meta = {}
-    raw = (table.schema.metadata or {}).get(_PARQUET_META_KEY)
+    raw = (table.schema.metadata or {}).get(PARQUET_META_KEY)
     if raw:
         meta = json.loads(raw.decode("utf-8"))
     names = list(table.column_names)
@@ -98,10 +98,10 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
         raise LogError(f"{path}: log file not found", path)
     if not path.is_file():
         raise LogError(f"{path}: not a file", path)
-    suffix = _suffix(path)
+    suffix = log_suffix(path)
     if suffix in (".parquet", ".pq"):
         names, raw, meta = _read_parquet(path)
-        _check_columns(path, names)
+        check_columns(path, names)
         cols = {}
         for n in names:
             try:
@@ -123,17 +123,17 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
         header_line = None
     elif suffix in (".csv", ".csv.gz"):
         names, rows, meta, header_line = _read_csv(path)
-        _check_columns(path, names)
+        check_columns(path, names)
         ncol = len(names)
         data = np.full((len(rows), ncol), np.nan)
         for i, r in enumerate(rows):
             if len(r) != ncol:
                 if len(r) == 0 or (len(r) == 1 and not r[0].strip()):
                     raise LogError(
-                        f"{path}: {_row_text(i + 1, header_line)} is empty", path, None, i + 1
+                        f"{path}: {row_text(i + 1, header_line)} is empty", path, None, i + 1
                     )
                 raise LogError(
-                    f"{path}: {_row_text(i + 1, header_line)} has {len(r)} "
+                    f"{path}: {row_text(i + 1, header_line)} has {len(r)} "
                     f"fields, the header has {ncol}",
                     path,
                     None,
@@ -149,7 +149,7 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
                     if names[j] in COLUMN_UNITS:
                         raise LogError(
                             f"{path}: column '{names[j]}', "
-                            f"{_row_text(i + 1, header_line)}: {cell!r} is not a "
+                            f"{row_text(i + 1, header_line)}: {cell!r} is not a "
                             "number",
                             path,
                             names[j],
@@ -162,7 +162,7 @@ def load_log(path, *, repair_spikes: bool = False) -> ExperimentLog:
             path,
         )
     repairs: list | None = [] if repair_spikes else None
-    _validate(path, cols, header_line, repairs)
+    validate_values(path, cols, header_line, repairs)
     return ExperimentLog(columns=cols, meta=meta, path=str(path), repairs=tuple(repairs or ()))
 
 
@@ -173,7 +173,7 @@ def _expand(paths) -> list[Path]:
     for p in paths:
         p = Path(p)
         if p.is_dir():
-            found = sorted(f for f in p.iterdir() if f.is_file() and _suffix(f) in LOG_SUFFIXES)
+            found = sorted(f for f in p.iterdir() if f.is_file() and log_suffix(f) in LOG_SUFFIXES)
             if not found:
                 raise LogError(f"{p}: directory holds no log files ({', '.join(LOG_SUFFIXES)})", p)
             out.extend(found)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from .log_format import COLUMN_UNITS, LogError, _row_text
+from .log_format import COLUMN_UNITS, LogError, row_text
 
 __all__ = ["SPIKE_HALF_WINDOW", "SPIKE_K", "SPIKE_FLOOR", "isolated_spikes"]
 
@@ -110,7 +110,7 @@ def isolated_spikes(x, floor: float, half_window: int = SPIKE_HALF_WINDOW, k: fl
     return np.abs(x - median) > allowed, median, allowed
 
 
-def _check_spikes(path, cols: dict, header_line: int | None, repairs: list | None = None):
+def check_spikes(path, cols: dict, header_line: int | None, repairs: list | None = None):
     """LogError at the first isolated spike of a :data:`SPIKE_FLOOR` column; with a list
     ``repairs`` instead, every spike is replaced by its neighbours' median and listed there
     (column, row, value, median)."""
@@ -131,7 +131,7 @@ def _check_spikes(path, cols: dict, header_line: int | None, repairs: list | Non
         u = COLUMN_UNITS[c]
         count = int(flagged.sum())
         raise LogError(
-            f"{path}: column '{c}', {_row_text(k + 1, header_line)}: value {v[k]:.6g} {u} is "
+            f"{path}: column '{c}', {row_text(k + 1, header_line)}: value {v[k]:.6g} {u} is "
             f"an isolated spike: the {2 * h} neighbouring samples ({h} on each side) agree on "
             f"a median of {median[k]:.6g} {u} and it lies {abs(v[k] - median[k]):.4g} {u} "
             f"from it; allowed: within {allowed[k]:.4g} {u} of the neighbours' median (the "

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .log_format import _PARQUET_META_KEY, LOG_SUFFIXES, _suffix
+from .log_format import LOG_SUFFIXES, PARQUET_META_KEY, log_suffix
 
 __all__ = ["save_log"]
 
@@ -24,7 +24,7 @@ def save_log(log, path, precision: int = 7) -> Path:
     (``.csv``, ``.csv.gz``) with ``# key = value`` metadata lines, or as Parquet
     (``.parquet``/``.pq``, needs pyarrow)."""
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = log_suffix(path)
     meta = {k: v for k, v in log.meta.items()}
     names = list(log.columns)
     if suffix in (".parquet", ".pq"):
@@ -37,7 +37,7 @@ def save_log(log, path, precision: int = 7) -> Path:
                 "install it with `pip install pyarrow`"
             ) from None
         table = pa.table({n: log.columns[n] for n in names})
-        table = table.replace_schema_metadata({_PARQUET_META_KEY: json.dumps(meta).encode()})
+        table = table.replace_schema_metadata({PARQUET_META_KEY: json.dumps(meta).encode()})
         pq.write_table(table, path)
         return path
     if suffix not in (".csv", ".csv.gz"):

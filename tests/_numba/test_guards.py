@@ -71,7 +71,7 @@ def test_the_cache_locator_is_left_out_where_numba_has_no_list_of_them(monkeypat
 
     f = kinematics.project_state.py_func
     loc = ours[0].from_function(f, kinematics.__file__)
-    directory = disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/model/kinematics.py")]
+    directory = disk_cache._MODULE_DIRS[str(disk_cache.PACKAGE / "_core/model/kinematics.py")]
     assert loc.get_cache_path() == str(directory)
     # and for no other file: Numba's own locators are asked, as without scoutsim
 

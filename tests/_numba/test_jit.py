@@ -148,7 +148,7 @@ def test_each_module_is_cached_under_a_digest_of_what_it_imports(tmp_path):
     import pathlib
     import shutil
 
-    pkg = disk_cache._PACKAGE
+    pkg = disk_cache.PACKAGE
     copy = tmp_path / "scoutsim"
     shutil.copytree(pkg, copy, ignore=shutil.ignore_patterns("__pycache__"))
     d0 = disk_cache.module_digests(copy)
@@ -239,7 +239,7 @@ _REPORT_CACHE_DIR = """
 import json, os, sys, numba, scoutsim._numba.jit
 from scoutsim._numba import disk_cache
 report = {"numba_cache_dir": numba.config.CACHE_DIR, "root": str(disk_cache.cache_directory()),
-          "loop": str(disk_cache._MODULE_DIRS[str(disk_cache._PACKAGE / "_core/loop.py")]),
+          "loop": str(disk_cache._MODULE_DIRS[str(disk_cache.PACKAGE / "_core/loop.py")]),
           "digests": disk_cache.module_digests(),
           "after_import": [p for p in sys.argv[1:] if os.path.exists(p)]}
 report["removed"] = [str(p) for p in disk_cache.clean_cache()]
@@ -289,7 +289,7 @@ def test_a_user_numba_cache_dir_holds_the_module_directories_too(tmp_path):
         os.environ,
         NUMBA_CACHE_DIR=str(user),
         PYTHONPATH=os.pathsep.join(
-            [str(disk_cache._PACKAGE.parent), os.environ.get("PYTHONPATH", "")]
+            [str(disk_cache.PACKAGE.parent), os.environ.get("PYTHONPATH", "")]
         ),
     )
     out = subprocess.run(
