@@ -99,6 +99,8 @@ def engine_share(model, steps, repeats):
     """(env steps/s, engine-only steps/s) of the set-point episodes."""
     import gymnasium
 
+    from scoutsim.envs.bound import SETPOINTS
+
     env = gymnasium.make("scoutsim/Bound-v0", model=model, action_type="setpoints")
     rng = np.random.default_rng(0)
     actions = [policy("setpoints", None, rng) for _ in range(steps)]
@@ -112,10 +114,9 @@ def engine_share(model, steps, repeats):
         env.reset(seed=0)
         eng = env.unwrapped.engine
         n = env.unwrapped.samples_per_step
-        slots = env.unwrapped.setpoint_slots
         t0 = time.perf_counter()
         for a in actions:
-            eng.C[slots] = a
+            eng.retune(**dict(zip(SETPOINTS, a)))
             eng.advance(eng.k + n)
             eng.discard_records()
         eng_rates.append(steps / (time.perf_counter() - t0))

@@ -65,6 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..names import ContactMode, EventKind
+from ..simulation.assembly import DEFAULT_PITCH_LIMIT_DEG
 from .stances import stance_overlap
 from .strides import MIN_STEADY_STRIDES, PERIOD_TOLERANCE
 
@@ -200,13 +201,18 @@ def toe_slide_distance(result, leg, t0: float | None = None) -> float:
     return float(np.sum(dx[np.isfinite(dx)]))
 
 
+def _pitch_limit_deg(result) -> float:
+    """The |pitch| [deg] the run counted as a fall (its provenance's, else the default)."""
+    return float((result.provenance or {}).get("pitch_limit_deg", DEFAULT_PITCH_LIMIT_DEG))
+
+
 def _fall(result):
     """(time [s], cause "pitch" / "torso_contact") of the run's fall record, or the end of
     the run and None if it has none."""
     log = result.event_log(kinds=(EventKind.FALL,))
     if log["t"].size == 0:
         return float(result.t_end), None
-    limit = math.radians(float((result.provenance or {}).get("pitch_limit_deg", 60.0)))
+    limit = math.radians(_pitch_limit_deg(result))
     pitch = abs(float(log["v2"][-1]))  # the fall record: v1 = y, v2 = theta
     cause = "pitch" if pitch >= limit * (1.0 - 1e-6) else "torso_contact"
     return float(log["t"][-1]), cause
@@ -322,8 +328,7 @@ def classify_behaviour(result, gait=None, period_tolerance: float = PERIOD_TOLER
         t_fall, cause = _fall(result)
         c["fall_cause"] = cause
         how = {
-            "pitch": "its pitch passed "
-            f"{float((result.provenance or {}).get('pitch_limit_deg', 60.0)):g} deg",
+            "pitch": f"its pitch passed {_pitch_limit_deg(result):g} deg",
             "torso_contact": "the torso touched the ground",
         }.get(cause, "")
         slid = _slide_note(c)

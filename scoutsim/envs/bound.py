@@ -22,7 +22,6 @@ import math
 import gymnasium
 import numpy as np
 
-from ..control.bounding import SCHEDULABLE
 from ..control.sensors import SensorParameters, load_sensors
 from ..names import ContactMode
 from ..parameters import ControllerParameters, RobotParameters
@@ -348,7 +347,6 @@ class BoundEnv(gymnasium.Env):
         self.observation_space = observation_space()
         self.action_space = action_space(self.robot, action_type)
         #: the set-points' slots in the engine's controller array ``engine.C``
-        self.setpoint_slots = np.array([SCHEDULABLE[name] for name in SETPOINTS])
         self._engine: HybridEngine | None = None
         # an engine from the first start, to check the options now (reset makes the
         # episode's)
@@ -404,7 +402,7 @@ class BoundEnv(gymnasium.Env):
         if self.action_type == "torque":
             eng.cmd[:] = a
         else:
-            eng.C[self.setpoint_slots] = a
+            eng.retune(**dict(zip(SETPOINTS, a)))
         x0, t0, e0 = eng.x, eng.t_now, self._electrical()
         eng.advance(eng.k + self.samples_per_step)
         outcome = eng.status_name
