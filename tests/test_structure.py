@@ -216,3 +216,18 @@ def test_no_module_imports_another_modules_private_names():
                 if a.name.startswith("_") and not a.name.startswith("__")
             ]
     assert not found, found
+
+
+def test_the_layout_page_names_every_module():
+    """docs/layout.md says what every module of the package holds: a module added, moved or
+    renamed without its row there fails (a row may name a whole directory, as `cli/`)."""
+    page = (ROOT.parent / "docs" / "layout.md").read_text()
+    missing = []
+    for p in _sources():
+        rel = p.relative_to(ROOT).as_posix()
+        if p.name in ("__init__.py", "__main__.py", "_version.py"):
+            continue
+        folder = rel.rpartition("/")[0]
+        if f"`{rel}`" not in page and not (folder and f"`{folder}/`" in page):
+            missing.append(rel)
+    assert not missing, missing

@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from ..control.factory import ControllerSpec
-from ..io.run_directory import RunDirectory
+from ..io.run_directory import RunDirectory, json_default
 from ..io.tables import write_rows_csv, write_rows_parquet
 from ..parameters import (
     DEFAULT_FRICTION_COEFFICIENT,
@@ -73,7 +73,7 @@ from .study_failures import (
     is_error,
     run_failure,
 )
-from .sweep_checkpoint import CHECKPOINT, json_default, read_checkpoint, was_error
+from .sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
 from .sweep_orbit import ORBIT_COLUMNS, ORBIT_RTOL, ORBIT_TOL, orbit_columns
 from .sweep_points import (
     DEG,

@@ -1,14 +1,13 @@
 """A sweep's checkpoint (:mod:`scoutsim.analysis.sweep`): the file in its output directory
 that a resumed sweep (or tuning) goes on from, one JSON record per finished point, and how
-its records are read back and written.
+its records are read back and written (JSON's fallback for a record's NumPy values:
+:func:`~scoutsim.io.run_directory.json_default`).
 """
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
-
-import numpy as np
 
 #: name of the checkpoint file in a sweep's output directory: one JSON record per finished
 #: point, appended and flushed as each point arrives
@@ -42,11 +41,3 @@ def was_error(row: dict) -> bool:
     """Whether a checkpoint's row is a point the study could not run (a row written
     before statuses existed: outcome "error")."""
     return row.get("status", "error" if row.get("outcome") == "error" else "ok") == "error"
-
-
-def json_default(v):
-    """A checkpoint record's value that JSON does not take: a NumPy number as a Python one,
-    anything else by its repr."""
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    return repr(v)

@@ -101,7 +101,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from ..io.run_directory import RunDirectory, json_safe
+from ..io.run_directory import RunDirectory, json_default, json_safe
 from ..parameters import RobotParameters
 from .parallel import map_tasks, pool_is_broken, worker_pool
 from .study_controller import (
@@ -141,7 +141,7 @@ from .tune_parameters import (
     parse_parameter,
     warn_of_box_ends,
 )
-from .tune_result import TuneResult, json_default, write_outputs
+from .tune_result import TuneResult, write_outputs
 from .tune_settings import TuneGoal, TuneRuns, TuneSearch, bundles, check_settings
 
 __all__ = [

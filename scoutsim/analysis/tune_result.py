@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.run_directory import RunDirectory, json_safe
+from ..io.run_directory import RunDirectory, json_default, json_safe
 from ..io.tables import write_rows_csv, write_rows_parquet
 from ..parameters import ControllerParameters, RobotParameters
 from .tune_evaluation import COLUMNS
@@ -144,11 +144,3 @@ def write_outputs(res: TuneResult, rd: RunDirectory, command: str) -> None:
     except ImportError:
         pass
     rd.finish(outcome="completed", partial=False)
-
-
-def json_default(v):
-    """JSON's fallback (``default=``) for what :func:`~scoutsim.io.run_directory.json_safe`
-    leaves: a NumPy scalar as its number, anything else as its repr."""
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    return repr(v)

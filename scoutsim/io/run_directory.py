@@ -28,6 +28,7 @@ import numpy as np
 
 __all__ = [
     "MANIFEST",
+    "json_default",
     "RunDirectory",
     "atomic_write",
     "read_manifest",
@@ -80,6 +81,15 @@ def json_safe(v):
     if isinstance(v, (np.floating, np.integer)):
         return json_safe(v.item())
     return v
+
+
+def json_default(v):
+    """JSON's fallback (``json.dumps(..., default=json_default)``) for a value it does not
+    take: a NumPy scalar as its number, anything else as its repr (a study's checkpoint
+    records, a tuning's files)."""
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    return repr(v)
 
 
 def read_manifest(directory) -> dict | None:
