@@ -35,8 +35,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: the physics tests every mutant is run against
 TEST_FILES = (
-    "tests/model",
-    "tests/numerics",
+    "tests/_core/model",
+    "tests/_core/numerics",
     "tests/control",
     "tests/analysis/test_energy.py",
     "tests/test_paper_claims.py",
@@ -291,8 +291,8 @@ MUTANTS = [
         "belt_damper_sign",
         "belt damper c_b (alpha' - phi')",
         "scoutsim/_core/model/transmission.py",
-        "            + P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg]))\n",
-        "            - P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg]))\n",
+        "    damper = P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg])\n",
+        "    damper = -P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg])\n",
         (
             MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
             EOM + "test_stance_constrained_dynamics",
@@ -302,8 +302,8 @@ MUTANTS = [
         "belt_damper_doubled",
         "belt damper c_b (alpha' - phi')",
         "scoutsim/_core/model/transmission.py",
-        "            + P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg]))\n",
-        "            + 2.0 * P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg]))\n",
+        "    damper = P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg])\n",
+        "    damper = 2.0 * P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg])\n",
         (
             MORE + "test_belt_torque_is_spring_with_dead_zone_and_damper",
             EOM + "test_stance_constrained_dynamics",

@@ -29,7 +29,7 @@ class IntegratorSettings:
         "dopri5": explicit Dormand-Prince 5(4), the reference (default rtol 1e-8 /
         atol 1e-9; the paper's Working Model runs used an adaptive Kutta-Merson integrator
         at 1e-10, and 1e-8 reproduces their gait metrics to better than 1e-4, see
-        tests/numerics). "ark3" / "ark4": additive Runge-Kutta 3(2) / 4(3) with the
+        tests/_core/numerics). "ark3" / "ark4": additive Runge-Kutta 3(2) / 4(3) with the
         Model II belt dampers (and stiff motor damping) implicit (scoutsim/_core/numerics/ark.py),
         for the stiff Model II. "auto": Model II with ``rtol`` unset or >= 1e-7 -> "ark3"
         (default rtol 1e-5 / atol 1e-6, velocities 1e-5: about 10x faster than the

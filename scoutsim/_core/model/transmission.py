@@ -91,9 +91,9 @@ def belt_torque(q, dq, leg, P):
     """Torque [N m] of the belt spring-damper on the leg of virtual leg ``leg``, per
     physical leg: k_b (alpha - phi) (with the dead zone of the backlash) plus
     c_b (alpha' - phi')."""
-    return P[P_KB + leg] * belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0] + P[P_CB + leg] * (
-        dq[IALB + leg] - dq[IPHB + leg]
-    )
+    spring = P[P_KB + leg] * belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0]
+    damper = P[P_CB + leg] * (dq[IALB + leg] - dq[IPHB + leg])
+    return spring + damper
 
 
 @kernel(inline="always")
