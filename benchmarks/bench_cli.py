@@ -17,7 +17,7 @@ Measures in one run, each command in a new process, as a user types it:
   (``python -c "import numba, scipy.linalg"``) and the simulator's own speed, 10 s of
   Model II repeated in one process (best of ``--repeat``).
 
-The targets (README, Performance) are printed next to the measurements (first run <= 60 s,
+The targets (docs/explanation/performance.md) are printed next to the measurements (first run <= 60 s,
 warm 1 s run <= 1.0 s, warm 10 s run <= 1.5 s, end-to-end real-time factor >= 100); nothing asserts.
 """
 

@@ -11,7 +11,7 @@ Measures in one run, on one core:
 * the same model in plain Python integrated by SciPy solve_ivp (benchmarks/scipy_baseline.py,
   NUMBA_DISABLE_JIT=1), over the first ``--baseline-seconds`` of the same run, and scoutsim
   over the same span -> speed ratio per simulated second.
-The targets (README, Performance) are printed next to the measurements; nothing here
+The targets (docs/explanation/performance.md) are printed next to the measurements; nothing here
 asserts.
 """
 

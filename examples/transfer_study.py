@@ -35,8 +35,8 @@ evaluates 5 s runs and one basin start (seconds in all; the numbers then show on
 it runs). Prints the table (markdown) and writes it, as ``transfer.md``, and every
 evaluation with its tuned parameters, as ``transfer.json``, to ``--out``. The
 ideal actuator has no electrical side: its cost of transport is hip work / (m g d), not
-comparable with the other models' electrical one. The table and what it shows are in the
-README, "Does a tuned or learned controller transfer?".
+comparable with the other models' electrical one. The table and what it shows are in
+docs/tuning.md.
 """
 
 from __future__ import annotations

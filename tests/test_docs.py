@@ -11,7 +11,8 @@ How a page's blocks run (docs/CONTRIBUTING notes in ``docs/index.md`` say the sa
   this process (``PYTHONPATH=.`` in front puts the page's directory on the import path, for
   the command and its workers), ``python FILE ...`` runs a script as a new process; the
   set-up commands of a fresh machine (``python3 -m venv``, ``. .venv/bin/activate``,
-  ``pip install``) are what this test environment already did and are skipped; any other
+  ``pip install``) are what this test environment already did, and ``pytest`` is the
+  command running these tests: both are skipped; any other
   command fails the test, so a page cannot show a command nobody ran;
 - ``text`` blocks (printed output, a directory listing) are not run.
 
@@ -37,8 +38,10 @@ PAGES = sorted(
     [REPO / "README.md", *(DOCS / "tutorials").glob("*.md"), *(DOCS / "how-to").glob("*.md")]
 )
 
-#: the set-up commands of a fresh machine: done already by the environment that runs the tests
+#: the set-up commands of a fresh machine, done already by the environment that runs these
+#: tests, and the test command itself (these tests are part of what it runs)
 SET_UP = ("python3 -m venv", "python -m venv", ". .venv/bin/activate", "source .venv", "pip ")
+TEST_COMMAND = ("pytest",)
 #: a script run as its own process gets at most this long (a bound on a hung process, not a
 #: timing check: a cold cache compiles the core first)
 SCRIPT_TIMEOUT_S = 900
@@ -97,7 +100,7 @@ def shell_commands(text: str) -> list[str]:
 
 def run_shell(command: str, where: Path, monkeypatch) -> None:
     """Run one command of a shell block in ``where`` (see the module docstring)."""
-    if command.startswith(SET_UP):
+    if command.startswith(SET_UP + TEST_COMMAND):
         return
     words = shlex.split(command, comments=True)
     env_words = []

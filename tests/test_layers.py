@@ -1,5 +1,5 @@
 """The package's import graph: no cycles, and imports go one way through the layers
-(README "Layout"): presentation, cli -> analysis / validation / identification / envs ->
+(docs/layout.md, "Packages"): presentation, cli -> analysis / validation / identification / envs ->
 simulation, result, state, the run loop -> numerics / control -> model, names ->
 parameters, io, the Numba glue; and nothing from the analysis layer up imports the compiled
 core (``scoutsim._core``) itself (``test_upper_layers_do_not_import_the_core``).

@@ -2,8 +2,8 @@
 
 Default floor (Coulomb mu = 1.0) and default start (scoutsim.default_initial_state()), 10 s
 runs; the quotes are from Poulakakis, Smith & Buehler, ICRA 2004. Where scoutsim differs
-from the paper, the test says so and asserts what scoutsim shows; README.md, "The paper's
-results in this simulator", says the same.
+from the paper, the test says so and asserts what scoutsim shows; docs/explanation/paper-results.md
+says the same.
 """
 
 import math

@@ -1,4 +1,4 @@
-"""The work-energy balance measurements of docs/model.md and the README.
+"""The work-energy balance measurements of docs/model.md and docs/explanation/energy.md.
 
     python tools/energy_table.py            # residuals of every model, floor and robot
     python tools/energy_table.py --terms    # the table of terms of the default Model II run

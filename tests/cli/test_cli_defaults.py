@@ -120,7 +120,7 @@ def test_parsed_default_is_what_the_help_says(command, dest, stated):
 )
 def test_duration_defaults_are_their_own(command, expected):
     """Each simulating command's --duration is its own (run, basin and sweep 10 s as the
-    README says, tune 20 s): none leaks into another through the shared options."""
+    command-line reference says, tune 20 s): none leaks into another through the shared options."""
     parser, _ = _subparsers()
     assert parser.parse_args([command]).duration == expected
 

@@ -302,7 +302,7 @@ def test_default_integrator_gait_metrics_agree_with_reference():
     "method, bound_state, bound_pitch", [("auto", 1.37e-2, 3.52e-7), ("dopri5", 3.60e-7, 1.80e-12)]
 )
 def test_resuming_at_a_sample_continues_the_run_to_the_tolerance(method, bound_state, bound_pitch):
-    """What HybridState resumption guarantees (its docstring, the README): the state and
+    """What HybridState resumption guarantees (its docstring, docs/how-to/resume-a-run.md): the state and
     modes of the sample, not the integrator's own state, so the continuation follows the
     original to the integration tolerance. Measured over the continued second, largest
     difference of any state component (a leg rate) / of the pitch: ARK3 (the default)
