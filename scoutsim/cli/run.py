@@ -179,7 +179,8 @@ def register(sub, common) -> None:
         help="write the tables as the run is computed, keeping only its last "
         "--keep seconds in memory (for runs too long for memory; the "
         "summary and figures cover the kept end). Chosen by itself when "
-        "the run would not fit in memory",
+        "the run would not fit in memory; refused before starting when "
+        "the disk cannot hold the tables",
     )
     run.add_argument(
         "--keep",
