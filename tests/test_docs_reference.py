@@ -36,7 +36,7 @@ def section(text: str, heading: str) -> str:
     start = text.index(heading + "\n")
     level = heading.split(" ")[0]
     rest = text[start + len(heading) + 1 :]
-    ends = [m.start() for m in re.finditer(r"^#{1,%d} " % len(level), rest, flags=re.M)]
+    ends = [m.start() for m in re.finditer(rf"^#{{1,{len(level)}}} ", rest, flags=re.M)]
     return rest[: ends[0]] if ends else rest
 
 

@@ -279,7 +279,10 @@ def robot_file_page() -> str:
     )
     from scoutsim.parameters.units import UNIT_INDEX, UNITS
 
-    meanings = {**docstring_attributes(RobotParameters), **docstring_attributes(ControllerParameters)}
+    meanings = {
+        **docstring_attributes(RobotParameters),
+        **docstring_attributes(ControllerParameters),
+    }
     schema = field_schema()
     missing = sorted(set(schema) - set(meanings))
     if missing:
@@ -693,7 +696,9 @@ def _column_rows(columns, units, meanings, legs, flows, states) -> list[list[str
                 row[1] += ", " + code(unit)
             continue
         seen[pattern] = len(rows)
-        rows.append([code(pattern), "" if unit is None else code(unit), md_escape(meanings[pattern])])
+        rows.append(
+            [code(pattern), "" if unit is None else code(unit), md_escape(meanings[pattern])]
+        )
     return rows
 
 
@@ -751,20 +756,27 @@ def output_files_page() -> str:
                 ],
                 [code(MANIFEST), "the run's files and whether they were all written (below)"],
                 [
-                    code("run.png") + ", " + code("torque_speed.png") + ", " + code("stride_power.png"),
+                    code("run.png")
+                    + ", "
+                    + code("torque_speed.png")
+                    + ", "
+                    + code("stride_power.png"),
                     "with `--plots`: the run over time (runs over 4 s: the whole run as "
                     "pitch and height ranges per stride with every stride's period, and the "
                     "last three strides in detail; titled by what the robot did), the "
                     "torque-speed plane (paper Fig. 11), the power over a stride by "
                     "destination",
                 ],
-                [code("timeseries.csv"), "with `--csv`: plain CSV, one row per sample, `name [unit]` headers"],
+                [
+                    code("timeseries.csv"),
+                    "with `--csv`: plain CSV, one row per sample, `name [unit]` headers",
+                ],
                 [code("result.npz"), "with `--npz`: the whole result in one NumPy file"],
             ],
         ),
         "",
         f"Table formats: {', '.join(code(f) for f in FORMATS)}. Parquet is the default "
-        "when pyarrow is installed; `--format csv` (`table_format=\"csv\"`), and the "
+        'when pyarrow is installed; `--format csv` (`table_format="csv"`), and the '
         "fallback without pyarrow, writes gzip-compressed CSV (`timeseries.csv.gz`, ...) "
         "with the same columns, units and metadata, also read back bit for bit.",
         "",
@@ -880,8 +892,7 @@ def output_files_page() -> str:
                 ],
                 [
                     ", ".join(code(k) for k in SUMMARY_BEHAVIOUR_KEYS),
-                    "what the robot did: a sentence, its kind and the counts it was "
-                    "decided from",
+                    "what the robot did: a sentence, its kind and the counts it was decided from",
                 ],
                 [
                     ", ".join(code(k) for k in SUMMARY_ENERGY_KEYS),
@@ -918,8 +929,7 @@ def output_files_page() -> str:
             [
                 [
                     code("complete"),
-                    "every file of the run was written; `files` lists each with its size "
-                    "in bytes",
+                    "every file of the run was written; `files` lists each with its size in bytes",
                 ],
                 [
                     code("partial"),
@@ -1000,11 +1010,15 @@ def on_pre_build(config, **kwargs) -> None:
 
 #: a Sphinx cross-reference role of a docstring as the API pages render it
 #: (``:class:`~scoutsim.state.HybridState``` becomes ``:class:<code>~scoutsim...</code>``)
-_SPHINX_ROLE = re.compile(r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):<code>(~?)([^<]+)</code>")
+_SPHINX_ROLE = re.compile(
+    r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):<code>(~?)([^<]+)</code>"
+)
 
 
 #: the same role inside a code span (a parameter's type), still with its backticks
-_SPHINX_ROLE_IN_CODE = re.compile(r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):`(~?)([^`<]+)`")
+_SPHINX_ROLE_IN_CODE = re.compile(
+    r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):`(~?)([^`<]+)`"
+)
 
 
 def _role_in_code(match: re.Match) -> str:

@@ -89,7 +89,12 @@ def robot_points(pose: ConventionsPose, robot: RobotParameters | None = None) ->
     com = np.array([pose.x, pose.y])
     axis = np.array([math.cos(pose.theta), math.sin(pose.theta)])
     normal = np.array([-math.sin(pose.theta), math.cos(pose.theta)])
-    out = {"com": com, "axis": axis, "normal": normal, "midpoint": com - pose.com_offset * axis}
+    out: dict[str, np.ndarray | float] = {
+        "com": com,
+        "axis": axis,
+        "normal": normal,
+        "midpoint": com - pose.com_offset * axis,
+    }
     for leg, name in enumerate(LEG_NAMES):
         along = (-half if leg == 0 else half) - pose.com_offset
         hip = com + along * axis
@@ -181,7 +186,8 @@ def plot_conventions(
     mid = p["midpoint"]
     ax.plot(*mid, "|", ms=10, color="black")
     draw_arrow("com_offset", mid - 0.028 * normal, com - 0.028 * normal, color="0.25")
-    ax.text(*(mid - 0.075 * normal - 0.01 * axis), r"$e$", fontsize=11, color="0.25")
+    e_label = mid - 0.075 * normal - 0.01 * axis
+    ax.text(e_label[0], e_label[1], r"$e$", fontsize=11, color="0.25")
 
     for leg, name in enumerate(LEG_NAMES):
         color = LEG_COLORS[leg]
@@ -191,7 +197,8 @@ def plot_conventions(
         ax.plot(*hip, "o", ms=7, color=color, zorder=5)
         ax.plot(*toe, "o", ms=6, mfc="white", mec=color, mew=2, zorder=5)
         inward = 0.03 if leg == 0 else -0.1
-        ax.text(*(hip + inward * axis + 0.025 * normal), "hip", fontsize=9, color=color)
+        hip_label = hip + inward * axis + 0.025 * normal
+        ax.text(hip_label[0], hip_label[1], "hip", fontsize=9, color=color)
         ax.text(toe[0] + 0.015, toe[1] - 0.005, "toe", fontsize=9, color=color)
         sub = name[0]
         # the torso's downward normal at the hip, and phi from it to the leg

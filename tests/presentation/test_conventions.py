@@ -42,7 +42,7 @@ def motion(point, **change):
         "l": list(POSE.l),
         "e": POSE.com_offset,
     }
-    (name, step), = change.items()
+    ((name, step),) = change.items()
 
     def at(sign):
         k = {key: (list(v) if isinstance(v, list) else v) for key, v in base.items()}
@@ -52,7 +52,9 @@ def motion(point, **change):
         else:
             k[name] += sign * step
         com, hips, toes = spec_points(**k)
-        return {"com": com, "hip0": hips[0], "hip1": hips[1], "toe0": toes[0], "toe1": toes[1]}[point]
+        return {"com": com, "hip0": hips[0], "hip1": hips[1], "toe0": toes[0], "toe1": toes[1]}[
+            point
+        ]
 
     d = at(1) - at(-1)
     return d / np.linalg.norm(d)
@@ -91,9 +93,7 @@ def test_every_arrow_is_drawn(drawn):
 
 def test_the_drawn_legs_end_where_the_specification_puts_hips_and_toes(drawn):
     _, legs = drawn
-    _, hips, toes = spec_points(
-        POSE.x, POSE.y, POSE.theta, POSE.phi, POSE.l, POSE.com_offset
-    )
+    _, hips, toes = spec_points(POSE.x, POSE.y, POSE.theta, POSE.phi, POSE.l, POSE.com_offset)
     for leg, name in enumerate(("back", "front")):
         np.testing.assert_allclose(legs[f"leg_{name}"][0], hips[leg], atol=1e-12)
         np.testing.assert_allclose(legs[f"leg_{name}"][1], toes[leg], atol=1e-12)
@@ -132,9 +132,7 @@ def test_each_arrow_points_the_way_its_coordinate_grows(drawn, gid, point, chang
 
 def test_gamma_is_measured_from_the_world_vertical_and_grows_with_phi(drawn):
     arrows, _ = drawn
-    assert direction(arrows["gamma_front"]) @ motion("toe1", phi1=1e-6) > math.cos(
-        math.radians(10)
-    )
+    assert direction(arrows["gamma_front"]) @ motion("toe1", phi1=1e-6) > math.cos(math.radians(10))
     tail, head = arrows["gamma_front"]
     _, hips, _ = spec_points(POSE.x, POSE.y, POSE.theta, POSE.phi, POSE.l, POSE.com_offset)
     r = head - hips[1]
