@@ -54,11 +54,22 @@ GENERATED_NOTE = (
 # -- Markdown helpers ---------------------------------------------------------------------
 
 
+#: a Sphinx cross-reference role in a docstring: ``:class:`~scoutsim.state.HybridState```
+_DOC_ROLE = re.compile(r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):`(~?)([^`]+)`")
+
+
+def _role_target(match: re.Match) -> str:
+    """What a role shows: its target, or with ``~`` only the target's last component."""
+    short, target = match.group(1), match.group(2)
+    return target.rsplit(".", 1)[-1] if short else target
+
+
 def md_escape(text: str) -> str:
     """Text for a Markdown table cell or paragraph: newlines joined, reStructuredText's
     double backticks made Markdown's single ones, and the characters Markdown would read as
     markup (emphasis, a table's cell border, HTML) escaped."""
     text = " ".join(str(text).split()).replace("``", "`")
+    text = _DOC_ROLE.sub(lambda m: f"`{_role_target(m)}`", text)
     for ch in "\\*|":
         text = text.replace(ch, "\\" + ch)
     return text.replace("<", "&lt;").replace(">", "&gt;")
@@ -265,6 +276,7 @@ def _range_text(lo, hi, lo_closed, hi_closed, factor: float) -> str:
 
 
 def robot_file_page() -> str:
+    from scoutsim._core.model.layout import MAX_SENSOR_DELAY
     from scoutsim.control.sensors import CHANNELS, SensorChannel, SensorParameters
     from scoutsim.parameters import ControllerParameters, RobotParameters
     from scoutsim.parameters.field_rules import allowed_range
@@ -447,7 +459,9 @@ def robot_file_page() -> str:
             [
                 [
                     code(name),
-                    "2 (back, front)" if name in _LEG_PAIRS else str(n),
+                    f"{n} ({', '.join(_SLOT_COMPONENTS.get(name, ('back', 'front')))})"
+                    if n == 2
+                    else str(n),
                     code(unit),
                     ", ".join(code(u) for u in UNITS[UNIT_INDEX[unit][0]]),
                 ]
@@ -460,7 +474,15 @@ def robot_file_page() -> str:
         table(
             ["key", "meaning", "default"],
             [
-                [code(f.name), md_escape(channel_keys[f.name]), code(number(f.default))]
+                [
+                    code(f.name),
+                    md_escape(
+                        channel_keys[f.name].replace(
+                            "layout.MAX_SENSOR_DELAY", str(MAX_SENSOR_DELAY)
+                        )
+                    ),
+                    code(number(f.default)),
+                ]
                 for f in dataclasses.fields(SensorChannel)
             ]
             + [
@@ -488,10 +510,6 @@ def robot_file_page() -> str:
         "",
     ]
     return "\n".join(out).rstrip() + "\n"
-
-
-#: channels whose two slots are the back and the front leg's
-_LEG_PAIRS = ("hip_angle", "hip_rate", "leg_length", "laser_range", "motor_current")
 
 
 # -- sensor-slots.md ----------------------------------------------------------------------
@@ -602,18 +620,18 @@ _COLUMN_MEANINGS = {
     "dphi_{leg}": "leg angle rate",
     "dalpha_{leg}": "driven-gear angle rate",
     "leg_length_{leg}": "leg length, hip to toe",
-    "ground_force_tangential_{leg}": "ground force on the toe, forward component",
-    "ground_force_normal_{leg}": "ground force on the toe, upward component",
-    "leg_axial_force_{leg}": "leg's axial (spring and damper) force, compression positive",
+    "ground_force_tangential_{leg}": "ground force on the toe along the floor, virtual leg",
+    "ground_force_normal_{leg}": "ground force on the toe normal to the floor, virtual leg",
+    "leg_axial_force_{leg}": "leg's axial force, compression positive, virtual leg",
     "hip_torque_commanded_{leg}": "hip torque the controller commands, per physical leg",
-    "hip_torque_applied_{leg}": "hip torque the motor delivers at the leg, per physical leg",
+    "hip_torque_applied_{leg}": "hip torque the actuator applies, per physical leg, at the leg (Model II: the driven gear)",
     "motor_current_{leg}": "motor current, per motor",
-    "motor_speed_{leg}": "motor shaft speed",
+    "motor_speed_{leg}": "motor speed relative to the torso",
     "belt_deflection_{leg}": "belt deflection alpha - phi (Model II)",
-    "stiction_holding_torque_{leg}": "torque holding a stuck motor joint (Model II)",
+    "stiction_holding_torque_{leg}": "torque holding a stuck motor joint, per motor (Model II)",
     "toe_x_{leg}": "toe's forward position",
     "toe_y_{leg}": "toe's height",
-    "toe_velocity_x_{leg}": "toe's forward velocity",
+    "toe_velocity_x_{leg}": "toe's horizontal velocity",
     "strut_force_{leg}": "force of a leg at its stop acting as a rigid strut, tension positive",
     "belt_torque_{leg}": "belt torque on the leg, per physical leg (Model II)",
     "battery_voltage": "battery (motor supply) voltage",
@@ -945,9 +963,10 @@ def output_files_page() -> str:
         ),
         "",
         f'Its other keys: `format` (`"{FORMAT}"`), `command` (the command line), '
-        "`outcome` (the run's outcome), `model`, `controller`, `duration_s`, `streamed` "
-        "(whether the tables were streamed to disk as the run was computed, `--stream`), "
-        "`scoutsim_version`, `t_end` and `files`.",
+        "`outcome` (the run's outcome) and `files`, with what the command adds; "
+        "`scoutsim run`: `model`, `controller`, `duration_s`, `streamed` (whether the "
+        "tables were streamed to disk as the run was computed, `--stream`), "
+        "`scoutsim_version` and `t_end`.",
         "",
         "Every file is written under a temporary name (`NAME"
         f"{PARTIAL_SUFFIX}.SUFFIX`) and renamed when whole, so no file is ever seen "
@@ -1010,31 +1029,16 @@ def on_pre_build(config, **kwargs) -> None:
 
 #: a Sphinx cross-reference role of a docstring as the API pages render it
 #: (``:class:`~scoutsim.state.HybridState``` becomes ``:class:<code>~scoutsim...</code>``)
-_SPHINX_ROLE = re.compile(
+_HTML_ROLE = re.compile(
     r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):<code>(~?)([^<]+)</code>"
 )
-
-
-#: the same role inside a code span (a parameter's type), still with its backticks
-_SPHINX_ROLE_IN_CODE = re.compile(
-    r":(?:py:)?(?:mod|class|func|meth|attr|data|exc|obj|const):`(~?)([^`<]+)`"
-)
-
-
-def _role_in_code(match: re.Match) -> str:
-    short, target = match.group(1), match.group(2)
-    return target.rsplit(".", 1)[-1] if short else target
-
-
-def _role_as_code(match: re.Match) -> str:
-    short, target = match.group(1), match.group(2)
-    return f"<code>{target.rsplit('.', 1)[-1] if short else target}</code>"
 
 
 def on_page_content(html: str, **kwargs) -> str:
     """MkDocs hook: the package's docstrings cite code with Sphinx roles; on the API pages
     they read as code, without the role (``~`` keeps the last component, as in Sphinx)."""
-    return _SPHINX_ROLE_IN_CODE.sub(_role_in_code, _SPHINX_ROLE.sub(_role_as_code, html))
+    html = _HTML_ROLE.sub(lambda m: f"<code>{_role_target(m)}</code>", html)
+    return _DOC_ROLE.sub(_role_target, html)  # (a role inside a code span: a parameter's type)
 
 
 def main(argv: list[str]) -> int:
