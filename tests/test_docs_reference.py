@@ -136,3 +136,23 @@ def test_tables_keep_their_cells_whatever_the_text(tool, pages):
                 while j < len(lines) and lines[j].startswith("|"):
                     assert len(re.split(r"(?<!\\)\|", lines[j])) == width, (path, lines[j])
                     j += 1
+
+
+def test_the_robot_file_examples_load(pages, tmp_path):
+    """The page's TOML examples are robot files the loaders accept, with the units they
+    show converted to SI."""
+    import math
+
+    import scoutsim
+
+    blocks = re.findall(r"```toml\n(.*?)```", pages["reference/robot-file.md"], flags=re.S)
+    assert len(blocks) == 2
+    path = tmp_path / "robot.toml"
+    path.write_text("\n".join(blocks))
+    robot, controller = scoutsim.load_parameters(path)
+    assert robot.leg_mass == pytest.approx(0.97)  # written as 970 g
+    assert robot.per_leg("leg_stiffness") == pytest.approx((3520.0, 3000.0))  # N/mm
+    assert controller.touchdown_angle_front == pytest.approx(0.3665)
+    sensors = scoutsim.load_sensors(path, robot)
+    assert sensors.pitch.noise == pytest.approx(math.radians(0.3))
+    assert sensors.seed == 7
