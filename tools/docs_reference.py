@@ -186,6 +186,8 @@ def _default_text(action: argparse.Action) -> str:
         return ""
     if default == argparse.SUPPRESS:
         return ""
+    if isinstance(default, (list, tuple)) and not default:
+        return ""
     if isinstance(default, (list, tuple)):
         return code(",".join(number(v) if isinstance(v, (int, float)) else str(v) for v in default))
     return code(number(default) if isinstance(default, (int, float)) else str(default))
