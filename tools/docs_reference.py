@@ -146,10 +146,55 @@ def _subcommands(parser: argparse.ArgumentParser):
                 yield name, helps.get(name, ""), sub
 
 
+def _metavar(action: argparse.Action) -> str:
+    if action.metavar is not None:
+        return str(action.metavar)
+    if action.choices is not None:
+        return "{" + ",".join(str(c) for c in action.choices) + "}"
+    return action.dest.upper() if action.option_strings else action.dest
+
+
+def _usage_part(action: argparse.Action) -> str:
+    """One argument as a usage line writes it (as argparse does), e.g. ``[--out DIR]``."""
+    if isinstance(action, argparse._HelpAction):
+        return "[-h]"
+    if action.nargs == 0:
+        text = " | ".join(action.option_strings)
+    else:
+        m = _metavar(action)
+        value = {None: m, "?": f"[{m}]", "*": f"[{m} ...]", "+": f"{m} [{m} ...]"}.get(
+            action.nargs, m
+        )
+        if not action.option_strings:
+            return value
+        text = f"{action.option_strings[0]} {value}"
+    return text if action.required else f"[{text}]"
+
+
 def _usage(parser: argparse.ArgumentParser) -> str:
-    formatter = argparse.HelpFormatter(parser.prog, width=USAGE_WIDTH)
-    formatter.add_usage(parser.usage, parser._actions, parser._mutually_exclusive_groups)
-    return formatter.format_help().strip()
+    """The usage lines of ``parser``, written here rather than by argparse, whose wrapping
+    differs between Python versions: the optional arguments, then the positional ones,
+    wrapped at :data:`USAGE_WIDTH` under the command's name."""
+    actions = [a for a in parser._actions if a.help != argparse.SUPPRESS]
+    parts = [_usage_part(a) for a in actions if a.option_strings]
+    if any(isinstance(a, argparse._SubParsersAction) for a in actions):
+        parts += [
+            _metavar(a) + " ..." for a in actions if isinstance(a, argparse._SubParsersAction)
+        ]
+    parts += [
+        _usage_part(a)
+        for a in actions
+        if not a.option_strings and not isinstance(a, argparse._SubParsersAction)
+    ]
+    prefix = f"usage: {parser.prog} "
+    lines, line = [], prefix
+    for part in parts:
+        if len(line) + len(part) > USAGE_WIDTH and line.strip() != prefix.strip():
+            lines.append(line.rstrip())
+            line = " " * len(prefix)
+        line += part + " "
+    lines.append(line.rstrip())
+    return "\n".join(lines)
 
 
 def _option_rows(parser: argparse.ArgumentParser) -> list[list[str]]:
