@@ -47,7 +47,13 @@ def register(sub, common) -> None:
         help="output figure, .png, .pdf or .svg (default: INPUT's name with "
         ".png, in the current directory)",
     )
-    add_time_window_options(plot, "start of the time window [s]", "end of the time window [s]")
+    add_time_window_options(
+        plot,
+        "start of the time window [s] (default: the start; a run streamed to "
+        "disk: the start of its kept end, --keep of scoutsim run). Only the "
+        "window of a saved run's tables is read",
+        "end of the time window [s] (default: the end)",
+    )
     add_repair_spikes_option(plot)
     plot.set_defaults(func=execute)
 

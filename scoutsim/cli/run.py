@@ -99,7 +99,9 @@ def register(sub, common) -> None:
         NAME,
         parents=[common],
         help="simulate one run, print a summary, write its tables",
-        description="Simulate one bounding run and write to DIR: timeseries and events tables "
+        description="Simulate one bounding run, print a summary table (what the robot "
+        "did, the gait, the simulation's real-time factor and the whole command's "
+        "wall time) and write to DIR: timeseries and events tables "
         "(Parquet, or gzip-compressed CSV without pyarrow) and summary.json; "
         "figures with --plots. SimulationResult.load(DIR) reads the run back.",
     )
@@ -179,7 +181,8 @@ def register(sub, common) -> None:
         help="write the tables as the run is computed, keeping only its last "
         "--keep seconds in memory (for runs too long for memory; the "
         "summary and figures cover the kept end). Chosen by itself when "
-        "the run would not fit in memory",
+        "the run would not fit in memory; refused before starting when "
+        "the disk cannot hold the tables",
     )
     run.add_argument(
         "--keep",

@@ -200,12 +200,18 @@ class Sensors:
 class SensorChannel:
     """How one sensor channel measures (in the channel's SI unit, see :data:`CHANNELS`).
 
-    noise : standard deviation of white Gaussian noise, one draw per sample and slot.
-    bias : constant offset; a number, or (back, front) for a two-slot channel.
-    resolution : quantization step (0: continuous); the reading is the nearest multiple;
-        a number, or (back, front) for a two-slot channel (a motor encoder's step at the
-        hip of legs whose gear ratios differ).
-    delay : how many control periods late the reading arrives (0 .. layout.MAX_SENSOR_DELAY).
+    Attributes
+    ----------
+    noise : float
+        Standard deviation of white Gaussian noise, one draw per sample and slot.
+    bias : float or (back, front)
+        Constant offset; a number, or (back, front) for a two-slot channel.
+    resolution : float or (back, front)
+        Quantization step (0: continuous); the reading is the nearest multiple; a number,
+        or (back, front) for a two-slot channel (a motor encoder's step at the hip of legs
+        whose gear ratios differ).
+    delay : int
+        How many control periods late the reading arrives (0 .. layout.MAX_SENSOR_DELAY).
     """
 
     noise: float = 0.0
@@ -237,10 +243,17 @@ class SensorParameters:
     """The robot's sensors: one :class:`SensorChannel` per channel, the noise seed and the
     laser range finders' geometry. The default: every sensor ideal.
 
-    seed : int >= 0, of the noise (the same seed gives the same noise, bit for bit).
-    laser_half_spacing : distance of each laser from the torso COM along the torso axis [m]
-        (None: half the robot's ``torso_length``, the torso's ends).
-    laser_mount_offset : the lasers' aperture below the torso axis [m].
+    Attributes
+    ----------
+    hip_angle, hip_rate, leg_length, pitch, pitch_rate, acceleration, laser_range, motor_current, battery_voltage : SensorChannel
+        How each channel measures (default: ideal).
+    seed : int
+        Seed of the noise, >= 0 (the same seed gives the same noise, bit for bit).
+    laser_half_spacing : float or None
+        Distance of each laser from the torso COM along the torso axis [m] (None: half the
+        robot's ``torso_length``, the torso's ends).
+    laser_mount_offset : float
+        The lasers' aperture below the torso axis [m].
     """
 
     hip_angle: SensorChannel = _IDEAL

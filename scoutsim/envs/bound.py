@@ -159,17 +159,6 @@ class BoundEnv(gymnasium.Env):
     reward : Reward, optional
         The reward's and the termination's settings below as one bundle; a keyword given
         as well overrides its field.
-    forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
-        Reward weights (above); ``target_speed`` None rewards speed itself.
-    terminate_when_fallen : bool
-        End the episode when the robot is not up (above).
-    healthy_height_range : (min, max) [m]
-        COM heights at which the robot is up (default (0.2, inf): the bound's COM stays
-        within 0.28-0.33 m in every model, 0.2 m puts the torso's underside 0.14 m above
-        the ground).
-    healthy_pitch_range : (min, max) [rad]
-        Pitch at which it is up (default +-30 deg: 2.5 times the bound's largest pitch,
-        12 deg).
     start : str, InitialState, HybridState or callable
         The start (above).
     reset_noise_scale : float
@@ -192,12 +181,6 @@ class BoundEnv(gymnasium.Env):
         ``scoutsim run --robot``).
     sensors : SensorParameters, optional
         The sensors' measurement model (default: the robot file's, else ideal).
-    friction_coefficient : float, optional
-        Coulomb coefficient of the toe on the floor (default 1.0; ``inf``: no slip).
-    pitch_limit_deg : float
-        |pitch| [deg] the simulator counts as a fall (default 60).
-    integrator : IntegratorSettings, optional
-        The integrator (default: the model's, as :func:`~scoutsim.simulate`).
     render_mode : {None, "rgb_array"}
         "rgb_array": :meth:`render` returns the robot now as an (``render_height``,
         ``render_width``, 3) uint8 image (:func:`scoutsim.presentation.frames.draw_pose`:
@@ -205,15 +188,34 @@ class BoundEnv(gymnasium.Env):
         state, toes filled while on the ground, the ground with a tick every 0.25 m).
         ``metadata["render_fps"]`` is the policy rate, 1 / ``policy_period``, so a video
         of one frame per step plays in real time. None: no rendering.
-    render_width, render_height : int
-        The frame's size [pixels] (default 480 x 240: 320 pixels per metre).
     **options
-        The keywords above that are fields of :class:`Reward`, of :data:`PLANT_OPTIONS`
-        (``friction_coefficient``, ``pitch_limit_deg``, ``integrator``) or of
-        :data:`RENDER_SIZE`, and any field of
+        The keywords under "Other Parameters" (the fields of :class:`Reward`, of
+        :data:`PLANT_OPTIONS` and of :data:`RENDER_SIZE`), and any field of
         :class:`~scoutsim.parameters.RobotParameters` or
         :class:`~scoutsim.parameters.ControllerParameters` [SI], applied over ``robot`` /
         ``controller`` / the robot file (e.g. ``current_limit=10.0``).
+
+    Other Parameters
+    ----------------
+    forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
+        Reward weights (above); ``target_speed`` None rewards speed itself.
+    terminate_when_fallen : bool
+        End the episode when the robot is not up (above).
+    healthy_height_range : (min, max) [m]
+        COM heights at which the robot is up (default (0.2, inf): the bound's COM stays
+        within 0.28-0.33 m in every model, 0.2 m puts the torso's underside 0.14 m above
+        the ground).
+    healthy_pitch_range : (min, max) [rad]
+        Pitch at which it is up (default +-30 deg: 2.5 times the bound's largest pitch,
+        12 deg).
+    friction_coefficient : float, optional
+        Coulomb coefficient of the toe on the floor (default 1.0; ``inf``: no slip).
+    pitch_limit_deg : float
+        |pitch| [deg] the simulator counts as a fall (default 60).
+    integrator : IntegratorSettings, optional
+        The integrator (default: the model's, as :func:`~scoutsim.simulate`).
+    render_width, render_height : int
+        The frame's size [pixels] (default 480 x 240: 320 pixels per metre).
     """
 
     #: Gymnasium's metadata; an instance's ``render_fps`` is its policy rate (this one is

@@ -88,7 +88,8 @@ class RobotParameters:
     planetary_ratio, sprocket_ratio : float
         Gear ratios [-]; N = planetary_ratio * sprocket_ratio (Table III).
     gearbox_efficiency, sprocket_efficiency : float
-        Efficiencies in (0, 1]; eta = product (Table III).
+        Efficiencies in (0, 1]; eta = product (Table III: 0.68 x 0.96 = 65.28 %, the
+        paper's constant efficiency).
     gearbox_idle_loss_torque : float
         tau_idle, torque-independent transmission loss at the leg side, per physical leg
         [N m] (assumed, default 0). Together with ``gearbox_load_loss_coefficient`` it makes
@@ -96,7 +97,9 @@ class RobotParameters:
         losses"). Zero (with a zero coefficient) recovers the constant efficiency exactly.
     gearbox_load_loss_coefficient : float
         c_load, load-proportional loss tau_loss = tau_idle + c_load |tau_out| [-], in [0, 1)
-        (assumed, default 0).
+        (assumed, default 0). The loss always opposes the transmitted power flow: a motor
+        that drives the leg delivers that much less torque, and a leg that back-drives its
+        motor must overcome it as well.
     drive_gear_inertia : float
         J_1, drive (motor-side) gear inertia [kg m^2] (Table II).
     driven_gear_inertia : float
