@@ -45,7 +45,7 @@ def register(sub, common) -> None:
         "simulate each model and measure it through the same chain (lasers, "
         "15 Hz FFT low-pass, controller leg states), and report the percent "
         "error of stride frequency, duty factors, pitch and height extremes: each "
-        "experimental steady stride against the model's mean steady stride, mean "
+        "experimental steady stride against the model's steady stride of the same rank, mean "
         "and max over all strides of all runs (paper Fig. 12). Writes errors.csv, "
         "errors_detail.csv and errors.md to DIR. Log format: docs/validation.md.",
     )

@@ -219,7 +219,7 @@ def simulate(
     record_steps : bool or None
         Also record every integrator step (``result.steps``: time, state and plant modes at
         the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
-        about 50 000 steps).
+        about 13 000 steps).
     check_memory : bool or None
         Refuse (ValueError) a run whose time series would not fit in this machine's memory
         (:func:`~scoutsim.simulation.budgets.check_run_memory`) before allocating anything

@@ -244,8 +244,8 @@ class ErrorTable:
     def _header(self) -> list[str]:
         lines = [
             f"Simulation vs experiment (Fig. 12): {self.n_experiment_strides} steady "
-            f"experimental strides from {self.n_runs} run(s); each compared with the "
-            "model's mean steady stride."
+            f"experimental strides from {self.n_runs} run(s); each paired by rank with "
+            "the model's steady strides."
         ]
         if self.synthetic:
             lines.append(
