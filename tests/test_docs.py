@@ -4,7 +4,8 @@ README runs here, as a reader would run it, in a fresh directory per page.
 How a page's blocks run (docs/CONTRIBUTING notes in ``docs/index.md`` say the same):
 
 - a ``python`` block runs in the page's one namespace, blocks in page order, so a later block
-  may use what an earlier one made;
+  may use what an earlier one made, in the page's directory and with it on the import path, so
+  it may import a file the page saved;
 - a block with a title (```` ```python title="my_gaits.py" ````, or ``toml``) is a file the
   reader saves: it is written to the page's directory under that name, not run;
 - a ``bash`` block is commands typed in a shell: ``scoutsim ...`` runs the command line in
@@ -133,11 +134,24 @@ def run_shell(command: str, where: Path, monkeypatch) -> None:
         pytest.fail(f"the documentation runs a command these tests cannot run: {command!r}")
 
 
+def _forget_modules_under(directory: Path) -> None:
+    """Drop from ``sys.modules`` the modules imported from files under ``directory``."""
+    for name, module in list(sys.modules.items()):
+        where = getattr(module, "__file__", None)
+        if where and Path(where).resolve().is_relative_to(directory.resolve()):
+            del sys.modules[name]
+
+
 @pytest.mark.parametrize("page", PAGES, ids=[str(p.relative_to(REPO)) for p in PAGES])
-def test_every_code_block_of_the_page_runs(page, tmp_path, monkeypatch):
+def test_every_code_block_of_the_page_runs(page, tmp_path, monkeypatch, request):
     """The page's code blocks run in order and every command and assertion succeeds."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
+    # a reader's Python runs in the directory the page's files are saved in, so it imports
+    # them; the modules a page saved are forgotten after it (another page's file of the
+    # same name is another module)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    request.addfinalizer(lambda: _forget_modules_under(tmp_path))
     namespace: dict = {"__name__": "__docs__"}
     blocks = code_blocks(page)
     for block in blocks:
