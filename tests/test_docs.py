@@ -1,7 +1,7 @@
 """The documentation cannot rot: every code block of the tutorials, the how-to guides and the
 README runs here, as a reader would run it, in a fresh directory per page.
 
-How a page's blocks run (docs/CONTRIBUTING notes in ``docs/index.md`` say the same):
+How a page's blocks run (CONTRIBUTING.md, "Documentation", says the same):
 
 - a ``python`` block runs in the page's one namespace, blocks in page order, so a later block
   may use what an earlier one made, in the page's directory and with it on the import path, so
