@@ -4,7 +4,11 @@ coordinate's arrow in its positive direction as docs/specification.md section 1 
 The reference is the specification's kinematics written out here (hip at h along the torso
 axis from the COM, h = -L - e back, L - e front; toe = hip + l (sin gamma, -cos gamma),
 gamma = theta + phi): the direction in which a point moves when a coordinate grows is its
-finite difference, and every drawn arrow must point that way."""
+finite difference, and every drawn arrow must point that way.
+
+The figure must also read: the renderer's boxes of the labels (each arrow's symbol, the
+COM's name, the legend, the title) overlap neither each other nor any drawn curve, each
+symbol lies nearer its own arrow than any other, and none is cut off by the figure's edge."""
 
 import math
 
@@ -16,6 +20,10 @@ from scoutsim.presentation.conventions import ARROWS, ConventionsPose, plot_conv
 
 ROBOT = RobotParameters()
 POSE = ConventionsPose()
+
+#: the least clearance between a label's box and another label or a drawn curve [px at the
+#: figure's own dpi]: text that touches a line is as hard to read as text on it
+CLEARANCE_PX = 2.0
 
 
 def spec_points(x, y, theta, phi, l, e):
@@ -64,7 +72,11 @@ def motion(point, **change):
 def drawn():
     fig = plot_conventions(pose=POSE, robot=ROBOT)
     ax = fig.axes[0]
-    arrows = {a.get_gid(): (np.array(a.xyann), np.array(a.xy)) for a in ax.texts if a.get_gid()}
+    arrows = {
+        a.get_gid(): (np.array(a.xyann), np.array(a.xy))
+        for a in ax.texts
+        if not (a.get_gid() or "label_").startswith("label_")
+    }
     legs = {
         line.get_gid(): np.column_stack(line.get_data())
         for line in ax.lines
@@ -161,3 +173,104 @@ def test_the_figure_is_written(tmp_path):
     path = tmp_path / "conventions.png"
     plot_conventions(path)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def rendered():
+    """The figure drawn by Agg: every label's box and every drawn curve in pixels."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = plot_conventions(pose=POSE, robot=ROBOT)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    ax = fig.axes[0]
+    labels = {
+        t.get_gid() or t.get_text(): t.get_window_extent(renderer)
+        for t in [*ax.texts, *fig.texts]
+        if t.get_text()
+    }
+    legend = ax.get_legend()
+    if legend is not None:
+        labels["legend"] = legend.get_window_extent(renderer)
+
+    def dense(points, step=1.0):
+        """The polyline through ``points`` [px], with a vertex at least every ``step`` px."""
+        out = [points[:1]]
+        for a, b in zip(points[:-1], points[1:]):
+            n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+            out.append(a + np.outer(np.arange(1, n + 1) / n, b - a))
+        return np.concatenate(out)
+
+    curves = {}
+    for gid in ARROWS:
+        (arrow,) = [a for a in ax.texts if a.get_gid() == gid]
+        tail, head = np.array(arrow.xyann), np.array(arrow.xy)
+        curves[gid] = dense(ax.transData.transform(np.array([tail, head])))
+    for i, line in enumerate(ax.lines):
+        xy = ax.transData.transform(np.column_stack(line.get_data()))
+        curves[line.get_gid() or f"line {i}"] = dense(xy)
+    for i, patch in enumerate(ax.patches):
+        path = patch.get_path()
+        xy = patch.get_patch_transform().transform(path.vertices)
+        xy = patch.get_data_transform().transform(xy)
+        curves[f"patch {i} ({type(patch).__name__})"] = dense(xy)
+    return fig, renderer, labels, curves
+
+
+def test_every_arrow_has_its_symbol(rendered):
+    _, _, labels, _ = rendered
+    assert {f"label_{gid}" for gid in ARROWS} <= set(labels)
+
+
+def test_no_two_labels_overlap(rendered):
+    """The boxes the renderer gives the labels (and the legend), each grown by
+    :data:`CLEARANCE_PX`, are pairwise disjoint."""
+    _, _, labels, _ = rendered
+    names = sorted(labels)
+    clashes = [
+        (a, b)
+        for i, a in enumerate(names)
+        for b in names[i + 1 :]
+        if labels[a].padded(CLEARANCE_PX).overlaps(labels[b])
+    ]
+    assert clashes == []
+
+
+def test_no_label_sits_on_a_line_or_an_arrow(rendered):
+    """No drawn curve (arrow, arc, leg, reference line, tick, the torso's outline, the
+    COM's symbol) passes through a label's box or within :data:`CLEARANCE_PX` of it."""
+    _, _, labels, curves = rendered
+    hits = [
+        (name, curve)
+        for name, label in labels.items()
+        for box in [label.padded(CLEARANCE_PX)]
+        for curve, xy in curves.items()
+        if np.any(
+            (xy[:, 0] > box.x0) & (xy[:, 0] < box.x1) & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1)
+        )
+    ]
+    assert hits == []
+
+
+def test_each_symbol_is_nearest_its_own_arrow(rendered):
+    """A reader pairs a symbol with the nearest arrow: the centre of ``label_<gid>`` lies
+    nearer the curve of arrow ``gid`` (its arc and head) than any other arrow's."""
+    _, _, labels, curves = rendered
+
+    def path(gid):
+        return np.concatenate([curves[gid], curves.get(f"{gid}_arc", curves[gid])])
+
+    for gid in ARROWS:
+        box = labels[f"label_{gid}"]
+        centre = np.array([0.5 * (box.x0 + box.x1), 0.5 * (box.y0 + box.y1)])
+        distance = {g: np.min(np.linalg.norm(path(g) - centre, axis=1)) for g in ARROWS}
+        assert min(distance, key=distance.get) == gid, (gid, distance)
+
+
+def test_every_label_lies_inside_the_figure(rendered):
+    fig, renderer, labels, _ = rendered
+    frame = fig.bbox
+    for name, box in labels.items():
+        assert frame.x0 <= box.x0 and box.x1 <= frame.x1, name
+        assert frame.y0 <= box.y0 and box.y1 <= frame.y1, name
