@@ -224,7 +224,9 @@ def _rungs(robot: RobotParameters) -> list[AssumptionCase]:
     line = {"current_limit": NO_CURRENT_LIMIT_A, "battery_resistance": 0.0}
     rich = richest_robot(robot)
     effects = {
-        k: getattr(rich, k) for k in dataclasses.asdict(rich) if getattr(rich, k) != getattr(robot, k)
+        k: getattr(rich, k)
+        for k in dataclasses.asdict(rich)
+        if getattr(rich, k) != getattr(robot, k)
     }
     specs = (
         ("ideal", "ideal", robot, {}),
