@@ -76,7 +76,7 @@ def plot_assumptions(result, path=None, *, tolerance_percent: float | None = 25.
     ax.set_xticks(x, [r["case"] for r in cases], rotation=30, ha="right")
     ax.set_ylabel(f"difference from {result.reference} [%]")
     ax.set_ylim(-1.1 * top, 1.1 * top)
-    ax.legend(ncol=5, fontsize=7, loc="lower left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     controller = result.settings.get("controller", "")
     ax.set_title(
         title or f"{controller}: each case against {result.reference} (grey: no bars, see label)",
