@@ -81,8 +81,7 @@ import dataclasses
 import warnings
 from dataclasses import dataclass, field
 
-from ..parameters import RobotParameters
-from ..parameters import ImplausibleParameterWarning
+from ..parameters import ImplausibleParameterWarning, RobotParameters
 
 __all__ = [
     "AssumptionCase",
@@ -228,7 +227,7 @@ def _rungs(robot: RobotParameters) -> list[AssumptionCase]:
         for k in dataclasses.asdict(rich)
         if getattr(rich, k) != getattr(robot, k)
     }
-    specs = (
+    specs: tuple[tuple[str, str, RobotParameters, dict], ...] = (
         ("ideal", "ideal", robot, {}),
         ("ideal+line", "I", _replace(robot, **line), line),
         ("I", "I", robot, {}),

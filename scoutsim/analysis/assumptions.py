@@ -234,7 +234,7 @@ def _case_tasks(case: AssumptionCase, controller, duration, friction, grid) -> l
 
 
 def _case_row(case: AssumptionCase, results: list[dict]) -> dict:
-    row = {
+    row: dict = {
         "case": case.name,
         "kind": case.kind,
         "model": case.model,
