@@ -158,6 +158,9 @@ class AssumptionCase:
     status : "run", "absent" (the effect is 0 in the richest rung: nothing to switch off)
         or "not_switchable" (the effect cannot be switched off alone; ``reason`` says why).
     reason : why a case does not run ("" when it runs).
+    changes : the robot's fields the case sets, by name (SI): the switch's parameters, the
+        rung's (``ideal+line``: the current limit and battery resistance; ``II+effects``:
+        the virtual robot's effects); empty when the case is the robot itself.
     """
 
     name: str

@@ -175,21 +175,35 @@ class AssumptionResult:
         raise KeyError(f"no case {case!r}; cases: {', '.join(r['case'] for r in self.rows)}")
 
     def columns(self) -> list[str]:
+        """The CSV's columns: the case, its status and verdict, the metrics, their
+        percents, the run's energy balance residual, what it did, and the switch's
+        parameters (as JSON)."""
         base = ["case", "kind", "model", "status", "verdict", "meaning"]
-        return base + list(METRICS) + [f"pct_{m}" for m in METRICS] + ["behaviour", "reason"]
+        return (
+            base
+            + list(METRICS)
+            + [f"pct_{m}" for m in METRICS]
+            + ["energy_relative_residual", "behaviour", "reason", "changes"]
+        )
 
     def to_csv(self, path) -> None:
+        """Write the table to ``path`` (:meth:`columns`; empty cells where a value is
+        None)."""
         cols = self.columns()
         with open(path, "w", newline="") as fh:
             w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
             w.writeheader()
             for r in self.rows:
-                w.writerow({k: ("" if r.get(k) is None else r[k]) for k in cols})
+                out = {k: ("" if r.get(k) is None else r[k]) for k in cols}
+                out["changes"] = json.dumps(json_safe(r.get("changes", {})), sort_keys=True)
+                w.writerow(out)
 
     def to_dict(self) -> dict:
+        """The reference, the settings and the rows (JSON-safe with ``json_safe``)."""
         return {"reference": self.reference, "settings": self.settings, "rows": self.rows}
 
     def to_json(self, path) -> None:
+        """Write :meth:`to_dict` to ``path`` as strict JSON."""
         with open(path, "w") as fh:
             json.dump(json_safe(self.to_dict()), fh, indent=1, allow_nan=False)
 

@@ -106,8 +106,8 @@ def register(sub, common) -> None:
     p.add_argument(
         "--quick",
         action="store_true",
-        help=f"{QUICK_DURATION_S:g} s runs and a basin of one start (unless --duration / "
-        "--basin-grid are given)",
+        help=f"{QUICK_DURATION_S:g} s runs and a basin of one start (where --duration / "
+        "--basin-grid are at their defaults)",
     )
     add_plots_option(p, True, "assumptions.png")
     p.set_defaults(func=execute)
@@ -117,12 +117,11 @@ def execute(args) -> int:
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = make_controller(law, cparams, robot, on_workers=True)
-    argv = sys.argv[1:]
     duration, grid_text = args.duration, args.basin_grid
-    if args.quick:
-        if not any(a.startswith("--duration") for a in argv):
+    if args.quick:  # the quick values replace the defaults, not values given
+        if duration == DEFAULT_DURATION_S:
             duration = QUICK_DURATION_S
-        if not any(a.startswith("--basin-grid") for a in argv):
+        if grid_text == DEFAULT_BASIN_GRID:
             grid_text = "1x1"
     grid = basin_grid(*_grid(grid_text))
     workers = 1 if args.scheduler else (args.workers or os.cpu_count() or 1)
@@ -144,7 +143,7 @@ def execute(args) -> int:
     result.settings["controller"] = controller_label(law)
     rd = RunDirectory(
         out,
-        command=" ".join(["scoutsim"] + argv),
+        command=" ".join(["scoutsim"] + sys.argv[1:]),
         info={"kind": "assumptions", "controller": args.controller},
     )
     rd.open()

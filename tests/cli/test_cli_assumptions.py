@@ -35,6 +35,8 @@ def test_assumptions_quick_writes_the_table_json_and_figure(tmp_path, capsys):
     assert float(by["II+effects"]["pct_mean_speed_m_s"]) == 0.0
     data = json.loads((out / "assumptions.json").read_text())
     assert data["reference"] == "II+effects" and len(data["rows"]) == len(rows)
+    # --quick shortens the runs; the basin grid given (none) is kept
+    assert data["settings"]["duration_s"] == 5.0 and data["settings"]["basin_speeds_m_s"] == []
     assert (out / "assumptions.png").stat().st_size > 0
     printed = capsys.readouterr().out
     assert "| case | verdict |" in printed and "not switchable" in printed
