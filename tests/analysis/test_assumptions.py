@@ -161,3 +161,23 @@ def test_bad_reference_and_unknown_switch_are_refused():
         assumption_study(reference="III", duration=1.0, basin=NO_BASIN)
     with pytest.raises(ValueError, match="unknown switch 'belts'"):
         assumption_cases(switches=("belts",))
+
+
+def test_every_switched_off_run_closes_its_energy_balance_and_the_rigid_belt_is_rigid():
+    """Each switch is a physically sane run: the work-energy balance of every case closes
+    (relative residual below 1e-3, the ARK3 method's 2-3e-4 on Model II), and the rigid
+    belt (spring x1000) deflects no further than the play's half-width (within 1 % and
+    0.01 deg), where the compliant belt deflects half as far again beyond it."""
+    study = assumption_study(duration=3.0, basin=NO_BASIN, workers=1, reference="II")
+    ran = [r for r in study.rows if r["status"] == "ok"]
+    assert len(ran) >= 10
+    for r in ran:
+        assert abs(r["energy_relative_residual"]) < 1e-3, r["case"]
+    rich = richest_robot()
+    half_play_deg = math.degrees(rich.belt_backlash) / 2.0
+    with plausibility_warnings_off():
+        (belt,) = [c for c in assumption_cases() if c.name == "-belt"]
+        rigid = scoutsim.simulate(belt.robot, None, None, 3.0, model="II").summary()
+        compliant = scoutsim.simulate(rich, None, None, 3.0, model="II").summary()
+    assert rigid["max_belt_deflection_deg"] < half_play_deg * 1.01 + 0.01
+    assert compliant["max_belt_deflection_deg"] > half_play_deg * 1.5
