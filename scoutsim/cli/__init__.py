@@ -3,6 +3,7 @@ each (``scoutsim COMMAND --help`` for the options):
 
     run       simulate one bounding run, print a summary, write its tables
     basin     basin map: which starts reach steady bounding, per model and floor
+    assumptions  which modelling assumptions change a controller's bound
     compare   Fig. 12 errors of the models against experiment logs
     plot      figure of one saved run or one experiment log
     animate   stick-figure animation of a saved run (GIF or MP4)
@@ -34,7 +35,20 @@ import contextlib
 import os
 import sys
 
-from . import animate, basin, cache, compare, identify, orbit, plot, rig, run, sweep, tune
+from . import (
+    animate,
+    assumptions,
+    basin,
+    cache,
+    compare,
+    identify,
+    orbit,
+    plot,
+    rig,
+    run,
+    sweep,
+    tune,
+)
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
@@ -52,9 +66,24 @@ __all__ = [
 ]
 
 #: the sub-command modules, in the order of ``scoutsim --help``
-COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig, cache)
+COMMANDS = (
+    run,
+    basin,
+    assumptions,
+    compare,
+    plot,
+    animate,
+    orbit,
+    sweep,
+    tune,
+    identify,
+    rig,
+    cache,
+)
 #: commands that simulate, so may have to compile the core first (a notice says so)
-COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, tune, identify, rig)}
+COMPILING_COMMANDS = {
+    c.NAME for c in (run, basin, assumptions, compare, orbit, sweep, tune, identify, rig)
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
