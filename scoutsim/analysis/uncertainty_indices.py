@@ -163,11 +163,16 @@ def sobol_from_evaluations(
         (lo1, hi1, boot.first_order.bootstrap_distribution),
         (lot, hit, boot.total_order.bootstrap_distribution),
     ):
-        q = np.quantile(
-            np.asarray(dist, dtype=float).reshape(k, d, -1), [alpha, 1 - alpha], axis=-1
-        )
+        with warnings.catch_warnings():  # (resamples without variance: NaN, left out)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            q = np.nanquantile(
+                np.asarray(dist, dtype=float).reshape(k, d, -1), [alpha, 1 - alpha], axis=-1
+            )
         bad = ~(np.isfinite(lo) & np.isfinite(hi))
         lo[bad], hi[bad] = q[0][bad], q[1][bad]
+    for lo, hi, v in ((lo1, hi1, s1), (lot, hit, st)):  # (no finite resample at all)
+        still = ~(np.isfinite(lo) & np.isfinite(hi))
+        lo[still], hi[still] = v[still], v[still]
     return SobolIndices(s1, st, lo1, hi1, lot, hit, n, confidence_level)
 
 

@@ -8,6 +8,7 @@ each (``scoutsim COMMAND --help`` for the options):
     animate   stick-figure animation of a saved run (GIF or MP4)
     orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
     sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
+    uncertainty  global sensitivity of the gait to uncertain parameters (Sobol' indices)
     tune      optimise controller or robot parameters (CMA-ES) against an objective
     identify  fit Model II hip-unit parameters to bench-rig logs
     rig       run a virtual bench rig and write its log
@@ -34,7 +35,20 @@ import contextlib
 import os
 import sys
 
-from . import animate, basin, cache, compare, identify, orbit, plot, rig, run, sweep, tune
+from . import (
+    animate,
+    basin,
+    cache,
+    compare,
+    identify,
+    orbit,
+    plot,
+    rig,
+    run,
+    sweep,
+    tune,
+    uncertainty,
+)
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
@@ -52,9 +66,24 @@ __all__ = [
 ]
 
 #: the sub-command modules, in the order of ``scoutsim --help``
-COMMANDS = (run, basin, compare, plot, animate, orbit, sweep, tune, identify, rig, cache)
+COMMANDS = (
+    run,
+    basin,
+    compare,
+    plot,
+    animate,
+    orbit,
+    sweep,
+    uncertainty,
+    tune,
+    identify,
+    rig,
+    cache,
+)
 #: commands that simulate, so may have to compile the core first (a notice says so)
-COMPILING_COMMANDS = {c.NAME for c in (run, basin, compare, orbit, sweep, tune, identify, rig)}
+COMPILING_COMMANDS = {
+    c.NAME for c in (run, basin, compare, orbit, sweep, uncertainty, tune, identify, rig)
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
