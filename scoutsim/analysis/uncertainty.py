@@ -137,10 +137,14 @@ class UncertaintyResult:
         return [p.name for p in self.parameters]
 
     def metric(self, name: str) -> np.ndarray:
-        """A metric's values over the runs (NaN where a run has none)."""
+        """A metric's values over the runs: ``bounds`` 1 or 0, a gait metric its value for
+        a run that bounds and NaN for one that does not (samples.parquet keeps what a run
+        that does not bound steadily measured all the same)."""
+        bounds = np.array([float(bool(r.get("steady_bounding"))) for r in self.rows])
         if name == BOUNDS:
-            return np.array([float(bool(r.get("steady_bounding"))) for r in self.rows])
-        return np.array([np.nan if r.get(name) is None else float(r[name]) for r in self.rows])
+            return bounds
+        v = np.array([np.nan if r.get(name) is None else float(r[name]) for r in self.rows])
+        return np.where(bounds == 1.0, v, np.nan)
 
     def share_not_bounding(self) -> float:
         """The share of the samples that do not bound."""

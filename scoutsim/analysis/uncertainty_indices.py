@@ -131,6 +131,16 @@ def sobol_from_evaluations(
     if not np.all(np.isfinite(y)):
         raise ValueError("values must all be finite: the estimator needs every row of A, B, AB")
     n = m // (d + 2)
+    if d == 1 and k == 1:  # (SciPy squeezes one output of one input to a scalar)
+        return _first_output(
+            sobol_from_evaluations(
+                np.hstack([y, y]),
+                d,
+                seed=seed,
+                confidence_level=confidence_level,
+                n_resamples=n_resamples,
+            )
+        )
     blocks = y.T.reshape(k, d + 2, n)  # (output, block, base row)
     func = {
         "f_A": blocks[:, 0, :],
@@ -174,6 +184,11 @@ def sobol_from_evaluations(
         still = ~(np.isfinite(lo) & np.isfinite(hi))
         lo[still], hi[still] = v[still], v[still]
     return SobolIndices(s1, st, lo1, hi1, lot, hit, n, confidence_level)
+
+
+def _first_output(ix: SobolIndices) -> SobolIndices:
+    arrays = {f: getattr(ix, f)[:1] for f in ("S1", "ST", "S1_low", "S1_high", "ST_low", "ST_high")}
+    return SobolIndices(**arrays, n=ix.n, confidence_level=ix.confidence_level)
 
 
 def sobol_indices(

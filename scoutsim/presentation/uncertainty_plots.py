@@ -50,14 +50,18 @@ def plot_indices(study, path=None) -> Figure:
     else:
         axes[0].text(0.5, 0.5, "no indices computed", ha="center", transform=axes[0].transAxes)
     if study.not_computed:
-        fig.suptitle("not computed: " + ", ".join(study.not_computed), fontsize=8, color="0.3")
+        fig.suptitle(
+            f"indices not computed for {len(study.not_computed)} metrics (summary.json: why)",
+            fontsize=8,
+            color="0.3",
+        )
     save_figure(fig, path)
     return fig
 
 
 def plot_distributions(study, path=None) -> Figure:
-    """A histogram of every metric over the runs that have it (``bounds``: how many runs
-    bound, 1, and how many do not, 0). Saved by suffix if ``path`` is given."""
+    """A histogram of every metric: ``bounds`` over every run (1: it bounds, 0: it does
+    not), a gait metric over the runs that bound. Saved by suffix if ``path`` is given."""
     from ..analysis.uncertainty import METRICS
 
     fig, axes = _grid(len(METRICS), 3.2, 2.4)
