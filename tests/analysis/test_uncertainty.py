@@ -1,8 +1,8 @@
-"""Sobol' indices (scoutsim.analysis.uncertainty_indices) against the closed forms of two
+"""Sobol' indices (scoutsim.analysis.uncertainty.sobol) against the closed forms of two
 standard test functions, Ishigami and Sobol's G-function; an input that does not enter
 the model (a function's, and the belt stiffness in Model I, which has no belt) has total
 index 0; the uncertain parameters' distributions, allowed ranges and the robot file's
-[uncertainty] section (scoutsim.analysis.uncertainty_parameters)."""
+[uncertainty] section (scoutsim.analysis.uncertainty.uncertain_parameters)."""
 
 import math
 

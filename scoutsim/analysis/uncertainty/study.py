@@ -1,9 +1,9 @@
-"""Uncertainty studies: what uncertain robot, controller and floor parameters do to the
-gait, by global sensitivity analysis (Sobol' indices).
+"""An uncertainty study (:mod:`scoutsim.analysis.uncertainty`): its runs, metrics,
+indices and outputs.
 
-The parameters (:mod:`~scoutsim.analysis.uncertainty_parameters`: uniform or truncated
+The parameters (:mod:`~scoutsim.analysis.uncertainty.uncertain_parameters`: uniform or truncated
 normal, named as a sweep's points, plus ``friction_coefficient``) are sampled by the
-Saltelli design of :mod:`~scoutsim.analysis.uncertainty_indices`: ``n`` base rows of A
+Saltelli design of :mod:`~scoutsim.analysis.uncertainty.sobol`: ``n`` base rows of A
 and of B and d matrices AB_i, ``n (d + 2)`` runs of :func:`scoutsim.simulate` in all,
 each a sweep point (:func:`~scoutsim.analysis.sweep.sweep_task`: the same parameter
 handling, outcomes and errors), in local processes or on a Dask cluster
@@ -29,7 +29,7 @@ to get the gait metrics' indices.
 Outputs (``out``): ``samples.parquet`` (every run: its design block, parameters and
 metrics), ``indices.csv`` (``metric, parameter, S1, S1_conf, ST, ST_conf``: one row per
 computed metric and parameter; ``*_conf`` the half-width of the bootstrap interval at
-:data:`~scoutsim.analysis.uncertainty_indices.CONFIDENCE_LEVEL`), ``summary.json`` and
+:data:`~scoutsim.analysis.uncertainty.sobol.CONFIDENCE_LEVEL`), ``summary.json`` and
 the checkpoint; ``manifest.json`` lists the files once they are whole.
 """
 
@@ -44,36 +44,24 @@ from typing import Any
 
 import numpy as np
 
-from ..control.factory import ControllerSpec
-from ..io.run_directory import RunDirectory, json_default
-from ..io.tables import write_rows_csv, write_rows_parquet
-from ..parameters import ControllerParameters, RobotParameters
-from ..simulation.initial_conditions import NAMED_STARTS
-from .parallel import map_tasks
-from .study_controller import check_controller_travels, describe_controller, study_controller
-from .study_failures import StudyError, end_of_study, error_fields, is_error
-from .sweep import SUMMARY_COLUMNS, SweepBase, sweep_task
-from .sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
-from .sweep_points import point_key
-from .uncertainty_indices import (
-    CONFIDENCE_LEVEL,
-    SobolIndices,
-    design_rows,
-    sobol_design,
-    sobol_from_evaluations,
-    sobol_indices,
-)
-from .uncertainty_parameters import FRICTION, UncertainParameter, parse_parameter, read_uncertainty
+from ...control.factory import ControllerSpec
+from ...io.run_directory import RunDirectory, json_default
+from ...io.tables import write_rows_csv, write_rows_parquet
+from ...parameters import ControllerParameters, RobotParameters
+from ...simulation.initial_conditions import NAMED_STARTS
+from ..parallel import map_tasks
+from ..study_controller import check_controller_travels, describe_controller, study_controller
+from ..study_failures import StudyError, end_of_study, error_fields, is_error
+from ..sweep import SUMMARY_COLUMNS, SweepBase, sweep_task
+from ..sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
+from ..sweep_points import point_key
+from .sobol import CONFIDENCE_LEVEL, design_rows, sobol_design, sobol_from_evaluations
+from .uncertain_parameters import FRICTION, UncertainParameter
 
 __all__ = [
     "uncertainty_study",
     "uncertainty_task",
     "UncertaintyResult",
-    "UncertainParameter",
-    "parse_parameter",
-    "read_uncertainty",
-    "sobol_indices",
-    "SobolIndices",
     "METRICS",
     "GAIT_METRICS",
     "BOUNDS",
@@ -122,7 +110,7 @@ def _error_row(task: dict, exc: BaseException) -> dict:
 class UncertaintyResult:
     """An uncertainty study: its ``parameters``, one row per run (``rows``, in design
     order: A, B, AB_1 ... AB_d, each ``n`` rows), the indices of the metrics computed
-    (``indices``: metric -> :class:`SobolIndices` of one output) and the reasons of those
+    (``indices``: metric -> :class:`~scoutsim.analysis.uncertainty.sobol.SobolIndices` of one output) and the reasons of those
     not computed (``not_computed``: metric -> reason), and its ``settings``."""
 
     parameters: list
@@ -235,7 +223,7 @@ class UncertaintyResult:
     def plot(self, out=None):
         """The figures (indices, distributions): a convenience for
         :func:`scoutsim.presentation.uncertainty_plots.plot_uncertainty` (Matplotlib)."""
-        from ..presentation.uncertainty_plots import plot_uncertainty
+        from ...presentation.uncertainty_plots import plot_uncertainty
 
         return plot_uncertainty(self, out)
 
@@ -304,7 +292,9 @@ def _check(parameters: list, base: SweepBase, controller) -> None:
     fields: dict = {}
     for p in parameters:
         if not isinstance(p, UncertainParameter):
-            raise TypeError(f"parameters: {p!r} is not an UncertainParameter (parse_parameter)")
+            raise TypeError(
+                f"parameters: {p!r} is not an UncertainParameter (scoutsim.analysis.uncertainty.parse_parameter)"
+            )
         if p.field in fields:
             raise ValueError(f"parameters {fields[p.field]!r} and {p.name!r} set the same field")
         fields[p.field] = p.name
@@ -339,8 +329,8 @@ def uncertainty_study(
 
     Parameters
     ----------
-    parameters : list of :class:`UncertainParameter` (:func:`parse_parameter`,
-        :func:`read_uncertainty`).
+    parameters : list of :class:`UncertainParameter` (:func:`~.uncertain_parameters.parse_parameter`,
+        :func:`~.uncertain_parameters.read_uncertainty`).
     n : base sample size (a power of two); the study runs ``n (d + 2)`` simulations.
     seed : seeds the Sobol' sequence and the bootstrap of the intervals.
     base : the configuration every run modifies (:class:`~scoutsim.analysis.sweep.SweepBase`:

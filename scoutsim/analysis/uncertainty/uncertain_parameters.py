@@ -40,10 +40,10 @@ from os import PathLike
 import numpy as np
 from scipy import stats
 
-from ..parameters import ParameterError, allowed_range
-from ..parameters.schema import CONTROLLER_SECTIONS, field_schema
-from ..parameters.units import UNIT_INDEX, UNITS
-from .sweep_points import check_name, si_name
+from ...parameters import ParameterError, allowed_range
+from ...parameters.schema import CONTROLLER_SECTIONS, field_schema
+from ...parameters.units import UNIT_INDEX, UNITS
+from ..sweep_points import check_name, si_name
 
 __all__ = [
     "FRICTION",
