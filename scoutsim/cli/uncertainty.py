@@ -190,8 +190,9 @@ def execute(args) -> int:
     print(f"  wall time {wall:.1f} s; wrote samples.parquet, indices.csv, summary.json to {out}/")
     if args.plots:
         from ..io.run_directory import add_to_manifest
+        from ..presentation.uncertainty_plots import plot_uncertainty
 
-        written = res.plot(out)
+        written = plot_uncertainty(res, out)
         add_to_manifest(out, [p.name for p in written])
         print(f"  figures: {', '.join(p.name for p in written)}")
     return 0

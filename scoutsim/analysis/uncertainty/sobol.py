@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy import stats
@@ -142,7 +143,7 @@ def sobol_from_evaluations(
             )
         )
     blocks = y.T.reshape(k, d + 2, n)  # (output, block, base row)
-    func = {
+    func: dict[Literal["f_A", "f_B", "f_AB"], np.ndarray] = {
         "f_A": blocks[:, 0, :],
         "f_B": blocks[:, 1, :],
         "f_AB": np.moveaxis(blocks[:, 2:, :], 1, 0),  # (d, k, n)

@@ -220,13 +220,6 @@ class UncertaintyResult:
         text = json.dumps(self.summary(), indent=2, default=json_default) + "\n"
         rd.write("summary.json", lambda p: p.write_text(text))
 
-    def plot(self, out=None):
-        """The figures (indices, distributions): a convenience for
-        :func:`scoutsim.presentation.uncertainty_plots.plot_uncertainty` (Matplotlib)."""
-        from ...presentation.uncertainty_plots import plot_uncertainty
-
-        return plot_uncertainty(self, out)
-
 
 def _columns(rows: list[dict], names) -> dict:
     return {n: [r[n] for r in rows] for n in names}
