@@ -54,7 +54,7 @@ def register(sub, common) -> None:
         "friction_coefficient, uniform (NAME=LOW:HIGH) or normal truncated at the "
         "field's allowed range (NAME=normal:MEAN:SD), also from the robot file's "
         "[uncertainty] section; run N (d + 2) simulations and write samples.parquet, "
-        "indices.csv (first-order and total Sobol' indices, 95%% confidence "
+        "indices.csv (first-order and total Sobol' indices, 95% confidence "
         "intervals), summary.json, the checkpoint points.jsonl and figures. Example: "
         "scoutsim uncertainty --param controller.touchdown_angle_front_deg=20:22 "
         "--param robot.leg_stiffness=3000:3800 --samples 16 --duration 6",
