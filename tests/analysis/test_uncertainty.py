@@ -209,3 +209,61 @@ def test_a_bad_uncertainty_entry_is_refused_naming_the_field(tmp_path, entry, wo
         read_uncertainty(f)
     for w in words:
         assert w in str(exc.value)
+
+
+def test_a_friction_sample_sets_the_floor_of_its_run():
+    """``friction_coefficient`` is not a robot field: the sample's value becomes the run's
+    floor, as the sweep's own ``friction_coefficient`` setting would."""
+    from scoutsim.analysis.sweep import sweep_task
+    from scoutsim.analysis.uncertainty import uncertainty_task
+    from scoutsim.parameters import ControllerParameters, RobotParameters
+
+    task = {
+        "model": "I",
+        "duration": 1.0,
+        "robot": RobotParameters(),
+        "controller": ControllerParameters(),
+        "initial_state": None,
+        "friction_coefficient": 1.0,
+    }
+    point = {"controller.touchdown_angle_front_deg": 21.0}
+    sampled = uncertainty_task(task | {"point": point | {"friction_coefficient": 0.2}})
+    floor = sweep_task(task | {"point": point, "friction_coefficient": 0.2})
+    default = sweep_task(task | {"point": point})
+    assert sampled.pop("friction_coefficient") == 0.2
+    assert sampled == floor
+    assert floor["max_friction_ratio"] != default["max_friction_ratio"]
+
+
+def test_two_names_of_one_field_and_controller_fields_of_a_controller_object_are_refused():
+    with pytest.raises(ValueError, match="set the same field"):
+        uncertainty_study(
+            [
+                parse_parameter("controller.touchdown_angle_front_deg=20:22"),
+                parse_parameter("controller.touchdown_angle_front=0.35:0.38"),
+            ],
+            n=2,
+        )
+    from scoutsim.control import BoundingController
+
+    with pytest.raises(ValueError, match="not allowed with a controller object"):
+        uncertainty_study(
+            [parse_parameter("controller.touchdown_angle_front_deg=20:22")],
+            n=2,
+            controller=BoundingController(),
+        )
+
+
+def test_a_range_reaching_far_from_scout_ii_is_warned_of_once_not_per_run():
+    from scoutsim.parameters import ImplausibleParameterWarning
+
+    with pytest.warns(ImplausibleParameterWarning) as record:
+        uncertainty_study(
+            [parse_parameter("robot.leg_stiffness=3000:300000")],
+            n=4,
+            model="I",
+            duration=0.2,
+            workers=1,
+        )
+    implausible = [w for w in record if issubclass(w.category, ImplausibleParameterWarning)]
+    assert len(implausible) == 1 and "leg_stiffness" in str(implausible[0].message)

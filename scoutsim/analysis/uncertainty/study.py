@@ -279,6 +279,24 @@ def _design_points(parameters: list, n: int, seed: int) -> list[dict]:
     return [{p.name: float(c[i]) for p, c in zip(parameters, cols)} for i in range(len(u))]
 
 
+def _warn_of_range_ends(parameters: list, points: list[dict], robot, controller) -> None:
+    """Make the robot or controller parameters at each uncertain field's lowest and highest
+    sampled value once, here, so a value far from a robot of this kind is warned of once
+    for the study (:class:`~scoutsim.parameters.ImplausibleParameterWarning`; the runs
+    themselves do not warn); a value that is not allowed is the run's business."""
+    for p in parameters:
+        sec, _, fld = p.field.partition(".")
+        obj = robot if sec == "robot" else controller
+        if p.field == FRICTION or not isinstance(obj, (RobotParameters, ControllerParameters)):
+            continue
+        scale = 1.0 if p.name == p.field else math.pi / 180.0
+        for v in {min(q[p.name] for q in points), max(q[p.name] for q in points)}:
+            try:
+                dataclasses.replace(obj, **{fld: v * scale})
+            except (ValueError, TypeError):
+                pass
+
+
 def _check(parameters: list, base: SweepBase, controller) -> None:
     if not parameters:
         raise ValueError("parameters is empty: give at least one uncertain parameter")
@@ -353,6 +371,8 @@ def uncertainty_study(
     _check(parameters, base, controller)
     points = _design_points(parameters, n, seed)
     check_controller_travels(controller, workers, scheduler, len(points))
+    params_of = controller.params if isinstance(controller, ControllerSpec) else controller
+    _warn_of_range_ends(parameters, points, robot, params_of or ControllerParameters())
     settings = _settings(base, robot, controller, parameters, n, seed)
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
