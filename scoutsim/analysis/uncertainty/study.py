@@ -389,8 +389,9 @@ def uncertainty_study(
             done = {k: r for k, r in read_checkpoint(ck).items() if not was_error(r)}
         elif ck.exists():
             ck.unlink()
-    todo = list({k: i for i, k in reversed(list(enumerate(keys))) if k not in done}.values())
-    todo.sort()
+    # the runs still to do, each point once (a point drawn twice runs once)
+    first = {k: i for i, k in reversed(list(enumerate(keys)))}
+    todo = sorted(i for k, i in first.items() if k not in done)
     common: dict[str, Any] = {
         "model": base.model,
         "duration": base.duration,
