@@ -548,14 +548,16 @@ def robot_file_page() -> str:
         "A `bias` of a two-slot channel may be a pair `[back, front]`.",
         "",
     ]
-    other = ", ".join(f"`[{s}]`" for s in SEPARATE_SECTIONS if s != "sensors")
-    out += [
-        "## Other sections",
-        "",
-        f"{other}: the law of a controller file, as `scoutsim tune` writes it "
-        "(`best.toml`) and `--controller FILE` reads it; the robot file's loaders skip it.",
-        "",
-    ]
+    what = {
+        "controller_law": "the law of a controller file, as `scoutsim tune` writes it "
+        "(`best.toml`) and `--controller FILE` reads it",
+        "uncertainty": "the uncertain parameters of `scoutsim uncertainty` "
+        "([Uncertainty of the gait](../how-to/uncertainty.md))",
+    }
+    out += ["## Other sections", ""]
+    for s in SEPARATE_SECTIONS:
+        if s != "sensors":
+            out += [f"`[{s}]`: {what[s]}; the robot file's loaders skip it.", ""]
     return "\n".join(out).rstrip() + "\n"
 
 

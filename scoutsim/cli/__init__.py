@@ -9,6 +9,7 @@ each (``scoutsim COMMAND --help`` for the options):
     animate   stick-figure animation of a saved run (GIF or MP4)
     orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
     sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
+    uncertainty  global sensitivity of the gait to uncertain parameters (Sobol' indices)
     tune      optimise controller or robot parameters (CMA-ES) against an objective
     identify  fit Model II hip-unit parameters to bench-rig logs
     rig       run a virtual bench rig and write its log
@@ -48,6 +49,7 @@ from . import (
     run,
     sweep,
     tune,
+    uncertainty,
 )
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
 from .basin import format_basin
@@ -75,6 +77,7 @@ COMMANDS = (
     animate,
     orbit,
     sweep,
+    uncertainty,
     tune,
     identify,
     rig,
@@ -82,7 +85,8 @@ COMMANDS = (
 )
 #: commands that simulate, so may have to compile the core first (a notice says so)
 COMPILING_COMMANDS = {
-    c.NAME for c in (run, basin, assumptions, compare, orbit, sweep, tune, identify, rig)
+    c.NAME
+    for c in (run, basin, assumptions, compare, orbit, sweep, uncertainty, tune, identify, rig)
 }
 
 
@@ -102,6 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
         "  scoutsim tune --objective speed --target 1.3 --param "
         "controller.touchdown_angle_front_deg --out tuned\n"
         "  scoutsim run --controller tuned/best.toml\n"
+        "  scoutsim assumptions --controller pitch-feedback --out assume\n"
+        "  scoutsim uncertainty --param robot.leg_stiffness=3000:4000 "
+        "--param controller.touchdown_angle_front_deg=19:23 --samples 64 --out unc\n"
         "  scoutsim compare run1.csv run2.csv --model I,II --out cmp\n"
         "  scoutsim compare --example             # on the shipped SYNTHETIC data set\n"
         "  scoutsim plot scoutsim_out --out run.pdf --t0 3 --t1 4\n"

@@ -27,6 +27,7 @@ SECTIONS: dict[str, type] = {
 SEPARATE_SECTIONS: dict[str, str] = {
     "sensors": "scoutsim.control.sensors.load_sensors",
     "controller_law": "scoutsim.analysis.controller_file.read_controller_file",
+    "uncertainty": "scoutsim.analysis.uncertainty.read_uncertainty",
 }
 
 
