@@ -84,7 +84,12 @@ def draw(dev: dict, errors: dict, path: Path, title: str) -> None:
         e = errors[m]
         ax.add_patch(
             plt.Rectangle(
-                (-e, k - 0.4), 2 * e, 0.8, color="tab:red", alpha=0.18, linewidth=0,
+                (-e, k - 0.4),
+                2 * e,
+                0.8,
+                color="tab:red",
+                alpha=0.18,
+                linewidth=0,
                 label="Model II mean error, synthetic example (+-)" if k == 0 else None,
             )
         )
@@ -138,8 +143,7 @@ def main(argv=None) -> int:
         dev,
         errors,
         args.out,
-        f"Model II, {n_base} samples of the uncertain parameters "
-        f"(5-25-50-75-95 % quantiles)",
+        f"Model II, {n_base} samples of the uncertain parameters (5-25-50-75-95 % quantiles)",
     )
     print(f"wrote {args.out}")
     return 0
