@@ -31,20 +31,22 @@ def plot_indices(study, path=None) -> Figure:
     interval as whiskers; a metric not computed is named with its reason in the title.
     Saved by suffix if ``path`` is given."""
     metrics = list(study.indices)
-    fig, axes = _grid(max(len(metrics), 1), 4.2, 3.0)
     names = study.names
-    x = np.arange(len(names))
+    # horizontal bars, a row per parameter: the names stay readable however many there are
+    fig, axes = _grid(max(len(metrics), 1), 4.6, max(2.6, 0.5 + 0.32 * len(names)))
+    y = np.arange(len(names))
     for ax, metric in zip(axes, metrics):
         ix = study.indices[metric]
         for off, key, color in ((-0.18, "S1", "tab:blue"), (0.18, "ST", "tab:orange")):
             v = getattr(ix, key)[0]
             lo, hi = getattr(ix, f"{key}_low")[0], getattr(ix, f"{key}_high")[0]
-            yerr = np.vstack([np.maximum(v - lo, 0.0), np.maximum(hi - v, 0.0)])
-            ax.bar(x + off, v, 0.36, color=color, label=key, yerr=yerr, capsize=3)
-        ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_xticks(x, names, rotation=20, ha="right", fontsize=7)
+            err = np.vstack([np.maximum(v - lo, 0.0), np.maximum(hi - v, 0.0)])
+            ax.barh(y + off, v, 0.36, color=color, label=key, xerr=err, capsize=2)
+        ax.axvline(0.0, color="k", lw=0.6)
+        ax.set_yticks(y, names, fontsize=7)
+        ax.invert_yaxis()  # the first parameter on top
         ax.set_title(metric, fontsize=9)
-        ax.set_ylabel("Sobol' index [-]")
+        ax.set_xlabel("Sobol' index [-]")
     if metrics:
         axes[0].legend(fontsize=7)
     else:

@@ -18,6 +18,8 @@ from scoutsim.analysis.uncertainty import (
     sobol_indices,
     uncertainty_study,
 )
+from scoutsim.analysis.uncertainty import study as study_module
+from scoutsim.analysis.uncertainty.study import MIN_BASE_OUTCOMES, UncertaintyResult
 from scoutsim.parameters import ParameterError, load_parameters
 
 #: base sample size of the closed-form checks: n (d + 2) evaluations of a cheap function
@@ -119,7 +121,7 @@ def test_gait_metrics_are_not_computed_when_some_samples_do_not_bound():
     """A run that falls is counted (share not bounding), not dropped: the indicator's
     indices are computed, a gait metric's are not, with the reason."""
     params = [parse_parameter("controller.touchdown_angle_front_deg=12:28")]
-    res = uncertainty_study(params, n=8, model="I", duration=4.5, workers=1)
+    res = uncertainty_study(params, n=16, model="I", duration=4.5, workers=1)
     share = res.share_not_bounding()
     assert 0 < share < 1
     assert set(res.indices) == {BOUNDS}
@@ -267,3 +269,41 @@ def test_a_range_reaching_far_from_scout_ii_is_warned_of_once_not_per_run():
         )
     implausible = [w for w in record if issubclass(w.category, ImplausibleParameterWarning)]
     assert len(implausible) == 1 and "leg_stiffness" in str(implausible[0].message)
+
+
+def _indicator_result(bounding: np.ndarray, n: int, d: int) -> UncertaintyResult:
+    """A study's result whose runs bound where ``bounding`` says (rows A, B, AB_1..AB_d)."""
+    params = [parse_parameter(f"robot.leg_stiffness={3000 + i}:{3500 + i}") for i in range(d)]
+    rows = [{"steady_bounding": bool(b)} for b in bounding]
+    return UncertaintyResult(parameters=params, rows=rows, n=n)
+
+
+@pytest.mark.parametrize(
+    "failing, computed",
+    [
+        ("ab only", False),  # the indicator does not vary over A and B
+        ("one in B", False),  # one base row: indices and intervals rest on it
+        ("enough", True),
+    ],
+)
+def test_the_indicators_indices_need_each_outcome_in_enough_base_samples(failing, computed):
+    """The Saltelli estimator divides by the indicator's variance over the base samples A
+    and B: failures only in the AB rows, or in one base row, give indices of 0 or 1 with
+    intervals of zero width that rest on single rows; those are refused with the reason,
+    and computed once each outcome holds for MIN_BASE_OUTCOMES base samples."""
+    n, d = 32, 2
+    b = np.ones(n * (d + 2))
+    if failing == "ab only":
+        b[2 * n + 3] = b[3 * n + 7] = 0.0
+    elif failing == "one in B":
+        b[n + 4] = b[2 * n + 4] = 0.0
+    else:
+        b[:MIN_BASE_OUTCOMES] = b[n : n + MIN_BASE_OUTCOMES] = 0.0
+        b[2 * n : 2 * n + MIN_BASE_OUTCOMES] = 0.0
+    res = _indicator_result(b, n, d)
+    study_module._indices(res, seed=0)
+    assert (BOUNDS in res.indices) == computed
+    if not computed:
+        assert "base samples (A and B)" in res.not_computed[BOUNDS]
+    else:
+        assert np.all(np.isfinite(res.indices[BOUNDS].ST))

@@ -20,10 +20,12 @@ cost of transport is not among them: the study's runs do not keep the energy acc
 Runs that do not bound are an outcome of the study, counted and reported (the share of
 samples that do not bound), never dropped: the estimator needs a value for every row of
 A, B and AB, and a gait metric has none for a run that does not bound. So the indices of
-``bounds`` are computed whenever some samples bound and some do not (they say which
-parameters decide whether the robot bounds), and the indices of a gait metric only when
-every sample bounds; otherwise the metric is listed as not computed, with the reason
-(also a metric that does not vary at all). Narrow the ranges to where the robot bounds
+``bounds`` are computed when each outcome, bounding and not, holds for at least
+:data:`MIN_BASE_OUTCOMES` of the ``2 N`` base samples (A and B: the estimator divides by
+the indicator's variance over them, and a handful of failures, or failures only in the AB
+rows, gives indices and bootstrap intervals that rest on single rows), and the indices of
+a gait metric only when every sample bounds; otherwise the metric is listed as not
+computed, with the reason (also a metric that does not vary at all). Narrow the ranges to where the robot bounds
 to get the gait metrics' indices.
 
 Outputs (``out``): ``samples.parquet`` (every run: its design block, parameters and
@@ -81,6 +83,10 @@ GAIT_METRICS = (
     "height_max_m",
     "height_min_m",
 )
+#: the indicator's indices need each outcome (bounds, does not) in at least this many of the
+#: ``2 N`` base samples A and B (module docstring)
+MIN_BASE_OUTCOMES = 5
+
 #: every metric of the study: ``bounds``, then the gait metrics
 METRICS = (BOUNDS, *GAIT_METRICS)
 #: the columns of indices.csv
@@ -245,8 +251,23 @@ def _indices(res: UncertaintyResult, seed: int) -> None:
                 if m != BOUNDS
                 else ("every sample bounds" if v[0] else "no sample bounds")
             )
+        elif m == BOUNDS and _too_few_base_outcomes(v[: 2 * res.n]):
+            base = v[: 2 * res.n]
+            res.not_computed[m] = (
+                f"{int(np.sum(base == 0.0))} of the {base.size} base samples (A and B) do not "
+                f"bound and {int(np.sum(base == 1.0))} do: each outcome needs at least "
+                f"{MIN_BASE_OUTCOMES} for the indicator's indices (a larger --samples, or "
+                "ranges that fail more often); the runs that do not bound are in "
+                "samples.parquet"
+            )
         else:
             res.indices[m] = sobol_from_evaluations(v, d, seed=seed)
+
+
+def _too_few_base_outcomes(base: np.ndarray) -> bool:
+    """Whether the indicator over the base samples has fewer than
+    :data:`MIN_BASE_OUTCOMES` of either outcome."""
+    return min(int(np.sum(base == 0.0)), int(np.sum(base == 1.0))) < MIN_BASE_OUTCOMES
 
 
 def _settings(base: SweepBase, robot, controller, parameters, n: int, seed: int) -> dict:
