@@ -107,6 +107,8 @@ __all__ = [
     "point_key",
 ]
 
+#: a run's cost of transport (summary.json), in a row of a task run with ``energy``
+COST_OF_TRANSPORT = "cost_of_transport"
 SUMMARY_COLUMNS = (
     "outcome",
     "t_end_s",
@@ -204,6 +206,7 @@ def _sweep_point(task: dict) -> dict:
             task["duration"],
             model=task["model"],
             friction_coefficient=task["friction_coefficient"],
+            energy=bool(task.get("energy", False)),
         )
     except Exception as exc:  # noqa: BLE001 - classified and reported per point
         row.update(run_failure(exc, "invalid_parameters"))
@@ -218,6 +221,8 @@ def _sweep_point(task: dict) -> dict:
         # whole-run average speed: defined even for runs too short for steady strides
         row["average_speed_m_s"] = float((r.x[-1] - r.x[0]) / r.t[-1]) if r.t[-1] > 0 else None
         row["steady_bounding"] = bool(s.get("steady_bounding"))
+        if task.get("energy"):  # (the run accounted for its energy: what the gait costs)
+            row[COST_OF_TRANSPORT] = s.get(COST_OF_TRANSPORT)
         if task.get("orbit"):
             if row["steady_bounding"]:
                 row.update(orbit_columns(r, robot, ctrl, task))

@@ -7,7 +7,7 @@ points.jsonl (an interrupted study resumes: Ctrl-C exits with status 130 and kee
 finished run) and figures (:mod:`scoutsim.analysis.uncertainty`).
 
     scoutsim uncertainty --param NAME=LOW:HIGH|NAME=normal:MEAN:SD ... [--samples N]
-                         [--seed N] [--model {ideal,I,II}] [--workers N]
+                         [--seed N] [--energy] [--model {ideal,I,II}] [--workers N]
                          [--scheduler ADDRESS] [--no-resume] [--duration S]
                          [--robot FILE] [--out DIR] [--friction MU] [--plots/--no-plots]
 """
@@ -78,6 +78,12 @@ def register(sub, common) -> None:
         help=f"base sample size N, a power of two; N (d + 2) runs (default: {DEFAULT_SAMPLES})",
     )
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    p.add_argument(
+        "--energy",
+        action="store_true",
+        help="also account for every run's energy and add the cost of transport to the "
+        "metrics (the same runs, each about 1.65 times as long to compute)",
+    )
     p.add_argument("--model", choices=CONTROLLED_MODELS, default="II", help="model (default: II)")
     p.add_argument(
         "--workers",
@@ -161,6 +167,7 @@ def execute(args) -> int:
                 progress=show_progress(args),
                 resume=not args.no_resume,
                 command=" ".join(["scoutsim"] + sys.argv[1:]),
+                energy=args.energy,
             )
     except KeyboardInterrupt:
         n_done = len(read_checkpoint(out / CHECKPOINT))

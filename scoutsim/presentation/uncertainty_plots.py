@@ -64,10 +64,9 @@ def plot_indices(study, path=None) -> Figure:
 def plot_distributions(study, path=None) -> Figure:
     """A histogram of every metric: ``bounds`` over every run (1: it bounds, 0: it does
     not), a gait metric over the runs that bound. Saved by suffix if ``path`` is given."""
-    from ..analysis.uncertainty import METRICS
-
-    fig, axes = _grid(len(METRICS), 3.2, 2.4)
-    for ax, metric in zip(axes, METRICS):
+    metrics = study.metrics
+    fig, axes = _grid(len(metrics), 3.2, 2.4)
+    for ax, metric in zip(axes, metrics):
         v = study.metric(metric)
         v = v[np.isfinite(v)]
         if v.size:

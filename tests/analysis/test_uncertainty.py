@@ -12,6 +12,7 @@ import pytest
 from scoutsim.analysis.uncertainty import (
     BOUNDS,
     GAIT_METRICS,
+    METRICS,
     UncertainParameter,
     parse_parameter,
     read_uncertainty,
@@ -307,3 +308,26 @@ def test_the_indicators_indices_need_each_outcome_in_enough_base_samples(failing
         assert "base samples (A and B)" in res.not_computed[BOUNDS]
     else:
         assert np.all(np.isfinite(res.indices[BOUNDS].ST))
+
+
+def test_with_energy_the_cost_of_transport_is_a_metric_and_the_gait_is_the_same():
+    """energy=True accounts for every run's energy: the cost of transport joins the
+    metrics (indices and samples.parquet), and the gait metrics are the study's without
+    it, bit for bit (the accounting does not change a run's trajectory)."""
+    params = [
+        parse_parameter("controller.touchdown_angle_front_deg=20:22"),
+        parse_parameter("robot.belt_stiffness=300:500"),  # (no belt in Model I: no effect)
+    ]
+    plain = uncertainty_study(params, n=8, model="I", duration=4.5, workers=1)
+    costed = uncertainty_study(params, n=8, model="I", duration=4.5, workers=1, energy=True)
+    assert plain.metrics == METRICS
+    assert costed.metrics == (*METRICS, "cost_of_transport")
+    cot = costed.metric("cost_of_transport")
+    assert np.all(np.isfinite(cot)) and np.all(cot > 0)  # every sample bounds here
+    assert "cost_of_transport" in costed.indices
+    assert costed.indices["cost_of_transport"].ST[0, 1] == 0.0  # the belt's
+    assert costed.indices["cost_of_transport"].ST[0, 0] > 0.0  # the touchdown angle's
+    assert "cost_of_transport" in costed.samples_columns()
+    for m in GAIT_METRICS:
+        assert np.array_equal(plain.metric(m), costed.metric(m)), m
+        assert np.array_equal(plain.indices[m].ST, costed.indices[m].ST), m

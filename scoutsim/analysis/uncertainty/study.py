@@ -14,8 +14,9 @@ with the same arguments finishes the rest and gives the same result, bit for bit
 Metrics (:data:`METRICS`, named as in a run's summary.json): the steady gait's mean
 speed, stride frequency, duty factors and pitch and height extremes, and ``bounds``,
 1 for a run that bounds steadily to its end and 0 for one that falls, stops bounding or
-has parameters that are not allowed together (outcome ``invalid_parameters``). The
-cost of transport is not among them: the study's runs do not keep the energy accounting.
+has parameters that are not allowed together (outcome ``invalid_parameters``); with
+``energy=True`` (``--energy``) also the cost of transport, each run then accounting for
+its energy (:attr:`UncertaintyResult.metrics`).
 
 Runs that do not bound are an outcome of the study, counted and reported (the share of
 samples that do not bound), never dropped: the estimator needs a value for every row of
@@ -54,7 +55,7 @@ from ...simulation.initial_conditions import NAMED_STARTS
 from ..parallel import map_tasks
 from ..study_controller import check_controller_travels, describe_controller, study_controller
 from ..study_failures import StudyError, end_of_study, error_fields, is_error
-from ..sweep import SUMMARY_COLUMNS, SweepBase, sweep_task
+from ..sweep import COST_OF_TRANSPORT, SUMMARY_COLUMNS, SweepBase, sweep_task
 from ..sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
 from ..sweep_points import point_key
 from .sobol import CONFIDENCE_LEVEL, design_rows, sobol_design, sobol_from_evaluations
@@ -130,6 +131,12 @@ class UncertaintyResult:
     def names(self) -> list[str]:
         return [p.name for p in self.parameters]
 
+    @property
+    def metrics(self) -> tuple[str, ...]:
+        """The study's metrics: :data:`METRICS`, and the cost of transport when its runs
+        accounted for their energy (``energy=True``)."""
+        return (*METRICS, COST_OF_TRANSPORT) if self.settings.get("energy") else METRICS
+
     def metric(self, name: str) -> np.ndarray:
         """A metric's values over the runs: ``bounds`` 1 or 0, a gait metric its value for
         a run that bounds and NaN for one that does not (samples.parquet keeps what a run
@@ -176,7 +183,7 @@ class UncertaintyResult:
         for name in ("outcome", "status", "t_end_s"):
             cols[name] = [r.get(name) for r in self.rows]
         cols[BOUNDS] = [bool(r.get("steady_bounding")) for r in self.rows]
-        for name in (*GAIT_METRICS, "average_speed_m_s", "n_steady_strides", "error"):
+        for name in (*self.metrics[1:], "average_speed_m_s", "n_steady_strides", "error"):
             cols[name] = [r.get(name) for r in self.rows]
         return cols
 
@@ -188,7 +195,7 @@ class UncertaintyResult:
         for r in self.rows:
             outcomes[r.get("outcome")] = outcomes.get(r.get("outcome"), 0) + 1
         metrics = {}
-        for m in METRICS:
+        for m in self.metrics:
             v = self.metric(m)
             v = v[np.isfinite(v)]
             metrics[m] = {
@@ -236,7 +243,7 @@ def _indices(res: UncertaintyResult, seed: int) -> None:
     d = len(res.parameters)
     n_runs = len(res.rows)
     not_bounding = int(round(res.share_not_bounding() * n_runs))
-    for m in METRICS:
+    for m in res.metrics:
         v = res.metric(m)
         if m != BOUNDS and not_bounding:
             res.not_computed[m] = (
@@ -355,6 +362,7 @@ def uncertainty_study(
     progress: bool = False,
     resume: bool = True,
     command: str = "",
+    energy: bool = False,
     **base_fields,
 ) -> UncertaintyResult:
     """Run an uncertainty study (module docstring) and compute its Sobol' indices.
@@ -374,6 +382,9 @@ def uncertainty_study(
         processes; a Dask address, Client or Executor; a progress bar).
     resume : skip runs already in ``out/points.jsonl`` with the same settings.
     command : the command line, recorded in ``out/manifest.json``.
+    energy : also account for every run's energy (``simulate(..., energy=True)``: the
+        trajectory is the same bit for bit, a run costs about 1.65 times as much) and add
+        the cost of transport (electrical energy / (m g distance)) to the metrics.
 
     Raises
     ------
@@ -395,6 +406,8 @@ def uncertainty_study(
     params_of = controller.params if isinstance(controller, ControllerSpec) else controller
     _warn_of_range_ends(parameters, points, robot, params_of or ControllerParameters())
     settings = _settings(base, robot, controller, parameters, n, seed)
+    if energy:  # (a study without it keeps the checkpoint keys it always had)
+        settings["energy"] = True
     keys = [point_key(p, settings) for p in points]
     done: dict = {}
     rd = ck = None
@@ -420,6 +433,7 @@ def uncertainty_study(
         "controller": controller,
         "initial_state": base.initial_state,
         "friction_coefficient": base.friction_coefficient,
+        "energy": bool(energy),
     }
     tasks = [common | {"point": points[i]} for i in todo]
     fh = open(ck, "a") if ck is not None else None
