@@ -38,16 +38,13 @@ and re-exports their public names.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..control.factory import ControllerSpec
-from ..io.run_directory import RunDirectory, json_default
 from ..io.tables import write_rows_csv, write_rows_parquet
 from ..parameters import (
     DEFAULT_FRICTION_COEFFICIENT,
@@ -58,7 +55,6 @@ from ..parameters import (
 )
 from ..simulation.initial_conditions import NAMED_STARTS
 from ..state import HybridState, InitialState
-from .parallel import map_tasks
 from .study_controller import (
     build_controller,
     check_controller_travels,
@@ -73,7 +69,12 @@ from .study_failures import (
     is_error,
     run_failure,
 )
-from .sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
+from .sweep_checkpoint import (
+    CHECKPOINT,
+    map_with_checkpoint,
+    open_study_directory,
+    read_checkpoint,
+)
 from .sweep_orbit import ORBIT_COLUMNS, ORBIT_RTOL, ORBIT_TOL, orbit_columns
 from .sweep_points import (
     DEG,
@@ -409,22 +410,9 @@ def sweep(
         "orbit": bool(orbit),
     }
     keys = [point_key(p, settings) for p in points]
-    done: dict = {}
-    ck = rd = None
-    if out is not None:
-        out = Path(out)
-        # the directory's manifest lists the tables once they are written whole; entering
-        # removes an earlier sweep's tables (never the checkpoint) so none looks current
-        rd = RunDirectory(
-            out,
-            command=command,
-            info={"kind": "sweep", "checkpoint": CHECKPOINT, "n_points": len(points)},
-        ).open()
-        ck = out / CHECKPOINT
-        if resume:  # (a point the study could not run is run again)
-            done = {k: r for k, r in read_checkpoint(ck).items() if not was_error(r)}
-        elif ck.exists():
-            ck.unlink()
+    rd, ck, done = open_study_directory(
+        out, command=command, info={"kind": "sweep", "n_points": len(points)}, resume=resume
+    )
     todo = [i for i, k in enumerate(keys) if k not in done]
     tasks: list[dict[str, Any]] = [
         {
@@ -441,32 +429,19 @@ def sweep(
     ]
     if tasks:
         _warn_of_range_ends([t["point"] for t in tasks], names, tasks[0])
-    fh = open(ck, "a") if ck is not None else None
-
-    def on_result(j, row):
-        if fh is not None:
-            fh.write(json.dumps({"key": keys[todo[j]], "row": row}, default=json_default) + "\n")
-            fh.flush()
-
-    try:
-        new_rows = map_tasks(
-            sweep_task,
-            tasks,
-            workers=workers,
-            scheduler=scheduler,
-            progress=progress,
-            desc="sweep",
-            on_result=on_result,
-            error_row=_error_row,
-            stop_when=is_error if on_error == "raise" else None,
-        )
-    except KeyboardInterrupt:
-        if rd is not None:  # no table: the same call again goes on from the checkpoint
-            rd.finish(outcome="interrupted", partial=True)
-        raise
-    finally:
-        if fh is not None:
-            fh.close()
+    new_rows = map_with_checkpoint(
+        sweep_task,
+        tasks,
+        [keys[i] for i in todo],
+        ck=ck,
+        rd=rd,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        desc="sweep",
+        error_row=_error_row,
+        stop_when=is_error if on_error == "raise" else None,
+    )
     for j, row in zip(todo, new_rows):
         if row is not None:
             done[keys[j]] = row

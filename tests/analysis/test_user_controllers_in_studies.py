@@ -185,9 +185,10 @@ def no_point_runs(monkeypatch):
         calls.append(args)
         raise AssertionError("a point was sent to run")
 
-    from scoutsim.analysis import tune
+    from scoutsim.analysis import sweep_checkpoint, tune
 
-    for module in (B, SW, tune):
+    # (the sweep maps its points through its checkpoint's map_with_checkpoint)
+    for module in (B, sweep_checkpoint, tune):
         monkeypatch.setattr(module, "map_tasks", map_tasks)
     return calls
 

@@ -42,7 +42,6 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -52,11 +51,10 @@ from ...io.run_directory import RunDirectory, json_default
 from ...io.tables import write_rows_csv, write_rows_parquet
 from ...parameters import ControllerParameters, RobotParameters
 from ...simulation.initial_conditions import NAMED_STARTS
-from ..parallel import map_tasks
 from ..study_controller import check_controller_travels, describe_controller, study_controller
 from ..study_failures import StudyError, end_of_study, error_fields, is_error
 from ..sweep import COST_OF_TRANSPORT, SUMMARY_COLUMNS, SweepBase, sweep_task
-from ..sweep_checkpoint import CHECKPOINT, read_checkpoint, was_error
+from ..sweep_checkpoint import map_with_checkpoint, open_study_directory
 from ..sweep_points import point_key
 from .sobol import CONFIDENCE_LEVEL, design_rows, sobol_design, sobol_from_evaluations
 from .uncertain_parameters import FRICTION, UncertainParameter
@@ -409,20 +407,12 @@ def uncertainty_study(
     if energy:  # (a study without it keeps the checkpoint keys it always had)
         settings["energy"] = True
     keys = [point_key(p, settings) for p in points]
-    done: dict = {}
-    rd = ck = None
-    if out is not None:
-        out = Path(out)
-        rd = RunDirectory(
-            out,
-            command=command,
-            info={"kind": "uncertainty", "checkpoint": CHECKPOINT, "n_runs": len(points)},
-        ).open()
-        ck = out / CHECKPOINT
-        if resume:
-            done = {k: r for k, r in read_checkpoint(ck).items() if not was_error(r)}
-        elif ck.exists():
-            ck.unlink()
+    rd, ck, done = open_study_directory(
+        out,
+        command=command,
+        info={"kind": "uncertainty", "n_runs": len(points)},
+        resume=resume,
+    )
     # the runs still to do, each point once (a point drawn twice runs once)
     first = {k: i for i, k in reversed(list(enumerate(keys)))}
     todo = sorted(i for k, i in first.items() if k not in done)
@@ -436,32 +426,19 @@ def uncertainty_study(
         "energy": bool(energy),
     }
     tasks = [common | {"point": points[i]} for i in todo]
-    fh = open(ck, "a") if ck is not None else None
-
-    def on_result(j, row):
-        if fh is not None:
-            fh.write(json.dumps({"key": keys[todo[j]], "row": row}, default=json_default) + "\n")
-            fh.flush()
-
-    try:
-        new_rows = map_tasks(
-            uncertainty_task,
-            tasks,
-            workers=workers,
-            scheduler=scheduler,
-            progress=progress,
-            desc="uncertainty",
-            on_result=on_result,
-            error_row=_error_row,
-            stop_when=is_error,
-        )
-    except KeyboardInterrupt:
-        if rd is not None:
-            rd.finish(outcome="interrupted", partial=True)
-        raise
-    finally:
-        if fh is not None:
-            fh.close()
+    new_rows = map_with_checkpoint(
+        uncertainty_task,
+        tasks,
+        [keys[i] for i in todo],
+        ck=ck,
+        rd=rd,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        desc="uncertainty",
+        error_row=_error_row,
+        stop_when=is_error,
+    )
     for j, row in zip(todo, new_rows):
         if row is not None:
             done[keys[j]] = row
