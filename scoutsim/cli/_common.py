@@ -283,6 +283,27 @@ def add_time_window_options(parser, t0_help: str, t1_help: str):
     parser.add_argument("--t1", type=finite_float, default=None, metavar="S", help=t1_help)
 
 
+def add_parallel_options(parser, resume_help: str | None = None) -> None:
+    """A study's --workers N (local processes) and --scheduler ADDRESS (a Dask cluster),
+    as :func:`scoutsim.analysis.parallel.map_tasks` takes them; and --no-resume, with
+    ``resume_help``, for a study that keeps a checkpoint."""
+    parser.add_argument(
+        "--workers",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="local processes (default: all cores; 1 runs in this process)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
+    )
+    if resume_help is not None:
+        parser.add_argument("--no-resume", action="store_true", help=resume_help)
+
+
 def add_duration_option(parser, default: float, what: str = "simulated time per run"):
     """--duration S with the command's own ``default`` [s] (each command has its own, from
     the function it calls: argparse would share one default between the commands whose

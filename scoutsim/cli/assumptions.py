@@ -27,13 +27,13 @@ from ._common import (
     UsageError,
     add_controller_option,
     add_duration_option,
+    add_parallel_options,
     add_plots_option,
     controller_choice,
     controller_label,
     load_parameters,
     make_controller,
     out_dir,
-    positive_int,
     show_progress,
     usage_errors,
     write_json,
@@ -90,19 +90,7 @@ def register(sub, common) -> None:
         help="basin starts: N speeds over 0.8-1.6 m/s x M pitch rates over 50-200 deg/s "
         f"at 0.33 m (one: 1.2 m/s, 150 deg/s; 0x0: no basin; default: {DEFAULT_BASIN_GRID})",
     )
-    p.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local processes (default: all cores; 1 runs in this process)",
-    )
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
-    )
+    add_parallel_options(p)
     p.add_argument(
         "--quick",
         action="store_true",

@@ -25,6 +25,7 @@ from ._common import (
     UsageError,
     add_controller_option,
     add_duration_option,
+    add_parallel_options,
     add_plots_option,
     check_expected_time,
     controller_choice,
@@ -92,24 +93,7 @@ def register(sub, common) -> None:
         help="refuse sweeps of more points than this before starting (default: 100000)",
     )
     sw.add_argument("--model", choices=CONTROLLED_MODELS, default="II", help="model (default: II)")
-    sw.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local processes (default: all cores)",
-    )
-    sw.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
-    )
-    sw.add_argument(
-        "--no-resume",
-        action="store_true",
-        help="recompute every point even if DIR/points.jsonl has it",
-    )
+    add_parallel_options(sw, "recompute every point even if DIR/points.jsonl has it")
     sw.add_argument(
         "--orbit",
         action="store_true",

@@ -27,6 +27,7 @@ from ._common import (
     UsageError,
     add_controller_option,
     add_duration_option,
+    add_parallel_options,
     check_expected_time,
     controller_choice,
     float_list,
@@ -168,24 +169,7 @@ def register(sub, common) -> None:
         metavar="N",
         help="candidates per generation (default: 4 + 3 ln n)",
     )
-    tu.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local processes (default: all cores)",
-    )
-    tu.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
-    )
-    tu.add_argument(
-        "--no-resume",
-        action="store_true",
-        help="start afresh even if DIR holds an earlier tuning's checkpoints",
-    )
+    add_parallel_options(tu, "start afresh even if DIR holds an earlier tuning's checkpoints")
     tu.set_defaults(func=execute)
 
 

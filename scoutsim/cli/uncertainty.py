@@ -25,6 +25,7 @@ from ._common import (
     UsageError,
     add_controller_option,
     add_duration_option,
+    add_parallel_options,
     add_plots_option,
     check_expected_time,
     controller_choice,
@@ -85,24 +86,7 @@ def register(sub, common) -> None:
         "metrics (the same runs, each about 1.65 times as long to compute)",
     )
     p.add_argument("--model", choices=CONTROLLED_MODELS, default="II", help="model (default: II)")
-    p.add_argument(
-        "--workers",
-        type=positive_int,
-        default=None,
-        metavar="N",
-        help="local processes (default: all cores)",
-    )
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="Dask distributed scheduler address (e.g. tcp://host:8786)",
-    )
-    p.add_argument(
-        "--no-resume",
-        action="store_true",
-        help="recompute every run even if DIR/points.jsonl has it",
-    )
+    add_parallel_options(p, "recompute every run even if DIR/points.jsonl has it")
     p.set_defaults(func=execute)
 
 
