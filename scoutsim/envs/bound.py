@@ -177,8 +177,6 @@ class BoundEnv(gymnasium.Env):
         The start (above).
     reset_noise_scale : float
         Width of the "random" start as a fraction of :data:`RANDOM_START_HALF_WIDTHS`.
-    normalize_actions : bool
-        The action box ``Box(-1, 1)`` (True, the default) or the physical range (above).
     robot : RobotParameters, optional
         The robot (default: Scout II); not together with ``robot_file``.
     controller : ControllerParameters or str, optional
@@ -205,7 +203,8 @@ class BoundEnv(gymnasium.Env):
         ``metadata["render_fps"]`` is the policy rate, 1 / ``policy_period``, so a video
         of one frame per step plays in real time. None: no rendering.
     **options
-        The keywords under "Other Parameters" (the fields of :class:`Reward`, of
+        The keywords under "Other Parameters" (``normalize_actions``, the fields of
+        :class:`Reward`, of
         :data:`PLANT_OPTIONS` and of :data:`RENDER_SIZE`), and any field of
         :class:`~scoutsim.parameters.RobotParameters` or
         :class:`~scoutsim.parameters.ControllerParameters` [SI], applied over ``robot`` /
@@ -213,6 +212,8 @@ class BoundEnv(gymnasium.Env):
 
     Other Parameters
     ----------------
+    normalize_actions : bool
+        The action box ``Box(-1, 1)`` (True, the default) or the physical range (above).
     forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
         Reward weights (above, :class:`Reward`: each default and the reason for it);
         ``target_speed`` None rewards speed itself.
@@ -248,7 +249,6 @@ class BoundEnv(gymnasium.Env):
         reward: Reward | None = None,
         start="random",
         reset_noise_scale: float = 1.0,
-        normalize_actions: bool = True,
         robot: RobotParameters | None = None,
         controller: ControllerParameters | str | None = None,
         robot_file=None,
@@ -259,6 +259,7 @@ class BoundEnv(gymnasium.Env):
         render_width, render_height = (
             options.pop(name, default) for name, default in RENDER_SIZE.items()
         )
+        normalize_actions = options.pop("normalize_actions", True)
         reward, plant, parameters = split_options(reward, options)
         forward_reward_weight, target_speed, energy_cost_weight, healthy_reward = (
             reward.forward_reward_weight,
