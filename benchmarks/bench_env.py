@@ -101,7 +101,9 @@ def engine_share(model, steps, repeats):
 
     from scoutsim.envs.bound import SETPOINTS
 
-    env = gymnasium.make("scoutsim/Bound-v0", model=model, action_type="setpoints")
+    env = gymnasium.make(
+        "scoutsim/Bound-v0", model=model, action_type="setpoints", normalize_actions=False
+    )
     rng = np.random.default_rng(0)
     actions = [policy("setpoints", None, rng) for _ in range(steps)]
     env_rates, eng_rates = [], []
@@ -151,7 +153,8 @@ def main(argv=None):
     rows = []
     envs = []
     for kind in ("torque", "setpoints"):
-        kw = dict(model=args.model, action_type=kind)
+        # physical actions (Table I's set-points in rad, torques in N m)
+        kw = dict(model=args.model, action_type=kind, normalize_actions=False)
         envs.append(
             (
                 f"scoutsim/Bound-v0 Model {args.model}, {kind}",

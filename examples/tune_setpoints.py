@@ -84,6 +84,7 @@ def main(argv=None):
         "scoutsim/Bound-v0",
         model=args.model,
         action_type="setpoints",
+        normalize_actions=False,  # the search moves the set-points in rad
         target_speed=args.target,
         start="random",
         robot_file=args.robot,

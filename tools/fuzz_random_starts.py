@@ -5,10 +5,11 @@ that end in a numerical failure of the integrator (there should be none).
     python tools/fuzz_random_starts.py --episodes 60 --models II --torques zero
     python tools/fuzz_random_starts.py --keep-going    # episodes go on while the robot is down
 
-Each episode is ``scoutsim/Bound-v0`` (scoutsim/envs/bound.py) with ``start="random"``
-(height, forward speed and pitch rate drawn about the flight start, the environment's own
-seeding: ``reset(seed=seed)``, seeds 0 .. episodes-1), driven by one of the open-loop
-torque regimes of :data:`TORQUES` until it ends (a fall, a failure, or the 10 s limit).
+Each episode is ``scoutsim/Bound-v0`` (scoutsim/envs/bound.py) from the fuzzed start
+(:func:`fuzzed_start`: height, forward speed and pitch rate drawn about the flight start
+with the environment's own seeding, ``reset(seed=seed)``, seeds 0 .. episodes-1), driven
+by one of the open-loop torque regimes of :data:`TORQUES` until it ends (a fall, a
+failure, or the 10 s limit).
 Prints, per model and regime, the outcomes and the seeds that failed, and the wall time.
 tests/envs/test_random_starts.py runs a subset of these episodes with the same driver.
 """
@@ -30,13 +31,34 @@ MODELS = ("ideal", "I", "II")
 MAX_STEPS = 1000
 
 
+#: the fuzzed start: InitialState field -> half-width [SI] of its uniform draw about the
+#: flight start, in the order drawn (the seeds the tests name are these draws')
+FUZZED_HALF_WIDTHS = {"y": 0.015, "dx": 0.2, "dtheta": np.radians(50.0)}
+
+
+def fuzzed_start(rng):
+    """The start of a fuzzed episode drawn with the environment's generator ``rng``: the
+    flight start with its height (0.315-0.345 m), forward speed (1.0-1.4 m/s) and pitch
+    rate (100-200 deg/s) drawn uniformly, each in turn."""
+    from scoutsim.state import InitialState
+
+    init = InitialState()
+    return init.replace(
+        **{
+            name: getattr(init, name) + half * float(rng.uniform(-1.0, 1.0))
+            for name, half in FUZZED_HALF_WIDTHS.items()
+        }
+    )
+
+
 def make_env(model: str, keep_going: bool = False):
-    """The environment of the fuzzing: Bound-v0's defaults with the random start;
-    ``keep_going``: the episode goes on when the robot is down (``terminate_when_fallen``
-    off), until the simulator's fall or the time limit (more of each episode is fuzzed)."""
+    """The environment of the fuzzing: Bound-v0's defaults (torque actions) with the fuzzed
+    start; ``keep_going``: the episode goes on when the robot is down
+    (``terminate_when_fallen`` off), until the simulator's fall or the time limit (more of
+    each episode is fuzzed)."""
     from scoutsim.envs.bound import BoundEnv
 
-    return BoundEnv(model=model, start="random", terminate_when_fallen=not keep_going)
+    return BoundEnv(model=model, start=fuzzed_start, terminate_when_fallen=not keep_going)
 
 
 def run_episode(env, torques: str, seed: int, max_steps: int = MAX_STEPS) -> dict:

@@ -30,19 +30,22 @@ from ..simulation.engine import HybridEngine, start_engine
 from ..state import HybridState, InitialState, standing_state
 from .configuration import (
     ACTION_TYPES,
+    OBSERVATION_NAMES,
     PLANT_OPTIONS,
     RANDOM_START_HALF_WIDTHS,
     RENDER_MODES,
     RENDER_SIZE,
+    SETPOINT_HALF_WIDTH,
     SETPOINTS,
     STARTS,
+    action_scale,
     action_space,
     environment_parameters,
     observation_space,
     split_options,
     start_state,
 )
-from .reward import Reward, check_weights, health_range
+from .reward import Reward, check_weights, forward_reward, health_range
 
 __all__ = [
     "BoundEnv",
@@ -52,6 +55,8 @@ __all__ = [
     "SETPOINTS",
     "STARTS",
     "RANDOM_START_HALF_WIDTHS",
+    "SETPOINT_HALF_WIDTH",
+    "OBSERVATION_NAMES",
     "RENDER_MODES",
     "RENDER_SIZE",
     "NON_PHYSICAL_ENDS",
@@ -70,42 +75,48 @@ class BoundEnv(gymnasium.Env):
 
     **Observation**: the robot's sensor readings at the sample that starts the next policy
     step, as a controller sees them (:class:`~scoutsim.control.sensors.Sensors`, in its
-    order, SI): hip angles (back, front) [rad], hip rates [rad/s], leg lengths [m], pitch
-    [rad], pitch rate [rad/s], accelerometer along the torso axis and its normal [m/s^2],
-    laser ranges (back, front) [m], motor currents [A], battery voltage [V]; with the
-    measurement model of ``sensors`` (noise, bias, resolution, delay). float64: the numbers
-    the compiled controllers see, unrounded, so that an observation is bit for bit a
-    controller's reading (tested against :func:`~scoutsim.simulate`) and an episode
-    reproducible in it; float32's rounding (1e-7 relative) would not matter to
-    a learner, which casts if it wants to (``gymnasium.wrappers.DtypeObservation``).
-    Unbounded: the readings are physical quantities with no hard limit (noise included).
+    order, SI; their names: ``observation_names``, :data:`OBSERVATION_NAMES`): hip angles
+    (back, front) [rad], hip rates [rad/s], leg lengths [m], pitch [rad], pitch rate
+    [rad/s], accelerometer along the torso axis and its normal [m/s^2], laser ranges
+    (back, front) [m], motor currents [A], battery voltage [V]; with the measurement model
+    of ``sensors`` (noise, bias, resolution, delay). float32 (what learning libraries
+    expect), within a finite box from the robot's physical ranges
+    (:func:`~scoutsim.envs.configuration.observation_bounds`): a reading outside it (noise,
+    a fall's last sample) is clipped to it. The float64 readings themselves, as a compiled
+    controller sees them, are ``readings``. The scales differ (0.01 rad to 36 V, the
+    battery voltage constant without a battery model): normalise them for learning
+    (Stable-Baselines3's ``VecNormalize``, Gymnasium's ``NormalizeObservation``).
 
-    **Action** (``action_type``):
+    **Action** (``action_type``), normalised to ``Box(-1, 1)`` float32 by default
+    (``normalize_actions``): a component ``a`` is ``action_center + action_half_width * a``
+    in physical units (``a`` clipped to [-1, 1] first;
+    :func:`~scoutsim.envs.configuration.action_scale`); with ``normalize_actions=False``
+    the box is the physical range itself (float32), and an action is clipped to it:
 
     * "torque": the hip torques (back, front) [N m per physical leg, at the leg], held
-      for the policy step; the box is the robot's current-limited torque
+      for the policy step; the range is the robot's current-limited torque
       +-``robot.max_leg_torque`` (Scout II: 31 N m). Model I and II limit what the motor
       delivers further (torque-speed line), as for any command.
     * "setpoints": the Table I controller's set-points :data:`SETPOINTS`
       (touchdown angles and sweep limits, back and front [rad]), which the compiled
       controller runs with at 1 kHz over the policy step (its gains and thresholds are
-      ``controller``'s); the box is the parameter schema's range (just inside
-      (-90, 90) deg, :func:`~scoutsim.parameters.closed_range`).
-
-    An action outside the box is clipped to it.
+      ``controller``'s); the range is the controller's own set-points
+      +-:data:`SETPOINT_HALF_WIDTH` (25 deg), within the parameter schema's range: an
+      action of 0 runs the controller as it is.
 
     **Reward** per step, each term in ``info``:
 
-    * ``reward_forward``: ``forward_reward_weight`` x v, v the torso's mean forward speed
-      over the step [m/s]; with a ``target_speed`` v* [m/s]:
-      -``forward_reward_weight`` x |v - v*|;
+    * ``reward_forward``: ``forward_reward_weight`` x (v* - |v - v*|), v the torso's mean
+      forward speed over the step [m/s] and v* the ``target_speed`` (default 1.3 m/s, the
+      paper's bound): speed rewarded up to the target, less beyond it; ``target_speed``
+      None: ``forward_reward_weight`` x v;
     * ``reward_energy``: -``energy_cost_weight`` [1/J] x the electrical energy into the
       motor terminals over the step [J] (``info["electrical_energy"]``, from the model's
       energy balance, :meth:`~scoutsim.result.simulation_result.SimulationResult.energy_balance`; negative
       while the motors regenerate more than they draw). The accounting runs only when
       ``energy_cost_weight`` is not 0 (it costs time); otherwise the energy is NaN and the
       term 0;
-    * ``reward_healthy``: ``healthy_reward`` while the robot is up: its COM height in
+    * ``reward_healthy``: ``healthy_reward`` (default 0.25) while the robot is up: its COM height in
       ``healthy_height_range`` [m] and its pitch in ``healthy_pitch_range`` [rad] at the
       end of the step, and not fallen during it; none for a step the simulator could not
       complete (below).
@@ -136,17 +147,20 @@ class BoundEnv(gymnasium.Env):
       (:meth:`~scoutsim.result.failure.FailureDiagnosis.message`). A learner that would rather
       count such an episode as lost tests ``info["numerical_failure"]``.
 
-    **Start** (``start``): "flight" (:class:`~scoutsim.state.InitialState`: released in
-    flight at 0.33 m, 1.2 m/s, nose rising at 150 deg/s), "standing"
-    (:func:`~scoutsim.state.standing_state`: at rest on four legs, the policy acting from
-    t = 0; with set-points the Table I stance-brake law holds the legs at the sweep limits
-    until the policy moves them), "random" (the flight start with its height, speed and
-    pitch rate drawn uniformly within ``reset_noise_scale`` x
-    :data:`RANDOM_START_HALF_WIDTHS` of it), an InitialState or HybridState, or a
-    callable ``start(np_random)`` returning one (a distribution of starts of your own).
-    ``reset(seed=...)`` seeds the start's draws and the sensor noise (a seed drawn from
-    the environment's generator replaces ``sensors.seed``): the same seed gives the same
-    episode bit for bit.
+    **Start** (``start``): "random", the default (the flight start with its height,
+    forward speed, pitch, pitch rate and leg angles drawn uniformly within
+    ``reset_noise_scale`` x :data:`RANDOM_START_HALF_WIDTHS` of it: height 0.315-0.345 m,
+    1.0-1.4 m/s, pitch +-3 deg, 100-200 deg/s nose up, each leg within 3 deg of its
+    touchdown angle; raised where needed so both toes start 5 mm or more above the
+    ground), "flight" (:class:`~scoutsim.state.InitialState`: released in flight at
+    0.33 m, 1.2 m/s, nose rising at 150 deg/s, the same start every episode: for
+    evaluation), "standing" (:func:`~scoutsim.state.standing_state`: at rest on four
+    legs, the policy acting from t = 0; with set-points the Table I stance-brake law holds
+    the legs at the sweep limits until the policy moves them), an InitialState or
+    HybridState, or a callable ``start(np_random)`` returning one (a distribution of
+    starts of your own). ``reset(seed=...)`` seeds the start's draws and the sensor noise
+    (a seed drawn from the environment's generator replaces ``sensors.seed``): the same
+    seed gives the same episode bit for bit.
 
     Parameters
     ----------
@@ -163,6 +177,8 @@ class BoundEnv(gymnasium.Env):
         The start (above).
     reset_noise_scale : float
         Width of the "random" start as a fraction of :data:`RANDOM_START_HALF_WIDTHS`.
+    normalize_actions : bool
+        The action box ``Box(-1, 1)`` (True, the default) or the physical range (above).
     robot : RobotParameters, optional
         The robot (default: Scout II); not together with ``robot_file``.
     controller : ControllerParameters or str, optional
@@ -198,7 +214,8 @@ class BoundEnv(gymnasium.Env):
     Other Parameters
     ----------------
     forward_reward_weight, target_speed, energy_cost_weight, healthy_reward : float
-        Reward weights (above); ``target_speed`` None rewards speed itself.
+        Reward weights (above, :class:`Reward`: each default and the reason for it);
+        ``target_speed`` None rewards speed itself.
     terminate_when_fallen : bool
         End the episode when the robot is not up (above).
     healthy_height_range : (min, max) [m]
@@ -229,8 +246,9 @@ class BoundEnv(gymnasium.Env):
         policy_period: float = 0.01,
         *,
         reward: Reward | None = None,
-        start="flight",
+        start="random",
         reset_noise_scale: float = 1.0,
+        normalize_actions: bool = True,
         robot: RobotParameters | None = None,
         controller: ControllerParameters | str | None = None,
         robot_file=None,
@@ -346,13 +364,24 @@ class BoundEnv(gymnasium.Env):
             **type(self).metadata,
             "render_fps": round(rate) if abs(rate - round(rate)) < 1e-9 * rate else rate,
         }
-        self.observation_space = observation_space()
-        self.action_space = action_space(self.robot, action_type)
+        self.observation_space = observation_space(self.robot, pitch_limit_deg)
+        #: the observation's names, in its order (:data:`OBSERVATION_NAMES`)
+        self.observation_names = OBSERVATION_NAMES
+        self.normalize_actions = bool(normalize_actions)
+        self.action_space = action_space(
+            self.robot, self.controller, action_type, self.normalize_actions
+        )
+        centre, half = action_scale(self.robot, self.controller, action_type)
+        #: the physical action of a normalised action ``a``: ``action_center +
+        #: action_half_width * a`` [N m or rad] (float64)
+        self.action_center, self.action_half_width = centre, half
+        #: the float64 sensor readings of the last observation (``layout.SN_*``, SI)
+        self.readings = np.full(self.observation_space.shape, np.nan)
         #: the set-points' slots in the engine's controller array ``engine.C``
         self._engine: HybridEngine | None = None
         # an engine from the first start, to check the options now (reset makes the
         # episode's)
-        self._new_engine(start_state(self.start, self.reset_noise_scale, None), 0)
+        self._new_engine(self._start(None), 0)
         self._running = False
         self._reset_done = False
 
@@ -380,14 +409,12 @@ class BoundEnv(gymnasium.Env):
         """Start an episode (see the class docstring); returns (observation, info)."""
         super().reset(seed=seed)
         noise_seed = int(self.np_random.integers(0, 2**63 - 1))
-        self._new_engine(
-            start_state(self.start, self.reset_noise_scale, self.np_random), noise_seed
-        )
+        self._new_engine(self._start(self.np_random), noise_seed)
         # the readings of sample 0 under zero torques, as simulate()'s controllers see them
         # before their first command (with torque actions the loop reads sample 0 again
         # under the first action: the accelerometer, currents and battery of that reading
         # are what a channel delayed past sample 0 reports at first)
-        obs = self._live_engine.read_sensors().copy()
+        obs = self._observe(self._live_engine.read_sensors())
         self._reset_done = True
         return obs, self._info_now()
 
@@ -397,10 +424,7 @@ class BoundEnv(gymnasium.Env):
         eng = self._engine
         if eng is None or not self._running:
             raise RuntimeError("BoundEnv.step: the episode has ended (or not begun): call reset()")
-        a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be finite")
-        a = np.clip(a, self.action_space.low, self.action_space.high)
+        a = self.physical_action(action)
         if self.action_type == "torque":
             eng.cmd[:] = a
         else:
@@ -411,7 +435,7 @@ class BoundEnv(gymnasium.Env):
         broken = outcome in NON_PHYSICAL_ENDS
         message = self._failure_message() if broken else None  # (from the step's records)
         eng.discard_records()
-        obs = eng.read_sensors().copy()
+        obs = self._observe(eng.read_sensors())
         x1, t1 = eng.x, eng.t_now
         energy = self._electrical() - e0
         fell = eng.fell
@@ -421,10 +445,7 @@ class BoundEnv(gymnasium.Env):
         up = not fell and not broken and up_now
         down = fell or (self.terminate_when_fallen and not up_now and self._state_finite())
         v = (x1 - x0) / (t1 - t0) if t1 > t0 else 0.0
-        if self.target_speed is None:
-            r_forward = self.forward_reward_weight * v
-        else:
-            r_forward = -self.forward_reward_weight * abs(v - self.target_speed)
+        r_forward = forward_reward(self.forward_reward_weight, v, self.target_speed)
         r_energy = -self.energy_cost_weight * energy if self._accounting else 0.0
         r_healthy = self.healthy_reward if up else 0.0
         reward = r_forward + r_energy + r_healthy
@@ -472,7 +493,36 @@ class BoundEnv(gymnasium.Env):
         )
         return draw_pose(pose, **self._frame_size)
 
+    def physical_action(self, action) -> np.ndarray:
+        """The physical action [N m or rad] (float64) that ``action`` (of the action space)
+        stands for: ``action_center + action_half_width * clip(action, -1, 1)`` with
+        normalised actions, ``action`` clipped to the physical box without."""
+        a = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"BoundEnv.step: action {a.tolist()} is not allowed: must be finite")
+        if self.normalize_actions:
+            return self.action_center + self.action_half_width * np.clip(a, -1.0, 1.0)
+        lo, hi = (
+            self.action_center - self.action_half_width,
+            self.action_center + self.action_half_width,
+        )
+        return np.clip(a, lo, hi)
+
     # -- pieces -----------------------------------------------------------------------------
+
+    def _observe(self, readings: np.ndarray) -> np.ndarray:
+        """The observation of the float64 ``readings`` (kept as ``readings``): float32,
+        clipped to the observation box."""
+        self.readings = readings.copy()
+        box = self.observation_space
+        assert isinstance(box, gymnasium.spaces.Box)
+        return np.clip(readings.astype(np.float32), box.low, box.high)
+
+    def _start(self, rng):
+        """The episode's start drawn with ``rng`` (None: without its draws)."""
+        return start_state(
+            self.start, self.reset_noise_scale, rng, robot=self.robot, controller=self.controller
+        )
 
     def _new_engine(self, start, noise_seed: int):
         """A fresh engine for an episode from ``start`` with sensor noise seed

@@ -5,10 +5,6 @@ compiles its own functions; and the core compiled without any of them runs bit f
 with them (they change no compiled code)."""
 
 import importlib.metadata
-import os
-import subprocess
-import sys
-import textwrap
 
 import numpy as np
 import pytest
@@ -136,36 +132,19 @@ def test_a_core_function_compiles_inside_the_context_and_others_outside():
         assert d.compile.__wrapped__.__func__ is type(d).compile, d
 
 
-_RUN = textwrap.dedent("""
-    import sys
-    import numpy as np
-    import scoutsim
-    from scoutsim._numba import jit
-    from scoutsim._numba import compile_steps
-    # the replacements are off in this process
-    assert all(v.startswith("off") for v in compile_steps.status().values()), jit.status()
-    out = {}
-    for model in ("II", "I"):
-        r = scoutsim.simulate(duration=0.3, model=model)
-        out.update({f"{model}/{k}": np.asarray(v) for k, v in r.columns().items()})
-    np.savez(sys.argv[1], **out)
-""")
-
-
-def test_the_core_compiled_without_the_replacements_runs_bit_for_bit_the_same(tmp_path):
+def test_the_core_compiled_without_the_replacements_runs_bit_for_bit_the_same(as_is_run):
     """A process with SCOUTSIM_NUMBA_AS_IS=1 compiles the core afresh (its own, empty
     NUMBA_CACHE_DIR) with Numba's steps as they are; its Model II and Model I runs equal
-    this process's in every recorded column, bit for bit."""
-    env = dict(os.environ, SCOUTSIM_NUMBA_AS_IS="1", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
-    out = tmp_path / "as_is.npz"
-    p = subprocess.run(
-        [sys.executable, "-c", _RUN, str(out)], env=env, capture_output=True, text=True, timeout=900
-    )
-    assert p.returncode == 0, p.stderr[-2000:]
+    this process's in every recorded column, bit for bit. (The process starts when the
+    tests are collected and this test runs last: tests/_numba/conftest.py.)"""
+    rc, stderr, out = as_is_run.wait()
+    assert rc == 0, stderr[-2000:]
     as_is = np.load(out)
-    for model in ("II", "I"):
-        r = scoutsim.simulate(duration=0.3, model=model)
-        for k, v in r.columns().items():
+    for model in as_is_run.models:
+        r = scoutsim.simulate(duration=as_is_run.duration, model=model)
+        columns = r.columns()
+        assert {f"{model}/{k}" for k in columns} == {k for k in as_is if k.startswith(f"{model}/")}
+        for k, v in columns.items():
             a, b = np.asarray(v), as_is[f"{model}/{k}"]
             assert a.shape == b.shape, (model, k)
             assert a.tobytes() == b.tobytes(), (model, k)

@@ -16,7 +16,9 @@ from scoutsim._core.model import layout as L  # noqa: E402
 from scoutsim.envs.bound import BoundEnv  # noqa: E402
 
 ID = "scoutsim/Bound-v0"
-TABLE_I_SETPOINTS = np.radians([19.0, 21.0, 0.0, 0.0])
+#: the set-point action that runs the controller as it is (Table I by default): the
+#: normalised action 0, the controller's own set-points
+TABLE_I_SETPOINTS = np.zeros(4, dtype=np.float32)
 
 
 def stopping_env(monkeypatch, status, torso_height=None):

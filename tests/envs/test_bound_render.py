@@ -25,7 +25,9 @@ from scoutsim.presentation.style import LEG_STATE_LINE_COLORS  # noqa: E402
 from scoutsim.state import state_index  # noqa: E402
 
 ID = "scoutsim/Bound-v0"
-TABLE_I_SETPOINTS = np.radians([19.0, 21.0, 0.0, 0.0])
+#: the set-point action that runs the controller as it is (Table I by default): the
+#: normalised action 0, the controller's own set-points
+TABLE_I_SETPOINTS = np.zeros(4, dtype=np.float32)
 
 
 def _pixel(frame, x_view, x, y):

@@ -2,7 +2,7 @@
 failure, in any model (ideal, Model I, Model II): the behaviour checked is that every
 contact transition the plant can reach has a consistent continuation the integrator can
 follow. 300 episodes per model and torque regime (zero, random, saturated) of the
-environment as configured by default, and, going on while the robot is down, the seeds
+environment as configured by default (from the fuzz tool's starts), and, going on while the robot is down, the seeds
 that failed before the dynamic-jam rule (a sliding toe whose ground force turns
 perpendicular to its leg, docs/model.md "A sliding toe that jams") and the one whose toe
 was pressed into the ground at the friction angle, with a spread of others. The episodes
