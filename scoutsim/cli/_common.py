@@ -181,18 +181,23 @@ CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
 def add_controller_option(parser):
     """--controller: which controller runs: a built-in law with the robot file's
     [controller] section, a controller file (as ``scoutsim tune`` writes its best
-    parameters) or a user's controller named ``MODULE:FACTORY``."""
+    parameters), a learned policy's file (``.npz``,
+    :class:`~scoutsim.control.policy.PolicyController`) or a user's controller named
+    ``MODULE:FACTORY``."""
     parser.add_argument(
         "--controller",
         default="table-i",
-        metavar="{" + ",".join(CONTROLLERS) + ",FILE,MODULE:FACTORY}",
+        metavar="{" + ",".join(CONTROLLERS) + ",FILE,FILE.npz,MODULE:FACTORY}",
         help="table-i: the paper's Table I controller (no torso feedback); "
         "pitch-feedback: Table I with the touchdown angles corrected "
         "by torso pitch and pitch rate (PitchFeedbackController, gains "
         "pitch_gain_* / pitch_rate_gain_* of the robot file's "
         "[controller]); FILE: a controller file, its law and every "
         "controller parameter (as scoutsim tune writes best.toml; it "
-        "replaces the robot file's [controller]); MODULE:FACTORY: your "
+        "replaces the robot file's [controller]); FILE.npz: a learned "
+        "policy (a PolicyController file, as scoutsim.envs.policy_export "
+        "writes it; its Table I parameters replace the robot file's "
+        "[controller]); MODULE:FACTORY: your "
         "own controller, FACTORY(robot, params) in the importable "
         "module MODULE (on PYTHONPATH) returning any controller "
         "scoutsim.simulate accepts (default: table-i)",
@@ -201,13 +206,17 @@ def add_controller_option(parser):
 
 def controller_choice(value: str, params):
     """``(law, ControllerParameters)`` of ``--controller value``: a law's name with the
-    robot file's ``params``, a controller file's law and parameters, or a ``MODULE:FACTORY``
-    string (the law) with ``params``. UsageError naming the file and the problem otherwise."""
+    robot file's ``params``, a controller file's law and parameters, a policy file
+    (``.npz``: its path is the law) with the Table I parameters it runs on, or a
+    ``MODULE:FACTORY`` string (the law) with ``params``. UsageError naming the file and the
+    problem otherwise."""
     from ..control.factory import is_factory_spec
 
     if value in CONTROLLERS:
         return value, params
     p = Path(value)
+    if is_policy_file(value):
+        return value, load_policy(value).controller_parameters
     if p.is_file():
         from ..analysis.controller_file import read_controller_file
 
@@ -225,6 +234,22 @@ def controller_choice(value: str, params):
     )
 
 
+def is_policy_file(value: str) -> bool:
+    """``--controller value`` names a learned policy's file (``.npz``)."""
+    return value.lower().endswith(".npz")
+
+
+def load_policy(path: str):
+    """The :class:`~scoutsim.control.policy.PolicyController` of the policy file ``path``;
+    UsageError naming the file and what is wrong with it."""
+    from ..control.policy import PolicyController, PolicyError
+
+    try:
+        return PolicyController.load(path)
+    except PolicyError as exc:
+        raise UsageError(f"--controller {path!r}: {exc}") from None
+
+
 def controller_label(law: str) -> str:
     """How outputs name the law of :func:`controller_choice` (a user's: its string)."""
     return CONTROLLER_LABELS.get(law, law)
@@ -235,13 +260,16 @@ def make_controller(name: str, params, robot=None, *, on_workers: bool = False):
     ControllerParameters ``params``: the parameters themselves (Table I), a
     PitchFeedbackController, or a user's ``MODULE:FACTORY`` controller made for ``robot``
     (``on_workers``: a :class:`~scoutsim.control.factory.ControllerSpec` that each worker
-    of a study makes itself, after the factory was tried here once)."""
+    of a study makes itself, after the factory was tried here once), or the learned policy
+    of a policy file (``.npz``; the controller object travels to a study's workers)."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
 
         return PitchFeedbackController(params)
     if name in CONTROLLERS:
         return params
+    if is_policy_file(name):
+        return load_policy(name)
     from ..control.factory import ControllerSpec, FactoryError, controller_from_spec
 
     try:

@@ -259,7 +259,9 @@ def _array(value, field: str, *, shape=None, dtype=np.float64) -> np.ndarray:
     try:
         a = np.array(value, dtype=dtype)
     except (TypeError, ValueError) as exc:
-        raise PolicyError(f"{field} is not allowed: not an array of numbers ({exc})", field)
+        raise PolicyError(
+            f"{field} is not allowed: not an array of numbers ({exc})", field
+        ) from None
     if shape is not None and a.shape != tuple(shape):
         raise PolicyError(
             f"{field} has shape {a.shape}: must be {tuple(shape)}",
@@ -364,8 +366,7 @@ class PolicyController(CompiledController):
             )
         if activation not in ACTIVATIONS:
             raise PolicyError(
-                f"activation = {activation!r} is not allowed: must be one of "
-                f"{list(ACTIVATIONS)}",
+                f"activation = {activation!r} is not allowed: must be one of {list(ACTIVATIONS)}",
                 "activation",
             )
         self.action_type = action_type
@@ -397,15 +398,18 @@ class PolicyController(CompiledController):
                 _array(observation_mean, "observation_mean", shape=(N_SENSORS,)),
                 "observation_mean",
             )
-            var = _finite(_array(observation_var, "observation_var", shape=(N_SENSORS,)), "observation_var")
+            var = _finite(
+                _array(observation_var, "observation_var", shape=(N_SENSORS,)), "observation_var"
+            )
             if (var < 0).any():
                 raise PolicyError("observation_var is not allowed: must be >= 0", "observation_var")
             self.observation_var = var
         self.observation_epsilon = _positive(observation_epsilon, "observation_epsilon")
         self.observation_clip = _positive(observation_clip, "observation_clip")
-        if self.observation_var is not None and not (
-            np.sqrt(self.observation_var + self.observation_epsilon) > 0
-        ).all():
+        if (
+            self.observation_var is not None
+            and not (np.sqrt(self.observation_var + self.observation_epsilon) > 0).all()
+        ):
             raise PolicyError(
                 "observation_var + observation_epsilon must be > 0", "observation_epsilon"
             )
@@ -417,20 +421,25 @@ class PolicyController(CompiledController):
             _array(action_half_width, "action_half_width", shape=shape), "action_half_width"
         )
         self.action_low = _finite(
-            _array(-np.ones(shape) if action_low is None else action_low, "action_low", shape=shape),
+            _array(
+                -np.ones(shape) if action_low is None else action_low, "action_low", shape=shape
+            ),
             "action_low",
         )
         self.action_high = _finite(
-            _array(np.ones(shape) if action_high is None else action_high, "action_high", shape=shape),
+            _array(
+                np.ones(shape) if action_high is None else action_high, "action_high", shape=shape
+            ),
             "action_high",
         )
         if (self.action_low > self.action_high).any():
             raise PolicyError("action_low is not allowed: above action_high", "action_low")
-        cparams = controller_parameters if controller_parameters is not None else ControllerParameters()
+        cparams = (
+            controller_parameters if controller_parameters is not None else ControllerParameters()
+        )
         if not isinstance(cparams, ControllerParameters):
             raise PolicyError(
-                "controller_parameters must be ControllerParameters, not "
-                f"{type(cparams).__name__}",
+                f"controller_parameters must be ControllerParameters, not {type(cparams).__name__}",
                 "controller_parameters",
             )
         self.controller_parameters = cparams
@@ -448,7 +457,9 @@ class PolicyController(CompiledController):
         try:
             json.dumps(self.metadata)
         except (TypeError, ValueError) as exc:
-            raise PolicyError(f"metadata is not allowed: not JSON-safe ({exc})", "metadata")
+            raise PolicyError(
+                f"metadata is not allowed: not JSON-safe ({exc})", "metadata"
+            ) from None
         width = max(w.shape[0] for w, _ in self.layers) if self.layers else 0
         width = max(width, N_SENSORS)
         super().__init__(
@@ -487,7 +498,7 @@ class PolicyController(CompiledController):
         ``model.predict(vec_normalize.normalize_obs(obs), deterministic=True)``."""
         x = self.observation(observation).astype(np.float64)
         if self.normalised:
-            assert self.observation_var is not None
+            assert self.observation_mean is not None and self.observation_var is not None
             std = np.sqrt(self.observation_var + self.observation_epsilon)
             c = self.observation_clip
             x = np.clip((x - self.observation_mean) / std, -c, c)
@@ -496,6 +507,25 @@ class PolicyController(CompiledController):
             if i < len(self.layers) - 1:
                 x = np.tanh(x) if self.activation == "tanh" else np.maximum(x, 0.0)
         return np.clip(x, self.action_low, self.action_high)
+
+    @property
+    def held_action(self) -> np.ndarray | None:
+        """The physical action [N m per leg, or rad] held by the compiled command after the
+        last :meth:`command` call from Python (None before the first); a run's own is in
+        the run's controller state."""
+        state = getattr(self, "_py_state", None)
+        if state is None:
+            return None
+        return state[S_ACTION : S_ACTION + len(self.action_names)].copy()
+
+    def compiled_action(self, readings) -> np.ndarray:
+        """The action (in the policy's own units, as :meth:`predict`) for the sensor
+        readings ``readings`` ((N_SENSORS,), SI) computed by the compiled evaluation the
+        command runs at a policy tick (:func:`network_action`), not by NumPy."""
+        y = np.array(readings, dtype=np.float64).reshape(N_SENSORS)
+        out = np.zeros(len(self.action_names))
+        network_action(y, self.params, np.zeros(2 * int(self.params[P_MAX_WIDTH])), out)
+        return out
 
     def physical_action(self, observation) -> np.ndarray:
         """The physical action [N m per leg, or rad] of :meth:`predict`'s action."""
@@ -506,6 +536,8 @@ class PolicyController(CompiledController):
     def save(self, path) -> None:
         """Write the policy to ``path`` (``.npz``, fields :data:`FILE_FIELDS`);
         :meth:`load` reads it back, every array bit for bit."""
+        cparams = self.controller_parameters
+        assert cparams is not None  # (set by the constructor)
         fields: dict[str, np.ndarray] = {
             "format": np.array(FILE_FORMAT),
             "activation": np.array(self.activation),
@@ -518,9 +550,7 @@ class PolicyController(CompiledController):
             "action_center": self.action_center,
             "action_half_width": self.action_half_width,
             "policy_period": np.array(self.policy_period),
-            "controller_parameters": np.array(
-                json.dumps(dataclasses.asdict(self.controller_parameters))
-            ),
+            "controller_parameters": np.array(json.dumps(dataclasses.asdict(cparams))),
             "metadata": np.array(json.dumps(self.metadata, sort_keys=True)),
         }
         if self.normalised:
@@ -601,7 +631,9 @@ class PolicyController(CompiledController):
             i += 1
         if not layers:
             raise PolicyError("field 'weights_0' is missing (the first layer)", "weights_0")
-        stray = sorted(k for k in f if k.startswith(("weights_", "biases_")) and not _layer_key(k, i))
+        stray = sorted(
+            k for k in f if k.startswith(("weights_", "biases_")) and not _layer_key(k, i)
+        )
         if stray:
             raise PolicyError(f"fields {stray} do not follow layers 0 .. {i - 1}", stray[0])
         cdict = json_field("controller_parameters")
@@ -654,7 +686,9 @@ def _positive(value, field: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise PolicyError(f"{field} = {value!r} is not allowed: must be a number > 0", field)
+        raise PolicyError(
+            f"{field} = {value!r} is not allowed: must be a number > 0", field
+        ) from None
     if not (math.isfinite(v) and v > 0):
         raise PolicyError(f"{field} = {value!r} is not allowed: must be a finite number > 0", field)
     return v
@@ -675,7 +709,9 @@ def _check_layers(layers) -> list[tuple[np.ndarray, np.ndarray]]:
         try:
             w, b = pair
         except (TypeError, ValueError):
-            raise PolicyError(f"layer {i} must be a pair (weights, biases)", f"weights_{i}") from None
+            raise PolicyError(
+                f"layer {i} must be a pair (weights, biases)", f"weights_{i}"
+            ) from None
         w = _finite(_array(w, f"weights_{i}"), f"weights_{i}")
         b = _finite(_array(b, f"biases_{i}"), f"biases_{i}")
         if w.ndim != 2 or w.shape[1] != n_in or w.shape[0] < 1:
@@ -722,8 +758,7 @@ def _check_names(names, action_type: str, n_actions: int) -> tuple[str, ...]:
         )
     if action_type == "torque" and names != TORQUE_NAMES:
         raise PolicyError(
-            f"action_names = {list(names)} is not allowed: a torque action is "
-            f"{list(TORQUE_NAMES)}",
+            f"action_names = {list(names)} is not allowed: a torque action is {list(TORQUE_NAMES)}",
             "action_names",
         )
     return names
