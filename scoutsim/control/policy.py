@@ -574,8 +574,10 @@ class PolicyController(CompiledController):
     @classmethod
     def load(cls, path) -> PolicyController:
         """The policy of the file ``path`` (as :meth:`save` writes it, or
-        :func:`scoutsim.envs.policy_export.export_policy`). PolicyError naming the file
-        and the field if a field is missing or not allowed (shapes, values)."""
+        :func:`scoutsim.envs.policy_export.export_policy`), named after the file
+        (``PolicyController(policy.npz)``: how errors and a run's provenance name it).
+        PolicyError naming the file and the field if a field is missing or not allowed
+        (shapes, values)."""
         path = os.fspath(path)
         try:
             with np.load(path, allow_pickle=False) as data:
@@ -587,12 +589,12 @@ class PolicyController(CompiledController):
                 f"policy file {path!r}: not a policy file (.npz, numbers only): {exc}", "path"
             ) from None
         try:
-            return cls._from_fields(fields)
+            return cls._from_fields(fields, name=f"PolicyController({os.path.basename(path)})")
         except PolicyError as exc:
             raise PolicyError(f"policy file {path!r}: {exc}", exc.field) from None
 
     @classmethod
-    def _from_fields(cls, f: dict) -> PolicyController:
+    def _from_fields(cls, f: dict, name: str | None = None) -> PolicyController:
         def need(name):
             if name not in f:
                 raise PolicyError(f"field {name!r} is missing ({FILE_FIELDS.get(name, '')})", name)
@@ -665,6 +667,7 @@ class PolicyController(CompiledController):
             policy_period=number("policy_period"),
             controller_parameters=cparams,
             metadata=json_field("metadata"),
+            name=name,
         )
 
     def __repr__(self):
