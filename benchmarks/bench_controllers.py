@@ -59,7 +59,7 @@ def learned_policy():
     VecNormalize statistics; seeded random weights, the output layer small (the Table I
     set-points, moved by a few mrad)."""
     from scoutsim.control.bounding import SCHEDULABLE
-    from scoutsim.control.policy import PolicyController
+    from scoutsim.control.policy import PolicyAction, PolicyController, PolicyObservation
     from scoutsim.control.sensors import N_SENSORS
     from scoutsim.parameters import ControllerParameters
 
@@ -73,13 +73,17 @@ def learned_policy():
     high = np.full(N_SENSORS, 1e3, dtype=np.float32)
     return PolicyController(
         layers,
-        observation_low=-high,
-        observation_high=high,
-        observation_mean=rng.normal(size=N_SENSORS),
-        observation_var=rng.uniform(0.5, 2.0, size=N_SENSORS),
-        action_type="setpoints",
-        action_center=[getattr(table_i, name) for name in SCHEDULABLE],
-        action_half_width=np.full(4, 0.44),
+        PolicyObservation(
+            low=-high,
+            high=high,
+            mean=rng.normal(size=N_SENSORS),
+            var=rng.uniform(0.5, 2.0, size=N_SENSORS),
+        ),
+        PolicyAction(
+            type="setpoints",
+            center=[getattr(table_i, name) for name in SCHEDULABLE],
+            half_width=np.full(4, 0.44),
+        ),
     )
 
 

@@ -181,9 +181,7 @@ CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
 def add_controller_option(parser):
     """--controller: which controller runs: a built-in law with the robot file's
     [controller] section, a controller file (as ``scoutsim tune`` writes its best
-    parameters), a learned policy's file (``.npz``,
-    :class:`~scoutsim.control.policy.PolicyController`) or a user's controller named
-    ``MODULE:FACTORY``."""
+    parameters), a learned policy's file (``.npz``) or a ``MODULE:FACTORY`` controller."""
     parser.add_argument(
         "--controller",
         default="table-i",
@@ -194,9 +192,8 @@ def add_controller_option(parser):
         "pitch_gain_* / pitch_rate_gain_* of the robot file's "
         "[controller]); FILE: a controller file, its law and every "
         "controller parameter (as scoutsim tune writes best.toml; it "
-        "replaces the robot file's [controller]); FILE.npz: a learned "
-        "policy (a PolicyController file, as scoutsim.envs.policy_export "
-        "writes it; its Table I parameters replace the robot file's "
+        "replaces the robot file's [controller]); FILE.npz: a learned policy's "
+        "file (PolicyController; its Table I parameters replace the robot file's "
         "[controller]); MODULE:FACTORY: your "
         "own controller, FACTORY(robot, params) in the importable "
         "module MODULE (on PYTHONPATH) returning any controller "
@@ -215,8 +212,11 @@ def controller_choice(value: str, params):
     if value in CONTROLLERS:
         return value, params
     p = Path(value)
-    if is_policy_file(value):
-        return value, load_policy(value).controller_parameters
+    if value.lower().endswith(".npz"):  # a learned policy's file
+        from ..control.policy import PolicyController, PolicyError
+
+        with usage_errors(PolicyError):
+            return value, PolicyController.load(value).controller_parameters
     if p.is_file():
         from ..analysis.controller_file import read_controller_file
 
@@ -234,22 +234,6 @@ def controller_choice(value: str, params):
     )
 
 
-def is_policy_file(value: str) -> bool:
-    """``--controller value`` names a learned policy's file (``.npz``)."""
-    return value.lower().endswith(".npz")
-
-
-def load_policy(path: str):
-    """The :class:`~scoutsim.control.policy.PolicyController` of the policy file ``path``;
-    UsageError naming the file and what is wrong with it."""
-    from ..control.policy import PolicyController, PolicyError
-
-    try:
-        return PolicyController.load(path)
-    except PolicyError as exc:
-        raise UsageError(f"--controller {path!r}: {exc}") from None
-
-
 def controller_label(law: str) -> str:
     """How outputs name the law of :func:`controller_choice` (a user's: its string)."""
     return CONTROLLER_LABELS.get(law, law)
@@ -260,16 +244,17 @@ def make_controller(name: str, params, robot=None, *, on_workers: bool = False):
     ControllerParameters ``params``: the parameters themselves (Table I), a
     PitchFeedbackController, or a user's ``MODULE:FACTORY`` controller made for ``robot``
     (``on_workers``: a :class:`~scoutsim.control.factory.ControllerSpec` that each worker
-    of a study makes itself, after the factory was tried here once), or the learned policy
-    of a policy file (``.npz``; the controller object travels to a study's workers)."""
+    of a study makes itself, after the factory was tried here once), or a policy file's."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
 
         return PitchFeedbackController(params)
     if name in CONTROLLERS:
         return params
-    if is_policy_file(name):
-        return load_policy(name)
+    if name.lower().endswith(".npz"):  # (read by controller_choice: a good file)
+        from ..control.policy import PolicyController
+
+        return PolicyController.load(name)
     from ..control.factory import ControllerSpec, FactoryError, controller_from_spec
 
     try:

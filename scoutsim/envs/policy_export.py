@@ -34,7 +34,13 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..control.policy import ACTIVATIONS, PolicyController, PolicyError
+from ..control.policy import (
+    ACTIVATIONS,
+    PolicyAction,
+    PolicyController,
+    PolicyError,
+    PolicyObservation,
+)
 from .configuration import SETPOINTS
 
 __all__ = ["export_policy"]
@@ -106,10 +112,10 @@ def export_policy(
                 "vec_normalize",
             )
         normalisation = dict(
-            observation_mean=np.asarray(rms.mean, dtype=np.float64),
-            observation_var=np.asarray(rms.var, dtype=np.float64),
-            observation_epsilon=float(vec_normalize.epsilon),
-            observation_clip=float(vec_normalize.clip_obs),
+            mean=np.asarray(rms.mean, dtype=np.float64),
+            var=np.asarray(rms.var, dtype=np.float64),
+            epsilon=float(vec_normalize.epsilon),
+            clip=float(vec_normalize.clip_obs),
         )
     action_space = policy.action_space
     # the box the model's predict() clips its action to, and the environment's map
@@ -133,16 +139,16 @@ def export_policy(
     }
     exported = PolicyController(
         layers,
+        PolicyObservation(low=low, high=high, **normalisation),
+        PolicyAction(
+            type=facts["action_type"],
+            center=center,
+            half_width=half,
+            low=box_low,
+            high=box_high,
+            names=SETPOINTS if facts["action_type"] == "setpoints" else (),
+        ),
         activation=activation,
-        observation_low=low,
-        observation_high=high,
-        **normalisation,
-        action_type=facts["action_type"],
-        action_names=SETPOINTS if facts["action_type"] == "setpoints" else None,
-        action_low=box_low,
-        action_high=box_high,
-        action_center=center,
-        action_half_width=half,
         policy_period=facts["policy_period"],
         controller_parameters=facts["controller"],
         metadata={**info, **(metadata or {})},

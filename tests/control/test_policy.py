@@ -20,7 +20,12 @@ import scoutsim
 from scoutsim.analysis import basin as B
 from scoutsim.control import sensors as S
 from scoutsim.control.bounding import SCHEDULABLE, bounding_step, controller_array
-from scoutsim.control.policy import PolicyController, PolicyError
+from scoutsim.control.policy import (
+    PolicyAction,
+    PolicyController,
+    PolicyError,
+    PolicyObservation,
+)
 from scoutsim.parameters import ControllerParameters, RobotParameters
 
 TABLE_I = ControllerParameters()
@@ -61,9 +66,9 @@ def _policy(
     stats = {}
     if normalised:
         stats = dict(
-            observation_mean=rng.normal(size=S.N_SENSORS),
-            observation_var=rng.uniform(0.05, 4.0, size=S.N_SENSORS),
-            observation_clip=3.0,  # (some normalised readings are clipped)
+            mean=rng.normal(size=S.N_SENSORS),
+            var=rng.uniform(0.05, 4.0, size=S.N_SENSORS),
+            clip=3.0,  # (some normalised readings are clipped)
         )
     if action_type == "torque":
         center, half = np.zeros(2), np.full(2, ROBOT.max_leg_torque)
@@ -71,13 +76,9 @@ def _policy(
         center, half = np.array(TABLE_I_SETPOINTS), np.full(4, 0.3)
     return PolicyController(
         _layers(rng, [S.N_SENSORS, *hidden, n_out], out_scale),
+        PolicyObservation(low=low, high=high, **stats),
+        PolicyAction(type=action_type, center=center, half_width=half),
         activation=activation,
-        observation_low=low,
-        observation_high=high,
-        action_type=action_type,
-        action_center=kw.pop("action_center", center),
-        action_half_width=kw.pop("action_half_width", half),
-        **stats,
         **kw,
     )
 
@@ -123,9 +124,9 @@ def test_the_observation_is_the_float32_reading_clipped_to_its_box():
     y = np.full(S.N_SENSORS, 0.1)
     y[0] = 1e9
     y[1] = -1e9
-    obs = p.observation(y)
+    obs = p.observation.observe(y)
     assert obs.dtype == np.float32
-    assert obs[0] == p.observation_high[0] and obs[1] == p.observation_low[1]
+    assert obs[0] == p.observation.high[0] and obs[1] == p.observation.low[1]
     assert obs[2] == np.float32(0.1) and float(obs[2]) != 0.1
 
 
@@ -187,11 +188,8 @@ def test_a_setpoint_policy_choosing_table_i_runs_the_table_i_controller_bit_for_
     zero = [(w, b) for w, b in p.layers[:-1]] + [(np.zeros((4, 16)), np.zeros(4))]
     p = PolicyController(
         zero,
-        observation_low=p.observation_low,
-        observation_high=p.observation_high,
-        action_type="setpoints",
-        action_center=TABLE_I_SETPOINTS,
-        action_half_width=[0.3] * 4,
+        p.observation,
+        PolicyAction(type="setpoints", center=TABLE_I_SETPOINTS, half_width=[0.3] * 4),
     )
     ref = scoutsim.simulate(duration=2.0, model=model)
     got = scoutsim.simulate(controller=p, duration=2.0, model=model)
@@ -211,29 +209,20 @@ def test_the_file_round_trips_bit_for_bit(tmp_path):
         path = tmp_path / "policy.npz"
         p.save(path)
         q = PolicyController.load(path)
-        for name in (
-            "observation_low",
-            "observation_high",
-            "observation_mean",
-            "observation_var",
-            "action_low",
-            "action_high",
-            "action_center",
-            "action_half_width",
-        ):
-            a, b = getattr(p, name), getattr(q, name)
-            assert (a is None and b is None) or (a.dtype == b.dtype and np.array_equal(a, b))
+        for part, name in [
+            ("observation", n) for n in ("low", "high", "mean", "var", "epsilon", "clip")
+        ] + [("action", n) for n in ("center", "half_width", "low", "high", "names", "type")]:
+            a, b = getattr(getattr(p, part), name), getattr(getattr(q, part), name)
+            if isinstance(a, np.ndarray):
+                assert a.dtype == b.dtype and np.array_equal(a, b)
+            else:
+                assert a == b
         assert all(
             np.array_equal(w, v) and np.array_equal(b, c)
             for (w, b), (v, c) in zip(p.layers, q.layers, strict=True)
         )
         assert np.array_equal(p.params, q.params)
-        assert (q.activation, q.action_type, q.action_names, q.policy_period) == (
-            p.activation,
-            p.action_type,
-            p.action_names,
-            p.policy_period,
-        )
+        assert (q.activation, q.policy_period) == (p.activation, p.policy_period)
         assert q.controller_parameters == p.controller_parameters
         assert q.metadata == p.metadata
 

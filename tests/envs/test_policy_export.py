@@ -49,7 +49,7 @@ def test_the_exported_policy_gives_the_torch_policys_actions(action_type):
     actions to 1e-5."""
     policy, rec = _fixture(action_type)
     obs, torch_actions = rec["observations"], rec["actions"]
-    assert obs.shape == (1000, policy.observation_low.size)
+    assert obs.shape == (1000, policy.observation.low.size)
     assert obs.dtype == np.float32 and torch_actions.dtype == np.float32
     assert np.abs(policy.predict(obs) - torch_actions).max() <= TORCH_TOLERANCE
     compiled = []
@@ -59,15 +59,13 @@ def test_the_exported_policy_gives_the_torch_policys_actions(action_type):
             policy.command(k * dt, Sensors.from_vector(y))
             if k == i * n:
                 compiled.append(policy.held_action)
-    normalised = (np.array(compiled) - policy.action_center) / policy.action_half_width
+    normalised = (np.array(compiled) - policy.action.center) / policy.action.half_width
     assert np.abs(normalised - torch_actions).max() <= TORCH_TOLERANCE
     # the observations spread: the normalisation's clip is reached by some of them
-    assert policy.normalised
-    assert policy.observation_mean is not None and policy.observation_var is not None
-    z = (obs - policy.observation_mean) / np.sqrt(
-        policy.observation_var + policy.observation_epsilon
-    )
-    assert (np.abs(z) > policy.observation_clip).any() and (np.abs(z) < 1.0).any()
+    seen = policy.observation
+    assert seen.normalised and seen.mean is not None
+    z = (obs - seen.mean) / seen.std
+    assert (np.abs(z) > seen.clip).any() and (np.abs(z) < 1.0).any()
 
 
 @pytest.mark.parametrize("action_type", ACTION_TYPES)
@@ -77,12 +75,13 @@ def test_the_file_carries_the_environments_spaces_and_action_map(action_type):
     period, Table I parameters, model."""
     policy, rec = _fixture(action_type)
     env = gymnasium.make("scoutsim/Bound-v0", model="II", action_type=action_type).unwrapped
-    assert np.array_equal(policy.observation_low, env.observation_space.low)
-    assert np.array_equal(policy.observation_high, env.observation_space.high)
-    assert np.array_equal(policy.action_center, env.action_center)
-    assert np.array_equal(policy.action_half_width, env.action_half_width)
-    assert np.array_equal(policy.action_low, -np.ones(len(env.action_center)))
-    assert np.array_equal(policy.action_high, np.ones(len(env.action_center)))
+    assert np.array_equal(policy.observation.low, env.observation_space.low)
+    assert np.array_equal(policy.observation.high, env.observation_space.high)
+    assert np.array_equal(policy.action.center, env.action_center)
+    assert np.array_equal(policy.action.half_width, env.action_half_width)
+    assert np.array_equal(policy.action.low, -np.ones(len(env.action_center)))
+    assert np.array_equal(policy.action.high, np.ones(len(env.action_center)))
+    assert policy.action.type == action_type
     assert policy.policy_period == env.policy_period
     assert policy.samples_per_step == env.samples_per_step
     assert policy.controller_parameters == env.controller
