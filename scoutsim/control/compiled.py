@@ -33,7 +33,7 @@ Writing a compiled controller::
 
 The function must compile with ``numba.njit`` (nopython mode). It writes the hip torques
 per physical leg at the leg [N m] (back, front) into ``torque``, may update its ``state``
-and ``leg_states`` (logged with the run: ``layout.LS_*``), and returns 0, or any other
+and ``leg_states`` (logged with the run: the codes of :class:`~scoutsim.names.LegState`), and returns 0, or any other
 integer to stop the run with a :class:`~scoutsim.control.protocol.ControllerError`; so do
 torques that are not finite.
 """

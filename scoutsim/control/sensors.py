@@ -110,7 +110,8 @@ class Sensors:
     Attributes (read-only): ``hip_angle``, ``hip_rate``, ``leg_length``, ``acceleration``,
     ``laser_range``, ``motor_current`` ((2,) arrays, back then front; acceleration: along
     the torso axis, then its normal), ``pitch``, ``pitch_rate``, ``battery_voltage``
-    (floats), and ``vector``, every reading by slot (``layout.SN_*``).
+    (floats), and ``vector``, every reading by slot (this module's ``HIP_ANGLE`` ... ``BATTERY``;
+    their names: ``scoutsim.envs.configuration.OBSERVATION_NAMES``).
 
     ``Sensors(hip_angle, hip_rate, leg_length, **other_channels)`` makes readings by hand
     (e.g. to test a controller); channels not given are NaN.
@@ -148,7 +149,7 @@ class Sensors:
 
     @property
     def vector(self) -> np.ndarray:
-        """Every reading by slot (``layout.SN_*``), read-only."""
+        """Every reading by slot (``HIP_ANGLE`` ... ``BATTERY`` of this module), read-only."""
         return self._v
 
     def _pair(self, slot):

@@ -375,7 +375,7 @@ class BoundEnv(gymnasium.Env):
         #: the physical action of a normalised action ``a``: ``action_center +
         #: action_half_width * a`` [N m or rad] (float64)
         self.action_center, self.action_half_width = centre, half
-        #: the float64 sensor readings of the last observation (``layout.SN_*``, SI)
+        #: the float64 sensor readings of the last observation (in its order, SI)
         self.readings = np.full(self.observation_space.shape, np.nan)
         #: the set-points' slots in the engine's controller array ``engine.C``
         self._engine: HybridEngine | None = None

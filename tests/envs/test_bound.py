@@ -136,17 +136,20 @@ def test_sync_and_async_vector_environments_from_the_id_give_the_same_observatio
         envs = gymnasium.make_vec(ID, num_envs=2, vectorization_mode=mode)
         try:
             obs, _ = envs.reset(seed=[11, 12])
-            out = [obs]
+            observations, rewards = [obs], []
             rng = np.random.default_rng(0)
             for _ in range(20):
                 obs, reward, _, _, _ = envs.step(rng.uniform(-1, 1, (2, 2)).astype(np.float32))
-                out += [obs, reward[:, None]]
-            runs[mode] = np.concatenate(out, axis=1)
+                observations.append(obs)
+                rewards.append(reward)
+            runs[mode] = np.array(observations), np.array(rewards)
         finally:
             envs.close()
-    assert runs["sync"].dtype == np.float32 or runs["sync"].dtype == np.float64
-    assert np.array_equal(runs["sync"], runs["async"])
-    assert not np.array_equal(runs["sync"][0], runs["sync"][1])
+    (obs_sync, rew_sync), (obs_async, rew_async) = runs["sync"], runs["async"]
+    assert obs_sync.dtype == obs_async.dtype == np.float32
+    assert np.array_equal(obs_sync, obs_async) and np.array_equal(rew_sync, rew_async)
+    # two seeds, two episodes
+    assert not np.array_equal(obs_sync[:, 0], obs_sync[:, 1])
 
 
 def test_make_vec_with_four_envs_steps_in_sync_and_async_mode():
