@@ -135,9 +135,9 @@ def _layers_start(params):
 @kernel
 def network_action(y, params, scratch, action):
     """The policy's action (in its own units, clipped to its box) for the readings ``y``
-    (``layout.SN_*``, SI) into ``action``; ``scratch``: 2 x ``P_MAX_WIDTH`` floats.
-    The observation (float32, clipped to its box), its normalisation and the network as
-    the module docstring says."""
+    (slots of :mod:`scoutsim.control.sensors`, SI) into ``action``; ``scratch``: 2 x
+    ``P_MAX_WIDTH`` floats. The observation (float32, clipped to its box), its
+    normalisation and the network as the module docstring says."""
     width = int(params[P_MAX_WIDTH])
     a = scratch[:width]
     b = scratch[width : 2 * width]
