@@ -93,6 +93,10 @@ __all__ = [
 
 #: the activations between the layers (the code of each is its index)
 ACTIVATIONS = ("tanh", "relu")
+#: the codes of the activations and of the action types (their index in ACTIVATIONS and
+#: in ACTION_TYPES) in the parameter array
+CODE_TANH = ACTIVATIONS.index("tanh")
+CODE_SETPOINTS = ACTION_TYPES.index("setpoints")
 
 # -- the parameter array -----------------------------------------------------------------
 # settings
@@ -159,7 +163,7 @@ def network_action(y, params, scratch, action):
                 o = clip
         a[i] = o
     n_layers = int(params[P_N_LAYERS])
-    tanh = int(params[P_ACTIVATION]) == 0
+    tanh = int(params[P_ACTIVATION]) == CODE_TANH
     at = _layers_start(params)
     for layer in range(n_layers):
         n_in = int(params[P_WIDTHS + layer])
@@ -194,7 +198,7 @@ def policy_command(t, y, params, state, torque, leg_states):
     also into the state's Table I array); then the torques of the held action, or of the
     Table I law with the held set-points, per physical leg [N m]. Returns 0."""
     k = int(state[S_SAMPLE])
-    setpoints = int(params[P_ACTION_TYPE]) == 1
+    setpoints = int(params[P_ACTION_TYPE]) == CODE_SETPOINTS
     n_actions = int(params[P_N_ACTIONS])
     if k == 0 and setpoints:  # the run's first sample: Table I as packed for its robot
         for i in range(NC):
