@@ -11,9 +11,14 @@ default integrator, default start and floor) under
   pitch-rate gain at 0 it makes the same run as Table I, bit for bit, which is checked),
 * a trivial Python PD controller (a Python object with ``command(t, sensors)``, called from
   the compiled loop at every sample);
+* a learned policy (``PolicyController``) of Stable-Baselines3's default size: set-point
+  actions, ``MlpPolicy`` 64-64 tanh, VecNormalize statistics, evaluated every 10 ms, the
+  Table I law at every sample (random weights with a small output layer, so that it
+  bounds for the whole run, as a trained set-point policy does);
 
 and prints each one's median wall time, real-time factor and ratio to the built-in
-controller (targets: compiled example <= 1.3x; Python PD real-time factor >= 50).
+controller (targets: compiled example <= 1.3x; Python PD real-time factor >= 50; learned
+policy real-time factor >= 0.5 x the built-in's, i.e. <= 2x its wall time).
 
 Then, each in a new process: the compile time of a fresh edit of the example controller
 (its source changed, so nothing of it is cached) with the core's cache warm, and, unless
@@ -49,6 +54,39 @@ class PythonPD:
         return (250.0 * (0.33 - a[0]) - 5.0 * r[0], 250.0 * (0.37 - a[1]) - 5.0 * r[1])
 
 
+def learned_policy():
+    """A set-point policy of Stable-Baselines3's default MlpPolicy size (64-64 tanh) with
+    VecNormalize statistics; seeded random weights, the output layer small (the Table I
+    set-points, moved by a few mrad)."""
+    from scoutsim.control.bounding import SCHEDULABLE
+    from scoutsim.control.policy import PolicyAction, PolicyController, PolicyObservation
+    from scoutsim.control.sensors import N_SENSORS
+    from scoutsim.parameters import ControllerParameters
+
+    rng = np.random.default_rng(0)
+    widths = [N_SENSORS, 64, 64, 4]
+    layers = [
+        (rng.normal(size=(o, i)) / np.sqrt(i) * (0.01 if o == 4 else 1.0), np.zeros(o))
+        for i, o in zip(widths[:-1], widths[1:])
+    ]
+    table_i = ControllerParameters()
+    high = np.full(N_SENSORS, 1e3, dtype=np.float32)
+    return PolicyController(
+        layers,
+        PolicyObservation(
+            low=-high,
+            high=high,
+            mean=rng.normal(size=N_SENSORS),
+            var=rng.uniform(0.5, 2.0, size=N_SENSORS),
+        ),
+        PolicyAction(
+            type="setpoints",
+            center=[getattr(table_i, name) for name in SCHEDULABLE],
+            half_width=np.full(4, 0.44),
+        ),
+    )
+
+
 def speeds(runs: int, duration: float):
     from compiled_controller import make_controller
 
@@ -60,6 +98,7 @@ def speeds(runs: int, duration: float):
         "built-in Table I (compiled)": None,
         "compiled user example": example,
         "trivial Python PD": PythonPD(),
+        "learned policy (64-64, set-points)": learned_policy(),
     }
     ref = scoutsim.simulate(duration=duration)
     same = scoutsim.simulate(controller=example, duration=duration)
@@ -71,20 +110,25 @@ def speeds(runs: int, duration: float):
         scoutsim.simulate(controller=c, duration=0.1)
     walls = {k: [] for k in kinds}
     t_end = {}
+    outcome = {}
     for _ in range(runs):
         for name, c in kinds.items():
             t0 = time.perf_counter()
             r = scoutsim.simulate(controller=c, duration=duration)
             walls[name].append(time.perf_counter() - t0)
             t_end[name] = r.t_end
+            outcome[name] = r.outcome
     base = statistics.median(walls["built-in Table I (compiled)"])
     print(f"\n{duration:g} s of Model II, median of {runs} alternating runs:")
-    print(f"{'controller':30s} {'wall [ms]':>10s} {'min-max':>15s} {'RTF':>6s} {'x built-in':>10s}")
+    print(
+        f"{'controller':36s} {'wall [ms]':>10s} {'min-max':>15s} {'RTF':>6s} {'x built-in':>10s} "
+        "outcome"
+    )
     for name, w in walls.items():
         med = statistics.median(w)
         print(
-            f"{name:30s} {med * 1e3:10.1f} {min(w) * 1e3:7.1f}-{max(w) * 1e3:<7.1f} "
-            f"{t_end[name] / med:6.0f} {med / base:10.2f}"
+            f"{name:36s} {med * 1e3:10.1f} {min(w) * 1e3:7.1f}-{max(w) * 1e3:<7.1f} "
+            f"{t_end[name] / med:6.0f} {med / base:10.2f} {outcome[name]}"
         )
 
 

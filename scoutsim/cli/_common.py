@@ -181,18 +181,20 @@ CONTROLLER_LABELS = {"table-i": "Table I", "pitch-feedback": "pitch feedback"}
 def add_controller_option(parser):
     """--controller: which controller runs: a built-in law with the robot file's
     [controller] section, a controller file (as ``scoutsim tune`` writes its best
-    parameters) or a user's controller named ``MODULE:FACTORY``."""
+    parameters), a learned policy's file (``.npz``) or a ``MODULE:FACTORY`` controller."""
     parser.add_argument(
         "--controller",
         default="table-i",
-        metavar="{" + ",".join(CONTROLLERS) + ",FILE,MODULE:FACTORY}",
+        metavar="{" + ",".join(CONTROLLERS) + ",FILE,FILE.npz,MODULE:FACTORY}",
         help="table-i: the paper's Table I controller (no torso feedback); "
         "pitch-feedback: Table I with the touchdown angles corrected "
         "by torso pitch and pitch rate (PitchFeedbackController, gains "
         "pitch_gain_* / pitch_rate_gain_* of the robot file's "
         "[controller]); FILE: a controller file, its law and every "
         "controller parameter (as scoutsim tune writes best.toml; it "
-        "replaces the robot file's [controller]); MODULE:FACTORY: your "
+        "replaces the robot file's [controller]); FILE.npz: a learned policy's "
+        "file (PolicyController; its Table I parameters replace the robot file's "
+        "[controller]); MODULE:FACTORY: your "
         "own controller, FACTORY(robot, params) in the importable "
         "module MODULE (on PYTHONPATH) returning any controller "
         "scoutsim.simulate accepts (default: table-i)",
@@ -201,13 +203,20 @@ def add_controller_option(parser):
 
 def controller_choice(value: str, params):
     """``(law, ControllerParameters)`` of ``--controller value``: a law's name with the
-    robot file's ``params``, a controller file's law and parameters, or a ``MODULE:FACTORY``
-    string (the law) with ``params``. UsageError naming the file and the problem otherwise."""
+    robot file's ``params``, a controller file's law and parameters, a policy file
+    (``.npz``: its path is the law) with the Table I parameters it runs on, or a
+    ``MODULE:FACTORY`` string (the law) with ``params``. UsageError naming the file and the
+    problem otherwise."""
     from ..control.factory import is_factory_spec
 
     if value in CONTROLLERS:
         return value, params
     p = Path(value)
+    if value.lower().endswith(".npz"):  # a learned policy's file
+        from ..control.policy import PolicyController, PolicyError
+
+        with usage_errors(PolicyError):
+            return value, PolicyController.load(value).controller_parameters
     if p.is_file():
         from ..analysis.controller_file import read_controller_file
 
@@ -235,13 +244,17 @@ def make_controller(name: str, params, robot=None, *, on_workers: bool = False):
     ControllerParameters ``params``: the parameters themselves (Table I), a
     PitchFeedbackController, or a user's ``MODULE:FACTORY`` controller made for ``robot``
     (``on_workers``: a :class:`~scoutsim.control.factory.ControllerSpec` that each worker
-    of a study makes itself, after the factory was tried here once)."""
+    of a study makes itself, after the factory was tried here once), or a policy file's."""
     if name == "pitch-feedback":
         from ..control.pitch_feedback import PitchFeedbackController
 
         return PitchFeedbackController(params)
     if name in CONTROLLERS:
         return params
+    if name.lower().endswith(".npz"):  # (read by controller_choice: a good file)
+        from ..control.policy import PolicyController
+
+        return PolicyController.load(name)
     from ..control.factory import ControllerSpec, FactoryError, controller_from_spec
 
     try:
