@@ -43,11 +43,31 @@ def _nearest_sample(t, te: float) -> int:
     return i
 
 
+#: the key under which :func:`stride_energy` keeps the run's impact log in ``cumulative``
+_IMPACTS = "impact_log"
+
+
+def _impact_loss(result, t0: float, t1: float, cumulative: dict) -> float:
+    """Kinetic energy lost in the touchdown impacts with t0 <= t < t1 [J]: the run's impact
+    log read once (kept in ``cumulative``) and the window found by bisection, so that the
+    strides of a run cost time linear in its length; the same sum as
+    ``result.impact_log(t0, t1)["energy_lost"].sum()``, term for term."""
+    if _IMPACTS not in cumulative:
+        cumulative[_IMPACTS] = result.impact_log()
+    log = cumulative[_IMPACTS]
+    times = log["t"]
+    if times.size > 1 and not np.all(times[1:] >= times[:-1]):  # (not in time order)
+        return float(log["energy_lost"][(times >= t0) & (times < t1)].sum())
+    k0, k1 = np.searchsorted(times, [t0, t1], side="left")
+    return float(log["energy_lost"][k0:k1].sum())
+
+
 def stride_energy(result, a: float, b: float, cumulative: dict | None = None) -> dict:
     """The energy fields of :class:`Stride` for the stride from ``a`` to ``b`` [s] (the
     run's samples nearest to them); {} if the run has no ``energy_series``.
     ``cumulative``: a dict in which the run's cumulative energies by destination
-    (``result.cumulative_energy``) are kept from one stride to the next."""
+    (``result.cumulative_energy``) and its impact log are kept from one stride to the
+    next."""
     if getattr(result, "energy_series", None) is None or len(result.t) < 2:
         return {}
     t = np.asarray(result.t, dtype=float)
@@ -61,7 +81,7 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
             cumulative[name] = result.cumulative_energy(name)
         return float(cumulative[name][j] - cumulative[name][i])
 
-    impacts = float(result.impact_log(t[i], t[j])["energy_lost"].sum())
+    impacts = _impact_loss(result, t[i], t[j], cumulative)
     mech = float(result.energy[j] - result.energy[i])
     hip = delta("hip_work")
     friction = delta("friction")

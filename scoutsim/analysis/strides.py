@@ -202,10 +202,21 @@ def split_strides(result, transient_s, stances):
     dhy = np.asarray(result.vertical_speed, dtype=float)
     t_end_run = float(result.t_end)
     xs = hermite(t, x, dx, lo)
+    # each stride's stances, found once for all strides: the rows of each leg's intervals
+    # (disjoint, in time order) that end at or after the stride's start and begin at or
+    # before its end, so that the split is linear in the run's length
+    meets = [
+        (
+            np.searchsorted(iv[:, 1], lo[:-1], side="left"),
+            np.searchsorted(iv[:, 0], lo[1:], side="right"),
+        )
+        for iv in stances
+    ]
     cumulative = {}
     out = []
     for k in range(len(lo) - 1):
         a, b = float(lo[k]), float(lo[k + 1])
+        legs = [iv[first[k] : last[k]] for iv, (first, last) in zip(stances, meets)]
         period = b - a
         if not period > 0.0:
             continue  # duplicate event time: not a stride
@@ -218,8 +229,8 @@ def split_strides(result, transient_s, stances):
                 t_end=b,
                 period_s=period,
                 stride_frequency_hz=1.0 / period,
-                duty_factor_back=stance_overlap(stances[0], a, b) / period,
-                duty_factor_front=stance_overlap(stances[1], a, b) / period,
+                duty_factor_back=stance_overlap(legs[0], a, b) / period,
+                duty_factor_front=stance_overlap(legs[1], a, b) / period,
                 pitch_max_deg=math.degrees(pmax),
                 pitch_min_deg=math.degrees(pmin),
                 height_max_m=hmax,
