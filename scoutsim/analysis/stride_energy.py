@@ -43,8 +43,10 @@ def _nearest_sample(t, te: float) -> int:
     return i
 
 
-#: the key under which :func:`stride_energy` keeps the run's impact log in ``cumulative``
+#: the keys under which :func:`stride_energy` keeps the run's impact log and its
+#: :func:`input_and_weight` in ``cumulative``
 _IMPACTS = "impact_log"
+_INPUT = "input_and_weight"
 
 
 def _impact_loss(result, t0: float, t1: float, cumulative: dict) -> float:
@@ -66,8 +68,8 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
     """The energy fields of :class:`Stride` for the stride from ``a`` to ``b`` [s] (the
     run's samples nearest to them); {} if the run has no ``energy_series``.
     ``cumulative``: a dict in which the run's cumulative energies by destination
-    (``result.cumulative_energy``) and its impact log are kept from one stride to the
-    next."""
+    (``result.cumulative_energy``), its impact log and its input flow are kept from one
+    stride to the next."""
     if getattr(result, "energy_series", None) is None or len(result.t) < 2:
         return {}
     t = np.asarray(result.t, dtype=float)
@@ -86,7 +88,9 @@ def stride_energy(result, a: float, b: float, cumulative: dict | None = None) ->
     hip = delta("hip_work")
     friction = delta("friction")
     distance = float(result.x[j] - result.x[i])
-    input_name, weight = input_and_weight(result)
+    if _INPUT not in cumulative:  # (the robot read once per run, not per stride)
+        cumulative[_INPUT] = input_and_weight(result)
+    input_name, weight = cumulative[_INPUT]
     electrical = input_name == "electrical"
     out = {
         "energy_t_start": float(t[i]),
