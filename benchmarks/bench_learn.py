@@ -29,7 +29,8 @@ scoutsim controller, :func:`scoutsim.envs.policy_export.export_policy`); then
 controller on ideal, Model I and Model II from ``--eval-episodes`` random starts of 10 s:
 mean speed [m/s], cost of transport, falls, and whether a steady bound was found by
 ``scoutsim``'s gait analysis of the run with the exported policy from the fixed start),
-``curve.png`` (the learning curves) and ``settings.json``.
+``curve.png`` (the learning curves) and ``settings-ACTION.json`` (the settings, machine
+and command).
 """
 
 from __future__ import annotations
@@ -74,6 +75,9 @@ N_ENVS = 2
 EVAL_SEED0 = 10_000
 #: a fall: an evaluation episode that ends before the time limit
 EVAL_STEPS = 1000
+#: the learning curves' colour per training model and line style per seed
+MODEL_COLOURS = {"ideal": "tab:green", "I": "tab:orange", "II": "tab:blue"}
+SEED_STYLES = ("-", "--", ":")
 #: how many of the last episodes the learning curve averages
 CURVE_WINDOW = 20
 
@@ -349,6 +353,7 @@ def plot_curves(out: Path, runs: list[tuple[str, str, int]], path: Path) -> None
     import matplotlib.pyplot as plt
 
     fig, (ax_r, ax_l) = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
+    seeds = sorted({seed for _, _, seed in runs})
     for train_model, action_type, seed in runs:
         f = out / run_name(train_model, action_type, seed) / "curve.csv"
         if not f.exists():
@@ -359,8 +364,14 @@ def plot_curves(out: Path, runs: list[tuple[str, str, int]], path: Path) -> None
             continue
         steps = np.array([float(r["steps"]) for r in data]) / 1e6
         label = f"{train_model}, {action_type}, seed {seed}"
-        ax_r.plot(steps, [float(r["mean_return"]) for r in data], label=label)
-        ax_l.plot(steps, [float(r["mean_length"]) / 100.0 for r in data], label=label)
+        style = {
+            "color": MODEL_COLOURS[train_model],
+            "ls": SEED_STYLES[seeds.index(seed) % len(SEED_STYLES)],
+            "lw": 1.3,
+            "label": label,
+        }
+        ax_r.plot(steps, [float(r["mean_return"]) for r in data], **style)
+        ax_l.plot(steps, [float(r["mean_length"]) / 100.0 for r in data], **style)
     ax_r.set_xlabel("environment steps [millions]")
     ax_r.set_ylabel(f"mean return of the last {CURVE_WINDOW} episodes")
     ax_l.set_xlabel("environment steps [millions]")
@@ -407,11 +418,14 @@ def main(argv=None) -> int:
     }
     try:
         settings["git"] = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            cwd=Path(__file__).resolve().parent,
         ).stdout.strip()
     except OSError:
         pass
-    (out / "settings.json").write_text(json.dumps(settings, indent=2) + "\n")
+    (out / f"settings-{args.action_type}.json").write_text(json.dumps(settings, indent=2) + "\n")
     if not args.evaluate_only:
         todo = [(m, a, s, args.steps, str(out)) for m, a, s in runs]
         with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
