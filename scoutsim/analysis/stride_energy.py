@@ -51,17 +51,20 @@ _INPUT = "input_and_weight"
 
 def _impact_loss(result, t0: float, t1: float, cumulative: dict) -> float:
     """Kinetic energy lost in the touchdown impacts with t0 <= t < t1 [J]: the run's impact
-    log read once (kept in ``cumulative``) and the window found by bisection, so that the
-    strides of a run cost time linear in its length; the same sum as
-    ``result.impact_log(t0, t1)["energy_lost"].sum()``, term for term."""
+    log read (and put in time order) once, kept in ``cumulative``, and the window found by
+    bisection, so that the strides of a run cost time linear in its length; the same sum
+    as ``result.impact_log(t0, t1)["energy_lost"].sum()``, term for term (the log is in
+    time order as the run records it)."""
     if _IMPACTS not in cumulative:
-        cumulative[_IMPACTS] = result.impact_log()
-    log = cumulative[_IMPACTS]
-    times = log["t"]
-    if times.size > 1 and not np.all(times[1:] >= times[:-1]):  # (not in time order)
-        return float(log["energy_lost"][(times >= t0) & (times < t1)].sum())
+        log = result.impact_log()
+        times, lost = log["t"], log["energy_lost"]
+        if times.size > 1 and not np.all(times[1:] >= times[:-1]):  # (put in time order)
+            order = np.argsort(times, kind="stable")
+            times, lost = times[order], lost[order]
+        cumulative[_IMPACTS] = (times, lost)
+    times, lost = cumulative[_IMPACTS]
     k0, k1 = np.searchsorted(times, [t0, t1], side="left")
-    return float(log["energy_lost"][k0:k1].sum())
+    return float(lost[k0:k1].sum())
 
 
 def stride_energy(result, a: float, b: float, cumulative: dict | None = None) -> dict:
