@@ -64,6 +64,7 @@ __all__ = [
     "SensorParameters",
     "load_sensors",
     "CHANNELS",
+    "SLOT_NAMES",
     "HIP_ANGLE",
     "HIP_RATE",
     "LEG_LENGTH",
@@ -90,6 +91,14 @@ N_SENSORS = L.NSN
 
 #: channel name -> (first slot, number of slots, SI unit)
 CHANNELS = {name: (slot, n, unit) for name, slot, n, unit in L.SENSOR_CHANNELS}
+#: every slot's name, in slot order: the channel's name, and for a two-slot channel its
+#: part ("_back" / "_front"; the accelerometer's "_axial" along the torso axis, then
+#: "_normal")
+SLOT_NAMES = tuple(
+    name if n == 1 else f"{name}_{part}"
+    for name, (slot, n, unit) in sorted(CHANNELS.items(), key=lambda item: item[1][0])
+    for part in (("axial", "normal") if name == "acceleration" else ("back", "front"))[:n]
+)
 #: channel -> the dimension of its unit (parameters.UNITS)
 _DIMENSIONS = {
     "hip_angle": "angle",
@@ -111,7 +120,7 @@ class Sensors:
     ``laser_range``, ``motor_current`` ((2,) arrays, back then front; acceleration: along
     the torso axis, then its normal), ``pitch``, ``pitch_rate``, ``battery_voltage``
     (floats), and ``vector``, every reading by slot (this module's ``HIP_ANGLE`` ... ``BATTERY``;
-    their names: ``scoutsim.envs.configuration.OBSERVATION_NAMES``).
+    their names: :data:`SLOT_NAMES`).
 
     ``Sensors(hip_angle, hip_rate, leg_length, **other_channels)`` makes readings by hand
     (e.g. to test a controller); channels not given are NaN.

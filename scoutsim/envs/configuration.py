@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from ..control.dispatch import plan_controller
 from ..control.factory import FactoryError, controller_from_spec, is_factory_spec
-from ..control.sensors import CHANNELS, N_SENSORS
+from ..control.sensors import CHANNELS, N_SENSORS, SLOT_NAMES
 from ..parameters import (
     ControllerParameters,
     RobotParameters,
@@ -69,20 +69,14 @@ RENDER_MODES = ("rgb_array",)
 RENDER_SIZE = {"render_width": None, "render_height": None}
 
 
-#: the observation's names, in its order: each sensor channel's slots
-#: (:data:`~scoutsim.control.sensors.CHANNELS`; two-slot channels are back then front, the
-#: accelerometer along the torso axis then its normal)
-OBSERVATION_NAMES = tuple(
-    name if n == 1 else f"{name}_{part}"
-    for name, (slot, n, unit) in sorted(CHANNELS.items(), key=lambda item: item[1][0])
-    for part in (("axial", "normal") if name == "acceleration" else ("back", "front"))[:n]
-)
-#: standard gravity [m/s^2], the accelerometer's range unit
-_G = 9.80665
+#: the observation's names, in its order: the sensor slots' names
+#: (:data:`~scoutsim.control.sensors.SLOT_NAMES`)
+OBSERVATION_NAMES = SLOT_NAMES
 #: pitch rate range [rad/s]: 4 times the bound's largest (about 5 rad/s, 290 deg/s)
 _PITCH_RATE_RANGE = 20.0
-#: accelerometer range [m/s^2]: 20 g (touchdowns on stiff legs peak near 10 g)
-_ACCELERATION_RANGE = 20.0 * _G
+#: accelerometer range [m/s^2]: 20 g of standard gravity, 9.80665 m/s^2 (touchdowns on
+#: stiff legs peak near 10 g)
+_ACCELERATION_RANGE = 20.0 * 9.80665
 #: laser range [m]: 0 to 2 m (the torso's ends at the simulator's 60 deg fall are below 1 m)
 _LASER_RANGE = 2.0
 #: hip rate range as a multiple of the motors' no-load leg speed (the ideal actuator has
