@@ -32,25 +32,12 @@ import math
 import os
 import platform
 import statistics
-import subprocess
 import time
 
 import numpy as np
+from machine import machine
 
 TABLE_I = np.radians([19.0, 21.0, 0.0, 0.0])
-
-
-def machine() -> str:
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        name = next(
-            line.split(":", 1)[1].strip()
-            for line in out.splitlines()
-            if line.startswith("Model name")
-        )
-    except (OSError, StopIteration):
-        name = platform.processor() or "unknown CPU"
-    return f"{name}, {os.cpu_count()} logical CPUs"
 
 
 def policy(kind: str, space, rng):

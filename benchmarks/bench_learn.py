@@ -40,7 +40,6 @@ import csv
 import json
 import math
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -48,6 +47,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from machine import machine
 
 ENV_ID = "scoutsim/Bound-v0"
 MODELS = ("ideal", "I", "II")
@@ -80,17 +80,6 @@ MODEL_COLOURS = {"ideal": "tab:green", "I": "tab:orange", "II": "tab:blue"}
 SEED_STYLES = ("-", "--", ":")
 #: how many of the last episodes the learning curve averages
 CURVE_WINDOW = 20
-
-
-def machine() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            name = next(
-                line.split(":", 1)[1].strip() for line in f if line.startswith("model name")
-            )
-    except (OSError, StopIteration):
-        name = platform.processor() or "unknown CPU"
-    return f"{name}, {os.cpu_count()} logical CPUs"
 
 
 def run_name(model: str, action_type: str, seed: int) -> str:

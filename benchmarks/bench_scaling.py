@@ -24,13 +24,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from machine import machine
 
 #: the in-process measurement: simulate, then its summary, timed inside the process
 _IN_PROCESS = """
@@ -46,17 +47,6 @@ print(json.dumps({"simulate_s": t1 - t0, "summary_s": t2 - t1, "outcome": r.outc
                   "strides": s.get("n_strides"),
                   "peak_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6}))
 """
-
-
-def machine() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            name = next(
-                line.split(":", 1)[1].strip() for line in f if line.startswith("model name")
-            )
-    except (OSError, StopIteration):
-        name = platform.processor() or "unknown CPU"
-    return f"{name}, {os.cpu_count()} logical CPUs"
 
 
 def cli_run(duration: float, model: str, scratch: Path) -> dict:
