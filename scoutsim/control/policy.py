@@ -136,6 +136,16 @@ def _layers_start(params):
     return P_WIDTHS + int(params[P_N_LAYERS]) + 1
 
 
+@kernel(inline="always")
+def _clamp(v, lo, hi):
+    """``v`` clipped to [lo, hi] (NaN stays NaN)."""
+    if v < lo:
+        return lo
+    if v > hi:
+        return hi
+    return v
+
+
 @kernel
 def network_action(y, params, scratch, action):
     """The policy's action (in its own units, clipped to its box) for the readings ``y``
@@ -148,19 +158,9 @@ def network_action(y, params, scratch, action):
     normalised = params[P_NORMALISED] != 0.0
     clip = params[P_OBS_CLIP]
     for i in range(N_SENSORS):
-        o = np.float64(np.float32(y[i]))
-        lo = params[P_OBS_LOW + i]
-        hi = params[P_OBS_HIGH + i]
-        if o < lo:
-            o = lo
-        elif o > hi:
-            o = hi
+        o = _clamp(np.float64(np.float32(y[i])), params[P_OBS_LOW + i], params[P_OBS_HIGH + i])
         if normalised:
-            o = (o - params[P_OBS_MEAN + i]) / params[P_OBS_STD + i]
-            if o < -clip:
-                o = -clip
-            elif o > clip:
-                o = clip
+            o = _clamp((o - params[P_OBS_MEAN + i]) / params[P_OBS_STD + i], -clip, clip)
         a[i] = o
     n_layers = int(params[P_N_LAYERS])
     tanh = int(params[P_ACTIVATION]) == CODE_TANH
@@ -182,14 +182,7 @@ def network_action(y, params, scratch, action):
         at = bias + n_out
         a, b = b, a
     for i in range(int(params[P_N_ACTIONS])):
-        v = a[i]
-        lo = params[P_ACTION_LOW + i]
-        hi = params[P_ACTION_HIGH + i]
-        if v < lo:
-            v = lo
-        elif v > hi:
-            v = hi
-        action[i] = v
+        action[i] = _clamp(a[i], params[P_ACTION_LOW + i], params[P_ACTION_HIGH + i])
 
 
 def policy_command(t, y, params, state, torque, leg_states):
