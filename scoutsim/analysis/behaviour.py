@@ -64,9 +64,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..names import ContactMode, EventKind
+from .._core.model import layout as L
+from ..names import ContactMode, EventKind, leg_index
 from ..simulation.assembly import DEFAULT_PITCH_LIMIT_DEG
 from .stances import stance_overlap
+from .stride_record import toe_slide_length
 from .strides import MIN_STEADY_STRIDES, PERIOD_TOLERANCE
 
 __all__ = [
@@ -191,14 +193,13 @@ def toe_slide_distance(result, leg, t0: float | None = None) -> float:
     position between consecutive samples both in contact (stick, slide or strut; a pinned
     toe does not move, so this is the sliding), from the 1 kHz samples (those at or after
     ``t0`` [s] if given)."""
+    record = getattr(result, "stride_record", None)
+    if t0 is None and record is not None:  # a thinned or streamed run: from every sample
+        return record.toe_slide[leg_index(leg)]
     k = 0 if t0 is None else int(np.searchsorted(np.asarray(result.t, dtype=float), t0))
     mode = np.asarray(result.contact_mode(leg))[k:]
     x = np.asarray(result.toe_position(leg)[0], dtype=float)[k:]
-    if x.size < 2:
-        return 0.0
-    on = (mode[1:] != ContactMode.FLIGHT) & (mode[:-1] != ContactMode.FLIGHT)
-    dx = np.abs(np.diff(x))[on]
-    return float(np.sum(dx[np.isfinite(dx)]))
+    return toe_slide_length(mode, x)
 
 
 def _pitch_limit_deg(result) -> float:
@@ -229,19 +230,29 @@ def _settled(strides, tol: float) -> bool:
 
 
 def _counts(result, gait) -> dict:
-    t = np.asarray(result.t, dtype=float)
-    t0, t1 = float(t[0]), float(result.t_end)
-    span = t1 - t0
-    x = np.asarray(result.x, dtype=float)
-    distance = float(x[-1] - x[0])
-    slide = [toe_slide_distance(result, leg) for leg in (0, 1)]
+    """The counts a run's behaviour is decided from: over the whole run, from every
+    sample (a thinned or streamed run's ``stride_record``) or from its samples."""
+    record = getattr(result, "stride_record", None)
     legs = ("back", "front")
+    if record is not None and record.t_first is not None:
+        t0, x0, x1 = record.t_first, record.x_first, record.x_last
+        liftoffs = {n: record.event_count(L.EK_LIFTOFF, i) for i, n in enumerate(legs)}
+        touchdowns = {n: record.event_count(L.EK_TOUCHDOWN, i) for i, n in enumerate(legs)}
+    else:
+        x = np.asarray(result.x, dtype=float)
+        t0, x0, x1 = float(result.t[0]), float(x[0]), float(x[-1])
+        liftoffs = {n: int(len(result.event_times("liftoff", n))) for n in legs}
+        touchdowns = {n: int(len(result.event_times("touchdown", n))) for n in legs}
+    t1 = float(result.t_end)
+    span = t1 - t0
+    distance = float(x1 - x0)
+    slide = [toe_slide_distance(result, leg) for leg in (0, 1)]
     steady = gait.n_steady_strides > 0
     return {
         "n_strides": gait.n_strides,
         "n_steady_strides": gait.n_steady_strides,
-        "liftoffs": {n: int(len(result.event_times("liftoff", n))) for n in legs},
-        "touchdowns": {n: int(len(result.event_times("touchdown", n))) for n in legs},
+        "liftoffs": liftoffs,
+        "touchdowns": touchdowns,
         "ground_contact_fraction": {
             n: (_num(stance_overlap(gait.stance[n], t0, t1) / span) if span > 0 else None)
             for n in legs

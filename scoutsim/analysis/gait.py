@@ -38,11 +38,12 @@ from typing import Any
 
 import numpy as np
 
-from ..names import LegState, leg_index
+from ..names import leg_index
 from ..parameters import RobotParameters
 from .behaviour import classify_behaviour
-from .stances import stance_intervals, stance_overlap
+from .stances import stance_intervals, stance_overlap, stances_of_events
 from .stride_energy import input_and_weight, stride_energy
+from .stride_record import record_strides, retraction_saturation
 from .strides import (
     MIN_STEADY_STRIDES,
     PERIOD_TOLERANCE,
@@ -288,26 +289,25 @@ class GaitMetrics:
             parameters are not in the provenance.
         """
         li = leg_index(leg)
-        robot = (result.provenance or {}).get("robot")
-        if not robot:
-            return None
-        m = result.leg_state(li) == LegState.RETRACTION
-        n = int(np.count_nonzero(m))
+        record = getattr(result, "stride_record", None)
+        if record is not None and record.saturation is not None:  # from every sample
+            n, n_saturated = record.saturation[li]
+        else:
+            robot = (result.provenance or {}).get("robot")
+            if not robot:
+                return None
+            n, n_saturated = retraction_saturation(result, li, RobotParameters(**robot).leg(li))
         if n == 0:
             return None
-        i = np.asarray(result.motor_current(li))[m]
-        w = np.asarray(result.motor_speed(li))[m]
-        vb = np.asarray(result.battery_voltage)[m]
-        motor = RobotParameters(**robot).leg(li)
-        on_current = np.abs(i) >= (1.0 - 1e-3) * motor.current_limit
-        v_term = motor.armature_resistance * i + motor.speed_constant * w
-        on_voltage = np.abs(v_term) >= (1.0 - 1e-3) * vb
-        return float(np.count_nonzero(on_current | on_voltage) / n)
+        return float(n_saturated / n)
 
     @staticmethod
     def max_belt_deflection_deg(result):
         """Largest |belt deflection alpha - phi| of both legs over the run [deg] (Model II;
         0 for the other variants); None if there are no samples."""
+        record = getattr(result, "stride_record", None)
+        if record is not None and record.belt_deflection_max is not None:  # every sample
+            return json_float(math.degrees(record.belt_deflection_max))
         if len(result.t) == 0:
             return None
         b = np.concatenate(
@@ -471,8 +471,17 @@ def gait_metrics(
         raise ValueError(
             f"period_tolerance = {period_tolerance!r} is not allowed: must be in (0, 1)"
         )
-    stances = (stance_intervals(result, 0), stance_intervals(result, 1))
-    strides = converged_tail(split_strides(result, float(transient_s), stances), period_tolerance)
+    record = record_strides(result)
+    if getattr(result, "stride_record", None) is not None:  # the whole run's contacts
+        t_first = record.t_first if record.t_first is not None else 0.0
+        stances = tuple(
+            stances_of_events(record.contacts, leg, t_first, float(result.t_end)) for leg in (0, 1)
+        )
+    else:
+        stances = (stance_intervals(result, 0), stance_intervals(result, 1))
+    strides = converged_tail(
+        split_strides(result, float(transient_s), stances, record), period_tolerance
+    )
     return GaitMetrics(
         strides=strides,
         transient_s=float(transient_s),

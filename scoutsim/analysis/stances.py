@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._core.model import layout as L
 from ..names import EventKind, leg_index
 
-__all__ = ["stance_intervals", "stance_overlap"]
+__all__ = ["stance_intervals", "stances_of_events", "stance_overlap"]
 
 
 def stance_intervals(result, leg) -> np.ndarray:
@@ -36,10 +37,22 @@ def stance_intervals(result, leg) -> np.ndarray:
     (k, 2) ndarray
         Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
     """
-    log = result.event_log(kinds=(EventKind.TOUCHDOWN, EventKind.LIFTOFF), leg=leg_index(leg))
-    order = np.argsort(log["t"], kind="stable")
-    times, kinds = log["t"][order], log["kind"][order]
     t0 = float(result.t[0]) if len(result.t) else 0.0
+    return stances_of_events(result.events, leg, t0, float(result.t_end))
+
+
+def stances_of_events(events, leg, t_first: float, t_end: float) -> np.ndarray:
+    """:func:`stance_intervals` of the event records ``events`` ((m, NEVREC), the order
+    logged) of a run whose first sample is at ``t_first`` and which ended at ``t_end``
+    [s]."""
+    ev = np.asarray(events, dtype=float)
+    if ev.size == 0:
+        return np.empty((0, 2))
+    m = np.isin(ev[:, L.EVR_KIND], (EventKind.TOUCHDOWN, EventKind.LIFTOFF))
+    m &= ev[:, L.EVR_LEG] == leg_index(leg)
+    times, kinds = ev[m, L.EVR_T], ev[m, L.EVR_KIND].astype(int)
+    order = np.argsort(times, kind="stable")
+    times, kinds = times[order], kinds[order]
     out = []
     start = None
     for i, (te, kind) in enumerate(zip(times, kinds)):
@@ -51,9 +64,9 @@ def stance_intervals(result, leg) -> np.ndarray:
                 out.append((start, float(te)))
                 start = None
             elif i == 0:
-                out.append((t0, float(te)))
+                out.append((t_first, float(te)))
     if start is not None:
-        out.append((start, max(float(result.t_end), start)))
+        out.append((start, max(t_end, start)))
     return np.array(out, dtype=float).reshape(-1, 2)
 
 

@@ -19,9 +19,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from .interpolation import extrema, hermite
 from .stances import stance_overlap
-from .stride_energy import stride_energy
+from .stride_energy import StrideCosts
+from .stride_record import record_strides
 
 __all__ = [
     "Stride",
@@ -189,19 +189,18 @@ class Stride:
         return getattr(self, key)
 
 
-def split_strides(result, transient_s, stances):
-    t = np.asarray(result.t, dtype=float)
-    lo = np.sort(result.event_times("liftoff", "back").astype(float))
-    if len(lo) < 2 or len(t) == 0:
+def split_strides(result, transient_s, stances, record=None):
+    """The strides of ``result`` (:class:`Stride` in time order) from its
+    :class:`~scoutsim.analysis.stride_record.StrideRecord` (``record``, default
+    :func:`~scoutsim.analysis.stride_record.record_strides` of the result) and the stance
+    intervals of its two virtual legs (``stances``); strides that start before
+    ``transient_s`` [s] are not steady."""
+    record = record_strides(result) if record is None else record
+    lift, inner = record.liftoffs, record.interior
+    lo = lift["t"]
+    if len(lo) < 2 or record.n_samples == 0:
         return []
-    x = np.asarray(result.x, dtype=float)
-    dx = np.asarray(result.forward_speed, dtype=float)
-    th = np.asarray(result.pitch, dtype=float)
-    dth = np.asarray(result.pitch_rate, dtype=float)
-    hy = np.asarray(result.height, dtype=float)
-    dhy = np.asarray(result.vertical_speed, dtype=float)
     t_end_run = float(result.t_end)
-    xs = hermite(t, x, dx, lo)
     # each stride's stances, found once for all strides: the rows of each leg's intervals
     # (disjoint, in time order) that end at or after the stride's start and begin at or
     # before its end, so that the split is linear in the run's length
@@ -212,7 +211,7 @@ def split_strides(result, transient_s, stances):
         )
         for iv in stances
     ]
-    cumulative = {}
+    costs = StrideCosts(result, record)
     out = []
     for k in range(len(lo) - 1):
         a, b = float(lo[k]), float(lo[k + 1])
@@ -220,8 +219,10 @@ def split_strides(result, transient_s, stances):
         period = b - a
         if not period > 0.0:
             continue  # duplicate event time: not a stride
-        pmax, pmin = extrema(t, th, dth, a, b)
-        hmax, hmin = extrema(t, hy, dhy, a, b)
+        pitch = np.array([lift["pitch"][k], lift["pitch"][k + 1], inner["pitch_max"][k]])
+        pitch_low = np.array([lift["pitch"][k], lift["pitch"][k + 1], inner["pitch_min"][k]])
+        height = np.array([lift["height"][k], lift["height"][k + 1], inner["height_max"][k]])
+        height_low = np.array([lift["height"][k], lift["height"][k + 1], inner["height_min"][k]])
         out.append(
             Stride(
                 index=len(out),
@@ -231,13 +232,13 @@ def split_strides(result, transient_s, stances):
                 stride_frequency_hz=1.0 / period,
                 duty_factor_back=stance_overlap(legs[0], a, b) / period,
                 duty_factor_front=stance_overlap(legs[1], a, b) / period,
-                pitch_max_deg=math.degrees(pmax),
-                pitch_min_deg=math.degrees(pmin),
-                height_max_m=hmax,
-                height_min_m=hmin,
-                mean_speed_m_s=float(xs[k + 1] - xs[k]) / period,
+                pitch_max_deg=math.degrees(float(np.max(pitch))),
+                pitch_min_deg=math.degrees(float(np.min(pitch_low))),
+                height_max_m=float(np.max(height)),
+                height_min_m=float(np.min(height_low)),
+                mean_speed_m_s=float(lift["x"][k + 1] - lift["x"][k]) / period,
                 steady=bool(a >= transient_s and b <= t_end_run),
-                **stride_energy(result, a, b, cumulative),
+                **costs.of(k),
             )
         )
     return out

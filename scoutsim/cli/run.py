@@ -18,7 +18,10 @@ has what the gait costs (``electrical_energy_j``, ``cost_of_transport``, ...,
 the timeseries table the cumulative energies. ``--plots``: run.png, torque_speed.png
 and stride_power.png (power over a steady stride by destination); ``--csv``: the plain
 timeseries.csv; ``--npz``: result.npz. :meth:`scoutsim.SimulationResult.load` reads DIR
-(or result.npz) back bit for bit.
+(or result.npz) back bit for bit. ``--record-rate HZ`` thins the timeseries table to HZ
+samples per second; the summary's strides, gait metrics and energy stay the full-rate
+run's. A run that would take more than ``--memory-budget`` (1 GB) held in memory streams
+its tables to disk as they are computed (``--stream``).
 
 Exit code 1 if the integration failed numerically, 130 if interrupted (the data so far is
 still written); a fall is a completed run (exit 0, the summary says so).
@@ -67,6 +70,10 @@ from .run_outputs import (
     write_timeseries_csv,
 )
 from .run_summary import format_energy, format_summary
+
+#: memory [GB] a run's time series may take before ``scoutsim run`` streams it to disk
+DEFAULT_MEMORY_BUDGET_GB = 1.0
+
 
 NAME = "run"
 
@@ -179,10 +186,11 @@ def register(sub, common) -> None:
         "--stream",
         action="store_true",
         help="write the tables as the run is computed, keeping only its last "
-        "--keep seconds in memory (for runs too long for memory; the "
-        "summary and figures cover the kept end). Chosen by itself when "
-        "the run would not fit in memory; refused before starting when "
-        "the disk cannot hold the tables",
+        "--keep seconds in memory (for long runs: the strides, gait "
+        "metrics and energy in the summary cover the whole run, the "
+        "figures the kept end). Chosen by itself when the time series "
+        "would take more than --memory-budget; refused before starting "
+        "when the disk cannot hold the tables",
     )
     run.add_argument(
         "--keep",
@@ -191,6 +199,26 @@ def register(sub, common) -> None:
         metavar="S",
         help="with --stream: seconds at the end of the run kept in memory for "
         f"the summary and figures (default: {DEFAULT_KEEP_SECONDS:g})",
+    )
+    run.add_argument(
+        "--record-rate",
+        type=positive_float,
+        default=None,
+        metavar="HZ",
+        help="samples per second of the timeseries table: the control rate "
+        "(1000 Hz) divided by a whole number, e.g. 100 (default: every control "
+        "sample). The events, strides, gait metrics and energy balance stay "
+        "those of the full-rate run; the table and memory shrink",
+    )
+    run.add_argument(
+        "--memory-budget",
+        type=positive_float,
+        default=DEFAULT_MEMORY_BUDGET_GB,
+        metavar="GB",
+        help="memory the run may take; a run that would take more held in "
+        "memory (about 4x its time series) streams its tables to disk as they "
+        "are computed, as with --stream (default: "
+        f"{DEFAULT_MEMORY_BUDGET_GB:g})",
     )
     run.add_argument(
         "--no-size-check",
@@ -252,20 +280,31 @@ def _write_outputs(args, out, result, summary, rd, command, info, interrupted):
     return rd
 
 
-def _stream_choice(args) -> bool:
+def _stream_choice(args, control_period: float) -> bool:
     """Whether the run streams its tables to disk: asked with --stream, or chosen because
-    the run would not fit in memory (said on stderr)."""
-    from ..simulation.budgets import check_run_memory
+    its time series would take more than --memory-budget (said on stderr)."""
+    from ..simulation.budgets import PEAK_PER_SERIES, time_series_bytes
+    from ..simulation.record_rate import samples_per_record
 
     if args.keep is not None and not args.stream:
         raise UsageError("--keep is only allowed with --stream")
     try:
-        if not args.no_size_check:
-            check_run_memory(args.duration, record_steps=args.steps)
-        fits = True
-    except ValueError:
-        fits = False
+        every = samples_per_record(args.record_rate, control_period)
+    except ValueError as exc:
+        raise UsageError(str(exc).replace("record_rate", "--record-rate", 1)) from None
+    need = time_series_bytes(
+        args.duration, record_steps=args.steps, dt=control_period, record_every=every
+    )
+    fits = args.no_size_check or need * PEAK_PER_SERIES <= args.memory_budget * 1e9
     stream = args.stream or not fits
+    if stream and not args.stream and (args.csv or args.npz):
+        raise UsageError(
+            f"{'--csv' if args.csv else '--npz'} needs the whole time series in memory, "
+            f"and {args.duration:g} s held in memory would take about "
+            f"{need * PEAK_PER_SERIES / 1e9:.2g} GB, more than the memory budget of "
+            f"{args.memory_budget:g} GB: give a larger --memory-budget, a lower "
+            "--record-rate, or leave it out"
+        )
     if stream and (args.csv or args.npz):
         raise UsageError(
             f"{'--csv' if args.csv else '--npz'} is not allowed with a streamed "
@@ -274,9 +313,13 @@ def _stream_choice(args) -> bool:
         )
     if stream and not args.stream:
         print(
-            f"scoutsim run: {args.duration:g} s would not fit in memory: streaming the "
-            "tables to disk as they are computed (the summary covers the last "
-            f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep)",
+            f"scoutsim run: {args.duration:g} s held in memory would take about "
+            f"{need * PEAK_PER_SERIES / 1e9:.2g} GB, "
+            f"more than the memory budget of {args.memory_budget:g} GB: streaming the "
+            "tables to disk as they are computed (the strides, gait metrics and "
+            "energy cover the whole run, the figures its last "
+            f"{DEFAULT_KEEP_SECONDS:g} s; see --stream, --keep, --memory-budget, "
+            "--record-rate)",
             file=sys.stderr,
         )
     return stream
@@ -331,7 +374,7 @@ def execute(args) -> int:
         raise UsageError("--energy and --no-energy are not allowed together")
     energy = not args.no_energy
     check_expected_time(args, {args.model: args.duration})
-    stream = _stream_choice(args)
+    stream = _stream_choice(args, float(getattr(controller, "control_period", 1e-3)))
     load_s = warm_up()
     command = " ".join(["scoutsim"] + sys.argv[1:])
     info = {
@@ -358,6 +401,7 @@ def execute(args) -> int:
             check_memory=not args.no_size_check,
             energy=energy,
             sensors=sensors,
+            record_rate=args.record_rate,
             **({"keep_seconds": args.keep, "table_format": args.format} if stream else {}),
         )
     wall = time.perf_counter() - wall0
@@ -424,8 +468,9 @@ def execute(args) -> int:
         if stream and result.provenance["stream"]["kept_from_s"] is not None:
             kept = result.provenance["stream"]["kept_from_s"]
             print(
-                f"  (streamed run: the summary covers t = {kept:.6g} - {result.t_end:.6g} s, "
-                "the tables hold the whole run)"
+                f"  (streamed run: the strides, gait metrics and energy cover the whole "
+                f"run, the figures and the sample-based figures t = {kept:.6g} - "
+                f"{result.t_end:.6g} s; the tables hold the whole run)"
             )
         print(f"wrote {', '.join(f.name for f in files)} to {out}/")
     if result.outcome == "numerical_failure":

@@ -102,7 +102,12 @@ class EnergyAccessors(RunData):
         """
         columns = self._energy_columns(name, leg)  # (raises if the run has no accounting)
         assert self.energy_series is not None
-        return self.energy_series[:, columns].sum(axis=1)
+        # column by column, so that each sample's sum is the same however many samples
+        # are summed at once (a run taken in pieces: analysis.stride_record)
+        out = self.energy_series[:, columns[0]].copy()
+        for c in columns[1:]:
+            out += self.energy_series[:, c]
+        return out
 
     def power(self, name: str, leg=None) -> np.ndarray:
         """Mean power [W] into destination ``name`` (as :meth:`cumulative_energy`) over

@@ -5,6 +5,7 @@ place for the class and for each of its accessor mixins."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -28,4 +29,5 @@ class RunData:
     steps: np.ndarray | None = None
     energy_flows: dict | None = None
     energy_series: np.ndarray | None = None
+    stride_record: Any = field(default=None, repr=False, compare=False)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)

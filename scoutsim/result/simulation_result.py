@@ -79,6 +79,11 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         start of the run to each sample [J], if the run accounted for its energy, else
         None. Read it with :meth:`cumulative_energy` and :meth:`power`. A window of a run
         (:meth:`window`, a streamed run's kept end) keeps the values since the run's start.
+    stride_record : what the strides of the whole run need, taken from every sample as the
+        run was computed (:class:`~scoutsim.analysis.stride_record.StrideRecord`), for a
+        run recorded at a lower rate (``simulate(record_rate=...)``) or streamed; its
+        strides and gait metrics come from it. None for a run held whole at the full rate
+        (its strides come from its samples) and for a :meth:`window`.
     """
 
     # -- analysis (computed on demand) -----------------------------------------------------
@@ -158,6 +163,7 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
             event_states=None if self.event_states is None else self.event_states[j],
             steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
             energy_series=None if self.energy_series is None else self.energy_series[k],
+            stride_record=None,
             _cache={},
         )
 

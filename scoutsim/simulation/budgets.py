@@ -11,10 +11,12 @@ from .._core.model import layout as L
 
 __all__ = [
     "check_run_memory",
+    "time_series_bytes",
     "check_stream_disk",
     "expected_wall_time",
     "physical_memory_bytes",
     "STREAM_CHUNK_SECONDS",
+    "PEAK_PER_SERIES",
     "WALL_S_PER_SIMULATED_S",
 ]
 
@@ -38,23 +40,38 @@ def physical_memory_bytes() -> int | None:
         return None
 
 
+def _bytes_per_sample(record_steps: bool, dt: float, record_every: int) -> float:
+    return (
+        BYTES_PER_SAMPLE / record_every
+        + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
+        + EVENT_ROWS_PER_S * dt * BYTES_PER_EVENT
+    )
+
+
+def time_series_bytes(
+    duration: float, *, record_steps: bool = False, dt: float = 1e-3, record_every: int = 1
+) -> int:
+    """The memory [bytes] the time series of a run of ``duration`` [s] takes held in
+    memory: every ``record_every``-th control sample of period ``dt`` [s], the events
+    and, with ``record_steps``, the integrator steps."""
+    return int(int(duration / dt + 2) * _bytes_per_sample(record_steps, dt, record_every))
+
+
 def check_run_memory(
     duration: float,
     *,
     record_steps: bool = False,
     dt: float = 1e-3,
     memory_bytes: int | None = None,
+    record_every: int = 1,
 ) -> int:
-    """The memory a run of ``duration`` [s] needs for its time series [bytes]; ValueError
-    if that is more than half of this machine's memory (``memory_bytes``, default: the
-    physical memory), saying how long a run can be (a longer one can be split: resume from
+    """The memory a run of ``duration`` [s] needs for its time series [bytes] (every
+    ``record_every``-th control sample of period ``dt`` [s] recorded); ValueError if that
+    is more than half of this machine's memory (``memory_bytes``, default: the physical
+    memory), saying how long a run can be (a longer one can be split: resume from
     ``result.hybrid_state(-1)``)."""
-    per_sample = (
-        BYTES_PER_SAMPLE
-        + (STEPS_PER_SAMPLE * BYTES_PER_STEP if record_steps else 0)
-        + EVENT_ROWS_PER_S * dt * BYTES_PER_EVENT
-    )
-    need = int(int(duration / dt + 2) * per_sample)
+    per_sample = _bytes_per_sample(record_steps, dt, record_every)
+    need = time_series_bytes(duration, record_steps=record_steps, dt=dt, record_every=record_every)
     have = physical_memory_bytes() if memory_bytes is None else memory_bytes
     if have is not None and need > have // 2:
         longest = (have // 2) / per_sample * dt
@@ -67,6 +84,12 @@ def check_run_memory(
         )
     return need
 
+
+#: a run held in memory and written by ``scoutsim run`` peaks at about this many times
+#: the memory of its time series (:func:`check_run_memory`): the tables' columns while
+#: they are written, the analysis; measured on Model II with the energy accounting
+#: (``benchmarks/bench_scaling.py``): 3.7x at 600 s, 2.8x at 3600 s
+PEAK_PER_SERIES = 4.0
 
 #: bytes per control sample of a streamed run's tables on disk (time series and events),
 #: with a margin: Parquet (zstd) of a 12 s Model II run takes 370 B per sample (the

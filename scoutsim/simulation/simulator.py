@@ -46,6 +46,7 @@ from .budgets import (
 from .engine import HybridEngine, start_engine
 from .initial_conditions import default_initial_state, named_start
 from .integrator import IntegratorSettings
+from .record_rate import RecordedPieces, samples_per_record
 
 __all__ = [
     "simulate",
@@ -81,7 +82,7 @@ class Recording:
     :func:`simulate`, which, given and not None, overrides the bundle's): ``progress``,
     ``chunk_seconds`` [s],
     ``record_steps``, ``check_memory``, ``stream_to``, ``keep_seconds`` [s],
-    ``table_format``, ``energy`` (see :func:`simulate`)."""
+    ``table_format``, ``energy``, ``record_rate`` [Hz] (see :func:`simulate`)."""
 
     progress: bool = False
     chunk_seconds: float = 1.0
@@ -91,6 +92,7 @@ class Recording:
     keep_seconds: float | None = None
     table_format: str | None = None
     energy: bool = False
+    record_rate: float | None = None
 
 
 #: :func:`simulate`'s keywords for the plant beyond the robot, with their defaults (those of
@@ -149,6 +151,7 @@ def simulate(
     keep_seconds: float | None = None,
     table_format: str | None = None,
     energy: bool | None = None,
+    record_rate: float | None = None,
 ) -> SimulationResult:
     """Simulate the planar Scout II model.
 
@@ -237,6 +240,19 @@ def simulate(
         (default :data:`scoutsim.simulation.streaming.DEFAULT_KEEP_SECONDS`, 60 s).
     table_format : {"parquet", "csv"} or None
         With ``stream_to``: the tables' format (default Parquet if pyarrow is installed).
+    record_rate : float or None
+        Samples per second [Hz] of the recorded time series (``result.t``, ``state``,
+        ``aux``, ``modes``, ``energy_series`` and a streamed run's ``timeseries``
+        table): the control rate divided by a whole number k (1000, 500, 250, 200, 100,
+        ... Hz for the 1 ms control period); every k-th control sample from the first is
+        kept, and the run's last. Default None: every control sample. The events (times
+        and exact states), the integrator steps, the energy totals
+        (``result.energy_flows``, ``energy_balance()``), the strides, gait metrics and
+        per-stride energies are those of the full-rate run, bit for bit: the strides are
+        read from every sample as the run is computed
+        (:mod:`scoutsim.simulation.record_rate`). Sample-based figures of the summary
+        (the saturation fractions, the largest belt deflection) and plots read the kept
+        samples. The simulation costs the same; memory and tables shrink by k.
     energy : bool or None
         Account for every power flow of the model over the whole run (electrical energy,
         copper and transmission losses, hip work, joint, belt, leg and toe friction and
@@ -277,6 +293,7 @@ def simulate(
             keep_seconds=keep_seconds,
             table_format=table_format,
             energy=energy,
+            record_rate=record_rate,
         ),
     )
     progress, chunk_seconds, record_steps, check_memory = (
@@ -285,11 +302,12 @@ def simulate(
         rec.record_steps,
         rec.check_memory,
     )
-    stream_to, keep_seconds, table_format, energy = (
+    stream_to, keep_seconds, table_format, energy, record_rate = (
         rec.stream_to,
         rec.keep_seconds,
         rec.table_format,
         rec.energy,
+        rec.record_rate,
     )
     robot = validate_robot(robot if robot is not None else RobotParameters())
     if environment is not None and friction_coefficient is not None:
@@ -310,14 +328,14 @@ def simulate(
     )
     if stream_to is None and (keep_seconds is not None or table_format is not None):
         raise ValueError("keep_seconds and table_format are only allowed with stream_to")
-    if check_memory and stream_to is None:
-        check_run_memory(duration, record_steps=record_steps)
-
     plan = plan_controller(controller, model, robot, sensors)
     cparams = plan.parameters
     if plan.kind == "builtin":
         validate_parameters(robot, cparams)
     dt = plan.control_period
+    every = samples_per_record(record_rate, dt)
+    if check_memory and stream_to is None:
+        check_run_memory(duration, record_steps=record_steps, dt=dt, record_every=every)
     initial_state, startup = named_start(
         initial_state, startup, model, robot, cparams, plan.controller
     )
@@ -344,11 +362,13 @@ def simulate(
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
         # fewer, larger pieces: each costs ~5 ms of table writing
         chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
+    # the pieces of a thinned or streamed run, its strides read from every sample
+    sink = RecordedPieces(every, stream, robot) if every > 1 or stream is not None else None
     eng = HybridEngine.assembled(
         setup,
         duration,
         record_steps=record_steps,
-        rows=None if stream is None else chunk + 2,
+        rows=None if sink is None else chunk + 2,
         energy=energy,
     )
     user_ctrl = plan.controller
@@ -381,13 +401,13 @@ def simulate(
             started = run_startup(eng, startup, cparams)
             if bar is not None:
                 bar.update(round(eng.k * dt, 6))
-            written = stream is None or stream.take(eng)
+            written = sink is None or sink.take(eng)
         while written and eng.running:
             k_prev = eng.k
             eng.advance(eng.k + chunk)
             if bridge is not None and bridge.interrupted:
                 raise KeyboardInterrupt
-            if stream is not None and not stream.take(eng):
+            if sink is not None and not sink.take(eng):
                 break  # the disk refused a piece (full): outcome "write_failed", below
             if bar is not None:
                 bar.update(round((eng.k - k_prev) * dt, 6))
@@ -450,20 +470,36 @@ def simulate(
         error = ControllerError(
             message, controller=user_ctrl, t=k_fail * dt, sample=k_fail, returned=returned
         )
+    if every > 1:
+        provenance["record_rate_hz"] = 1.0 / (every * dt)
     if stream is None:
-        result = eng.result(provenance, interrupted, {"wall_time_s": wall})
+        if sink is None:
+            result = eng.result(provenance, interrupted, {"wall_time_s": wall})
+        else:
+            sink.take(eng)  # (a Ctrl-C between the compiled call and take(): its rows)
+            sink.close()
+            result = sink.result(
+                eng.result(
+                    provenance,
+                    interrupted,
+                    {"wall_time_s": wall},
+                    last_sample_t=sink.last_sample_t,
+                )
+            )
         if error is not None:
             error.result = result
             raise error from (failure[2] if failure is not None else None)
         return result
+    assert sink is not None, "a streamed run takes its pieces through the sink"
     try:
         if stream.write_error is None:
-            stream.take(eng)  # a Ctrl-C between the compiled call and take(): its rows
+            if sink.take(eng):  # a Ctrl-C between the compiled call and take(): its rows
+                sink.close()
     except BaseException:
         stream.abort()
         raise
     whole = eng.result(
-        provenance, interrupted, {"wall_time_s": wall}, last_sample_t=stream.last_sample_t
+        provenance, interrupted, {"wall_time_s": wall}, last_sample_t=sink.last_sample_t
     )
     if stream.write_error is not None:
         whole.outcome = "write_failed"
@@ -479,6 +515,7 @@ def simulate(
     kept = stream.finish(
         whole, partial=interrupted or stream.write_error is not None or error is not None
     )
+    kept.stride_record = sink.stride_record()
     if error is not None:
         error.result = kept
         raise error from (failure[2] if failure is not None else None)

@@ -30,11 +30,59 @@ from ..io.tables import TableWriter
 from ..result.run_files import TABLES_FORMAT
 from ..result.simulation_result import SimulationResult
 
-__all__ = ["RunStream", "DEFAULT_KEEP_SECONDS"]
+__all__ = ["RunStream", "DEFAULT_KEEP_SECONDS", "take_piece", "join_pieces"]
 
 #: seconds of the end of a streamed run kept in memory (and returned) by default: enough
 #: for the steady-state gait metrics of the summary (a stride is about 0.3 s)
 DEFAULT_KEEP_SECONDS = 60.0
+
+
+def take_piece(eng) -> SimulationResult:
+    """What the engine ``eng`` computed since the last call (samples, events and, with
+    ``record_steps``, steps) as a result of its own (outcome "running"), the engine's
+    buffers emptied for the next piece."""
+    n, m = eng.n_out, min(eng.nev, eng.ev.shape[0])
+    nst = int(eng.stepc[0]) if eng.stepc[1] else 0
+    piece = SimulationResult(
+        t=eng.out_t[:n].copy(),
+        state=eng.out_s[:n].copy(),
+        aux=eng.out_aux[:n].copy(),
+        modes=eng.out_ls[:n].copy(),
+        events=eng.ev[:m, : L.NEVREC].copy(),
+        event_states=eng.ev[:m, L.NEVREC :].reshape(m, 2, L.NS).copy(),
+        steps=eng.steps[:nst].copy() if eng.stepc[1] else None,
+        energy_series=eng.out_energy[:n].copy() if eng.energy.size else None,
+        outcome="running",
+        t_end=float(eng.t_now),
+        stats={},
+        provenance={},
+    )
+    eng.n_out = eng.nev = 0
+    eng.stepc[0] = 0
+    return piece
+
+
+def join_pieces(pieces: list, whole: SimulationResult) -> SimulationResult:
+    """The pieces of a run (:func:`take_piece`, in time order) joined into one result
+    with the whole run's outcome, end, statistics, provenance and energy totals
+    (``whole``)."""
+    steps = [c.steps for c in pieces if c.steps is not None]
+    energy = [c.energy_series for c in pieces if c.energy_series is not None]
+    return SimulationResult(
+        t=np.concatenate([c.t for c in pieces]),
+        state=np.concatenate([c.state for c in pieces]),
+        aux=np.concatenate([c.aux for c in pieces]),
+        modes=np.concatenate([c.modes for c in pieces]),
+        events=np.concatenate([c.events for c in pieces]),
+        event_states=np.concatenate([c.event_states for c in pieces]),
+        steps=np.concatenate(steps) if steps else None,
+        energy_series=np.concatenate(energy) if energy else None,
+        outcome=whole.outcome,
+        t_end=whole.t_end,
+        stats=whole.stats,
+        provenance=whole.provenance,
+        energy_flows=whole.energy_flows,
+    )
 
 
 class RunStream:
@@ -101,30 +149,16 @@ class RunStream:
     def take(self, eng) -> bool:
         """Write what the engine computed since the last call and empty its buffers; False
         if the disk refused it (a full disk: :attr:`write_error`, the run should stop)."""
+        return self.write(take_piece(eng))
+
+    def write(self, chunk: SimulationResult) -> bool:
+        """Write the piece ``chunk`` of the run (:func:`take_piece`); False if the disk
+        refused it (a full disk: :attr:`write_error`, the run should stop)."""
         if not self._opened:
             self._open()
-        n, m = eng.n_out, min(eng.nev, eng.ev.shape[0])
-        nst = int(eng.stepc[0]) if eng.stepc[1] else 0
-        if n == 0 and m == 0 and nst == 0:
+        n = len(chunk.t)
+        if n == 0 and len(chunk.events) == 0 and (chunk.steps is None or len(chunk.steps) == 0):
             return True
-        chunk = SimulationResult(
-            t=eng.out_t[:n].copy(),
-            state=eng.out_s[:n].copy(),
-            aux=eng.out_aux[:n].copy(),
-            modes=eng.out_ls[:n].copy(),
-            events=eng.ev[:m, : L.NEVREC].copy(),
-            event_states=eng.ev[:m, L.NEVREC :].reshape(m, 2, L.NS).copy(),
-            steps=eng.steps[:nst].copy() if eng.stepc[1] else None,
-            energy_series=eng.out_energy[:n].copy() if eng.energy.size else None,
-            outcome="running",
-            t_end=float(eng.t_now),
-            stats={},
-            provenance={},
-        )
-        # kept (and the buffers emptied) before writing: a piece the disk refuses is still
-        # in the returned result
-        eng.n_out = eng.nev = 0
-        eng.stepc[0] = 0
         self._keep(chunk)
         if n:
             self.last_sample_t = float(chunk.t[-1])
@@ -228,25 +262,7 @@ class RunStream:
         if not any(len(c.t) for c in ch):  # nothing computed (stopped before a sample)
             info["kept_from_s"] = None
             return whole
-        joined = SimulationResult(
-            t=np.concatenate([c.t for c in ch]),
-            state=np.concatenate([c.state for c in ch]),
-            aux=np.concatenate([c.aux for c in ch]),
-            modes=np.concatenate([c.modes for c in ch]),
-            events=np.concatenate([c.events for c in ch]),
-            event_states=np.concatenate([c.event_states for c in ch]),
-            steps=None if ch[0].steps is None else np.concatenate([c.steps for c in ch]),
-            energy_series=(
-                None
-                if ch[0].energy_series is None
-                else np.concatenate([c.energy_series for c in ch])
-            ),
-            outcome=whole.outcome,
-            t_end=whole.t_end,
-            stats=whole.stats,
-            provenance=whole.provenance,
-            energy_flows=whole.energy_flows,
-        )
+        joined = join_pieces(ch, whole)
         t0 = float(joined.t[np.searchsorted(joined.t, joined.t[-1] - self.keep_seconds)])
         info["kept_from_s"] = t0
         return joined.window(t0, np.inf)

@@ -10,6 +10,7 @@ import scoutsim
 from scoutsim.analysis import stances as stances_module
 from scoutsim.analysis import strides as strides_module
 from scoutsim.analysis.gait import gait_metrics
+from scoutsim.analysis.stride_record import StrideRecord
 
 
 @pytest.fixture(scope="module")
@@ -19,9 +20,10 @@ def runs():
 
 
 def _counted(result, monkeypatch):
-    """(gait metrics, impact-log reads, stance rows handed to the overlaps) of ``result``."""
+    """(gait metrics, reads of the run's impacts, stance rows handed to the overlaps) of
+    ``result``."""
     counts = {"impact_log": 0, "stance_rows": 0}
-    real_impact_log = type(result).impact_log
+    real_impact_log = StrideRecord.impacts
     real_overlap = stances_module.stance_overlap
 
     def impact_log(self, *args, **kwargs):
@@ -33,7 +35,7 @@ def _counted(result, monkeypatch):
         return real_overlap(intervals, a, b)
 
     with monkeypatch.context() as m:
-        m.setattr(type(result), "impact_log", impact_log)
+        m.setattr(StrideRecord, "impacts", impact_log)
         m.setattr(strides_module, "stance_overlap", overlap)
         metrics = gait_metrics(result)
     return metrics, counts

@@ -349,7 +349,7 @@ def test_cli_streams_a_run_too_long_for_memory_and_refuses_one_too_long_for_the_
         == 2
     )
     err = capsys.readouterr().err
-    assert "would not fit in memory: streaming" in err
+    assert "more than the memory budget of 1 GB: streaming" in err
     assert "1e+09 s is not allowed here" in err and "on disk" in err
     assert [p.name for p in out.iterdir()] == ["earlier.txt"]  # refused before touching it
 

@@ -152,8 +152,14 @@ def test_cli_stream_writes_the_tables_of_the_run_in_memory(tmp_path, capsys):
     assert main([*base, "--out", str(tmp_path / "memory")]) == 0
     assert main([*base, "--stream", "--keep", "3", "--out", str(tmp_path / "streamed")]) == 0
     out = capsys.readouterr().out
-    assert "streamed run: the summary covers t = 9 - 12 s" in out
+    assert "the sample-based figures t = 9 - 12 s" in out
     _same_tables(tmp_path / "memory", tmp_path / "streamed")
+    # the streamed run's strides and energy are the whole run's, not its kept end's
+    memory, streamed = (
+        json.loads((tmp_path / d / "summary.json").read_text()) for d in ("memory", "streamed")
+    )
+    for key in ("n_strides", "mean_speed_m_s", "cost_of_transport", "electrical_energy_j"):
+        assert streamed[key] == memory[key], key
     manifest = check_run_directory(tmp_path / "streamed")
     assert manifest["status"] == "complete" and manifest["streamed"] is True
     assert {"timeseries.parquet", "events.parquet", "summary.json"} <= set(manifest["files"])
