@@ -218,7 +218,9 @@ def simulate(
         Show a progress bar (tqdm) on stderr (default False).
     chunk_seconds : float or None
         Simulated time [s] per call of the compiled loop (progress updates, interrupts;
-        default 1 s); the result does not depend on it.
+        default 1 s; a streamed or thinned run takes at least
+        :data:`~scoutsim.simulation.budgets.STREAM_CHUNK_SECONDS` per call); the result
+        does not depend on it.
     record_steps : bool or None
         Also record every integrator step (``result.steps``: time, state and plant modes at
         the end of each step, layout ``STP_*``); off by default (a 10 s Model II run takes
@@ -360,10 +362,11 @@ def simulate(
         )
         if check_memory:
             check_stream_disk(duration, stream.dir, record_steps=record_steps, dt=dt)
-        # fewer, larger pieces: each costs ~5 ms of table writing
-        chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
     # the pieces of a thinned or streamed run, its strides read from every sample
     sink = RecordedPieces(every, stream, robot) if every > 1 or stream is not None else None
+    if sink is not None:
+        # fewer, larger pieces: each costs ~1 ms of stride record and ~5 ms of table writing
+        chunk = max(chunk, int(round(STREAM_CHUNK_SECONDS / dt)))
     eng = HybridEngine.assembled(
         setup,
         duration,
