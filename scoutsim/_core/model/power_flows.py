@@ -4,7 +4,8 @@ For the work-energy balance of a run (``simulate(energy=True)``,
 ``SimulationResult.energy_balance``, docs/model.md "Work-energy balance"): at a state and
 its evaluation, every power flow [W] of the model, per virtual leg (both motors of a leg
 together), into the slots of ``layout.EN_*``. The integrator integrates them over each of
-its steps (``scoutsim._core.numerics.step_energy``); the impact losses come from the touchdown records.
+its steps, at the stages of the step (``scoutsim._core.numerics.step_energy``); the impact
+losses come from the touchdown records.
 
 Per motor, with current i, motor speed w_m (relative to the torso), delivered torque
 tau_out and the paper's constant-efficiency torque tau_0 = N eta K_T i (docs/specification.md
@@ -24,8 +25,9 @@ section 4):
 
 The dissipations are computed from the forces *as they acted* in the evaluation (the axial
 leg force, the belt torque, the joint friction torque, the ground force, the constraint
-multipliers) times the velocities they act through, so the balance checks that every force
-enters the equations of motion with the power it claims.
+multipliers) times the velocities they act through, at the state as the evaluation
+projected it (held in its workspace), so the balance checks that every force enters the
+equations of motion with the power it claims.
 """
 
 from __future__ import annotations
@@ -81,20 +83,23 @@ from .layout import (
     STUCK,
 )
 from .leg import leg_damping
-from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_META, WK_RLEG
+from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_L, WK_META, WK_Q, WK_RLEG
 
 
 @kernel
-def power_flows(s, ds, aux, P, mi, wk, wA, out):
-    """Every power flow [W] of the model at state ``s`` (projected) into ``out`` (layout
-    ``EN_*``), from the evaluation just made there with outputs: its derivative ``ds``,
-    outputs ``aux`` and workspace ``wk, wA`` (:func:`~scoutsim._core.model.evaluate.evaluate_ws`
-    with ``want_aux``)."""
+def power_flows(ds, aux, P, mi, wk, wA, out):
+    """Every power flow [W] of the model into ``out`` (layout ``EN_*``), from an evaluation
+    (:func:`~scoutsim._core.model.evaluate.evaluate_ws`) held in its workspace ``wk, wA``
+    (the projected state, the velocities, the constraint rows and multipliers): its
+    derivative ``ds`` and its outputs ``aux`` (filled by the evaluation with ``want_aux``,
+    or afterwards by :func:`~scoutsim._core.model.evaluate.fill_outputs`)."""
     model = int(P[P_MODEL])
     npl = P[P_NP]
     for i in range(out.shape[0]):
         out[i] = 0.0
+    q = wk[WK_Q : WK_Q + NQ]
     dq = wk[WK_DQ : WK_DQ + NQ]
+    lengths = wk[WK_L : WK_L + 2]
     p_el_total = 0.0
     for leg in range(2):
         o = leg * NAUX_LEG
@@ -124,17 +129,17 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
                 out[e + EN_JOINT_VISCOUS] = p_visc
                 out[e + EN_JOINT_COULOMB] = p_joint - p_visc
             rate = dq[IALB + leg] - dq[IPHB + leg]
-            spring = P[P_KB + leg] * belt_spring(s[IALB + leg] - s[IPHB + leg], leg, P)[0]
+            spring = P[P_KB + leg] * belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0]
             out[e + EN_BELT_DAMPER] = npl * (aux[o + A_TAU_BELT] - spring) * rate
         # telescopic leg: the axial force as it acted, less its spring part, through the
         # leg's rate of extension (in flight the massless toe's force balance makes the
         # axial force zero: the spring's power is all dissipated)
         ld = ds[IL_B + leg]
-        ll = s[IL_B + leg]
+        ll = lengths[leg]
         f_spring = npl * P[P_K + leg] * (P[P_L0 + leg] - ll)
         if mode != STRUT:
             p_leg = -(aux[o + A_FAX] - f_spring) * ld
-            p_damp = npl * leg_damping(s[IPHB + leg], leg, P) * ld * ld
+            p_damp = npl * leg_damping(q[IPHB + leg], leg, P) * ld * ld
             out[e + EN_LEG_DAMPER] = p_damp
             out[e + EN_LEG_FRICTION] = p_leg - p_damp
         out[e + EN_TOE_SLIDE] = -aux[o + A_GT] * aux[o + A_SLIP_V]
