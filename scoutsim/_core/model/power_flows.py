@@ -86,7 +86,7 @@ from .leg import leg_damping
 from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_L, WK_META, WK_Q, WK_RLEG
 
 
-@kernel(inline="always")
+@kernel
 def power_flows(ds, aux, P, mi, wk, wA, out):
     """Every power flow [W] of the model into ``out`` (layout ``EN_*``), from an evaluation
     (:func:`~scoutsim._core.model.evaluate.evaluate_ws`) held in its workspace ``wk, wA``

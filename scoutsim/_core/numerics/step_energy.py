@@ -34,14 +34,14 @@ def accounting(en):
     return en.quad.shape[0] > 0
 
 
-@kernel
+@kernel(inline="always")
 def power_at(ds, aux, P, mi, ew, out):
     """The power flows into ``out`` at the evaluation just made on the workspace ``ew``
     with outputs (``want_aux``): its derivative ``ds`` and outputs ``aux``."""
     power_flows(ds, aux, P, mi, ew[0], ew[1], out)
 
 
-@kernel
+@kernel(inline="always")
 def begin_step(b0, en):
     """Start the quadrature of a step: ``en.quad`` = b_0 P(y), the first stage being the
     step's start."""
@@ -49,7 +49,7 @@ def begin_step(b0, en):
         en.quad[i] = b0 * en.p_start[i]
 
 
-@kernel
+@kernel(inline="always")
 def add_stage(b, ds, P, mi, cmd, ew, en):
     """Add b P(Y) to ``en.quad``: the power flows of the stage just evaluated on the
     workspace ``ew`` without outputs (``want_aux`` False), with derivative ``ds``; its
@@ -60,7 +60,7 @@ def add_stage(b, ds, P, mi, cmd, ew, en):
         en.quad[i] += b * en.p[i]
 
 
-@kernel
+@kernel(inline="always")
 def take_step(h, en, energy):
     """The step of size ``h`` whose quadrature ``en.quad`` holds is taken: add its energy
     h sum_j b_j P(Y_j) to the run's ``energy`` (layout ``EN_*``, [J]); its end's power
