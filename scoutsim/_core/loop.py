@@ -201,9 +201,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
     nen = energy.shape[0]  # (0: no accounting)
-    step_energy = StepEnergy(
-        np.zeros(nen), np.zeros(nen), np.zeros(nen), np.zeros(nen), np.zeros(NAUX if nen else 0)
-    )
+    step_energy = StepEnergy(np.zeros(nen), np.zeros(nen), np.zeros(nen), np.zeros(nen))
     sc = AdvanceScratch(
         np.empty(NEV),
         np.zeros(NEV, dtype=np.bool_),

@@ -247,7 +247,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
             ok = False
         nfev += 1
         if counting and B[st] != 0.0:
-            add_stage(B[st], K[st], P, mi, cmd, ew, en)
+            add_stage(B[st], K[st], P, mi, ew, en)
     # error estimate, filtered through W^-1 (Hairer & Wanner IV.8: the raw difference
     # over-estimates the error in the damped stiff components)
     for a in range(R):
@@ -276,7 +276,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
             ok = False
         nfev += 1
         if counting:
-            power_at(K[6], aux_new, P, mi, ew, en.p_end)
+            power_at(K[6], P, mi, ew, en.p_end)
     return err, ok, nfev
 
 

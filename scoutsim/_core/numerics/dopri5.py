@@ -105,9 +105,9 @@ def step(y, h, P, mi, mf, cmd, w):
             ok = False
         if counting:
             if st == 6:  # (b_7 = 0: y_new is the next step's start)
-                power_at(K[6], aux_new, P, mi, ew, en.p_end)
+                power_at(K[6], P, mi, ew, en.p_end)
             elif A[6, st] != 0.0:
-                add_stage(A[6, st], K[st], P, mi, cmd, ew, en)
+                add_stage(A[6, st], K[st], P, mi, ew, en)
     err = 0.0
     for i in range(NS):
         e = 0.0

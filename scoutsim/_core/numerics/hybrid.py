@@ -156,7 +156,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
         stats[S_NFEV] += 1
     if sc.energy.shape[0] > 0:  # the power flows at the first step's start (ew holds K0's)
-        power_at(K0, aux, P, mi, ew, work.energy.p_start)
+        power_at(K0, P, mi, ew, work.energy.p_start)
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
         if e_old[i] > 0.0:
@@ -362,7 +362,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
                 stats[S_NFEV] += 1
             if sc.energy.shape[0] > 0:  # the power flows after the event (ew holds K0's)
-                power_at(K0, aux, P, mi, ew, work.energy.p_start)
+                power_at(K0, P, mi, ew, work.energy.p_start)
             if he > 0.0 and he < h:
                 h = max(he, 1e-6)
             if t_end - t < 1e-12:

@@ -10,10 +10,10 @@ with the weights b_j of the step's solution y_new = y + h sum_j b_j K_j. That is
 applied to the energies as further components of the state, z' = P(y) (which never feed
 back): they are integrated with the order and the error control of the motion itself, and
 at no further evaluation of the right-hand side. P(Y_j) is read from the evaluation that
-gave the stage derivative K_j (the state as it projected it, the forces, currents and
-multipliers as they acted: :func:`add_stage`), P(Y_0) = P(y) from the evaluation that gave
-K[0] (the step's start, with the period's held command and the step's modes:
-``StepEnergy.p_start``). The sum is kept in the step's scratch (``StepEnergy.quad``) and
+gave the stage derivative K_j, held in the evaluation workspace (the state as it projected
+it, the forces, currents and multipliers as they acted: :func:`add_stage`), P(Y_0) = P(y)
+from the evaluation that gave K[0] (the step's start, with the period's held command and
+the step's modes: ``StepEnergy.p_start``). The sum is kept in the step's scratch (``StepEnergy.quad``) and
 added to the run's energies only when the step is taken (:func:`take_step`): a rejected
 step, and a step redone to an event's instant, count once. The motion is the same bit for
 bit with and without the accounting: it only reads the evaluations and writes its own
@@ -23,7 +23,6 @@ arrays. Compiled with Numba.
 from __future__ import annotations
 
 from ..._numba.jit import kernel
-from ..model.evaluate import fill_outputs
 from ..model.power_flows import power_flows
 
 
@@ -35,10 +34,10 @@ def accounting(en):
 
 
 @kernel(inline="always")
-def power_at(ds, aux, P, mi, ew, out):
-    """The power flows into ``out`` at the evaluation just made on the workspace ``ew``
-    with outputs (``want_aux``): its derivative ``ds`` and outputs ``aux``."""
-    power_flows(ds, aux, P, mi, ew[0], ew[1], out)
+def power_at(ds, P, mi, ew, out):
+    """The power flows into ``out`` at the evaluation held in the workspace ``ew``, with
+    derivative ``ds``."""
+    power_flows(ds, P, mi, ew[0], ew[1], out)
 
 
 @kernel(inline="always")
@@ -50,12 +49,10 @@ def begin_step(b0, en):
 
 
 @kernel(inline="always")
-def add_stage(b, ds, P, mi, cmd, ew, en):
+def add_stage(b, ds, P, mi, ew, en):
     """Add b P(Y) to ``en.quad``: the power flows of the stage just evaluated on the
-    workspace ``ew`` without outputs (``want_aux`` False), with derivative ``ds``; its
-    outputs are filled into ``en.aux`` from the workspace."""
-    fill_outputs(P, mi, cmd, en.aux, ew[0])
-    power_flows(ds, en.aux, P, mi, ew[0], ew[1], en.p)
+    workspace ``ew`` (without its outputs: they are not needed), with derivative ``ds``."""
+    power_flows(ds, P, mi, ew[0], ew[1], en.p)
     for i in range(en.quad.shape[0]):
         en.quad[i] += b * en.p[i]
 

@@ -12,7 +12,7 @@ tolerances ``rtol``, ``atol``, and the step's work-energy accounting ``energy``
 account): ``quad`` the method's quadrature sum_j b_j P(Y_j) of the power flows [W] over
 the step being taken, ``p_start`` the power flows at the step's start (from the evaluation
 that gave K[0]), ``p_end`` at its end (from the evaluation of y_new), and the scratch
-``p`` (power flows, layout ``EN_*``) and ``aux`` (a stage's outputs, layout ``A_*``).
+``p`` (a stage's power flows); layout ``EN_*``.
 
 ``EventWork``: what locating events works on: which event functions are ``armed``, their
 values at the step's start ``e_old`` and end ``e_new``, and the probe buffers ``ybuf``
@@ -30,7 +30,7 @@ from __future__ import annotations
 from collections import namedtuple
 
 StepWork = namedtuple("StepWork", "K y_new aux_new tmp ew SF0 SF1 Z rtol atol energy")
-StepEnergy = namedtuple("StepEnergy", "quad p_start p_end p aux")
+StepEnergy = namedtuple("StepEnergy", "quad p_start p_end p")
 EventWork = namedtuple("EventWork", "armed e_old e_new ybuf aux_tmp e_tmp")
 Plant = namedtuple("Plant", "s P mi mf cmd")
 EventLog = namedtuple("EventLog", "ev stats")
