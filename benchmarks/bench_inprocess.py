@@ -2,10 +2,12 @@
 
     python benchmarks/bench_inprocess.py --base f72f8b0 [--processes 8] [--runs 21]
     python benchmarks/bench_inprocess.py --base-tree /path/to/worktree   # already built
+    python benchmarks/bench_inprocess.py --base-tree ... --energy   # with the energy accounting
 
 The job: 10 s of Model II from the default start on the default floor with the default
 integrator, in one process after its compiled code is loaded (``scoutsim.simulate``), the
-number the compile-time cuts (docs/model.md, "Compile time") must not make worse. The
+number the compile-time cuts (docs/model.md, "Compile time") must not make worse; with
+``--energy``, with the work-energy accounting (``energy=True``) on both sides. The
 base is checked out in a temporary git worktree and its compiled core built there first (a
 few minutes). Then ``--processes`` processes per side run alternately (base, this, base, ...), pinned to one core, each timing ``--runs``
 runs; a process's median is its figure. Between processes of the same code the median
@@ -29,19 +31,19 @@ ROOT = Path(__file__).resolve().parents[1]
 JOB = """
 import statistics, sys, time
 import scoutsim
-scoutsim.simulate(duration=0.5)
+scoutsim.simulate(duration=0.5, energy={energy})
 ts = []
 for _ in range({runs}):
     t0 = time.perf_counter()
-    scoutsim.simulate(duration=10.0, model="II")
+    scoutsim.simulate(duration=10.0, model="II", energy={energy})
     ts.append(time.perf_counter() - t0)
 print(statistics.median(ts), min(ts))
 """
 
 
-def run_side(tree: Path, runs: int, core: int | None) -> tuple[float, float]:
+def run_side(tree: Path, runs: int, core: int | None, energy: bool = False) -> tuple[float, float]:
     env = dict(os.environ, PYTHONPATH=str(tree))
-    cmd = [sys.executable, "-c", JOB.format(runs=runs)]
+    cmd = [sys.executable, "-c", JOB.format(runs=runs, energy=energy)]
     if core is not None and hasattr(os, "sched_setaffinity"):
         cmd = ["taskset", "-c", str(core)] + cmd
     out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=tree)
@@ -56,6 +58,9 @@ def main():
     ap.add_argument("--processes", type=int, default=8, help="processes per side")
     ap.add_argument("--runs", type=int, default=21, help="runs per process")
     ap.add_argument("--core", type=int, default=1, help="CPU to pin to (-1: none)")
+    ap.add_argument(
+        "--energy", action="store_true", help="runs with the energy accounting (energy=True)"
+    )
     args = ap.parse_args()
     if (args.base is None) == (args.base_tree is None):
         ap.error("give --base COMMIT or --base-tree DIR")
@@ -73,12 +78,12 @@ def main():
     try:
         for tree in (base, ROOT):  # build / load each side's compiled core
             print(f"preparing {tree} ...", file=sys.stderr, flush=True)
-            run_side(tree, 1, core)
+            run_side(tree, 1, core, args.energy)
         meds = {"base": [], "this": []}
         bests = {"base": [], "this": []}
         for i in range(args.processes):
             for side, tree in (("base", base), ("this", ROOT)):
-                m, b = run_side(tree, args.runs, core)
+                m, b = run_side(tree, args.runs, core, args.energy)
                 meds[side].append(m)
                 bests[side].append(b)
                 print(
@@ -86,8 +91,8 @@ def main():
                     flush=True,
                 )
         print(
-            f"10 s of Model II in one process, {args.processes} processes x {args.runs} runs "
-            "per side"
+            f"10 s of Model II in one process{' with energy=True' if args.energy else ''}, "
+            f"{args.processes} processes x {args.runs} runs per side"
         )
         for side in ("base", "this"):
             ms = [m * 1e3 for m in meds[side]]

@@ -64,7 +64,7 @@ from .numerics.hybrid import HW_EVAL_KEPT, HW_STIFF_VALID, STEP_HEADROOM, Advanc
 from .numerics.stats import S_NFEV
 from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
 from .numerics.transitions import settle_ws
-from .numerics.work import EventLog, EventWork, StepWork
+from .numerics.work import EventLog, EventWork, StepEnergy, StepWork
 
 __all__ = [
     "run",
@@ -173,7 +173,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     :func:`~scoutsim._core.numerics.events.record_step`): the call returns at a sample before
     ``steps`` has fewer than ``STEP_HEADROOM`` free rows (as before ``ev`` fills up).
     ``energy`` (layout ``EN_*``) accumulates the energy of every power flow over the
-    integrator's steps (:func:`~scoutsim._core.numerics.step_energy.accumulate_energy`); an empty
+    integrator's steps (:mod:`~scoutsim._core.numerics.step_energy`); an empty
     array switches the accounting off. ``out_energy`` (rows as ``out_t``, ``NEN`` columns;
     empty (0, NEN) without the accounting) receives ``energy`` at every recorded sample:
     the cumulative energy of every flow [J]. Returns (k, n_out, nev, status, t)."""
@@ -200,10 +200,8 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     SF0 = sfwork  # ARK stiff factors, kept across calls (hwork[HW_STIFF_VALID] = 1: valid)
     SF1 = np.zeros((NS, 2 * ark.NSTIFF))
     Z = np.zeros((ark.Z_ROWS, ark.Z_COLS))
-    if energy.shape[0] > 0:
-        ew_e = eval_workspace()
-    else:  # (no accounting: placeholders of the same types)
-        ew_e = (np.zeros(1), np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros((1, 1)))
+    nen = energy.shape[0]  # (0: no accounting)
+    step_energy = StepEnergy(np.zeros(nen), np.zeros(nen), np.zeros(nen), np.zeros(nen))
     sc = AdvanceScratch(
         np.empty(NEV),
         np.zeros(NEV, dtype=np.bool_),
@@ -212,14 +210,9 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         steps,
         stepc,
         energy,
-        ew_e,
-        np.zeros(NS),
-        np.zeros(NS),
-        np.zeros(NAUX),
-        np.zeros(energy.shape[0]),
         imp,
     )
-    work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol)
+    work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol, step_energy)
     evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
     log = EventLog(ev, stats)
     sf_ok = is_set(hwork[HW_STIFF_VALID])  # SF0 holds stiff factors from an earlier step

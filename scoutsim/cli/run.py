@@ -239,7 +239,7 @@ def register(sub, common) -> None:
         "transmission losses, friction, dampers, impacts, cost of "
         "transport in summary.json and the energy block; it leaves the "
         "motion the same and makes the simulation of 10 s of Model II "
-        "1.65x slower)",
+        "1.11x slower)",
     )
     run.add_argument(
         "--json",

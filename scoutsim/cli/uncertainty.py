@@ -83,7 +83,7 @@ def register(sub, common) -> None:
         "--energy",
         action="store_true",
         help="also account for every run's energy and add the cost of transport to the "
-        "metrics (the same runs, each about 1.65 times as long to compute)",
+        "metrics (the same runs, each about 1.1 times as long to compute)",
     )
     p.add_argument("--model", choices=CONTROLLED_MODELS, default="II", help="model (default: II)")
     add_parallel_options(p, "recompute every run even if DIR/points.jsonl has it")

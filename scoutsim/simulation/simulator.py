@@ -260,8 +260,9 @@ def simulate(
         copper and transmission losses, hip work, joint, belt, leg and toe friction and
         damping, constraint work; docs/model.md "Work-energy balance"), integrated on every
         integrator step: ``result.energy_flows``, ``result.energy_balance()`` (default
-        off). The motion is the same bit for bit; the run takes longer (three more
-        evaluations per step: 10 s of Model II 1.65x, of Model I 1.28x).
+        off). The motion is the same bit for bit; the run takes a little longer (the power
+        at every stage of every step, read from the step's own evaluations: 10 s of
+        Model II or Model I 1.11x).
 
     Returns
     -------

@@ -4,7 +4,8 @@ For the work-energy balance of a run (``simulate(energy=True)``,
 ``SimulationResult.energy_balance``, docs/model.md "Work-energy balance"): at a state and
 its evaluation, every power flow [W] of the model, per virtual leg (both motors of a leg
 together), into the slots of ``layout.EN_*``. The integrator integrates them over each of
-its steps (``scoutsim._core.numerics.step_energy``); the impact losses come from the touchdown records.
+its steps, at the stages of the step (``scoutsim._core.numerics.step_energy``); the impact
+losses come from the touchdown records.
 
 Per motor, with current i, motor speed w_m (relative to the torso), delivered torque
 tau_out and the paper's constant-efficiency torque tau_0 = N eta K_T i (docs/specification.md
@@ -24,8 +25,11 @@ section 4):
 
 The dissipations are computed from the forces *as they acted* in the evaluation (the axial
 leg force, the belt torque, the joint friction torque, the ground force, the constraint
-multipliers) times the velocities they act through, so the balance checks that every force
-enters the equations of motion with the power it claims.
+multipliers) times the velocities they act through, at the state as the evaluation
+projected it, all read from the evaluation's workspace (its per-leg scalars ``LG_*``, the
+outputs ``A_*`` are copies of: so the power of an integrator stage, evaluated without its
+outputs, is read as that of any evaluation), so the balance checks that every force enters
+the equations of motion with the power it claims.
 """
 
 from __future__ import annotations
@@ -33,15 +37,6 @@ from __future__ import annotations
 from ..._numba.jit import kernel
 from .hip_unit import belt_spring, geared
 from .layout import (
-    A_CURRENT,
-    A_FAX,
-    A_GT,
-    A_HOLD,
-    A_OMEGA_M,
-    A_SLIP_V,
-    A_TAU_APP,
-    A_TAU_BELT,
-    A_VBATT,
     EN_BATTERY_LOSS,
     EN_BELT_DAMPER,
     EN_CONSTRAINT,
@@ -62,7 +57,6 @@ from .layout import (
     MI_MOTOR_B,
     MODEL_IDEAL,
     MODEL_PASSIVE,
-    NAUX_LEG,
     NEN_LEG,
     NQ,
     P_B_J,
@@ -81,30 +75,53 @@ from .layout import (
     STUCK,
 )
 from .leg import leg_damping
-from .workspace import MT_NROWS, WA_R, WK_B, WK_DQ, WK_META, WK_RLEG
+from .workspace import (
+    LG_CUR,
+    LG_FAX,
+    LG_GT,
+    LG_OM,
+    LG_TAPP,
+    LG_TBELT,
+    LG_TFRIC,
+    LG_TOEVX,
+    MT_NROWS,
+    MT_VBATT,
+    WA_R,
+    WK_B,
+    WK_DQ,
+    WK_L,
+    WK_LEG,
+    WK_META,
+    WK_Q,
+    WK_RLEG,
+)
 
 
 @kernel
-def power_flows(s, ds, aux, P, mi, wk, wA, out):
-    """Every power flow [W] of the model at state ``s`` (projected) into ``out`` (layout
-    ``EN_*``), from the evaluation just made there with outputs: its derivative ``ds``,
-    outputs ``aux`` and workspace ``wk, wA`` (:func:`~scoutsim._core.model.evaluate.evaluate_ws`
-    with ``want_aux``)."""
+def power_flows(ds, P, mi, wk, wA, out):
+    """Every power flow [W] of the model into ``out`` (layout ``EN_*``), from an evaluation
+    (:func:`~scoutsim._core.model.evaluate.evaluate_ws`, with or without its outputs, or
+    :func:`~scoutsim._core.model.evaluate.evaluate_command_change`) held in its workspace
+    ``wk, wA`` (the projected state and velocities, the per-leg forces, currents and
+    speeds, the battery voltage, the constraint rows and multipliers) and its derivative
+    ``ds``."""
     model = int(P[P_MODEL])
     npl = P[P_NP]
     for i in range(out.shape[0]):
         out[i] = 0.0
+    q = wk[WK_Q : WK_Q + NQ]
     dq = wk[WK_DQ : WK_DQ + NQ]
+    lengths = wk[WK_L : WK_L + 2]
+    LG = wk[WK_LEG:]
     p_el_total = 0.0
     for leg in range(2):
-        o = leg * NAUX_LEG
         e = leg * NEN_LEG
         mode = mi[MI_CONTACT_B + leg]
         N = P[P_N + leg]
         if model != MODEL_PASSIVE:
-            cur = aux[o + A_CURRENT]
-            om = aux[o + A_OMEGA_M]
-            tout = aux[o + A_TAU_APP]
+            cur = LG[2 * LG_CUR + leg]
+            om = LG[2 * LG_OM + leg]
+            tout = LG[2 * LG_TAPP + leg]
             tau0 = N * P[P_ETA + leg] * P[P_KT + leg] * cur
             p_el = npl * cur * (P[P_RA + leg] * cur + P[P_KW + leg] * om)
             out[e + EN_ELECTRICAL] = p_el
@@ -116,28 +133,29 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
             out[e + EN_HIP_WORK] = npl * tout * om / N
             p_el_total += p_el
         if geared(P):
-            om = aux[o + A_OMEGA_M]
+            om = LG[2 * LG_OM + leg]
             if mi[MI_MOTOR_B + leg] != STUCK:
                 # the joint's friction torque as it acted (viscous + Coulomb)
-                p_joint = npl * aux[o + A_HOLD] * om
+                p_joint = npl * LG[2 * LG_TFRIC + leg] * om
                 p_visc = npl * P[P_B_J + leg] * om * om
                 out[e + EN_JOINT_VISCOUS] = p_visc
                 out[e + EN_JOINT_COULOMB] = p_joint - p_visc
             rate = dq[IALB + leg] - dq[IPHB + leg]
-            spring = P[P_KB + leg] * belt_spring(s[IALB + leg] - s[IPHB + leg], leg, P)[0]
-            out[e + EN_BELT_DAMPER] = npl * (aux[o + A_TAU_BELT] - spring) * rate
+            spring = P[P_KB + leg] * belt_spring(q[IALB + leg] - q[IPHB + leg], leg, P)[0]
+            out[e + EN_BELT_DAMPER] = npl * (LG[2 * LG_TBELT + leg] - spring) * rate
         # telescopic leg: the axial force as it acted, less its spring part, through the
         # leg's rate of extension (in flight the massless toe's force balance makes the
         # axial force zero: the spring's power is all dissipated)
         ld = ds[IL_B + leg]
-        ll = s[IL_B + leg]
+        ll = lengths[leg]
         f_spring = npl * P[P_K + leg] * (P[P_L0 + leg] - ll)
         if mode != STRUT:
-            p_leg = -(aux[o + A_FAX] - f_spring) * ld
-            p_damp = npl * leg_damping(s[IPHB + leg], leg, P) * ld * ld
+            p_leg = -(LG[2 * LG_FAX + leg] - f_spring) * ld
+            p_damp = npl * leg_damping(q[IPHB + leg], leg, P) * ld * ld
             out[e + EN_LEG_DAMPER] = p_damp
             out[e + EN_LEG_FRICTION] = p_leg - p_damp
-        out[e + EN_TOE_SLIDE] = -aux[o + A_GT] * aux[o + A_SLIP_V]
+        # (a pinned toe does not move: its velocity slot is zero)
+        out[e + EN_TOE_SLIDE] = -LG[2 * LG_GT + leg] * LG[2 * LG_TOEVX + leg]
     # constraint forces: generalized force -R^T nu through dq, by the leg of each row
     nr = int(wk[WK_META + MT_NROWS])
     nact = 7 if geared(P) else 5
@@ -151,6 +169,6 @@ def power_flows(s, ds, aux, P, mi, wk, wA, out):
         # nu R dq: minus the power of the generalized constraint force -R^T nu
         out[leg * NEN_LEG + EN_CONSTRAINT] += wk[WK_B + nact + rr] * rdq
     if model != MODEL_IDEAL and model != MODEL_PASSIVE and P[P_RB] > 0.0:
-        vb = aux[A_VBATT]
+        vb = wk[WK_META + MT_VBATT]
         ib = p_el_total / vb
         out[EN_BATTERY_LOSS] = P[P_RB] * ib * ib

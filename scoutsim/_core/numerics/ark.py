@@ -22,7 +22,9 @@ stage solves (I - h gamma U V^T) Y = rhs by the Sherman-Morrison-Woodbury formul
 or 4 x 4 system). Both parts share the weights b, so y_new = y + h sum b_j f(Y_j): the
 physics is f itself, unchanged. Error control as in dopri5.py (RMS norm, per-component
 atol + rtol max(|y|, |y_new|)), except that velocities get VELOCITY_ATOL_FACTOR x atol.
-Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)).
+Dense output: cubic Hermite on (y, f(y), y_new, f(y_new)). With the work-energy accounting,
+the power flows at the stages are summed with the same weights b
+(:mod:`scoutsim._core.numerics.step_energy`).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ import numpy as np
 from ..._numba.jit import kernel
 from ..model.evaluate import NSTIFF, evaluate_ws
 from ..model.layout import IALB, IALF, NQ, NS
+from .step_energy import accounting, add_stage, begin_step, power_at
 
 # U (the first NSTIFF columns of the stiff factors) is zero outside the acceleration rows
 # NQ .. 2 NQ - 1 of the state (evaluate_ws: U = -npl G w, G the constrained inverse mass
@@ -178,11 +181,16 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
 
     Fills K[1..5] (stage derivatives), y_new and, if the step is accepted (error <= 1) or
     ``eval_end``, K[6] = f(y_new), aux_new and, if ``want_sf``, SF1 (stiff factors at
-    y_new, FSAL).
+    y_new, FSAL). With the energy accounting (``work.energy``), also the quadrature
+    sum_j B_j P(Y_j) of the power flows and the power flows at y_new (``p_end``).
     Z (Z_ROWS, Z_COLS) is scratch. Returns (error_norm, ok, evaluations)."""
     AE, AD, B, EW, GAMMA = tableau
     K, y_new, aux_new, tmp, ew = work.K, work.y_new, work.aux_new, work.tmp, work.ew
     SF0, SF1, Z, rtol, atol = work.SF0, work.SF1, work.Z, work.rtol, work.atol
+    en = work.energy
+    counting = accounting(en)
+    if counting:
+        begin_step(B[0], en)
     ok = True
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
@@ -238,6 +246,8 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
         if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False, ew[3], False):
             ok = False
         nfev += 1
+        if counting and B[st] != 0.0:
+            add_stage(B[st], K[st], P, mi, ew, en)
     # error estimate, filtered through W^-1 (Hairer & Wanner IV.8: the raw difference
     # over-estimates the error in the damped stiff components)
     for a in range(R):
@@ -265,6 +275,8 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
         if not evaluate_ws(y_new, P, mi, mf, cmd, K[6], aux_new, ew, want_sf, SF1, True):
             ok = False
         nfev += 1
+        if counting:
+            power_at(K[6], P, mi, ew, en.p_end)
     return err, ok, nfev
 
 

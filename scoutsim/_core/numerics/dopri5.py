@@ -3,7 +3,9 @@
 The classic embedded pair (Dormand & Prince 1980; Hairer, Norsett & Wanner, *Solving ODEs I*,
 Sec. II.5), the method of MATLAB's ode45 and SciPy's RK45, with the same 4th-order
 continuous extension as SciPy. Error-per-step control with the RMS norm
-``||err / (atol + rtol max(|y|, |y_new|))||``.
+``||err / (atol + rtol max(|y|, |y_new|))||``. With the work-energy accounting, the power
+flows at the stages are summed with the weights of the solution, b = A[6]
+(:mod:`scoutsim._core.numerics.step_energy`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from ..._numba.jit import allocating, kernel
 from ..model.evaluate import NSTIFF, evaluate_ws
 from ..model.layout import NAUX, NS
 from ..model.workspace import new_eval_workspace
+from .step_energy import accounting, add_stage, begin_step, power_at
 
 C = np.array([0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0])
 A = np.array(
@@ -76,9 +79,15 @@ def step(y, h, P, mi, mf, cmd, w):
     """One Dormand-Prince step of size h from y, with w.K[0] = f(y) already filled, on the
     step's work ``w`` (:class:`~scoutsim._core.numerics.work.StepWork`).
 
-    Fills K[1..6], y_new and aux_new (outputs at y_new; K[6] = f(y_new) is FSAL).
+    Fills K[1..6], y_new and aux_new (outputs at y_new; K[6] = f(y_new) is FSAL); with the
+    energy accounting (``w.energy``), also the quadrature sum_j b_j P(Y_j) of the power
+    flows and the power flows at y_new (``p_end``).
     Returns (error_norm, ok); ok is False if the dynamics were singular at a stage."""
     K, y_new, aux_new, tmp, ew, rtol, atol = w.K, w.y_new, w.aux_new, w.tmp, w.ew, w.rtol, w.atol
+    en = w.energy
+    counting = accounting(en)
+    if counting:
+        begin_step(A[6, 0], en)
     ok = True
     for st in range(1, 7):
         for i in range(NS):
@@ -94,6 +103,11 @@ def step(y, h, P, mi, mf, cmd, w):
         # the outputs (aux_new) are needed at y_new only (the last stage)
         if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False, ew[3], st == 6):
             ok = False
+        if counting:
+            if st == 6:  # (b_7 = 0: y_new is the next step's start)
+                power_at(K[6], P, mi, ew, en.p_end)
+            elif A[6, st] != 0.0:
+                add_stage(A[6, st], K[st], P, mi, ew, en)
     err = 0.0
     for i in range(NS):
         e = 0.0

@@ -68,7 +68,7 @@ from .events import (
     stamp_transition,
 )
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
-from .step_energy import accumulate_energy
+from .step_energy import power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -113,12 +113,10 @@ def arm_jams(mi, e_now, armed):
 #: advance()'s scratch arrays (``imp``: the impulses of a touchdown), and the step recording (``steps``, ``stepc``:
 #: :func:`~scoutsim._core.numerics.events.record_step`), the state before a transition
 #: (``s_before``, for the event records) and the work-energy accounting (``energy``: the
-#: accumulated energies, layout ``EN_*``, empty when the run does not account; ``ew_e``
-#: an evaluation workspace of its own and ``y_e, ds_e, aux_e, p_e`` its scratch:
-#: :func:`~scoutsim._core.numerics.step_energy.accumulate_energy`)
+#: accumulated energies, layout ``EN_*``, empty when the run does not account; each step's
+#: share: :mod:`~scoutsim._core.numerics.step_energy`)
 AdvanceScratch = namedtuple(
-    "AdvanceScratch",
-    "e_end pending mi_before s_before steps stepc energy ew_e y_e ds_e aux_e p_e imp",
+    "AdvanceScratch", "e_end pending mi_before s_before steps stepc energy imp"
 )
 
 
@@ -157,6 +155,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         project_state(s, P, mi, mf)
         eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
         stats[S_NFEV] += 1
+    if sc.energy.shape[0] > 0:  # the power flows at the first step's start (ew holds K0's)
+        power_at(K0, P, mi, ew, work.energy.p_start)
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
         if e_old[i] > 0.0:
@@ -273,7 +273,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 )
                 stats[S_NFEV] += nf
                 if sc.energy.shape[0] > 0:
-                    accumulate_energy(method, s, y_new, he, K, P, mi, mf, cmd, sc)
+                    take_step(he, work.energy, sc.energy)
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -361,6 +361,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 # stiff factors at the post-event state (settle() filled K0 and aux)
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
                 stats[S_NFEV] += 1
+            if sc.energy.shape[0] > 0:  # the power flows after the event (ew holds K0's)
+                power_at(K0, P, mi, ew, work.energy.p_start)
             if he > 0.0 and he < h:
                 h = max(he, 1e-6)
             if t_end - t < 1e-12:
@@ -376,7 +378,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         if h > stats[S_HMAX]:
             stats[S_HMAX] = h
         if sc.energy.shape[0] > 0:
-            accumulate_energy(method, s, y_new, h, K, P, mi, mf, cmd, sc)
+            take_step(h, work.energy, sc.energy)
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]

@@ -381,7 +381,7 @@ def uncertainty_study(
     resume : skip runs already in ``out/points.jsonl`` with the same settings.
     command : the command line, recorded in ``out/manifest.json``.
     energy : also account for every run's energy (``simulate(..., energy=True)``: the
-        trajectory is the same bit for bit, a run costs about 1.65 times as much) and add
+        trajectory is the same bit for bit, a run costs about 1.1 times as much) and add
         the cost of transport (electrical energy / (m g distance)) to the metrics.
 
     Raises
