@@ -57,9 +57,9 @@ from scoutsim import (
     default_initial_state,
 )
 from scoutsim.analysis.gait import GaitMetrics
-from scoutsim.analysis.interpolation import extrema, hermite
 from scoutsim.analysis.stances import stance_overlap
 from scoutsim.analysis.strides import Stride, converged_tail
+from scoutsim.result.interpolation import extrema, hermite
 
 MU = 0.8
 METRICS = [

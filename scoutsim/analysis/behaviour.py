@@ -64,11 +64,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._core.model import layout as L
 from ..names import ContactMode, EventKind, leg_index
+from ..result.stride_record import toe_slide_length
 from ..simulation.assembly import DEFAULT_PITCH_LIMIT_DEG
 from .stances import stance_overlap
-from .stride_record import toe_slide_length
 from .strides import MIN_STEADY_STRIDES, PERIOD_TOLERANCE
 
 __all__ = [
@@ -236,8 +235,8 @@ def _counts(result, gait) -> dict:
     legs = ("back", "front")
     if record is not None and record.t_first is not None:
         t0, x0, x1 = record.t_first, record.x_first, record.x_last
-        liftoffs = {n: record.event_count(L.EK_LIFTOFF, i) for i, n in enumerate(legs)}
-        touchdowns = {n: record.event_count(L.EK_TOUCHDOWN, i) for i, n in enumerate(legs)}
+        liftoffs = {n: record.event_count(EventKind.LIFTOFF, i) for i, n in enumerate(legs)}
+        touchdowns = {n: record.event_count(EventKind.TOUCHDOWN, i) for i, n in enumerate(legs)}
     else:
         x = np.asarray(result.x, dtype=float)
         t0, x0, x1 = float(result.t[0]), float(x[0]), float(x[-1])

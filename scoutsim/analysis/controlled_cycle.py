@@ -74,7 +74,7 @@ def _liftoff_states(result):
     """Torso state at each back-leg lift-off: positions by cubic Hermite on (q, dq) of the
     1 kHz samples, velocities linearly (their derivative, the acceleration, is not stored;
     error O(h^2 a'), about 1e-4 m/s)."""
-    from .interpolation import hermite
+    from ..result.interpolation import hermite
 
     t = result.t
     te = result.event_times("liftoff", "back")

@@ -19,7 +19,7 @@ radians), amperes for currents.
 The parts have their own modules: :mod:`~scoutsim.analysis.stances` (stance intervals
 from the contact events), :mod:`~scoutsim.analysis.strides` (the :class:`Stride` record,
 the split into strides, the converged tail), :mod:`~scoutsim.analysis.stride_energy`
-(what a stride costs) and :mod:`~scoutsim.analysis.interpolation` (values between
+(what a stride costs) and :mod:`~scoutsim.result.interpolation` (values between
 samples). This module holds the metrics of a whole run and re-exports the public names.
 
 Public API
@@ -40,10 +40,10 @@ import numpy as np
 
 from ..names import leg_index
 from ..parameters import RobotParameters
+from ..result.stride_record import record_strides, retraction_saturation
 from .behaviour import classify_behaviour
-from .stances import stance_intervals, stance_overlap, stances_of_events
+from .stances import stance_intervals, stance_overlap, stances_of_contacts
 from .stride_energy import input_and_weight, stride_energy
-from .stride_record import record_strides, retraction_saturation
 from .strides import (
     MIN_STEADY_STRIDES,
     PERIOD_TOLERANCE,
@@ -475,7 +475,8 @@ def gait_metrics(
     if getattr(result, "stride_record", None) is not None:  # the whole run's contacts
         t_first = record.t_first if record.t_first is not None else 0.0
         stances = tuple(
-            stances_of_events(record.contacts, leg, t_first, float(result.t_end)) for leg in (0, 1)
+            stances_of_contacts(*record.contact_log(leg), t_first, float(result.t_end))
+            for leg in (0, 1)
         )
     else:
         stances = (stance_intervals(result, 0), stance_intervals(result, 1))

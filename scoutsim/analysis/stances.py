@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._core.model import layout as L
 from ..names import EventKind, leg_index
 
-__all__ = ["stance_intervals", "stances_of_events", "stance_overlap"]
+__all__ = ["stance_intervals", "stances_of_contacts", "stance_overlap"]
 
 
 def stance_intervals(result, leg) -> np.ndarray:
@@ -37,20 +36,17 @@ def stance_intervals(result, leg) -> np.ndarray:
     (k, 2) ndarray
         Rows ``[t_touchdown, t_liftoff]`` [s], in time order.
     """
+    log = result.event_log(kinds=(EventKind.TOUCHDOWN, EventKind.LIFTOFF), leg=leg_index(leg))
     t0 = float(result.t[0]) if len(result.t) else 0.0
-    return stances_of_events(result.events, leg, t0, float(result.t_end))
+    return stances_of_contacts(log["t"], log["kind"], t0, float(result.t_end))
 
 
-def stances_of_events(events, leg, t_first: float, t_end: float) -> np.ndarray:
-    """:func:`stance_intervals` of the event records ``events`` ((m, NEVREC), the order
-    logged) of a run whose first sample is at ``t_first`` and which ended at ``t_end``
-    [s]."""
-    ev = np.asarray(events, dtype=float)
-    if ev.size == 0:
-        return np.empty((0, 2))
-    m = np.isin(ev[:, L.EVR_KIND], (EventKind.TOUCHDOWN, EventKind.LIFTOFF))
-    m &= ev[:, L.EVR_LEG] == leg_index(leg)
-    times, kinds = ev[m, L.EVR_T], ev[m, L.EVR_KIND].astype(int)
+def stances_of_contacts(times, kinds, t_first: float, t_end: float) -> np.ndarray:
+    """:func:`stance_intervals` of one leg's touchdown and lift-off events, their times
+    [s] and kinds (:class:`~scoutsim.names.EventKind` codes) in the order logged, for a
+    run whose first sample is at ``t_first`` and which ended at ``t_end`` [s]."""
+    times = np.asarray(times, dtype=float)
+    kinds = np.asarray(kinds)
     order = np.argsort(times, kind="stable")
     times, kinds = times[order], kinds[order]
     out = []

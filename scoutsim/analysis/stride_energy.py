@@ -36,7 +36,7 @@ def input_and_weight(result):
 
 class StrideCosts:
     """The energy fields of the strides of one run, from its
-    :class:`~scoutsim.analysis.stride_record.StrideRecord` (``record``): the cumulative
+    :class:`~scoutsim.result.stride_record.StrideRecord` (``record``): the cumulative
     energies at the samples nearest to the back-leg lift-offs, the impacts between them.
     The impact log and the input flow are read once for all strides, so that the strides
     of a run cost time linear in its length."""
@@ -107,7 +107,7 @@ def stride_energy(result, a: float, b: float) -> dict:
     ``result`` from the back-leg lift-off at ``a`` to the one at ``b`` [s] (the run's
     samples nearest to them); {} if the run has no ``energy_series`` or no such pair of
     lift-offs."""
-    from .stride_record import record_strides
+    from ..result.stride_record import record_strides
 
     record = record_strides(result)
     lo = record.liftoffs["t"]

@@ -19,9 +19,9 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..result.stride_record import record_strides
 from .stances import stance_overlap
 from .stride_energy import StrideCosts
-from .stride_record import record_strides
 
 __all__ = [
     "Stride",
@@ -191,8 +191,8 @@ class Stride:
 
 def split_strides(result, transient_s, stances, record=None):
     """The strides of ``result`` (:class:`Stride` in time order) from its
-    :class:`~scoutsim.analysis.stride_record.StrideRecord` (``record``, default
-    :func:`~scoutsim.analysis.stride_record.record_strides` of the result) and the stance
+    :class:`~scoutsim.result.stride_record.StrideRecord` (``record``, default
+    :func:`~scoutsim.result.stride_record.record_strides` of the result) and the stance
     intervals of its two virtual legs (``stances``); strides that start before
     ``transient_s`` [s] are not steady."""
     record = record_strides(result) if record is None else record

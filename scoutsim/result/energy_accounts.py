@@ -103,7 +103,7 @@ class EnergyAccessors(RunData):
         columns = self._energy_columns(name, leg)  # (raises if the run has no accounting)
         assert self.energy_series is not None
         # column by column, so that each sample's sum is the same however many samples
-        # are summed at once (a run taken in pieces: analysis.stride_record)
+        # are summed at once (a run taken in pieces: result.stride_record)
         out = self.energy_series[:, columns[0]].copy()
         for c in columns[1:]:
             out += self.energy_series[:, c]

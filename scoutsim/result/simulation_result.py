@@ -80,7 +80,7 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
         None. Read it with :meth:`cumulative_energy` and :meth:`power`. A window of a run
         (:meth:`window`, a streamed run's kept end) keeps the values since the run's start.
     stride_record : what the strides of the whole run need, taken from every sample as the
-        run was computed (:class:`~scoutsim.analysis.stride_record.StrideRecord`), for a
+        run was computed (:class:`~scoutsim.result.stride_record.StrideRecord`), for a
         run recorded at a lower rate (``simulate(record_rate=...)``) or streamed; its
         strides and gait metrics come from it. None for a run held whole at the full rate
         (its strides come from its samples) and for a :meth:`window`.

@@ -5,7 +5,7 @@
 the events (their times and exact states), the integrator steps, the energy accounts
 (``result.energy_flows``, integrated on every integrator step inside the core) are
 not thinned. The strides need more than the kept samples (the torso at each back-leg
-lift-off, the extremes between two): a :class:`~scoutsim.analysis.stride_record.StrideRecorder`
+lift-off, the extremes between two): a :class:`~scoutsim.result.stride_record.StrideRecorder`
 reads them from every sample, piece by piece as the compiled loop computes them, so that
 the strides, gait metrics and per-stride energies of the thinned run are those of the same
 run recorded at the full rate, bit for bit. A streamed run (``stream_to``) takes its pieces
@@ -20,8 +20,8 @@ import math
 
 import numpy as np
 
-from ..analysis.stride_record import StrideRecorder
 from ..result.simulation_result import SimulationResult
+from ..result.stride_record import StrideRecorder
 from .streaming import RunStream, join_pieces, take_piece
 
 __all__ = ["RecordedPieces", "samples_per_record"]
@@ -128,7 +128,7 @@ class RecordedPieces:
         return out
 
     def stride_record(self):
-        """The run's :class:`~scoutsim.analysis.stride_record.StrideRecord` (after its
+        """The run's :class:`~scoutsim.result.stride_record.StrideRecord` (after its
         last piece)."""
         if self._record is None:
             self._record = self.recorder.finish()

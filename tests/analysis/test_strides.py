@@ -10,7 +10,7 @@ import scoutsim
 from scoutsim.analysis import stances as stances_module
 from scoutsim.analysis import strides as strides_module
 from scoutsim.analysis.gait import gait_metrics
-from scoutsim.analysis.stride_record import StrideRecord
+from scoutsim.result.stride_record import StrideRecord
 
 
 @pytest.fixture(scope="module")

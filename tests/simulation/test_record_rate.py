@@ -1,5 +1,5 @@
 """A run recorded at a lower rate (scoutsim/simulation/record_rate.py) and the strides read
-from every sample as the run is computed (scoutsim/analysis/stride_record.py): the thinned
+from every sample as the run is computed (scoutsim/result/stride_record.py): the thinned
 tables hold every k-th control sample and the last, while the events, the energy balance
 and the strides are those of the full-rate run, bit for bit; a streamed run's strides are
 the whole run's, not only those of the end it keeps in memory."""
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.analysis.stride_record import StrideRecorder
+from scoutsim.result.stride_record import StrideRecorder
 
 
 def _strides(r):

@@ -135,9 +135,15 @@ class StrideRecord:
     saturation: tuple | None = None
     belt_deflection_max: float | None = None
 
+    def contact_log(self, leg: int) -> tuple[np.ndarray, np.ndarray]:
+        """(times [s], kinds: :class:`~scoutsim.names.EventKind` codes) of the touchdowns
+        and lift-offs of leg ``leg`` (0 back, 1 front), in the order logged."""
+        ev = self.contacts[self.contacts[:, L.EVR_LEG] == leg]
+        return ev[:, L.EVR_T], ev[:, L.EVR_KIND].astype(int)
+
     def event_count(self, kind: int, leg: int) -> int:
-        """How many contact events of ``kind`` (``layout.EK_TOUCHDOWN`` or
-        ``EK_LIFTOFF``) leg ``leg`` (0 back, 1 front) had."""
+        """How many contact events of ``kind`` (``EventKind.TOUCHDOWN`` or ``LIFTOFF``)
+        leg ``leg`` (0 back, 1 front) had."""
         ev = self.contacts
         return int(np.count_nonzero((ev[:, L.EVR_KIND] == kind) & (ev[:, L.EVR_LEG] == leg)))
 
@@ -208,7 +214,7 @@ class StrideRecorder:
 
     def finish(self) -> StrideRecord:
         """The record of everything fed: the lift-offs after the last sample are taken
-        at it (as :func:`~scoutsim.analysis.interpolation.hermite` clamps)."""
+        at it (as :func:`~scoutsim.result.interpolation.hermite` clamps)."""
         if self._carry is not None:
             self._resolve(self._carry, self._n - len(self._carry["t"]), final=True)
         energy = bool(self._energy) and self._n >= 2
