@@ -181,7 +181,7 @@ def fill_derivative(ds, dq, b, LG, nact, gear, ok):
     ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
 
 
-@kernel
+@kernel(inline="always")
 def fill_outputs(P, mi, cmd, aux, wk):
     """The outputs aux of :func:`evaluate_ws` from the evaluation held in the workspace
     ``wk`` (its per-leg scalars, the KKT solution with the multipliers after the ``nact``
@@ -303,7 +303,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     return ok
 
 
-@kernel
+@kernel(inline="always")
 def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     """The rank-NSTIFF factorization of the stiff part of the Jacobian (see
     :func:`evaluate_ws`), from the evaluation just made, held in the workspace ``wk, wA,

@@ -133,7 +133,7 @@ def event_slot(k):
     return k % NEV_CONTACT
 
 
-@kernel
+@kernel(inline="always")
 def body_weight(P):
     """The robot's weight [N]: torso and all leg bodies (the force scale of the events)."""
     return (P[P_MT] + P[P_NP] * (P[P_ML + BACK] + P[P_ML + FRONT])) * P[P_G]
@@ -145,7 +145,7 @@ def event_values(s, aux, P, mi, out):
     event_values_at(s, aux, P, mi, out, math.sin(s[ITH]), math.cos(s[ITH]))
 
 
-@kernel
+@kernel(inline="always")
 def event_values_at(s, aux, P, mi, out, sth, cth):
     """:func:`event_values` given the pitch's sine and cosine ``sth, cth`` at ``s`` (as the
     evaluation of ``s`` computed them)."""
