@@ -21,7 +21,10 @@ Summary (docs/model.md derives every term; docs/specification.md sections 1-5):
 Speed: the small helpers of :func:`evaluate_ws` (projection, the per-concept terms, motor
 and battery laws, the reduced KKT solve) are inlined at the Numba IR level
 (``inline="always"``): 17 % off an ARK3 step, bit-identical results, for more first-call
-compilation (the cache keeps it).
+compilation (the cache keeps it). So are the Schur-complement factorization and the clamp
+rows, which run at every evaluation: a call passes every array as 7-9 machine words, more
+than such a part's own work. (The output fills run once per accepted step: inlining them
+makes runs no faster, docs/model.md "Compile time".)
 """
 
 from __future__ import annotations
@@ -181,7 +184,7 @@ def fill_derivative(ds, dq, b, LG, nact, gear, ok):
     ds[IL_B + 1] = LG[2 * LG_LDOT + 1]
 
 
-@kernel(inline="always")
+@kernel
 def fill_outputs(P, mi, cmd, aux, wk):
     """The outputs aux of :func:`evaluate_ws` from the evaluation held in the workspace
     ``wk`` (its per-leg scalars, the KKT solution with the multipliers after the ``nact``
@@ -303,7 +306,7 @@ def evaluate_command_change(P, mi, cmd, ds, aux, wk, wA, piv):
     return ok
 
 
-@kernel(inline="always")
+@kernel
 def fill_stiff_factors(stiff, P, mi, cmd, wk, wA, piv):
     """The rank-NSTIFF factorization of the stiff part of the Jacobian (see
     :func:`evaluate_ws`), from the evaluation just made, held in the workspace ``wk, wA,
