@@ -87,6 +87,7 @@ def test_the_hot_loop_runs_without_reference_counting():
         kinematics.project_state,
         ark.step3,
         hybrid.advance,
+        loop.run_periods,
         transitions.settle_ws,
         events.event_values,
         bounding.bounding_step,

@@ -21,7 +21,10 @@ Summary (docs/model.md derives every term; docs/specification.md sections 1-5):
 Speed: the small helpers of :func:`evaluate_ws` (projection, the per-concept terms, motor
 and battery laws, the reduced KKT solve) are inlined at the Numba IR level
 (``inline="always"``): 17 % off an ARK3 step, bit-identical results, for more first-call
-compilation (the cache keeps it).
+compilation (the cache keeps it). So are the Schur-complement factorization and the clamp
+rows, which run at every evaluation: a call passes every array as 7-9 machine words, more
+than such a part's own work. (The output fills run once per accepted step: inlining them
+makes runs no faster, docs/model.md "Compile time".)
 """
 
 from __future__ import annotations
@@ -475,7 +478,6 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     mass_matrix_at(M, P, sth, cth, sgl0, cgl0, sgl1, cgl1)
     coriolis_at(h, dq, P, sth, cth, sgl0, cgl0, sgl1, cgl1)
     add_gravity_at(Q, P, sth, cth, sgl0, cgl0, sgl1, cgl1)
-    epot = potential_energy_at(q, l, P, sth, cgl0, cgl1)
 
     # actuators and transmissions
     vb = battery_voltage(dq, cmd, P)
@@ -508,10 +510,10 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
         nr = motor_joint_row(R, r, rkind, rleg, nr, leg, mi, P)
     nr = add_clamp_rows(P, R, r, rkind, rleg, nr)
 
-    # kinetic energy before the factorization
-    ekin = 0.0
+    # the energy (an output) before the factorization
+    energy = 0.0
     if want_aux:
-        ekin = kinetic_energy_at(M, dq)
+        energy = kinetic_energy_at(M, dq) + potential_energy_at(q, l, P, sth, cgl0, cgl1)
 
     # KKT system [M R^T; R 0] [ddq; nu] = [Q - h; r]; generalized constraint force = -R^T nu
     b = wk[WK_B : WK_B + MAX_KKT]
@@ -550,9 +552,24 @@ def evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, want_stiff, stiff, want_aux):
     if not want_aux:
         aux[A_KKT_OK] = FLAG_ON if ok else FLAG_OFF
         return ok
-    meta[MT_ENERGY] = ekin + epot
+    meta[MT_ENERGY] = energy
     fill_outputs(P, mi, cmd, aux, wk)
     return ok
+
+
+@kernel(inline="always")
+def evaluated_state(ew, s):
+    """Copy into ``s`` the projected state of the last :func:`evaluate_ws` call on the
+    workspace ``ew`` (the state it was given, its dependent coordinates projected: what
+    :func:`~scoutsim._core.model.kinematics.project_state` makes of that state, bit for bit,
+    without computing the projection again) and return the pitch's (sin, cos) there."""
+    wk = ew[0]
+    for i in range(NQ):
+        s[i] = wk[WK_Q + i]
+        s[NQ + i] = wk[WK_DQ + i]
+    s[IL_B] = wk[WK_L]
+    s[IL_B + 1] = wk[WK_L + 1]
+    return wk[WK_META + MT_STH], wk[WK_META + MT_CTH]
 
 
 @allocating

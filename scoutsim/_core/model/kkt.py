@@ -35,7 +35,7 @@ def new_row(R, r, rkind, rleg, nr, rhs, kind, leg):
     rleg[nr] = leg
 
 
-@kernel
+@kernel(inline="always")
 def add_clamp_rows(P, R, r, rkind, rleg, nr):
     """Bench-rig clamps as constraint rows (scoutsim.identification.rigs;
     docs/identification.md): with P_CLAMP_TORSO, ddx = ddy = ddtheta = 0 (``ROW_CLAMP_TORSO``); with P_CLAMP_LEGS also ddphi = 0 for
@@ -216,7 +216,7 @@ def kkt_reduced_solve(A, piv, M, rkind, rleg, system, b, o, y, yo):
 SCHUR_MAX_ROWS = MAX_KKT - 10
 
 
-@kernel
+@kernel(inline="always")
 def kkt_schur_factor(A, M, R, rkind, nact, nr, free0, free1):
     """Factor the reduced KKT system of :func:`kkt_reduced_factor` by Schur complements,
     using the structure of the mass matrix: the torso translations have the scalar inertia

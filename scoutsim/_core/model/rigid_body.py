@@ -191,18 +191,31 @@ def potential_energy(q, l, P):
     return potential_energy_at(q, l, P, sth, cg0, cg1)
 
 
+@kernel
+def kinetic_energy_ws(q, dq, P, M):
+    """Kinetic energy 1/2 dq^T M(q) dq [J], the mass matrix built in the scratch ``M``
+    (7 x 7)."""
+    mass_matrix(q, P, M)
+    return kinetic_energy_at(M, dq)
+
+
 @allocating
 def kinetic_energy(q, dq, P):
     """Kinetic energy 1/2 dq^T M(q) dq [J]."""
-    M = np.empty((NQ, NQ))
-    mass_matrix(q, P, M)
-    return kinetic_energy_at(M, dq)
+    return kinetic_energy_ws(q, dq, P, np.empty((NQ, NQ)))
+
+
+@kernel
+def state_energy_ws(s, P, M):
+    """:func:`state_energy` without allocation: the mass matrix is built in the scratch
+    ``M`` (7 x 7)."""
+    return kinetic_energy_ws(s[0:NQ], s[NQ : 2 * NQ], P, M) + potential_energy(
+        s[0:NQ], s[IL_B : IL_B + 2], P
+    )
 
 
 @allocating
 def state_energy(s, P):
     """Total mechanical energy of a full state vector s [J]: kinetic plus potential (gravity,
     leg springs, Model II belts); the same quantity as the ``energy`` output."""
-    return kinetic_energy(s[0:NQ], s[NQ : 2 * NQ], P) + potential_energy(
-        s[0:NQ], s[IL_B : IL_B + 2], P
-    )
+    return state_energy_ws(s, P, np.empty((NQ, NQ)))

@@ -280,7 +280,7 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     return err, ok, nfev
 
 
-@kernel
+@kernel(inline="always")
 def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
     """x := W^-1 x = x + h gamma U S^-1 V^T x (Sherman-Morrison-Woodbury), given
     m = V^T x and Si = S^-1 = (I - h gamma V^T U)^-1; leaves p = h gamma S^-1 m in pp."""
@@ -296,7 +296,7 @@ def apply_w_inverse(SF0, Si, hg, m, pp, x, R):
         x[i] = acc
 
 
-@kernel
+@kernel(inline="always")
 def invert_small(VU, hg, Si, R, M):
     """Si = (I - hg VU)^-1 by Gauss-Jordan with partial pivoting (R <= 4); M (4, 8) is
     scratch."""

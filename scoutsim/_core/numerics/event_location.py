@@ -12,11 +12,11 @@ Compiled with Numba.
 from __future__ import annotations
 
 from ..._numba.jit import kernel
-from ..model.evaluate import evaluate_ws
+from ..model.evaluate import evaluate_ws, evaluated_state
 from ..model.kinematics import project_state
 from ..model.layout import NEV, NS
 from ..model.roots import illinois_update
-from .events import event_values
+from .events import event_values, event_values_at
 from .stepper import do_step, method_dense
 
 #: an event's instant is located when its bracket is narrower than this [s]
@@ -34,8 +34,8 @@ def dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw):
     ybuf, aux_tmp, ew = evw.ybuf, evw.aux_tmp, work.ew
     method_dense(method, s, work.y_new, h, work.K, th, ybuf)
     evaluate_ws(ybuf, P, mi, mf, cmd, work.tmp, aux_tmp, ew, False, ew[3], True)
-    project_state(ybuf, P, mi, mf)
-    event_values(ybuf, aux_tmp, P, mi, evw.e_tmp)
+    sth, cth = evaluated_state(ew, ybuf)  # ybuf projected
+    event_values_at(ybuf, aux_tmp, P, mi, evw.e_tmp, sth, cth)
 
 
 @kernel(inline="always")

@@ -133,7 +133,7 @@ def event_slot(k):
     return k % NEV_CONTACT
 
 
-@kernel
+@kernel(inline="always")
 def body_weight(P):
     """The robot's weight [N]: torso and all leg bodies (the force scale of the events)."""
     return (P[P_MT] + P[P_NP] * (P[P_ML + BACK] + P[P_ML + FRONT])) * P[P_G]
@@ -142,6 +142,13 @@ def body_weight(P):
 @kernel
 def event_values(s, aux, P, mi, out):
     """Event functions of the current modes; an event happens when one goes below zero."""
+    event_values_at(s, aux, P, mi, out, math.sin(s[ITH]), math.cos(s[ITH]))
+
+
+@kernel(inline="always")
+def event_values_at(s, aux, P, mi, out, sth, cth):
+    """:func:`event_values` given the pitch's sine and cosine ``sth, cth`` at ``s`` (as the
+    evaluation of ``s`` computed them)."""
     W = body_weight(P)
     massless = is_set(P[P_MASSLESS])
     coulomb = toe_can_slip(P)
@@ -183,11 +190,10 @@ def event_values(s, aux, P, mi, out):
                 out[EV_MOTOR_B + leg] = (tau_s - abs(aux[o + A_HOLD])) / tau_s
             else:
                 out[EV_MOTOR_B + leg] = aux[o + A_OMEGA_M] * mm / P[P_N + leg]
-    th = s[ITH]
     a = 0.5 * P[P_TORSO_LEN]
     b = 0.5 * P[P_TORSO_H]
-    out[EV_FALL_HEIGHT] = s[IY] - a * abs(math.sin(th)) - b * abs(math.cos(th))
-    out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(th)
+    out[EV_FALL_HEIGHT] = s[IY] - a * abs(sth) - b * abs(cth)
+    out[EV_FALL_PITCH] = P[P_THETA_LIM] - abs(s[ITH])
 
 
 @kernel

@@ -28,7 +28,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..._numba.jit import kernel
-from ..model.evaluate import evaluate_ws
+from ..model.evaluate import evaluate_ws, evaluated_state
 from ..model.flags import is_set
 from ..model.kinematics import project_state
 from ..model.layout import (
@@ -62,6 +62,7 @@ from .events import (
     event_leg,
     event_slot,
     event_values,
+    event_values_at,
     is_contact_event,
     mode_violations,
     record_step,
@@ -120,7 +121,7 @@ AdvanceScratch = namedtuple(
 )
 
 
-@kernel
+@kernel(inline="always")
 def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=False):
     """Integrate from t to t_end (one control period) with events.
 
@@ -192,8 +193,10 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 return t, nev, ST_NUMERICAL_FAILURE
             continue
         nfail = 0
-        project_state(y_new, P, mi, mf)
-        event_values(y_new, aux_new, P, mi, e_new)
+        # the step's end was evaluated last (K[6], aux_new): y_new projected as that
+        # evaluation projected it, the event functions with its pitch's sin / cos
+        sth, cth = evaluated_state(ew, y_new)
+        event_values_at(y_new, aux_new, P, mi, e_new, sth, cth)
         # earliest triggered event
         kmin = -1
         thmin = 2.0

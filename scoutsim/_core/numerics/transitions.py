@@ -471,7 +471,7 @@ def apply_event(k, t, s, P, mi, mf, aux, ev, nev, stats, imp):
     return nev, ok
 
 
-@kernel
+@kernel(inline="always")
 def record_friction(aux, P, mi, stats):
     """Track the largest friction ratio |Ft|/Fn needed by a pinned toe (Fn > 5 % weight)."""
     W = body_weight(P)
