@@ -219,26 +219,25 @@ def run(plant, control, span, records, carry, n_out, nev, method):
     work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol, step_energy)
     evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
     log = EventLog(ev, stats)
-    periods = PeriodScratch(aux, ds, s_prev, tr, ew_s, s_tmp, np.empty((NQ, NQ)))
+    periods = PeriodScratch(aux, ds, s_prev, tr, ew_s, s_tmp, np.empty((NQ, NQ)), log)
     return run_periods(
-        plant, control, span, records, carry, n_out, nev, method, work, evw, sc, log, periods
+        plant, control, span, records, carry, n_out, nev, method, work, evw, sc, periods
     )
 
 
 #: :func:`run_periods`' own arrays: the outputs ``aux`` at the state, a derivative ``ds``
 #: for the final evaluation, the state before a sample's settling ``s_prev``, the
 #: controller's transitions ``tr``, the sensors' evaluation workspace ``ew_s`` and state
-#: copy ``s_tmp``, and a mass-matrix scratch ``M`` (the energy before a mode change)
-PeriodScratch = namedtuple("PeriodScratch", "aux ds s_prev tr ew_s s_tmp M")
+#: copy ``s_tmp``, a mass-matrix scratch ``M`` (the energy before a mode change) and the
+#: event log ``log`` (``EventLog``)
+PeriodScratch = namedtuple("PeriodScratch", "aux ds s_prev tr ew_s s_tmp M log")
 
 
 @kernel
-def run_periods(
-    plant, control, span, records, carry, n_out, nev, method, work, evw, sc, log, periods
-):
+def run_periods(plant, control, span, records, carry, n_out, nev, method, work, evw, sc, periods):
     """The control periods of :func:`run` on the arrays it made: ``work`` (``StepWork``),
-    ``evw`` (``EventWork``), ``sc`` (:data:`AdvanceScratch`), ``log`` (``EventLog``) and
-    ``periods`` (:data:`PeriodScratch`). A kernel (no reference counting): the loop passes
+    ``evw`` (``EventWork``), ``sc`` (:data:`AdvanceScratch`) and ``periods``
+    (:data:`PeriodScratch`, with the event log). A kernel (no reference counting): the loop passes
     its arrays to the integrator and the model at every sample, and with reference counting
     each of them was an atomic increment and decrement per call (perf, 10 s of Model II:
     6 % of the compiled time). Returns what :func:`run` returns."""
@@ -248,7 +247,7 @@ def run_periods(
     out_t, out_s, out_aux, out_ls, ev, stats, steps, stepc, energy, out_energy = records
     hwork, ew = carry.hwork, carry.ew
     K = work.K
-    aux, ds, s_prev, tr, ew_s, s_tmp, M_e = periods
+    aux, ds, s_prev, tr, ew_s, s_tmp, M_e, log = periods
     kind = cb.ints[CB_KIND]
     sf_ok = is_set(hwork[HW_STIFF_VALID])  # SF0 holds stiff factors from an earlier step
     t = k_start * dt
