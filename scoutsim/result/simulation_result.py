@@ -152,18 +152,27 @@ class SimulationResult(SeriesAccessors, EventAccessors, EnergyAccessors, ColumnV
                 int(np.searchsorted(t, t0, side="left")), int(np.searchsorted(t, t1, side="right"))
             )
 
-        k, j = rows(self.t), rows(self.events[:, L.EVR_T])
-        return dataclasses.replace(
-            self,
-            t=self.t[k],
-            state=self.state[k],
-            aux=self.aux[k],
-            modes=self.modes[k],
+        j = rows(self.events[:, L.EVR_T])
+        return self.with_samples(
+            rows(self.t),
             events=self.events[j],
             event_states=None if self.event_states is None else self.event_states[j],
             steps=None if self.steps is None else self.steps[rows(self.steps[:, L.STP_T])],
-            energy_series=None if self.energy_series is None else self.energy_series[k],
             stride_record=None,
+        )
+
+    def with_samples(self, rows, **changes) -> SimulationResult:
+        """This result with only the samples ``rows`` (a slice, indices or a boolean mask)
+        of its time series and cumulative energies, and the fields ``changes`` replaced
+        (its events and steps are kept whole unless replaced)."""
+        return dataclasses.replace(
+            self,
+            t=self.t[rows],
+            state=self.state[rows],
+            aux=self.aux[rows],
+            modes=self.modes[rows],
+            energy_series=None if self.energy_series is None else self.energy_series[rows],
+            **changes,
             _cache={},
         )
 

@@ -15,7 +15,6 @@ whatever it keeps in memory.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -45,26 +44,12 @@ def samples_per_record(record_rate: float | None, control_period: float) -> int:
     return int(k)
 
 
-def _rows(piece: SimulationResult, keep: np.ndarray) -> SimulationResult:
-    """``piece`` with only the samples ``keep`` (a boolean mask); its events and steps
-    whole."""
-    return dataclasses.replace(
-        piece,
-        t=piece.t[keep],
-        state=piece.state[keep],
-        aux=piece.aux[keep],
-        modes=piece.modes[keep],
-        energy_series=None if piece.energy_series is None else piece.energy_series[keep],
-        _cache={},
-    )
-
-
 def _last_sample(piece: SimulationResult) -> SimulationResult:
     """The last sample of ``piece`` alone (its events and steps go with the kept rows)."""
     last = np.zeros(len(piece.t), dtype=bool)
     last[-1] = True
-    return dataclasses.replace(
-        _rows(piece, last),
+    return piece.with_samples(
+        last,
         events=piece.events[:0],
         event_states=None if piece.event_states is None else piece.event_states[:0],
         steps=None if piece.steps is None else piece.steps[:0],
@@ -106,7 +91,7 @@ class RecordedPieces:
         if n:
             self.last_sample_t = float(piece.t[-1])
             self._last = None if keep[-1] else _last_sample(piece)
-        return self._put(_rows(piece, keep) if self.every > 1 else piece)
+        return self._put(piece.with_samples(keep) if self.every > 1 else piece)
 
     def close(self) -> bool:
         """Record the run's last sample if it was not (once, at the end of the run)."""

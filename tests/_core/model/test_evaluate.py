@@ -17,6 +17,7 @@ from scoutsim._core.model import layout as L
 from scoutsim._core.model import workspace as W
 from scoutsim._core.model.packing import robot_array
 
+from ..sample_modes import sample_modes
 from . import reference_evaluator as ref
 from .reference_evaluator import evaluate_reference
 
@@ -93,14 +94,7 @@ def _cases(robot, model, mu, rig=None, **kw):
     out = []
     for n in range(0, len(r.t), 5):
         s = r.state[n].copy()
-        mi = np.zeros(L.NMI, dtype=np.int64)
-        mf = np.zeros(L.NMF)
-        mi[L.MI_CONTACT_B : L.MI_CONTACT_B + 2] = r.modes[n, L.RM_CONTACT_B : L.RM_CONTACT_B + 2]
-        mi[L.MI_MOTOR_B : L.MI_MOTOR_B + 2] = r.modes[n, L.RM_MOTOR_B : L.RM_MOTOR_B + 2]
-        mi[L.MI_SLIDE_DIR_B : L.MI_SLIDE_DIR_B + 2] = 1 if n % 2 else -1
-        for leg in range(2):
-            mf[leg] = r.aux[n, leg * L.NAUX_LEG + L.A_TOE_X]
-        cmd = np.array([r.aux[n, L.A_TAU_CMD], r.aux[n, L.NAUX_LEG + L.A_TAU_CMD]])
+        mi, mf, cmd = sample_modes(r, n, 1 if n % 2 else -1)
         out.append((s, mi, mf, cmd))
     return P, out
 

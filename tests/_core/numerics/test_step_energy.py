@@ -24,6 +24,8 @@ from scoutsim._core.numerics.dopri5 import eval_workspace
 from scoutsim._core.numerics.step_energy import add_stage, begin_step, power_at, take_step
 from scoutsim._core.numerics.work import StepEnergy
 
+from ..sample_modes import sample_modes
+
 METHODS = {
     "ark3": IntegratorSettings(method="ark3"),
     "ark4": IntegratorSettings(method="ark4", rtol=1e-5, atol=1e-6),
@@ -71,14 +73,7 @@ def _sampled_evaluations(model, robot, mu):
     P = robot_array(robot or RobotParameters(), model, friction_coefficient=mu)
     out = []
     for n in range(0, len(r.t), 10):
-        mi = np.zeros(L.NMI, dtype=np.int64)
-        mf = np.zeros(L.NMF)
-        mi[L.MI_CONTACT_B : L.MI_CONTACT_B + 2] = r.modes[n, L.RM_CONTACT_B : L.RM_CONTACT_B + 2]
-        mi[L.MI_MOTOR_B : L.MI_MOTOR_B + 2] = r.modes[n, L.RM_MOTOR_B : L.RM_MOTOR_B + 2]
-        mi[L.MI_SLIDE_DIR_B : L.MI_SLIDE_DIR_B + 2] = 1 if n % 20 else -1
-        for leg in range(2):
-            mf[leg] = r.aux[n, leg * L.NAUX_LEG + L.A_TOE_X]
-        cmd = np.array([r.aux[n, L.A_TAU_CMD], r.aux[n, L.NAUX_LEG + L.A_TAU_CMD]])
+        mi, mf, cmd = sample_modes(r, n, 1 if n % 20 else -1)
         for motor in (None, [0, 0], [1, -1]):
             for contact in (None, [L.STICK, L.STRUT], [L.SLIDE, L.FLIGHT]):
                 m = mi.copy()
