@@ -97,7 +97,7 @@ from .workspace import (
 )
 
 
-@kernel
+@kernel(inline="always")
 def power_flows(ds, P, mi, wk, wA, out):
     """Every power flow [W] of the model into ``out`` (layout ``EN_*``), from an evaluation
     (:func:`~scoutsim._core.model.evaluate.evaluate_ws`, with or without its outputs, or

@@ -222,17 +222,23 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
                 acc += AD[st, j] * Z[j, a]
             w[a] = h * acc
             m[a] = 0.0
+        # (loops over the components innermost, in the order of the sums: each
+        # component's sum runs over the stages in the same order as a sum per component)
         for i in range(NS):
-            acc = 0.0
-            for j in range(st):
-                c = AE[st, j]
-                if c != 0.0:
-                    acc += c * K[j, i]
-            r = y[i] + h * acc
-            if i >= U0 and i < U1:
-                for a in range(R):
-                    r += SF0[i, a] * w[a]
+            tmp[i] = 0.0
+        for j in range(st):
+            c = AE[st, j]
+            for i in range(NS):
+                tmp[i] += c * K[j, i]
+        for i in range(NS):
+            tmp[i] = y[i] + h * tmp[i]
+        for i in range(U0, U1):
+            r = tmp[i]
+            for a in range(R):
+                r += SF0[i, a] * w[a]
             tmp[i] = r
+        for i in range(NS):
+            r = tmp[i]
             for a in range(R):
                 m[a] += SF0[i, NSTIFF + a] * r
         # Y = W^-1 rhs
@@ -253,13 +259,17 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     for a in range(R):
         m[a] = 0.0
     for i in range(NS):
-        acc = 0.0
-        e = 0.0
-        for j in range(ns):
-            acc += B[j] * K[j, i]
-            e += EW[j] * K[j, i]
-        y_new[i] = y[i] + h * acc
-        e *= h
+        y_new[i] = 0.0
+        tmp[i] = 0.0
+    for j in range(ns):
+        bj = B[j]
+        ej = EW[j]
+        for i in range(NS):
+            y_new[i] += bj * K[j, i]
+            tmp[i] += ej * K[j, i]
+    for i in range(NS):
+        y_new[i] = y[i] + h * y_new[i]
+        e = tmp[i] * h
         tmp[i] = e
         for a in range(R):
             m[a] += SF0[i, NSTIFF + a] * e

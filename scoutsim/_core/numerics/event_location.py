@@ -13,10 +13,9 @@ from __future__ import annotations
 
 from ..._numba.jit import kernel
 from ..model.evaluate import evaluate_ws, evaluated_state
-from ..model.kinematics import project_state
 from ..model.layout import NEV, NS
 from ..model.roots import illinois_update
-from .events import event_values, event_values_at
+from .events import event_values_at
 from .stepper import do_step, method_dense
 
 #: an event's instant is located when its bracket is narrower than this [s]
@@ -39,14 +38,14 @@ def dense_event_values(method, s, h, th, P, mi, mf, cmd, work, evw):
 
 
 @kernel(inline="always")
-def smallest_armed_event(y, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed):
-    """The smallest armed event function at state ``y`` (evaluated on a projected copy)
-    and its slot: (value, slot)."""
+def smallest_armed_event_at_end(y_new, ybuf, P, mi, aux_new, ew, e_tmp, armed):
+    """The smallest armed event function at the end ``y_new`` of a step that evaluated it
+    (its end evaluation in ``ew`` and ``aux_new``, read, not made again; ``ybuf`` receives
+    ``y_new`` as that evaluation projected it) and its slot: (value, slot)."""
     for i in range(NS):
-        ybuf[i] = y[i]
-    project_state(ybuf, P, mi, mf)
-    evaluate_ws(ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, False, ew[3], True)
-    event_values(ybuf, aux_tmp, P, mi, e_tmp)
+        ybuf[i] = y_new[i]
+    sth, cth = evaluated_state(ew, ybuf)  # ybuf projected
+    event_values_at(ybuf, aux_new, P, mi, e_tmp, sth, cth)
     fc = 1.0
     k = -1
     for i in range(NEV):
@@ -67,11 +66,14 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     function g = min_i e_i has crossed (<= 0) by no more than EVENT_STATE_TOL of its slope;
     otherwise g's zero is located by Illinois iterations on redone steps. Using g, not
     e_kmin alone, keeps a refinement from stepping over another event. Returns
-    (he, event slot, evaluations); y_new holds the step to he. ``work``: the step's
+    (he, event slot, evaluations); y_new holds the step to he, and the step's end
+    evaluation (``work.K[6]``, ``work.aux_new``, ``work.ew``) is that of y_new: the
+    function values are read from it (the step to th0 h was evaluated at its end too).
+    ``work``: the step's
     :class:`~scoutsim._core.numerics.work.StepWork`; ``evw``: its ``EventWork`` (the armed events,
     their values ``e_old`` at the step's start, the probe buffers)."""
-    armed, e_start, ybuf, aux_tmp, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.aux_tmp, evw.e_tmp
-    y_new, tmp, ew = work.y_new, work.tmp, work.ew
+    armed, e_start, ybuf, e_tmp = evw.armed, evw.e_old, evw.ybuf, evw.e_tmp
+    y_new, ew = work.y_new, work.ew
     nf = 0
     a = 0.0
     fa = 1.0
@@ -86,8 +88,7 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
     side = 0
     k = kmin
     for _ in range(60):
-        fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed)
-        nf += 1
+        fc, kk = smallest_armed_event_at_end(y_new, ybuf, P, mi, work.aux_new, ew, e_tmp, armed)
         if kk >= 0:
             k = kk
         slope = abs(e_full[k] - e_start[k]) / h
@@ -101,8 +102,7 @@ def refine_event(kmin, s, h, th0, e_full, method, P, mi, mf, cmd, work, evw):
         if done:
             break
     # bracket closed to EVENT_TIME_TOL: the step to b, where g <= 0
-    fc, kk = smallest_armed_event(y_new, ybuf, P, mi, mf, cmd, tmp, aux_tmp, ew, e_tmp, armed)
-    nf += 1
+    fc, kk = smallest_armed_event_at_end(y_new, ybuf, P, mi, work.aux_new, ew, e_tmp, armed)
     if kk >= 0:
         k = kk
     return th * h, k, nf

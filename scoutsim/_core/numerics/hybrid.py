@@ -286,8 +286,18 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 if sc.stepc[1] != 0:  # (tested here: no call when steps are not recorded)
                     record_step(sc.steps, sc.stepc, t, s, mi)
             stats[S_NSTEP] += 1
-            project_state(s, P, mi, mf)
-            evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, False, ew[3], True)
+            if he > 0.0:
+                # the step redone to the event was evaluated at its end last (K[6], aux_new
+                # and ew, refine_event): the state as that evaluation projected it
+                evaluated_state(ew, s)
+                for i in range(NS):
+                    K0[i] = K[6, i]
+                for i in range(NAUX):
+                    aux[i] = aux_new[i]
+            else:
+                project_state(s, P, mi, mf)
+                evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, False, ew[3], True)
+                stats[S_NFEV] += 1
             n_events_here += 1
             if n_events_here > MAX_EVENTS_PER_PERIOD:
                 return t, nev, ST_NUMERICAL_FAILURE
