@@ -33,10 +33,11 @@ def accounting(en):
     return en.quad.shape[0] > 0
 
 
-@kernel(inline="always")
+@kernel
 def power_at(ds, P, mi, ew, out):
     """The power flows into ``out`` at the evaluation held in the workspace ``ew``, with
-    derivative ``ds``."""
+    derivative ``ds`` (a kernel of its own: called at a step's end and a period's start,
+    it is compiled once; the stages' :func:`add_stage` has the flows inlined)."""
     power_flows(ds, P, mi, ew[0], ew[1], out)
 
 
