@@ -69,7 +69,7 @@ from .events import (
     stamp_transition,
 )
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
-from .step_energy import power_at, take_step
+from .step_energy import accounting, power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -152,6 +152,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
     pending = sc.pending
     mi_before = sc.mi_before
     e_tmp = evw.e_tmp
+    counting = accounting(work.energy)  # (the run's energies sc.energy have the same size)
     if not fresh:
         # (if fresh, K0 and aux were just computed at s by settle(); the ARK stiff factors
         # SF0 are kept from the end of the previous step: any splitting matrix keeps the
@@ -159,7 +160,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         project_state(s, P, mi, mf)
         eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
         stats[S_NFEV] += 1
-    if sc.energy.shape[0] > 0:  # the power flows at the first step's start (ew holds K0's)
+    if counting:  # the power flows at the first step's start (ew holds K0's)
         power_at(K0, P, mi, ew, work.energy.p_start)
     event_values(s, aux, P, mi, e_old)
     for i in range(NEV):
@@ -278,7 +279,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                     kmin, s, h, thmin, e_end, method, P, mi, mf, cmd, work, evw
                 )
                 stats[S_NFEV] += nf
-                if sc.energy.shape[0] > 0:
+                if counting:
                     take_step(he, work.energy, sc.energy)
                 for i in range(NS):
                     s[i] = y_new[i]
@@ -377,7 +378,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 # stiff factors at the post-event state (settle() filled K0 and aux)
                 eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
                 stats[S_NFEV] += 1
-            if sc.energy.shape[0] > 0:  # the power flows after the event (ew holds K0's)
+            if counting:  # the power flows after the event (ew holds K0's)
                 power_at(K0, P, mi, ew, work.energy.p_start)
             if he > 0.0 and he < h:
                 h = max(he, 1e-6)
@@ -393,7 +394,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             stats[S_HMIN] = h
         if h > stats[S_HMAX]:
             stats[S_HMAX] = h
-        if sc.energy.shape[0] > 0:
+        if counting:
             take_step(h, work.energy, sc.energy)
         for i in range(NS):
             s[i] = y_new[i]
