@@ -121,9 +121,10 @@ AdvanceScratch = namedtuple(
 )
 
 
-# (a kernel of its own: inlined at Numba's IR level into the run loop, it left the
-# evaluation the sensors read between samples, ``cb.last``, at the run's first sample for a
-# Python controller, the motion the same; tests/control/test_sensors.py)
+# (a kernel of its own: inlined at Numba's IR level into the run loop, the run loop's
+# stores of the evaluation the sensors read between samples, ``cb.last``, were lost, the
+# motion the same (tests/control/test_sensors.py); with that copy in a kernel of its own
+# the inlined loop is no faster: docs/explanation/performance.md)
 @kernel
 def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=False):
     """Integrate from t to t_end (one control period) with events.
