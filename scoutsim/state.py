@@ -119,6 +119,15 @@ class HybridState:
         that direction.
     slide_directions : +1 / -1, direction of a sliding toe (back, front).
     toe_anchors : world x [m] of pinned (stick / strut) toes (back, front).
+    controller_state : the controller's own state before its command at this sample (floats,
+        in the controller's units): a :class:`~scoutsim.control.compiled.CompiledController`'s
+        state array, or what a Python controller's ``get_state()`` returns
+        (:mod:`scoutsim.control.protocol`); empty: the controller starts from its own
+        initial state, as in any run. The built-in Table I law keeps only ``leg_states``.
+    held_torques : the hip torques [N m] (back, front, per physical leg) held from the
+        sample before: what the motor-current and IMU readings of this sample see before
+        the controller's new command (no effect on the Table I law with ideal sensors,
+        which reads the encoders and leg lengths only).
     """
 
     state: tuple
@@ -127,6 +136,8 @@ class HybridState:
     motor_modes: tuple = (0, 0)
     slide_directions: tuple = (1, 1)
     toe_anchors: tuple = (0.0, 0.0)
+    controller_state: tuple = ()
+    held_torques: tuple = (0.0, 0.0)
 
     def __post_init__(self):
         s = np.asarray(self.state, dtype=float)
@@ -156,6 +167,20 @@ class HybridState:
                 "two finite positions [m]"
             )
         object.__setattr__(self, "toe_anchors", a)
+        c = np.asarray(self.controller_state, dtype=float).ravel()
+        if not np.all(np.isfinite(c)):
+            raise ValueError(
+                f"HybridState.controller_state = {self.controller_state!r} is not allowed: "
+                "finite numbers only"
+            )
+        object.__setattr__(self, "controller_state", tuple(float(v) for v in c))
+        tq = tuple(float(x) for x in self.held_torques)
+        if len(tq) != 2 or not all(math.isfinite(x) for x in tq):
+            raise ValueError(
+                f"HybridState.held_torques = {self.held_torques!r} is not allowed: "
+                "two finite hip torques [N m]"
+            )
+        object.__setattr__(self, "held_torques", tq)
 
     def mode_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The compiled model's mode arrays of this state: (mi, mf), layout ``MI_*`` (toe

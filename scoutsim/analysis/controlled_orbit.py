@@ -26,19 +26,34 @@ from ..state import HybridState
 from .poincare import MapError, floquet_multipliers
 from .stride_map import (
     CONTROLLED_Z_NAMES,
-    controlled_stride_map,
-    discrete_modes,
-    hs_of,
+    SECTION_LABELS,
+    Crossing,
+    StrideMap,
+    mode_signature,
     section_state,
 )
 
-__all__ = ["ControlledOrbit", "controlled_fixed_point"]
+__all__ = ["ControlledOrbit", "NewtonSettings", "controlled_fixed_point"]
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """How :func:`controlled_fixed_point` runs Newton's method.
+
+    tol : target residual max|P(z) - z| (SI units of each coordinate).
+    max_iter : Newton iterations at most.
+    jacobian_step : relative step of the difference Jacobian (times max(1, |z_j|)).
+    """
+
+    tol: float = 1e-10
+    max_iter: int = 10
+    jacobian_step: float = 1e-6
 
 
 @dataclass
 class ControlledOrbit:
-    """Fixed point of the controlled stride map (section: the control sample at which the
-    controller detects back-leg lift-off)."""
+    """Fixed point of the controlled stride map (section: the first control sample after
+    the back leg's lift-off, :class:`~scoutsim.analysis.stride_map.StrideMap`)."""
 
     z: np.ndarray  # section coordinates (CONTROLLED_Z_NAMES), SI
     state: object  # the HybridState at the section
@@ -52,6 +67,15 @@ class ControlledOrbit:
     #: [rad] (back, front; linear interpolation between the 1 kHz samples)
     touchdown_angles_world: tuple = (math.nan, math.nan)
     mean_speed: float = math.nan  # forward travel over the period / period [m/s]
+    #: names of the section coordinates z (StrideMap.z_names)
+    z_names: tuple = CONTROLLED_Z_NAMES
+    #: distance of the lift-off on the orbit from the nearer sample boundary [s]: a
+    #: parameter change that moves it by more moves the section by a sample
+    section_margin: float = math.nan
+    #: strides per period (the orbit is a fixed point of the stride map's strides-th iterate)
+    strides: int = 1
+    #: what the section is (StrideMap.section_label)
+    section_label: str = SECTION_LABELS["plant"]
 
     @property
     def stable(self) -> bool:
@@ -59,10 +83,13 @@ class ControlledOrbit:
 
     def to_dict(self) -> dict:
         return {
-            "section": "controller detects back-leg lift-off (control sample)",
+            "section": self.section_label,
+            "section_margin_s": self.section_margin,
+            "jacobian_method": "fd",
+            "strides_per_period": self.strides,
             "touchdown_angle_back_deg": math.degrees(self.touchdown_angles_world[0]),
             "touchdown_angle_front_deg": math.degrees(self.touchdown_angles_world[1]),
-            "state": {n: float(v) for n, v in zip(CONTROLLED_Z_NAMES, self.z)},
+            "state": {n: float(v) for n, v in zip(self.z_names, self.z)},
             "period_s": self.period,
             "mean_speed_m_s": self.mean_speed,
             "residual": self.residual,
@@ -83,103 +110,126 @@ def controlled_fixed_point(
     controller=None,
     integrator: IntegratorSettings | None = None,
     settle_duration: float = 12.0,
-    tol: float = 1e-10,
-    max_iter: int = 10,
-    jacobian_step: float = 1e-6,
+    newton: NewtonSettings | None = None,
     progress=None,
+    strides: int | None = None,
+    section: str | None = None,
 ) -> ControlledOrbit:
-    """Periodic orbit of the controlled robot (Table I law at 1 kHz) by Newton's method on
-    the sampled stride map :func:`controlled_stride_map`, and its Floquet multipliers.
+    """Periodic orbit of the controlled robot by Newton's method on the sampled stride map
+    (:class:`~scoutsim.analysis.stride_map.StrideMap`: section at the first control sample
+    after the back leg's lift-off), and its Floquet multipliers, for any controller whose
+    state scoutsim can read and set (the built-in Table I law, a
+    :class:`~scoutsim.control.compiled.CompiledController`, a Python controller with
+    ``get_state()`` / ``set_state(values)``).
 
     The closed loop is a sampled-data system: between samples the plant flows, at samples
-    the controller switches. On the section "the sample at which the controller detects
-    back-leg lift-off" the stride map is smooth as long as every controller transition
-    stays on the same sample, so a fixed point is a periodic orbit of a whole number of
-    control periods, and Newton converges on it quadratically (within a sample-phase
-    cell). ``start``: a HybridState at such a sample (default: the last one of a
-    ``settle_duration`` run from the default start). Jacobian: forward differences with
-    steps ``jacobian_step`` max(1, |z_j|); Newton steps by least squares (the dependent
-    coordinates of pinned legs and stuck motor joints make ``dP/dz - I`` rank deficient).
-    Default integrator: DOPRI5 at rtol 1e-11 / atol 1e-12, so the map is accurate well
-    below ``tol``. MapError if the discrete modes at the section change or no fixed point
-    is found within ``max_iter`` iterations. ``progress``: optional callable(str), told
-    the settling run and each Newton iteration's residual."""
+    the controller switches. The stride map is smooth as long as the lift-off and every
+    controller switch stay on the same sample, so a fixed point is a periodic orbit of a
+    whole number of control periods, and Newton converges on it quadratically (within a
+    sample-phase cell).
+
+    ``start``: None (a ``settle_duration`` [s] run from the default start, at the default
+    integrator, then to the next section sample), a :class:`~scoutsim.SimulationResult` of
+    a steady bound (its second-to-last back-leg lift-off; a controller that keeps its own
+    state or reads its held torques is settled three more strides from there, since a
+    result records neither), or a HybridState at a section sample (as
+    :attr:`ControlledOrbit.state`). ``newton``: :class:`NewtonSettings` (the target
+    residual ``tol``, ``max_iter``, ``jacobian_step``). Jacobian: forward differences with
+    steps ``jacobian_step`` max(1, |z_j|) (backward where the forward step moves the section or
+    a controller switch by a sample: the map's jump, not its derivative). Newton steps by
+    least squares (the dependent coordinates of pinned legs and stuck motor joints make
+    ``dP/dz - I`` rank deficient), globalised by halving a step that does not reduce the
+    residual (or makes the robot fall) up to five times. Default integrator: DOPRI5 at
+    rtol 1e-11 / atol 1e-12, so the map is accurate well below ``tol``. MapError, saying
+    why, if the discrete modes at the section change, Newton stalls or no fixed point is
+    found within ``max_iter`` iterations. ``progress``: optional callable(str), told the
+    settling run and each Newton iteration's residual.
+
+    ``strides``: strides per period of the orbit, the fixed point of the map's
+    ``strides``-th iterate (None: the cycle the settled run is on, read from its next 36
+    strides, :func:`repeating_strides`; one stride if they do not repeat). A sampled controller can lock into a cycle of
+    several strides of different whole numbers of control periods, and such a cycle can
+    coexist with a period-1 orbit (Model I under the Table I law: docs/orbits.md); the
+    orbit found is the one the start is on. ``section``: "plant" or "controller" (:class:`StrideMap`; default: the
+    built-in law's own lift-off detection for that law, the plant's lift-off otherwise)."""
     integ = integrator or IntegratorSettings(rtol=1e-11, atol=1e-12)
-    kw = dict(
-        model=model,
-        friction_coefficient=friction_coefficient,
-        robot=robot,
-        controller=controller,
-        integrator=integ,
+    ns = newton or NewtonSettings()
+    tol, max_iter, jacobian_step = ns.tol, ns.max_iter, ns.jacobian_step
+    common = dict(
+        model=model, friction_coefficient=friction_coefficient, robot=robot, controller=controller
     )
+    m = StrideMap(integrator=integ, section=section, **common)
     say = progress or (lambda message: None)
     if start is None:
         say(f"settling: {settle_duration:g} s of model {model} to a Newton start")
-        start = simulate(
-            robot,
-            controller,
-            None,
-            settle_duration,
-            model=model,
-            friction_coefficient=friction_coefficient,
+        start = (
+            StrideMap(section=m.section, **common).crossing(None, settle_s=settle_duration).state
         )
-    if not isinstance(start, HybridState):
-        start = section_state(start)
-    disc = discrete_modes(start)
-    z0, z1, h1, T = controlled_stride_map(start, **kw)
-    z = z0
-    hist = []
+    elif not isinstance(start, HybridState):
+        start = section_state(start, m.section)
+        if not m.builtin:
+            say("settling: three strides from the run's last strides to a Newton start")
+            settle = StrideMap(section=m.section, **common)
+            for _ in range(3):
+                start = settle.crossing(start).state
+    if strides is None:
+        k, lengths = repeating_strides(StrideMap(section=m.section, **common), start)
+        if k is not None:
+            say(f"the settled strides repeat every {k} stride(s)")
+            strides = k
+        else:
+            say(f"the settled strides do not repeat within {MAX_STRIDES_PER_PERIOD} strides")
+            try:
+                return _newton(m, start, 1, tol, max_iter, jacobian_step, say, common, integ)
+            except MapError as exc:
+                raise MapError(
+                    f"no periodic orbit from this start: the settled strides do not "
+                    f"repeat within {MAX_STRIDES_PER_PERIOD} strides (lengths in control "
+                    f"periods {lengths}), and Newton for one stride failed ({exc}); settle "
+                    "longer, or give strides"
+                ) from exc
+    return _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
+
+
+def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ):
+    """Newton on the ``strides``-th iterate of the map ``m`` from ``start`` (see
+    :func:`controlled_fixed_point`)."""
+    disc = mode_signature(start)
+    c = m.crossing(start, strides=strides)
+    assert c.start is not None, "a crossing from a HybridState keeps its start"
+    z, z1 = m.z_of(c.start), m.z_of(c.state)
+    like = c.start
+    hist: list[float] = []
     J = None
     it = 0
     for it in range(max_iter + 1):
+        _same_modes(disc, c.state)
         F = z1 - z
         res = float(np.max(np.abs(F)))
         hist.append(res)
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
-        if discrete_modes(h1) != disc:
-            raise MapError(
-                f"the discrete state at the section changed ({disc} -> "
-                f"{discrete_modes(h1)}): not a period-1 orbit of this section"
-            )
         if res < tol or it == max_iter:
             break
-        J = np.empty((z.size, z.size))
-        for j in range(z.size):
-            e = jacobian_step * max(1.0, abs(z[j]))
-            zp = z.copy()
-            zp[j] += e
-            _, zj1, _, Tj = controlled_stride_map(hs_of(zp, disc), **kw)
-            if Tj != T:
-                raise MapError(
-                    f"the stride length changed from {T} s to {Tj} s under a "
-                    f"perturbation of {CONTROLLED_Z_NAMES[j]}: the start lies on "
-                    "a sample-phase boundary"
-                )
-            J[:, j] = (zj1 - z1) / e
+        J = _jacobian(m, z, like, c, jacobian_step, strides)
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
-        z0, z1, h1, T = controlled_stride_map(hs_of(z + dz, disc), **kw)
-        z = z0
+        z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
     if hist[-1] >= tol:
         raise MapError(
             f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
             f"iterations (history {[f'{v:.1e}' for v in hist]})"
         )
     if J is None or it > 0:
-        J = np.empty((z.size, z.size))
-        for j in range(z.size):
-            e = jacobian_step * max(1.0, abs(z[j]))
-            zp = z.copy()
-            zp[j] += e
-            J[:, j] = (controlled_stride_map(hs_of(zp, disc), **kw)[1] - z1) / e
-    hs = hs_of(z, disc)
+        J = _jacobian(m, z, like, c, jacobian_step, strides)
+    hs = m.hs_of(z, like)
+    T = c.period_s
     r = simulate(
-        robot,
-        controller,
+        common["robot"],
+        common["controller"],
         hs,
         T,
-        model=model,
+        model=common["model"],
         integrator=integ,
-        friction_coefficient=friction_coefficient,
+        friction_coefficient=common["friction_coefficient"],
     )
     td = []
     for leg in LEG_NAMES:
@@ -200,4 +250,97 @@ def controlled_fixed_point(
         history=hist,
         touchdown_angles_world=tuple(td),
         mean_speed=float((r.x[-1] - r.x[0]) / (r.t[-1] - r.t[0])),
+        z_names=m.z_names(hs),
+        section_margin=c.margin_s,
+        strides=strides,
+        section_label=m.section_label,
+    )
+
+
+#: strides per period searched for a repeating cycle; the settled strides compared
+MAX_STRIDES_PER_PERIOD = 12
+_COMPARED = 3 * MAX_STRIDES_PER_PERIOD
+
+
+def repeating_strides(m: StrideMap, start: HybridState) -> tuple[int | None, list[int]]:
+    """Strides per period of the cycle the run from the section state ``start`` is on:
+    over its next 36 strides, the smallest k (up to 12) whose stride lengths in control
+    periods repeat every k strides (a sampled controller can lock into a cycle of strides
+    of different whole numbers of control periods); None if they do not repeat. Returns
+    (k, the stride lengths)."""
+    ns = []
+    hs = start
+    for _ in range(_COMPARED):
+        c = m.crossing(hs)
+        hs = c.state
+        ns.append(c.samples)
+    for k in range(1, MAX_STRIDES_PER_PERIOD + 1):
+        if all(ns[i + k] == ns[i] for i in range(len(ns) - k)):
+            return k, ns
+    return None, ns
+
+
+def _same_modes(disc: dict, hs: HybridState) -> None:
+    """MapError unless the discrete modes of ``hs`` are ``disc``."""
+    if mode_signature(hs) != disc:
+        raise MapError(
+            f"the discrete state at the section changed ({disc} -> "
+            f"{mode_signature(hs)}): not a period-1 orbit of this section"
+        )
+
+
+def _smooth_with(base: Crossing, c: Crossing) -> bool:
+    """True if the stride ``c`` lies in the sample-phase cell of ``base``: the same number
+    of control periods and the controller switching on the same samples."""
+    return c.samples == base.samples and np.array_equal(c.leg_states, base.leg_states)
+
+
+def _jacobian(m: StrideMap, z, like, base: Crossing, step: float, strides: int) -> np.ndarray:
+    """dP/dz at ``z`` (whose stride is ``base``) by forward differences, a column by
+    backward differences where the forward step leaves the sample-phase cell; MapError if
+    both do (the map is not smooth here)."""
+    z1 = m.z_of(base.state)
+    J = np.empty((z.size, z.size))
+    names = m.z_names(like)
+    for j in range(z.size):
+        e = step * max(1.0, abs(z[j]))
+        for sign in (1.0, -1.0):
+            zp = z.copy()
+            zp[j] += sign * e
+            cj = m.crossing(m.hs_of(zp, like), strides=strides)
+            if _smooth_with(base, cj):
+                J[:, j] = (m.z_of(cj.state) - z1) / (sign * e)
+                break
+        else:
+            raise MapError(
+                f"the stride map is not smooth here: a perturbation of {names[j]} by "
+                f"+-{e:.1e} moves the section or a controller switch by a control sample "
+                f"(the lift-off lies {base.margin_s * 1e6:.2f} us from a sample boundary)"
+            )
+    return J
+
+
+def _globalised_step(m: StrideMap, z, dz, like, res: float, disc: dict, hist: list, strides: int):
+    """The Newton step ``dz`` from ``z``, halved until it reduces the residual
+    max|P(z) - z| below ``res`` (at most five halvings): (z, P(z), its crossing)."""
+    why = ""
+    lam = 1.0
+    for _ in range(6):
+        try:
+            c = m.crossing(m.hs_of(z + lam * dz, like), strides=strides)
+            if mode_signature(c.state) != disc:
+                raise MapError("the discrete state at the section changed")
+            assert c.start is not None, "a crossing from a HybridState keeps its start"
+            zt, zt1 = m.z_of(c.start), m.z_of(c.state)
+            rt = float(np.max(np.abs(zt1 - zt)))
+            if rt < res:
+                return zt, zt1, c
+            why = f"residual {rt:.2e}"
+        except MapError as exc:
+            why = str(exc)
+        lam *= 0.5
+    raise MapError(
+        f"Newton stalled: no step along the Newton direction (down to 1/32 of it) reduces "
+        f"the residual {res:.2e} (the last: {why}; history "
+        f"{[f'{v:.1e}' for v in hist]})"
     )

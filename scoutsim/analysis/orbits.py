@@ -24,19 +24,25 @@ prescribed touchdown angles from the world vertical, ``model="passive"``):
 * **Floquet multipliers**: eigenvalues of the central-difference Jacobian ``dP/dz`` at the
   fixed point. Energy conservation makes one of them exactly 1.
 
-Controlled robot (:func:`controlled_fixed_point`): the Table I law samples and holds at
-1 kHz, so the closed loop is a sampled-data system. **Section**: the control sample at which
-the controller detects back-leg lift-off; the section state is the complete hybrid state
-there (:class:`~scoutsim.state.HybridState`: continuous state without x, pinned toes'
-anchors relative to x, and the discrete plant/controller modes, which must recur). The
-stride map :func:`controlled_stride_map` is smooth as long as every controller transition
-stays on the same sample, so its fixed point is a periodic orbit lasting a whole number of
-control periods; Newton's method (forward-difference Jacobian, least-squares steps because
-pinned legs and stuck motor joints make some coordinates dependent) converges on it to a
-residual ~1e-12, and the eigenvalues of the Jacobian are its Floquet multipliers. On the
-Scout II defaults (Model II, default floor) the orbit lasts 234 ms with spectral radius
-0.925 (a real multiplier -0.925: successive strides alternate about the orbit), and a long
-simulation from the default start settles onto it at that rate (tests/analysis).
+Controlled robot (:func:`controlled_fixed_point`), for any controller whose state scoutsim
+can read and set (the built-in Table I law, a compiled controller, a Python controller with
+``get_state()`` / ``set_state(values)``): the controller samples and holds at 1 kHz, so the
+closed loop is a sampled-data system. **Section**: the first control sample after the back
+leg's lift-off (a plant event every bounding run has); the section state is the complete
+hybrid state there (:class:`~scoutsim.state.HybridState`: continuous state without x,
+pinned toes' anchors relative to x, the controller's own state and, for a controller other
+than the built-in law, the held torques; the discrete plant/controller modes must recur).
+The stride map (:class:`~scoutsim.analysis.stride_map.StrideMap`) is smooth as long as the
+lift-off and every controller switch stay on the same sample, so its fixed point is a
+periodic orbit lasting a whole number of control periods; Newton's method (forward-
+difference Jacobian, least-squares steps because pinned legs and stuck motor joints make
+some coordinates dependent, halved where a step does not reduce the residual) converges on
+it to a residual ~1e-12, and the eigenvalues of the Jacobian are its Floquet multipliers.
+A controller that locks into a cycle of several strides of different lengths has its orbit
+as a fixed point of the map's iterate (``strides``). On the Scout II defaults (Model II,
+default floor) the orbit lasts 234 ms with spectral radius 0.925 (a real multiplier
+-0.925: successive strides alternate about the orbit), and a long simulation from the
+default start settles onto it at that rate (tests/analysis).
 :func:`controlled_cycle` is the simulation-only estimate (mean of converged strides,
 multipliers fitted to the transient), kept as a cross-check.
 
@@ -55,7 +61,7 @@ re-exports their public names.
 from __future__ import annotations
 
 from .controlled_cycle import LIFTOFF_STATE_NAMES, ControlledCycle, controlled_cycle
-from .controlled_orbit import ControlledOrbit, controlled_fixed_point
+from .controlled_orbit import ControlledOrbit, NewtonSettings, controlled_fixed_point
 from .passive_orbits import PassiveOrbit, continue_passive_family, passive_bounding_orbit
 from .passive_reference import (
     APEX_STATE_NAMES,
@@ -66,7 +72,7 @@ from .passive_reference import (
     passive_robot,
 )
 from .poincare import MapError, fd_jacobian, floquet_multipliers
-from .stride_map import CONTROLLED_Z_NAMES, controlled_stride_map, section_state
+from .stride_map import CONTROLLED_Z_NAMES, StrideMap, controlled_stride_map, section_state
 
 __all__ = [
     "MapError",
@@ -74,6 +80,8 @@ __all__ = [
     "PassiveOrbit",
     "ControlledCycle",
     "ControlledOrbit",
+    "NewtonSettings",
+    "StrideMap",
     "controlled_fixed_point",
     "controlled_stride_map",
     "section_state",

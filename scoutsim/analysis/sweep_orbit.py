@@ -28,7 +28,7 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
     """The :data:`ORBIT_COLUMNS` of a steadily bounding run: its controlled orbit by Newton
     from its last strides (``task``: the run's ``model`` and ``friction_coefficient``)."""
     from ..simulation.integrator import IntegratorSettings
-    from .controlled_orbit import controlled_fixed_point
+    from .controlled_orbit import NewtonSettings, controlled_fixed_point
     from .poincare import MapError
 
     out: dict[str, Any] = {k: None for k in ORBIT_COLUMNS}
@@ -39,8 +39,7 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
             friction_coefficient=task["friction_coefficient"],
             robot=robot,
             controller=ctrl,
-            tol=ORBIT_TOL,
-            max_iter=6,
+            newton=NewtonSettings(tol=ORBIT_TOL, max_iter=6),
             integrator=IntegratorSettings(rtol=ORBIT_RTOL, atol=ORBIT_RTOL / 10),
         )
         out.update(

@@ -1,11 +1,12 @@
 """``scoutsim orbit``: a periodic bounding orbit and its Floquet multipliers
 (docs/orbits.md). With --passive, the conservative massless-leg model's bound through a
 level-torso apex (touchdown angles solved for); otherwise the controlled robot's orbit,
-found by Newton's method on the stride map sampled at the controller's back-leg lift-off.
+found by Newton's method on the stride map sampled at the first control sample after the
+back leg's lift-off, for any controller whose state scoutsim can read and set.
 
     scoutsim orbit [--passive] [--speed V] [--apex-height H] [--pitch-rate W]
                    [--model {ideal,I,II}] [--friction MU] [--duration S] [--robot FILE]
-                   [--json]
+                   [--controller C] [--strides K] [--section {plant,controller}] [--json]
 
 Exit code 1 if no periodic orbit is found.
 """
@@ -23,11 +24,13 @@ from ._common import (
     add_friction_option,
     add_no_progress_option,
     controller_choice,
+    controller_label,
     dumps,
     finite_float,
     load_parameters,
     make_controller,
     positive_float,
+    positive_int,
     progress_messages,
 )
 
@@ -43,8 +46,9 @@ def register(sub, common) -> None:
         "the touchdown angles (from the world vertical) and prints them, the "
         "period, the multipliers of the apex return map and the map residual. "
         "Without --passive: the controlled robot's periodic orbit (Newton on the "
-        "stride map sampled where the controller detects back-leg lift-off, "
-        "started from a converged run), its touchdown angles from the world "
+        "stride map sampled at the first control sample after the back leg's "
+        "lift-off, started from a converged run; any --controller whose state "
+        "scoutsim can read and set), its touchdown angles from the world "
         "vertical, period, Floquet multipliers and residual.",
     )
     orbit.add_argument(
@@ -85,6 +89,23 @@ def register(sub, common) -> None:
         help="controlled: simulated time to the Newton start [s] (default: 12)",
     )
     orbit.add_argument(
+        "--strides",
+        type=positive_int,
+        default=None,
+        metavar="K",
+        help="controlled: look for an orbit of K strides per period, a fixed point of the "
+        "stride map's K-th iterate (default: the cycle the settled run is on, read from "
+        "its next 36 strides)",
+    )
+    orbit.add_argument(
+        "--section",
+        choices=("plant", "controller"),
+        default=None,
+        help="controlled: the section, the first control sample after the back leg's "
+        "lift-off (plant, any controller) or the sample after the Table I controller "
+        "detects it (controller; the default for the Table I law); the orbit is the same",
+    )
+    orbit.add_argument(
         "--robot",
         metavar="FILE",
         help="TOML robot/controller file with the layout of "
@@ -101,7 +122,7 @@ def execute(args) -> int:
     from ..analysis.controlled_orbit import ControlledOrbit, controlled_fixed_point
     from ..analysis.passive_orbits import PassiveOrbit, passive_bounding_orbit
     from ..analysis.poincare import MapError
-    from ..parameters import ControllerParameters
+    from ..control.dispatch import ControllerStateError
 
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
@@ -112,16 +133,6 @@ def execute(args) -> int:
         )
     if not args.passive:
         controller = make_controller(law, cparams, robot)
-        if not isinstance(controller, ControllerParameters):
-            raise UsageError(
-                f"--controller {args.controller} is not allowed here: scoutsim orbit finds "
-                "periodic orbits of the Table I law, whose section (the sample at which it "
-                "detects back-leg lift-off) and whose state are part of the hybrid state a "
-                f"stride restarts from; {args.controller} made a "
-                f"{type(controller).__name__}, whose own state a restarted stride would "
-                "lose. Give the Table I law your parameters instead: a controller file, or "
-                "a MODULE:FACTORY that returns ControllerParameters"
-            )
     orb: PassiveOrbit | ControlledOrbit
     try:
         if args.passive:
@@ -136,7 +147,18 @@ def execute(args) -> int:
                 controller=controller,
                 settle_duration=args.duration,
                 progress=progress_messages(args, NAME),
+                strides=args.strides,
+                section=args.section,
             )
+    except ValueError as exc:
+        if args.section is None or not str(exc).startswith("section ="):
+            raise
+        raise UsageError(f"--section {args.section}: {exc}") from exc  # not this controller's
+    except ControllerStateError as exc:
+        raise UsageError(
+            f"--controller {args.controller}: {exc}; scoutsim orbit restarts strides from "
+            "section states, which include the controller's own state"
+        ) from exc
     except MapError as exc:
         print(f"scoutsim orbit: {exc}", file=sys.stderr)
         return 1
@@ -171,11 +193,10 @@ def _print_passive(args, orb, d) -> None:
 def _print_controlled(args, orb, d) -> None:
     import numpy as np
 
-    law = "Table I" + ("" if args.controller == "table-i" else f" ({args.controller})")
+    law = controller_label(args.controller)
     print(
-        f"scoutsim orbit: model {args.model}, {law} controller at 1 kHz, mu = "
-        f"{args.friction:g}; section: the sample at which the controller detects back-leg "
-        "lift-off; Newton on the sampled stride map"
+        f"scoutsim orbit: model {args.model}, {law} controller, mu = "
+        f"{args.friction:g}; section: {d['section']}; Newton on the sampled stride map"
     )
     print(
         f"  touchdown angle back / front  {d['touchdown_angle_back_deg']:.4f} / "
@@ -183,8 +204,11 @@ def _print_controlled(args, orb, d) -> None:
     )
     print(
         f"  period                        {d['period_s']:.6f} s "
-        f"({round(d['period_s'] * 1000)} control periods), mean speed "
-        f"{d['mean_speed_m_s']:.4f} m/s"
+        f"({d['strides_per_period']} stride(s)), mean speed {d['mean_speed_m_s']:.4f} m/s"
+    )
+    print(
+        f"  lift-off from a sample boundary {d['section_margin_s'] * 1e6:.2f} us (a change "
+        "that moves it further moves the section by a sample)"
     )
     for name, v in d["state"].items():
         print(f"    {name:<18} {v: .9f}")

@@ -34,7 +34,15 @@ from .compiled import CompiledController
 from .protocol import DEFAULT_CONTROL_PERIOD, controller_name
 from .sensors import SensorParameters, Sensors
 
-__all__ = ["ControllerPlan", "PythonBridge", "plan_controller"]
+__all__ = [
+    "ControllerPlan",
+    "ControllerStateError",
+    "PythonBridge",
+    "check_state_access",
+    "plan_controller",
+    "read_controller_state",
+    "write_controller_state",
+]
 
 
 @dataclass
@@ -183,6 +191,74 @@ def plan_controller(
         C=controller_array(None),
         block=block,
         label=controller_name(user),
+    )
+
+
+class ControllerStateError(TypeError):
+    """The controller's own state cannot be read or set: a Python controller without
+    ``get_state()`` / ``set_state(values)`` (:mod:`scoutsim.control.protocol`), or a state of
+    the wrong size."""
+
+
+def check_state_access(plan: ControllerPlan) -> None:
+    """ControllerStateError unless scoutsim can read and set the own state of the
+    controller of ``plan`` (the built-in law and compiled controllers: always; a Python
+    controller: with ``get_state()`` and ``set_state(values)``)."""
+    if plan.kind != "python":
+        return
+    c = plan.controller
+    if not callable(getattr(c, "get_state", None)) or not callable(getattr(c, "set_state", None)):
+        raise ControllerStateError(
+            f"controller {controller_name(c)} offers no state: give it get_state() and "
+            "set_state(values) (scoutsim.control.protocol; a stateless controller "
+            "returns ()), or make it a CompiledController"
+        )
+
+
+def read_controller_state(plan: ControllerPlan) -> tuple[float, ...]:
+    """The controller's own state now (:attr:`~scoutsim.state.HybridState.controller_state`):
+    a compiled controller's state array (as the loop left it), a Python controller's
+    ``get_state()``, nothing for the built-in law (its leg states are the plan's ``ls``).
+    ControllerStateError for a Python controller that offers no state."""
+    if plan.kind == "compiled":  # (an empty state has a one-slot placeholder array)
+        n = plan.controller.initial_state.size
+        return tuple(float(v) for v in plan.block.state[:n])
+    if plan.kind != "python":
+        return ()
+    check_state_access(plan)
+    values = np.asarray(plan.controller.get_state(), dtype=float).ravel()
+    if not np.all(np.isfinite(values)):
+        raise ControllerStateError(
+            f"controller {controller_name(plan.controller)}: get_state() returned "
+            f"{values!r}, not finite numbers"
+        )
+    return tuple(float(v) for v in values)
+
+
+def write_controller_state(plan: ControllerPlan, values) -> None:
+    """Put the controller's own state ``values`` (a sequence of floats, as
+    :func:`read_controller_state` gives it) back before a run resumes; an empty ``values``
+    leaves the controller as its ``reset`` left it. ControllerStateError if the controller
+    keeps no such state or ``values`` has the wrong size."""
+    values = np.asarray(values, dtype=float).ravel()
+    if values.size == 0:
+        return
+    name = controller_name(plan.controller) if plan.controller is not None else "Table I"
+    if plan.kind == "compiled":
+        n = plan.controller.initial_state.size
+        if values.size != n:
+            raise ControllerStateError(
+                f"controller_state has {values.size} values; controller {name} keeps {n}"
+            )
+        plan.block.state[:n] = values
+        return
+    if plan.kind == "python" and callable(getattr(plan.controller, "set_state", None)):
+        plan.controller.set_state(values.copy())
+        return
+    raise ControllerStateError(
+        f"controller_state has {values.size} values, but controller {name} keeps no "
+        "state of its own that scoutsim can set (the built-in law: leg_states; a Python "
+        "controller: set_state(values), scoutsim.control.protocol)"
     )
 
 

@@ -17,6 +17,14 @@ A controller is an object with
 ``leg_states`` (optional)
     length-2 sequence of leg-state codes (0 flight, 1 stance-retraction, 2 stance-brake)
     logged with each sample.
+``get_state() -> sequence of float`` and ``set_state(values)`` (optional, together)
+    the controller's own state (timers, filters, estimates; its ``leg_states`` too if it
+    keeps them), read at a control sample before its command there and put back before a
+    run resumes from that sample (:class:`~scoutsim.state.HybridState`'s
+    ``controller_state``). A stateless controller returns an empty sequence. The periodic
+    orbits (:func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`, ``scoutsim
+    orbit``) restart strides from section states and need them; a compiled controller's
+    state is its state array, read and set by scoutsim itself.
 
 :class:`Controller` is a base class with these defaults. The built-in Table I controller
 (:class:`~scoutsim.control.bounding.BoundingController`) and the compiled controllers

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -20,16 +21,21 @@ from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .._core.numerics.stepper import METHOD_AUTO
 from .._core.numerics.work import Plant
 from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
-from ..control.dispatch import plan_controller
+from ..control.dispatch import (
+    PythonBridge,
+    plan_controller,
+    read_controller_state,
+    write_controller_state,
+)
 from ..control.sensors import SensorParameters, Sensors
-from ..parameters import ControllerParameters, RobotParameters, validate_parameters, validate_robot
+from ..parameters import RobotParameters, validate_parameters, validate_robot
 from ..result.simulation_result import SimulationResult
 from ..state import HybridState, InitialState
 from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, RunSetup, assemble
 from .budgets import EVENT_ROWS_PER_S
 from .integrator import METHOD_CODES, IntegratorSettings
 
-__all__ = ["HybridEngine", "start_engine", "RETUNABLE"]
+__all__ = ["HybridEngine", "start_controller", "start_engine", "RETUNABLE"]
 
 #: ControllerParameters field -> slot of the built-in Table I controller's array, for the
 #: fields a caller may change while the engine runs (:meth:`HybridEngine.retune`): the
@@ -122,6 +128,9 @@ class HybridEngine:
         self.status = L.ST_RUNNING
         self._entry: Callable | None = None  # the compiled run loop for this engine's method
         self.t_now = 0.0
+        # the controller's plan and a Python controller's bridge (start_controller)
+        self.plan: Any = None
+        self.bridge: Any = None
 
     @classmethod
     def assembled(
@@ -196,6 +205,49 @@ class HybridEngine:
         o = int(leg) * L.NAUX_LEG
         aux = self.block.last[L.NS :]
         return float(aux[o + L.A_TOE_X]), float(aux[o + L.A_TOE_Y])
+
+    def hybrid_state(self) -> HybridState:
+        """The hybrid state now, at control sample ``k`` before the controller's command
+        there: the state, every mode, the leg states, the held hip torques and (an engine
+        started by :func:`start_controller`) the controller's own state. A run resumed from
+        it continues this one to the integration tolerance (see
+        :class:`~scoutsim.state.HybridState`)."""
+        mi, mf = self.mi, self.mf
+        plan = self.plan
+        return HybridState(
+            state=self.s.copy(),
+            leg_states=tuple(int(v) for v in self.ls),
+            contact_modes=(int(mi[L.MI_CONTACT_B]), int(mi[L.MI_CONTACT_B + 1])),
+            motor_modes=(int(mi[L.MI_MOTOR_B]), int(mi[L.MI_MOTOR_B + 1])),
+            slide_directions=(int(mi[L.MI_SLIDE_DIR_B]), int(mi[L.MI_SLIDE_DIR_B + 1])),
+            toe_anchors=(float(mf[L.MF_ANCHOR_B]), float(mf[L.MF_ANCHOR_B + 1])),
+            controller_state=read_controller_state(plan) if plan is not None else (),
+            held_torques=(float(self.cmd[0]), float(self.cmd[1])),
+        )
+
+    def event_times(self, kind: str, leg: int, since: int = 0) -> np.ndarray:
+        """Times [s] of the events of ``kind`` (a name of
+        :data:`~scoutsim.names.EVENT_KIND_NAMES`: "liftoff", "touchdown", ...) of leg
+        ``leg`` (0 back, 1 front) among the records logged since record ``since`` (the
+        engine's ``nev`` then)."""
+        codes = {v: c for c, v in L.EVENT_KIND_NAMES.items()}
+        if kind not in codes:
+            raise ValueError(f"kind = {kind!r} is not allowed: must be one of {sorted(codes)}")
+        ev = self.ev[since : min(self.nev, self.ev.shape[0])]
+        m = (ev[:, L.EVR_KIND] == codes[kind]) & (ev[:, L.EVR_LEG] == int(leg))
+        return ev[m, L.EVR_T].copy()
+
+    def recorded_state(self, i: int) -> tuple[float, ...]:
+        """The state recorded at row ``i`` of the time series (sample ``i`` of a run that
+        keeps its records), as the run took it (dependent coordinates projected)."""
+        if not 0 <= i < self.n_out:
+            raise ValueError(f"i = {i!r} is not allowed: must be in [0, {self.n_out - 1}]")
+        return tuple(float(v) for v in self.out_s[i])
+
+    def leg_state_record(self) -> np.ndarray:
+        """The controller's leg states (back, front) at every sample recorded so far,
+        (n, 2) int: where the controller switched, sample by sample."""
+        return self.out_ls[: self.n_out, [L.RM_LEG_STATE_B, L.RM_LEG_STATE_F]].astype(int)
 
     def contact_mode(self, leg) -> int:
         """Plant contact mode of leg ``leg`` now, a code of
@@ -382,13 +434,39 @@ class HybridEngine:
         )
 
 
+def start_controller(engine: HybridEngine, plan, robot: RobotParameters, start):
+    """Make the controller of ``plan`` (:func:`~scoutsim.control.dispatch.plan_controller`)
+    ready to run ``engine`` from ``start``, as :func:`~scoutsim.simulation.simulator.simulate`
+    does: a Python controller's :class:`~scoutsim.control.dispatch.PythonBridge`, the
+    controller's ``reset`` with the first readings (a compiled controller's state array from
+    its ``initial_state``, which a reset may set) and, for a
+    :class:`~scoutsim.state.HybridState` start, its held torques (before the first
+    readings) and its ``controller_state`` (after the reset). Keeps the plan and the bridge
+    on the engine (``engine.plan``, ``engine.bridge``) and returns the bridge (None unless
+    the controller is a Python one)."""
+    if isinstance(start, HybridState):
+        engine.cmd[:] = start.held_torques
+    user = plan.controller
+    bridge = None
+    if plan.kind == "python":
+        bridge = PythonBridge(user, plan.block, engine.cmd, engine.ls, plan.control_period)
+    if user is not None and callable(getattr(user, "reset", None)):
+        user.reset(robot, engine.read_first_sensors())
+        if plan.kind == "compiled":  # a reset may set the controller's initial state
+            plan.block.state[: user.initial_state.size] = user.initial_state
+    if isinstance(start, HybridState):
+        write_controller_state(plan, start.controller_state)
+    engine.plan, engine.bridge = plan, bridge
+    return bridge
+
+
 def start_engine(
     start: InitialState | HybridState | None,
     duration: float,
     *,
     robot: RobotParameters | None = None,
     model: str = "II",
-    controller: ControllerParameters | None = None,
+    controller=None,
     hold_commands: bool = False,
     sensors: SensorParameters | None = None,
     friction_coefficient: float | None = None,
@@ -412,9 +490,12 @@ def start_engine(
     robot, model, sensors, friction_coefficient, pitch_limit_deg, integrator, energy : as for
         :func:`~scoutsim.simulation.simulator.simulate` (``model`` "ideal", "I" or "II"; ``energy``: the accumulator
         ``engine.energy``, layout ``EN_*`` [J]).
-    controller : ControllerParameters of the built-in Table I law (default Table I); with
-        ``hold_commands`` they set only the leg angles of a start in flight and what the
-        hip encoders read (``sense_motor_angle``).
+    controller : any controller :func:`~scoutsim.simulation.simulator.simulate` takes
+        (default: the Table I law), made ready by :func:`start_controller` (a
+        :class:`~scoutsim.state.HybridState` start sets its held torques and its
+        ``controller_state``); with ``hold_commands``, ControllerParameters that set only
+        the leg angles of a start in flight and what the hip encoders read
+        (``sense_motor_angle``).
     hold_commands : no controller runs: the hip torques ``engine.cmd`` [N m per physical
         leg] are held as the caller sets them (zero at first).
     rows : samples the time-series buffers hold (None: the whole run); a caller that calls
@@ -424,10 +505,15 @@ def start_engine(
     if model not in ("ideal", "I", "II"):
         raise ValueError(f"model = {model!r} is not allowed: must be 'ideal', 'I' or 'II'")
     robot = validate_robot(robot if robot is not None else RobotParameters())
-    cparams = controller if controller is not None else ControllerParameters()
-    validate_parameters(robot, cparams)
     plant = PlantOptions(friction_coefficient=friction_coefficient, pitch_limit_deg=pitch_limit_deg)
-    plan = plan_controller(cparams, model, robot, sensors)
+    plan = plan_controller(controller, model, robot, sensors)
+    if plan.kind == "builtin":
+        validate_parameters(robot, plan.parameters)
+    elif hold_commands:
+        raise TypeError(
+            "with hold_commands, controller must be ControllerParameters (they set the "
+            f"legs' start angles), not {type(controller).__name__}"
+        )
     if start is not None and not isinstance(start, (InitialState, HybridState)):
         raise TypeError(
             f"start must be an InitialState, a HybridState or None, not {type(start).__name__}"
@@ -435,7 +521,10 @@ def start_engine(
     setup = assemble(
         robot, model, start, plan, plant=plant, integrator=integrator, hold_commands=hold_commands
     )
-    return HybridEngine.assembled(setup, duration, rows=rows, energy=energy)
+    engine = HybridEngine.assembled(setup, duration, rows=rows, energy=energy)
+    if not hold_commands:
+        start_controller(engine, plan, robot, start)
+    return engine
 
 
 def _kept(buffer: np.ndarray, n: int) -> np.ndarray:

@@ -25,7 +25,7 @@ from dataclasses import asdict, dataclass, fields
 
 from .._core.model import layout as L
 from .._version import __version__
-from ..control.dispatch import PythonBridge, plan_controller
+from ..control.dispatch import plan_controller
 from ..control.protocol import ControllerError, failure_message
 from ..control.sensors import SensorParameters, Sensors
 from ..control.startup import StartupParameters, run_startup
@@ -43,7 +43,7 @@ from .budgets import (
     expected_wall_time,
     physical_memory_bytes,
 )
-from .engine import HybridEngine, start_engine
+from .engine import HybridEngine, start_controller, start_engine
 from .initial_conditions import default_initial_state, named_start
 from .integrator import IntegratorSettings
 from .record_rate import RecordedPieces, samples_per_record
@@ -376,13 +376,7 @@ def simulate(
         energy=energy,
     )
     user_ctrl = plan.controller
-    bridge = None
-    if plan.kind == "python":
-        bridge = PythonBridge(user_ctrl, plan.block, eng.cmd, eng.ls, dt)
-    if user_ctrl is not None and callable(getattr(user_ctrl, "reset", None)):
-        user_ctrl.reset(robot, eng.read_first_sensors())
-        if plan.kind == "compiled":  # a reset may set the controller's initial state
-            plan.block.state[: user_ctrl.initial_state.size] = user_ctrl.initial_state
+    bridge = start_controller(eng, plan, robot, init)
     wall0 = time.perf_counter()
     bar = None
     if progress:

@@ -522,13 +522,32 @@ def test_sweep_random_sample_runs_each_drawn_point(tmp_path, capsys):
 # -----------------------------------------------------------------------------------------
 def test_orbit_model_I_prints_a_periodic_orbit(tmp_path, capsys):
     """`orbit --model I --json`: the printed section state is a periodic orbit. Resumed
-    with simulate() (the section's discrete modes from a Model I run: back leg just
-    lifted off, front leg in stance), one period later the controller detects the next
-    back-leg lift-off and the state is back where it started; the period is a whole
+    with simulate() (the section's discrete modes from a Model I run at the sample after
+    the controller detects back-leg lift-off: back leg just lifted off, front leg in
+    stance), the controller detects the next back-leg lift-off one sample before the
+    period ends, and at the period's end the state is back where it started; the period is a whole
     number of control periods; the mean speed is the travel over the period; "stable"
     is spectral radius < 1, the spectral radius the largest |multiplier|."""
-    assert main(["orbit", "--model", "I", "--json", "--no-progress"]) == 0
+    # (6 s from the default start the run passes near the period-1 orbit; it settles on
+    # the 2-stride cycle, test_orbit_model_I_settles_on_a_two_stride_cycle)
+    assert (
+        main(
+            [
+                "orbit",
+                "--model",
+                "I",
+                "--duration",
+                "6",
+                "--strides",
+                "1",
+                "--json",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     orb = json.loads(capsys.readouterr().out)
+    assert orb["strides_per_period"] == 1
     period = orb["period_s"]
     n = round(period / DT)
     assert period == pytest.approx(n * DT, abs=1e-12)
@@ -538,7 +557,7 @@ def test_orbit_model_I_prints_a_periodic_orbit(tmp_path, capsys):
     assert orb["stable"] == (orb["spectral_radius"] < 1.0)
 
     run = scoutsim.simulate(None, None, None, 2.0, model="I")
-    k_lo = int(round(run.event_times("controller_liftoff", "back")[-1] / DT))
+    k_lo = int(round(run.event_times("controller_liftoff", "back")[-1] / DT)) + 1
     modes = run.hybrid_state(k_lo)
     z = orb["state"]
     s = np.array([0.0] + [z[name] for name in L.STATE_NAMES[1:]])
@@ -558,10 +577,28 @@ def test_orbit_model_I_prints_a_periodic_orbit(tmp_path, capsys):
         model="I",
         integrator=IntegratorSettings(rtol=1e-11, atol=1e-12),
     )
-    np.testing.assert_allclose(r.event_times("controller_liftoff", "back"), [period], atol=1e-12)
+    np.testing.assert_allclose(
+        r.event_times("controller_liftoff", "back"), [period - DT], atol=1e-12
+    )
     assert r.hybrid_state(n).leg_states == modes.leg_states
     np.testing.assert_allclose(r.state[n, 1:], s[1:], rtol=0, atol=1e-8)
     assert (r.x[n] - r.x[0]) / period == pytest.approx(orb["mean_speed_m_s"], rel=1e-8)
+
+
+def test_orbit_model_I_settles_on_a_two_stride_cycle(capsys):
+    """Model I under the Table I law has two stable gaits: the period-1 orbit of 207
+    control periods (above) and a cycle of two strides of 207 and 205 periods, on which a
+    long run from the default start settles. `orbit` after the default 12 s settling finds
+    the cycle the run is on; the long run's strides independently alternate 207 / 205."""
+    run = scoutsim.simulate(None, None, None, 30.0, model="I")
+    strides = np.round(np.diff(run.event_times("controller_liftoff", "back")) / DT).astype(int)
+    assert sorted(set(strides[-20:])) == [205, 207]
+    assert np.all(strides[-20:][1:] != strides[-20:][:-1])
+    assert main(["orbit", "--model", "I", "--json", "--no-progress"]) == 0
+    orb = json.loads(capsys.readouterr().out)
+    assert orb["strides_per_period"] == 2
+    assert orb["period_s"] == pytest.approx((207 + 205) * DT, abs=1e-12)
+    assert orb["residual"] < 1e-9 and orb["stable"]
 
 
 def test_run_model_ideal_limits_torque_only_by_the_current_limit(tmp_path, capsys):

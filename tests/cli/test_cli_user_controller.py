@@ -45,6 +45,15 @@ USER_MODULE = textwrap.dedent('''
 
     def not_a_controller(robot, params):
         return 42
+
+    class Limp:
+        """A Python controller that keeps no state it could give (no get_state)."""
+
+        def command(self, t, sensors):
+            return (0.0, 0.0)
+
+    def limp(robot, params):
+        return Limp()
     ''')
 
 
@@ -245,8 +254,9 @@ def test_tune_runs_a_module_controller(user_dir, tmp_path):
 
 def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     """orbit: the factory's parameters are the ones whose orbit is found (its front
-    touchdown angle differs from the default orbit's), and a controller object with state
-    of its own is refused with the reason."""
+    touchdown angle differs from the default orbit's); a controller that does not bound
+    is reported (exit 1, the reason), and a Python controller that offers no state of its
+    own is refused with the reason (exit 2)."""
     own = scoutsim(
         user_dir,
         "orbit",
@@ -263,6 +273,12 @@ def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     a, b = json.loads(own.stdout), json.loads(default.stdout)
     assert a["residual"] < 1e-9 and b["residual"] < 1e-9
     assert a["touchdown_angle_front_deg"] != b["touchdown_angle_front_deg"]
-    refused = scoutsim(user_dir, "orbit", "--controller", "usermod:pitch", cwd=tmp_path)
+    still = scoutsim(
+        user_dir, "orbit", "--controller", "usermod:compiled", "--duration", "1", cwd=tmp_path
+    )
+    assert still.returncode == 1 and "lift-off" in still.stderr
+    refused = scoutsim(
+        user_dir, "orbit", "--controller", "usermod:limp", "--duration", "0.5", cwd=tmp_path
+    )
     assert refused.returncode == 2
-    assert "PitchFeedbackController" in refused.stderr
+    assert "get_state" in refused.stderr

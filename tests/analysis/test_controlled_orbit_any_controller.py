@@ -1,0 +1,173 @@
+"""Periodic orbits of the controlled robot for controllers other than the built-in Table I
+law (scoutsim.analysis.controlled_orbit, scoutsim.analysis.stride_map): the section every
+run has (the first sample after the back leg's lift-off), the controller's own state as
+part of the section state, and cycles of several strides.
+
+Laws checked: the fixed point returns to itself under the stride map and under
+simulate() resumed from it (its controller state included); the same law run as Python
+and compiled into the loop has the same orbit and multipliers (two independent paths
+through the controller dispatch); the multipliers of a cycle of k strides are those of
+the k-th iterate.
+"""
+
+import json
+
+import numba
+import numpy as np
+import pytest
+
+import scoutsim
+from scoutsim.analysis.controlled_orbit import controlled_fixed_point
+from scoutsim.analysis.poincare import MapError
+from scoutsim.analysis.stride_map import StrideMap
+from scoutsim.cli import main
+from scoutsim.control.bounding import BoundingController
+from scoutsim.control.compiled import CompiledController
+from scoutsim.control.dispatch import ControllerStateError
+from scoutsim.control.pitch_feedback import (
+    PitchFeedbackController,
+    pitch_feedback_array,
+    pitch_feedback_command,
+)
+from scoutsim.control.sensors import PITCH_RATE
+from scoutsim.parameters import ControllerParameters
+from scoutsim.simulation.integrator import IntegratorSettings
+from scoutsim.state import HybridState
+
+_pf = numba.njit(pitch_feedback_command)
+
+
+def filtered_pitch_feedback(t, y, params, state, torque, leg_states):
+    """Table I with torso feedback, the pitch rate low-passed (state[0], a first-order
+    filter with a 10-sample time constant): a compiled controller with a state of its own."""
+    state[0] += 0.1 * (y[PITCH_RATE] - state[0])
+    yf = y.copy()
+    yf[PITCH_RATE] = state[0]
+    return _pf(t, yf, params, state, torque, leg_states)
+
+
+def _filtered():
+    return CompiledController(
+        filtered_pitch_feedback,
+        params=pitch_feedback_array(ControllerParameters()),
+        state=[0.0],
+        name="filtered_pitch_feedback",
+    )
+
+
+class PythonTableI(BoundingController):
+    """The Table I law run as a Python controller (command overridden), offering its leg
+    states as its state."""
+
+    def command(self, t, sensors):
+        return super().command(t, sensors)
+
+    def get_state(self):
+        return tuple(float(v) for v in self.leg_states)
+
+    def set_state(self, values):
+        self.leg_states[:] = np.round(values).astype(np.int64)
+
+
+class Stateless(BoundingController):
+    def command(self, t, sensors):
+        return super().command(t, sensors)
+
+
+@pytest.fixture(scope="module")
+def table_i():
+    return controlled_fixed_point(settle_duration=8.0, section="plant")
+
+
+def test_a_python_controller_has_the_orbit_of_the_same_law_compiled(table_i):
+    py = controlled_fixed_point(controller=PythonTableI(), settle_duration=8.0)
+    assert py.residual < 1e-9
+    assert py.period == table_i.period and py.strides == table_i.strides == 1
+    n = len(table_i.z)
+    assert np.max(np.abs(py.z[:n] - table_i.z)) < 1e-8
+    # the same nonzero multipliers; the Python controller's extra coordinates (its leg
+    # states, the held torques) add only zero multipliers
+    big = np.sort(np.abs(table_i.multipliers))[-6:]
+    assert np.max(np.abs(np.sort(np.abs(py.multipliers))[-6:] - big)) < 1e-4
+    assert "held_torque_back" in py.z_names and "controller_state_0" in py.z_names
+
+
+def test_a_compiled_controller_state_is_part_of_the_orbit():
+    ctrl = _filtered()
+    o = controlled_fixed_point(controller=ctrl, settle_duration=8.0)
+    assert o.residual < 1e-9
+    i = o.z_names.index("controller_state_0")
+    # the filter's state on the orbit is the low-passed pitch rate: a real rate [rad/s]
+    assert 0.0 < abs(o.z[i]) < 10.0
+    assert o.state.controller_state == (o.z[i],)
+    # the state matters: the map's Jacobian has a column for it
+    assert np.max(np.abs(o.jacobian[:, i])) > 1e-6
+    # the map from the orbit returns to it (at the orbit's integrator) ...
+    tight = IntegratorSettings(rtol=1e-11, atol=1e-12)
+    m = StrideMap(controller=ctrl, integrator=tight)
+    c = m.crossing(o.state, strides=o.strides)
+    assert c.period_s == pytest.approx(o.period)
+    assert np.max(np.abs(m.z_of(c.state) - o.z)) < 1e-9
+    # ... and so does simulate() resumed from the orbit's HybridState, whose controller
+    # state it puts back after the controller's reset
+    r = scoutsim.simulate(
+        initial_state=o.state, duration=o.period, controller=ctrl, model="II", integrator=tight
+    )
+    assert np.max(np.abs(r.state[-1] - np.asarray(c.state.state))) < 1e-9
+    # without its state (the filter restarting from 0) the stride lands elsewhere
+    cold = m.crossing(HybridState(**{**o.state.__dict__, "controller_state": (0.0,)}))
+    assert np.max(np.abs(m.z_of(cold.state) - o.z)) > 1e-3
+
+
+def test_a_cycle_of_several_strides_is_a_fixed_point_of_the_iterate(capsys):
+    """Pitch feedback at its defaults locks into a cycle of 6 strides of different whole
+    numbers of control periods: the orbit is the fixed point of the 6th iterate, and the
+    CLI says so."""
+    assert main(["orbit", "--controller", "pitch-feedback", "--json", "--duration", "8"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["jacobian_method"] == "fd"
+    assert d["residual"] < 1e-9
+    k = d["strides_per_period"]
+    assert k > 1
+    # the cycle's strides have different lengths, and their sum is the period
+    assert d["period_s"] * 1000 == pytest.approx(round(d["period_s"] * 1000), abs=1e-9)
+    assert 0.0 < d["section_margin_s"] <= 0.5e-3
+
+
+def test_the_iterate_of_a_period_one_orbit_has_the_multipliers_squared(table_i):
+    two = controlled_fixed_point(table_i.state, strides=2, section="plant")
+    assert two.period == pytest.approx(2 * table_i.period)
+    assert np.max(np.abs(two.z - table_i.z)) < 1e-8
+    lam = np.sort(np.abs(table_i.multipliers))[-4:] ** 2
+    assert np.max(np.abs(np.sort(np.abs(two.multipliers))[-4:] - lam)) < 1e-4
+
+
+def test_the_orbit_does_not_depend_on_the_section(table_i):
+    """The built-in law's own section (the sample after it detects lift-off) gives the
+    same orbit: the same period and nonzero multipliers."""
+    own = controlled_fixed_point(settle_duration=8.0)
+    assert "detects" in own.section_label and "plant" in table_i.section_label
+    assert own.period == table_i.period
+    big = np.sort(np.abs(table_i.multipliers))[-6:]
+    assert np.max(np.abs(np.sort(np.abs(own.multipliers))[-6:] - big)) < 1e-4
+    with pytest.raises(ValueError, match="section"):
+        StrideMap(controller=PitchFeedbackController(), section="controller")
+
+
+def test_a_python_controller_without_state_is_refused_by_name(capsys):
+    with pytest.raises(ControllerStateError, match="get_state"):
+        controlled_fixed_point(controller=Stateless(), settle_duration=2.0)
+
+
+def test_hybrid_state_controller_fields_are_checked():
+    with pytest.raises(ValueError, match="controller_state"):
+        HybridState(state=np.zeros(16), controller_state=(np.nan,))
+    with pytest.raises(ValueError, match="held_torques"):
+        HybridState(state=np.zeros(16), held_torques=(1.0,))
+
+
+def test_a_fall_is_reported_not_counted():
+    m = StrideMap(max_period=0.3)
+    hs = HybridState(state=np.r_[0.0, 0.05, np.zeros(14)])
+    with pytest.raises(MapError):
+        m.crossing(hs)
