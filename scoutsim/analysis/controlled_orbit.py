@@ -14,6 +14,7 @@ period [s], speed [m/s], angles [rad]; degrees only in ``to_dict``).
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -146,8 +147,11 @@ def controlled_fixed_point(
     settling run and each Newton iteration's residual.
 
     ``strides``: strides per period of the orbit, the fixed point of the map's
-    ``strides``-th iterate (None: the cycle the settled run is on, read from its next 36
-    strides, :func:`repeating_strides`; one stride if they do not repeat). A sampled controller can lock into a cycle of
+    ``strides``-th iterate (None: the cycle the map settles on, read from 48 strides after
+    32 more at the orbit's integrator (up to 240 if they do not repeat),
+    :func:`likely_strides`; Newton from their end for the three most likely
+    numbers of strides in turn, and a fixed point of the k-th iterate that is one of a
+    shorter period reported with that period). A sampled controller can lock into a cycle of
     several strides of different whole numbers of control periods, and such a cycle can
     coexist with a period-1 orbit (Model I under the Table I law: docs/orbits.md); the
     orbit found is the one the start is on. ``section``: "plant" or "controller" (:class:`StrideMap`; default: the
@@ -172,23 +176,31 @@ def controlled_fixed_point(
             settle = StrideMap(section=m.section, **common)
             for _ in range(3):
                 start = settle.crossing(start).state
-    if strides is None:
-        k, lengths = repeating_strides(StrideMap(section=m.section, **common), start)
-        if k is not None:
-            say(f"the settled strides repeat every {k} stride(s)")
-            strides = k
-        else:
-            say(f"the settled strides do not repeat within {MAX_STRIDES_PER_PERIOD} strides")
-            try:
-                return _newton(m, start, 1, tol, max_iter, jacobian_step, say, common, integ)
-            except MapError as exc:
-                raise MapError(
-                    f"no periodic orbit from this start: the settled strides do not "
-                    f"repeat within {MAX_STRIDES_PER_PERIOD} strides (lengths in control "
-                    f"periods {lengths}), and Newton for one stride failed ({exc}); settle "
-                    "longer, or give strides"
-                ) from exc
-    return _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
+    if strides is not None:
+        return _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
+    ks, lengths, start = likely_strides(m, start)
+    say(
+        f"settled stride lengths (control periods) {lengths[:12]}...: trying "
+        f"{', '.join(map(str, ks))} stride(s) per period"
+    )
+    failures = []
+    for k in ks:
+        try:
+            orbit = _newton(m, start, k, tol, max_iter, jacobian_step, say, common, integ)
+        except MapError as exc:
+            failures.append(f"{k} stride(s): {exc}")
+            continue
+        for d in (d for d in range(1, k) if k % d == 0):
+            # the fixed point of the k-th iterate may be one of a shorter period
+            c = m.crossing(orbit.state, strides=d)
+            if float(np.max(np.abs(m.z_of(c.state) - orbit.z))) < 100.0 * tol:
+                say(f"the fixed point of {k} strides is one of {d}: Newton for {d} from it")
+                return _newton(m, orbit.state, d, tol, max_iter, jacobian_step, say, common, integ)
+        return orbit
+    raise MapError(
+        "no periodic orbit from this start (settled stride lengths in control periods "
+        f"{lengths}): " + "; ".join(failures)
+    )
 
 
 def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ):
@@ -257,27 +269,45 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
     )
 
 
-#: strides per period searched for a repeating cycle; the settled strides compared
-MAX_STRIDES_PER_PERIOD = 12
+#: strides per period searched for a repeating cycle; strides settled first, and compared;
+#: cycles tried
+MAX_STRIDES_PER_PERIOD = 16
+_SETTLED = 2 * MAX_STRIDES_PER_PERIOD
 _COMPARED = 3 * MAX_STRIDES_PER_PERIOD
+_TRIED = 3
+_ROUNDS = 3
 
 
-def repeating_strides(m: StrideMap, start: HybridState) -> tuple[int | None, list[int]]:
-    """Strides per period of the cycle the run from the section state ``start`` is on:
-    over its next 36 strides, the smallest k (up to 12) whose stride lengths in control
-    periods repeat every k strides (a sampled controller can lock into a cycle of strides
-    of different whole numbers of control periods); None if they do not repeat. Returns
-    (k, the stride lengths)."""
-    ns = []
+def likely_strides(m: StrideMap, start: HybridState):
+    """The strides per period of the cycle the map ``m`` settles on from the section
+    state ``start``, most likely first: after 32 strides more, over the next 48, the k (up
+    to 16) whose stride lengths in control periods repeat every k strides (tried again
+    after 80 strides more, twice, while none do; then all k), ordered by how closely the
+    section states repeat every k strides (d_k = max |z_(i+k) - z_i|): those within 30 x
+    the smallest d_k first, shortest first (a bound still converging with an alternating
+    multiplier lambda has d_1 / d_2 about 2 / (1 - lambda^2): 14 at lambda = -0.925). A
+    sampled controller can lock into a cycle of strides of different whole numbers of
+    control periods, and a gait can repeat only every other stride (a period doubling)
+    with strides of equal length. Returns (the three most likely k, the last 48 stride
+    lengths, the section state after them)."""
     hs = start
-    for _ in range(_COMPARED):
-        c = m.crossing(hs)
-        hs = c.state
-        ns.append(c.samples)
-    for k in range(1, MAX_STRIDES_PER_PERIOD + 1):
-        if all(ns[i + k] == ns[i] for i in range(len(ns) - k)):
-            return k, ns
-    return None, ns
+    ks = range(1, MAX_STRIDES_PER_PERIOD + 1)
+    for _ in range(_ROUNDS):
+        ns, zs = [], []
+        for i in range(_SETTLED + _COMPARED):
+            c = m.crossing(hs)
+            hs = c.state
+            if i >= _SETTLED:
+                ns.append(c.samples)
+                zs.append(m.z_of(hs))
+        repeating = [k for k in ks if all(ns[i + k] == ns[i] for i in range(len(ns) - k))]
+        if repeating:
+            break
+    Z = np.array(zs)
+    d = {k: float(np.max(np.abs(Z[k:] - Z[:-k]))) for k in (repeating or list(ks))}
+    best = min(d.values())
+    order = sorted(d, key=lambda k: (d[k] > 30.0 * best, k))
+    return order[:_TRIED], ns, hs
 
 
 def _same_modes(disc: dict, hs: HybridState) -> None:
@@ -289,33 +319,50 @@ def _same_modes(disc: dict, hs: HybridState) -> None:
         )
 
 
-def _smooth_with(base: Crossing, c: Crossing) -> bool:
-    """True if the stride ``c`` lies in the sample-phase cell of ``base``: the same number
-    of control periods and the controller switching on the same samples."""
-    return c.samples == base.samples and np.array_equal(c.leg_states, base.leg_states)
+def _cell_change(base: Crossing, c: Crossing) -> str:
+    """How the stride ``c`` leaves the sample-phase cell and mode sequence of ``base``
+    ("" if it does not): another number of control periods, the controller switching on
+    other samples, or another sequence of plant events (one that appears or disappears:
+    the orbit grazes it)."""
+    if c.samples != base.samples:
+        return f"the stride lasts {c.samples} control periods instead of {base.samples}"
+    if not np.array_equal(c.leg_states, base.leg_states):
+        return "a controller switch moves to another sample"
+    if c.plant_events != base.plant_events:
+        a, b = Counter(base.plant_events), Counter(c.plant_events)
+        gone = [f"{k} ({LEG_NAMES[g]})" for (k, g) in (a - b)]
+        new = [f"{k} ({LEG_NAMES[g]})" for (k, g) in (b - a)]
+        parts = ([f"{', '.join(new)} appears"] if new else []) + (
+            [f"{', '.join(gone)} disappears"] if gone else []
+        )
+        what = "; ".join(parts) or "reordered"
+        return f"the plant's event sequence changes ({what}): the orbit grazes it"
+    return ""
 
 
 def _jacobian(m: StrideMap, z, like, base: Crossing, step: float, strides: int) -> np.ndarray:
     """dP/dz at ``z`` (whose stride is ``base``) by forward differences, a column by
-    backward differences where the forward step leaves the sample-phase cell; MapError if
-    both do (the map is not smooth here)."""
+    backward differences where the forward step leaves the sample-phase cell or the mode
+    sequence; MapError, saying how, if both do (the map is not smooth here)."""
     z1 = m.z_of(base.state)
     J = np.empty((z.size, z.size))
     names = m.z_names(like)
     for j in range(z.size):
         e = step * max(1.0, abs(z[j]))
+        why = ""
         for sign in (1.0, -1.0):
             zp = z.copy()
             zp[j] += sign * e
             cj = m.crossing(m.hs_of(zp, like), strides=strides)
-            if _smooth_with(base, cj):
+            why = _cell_change(base, cj)
+            if not why:
                 J[:, j] = (m.z_of(cj.state) - z1) / (sign * e)
                 break
         else:
             raise MapError(
-                f"the stride map is not smooth here: a perturbation of {names[j]} by "
-                f"+-{e:.1e} moves the section or a controller switch by a control sample "
-                f"(the lift-off lies {base.margin_s * 1e6:.2f} us from a sample boundary)"
+                f"the stride map is not smooth here: under a perturbation of {names[j]} by "
+                f"+-{e:.1e} {why} (the lift-off lies {base.margin_s * 1e6:.2f} us from a "
+                "sample boundary)"
             )
     return J
 

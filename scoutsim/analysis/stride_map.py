@@ -112,6 +112,8 @@ class Crossing:
         perturbation that moves it by more moves it to another sample.
     leg_states : (samples + 1, 2) the controller's leg states at every sample of the
         stride: where the controller switched.
+    plant_events : the plant's events of the stride, (kind, leg) in order: the sequence of
+        contact and joint modes it went through.
     """
 
     start: HybridState | None
@@ -121,6 +123,7 @@ class Crossing:
     event_s: float
     margin_s: float
     leg_states: np.ndarray
+    plant_events: tuple = ()
 
 
 class StrideMap:
@@ -248,6 +251,7 @@ class StrideMap:
             event_s=t_ev,
             margin_s=dt * min(phase, 1.0 - phase),
             leg_states=eng.leg_state_record()[k0:],
+            plant_events=eng.plant_events(nev0),
         )
 
     def _lifts(self, eng, nev0: int, t0: float) -> np.ndarray:

@@ -10,10 +10,15 @@ from typing import Any
 import numpy as np
 
 #: columns added by ``orbit=True``: the controlled orbit at the point (Newton from the run's
-#: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`)
+#: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`): its
+#: period [s] and strides per period (a cycle of several strides), spectral radius of the
+#: period's map and its k-th root, the contraction per stride (comparable between cycles
+#: of different lengths), stability, residual, and "ok" or why there is none
 ORBIT_COLUMNS = (
     "orbit_period_s",
+    "orbit_strides",
     "orbit_spectral_radius",
+    "orbit_spectral_radius_per_stride",
     "orbit_stable",
     "orbit_residual",
     "orbit_status",
@@ -42,10 +47,13 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
             newton=NewtonSettings(tol=ORBIT_TOL, max_iter=6),
             integrator=IntegratorSettings(rtol=ORBIT_RTOL, atol=ORBIT_RTOL / 10),
         )
+        rho = float(np.max(np.abs(o.multipliers)))
         out.update(
             orbit_period_s=o.period,
+            orbit_strides=o.strides,
             orbit_residual=o.residual,
-            orbit_spectral_radius=float(np.max(np.abs(o.multipliers))),
+            orbit_spectral_radius=rho,
+            orbit_spectral_radius_per_stride=rho ** (1.0 / o.strides),
             orbit_stable=o.stable,
             orbit_status="ok",
         )

@@ -23,11 +23,11 @@ What is minimised (``objective``), over the steady strides of each run:
 - ``"speed"``: ``|v - target|`` [m/s], v the mean forward speed of the steady strides;
 - ``"max-speed"``: ``-v`` [m/s];
 - ``"cot"``: the cost of transport [-] (electrical energy / (m g d), ``simulate(energy=True)``);
-- ``"stability"``: the spectral radius [-] of the stride map at the run's periodic orbit
-  (Newton from the run's last strides,
-  :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`; < 1: stable), a few
-  seconds per evaluation; Table I controller only (the orbit tools cut the stride map at
-  the lift-offs the controller logs, which compiled controllers do not log).
+- ``"stability"``: the spectral radius [-] per stride of the stride map at the run's
+  periodic orbit (Newton from the run's last strides,
+  :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`; for a cycle of k
+  strides the k-th root of its map's spectral radius; < 1: stable), a few seconds per
+  evaluation; any controller whose state scoutsim can read and set.
 
 Constraints: the run must not fall (nor fail), must bound steadily
 (:meth:`~scoutsim.analysis.gait.GaitMetrics.is_steady_bounding`: at least 7 steady strides
@@ -240,12 +240,6 @@ def tune(
     check_on_error(on_error)
     robot = robot or RobotParameters()
     kind, cparams, spec = controller_spec(controller, robot)
-    if objective == "stability" and kind != "table-i":
-        raise ValueError(
-            f"objective 'stability' is not allowed with the {kind} controller: "
-            "the orbit tools cut the stride map where the controller logs a "
-            "back-leg lift-off, which only the Table I controller logs"
-        )
     probe = spec.get("controller")
     if kind == "factory" and any("params[" in str(p) for p in parameters):
         # a factory's parameter array: the controller it makes for the base robot

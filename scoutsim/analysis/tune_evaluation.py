@@ -217,8 +217,8 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
                 ctrl,
                 {"model": scenario["model"], "friction_coefficient": scenario["friction"]},
             )
-            row["spectral_radius"] = orbit["orbit_spectral_radius"]
-            if orbit["orbit_spectral_radius"] is None:
+            row["spectral_radius"] = orbit["orbit_spectral_radius_per_stride"]
+            if row["spectral_radius"] is None:
                 broken.append(("no periodic orbit", 1.0))
         objective = row["spectral_radius"]
     if objective is None and not broken:

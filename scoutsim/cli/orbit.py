@@ -94,8 +94,8 @@ def register(sub, common) -> None:
         default=None,
         metavar="K",
         help="controlled: look for an orbit of K strides per period, a fixed point of the "
-        "stride map's K-th iterate (default: the cycle the settled run is on, read from "
-        "its next 36 strides)",
+        "stride map's K-th iterate (default: the cycle the run settles on, read from 48 "
+        "strides after 32 more)",
     )
     orbit.add_argument(
         "--section",

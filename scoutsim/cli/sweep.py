@@ -251,11 +251,17 @@ def execute(args) -> int:
             atomic_write(
                 out / "stability.png",
                 lambda p: res.plot_map(
-                    res.parameters[0], res.parameters[1], "orbit_spectral_radius", path=p
+                    res.parameters[0],
+                    res.parameters[1],
+                    "orbit_spectral_radius_per_stride",
+                    path=p,
                 ),
             )
             add_to_manifest(out, ["stability.png"])
-            print(f"  map of the orbit's spectral radius (< 1: stable): {out}/stability.png")
+            print(
+                "  map of the orbit's spectral radius per stride (< 1: stable): "
+                f"{out}/stability.png"
+            )
     if args.orbit:
         stable = sum(bool(r.get("orbit_stable")) for r in res.rows)
         print(f"  periodic orbits found and stable: {stable} of {steady} bounding points")

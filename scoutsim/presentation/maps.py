@@ -128,7 +128,8 @@ def plot_basin_map(rows, path=None, default_start=None, controller: str | None =
 def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=None) -> Figure:
     """Map of ``value`` over two swept parameters of a grid sweep
     (:class:`scoutsim.analysis.sweep.SweepResult`); points that do not reach steady bounding
-    are marked x. Each axis in its unit (``sweep.axis_label``: an angle in degrees);
+    are marked x, and on a map of an orbit column (``orbit_*``) the bounding points without
+    a periodic orbit ?, their reason in the table's ``orbit_status``. Each axis in its unit (``sweep.axis_label``: an angle in degrees);
     saved by suffix if ``path`` is given."""
     xs = sweep.column(x)
     ys = sweep.column(y)
@@ -151,12 +152,23 @@ def plot_sweep_map(sweep, x: str, y: str, value: str = "mean_speed_m_s", path=No
     ax = fig.add_subplot()
     m = ax.pcolormesh(gx, gy, Z, shading="nearest", cmap="viridis")
     fig.colorbar(m, ax=ax, label=value)
+    orbit_value = value.startswith("orbit_")
+    n_missing = 0
     for i in range(len(uy)):
         for j in range(len(ux)):
             if not steady[i, j]:
-                ax.plot(gx[j], gy[i], "x", color="w", ms=5)
+                ax.plot(gx[j], gy[i], "x", color="0.4", ms=6)
+            elif orbit_value and np.isnan(Z[i, j]):
+                # bounds steadily, but no periodic orbit was found: the table's
+                # orbit_status says why
+                ax.plot(gx[j], gy[i], "o", mfc="none", mec="k", ms=9)
+                ax.annotate("?", (gx[j], gy[i]), ha="center", va="center", fontsize=8)
+                n_missing += 1
     ax.set_xlabel(lx)
     ax.set_ylabel(ly)
-    ax.set_title(f"{value} (x: not steady bounding)")
+    note = "x: not steady bounding"
+    if orbit_value:
+        note += f"; ?: bounding, no periodic orbit ({n_missing}; why: orbit_status)"
+    ax.set_title(f"{value}\n({note})", fontsize=9)
     save_figure(fig, path)
     return fig

@@ -237,6 +237,19 @@ class HybridEngine:
         m = (ev[:, L.EVR_KIND] == codes[kind]) & (ev[:, L.EVR_LEG] == int(leg))
         return ev[m, L.EVR_T].copy()
 
+    def plant_events(self, since: int = 0) -> tuple[tuple[str, int], ...]:
+        """The plant's events (kind name, leg) logged since record ``since``, in order
+        (the controller's own events left out): the sequence of contact and joint modes a
+        stretch of the run went through."""
+        ev = self.ev[since : min(self.nev, self.ev.shape[0])]
+        names = L.EVENT_KIND_NAMES
+        own = (L.EK_CTRL_TOUCHDOWN, L.EK_CTRL_LIFTOFF, L.EK_CTRL_SWEEP)
+        return tuple(
+            (names[int(k)], int(g))
+            for k, g in zip(ev[:, L.EVR_KIND], ev[:, L.EVR_LEG])
+            if int(k) not in own
+        )
+
     def recorded_state(self, i: int) -> tuple[float, ...]:
         """The state recorded at row ``i`` of the time series (sample ``i`` of a run that
         keeps its records), as the run took it (dependent coordinates projected)."""

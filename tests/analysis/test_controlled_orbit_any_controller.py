@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.analysis.controlled_orbit import controlled_fixed_point
+from scoutsim.analysis.controlled_orbit import NewtonSettings, controlled_fixed_point
 from scoutsim.analysis.poincare import MapError
 from scoutsim.analysis.stride_map import StrideMap
 from scoutsim.cli import main
@@ -171,3 +171,29 @@ def test_a_fall_is_reported_not_counted():
     hs = HybridState(state=np.r_[0.0, 0.05, np.zeros(14)])
     with pytest.raises(MapError):
         m.crossing(hs)
+
+
+def test_a_period_doubled_gait_is_found_as_a_two_stride_orbit():
+    """A soft belt (200 N m/rad) and a 19 deg front touchdown angle: the run settles on a
+    gait that repeats only every other stride, its strides of equal length (229 control
+    periods). The orbit is the fixed point of the 2-stride map, and not one of the
+    1-stride map: one stride from it lands 1e-3 or more away."""
+    import dataclasses
+    import math
+
+    robot = dataclasses.replace(scoutsim.RobotParameters(), belt_stiffness=200.0)
+    params = dataclasses.replace(ControllerParameters(), touchdown_angle_front=math.radians(19.0))
+    o = controlled_fixed_point(
+        robot=robot,
+        controller=params,
+        settle_duration=6.0,
+        integrator=IntegratorSettings(rtol=1e-9, atol=1e-10),
+        newton=NewtonSettings(tol=1e-7),
+    )
+    assert o.strides == 2 and o.residual < 1e-7
+    m = StrideMap(
+        robot=robot, controller=params, integrator=IntegratorSettings(rtol=1e-9, atol=1e-10)
+    )
+    one = m.crossing(o.state)
+    assert 2 * one.samples * 1e-3 == pytest.approx(o.period)
+    assert np.max(np.abs(m.z_of(one.state) - o.z)) > 1e-3

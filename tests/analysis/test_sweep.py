@@ -137,7 +137,9 @@ def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
     assert bound["orbit_residual"] < 1e-7
     # the orbit's period is a whole number of control periods, near the run's strides
     assert bound["orbit_period_s"] * 1000 == pytest.approx(round(bound["orbit_period_s"] * 1000))
-    assert bound["orbit_period_s"] == pytest.approx(1 / bound["stride_frequency_hz"], rel=0.02)
+    assert bound["orbit_period_s"] / bound["orbit_strides"] == pytest.approx(
+        1 / bound["stride_frequency_hz"], rel=0.02
+    )
     assert bound["orbit_stable"] == (bound["orbit_spectral_radius"] < 1)
     assert not fell["steady_bounding"] and fell["orbit_status"].startswith("no orbit")
     assert set(ORBIT_COLUMNS) <= set(res.columns())
@@ -189,3 +191,31 @@ def test_a_sweep_from_a_named_start_runs_it_and_refuses_an_unknown_name(tmp_path
     assert res.settings["initial_state"] == "standing"
     with pytest.raises(ValueError, match=r"initial_state = 'sitting'.*\['flight', 'standing'\]"):
         sweep(pts, model="ideal", duration=0.6, workers=1, initial_state="sitting")
+
+
+def test_orbit_columns_find_cycles_of_several_strides(tmp_path):
+    """Belt stiffness x front touchdown angle (docs/orbits.md): points whose runs lock into
+    a period-doubled gait (200 N m/rad, 19 deg: 2 strides of equal length) and a cycle of
+    13 strides (800 N m/rad, 19 deg) have their orbits, each a whole number of control
+    periods long, stable, and its period the sum of its strides."""
+    from scoutsim.analysis.sweep import sweep
+
+    pts = [
+        {"robot.belt_stiffness": kb, "controller.touchdown_angle_front_deg": 19.0}
+        for kb in (200.0, 800.0)
+    ]
+    res = sweep(pts, duration=6.0, workers=1, out=tmp_path, orbit=True)
+    doubled, long = res.rows
+    for row in (doubled, long):
+        assert row["steady_bounding"] and row["orbit_status"] == "ok", row["orbit_status"]
+        assert row["orbit_period_s"] * 1000 == pytest.approx(round(row["orbit_period_s"] * 1000))
+        assert row["orbit_stable"]
+        assert row["orbit_spectral_radius_per_stride"] == pytest.approx(
+            row["orbit_spectral_radius"] ** (1 / row["orbit_strides"])
+        )
+    assert doubled["orbit_strides"] == 2 and long["orbit_strides"] == 13
+    # the strides average what the run's stride frequency says
+    for row in (doubled, long):
+        assert row["orbit_period_s"] / row["orbit_strides"] == pytest.approx(
+            1 / row["stride_frequency_hz"], rel=0.02
+        )
