@@ -34,7 +34,14 @@ from .stride_map import (
     section_state,
 )
 
-__all__ = ["ControlledOrbit", "NewtonSettings", "controlled_fixed_point"]
+__all__ = [
+    "ControlledOrbit",
+    "NewtonSettings",
+    "cell_change",
+    "controlled_fixed_point",
+    "difference_jacobian",
+    "likely_strides",
+]
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,9 @@ class ControlledOrbit:
     strides: int = 1
     #: what the section is (StrideMap.section_label)
     section_label: str = SECTION_LABELS["plant"]
+    #: how it was found: model, friction_coefficient, robot, controller, integrator and
+    #: section (what orbit_sensitivity needs to perturb it)
+    setting: dict = field(default_factory=dict, repr=False)
 
     @property
     def stable(self) -> bool:
@@ -222,7 +232,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
         if res < tol or it == max_iter:
             break
-        J = _jacobian(m, z, like, c, jacobian_step, strides)
+        J = difference_jacobian(m, z, like, c, jacobian_step, strides)
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
         z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
     if hist[-1] >= tol:
@@ -231,7 +241,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
             f"iterations (history {[f'{v:.1e}' for v in hist]})"
         )
     if J is None or it > 0:
-        J = _jacobian(m, z, like, c, jacobian_step, strides)
+        J = difference_jacobian(m, z, like, c, jacobian_step, strides)
     hs = m.hs_of(z, like)
     T = c.period_s
     r = simulate(
@@ -266,6 +276,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
         section_margin=c.margin_s,
         strides=strides,
         section_label=m.section_label,
+        setting=dict(common, integrator=integ, section=m.section),
     )
 
 
@@ -319,7 +330,7 @@ def _same_modes(disc: dict, hs: HybridState) -> None:
         )
 
 
-def _cell_change(base: Crossing, c: Crossing) -> str:
+def cell_change(base: Crossing, c: Crossing) -> str:
     """How the stride ``c`` leaves the sample-phase cell and mode sequence of ``base``
     ("" if it does not): another number of control periods, the controller switching on
     other samples, or another sequence of plant events (one that appears or disappears:
@@ -340,7 +351,9 @@ def _cell_change(base: Crossing, c: Crossing) -> str:
     return ""
 
 
-def _jacobian(m: StrideMap, z, like, base: Crossing, step: float, strides: int) -> np.ndarray:
+def difference_jacobian(
+    m: StrideMap, z, like, base: Crossing, step: float, strides: int
+) -> np.ndarray:
     """dP/dz at ``z`` (whose stride is ``base``) by forward differences, a column by
     backward differences where the forward step leaves the sample-phase cell or the mode
     sequence; MapError, saying how, if both do (the map is not smooth here)."""
@@ -354,7 +367,7 @@ def _jacobian(m: StrideMap, z, like, base: Crossing, step: float, strides: int) 
             zp = z.copy()
             zp[j] += sign * e
             cj = m.crossing(m.hs_of(zp, like), strides=strides)
-            why = _cell_change(base, cj)
+            why = cell_change(base, cj)
             if not why:
                 J[:, j] = (m.z_of(cj.state) - z1) / (sign * e)
                 break

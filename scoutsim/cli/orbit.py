@@ -6,7 +6,8 @@ back leg's lift-off, for any controller whose state scoutsim can read and set.
 
     scoutsim orbit [--passive] [--speed V] [--apex-height H] [--pitch-rate W]
                    [--model {ideal,I,II}] [--friction MU] [--duration S] [--robot FILE]
-                   [--controller C] [--strides K] [--section {plant,controller}] [--json]
+                   [--controller C] [--strides K] [--section {plant,controller}]
+                   [--sensitivity NAME[,NAME...]|all] [--json]
 
 Exit code 1 if no periodic orbit is found.
 """
@@ -98,6 +99,16 @@ def register(sub, common) -> None:
         "strides after 32 more)",
     )
     orbit.add_argument(
+        "--sensitivity",
+        metavar="NAME[,NAME...]|all",
+        default=None,
+        help="controlled: also the sensitivities of the orbit's speed, stride frequency, "
+        "duty factors, pitch and height extremes, electrical power, cost of transport "
+        "and spectral radius to these parameters (robot.<field>, controller.<field> of "
+        "the Table I law, friction_coefficient; SI), by the implicit function theorem "
+        "on the fixed point, and their elasticities [%% per %%]",
+    )
+    orbit.add_argument(
         "--section",
         choices=("plant", "controller"),
         default=None,
@@ -133,6 +144,7 @@ def execute(args) -> int:
         )
     if not args.passive:
         controller = make_controller(law, cparams, robot)
+    names = _sensitivity_names(args, controller)
     orb: PassiveOrbit | ControlledOrbit
     try:
         if args.passive:
@@ -163,13 +175,71 @@ def execute(args) -> int:
         print(f"scoutsim orbit: {exc}", file=sys.stderr)
         return 1
     d = orb.to_dict()
+    sens = None
+    if names and isinstance(orb, ControlledOrbit):
+        from ..analysis.orbit_sensitivity import orbit_sensitivities
+
+        sens, metrics = orbit_sensitivities(orb, names, progress=progress_messages(args, NAME))
+        d["metrics"] = metrics
+        d["sensitivities"] = {n: s.to_dict() for n, s in sens.items()}
     if args.json:
         print(dumps(d))
     elif args.passive:
         _print_passive(args, orb, d)
     else:
         _print_controlled(args, orb, d)
+        if sens is not None:
+            _print_sensitivities(d)
     return 0
+
+
+def _sensitivity_names(args, controller) -> list[str] | None:
+    """The parameters of --sensitivity (None without it); UsageError naming a bad one."""
+    if args.sensitivity is None:
+        return None
+    if args.passive:
+        raise UsageError("--sensitivity is not allowed with --passive")
+    from ..analysis.orbit_sensitivity import sensitivity_parameter_names
+
+    known = sensitivity_parameter_names(controller)
+    if args.sensitivity.strip() == "all":
+        return known
+    names = [n.strip() for n in args.sensitivity.split(",") if n.strip()]
+    for n in names:
+        if n not in known:
+            import difflib
+
+            near = difflib.get_close_matches(n, known, n=1)
+            hint = f"; did you mean {near[0]!r}?" if near else ""
+            raise UsageError(
+                f"--sensitivity {n!r} is not allowed: must be 'all' or names of "
+                f"robot.<field>, controller.<field> (the Table I law's) or "
+                f"friction_coefficient{hint}"
+            )
+    return names
+
+
+def _print_sensitivities(d) -> None:
+    """The elasticities [% per %] of the main metrics, the parameters that move the speed
+    most first."""
+    rows = [(n, s) for n, s in d["sensitivities"].items() if s["status"] == "ok"]
+
+    def size(row) -> float:
+        e = row[1]["elasticity"]["mean_speed_m_s"]
+        return -1.0 if e is None or math.isnan(e) else abs(e)
+
+    rows.sort(key=size, reverse=True)
+    cols = ("mean_speed_m_s", "electrical_power_w", "cost_of_transport", "spectral_radius")
+    print("  elasticities [% per %] at the orbit (implicit function theorem):")
+    print(f"    {'parameter':<40}" + "".join(f"{c:>20}" for c in cols))
+    for n, s in rows:
+        print(f"    {n:<40}" + "".join(f"{s['elasticity'][c]:>20.4f}" for c in cols))
+    print(
+        "    (nan: a parameter at 0, whose elasticity is not defined; its derivative is in --json)"
+    )
+    for n, s in d["sensitivities"].items():
+        if s["status"] != "ok":
+            print(f"    {n}: {s['status']}")
 
 
 def _print_passive(args, orb, d) -> None:

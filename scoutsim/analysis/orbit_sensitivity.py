@@ -1,0 +1,303 @@
+"""Orbit sensitivities: how a periodic gait and its stability move with each robot,
+controller or floor parameter, by the implicit function theorem on the fixed point.
+
+At a fixed point z* = P(z*, p) of the stride map (:mod:`scoutsim.analysis.controlled_orbit`;
+its ``strides``-th iterate for a cycle of several strides),
+
+    dz*/dp = (I - dP/dz)^+ dP/dp,
+
+with dP/dz the orbit's Jacobian and dP/dp by central differences of the map at z*
+(relative step ``relative_step``; least squares, since the dependent coordinates of
+pinned legs and stuck joints make I - dP/dz singular). A metric m(z, p) of the orbit (its
+mean speed, duty factors, extremes, electrical power, cost of transport, spectral
+radius) then moves by
+
+    dm/dp = [m(z* + h dz*/dp, p + h) - m(z* - h dz*/dp, p - h)] / (2 h),
+
+one period simulated from each end, without solving for the orbit again. The
+elasticity is (dm/dp) p / m [% per %]. The stride frequency of a sampled orbit is locked
+to the control period (a whole number of samples per period), so within a sample-phase
+cell its derivative is 0; a step that leaves the cell (another number of samples,
+controller switches on other samples, another sequence of plant events) is reported
+instead of differenced.
+
+Units: SI; metrics as named (``*_m_s``, ``*_hz``, ``*_rad``, ``*_m``, ``*_w``, ``-``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..parameters import ControllerParameters, RobotParameters
+from ..simulation.simulator import simulate
+from ..state import HybridState
+from .controlled_orbit import ControlledOrbit, cell_change, difference_jacobian
+from .poincare import MapError
+from .stride_map import StrideMap
+
+__all__ = [
+    "SENSITIVITY_METRICS",
+    "ParameterSensitivity",
+    "orbit_metrics",
+    "orbit_sensitivities",
+    "sensitivity_parameter_names",
+    "setting_with",
+]
+
+#: the metrics of an orbit whose sensitivities are computed (SI, as named)
+SENSITIVITY_METRICS = (
+    "mean_speed_m_s",
+    "stride_frequency_hz",
+    "duty_factor_back",
+    "duty_factor_front",
+    "pitch_max_rad",
+    "pitch_min_rad",
+    "height_max_m",
+    "height_min_m",
+    "electrical_power_w",
+    "cost_of_transport",
+    "spectral_radius",
+)
+#: the floor parameter's name
+FRICTION = "friction_coefficient"
+#: absolute step of a parameter whose value is 0 (SI)
+ZERO_STEP = 1e-6
+
+
+@dataclass
+class ParameterSensitivity:
+    """How an orbit's metrics move with one parameter.
+
+    name : the parameter ("robot.<field>", "controller.<field>" or "friction_coefficient").
+    value : its value at the orbit (SI).
+    derivative : {metric: d metric / d parameter} (SI per SI).
+    elasticity : {metric: (d metric / d parameter) value / metric} [% per %] (NaN where
+        the value or the metric is 0).
+    status : "ok", or why there is none (the step leaves the sample-phase cell, ...).
+    """
+
+    name: str
+    value: float
+    derivative: dict = field(default_factory=dict)
+    elasticity: dict = field(default_factory=dict)
+    status: str = "ok"
+
+    def to_dict(self) -> dict:
+        return {
+            "value": self.value,
+            "derivative": self.derivative,
+            "elasticity": self.elasticity,
+            "status": self.status,
+        }
+
+
+def sensitivity_parameter_names(controller=None) -> list[str]:
+    """The parameters whose sensitivities can be computed: every float field of
+    RobotParameters, of the Table I ControllerParameters (when the controller is the
+    built-in law; not its control period or torso-feedback gains) and the floor's
+    friction coefficient."""
+    names = [
+        f"robot.{f.name}"
+        for f in dataclasses.fields(RobotParameters)
+        if isinstance(getattr(RobotParameters(), f.name), float)
+    ]
+    if controller is None or isinstance(controller, ControllerParameters):
+        names += [
+            f"controller.{f.name}"
+            for f in dataclasses.fields(ControllerParameters)
+            if isinstance(getattr(ControllerParameters(), f.name), float)
+            and f.name not in _NOT_SMOOTH
+        ]
+    return names + [FRICTION]
+
+
+#: controller fields without a sensitivity: the control period (it moves the sample grid
+#: itself) and the torso-feedback gains (the Table I law does not use them)
+_NOT_SMOOTH = (
+    "control_period",
+    "pitch_gain_front",
+    "pitch_gain_back",
+    "pitch_rate_gain_front",
+    "pitch_rate_gain_back",
+)
+
+
+def setting_with(setting: dict, name: str, value: float) -> dict:
+    """The orbit's setting (model, floor, robot, controller) with parameter ``name`` set
+    to ``value`` (SI)."""
+    out = dict(setting)
+    if name == FRICTION:
+        out["friction_coefficient"] = value
+        return out
+    sec, _, fld = name.partition(".")
+    changes: dict[str, Any] = {fld: value}
+    if sec == "robot":
+        out["robot"] = dataclasses.replace(setting["robot"] or RobotParameters(), **changes)
+    elif sec == "controller" and (
+        setting["controller"] is None or isinstance(setting["controller"], ControllerParameters)
+    ):
+        base = setting["controller"] or ControllerParameters()
+        out["controller"] = dataclasses.replace(base, **changes)
+    else:
+        raise ValueError(
+            f"parameter {name!r} is not allowed: must be one of "
+            "sensitivity_parameter_names() (robot.<field>, controller.<field> of the "
+            "built-in law, friction_coefficient)"
+        )
+    return out
+
+
+def _value(setting: dict, name: str) -> float:
+    if name == FRICTION:
+        return float(setting["friction_coefficient"])
+    sec, _, fld = name.partition(".")
+    obj = setting["robot"] or RobotParameters() if sec == "robot" else setting["controller"]
+    if sec == "controller" and obj is None:
+        obj = ControllerParameters()
+    return float(getattr(obj, fld))
+
+
+def orbit_metrics(hs, period: float, setting: dict, integrator, jacobian=None) -> dict:
+    """The metrics (:data:`SENSITIVITY_METRICS`) of one period ``period`` [s] from the
+    section state ``hs`` in ``setting`` (model, friction_coefficient, robot, controller);
+    ``jacobian``: the period map's Jacobian there, for the spectral radius (NaN without)."""
+    robot = setting["robot"] or RobotParameters()
+    model = setting["model"]
+    r = simulate(
+        robot,
+        setting["controller"],
+        hs,
+        period,
+        model=model,
+        integrator=integrator,
+        friction_coefficient=setting["friction_coefficient"],
+        energy=model in ("I", "II"),
+    )
+    travel = float(r.x[-1] - r.x[0])
+    out = {
+        "mean_speed_m_s": travel / period,
+        "stride_frequency_hz": len(r.event_times("liftoff", "back")) / period,
+        "pitch_max_rad": float(np.max(r.pitch)),
+        "pitch_min_rad": float(np.min(r.pitch)),
+        "height_max_m": float(np.max(r.height)),
+        "height_min_m": float(np.min(r.height)),
+    }
+    for leg in ("back", "front"):
+        out[f"duty_factor_{leg}"] = _stance_time(r, leg, period) / period
+    if model in ("I", "II"):
+        e = float(r.cumulative_energy("electrical")[-1] - r.cumulative_energy("electrical")[0])
+        out["electrical_power_w"] = e / period
+        out["cost_of_transport"] = e / (robot.total_mass * 9.81 * travel)
+    else:
+        out["electrical_power_w"] = out["cost_of_transport"] = math.nan
+    out["spectral_radius"] = (
+        math.nan if jacobian is None else float(np.max(np.abs(np.linalg.eigvals(jacobian))))
+    )
+    return {k: out[k] for k in SENSITIVITY_METRICS}
+
+
+def _stance_time(r, leg: str, period: float) -> float:
+    """Time [s] leg ``leg`` spends on the ground within [0, period] (its touchdown and
+    lift-off events, located in continuous time)."""
+    events = sorted(
+        [(t, True) for t in r.event_times("touchdown", leg)]
+        + [(t, False) for t in r.event_times("liftoff", leg)]
+    )
+    down = r.hybrid_state(0).contact_modes[0 if leg == "back" else 1] != 0
+    t_down, total = 0.0, 0.0
+    for t, touchdown in events:
+        if touchdown:
+            down, t_down = True, t
+        elif down:
+            total += t - t_down
+            down = False
+    if down:
+        total += period - t_down
+    return total
+
+
+def orbit_sensitivities(
+    orbit: ControlledOrbit,
+    names,
+    *,
+    relative_step: float = 1e-4,
+    spectral_radius: bool = True,
+    progress=None,
+) -> tuple[dict[str, ParameterSensitivity], dict]:
+    """The sensitivities of the metrics of ``orbit`` (found by
+    :func:`~scoutsim.analysis.controlled_orbit.controlled_fixed_point`, which keeps its
+    setting) to each parameter of ``names`` (see :func:`sensitivity_parameter_names`;
+    "all": every one), by the implicit function theorem (module docstring) with steps
+    ``relative_step`` |p| (a forward step of :data:`ZERO_STEP` for a parameter at 0).
+    ``spectral_radius``: also the spectral radius's (two Jacobians of the map per
+    parameter: the costliest part). ``progress``: optional callable(str). Returns
+    ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
+    setting = orbit.setting
+    if not setting:
+        raise ValueError("orbit has no setting: find it with controlled_fixed_point()")
+    if names == "all" or names == ["all"]:
+        names = sensitivity_parameter_names(setting["controller"])
+    integ, k = setting["integrator"], orbit.strides
+    base_map = StrideMap(integrator=integ, section=setting["section"], **_common(setting))
+    base = base_map.crossing(orbit.state, strides=k)
+    n = orbit.z.size
+    like = orbit.state
+    assert isinstance(like, HybridState), "an orbit's state is a HybridState"
+    base_values = orbit_metrics(orbit.state, orbit.period, setting, integ, orbit.jacobian)
+    out = {}
+    say = progress or (lambda message: None)
+    for name in names:
+        p = _value(setting, name)
+        h = relative_step * abs(p) if p != 0.0 else ZERO_STEP
+        sens = ParameterSensitivity(name=name, value=p)
+        out[name] = sens
+        if not math.isfinite(p):
+            sens.status = f"no sensitivity: {name} = {p} is not finite"
+            continue
+        # central differences; forward ones for a parameter at 0 (most such parameters
+        # are bounded below by 0: a friction, a loss, a backlash)
+        signs = (1.0, -1.0) if p != 0.0 else (1.0,)
+        try:
+            ends = []
+            for sign in signs:
+                s_p = setting_with(setting, name, p + sign * h)
+                m = StrideMap(integrator=integ, section=setting["section"], **_common(s_p))
+                c = m.crossing(like, strides=k)
+                why = cell_change(base, c)
+                if why:
+                    raise MapError(f"a step of {sign * h:+.2e} in {name}: {why}")
+                ends.append((s_p, m, m.z_of(c.state), sign))
+            z_back = ends[1][2] if len(ends) > 1 else base_map.z_of(base.state)
+            dPdp = (ends[0][2] - z_back) / (len(ends) * h)
+            dz = np.linalg.lstsq(np.eye(n) - orbit.jacobian, dPdp, rcond=1e-12)[0]
+            values = []
+            for s_p, m, _, sign in ends:
+                hs = m.hs_of(orbit.z + sign * h * dz, like)
+                J = None
+                if spectral_radius:
+                    c = m.crossing(hs, strides=k)
+                    assert c.start is not None, "a crossing from a HybridState keeps its start"
+                    J = difference_jacobian(m, m.z_of(c.start), c.start, c, 1e-6, k)
+                values.append(orbit_metrics(hs, orbit.period, s_p, integ, J))
+            if len(values) == 1:
+                values.append(base_values)
+        except (MapError, ValueError) as exc:
+            sens.status = f"no sensitivity: {exc}"
+            say(f"{name}: {sens.status}")
+            continue
+        for metric in SENSITIVITY_METRICS:
+            d = (values[0][metric] - values[1][metric]) / (len(signs) * h)
+            sens.derivative[metric] = d
+            mv = base_values.get(metric, math.nan)
+            sens.elasticity[metric] = d * p / mv if p != 0.0 and mv != 0.0 else math.nan
+        say(f"{name} = {p:.6g}: d speed / d p = {sens.derivative['mean_speed_m_s']:.4g}")
+    return out, base_values
+
+
+def _common(setting: dict) -> dict:
+    return {k: setting[k] for k in ("model", "friction_coefficient", "robot", "controller")}

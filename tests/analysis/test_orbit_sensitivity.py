@@ -1,0 +1,120 @@
+"""Orbit sensitivities (scoutsim.analysis.orbit_sensitivity): the implicit function theorem
+on the fixed point against the derivatives of the orbits solved again at perturbed
+parameters (central differences, +-1e-4 relative: an independent route through Newton).
+
+Laws checked: agreement of the two routes for parameters of every kind (a belt spring, a
+touchdown angle, the floor's friction); the stride frequency of a sampled orbit is locked
+to the control period, so its derivative is 0 within a sample-phase cell; a parameter at
+0 (a backlash) takes a one-sided step and has no elasticity.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from scoutsim.analysis.controlled_orbit import controlled_fixed_point
+from scoutsim.analysis.orbit_sensitivity import (
+    SENSITIVITY_METRICS,
+    orbit_metrics,
+    orbit_sensitivities,
+    setting_with,
+)
+from scoutsim.cli import main
+
+PARAMETERS = ("robot.belt_stiffness", "controller.touchdown_angle_front", "friction_coefficient")
+
+
+@pytest.fixture(scope="module")
+def orbit():
+    return controlled_fixed_point(settle_duration=8.0)
+
+
+@pytest.fixture(scope="module")
+def sensitivities(orbit):
+    return orbit_sensitivities(orbit, list(PARAMETERS) + ["robot.belt_backlash"])
+
+
+def _resolved(orbit, name, value):
+    """The metrics of the orbit solved again (Newton from the orbit) with ``name`` set to
+    ``value``."""
+    st = setting_with(orbit.setting, name, value)
+    o = controlled_fixed_point(
+        orbit.state,
+        model=st["model"],
+        friction_coefficient=st["friction_coefficient"],
+        robot=st["robot"],
+        controller=st["controller"],
+        strides=orbit.strides,
+    )
+    assert o.period == orbit.period
+    return orbit_metrics(o.state, o.period, st, orbit.setting["integrator"], o.jacobian)
+
+
+@pytest.mark.parametrize("name", PARAMETERS)
+def test_implicit_function_theorem_agrees_with_orbits_solved_again(orbit, sensitivities, name):
+    sens = sensitivities[0][name]
+    assert sens.status == "ok"
+    p = sens.value
+    h = 1e-4 * abs(p)
+    plus, minus = _resolved(orbit, name, p + h), _resolved(orbit, name, p - h)
+    for metric in SENSITIVITY_METRICS:
+        fd = (plus[metric] - minus[metric]) / (2 * h)
+        ift = sens.derivative[metric]
+        if metric == "stride_frequency_hz":
+            assert ift == fd == 0.0  # locked to the control period
+            continue
+        # the spectral radius comes from difference Jacobians on both routes: its
+        # derivative is a difference of differences, good to a few percent. The orbits
+        # solved again are accurate to about 1e-9 in z (Newton's 1e-10 residual over
+        # 1 - 0.925), which their difference divides by 2 h: the reference's own noise
+        tol = 3e-2 if metric == "spectral_radius" else 1e-3
+        assert ift == pytest.approx(fd, rel=tol, abs=1e-9 / h)
+
+
+def test_elasticity_is_the_relative_derivative(sensitivities):
+    sens, base = sensitivities
+    s = sens["controller.touchdown_angle_front"]
+    for metric in ("mean_speed_m_s", "electrical_power_w"):
+        assert s.elasticity[metric] == pytest.approx(
+            s.derivative[metric] * s.value / base[metric], rel=1e-12
+        )
+
+
+def test_a_parameter_at_zero_takes_a_one_sided_step(sensitivities):
+    s = sensitivities[0]["robot.belt_backlash"]
+    assert s.value == 0.0 and s.status == "ok"
+    assert all(math.isfinite(v) for v in s.derivative.values())
+    assert all(math.isnan(v) for v in s.elasticity.values())
+
+
+def test_cli_orbit_sensitivity_json(capsys):
+    assert (
+        main(
+            [
+                "orbit",
+                "--duration",
+                "8",
+                "--sensitivity",
+                "controller.touchdown_angle_front",
+                "--json",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
+    d = json.loads(capsys.readouterr().out)
+    s = d["sensitivities"]["controller.touchdown_angle_front"]
+    assert set(s) == {"value", "derivative", "elasticity", "status"}
+    assert set(s["derivative"]) == set(SENSITIVITY_METRICS)
+    assert s["value"] == pytest.approx(math.radians(21.0))
+    # a steeper front touchdown angle slows the bound (docs/orbits.md)
+    assert s["derivative"]["mean_speed_m_s"] < 0
+    assert d["metrics"]["mean_speed_m_s"] == pytest.approx(d["mean_speed_m_s"], rel=1e-9)
+    assert np.isfinite(d["metrics"]["cost_of_transport"])
+
+
+def test_cli_refuses_an_unknown_parameter_by_name(capsys):
+    assert main(["orbit", "--sensitivity", "robot.belt_stifness"]) == 2
+    assert "robot.belt_stiffness" in capsys.readouterr().err
