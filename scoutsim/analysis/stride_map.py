@@ -328,27 +328,13 @@ def section_state(result, section: str = "plant") -> HybridState:
     return result.hybrid_state(k)
 
 
-def controlled_stride_map(
-    hs,
-    *,
-    model: str = "II",
-    friction_coefficient: float = DEFAULT_FRICTION_COEFFICIENT,
-    robot=None,
-    controller=None,
-    integrator: IntegratorSettings | None = None,
-    max_period: float = 0.6,
-):
+def controlled_stride_map(hs, **settings):
     """One stride of the sampled closed loop from the HybridState ``hs`` taken at a section
-    sample (:class:`StrideMap`): ``(z_start, z_end, hs_end, period_s)``. MapError if the
-    robot falls or no lift-off comes within ``max_period`` [s]."""
-    m = StrideMap(
-        model=model,
-        friction_coefficient=friction_coefficient,
-        robot=robot,
-        controller=controller,
-        integrator=integrator,
-        max_period=max_period,
-    )
+    sample: ``(z_start, z_end, hs_end, period_s)``. ``settings``: the keywords of
+    :class:`StrideMap` (model, friction_coefficient, robot, controller, integrator,
+    max_period, section). MapError if the robot falls or no lift-off comes within
+    ``max_period`` [s]."""
+    m = StrideMap(**settings)
     c = m.crossing(hs)
     assert c.start is not None, "a crossing from a HybridState keeps its start"
     return m.z_of(c.start), m.z_of(c.state), c.state, c.period_s

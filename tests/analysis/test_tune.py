@@ -315,8 +315,9 @@ def test_cost_of_transport_objective_and_a_current_constraint():
     assert first["score"] > T.PENALTY
 
 
-def test_stability_objective_is_the_spectral_radius_of_the_orbit():
-    task = {
+def _stability_task(duration: float, kind: str) -> dict:
+    """An evaluation task of the "stability" objective for the controller ``kind``."""
+    return {
         "goal": {
             "objective": "stability",
             "target": None,
@@ -325,9 +326,13 @@ def test_stability_objective_is_the_spectral_radius_of_the_orbit():
             "max_current": None,
             "min_speed": None,
         },
-        "duration": 6.0,
-        "controller": {"kind": "table-i"},
+        "duration": duration,
+        "controller": {"kind": kind},
     }
+
+
+def test_stability_objective_is_the_spectral_radius_of_the_orbit():
+    task = _stability_task(6.0, "table-i")
     scen = {"model": "II", "friction": 1.0, "initial_state": None}
     row = E._scenario_row(task, scen, scoutsim.RobotParameters(), ControllerParameters(), None)
     # the Table I bound is a stable orbit (docs/orbits.md): radius below 1
@@ -340,18 +345,7 @@ def test_stability_objective_takes_a_cycle_of_several_strides_per_stride():
     the objective is its map's spectral radius per stride, the 6th root."""
     from scoutsim.analysis.controlled_orbit import controlled_fixed_point
 
-    task = {
-        "goal": {
-            "objective": "stability",
-            "target": None,
-            "aggregate": "worst",
-            "max_belt_deflection": None,
-            "max_current": None,
-            "min_speed": None,
-        },
-        "duration": 12.0,
-        "controller": {"kind": "pitch-feedback"},
-    }
+    task = _stability_task(12.0, "pitch-feedback")
     scen = {"model": "II", "friction": 1.0, "initial_state": None}
     params = ControllerParameters()
     row = E._scenario_row(task, scen, scoutsim.RobotParameters(), params, None)
