@@ -198,7 +198,11 @@ def execute(args) -> int:
     progress = show_progress(args)
     wall0 = time.perf_counter()
     try:
-        with usage_errors(SchedulerUnreachableError, NotSendableError), warnings.catch_warnings():
+        # (a ValueError here is the sweep refusing its settings: a usage error, exit 2)
+        with (
+            usage_errors(SchedulerUnreachableError, NotSendableError, ValueError),
+            warnings.catch_warnings(),
+        ):
             # the points the sweep could not run are reported below, by point
             warnings.simplefilter("ignore", RuntimeWarning)
             res = sweep(

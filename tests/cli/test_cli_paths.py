@@ -633,3 +633,23 @@ def test_run_model_ideal_limits_torque_only_by_the_current_limit(tmp_path, capsy
         np.testing.assert_array_equal(r.motor_angle(leg), r.leg_angle(leg))
         clipped += int(np.sum(np.abs(cmd) > tau_max))
     assert clipped > 0  # the limit was reached, so the clipping was exercised
+
+
+def test_sweep_refuses_controller_parameters_its_controller_does_not_read(tmp_path, capsys):
+    """A controller object (pitch feedback) with controller.<field> points: a usage error
+    (exit 2) that says what to do, not a traceback."""
+    code = main(
+        [
+            "sweep",
+            "--controller",
+            "pitch-feedback",
+            "--grid",
+            "controller.touchdown_angle_front_deg=19:23:2",
+            "--duration",
+            "1",
+            "--out",
+            str(tmp_path / "s"),
+        ]
+    )
+    assert code == 2
+    assert "MODULE:FACTORY" in capsys.readouterr().err
