@@ -45,6 +45,7 @@ __all__ = [
     "ParameterSensitivity",
     "orbit_metrics",
     "orbit_sensitivities",
+    "parameter_value",
     "sensitivity_parameter_names",
     "setting_with",
 ]
@@ -152,7 +153,8 @@ def setting_with(setting: dict, name: str, value: float) -> dict:
     return out
 
 
-def _value(setting: dict, name: str) -> float:
+def parameter_value(setting: dict, name: str) -> float:
+    """The value (SI) of parameter ``name`` in an orbit's setting."""
     if name == FRICTION:
         return float(setting["friction_coefficient"])
     sec, _, fld = name.partition(".")
@@ -245,14 +247,13 @@ def orbit_sensitivities(
     integ, k = setting["integrator"], orbit.strides
     base_map = StrideMap(integrator=integ, section=setting["section"], **_common(setting))
     base = base_map.crossing(orbit.state, strides=k)
-    n = orbit.z.size
     like = orbit.state
     assert isinstance(like, HybridState), "an orbit's state is a HybridState"
     base_values = orbit_metrics(orbit.state, orbit.period, setting, integ, orbit.jacobian)
     out = {}
     say = progress or (lambda message: None)
     for name in names:
-        p = _value(setting, name)
+        p = parameter_value(setting, name)
         h = relative_step * abs(p) if p != 0.0 else ZERO_STEP
         sens = ParameterSensitivity(name=name, value=p)
         out[name] = sens
@@ -263,18 +264,7 @@ def orbit_sensitivities(
         # are bounded below by 0: a friction, a loss, a backlash)
         signs = (1.0, -1.0) if p != 0.0 else (1.0,)
         try:
-            ends = []
-            for sign in signs:
-                s_p = setting_with(setting, name, p + sign * h)
-                m = StrideMap(integrator=integ, section=setting["section"], **_common(s_p))
-                c = m.crossing(like, strides=k)
-                why = cell_change(base, c)
-                if why:
-                    raise MapError(f"a step of {sign * h:+.2e} in {name}: {why}")
-                ends.append((s_p, m, m.z_of(c.state), sign))
-            z_back = ends[1][2] if len(ends) > 1 else base_map.z_of(base.state)
-            dPdp = (ends[0][2] - z_back) / (len(ends) * h)
-            dz = np.linalg.lstsq(np.eye(n) - orbit.jacobian, dPdp, rcond=1e-12)[0]
+            ends, dz = _tangent(orbit, base, base_map, name, h, signs)
             values = []
             for s_p, m, _, sign in ends:
                 hs = m.hs_of(orbit.z + sign * h * dz, like)
@@ -297,6 +287,28 @@ def orbit_sensitivities(
             sens.elasticity[metric] = d * p / mv if p != 0.0 and mv != 0.0 else math.nan
         say(f"{name} = {p:.6g}: d speed / d p = {sens.derivative['mean_speed_m_s']:.4g}")
     return out, base_values
+
+
+def _tangent(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
+    """dz*/dp of ``orbit`` (whose stride map ``base_map`` gives the crossing ``base``) for
+    parameter ``name`` with step ``h``, central (``signs`` (1, -1)) or forward ((1,)):
+    (the ends: (setting, map, P(z*), sign) at p + sign h; dz*/dp). MapError if a step
+    leaves the sample-phase cell."""
+    setting, k = orbit.setting, orbit.strides
+    p = parameter_value(setting, name)
+    ends = []
+    for sign in signs:
+        s_p = setting_with(setting, name, p + sign * h)
+        m = StrideMap(integrator=setting["integrator"], section=setting["section"], **_common(s_p))
+        c = m.crossing(orbit.state, strides=k)
+        why = cell_change(base, c)
+        if why:
+            raise MapError(f"a step of {sign * h:+.2e} in {name}: {why}")
+        ends.append((s_p, m, m.z_of(c.state), sign))
+    z_back = ends[1][2] if len(ends) > 1 else base_map.z_of(base.state)
+    dPdp = (ends[0][2] - z_back) / (len(ends) * h)
+    n = orbit.z.size
+    return ends, np.linalg.lstsq(np.eye(n) - orbit.jacobian, dPdp, rcond=1e-12)[0]
 
 
 def _common(setting: dict) -> dict:
