@@ -19,8 +19,9 @@ Names and units: a point's names are ``robot.<field>`` / ``controller.<field>`` 
 units, or ``<name>_deg`` in degrees for an angle field (:mod:`scoutsim.analysis.sweep_points`).
 
 Controllers: the base controller is ControllerParameters (Table I; ``controller.<field>``
-points set its fields), a user's controller object (a CompiledController, a Python
-controller; only ``robot.<field>`` points), or a user's factory, ``"MODULE:FACTORY"`` or
+points set its fields), a PitchFeedbackController (``controller.<field>`` points set the
+fields of its ControllerParameters, torso-feedback gains included), a user's controller
+object (a CompiledController, a Python controller; only ``robot.<field>`` points), or a user's factory, ``"MODULE:FACTORY"`` or
 a :class:`~scoutsim.control.factory.ControllerSpec`, called in the worker with the point's
 robot and controller parameters (``controller.<field>`` points set the parameters the
 factory gets). It is checked before the first point runs
@@ -45,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from ..control.factory import ControllerSpec
+from ..control.pitch_feedback import PitchFeedbackController
 from ..io.tables import write_rows_csv, write_rows_parquet
 from ..parameters import (
     DEFAULT_FRICTION_COEFFICIENT,
@@ -148,6 +150,9 @@ def _point_parameters(task: dict):
         return robot, dataclasses.replace(c, **ctl)
     if isinstance(c, ControllerSpec):
         return robot, dataclasses.replace(c.params or ControllerParameters(), **ctl)
+    if isinstance(c, PitchFeedbackController):  # (it runs on ControllerParameters)
+        law = c.controller_parameters or ControllerParameters()
+        return robot, dataclasses.replace(law, **ctl)
     return robot, None
 
 
@@ -187,15 +192,19 @@ def _sweep_point(task: dict) -> dict:
     c = task["controller"]
     try:
         robot, cparams = _point_parameters(task)
-        if isinstance(c, ControllerSpec):  # (the factory gets parameters that are allowed)
+        if isinstance(c, (ControllerSpec, PitchFeedbackController)):
+            # (the factory, or the pitch-feedback law, gets parameters that are allowed)
             validate_parameters(robot, cparams)
     except ValueError as exc:
         row.update(status="invalid", outcome="invalid_parameters", error=str(exc))
         return row
     try:
-        ctrl = (
-            cparams if isinstance(c, ControllerParameters) else build_controller(c, robot, cparams)
-        )
+        if isinstance(c, ControllerParameters):
+            ctrl = cparams
+        elif isinstance(c, PitchFeedbackController):
+            ctrl = PitchFeedbackController(cparams)
+        else:
+            ctrl = build_controller(c, robot, cparams)
     except Exception as exc:  # noqa: BLE001 - an error of the study, reported per point
         row.update(error_fields(exc))
         return row
@@ -383,9 +392,9 @@ def sweep(
             f"controller = {controller!r} is not allowed: give "
             "ControllerParameters, a controller object, or MODULE:FACTORY"
         )
-    if not isinstance(controller, (ControllerParameters, ControllerSpec)) and any(
-        n.startswith("controller.") for n in names
-    ):
+    if not isinstance(
+        controller, (ControllerParameters, ControllerSpec, PitchFeedbackController)
+    ) and any(n.startswith("controller.") for n in names):
         raise ValueError(
             f"sweep parameters {[n for n in names if n.startswith('controller.')]}"
             " are not allowed with a controller object, which does not read "

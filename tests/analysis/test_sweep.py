@@ -219,3 +219,27 @@ def test_orbit_columns_find_cycles_of_several_strides(tmp_path):
         assert row["orbit_period_s"] / row["orbit_strides"] == pytest.approx(
             1 / row["stride_frequency_hz"], rel=0.02
         )
+
+
+def test_a_pitch_feedback_sweep_sets_its_gains_per_point(tmp_path):
+    """controller.<field> points with pitch feedback set the parameters it runs on: with
+    its four torso-feedback gains at 0 it is the Table I law (the same run as the Table I
+    sweep's point, to rounding), and with a front pitch gain it bounds differently."""
+    from scoutsim.analysis.sweep import sweep
+    from scoutsim.control.pitch_feedback import PitchFeedbackController
+
+    zero = {
+        "controller.pitch_gain_front": 0.0,
+        "controller.pitch_gain_back": 0.0,
+        "controller.pitch_rate_gain_front": 0.0,
+        "controller.pitch_rate_gain_back": 0.0,
+    }
+    pts = [zero, zero | {"controller.pitch_gain_front": 0.3}]
+    pf = sweep(
+        pts, duration=3.0, workers=1, out=tmp_path / "pf", controller=PitchFeedbackController()
+    )
+    ti = sweep([{}], duration=3.0, workers=1, out=tmp_path / "ti")
+    (off, on), (table_i,) = pf.rows, ti.rows
+    assert off["status"] == on["status"] == "ok"
+    assert off["average_speed_m_s"] == pytest.approx(table_i["average_speed_m_s"], rel=1e-9)
+    assert abs(on["average_speed_m_s"] - off["average_speed_m_s"]) > 1e-3

@@ -635,14 +635,14 @@ def test_run_model_ideal_limits_torque_only_by_the_current_limit(tmp_path, capsy
     assert clipped > 0  # the limit was reached, so the clipping was exercised
 
 
-def test_sweep_refuses_controller_parameters_its_controller_does_not_read(tmp_path, capsys):
-    """A controller object (pitch feedback) with controller.<field> points: a usage error
-    (exit 2) that says what to do, not a traceback."""
+def test_sweep_settings_it_refuses_are_a_usage_error(tmp_path, capsys):
+    """Two names for the same field (radians and degrees): a usage error (exit 2) that
+    says so, not a traceback."""
     code = main(
         [
             "sweep",
-            "--controller",
-            "pitch-feedback",
+            "--grid",
+            "controller.touchdown_angle_front=0.33:0.4:2",
             "--grid",
             "controller.touchdown_angle_front_deg=19:23:2",
             "--duration",
@@ -652,4 +652,4 @@ def test_sweep_refuses_controller_parameters_its_controller_does_not_read(tmp_pa
         ]
     )
     assert code == 2
-    assert "MODULE:FACTORY" in capsys.readouterr().err
+    assert "set the same field" in capsys.readouterr().err
