@@ -43,13 +43,21 @@ def test_a_field_named_twice_or_degrees_of_no_angle_are_refused(points, words):
         SW.sweep(points, model="I", duration=0.1, workers=1)
 
 
+def hold(t, y, params, state, torque, leg_states):
+    """A compiled controller that reads no ControllerParameters: zero torque."""
+    torque[0] = 0.0
+    torque[1] = 0.0
+    return 0
+
+
 def test_a_controller_object_cannot_sweep_controller_fields():
-    """A controller object does not read ControllerParameters: sweeping them would
-    change nothing, so it is refused before any point (a factory gets them)."""
-    from scoutsim.control import PitchFeedbackController
+    """A controller object that does not read ControllerParameters (a compiled
+    controller of its own; pitch feedback does read them): sweeping them would change
+    nothing, so it is refused before any point (a factory gets them)."""
+    from scoutsim.control import CompiledController
 
     with pytest.raises(ValueError, match="MODULE:FACTORY"):
-        SW.sweep([{DEG: 19.0}], controller=PitchFeedbackController(), duration=0.1, workers=1)
+        SW.sweep([{DEG: 19.0}], controller=CompiledController(hold), duration=0.1, workers=1)
 
 
 def test_map_axes_carry_each_parameters_unit():
