@@ -32,6 +32,7 @@ ORBIT_TOL = 1e-7
 def orbit_columns(result, robot, ctrl, task) -> dict:
     """The :data:`ORBIT_COLUMNS` of a steadily bounding run: its controlled orbit by Newton
     from its last strides (``task``: the run's ``model`` and ``friction_coefficient``)."""
+    from ..control.dispatch import ControllerStateError
     from ..simulation.integrator import IntegratorSettings
     from .controlled_orbit import NewtonSettings, controlled_fixed_point
     from .poincare import MapError
@@ -57,6 +58,8 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
             orbit_stable=o.stable,
             orbit_status="ok",
         )
-    except MapError as exc:
+    except (MapError, ControllerStateError) as exc:
+        # (a controller whose state scoutsim cannot read has no orbit here; the run's own
+        # row stands)
         out["orbit_status"] = f"no orbit: {exc}"
     return out

@@ -243,3 +243,27 @@ def test_a_pitch_feedback_sweep_sets_its_gains_per_point(tmp_path):
     assert off["status"] == on["status"] == "ok"
     assert off["average_speed_m_s"] == pytest.approx(table_i["average_speed_m_s"], rel=1e-9)
     assert abs(on["average_speed_m_s"] - off["average_speed_m_s"]) > 1e-3
+
+
+from scoutsim.control.bounding import BoundingController  # noqa: E402
+
+
+class _StatelessTableI(BoundingController):
+    """The Table I law as a Python controller that offers no state (no get_state)."""
+
+    def command(self, t, sensors):
+        return super().command(t, sensors)
+
+
+def test_an_orbit_a_controller_cannot_give_keeps_the_runs_row(tmp_path):
+    """A Python controller without get_state(): the point's run stands (it bounds), and
+    only its orbit columns say why there is no orbit; the point is not an error and is
+    not counted as not bounding."""
+    from scoutsim.analysis.sweep import sweep
+
+    res = sweep(
+        [{}], duration=6.0, workers=1, out=tmp_path, orbit=True, controller=_StatelessTableI()
+    )
+    (row,) = res.rows
+    assert row["status"] == "ok" and row["steady_bounding"]
+    assert row["orbit_status"].startswith("no orbit") and "get_state" in row["orbit_status"]
