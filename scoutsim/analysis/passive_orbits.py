@@ -9,8 +9,10 @@ the world vertical] by Levenberg-Marquardt / Gauss-Newton on the four residuals 
 unknowns; the system is consistent because such orbits are symmetric under the
 time-reversal-and-mirror symmetry of the conservative model, which leaves two independent
 conditions) with a central finite-difference Jacobian. The Floquet multipliers are the
-eigenvalues of the central-difference Jacobian ``dP/dz`` at the fixed point; energy
-conservation makes one of them exactly 1.
+eigenvalues of the Jacobian ``dP/dz`` at the fixed point, exact by default (variational
+equations and saltation matrices, :func:`~scoutsim.analysis.passive_reference.passive_apex_map_derivative`)
+or by central differences (``jacobian="fd"``, the check); energy conservation makes one of
+them exactly 1.
 """
 
 from __future__ import annotations
@@ -22,7 +24,12 @@ import numpy as np
 
 from ..parameters import RobotParameters
 from ..simulation.integrator import IntegratorSettings
-from .passive_reference import ORBIT_TOLERANCE, passive_apex_map, passive_robot
+from .passive_reference import (
+    ORBIT_TOLERANCE,
+    passive_apex_map,
+    passive_apex_map_derivative,
+    passive_robot,
+)
 from .poincare import MapError, fd_jacobian, floquet_multipliers
 
 __all__ = ["PassiveOrbit", "passive_bounding_orbit", "continue_passive_family"]
@@ -38,11 +45,14 @@ class PassiveOrbit:
     touchdown_angles : (back, front) from the world vertical [rad].
     period : stride period, apex to apex [s].
     residual : max |P(z*) - z*| over the four apex components (SI).
-    jacobian : (4, 4) dP/dz at the fixed point (central differences).
+    jacobian : (4, 4) dP/dz at the fixed point.
     multipliers : Floquet multipliers (eigenvalues of ``jacobian``), by decreasing modulus.
     order : touchdown order of the legs in the stride.
     iterations : map evaluations of the fixed-point search.
     rtol : integrator tolerance used.
+    jacobian_method : "exact" (variational equations and saltation matrices) or "fd"
+        (central differences with step ``jacobian_step``).
+    angle_jacobian : (4, 2) dP/d(gamma_back, gamma_front) at the fixed point [per rad].
     """
 
     speed: float
@@ -56,6 +66,8 @@ class PassiveOrbit:
     order: tuple
     iterations: int
     rtol: float
+    jacobian_method: str = "exact"
+    angle_jacobian: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan), repr=False)
 
     @property
     def z(self) -> np.ndarray:
@@ -85,6 +97,7 @@ class PassiveOrbit:
             "period_s": self.period,
             "eigenvalues": [[float(m.real), float(m.imag)] for m in self.multipliers],
             "residual": self.residual,
+            "jacobian_method": self.jacobian_method,
         }
 
 
@@ -148,6 +161,7 @@ def passive_bounding_orbit(
     rtol: float = ORBIT_TOLERANCE,
     tol: float = 1e-11,
     max_iter: int = 40,
+    jacobian: str = "exact",
     jacobian_step: float = 1e-5,
 ) -> PassiveOrbit:
     """Periodic passive bounding through the level-torso apex ``(apex_height, 0, speed,
@@ -163,12 +177,16 @@ def passive_bounding_orbit(
         pronk angle for both, then a continuation in pitch rate from 0 if that fails).
     rtol : integrator tolerance (rtol = atol).
     tol : stop when max |P(z*) - z*| < tol.
-    jacobian_step : central-difference step of dP/dz (SI units of each component).
+    jacobian : "exact" (variational equations and saltation matrices) or "fd" (central
+        differences of the map, the check).
+    jacobian_step : central-difference step of dP/dz with ``jacobian="fd"`` (SI units of
+        each component).
 
     Raises
     ------
     MapError if no orbit is found (residual above 1e-9).
     """
+    _check_jacobian(jacobian)
     rob = passive_robot(robot)
     integ = IntegratorSettings(rtol=rtol, atol=rtol)
     z = np.array([apex_height, 0.0, speed, pitch_rate], dtype=float)
@@ -193,7 +211,7 @@ def passive_bounding_orbit(
                 tol=tol,
                 linearise=False,
             )
-            return _finish(fam[-1], rob, integ, jacobian_step)
+            return _finish(fam[-1], rob, integ, jacobian, jacobian_step)
     res = float(np.max(np.abs(r)))
     if not res <= 1e-9:
         raise MapError(
@@ -214,21 +232,35 @@ def passive_bounding_orbit(
         iterations=n,
         rtol=rtol,
     )
-    return _finish(orb, rob, integ, jacobian_step)
+    return _finish(orb, rob, integ, jacobian, jacobian_step)
 
 
-def _finish(orb: PassiveOrbit, rob, integ, jacobian_step) -> PassiveOrbit:
-    """Fill in period, order, Jacobian and multipliers of a converged orbit."""
-    m = passive_apex_map(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
-    J = fd_jacobian(
-        lambda x: passive_apex_map(x, orb.touchdown_angles, robot=rob, rtol=integ.rtol).z,
-        orb.z,
-        jacobian_step,
-    )
+def _check_jacobian(jacobian: str) -> None:
+    if jacobian not in ("exact", "fd"):
+        raise ValueError(f"jacobian = {jacobian!r}: must be 'exact' or 'fd'")
+
+
+def _finish(orb: PassiveOrbit, rob, integ, jacobian, jacobian_step) -> PassiveOrbit:
+    """Fill in period, order, Jacobians and multipliers of a converged orbit."""
+    d = passive_apex_map_derivative(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
+    m = d.map
+    J, Jg = d.state_jacobian, d.angle_jacobian
+    if jacobian == "fd":
+
+        def f(x):
+            return passive_apex_map(x, orb.touchdown_angles, robot=rob, rtol=integ.rtol).z
+
+        def f_angles(gam):
+            return passive_apex_map(orb.z, gam, robot=rob, rtol=integ.rtol).z
+
+        J = fd_jacobian(f, orb.z, jacobian_step)
+        Jg = fd_jacobian(f_angles, np.array(orb.touchdown_angles), jacobian_step)
     orb.period = m.period
     orb.order = m.order
     orb.residual = float(np.max(np.abs(m.z - orb.z)))
     orb.jacobian = J
+    orb.angle_jacobian = Jg
+    orb.jacobian_method = jacobian
     orb.multipliers = floquet_multipliers(J)
     return orb
 
@@ -242,6 +274,7 @@ def continue_passive_family(
     rtol: float = ORBIT_TOLERANCE,
     tol: float = 1e-11,
     linearise: bool = True,
+    jacobian: str = "exact",
     jacobian_step: float = 1e-5,
 ) -> list[PassiveOrbit]:
     """Natural-parameter continuation of passive bounding orbits in the apex pitch rate.
@@ -249,7 +282,9 @@ def continue_passive_family(
     Each solve starts from a secant prediction through the two previous solutions (the
     first from the spring-mass pronk angle). ``pitch_rates`` [rad/s] should be ordered and
     closely spaced (a few tens of deg/s). Returns one :class:`PassiveOrbit` per pitch rate
-    (with multipliers if ``linearise``)."""
+    (with multipliers if ``linearise``; ``jacobian`` and ``jacobian_step`` as
+    :func:`passive_bounding_orbit`)."""
+    _check_jacobian(jacobian)
     rob = passive_robot(robot)
     integ = IntegratorSettings(rtol=rtol, atol=rtol)
     out: list[PassiveOrbit] = []
@@ -287,6 +322,6 @@ def continue_passive_family(
             rtol=rtol,
         )
         if linearise:
-            orb = _finish(orb, rob, integ, jacobian_step)
+            orb = _finish(orb, rob, integ, jacobian, jacobian_step)
         out.append(orb)
     return out

@@ -35,6 +35,7 @@ import numpy as np
 from ..names import LEG_NAMES, EventKind, Leg
 from ..parameters import RobotParameters
 from .poincare import MapError
+from .saltation import Guard, flow_to_event, saltation_matrix
 
 __all__ = [
     "passive_robot",
@@ -42,6 +43,9 @@ __all__ = [
     "ApexMap",
     "APEX_STATE_NAMES",
     "ORBIT_TOLERANCE",
+    "ApexMapDerivative",
+    "passive_apex_map_derivative",
+    "TANGENT_STATE_NAMES",
     "SIMULTANEOUS_EVENT_TOL",
 ]
 
@@ -114,7 +118,7 @@ def _passive_rhs(rob: RobotParameters, anchors):
     k = [rob.legs_per_virtual_leg * v for v in rob.per_leg("leg_stiffness")]
     l0, hip = rob.per_leg("leg_rest_length"), _hips(rob)
 
-    def rhs(t, u):
+    def rhs(u):
         x, y, th = u[0], u[1], u[2]
         c, sn = math.cos(th), math.sin(th)
         fx = fy = tq = 0.0
@@ -135,16 +139,139 @@ def _passive_rhs(rob: RobotParameters, anchors):
     return rhs
 
 
+#: Layout of the state the passive stride's sensitivities are taken of: the torso's six
+#: coordinates and rates, the back and front toe anchors (x of the pinned toe [m]) and the
+#: back and front touchdown angles [rad] (parameters: zero rate, but the touchdown reset
+#: and guard depend on them).
+TANGENT_STATE_NAMES = ("x", "y", "theta", "dx", "dy", "dtheta", "anchor_back", "anchor_front",
+                       "gamma_back", "gamma_front")  # fmt: skip
+_ANCHOR, _GAMMA = 6, 8
+
+
+class _PassiveTangent:
+    """The sensitivities of the passive stride (docs/orbits.md, "Exact derivatives"):
+    ``phi`` = d(state of :data:`TANGENT_STATE_NAMES`)/d(apex z, touchdown angles), (10, 6),
+    integrated with the torso by the variational equations of :func:`_passive_rhs` and
+    mapped across each touchdown and lift-off by its saltation matrix
+    (:mod:`scoutsim.analysis.saltation`)."""
+
+    def __init__(self, rob: RobotParameters, gammas):
+        self.rob, self.gammas = rob, gammas
+        self.k = [rob.legs_per_virtual_leg * v for v in rob.per_leg("leg_stiffness")]
+        self.l0, self.hip = rob.per_leg("leg_rest_length"), _hips(rob)
+        phi = np.zeros((10, 6))
+        for row, col in ((1, 0), (2, 1), (3, 2), (5, 3), (_GAMMA, 4), (_GAMMA + 1, 5)):
+            phi[row, col] = 1.0
+        self.phi = phi
+        self.simultaneous = False
+
+    @property
+    def phi_u(self) -> np.ndarray:
+        return self.phi[:6]
+
+    @phi_u.setter
+    def phi_u(self, value) -> None:
+        self.phi[:6] = value
+
+    def _leg(self, u, leg, anchor):
+        """Hip lever r, its theta-derivative, leg vector d (hip - toe), length l."""
+        sL, c, sn = self.hip[leg], math.cos(u[2]), math.sin(u[2])
+        r, rp = np.array([sL * c, sL * sn]), np.array([-sL * sn, sL * c])
+        d = np.array([u[0] + r[0] - anchor, u[1] + r[1]])
+        return r, rp, d, math.hypot(d[0], d[1])
+
+    def jacobians(self, u, anchors):
+        """(d f_u / d u (6, 6), d f_u / d anchors (6, 2)) of the torso equations."""
+        rob = self.rob
+        A = np.zeros((6, 6))
+        A[0:3, 3:6] = np.eye(3)
+        B = np.zeros((6, 2))
+        for leg, ax in enumerate(anchors):
+            if ax is None:
+                continue
+            r, rp, d, ll = self._leg(u, leg, ax)
+            k, l0 = self.k[leg], self.l0[leg]
+            F = k * (l0 / ll - 1.0) * d  # axial spring force on the hip
+            K = k * (l0 / ll - 1.0) * np.eye(2) - k * l0 / ll**3 * np.outer(d, d)  # dF/dd
+            dF = np.column_stack((K[:, 0], K[:, 1], K @ rp, -K[:, 0]))  # d/d(x, y, theta, a)
+            dtau = r[0] * dF[1] - r[1] * dF[0]
+            dtau[2] += rp[0] * F[1] - rp[1] * F[0]
+            for row, col, v in ((3, dF[0], rob.torso_mass), (4, dF[1], rob.torso_mass),
+                                (5, dtau, rob.torso_inertia)):  # fmt: skip
+                A[row, 0:3] += col[0:3] / v
+                B[row, leg] += col[3] / v
+        return A, B
+
+    def variational(self, anchors):
+        anchors = list(anchors)
+
+        def rhs(u, phi_u):
+            A, B = self.jacobians(u, anchors)
+            return A @ phi_u + B @ self.phi[_ANCHOR:_GAMMA]
+
+        return rhs
+
+    def _flow(self, u, anchors) -> np.ndarray:
+        f = np.zeros(10)
+        f[:6] = _passive_rhs(self.rob, list(anchors))(u)
+        return f
+
+    def jump(self, kind, leg, u, before, after) -> None:
+        """Map ``phi`` across the ``kind`` event of ``leg`` at state ``u`` (anchors before
+        and after the reset)."""
+        n = np.zeros(10)
+        DR = np.eye(10)
+        if kind == "touchdown":  # toe height y + sL sin(theta) - l0 cos(gamma) = 0
+            sL, gam, l0 = self.hip[leg], self.gammas[leg], self.l0[leg]
+            n[1], n[2], n[_GAMMA + leg] = 1.0, sL * math.cos(u[2]), l0 * math.sin(gam)
+            # reset: anchor = x + sL cos(theta) + l0 sin(gamma)
+            DR[_ANCHOR + leg] = 0.0
+            DR[_ANCHOR + leg, 0] = 1.0
+            DR[_ANCHOR + leg, 2] = -sL * math.sin(u[2])
+            DR[_ANCHOR + leg, _GAMMA + leg] = l0 * math.cos(gam)
+        else:  # lift-off: leg length |d| - l0 = 0
+            r, rp, d, ll = self._leg(u, leg, before[leg])
+            n[0], n[1], n[2] = d[0] / ll, d[1] / ll, float(d @ rp) / ll
+            n[_ANCHOR + leg] = -d[0] / ll
+        fm, fp = self._flow(u, before), self._flow(u, after)
+        self.phi = saltation_matrix(DR, fm, fp, n) @ self.phi
+
+
+@dataclass(frozen=True)
+class ApexMapDerivative:
+    """The apex return map and its exact first derivatives (variational equations and
+    saltation matrices, :func:`passive_apex_map_derivative`).
+
+    map : the :class:`ApexMap` evaluated with the sensitivities.
+    state_jacobian : (4, 4) dz_next/dz (:data:`APEX_STATE_NAMES` both ways).
+    angle_jacobian : (4, 2) dz_next/d(gamma_back, gamma_front) [per rad].
+    period_gradient : (4,) d period/dz.
+    period_angle_gradient : (2,) d period/d(gamma_back, gamma_front) [s/rad].
+    simultaneous : two events happened at one instant (a pronk's touchdowns or lift-offs):
+        the map is only piecewise smooth there and the derivatives are those of one side
+        (the events taken back leg first when they were found together).
+    """
+
+    map: ApexMap
+    state_jacobian: np.ndarray
+    angle_jacobian: np.ndarray
+    period_gradient: np.ndarray
+    period_angle_gradient: np.ndarray
+    simultaneous: bool
+
+
 #: two events of the passive stride are simultaneous when the second one's function (toe
 #: height or leg extension beyond l0) is within this distance [m] of zero at the first
 SIMULTANEOUS_EVENT_TOL = 1e-12
 
 
-def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
+def _integrate_passive_stride(z, gammas, rob, rtol, max_period, tangent=None):
     """From apex z, run the passive model until both legs have had a stance and both are in
-    flight; return (state at the last lift-off, its time, order of first touchdowns)."""
-    from scipy.integrate import solve_ivp
+    flight; return (state at the last lift-off, its time, order of first touchdowns).
 
+    With a ``tangent`` (:class:`_PassiveTangent`) the sensitivities are integrated with the
+    state and jump at each touchdown and lift-off (its ``phi`` is then the sensitivity of
+    the state just after the last lift-off)."""
     l0, hip = rob.per_leg("leg_rest_length"), _hips(rob)
     u = np.array([0.0, z[0], z[1], z[2], 0.0, z[3]], dtype=float)
     t = 0.0
@@ -167,50 +294,36 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
     for _ in range(12):
         if all(had_stance) and anchors == [None, None]:
             return u, t, tuple(LEG_NAMES[i] for i in np.argsort(first_td, kind="stable"))
-        evs, meaning = [], []
+        guards, meaning = [], []
         for leg in (0, 1):
             if anchors[leg] is None:
-
-                def e(t_, u_, leg=leg):
-                    return toe_y(u_, leg)
-
-                e.direction = -1.0 if armed[leg] else 1.0
+                guards.append(
+                    Guard(lambda u_, leg=leg: toe_y(u_, leg), -1.0 if armed[leg] else 1.0)
+                )
                 meaning.append(("touchdown" if armed[leg] else "arm", leg))
             else:
-
-                def e(t_, u_, leg=leg):
-                    sL = hip[leg]
-                    hx = u_[0] + sL * math.cos(u_[2])
-                    hy = u_[1] + sL * math.sin(u_[2])
-                    return math.hypot(hx - anchors[leg], hy) - l0[leg]
-
-                e.direction = 1.0
+                guards.append(Guard(lambda u_, leg=leg: leg_length(u_, leg) - l0[leg], 1.0))
                 meaning.append(("liftoff", leg))
-            e.terminal = True
-            evs.append(e)
-
-        def fall(t_, u_):
-            return u_[1] - 0.5 * rob.torso_height
-
-        fall.terminal = True
-        evs.append(fall)
-        sol = solve_ivp(
+        guards.append(Guard(lambda u_: u_[1] - 0.5 * rob.torso_height))
+        seg = flow_to_event(
             _passive_rhs(rob, list(anchors)),
-            (t, max_period),
             u,
-            method="DOP853",
+            t0=t,
+            t_max=max_period,
+            guards=guards,
+            variational=None if tangent is None else tangent.variational(anchors),
+            sensitivity=None if tangent is None else tangent.phi_u,
             rtol=rtol,
             atol=rtol,
-            events=evs,
         )
-        hit = [(te[0], i) for i, te in enumerate(sol.t_events) if len(te)]
-        if not hit:
+        if seg.guard is None:
             raise MapError(f"no stride within {max_period} s")
-        te, i = min(hit)
-        if i == len(evs) - 1:
+        i = seg.guard
+        if i == len(guards) - 1:
             raise MapError("the torso fell")
-        u = np.array(sol.y_events[i][0])
-        t = float(te)
+        u, t = seg.x, seg.t
+        if tangent is not None:
+            tangent.phi_u = seg.sensitivity
         kind, leg = meaning[i]
         if kind == "arm":
             armed[leg] = True
@@ -230,6 +343,9 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
                         continue
                 else:
                     continue
+                if tangent is not None:
+                    tangent.simultaneous = True
+            before = list(anchors)
             if kind == "touchdown":
                 sL = hip[lg]
                 anchors[lg] = u[0] + sL * math.cos(u[2]) + l0[lg] * math.sin(gammas[lg])
@@ -238,6 +354,8 @@ def _integrate_passive_stride(z, gammas, rob, rtol, max_period):
             else:
                 anchors[lg] = None
                 armed[lg] = toe_y(u, lg) > SIMULTANEOUS_EVENT_TOL
+            if tangent is not None:
+                tangent.jump(kind, lg, u, before, anchors)
     raise MapError("too many phases in one stride")
 
 
@@ -278,7 +396,13 @@ def passive_apex_map(
     z = np.asarray(z, dtype=float)
     gam = tuple(float(a) for a in touchdown_angles)
     u, t_lo, order = _integrate_passive_stride(z, gam, rob, rtol, max_period)
-    g = rob.gravity
+    z_next, period, _ = _to_apex(u, t_lo, rob.gravity)
+    return ApexMap(z=z_next, period=period, order=order)
+
+
+def _to_apex(u, t_lo, g):
+    """The next apex from the state u at the last lift-off (ballistic flight, closed form):
+    (z_next, period, d z_next / d u (4, 6))."""
     dy = u[4]
     if dy < 0.0:
         raise MapError(
@@ -287,4 +411,55 @@ def passive_apex_map(
         )
     ta = dy / g
     z_next = np.array([u[1] + dy * dy / (2.0 * g), u[2] + u[5] * ta, u[3], u[5]])
-    return ApexMap(z=z_next, period=t_lo + ta, order=order)
+    D = np.zeros((4, 6))
+    D[0, 1], D[0, 4] = 1.0, dy / g
+    D[1, 2], D[1, 4], D[1, 5] = 1.0, u[5] / g, ta
+    D[2, 3] = D[3, 5] = 1.0
+    return z_next, t_lo + ta, D
+
+
+def passive_apex_map_derivative(
+    z,
+    touchdown_angles,
+    *,
+    robot: RobotParameters | None = None,
+    rtol: float = ORBIT_TOLERANCE,
+    max_period: float = 2.0,
+) -> ApexMapDerivative:
+    """The apex return map :func:`passive_apex_map` with its exact first derivatives with
+    respect to the apex state and the touchdown angles.
+
+    The variational equations of the torso (the Jacobian of the spring forces in closed
+    form) are integrated with the state by the same DOP853 under the same error control;
+    at each touchdown and lift-off the sensitivities jump by the event's saltation matrix
+    (:func:`scoutsim.analysis.saltation.saltation_matrix`: the touchdown reset places the
+    toe's anchor at ``x + sL cos(theta) + l0 sin(gamma)``, and the event-time correction
+    uses the toe-height and leg-length guards); the ballistic flight to the next apex is
+    differentiated in closed form. Exact up to the integration error (rtol), unlike
+    differences of the map, whose error is set by their step. Parameters as
+    :func:`passive_apex_map`.
+
+    Raises
+    ------
+    MapError as :func:`passive_apex_map`;
+    :class:`scoutsim.analysis.saltation.GrazingEventError` if a leg's event is tangential
+    to the flow (no first derivative there).
+    """
+    rob = passive_robot(robot)
+    z = np.asarray(z, dtype=float)
+    gam = tuple(float(a) for a in touchdown_angles)
+    tangent = _PassiveTangent(rob, gam)
+    u, t_lo, order = _integrate_passive_stride(z, gam, rob, rtol, max_period, tangent)
+    z_next, period, D = _to_apex(u, t_lo, rob.gravity)
+    dz = D @ tangent.phi_u
+    # phi_u is the sensitivity at the nominal lift-off time, the event-time shift included
+    # by the saltation matrix: the apex follows after dy / g from there
+    dT = tangent.phi_u[4] / rob.gravity
+    return ApexMapDerivative(
+        map=ApexMap(z=z_next, period=period, order=order),
+        state_jacobian=dz[:, :4],
+        angle_jacobian=dz[:, 4:],
+        period_gradient=dT[:4],
+        period_angle_gradient=dT[4:],
+        simultaneous=tangent.simultaneous,
+    )

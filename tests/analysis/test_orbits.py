@@ -98,8 +98,10 @@ def test_cli_orbit_passive_json_has_exactly_the_keys(capsys):
         "period_s",
         "eigenvalues",
         "residual",
+        "jacobian_method",
     }
     assert d["residual"] < 1e-9
+    assert d["jacobian_method"] == "exact"
     assert len(d["eigenvalues"]) == 4 and all(len(e) == 2 for e in d["eigenvalues"])
 
 
