@@ -72,11 +72,18 @@ class ApexMap:
     period : time from the start apex to the next [s].
     order : legs in the order of their first touchdown ("back"/"front"; simultaneous
         touchdowns are listed back first).
+    stride_length : forward travel of the torso from the start apex to the next [m].
     """
 
     z: np.ndarray
     period: float
     order: tuple
+    stride_length: float = math.nan
+
+    @property
+    def mean_speed(self) -> float:
+        """Mean forward speed over the stride [m/s]."""
+        return self.stride_length / self.period
 
 
 def _glitched(result) -> bool:
@@ -397,7 +404,12 @@ def passive_apex_map(
     gam = tuple(float(a) for a in touchdown_angles)
     u, t_lo, order = _integrate_passive_stride(z, gam, rob, rtol, max_period)
     z_next, period, _ = _to_apex(u, t_lo, rob.gravity)
-    return ApexMap(z=z_next, period=period, order=order)
+    return ApexMap(z=z_next, period=period, order=order, stride_length=_stride(u, t_lo, period))
+
+
+def _stride(u, t_lo, period) -> float:
+    """x at the next apex: the lift-off's x and the ballistic flight's travel [m]."""
+    return float(u[0] + u[3] * (period - t_lo))
 
 
 def _to_apex(u, t_lo, g):
@@ -456,7 +468,7 @@ def passive_apex_map_derivative(
     # by the saltation matrix: the apex follows after dy / g from there
     dT = tangent.phi_u[4] / rob.gravity
     return ApexMapDerivative(
-        map=ApexMap(z=z_next, period=period, order=order),
+        map=ApexMap(z=z_next, period=period, order=order, stride_length=_stride(u, t_lo, period)),
         state_jacobian=dz[:, :4],
         angle_jacobian=dz[:, 4:],
         period_gradient=dT[:4],

@@ -60,22 +60,27 @@ def check_name(name: str):
     base, scale = si_name(name)
     sec, _, fld = base.partition(".")
     cls = _SECTIONS.get(sec)
-    if scale != 1.0 and cls is not None and field_dimension(fld) != "angle":
-        raise ValueError(
-            f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
-            f"degrees for an angle; {base!r} is not an angle (give it in SI "
-            "units, without the suffix)"
-        )
     if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
         import difflib
 
-        near = difflib.get_close_matches(name, parameter_names(), n=1)
+        near = difflib.get_close_matches(name, parameter_names() + _deg_names(), n=1)
         hint = f"; did you mean {near[0]!r}?" if near else ""
         raise ValueError(
             f"sweep parameter {name!r} is not allowed: must be robot.<field> or "
             f"controller.<field> of RobotParameters / ControllerParameters (a "
             f"_deg suffix on an angle takes degrees){hint}"
         )
+    if scale != 1.0 and field_dimension(fld) != "angle":
+        raise ValueError(
+            f"sweep parameter {name!r} is not allowed: the _deg suffix takes "
+            f"degrees for an angle; {base!r} is not an angle (give it in SI "
+            "units, without the suffix)"
+        )
+
+
+def _deg_names() -> list[str]:
+    """The names of the angle fields in degrees (``<name>_deg``)."""
+    return [n + DEG for n in parameter_names() if field_dimension(n.partition(".")[2]) == "angle"]
 
 
 def grid_points(grid: dict) -> list[dict]:

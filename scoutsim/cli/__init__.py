@@ -8,6 +8,7 @@ each (``scoutsim COMMAND --help`` for the options):
     plot      figure of one saved run or one experiment log
     animate   stick-figure animation of a saved run (GIF or MP4)
     orbit     periodic bounding orbit and its Floquet multipliers (docs/orbits.md)
+    continue  a family of periodic gaits along one parameter, its stability and bifurcations
     sweep     parameter sweep (grid or random sample) in parallel or on a Dask cluster
     uncertainty  global sensitivity of the gait to uncertain parameters (Sobol' indices)
     tune      optimise controller or robot parameters (CMA-ES) against an objective
@@ -23,7 +24,7 @@ printed and plotted, converted here with :func:`math.degrees` / :func:`math.radi
 
 Exit codes: 0 success (also when the robot fell: the summary says so), 1 numerical failure
 (``run``, a model in ``compare``), a crashed start (``basin``) or no periodic orbit found
-(``orbit``), 2 bad usage, parameter file, initial state, input file or experiment log,
+(``orbit``, ``continue``), 2 bad usage, parameter file, initial state, input file or experiment log,
 74 the outputs could not be written (``run``: a full disk, a directory where a file
 goes; the run's data are saved to the temporary directory instead, the message says
 where), 130 interrupted (Ctrl-C; the data computed so far is still written).
@@ -42,6 +43,7 @@ from . import (
     basin,
     cache,
     compare,
+    continuation,
     identify,
     orbit,
     plot,
@@ -76,6 +78,7 @@ COMMANDS = (
     plot,
     animate,
     orbit,
+    continuation,
     sweep,
     uncertainty,
     tune,
@@ -86,7 +89,19 @@ COMMANDS = (
 #: commands that simulate, so may have to compile the core first (a notice says so)
 COMPILING_COMMANDS = {
     c.NAME
-    for c in (run, basin, assumptions, compare, orbit, sweep, uncertainty, tune, identify, rig)
+    for c in (
+        run,
+        basin,
+        assumptions,
+        compare,
+        orbit,
+        continuation,
+        sweep,
+        uncertainty,
+        tune,
+        identify,
+        rig,
+    )
 }
 
 
