@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..control.pitch_feedback import PitchFeedbackController
 from ..parameters import ControllerParameters, RobotParameters
 from ..simulation.simulator import simulate
 from ..state import HybridState
@@ -130,7 +131,9 @@ _NOT_SMOOTH = (
 
 def setting_with(setting: dict, name: str, value: float) -> dict:
     """The orbit's setting (model, floor, robot, controller) with parameter ``name`` set
-    to ``value`` (SI)."""
+    to ``value`` (SI). ``controller.<field>`` sets a field of the Table I law's
+    ControllerParameters, or of those a PitchFeedbackController runs on (a new controller
+    is built from them)."""
     out = dict(setting)
     if name == FRICTION:
         out["friction_coefficient"] = value
@@ -144,11 +147,14 @@ def setting_with(setting: dict, name: str, value: float) -> dict:
     ):
         base = setting["controller"] or ControllerParameters()
         out["controller"] = dataclasses.replace(base, **changes)
+    elif sec == "controller" and isinstance(setting["controller"], PitchFeedbackController):
+        law = setting["controller"].controller_parameters or ControllerParameters()
+        out["controller"] = PitchFeedbackController(dataclasses.replace(law, **changes))
     else:
         raise ValueError(
             f"parameter {name!r} is not allowed: must be one of "
             "sensitivity_parameter_names() (robot.<field>, controller.<field> of the "
-            "built-in law, friction_coefficient)"
+            "built-in law or of pitch feedback, friction_coefficient)"
         )
     return out
 
@@ -161,6 +167,8 @@ def parameter_value(setting: dict, name: str) -> float:
     obj = setting["robot"] or RobotParameters() if sec == "robot" else setting["controller"]
     if sec == "controller" and obj is None:
         obj = ControllerParameters()
+    if isinstance(obj, PitchFeedbackController):
+        obj = obj.controller_parameters
     return float(getattr(obj, fld))
 
 

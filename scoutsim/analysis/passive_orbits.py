@@ -217,7 +217,7 @@ def passive_bounding_orbit(
         raise MapError(
             f"no periodic orbit found at speed {speed} m/s, apex height "
             f"{apex_height} m, pitch rate {math.degrees(pitch_rate):.3g} deg/s "
-            f"(residual {res:.3g} after {n} map evaluations)"
+            f"(residual {res:.3g} after {n} map evaluations){_asymmetry(rob)}"
         )
     orb = PassiveOrbit(
         speed=float(speed),
@@ -233,6 +233,24 @@ def passive_bounding_orbit(
         rtol=rtol,
     )
     return _finish(orb, rob, integ, jacobian, jacobian_step)
+
+
+def _asymmetry(rob: RobotParameters) -> str:
+    """A note naming what breaks the back-front mirror symmetry the level-apex orbits rely
+    on ("" for a symmetric robot)."""
+    what = []
+    if rob.com_offset != 0.0:
+        what.append(f"com_offset = {rob.com_offset:g} m")
+    for fld in ("leg_stiffness", "leg_rest_length"):
+        back, front = rob.per_leg(fld)
+        if back != front:
+            what.append(f"{fld} = [{back:g}, {front:g}]")
+    if not what:
+        return ""
+    return (
+        "; the orbits looked for pass through a level-torso apex, which needs the robot's "
+        "back-front mirror symmetry, and this robot has none: " + ", ".join(what)
+    )
 
 
 def _check_jacobian(jacobian: str) -> None:

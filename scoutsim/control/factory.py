@@ -98,7 +98,15 @@ def _call(factory, spec: str, robot, params):
         n = 2 if varargs else min(2, len(positional))
     except (TypeError, ValueError):  # a builtin without a signature: try both
         n = 2
-    return factory(*(robot, params)[:n])
+    try:
+        return factory(*(robot, params)[:n])
+    except Exception as exc:  # the user's code: say where it failed, not a traceback
+        raise FactoryError(
+            f"controller {spec!r} failed when called as "
+            f"{spec.partition(':')[2]}({', '.join(('robot', 'params')[:n])}) with the "
+            f"robot's RobotParameters and the controller settings' ControllerParameters: "
+            f"{type(exc).__name__}: {exc}"
+        ) from exc
 
 
 def _is_controller(obj) -> bool:

@@ -259,3 +259,13 @@ def test_apex_map_agrees_with_simulate_for_unequal_legs():
     # and the asymmetry matters: the map of the symmetric robot is elsewhere
     sym = O.passive_apex_map(z, td, robot=O.passive_robot())
     assert np.max(np.abs(sym.z - m.z)) > 1e-3
+
+
+def test_passive_orbit_of_an_asymmetric_robot_says_what_breaks_the_symmetry():
+    """The level-apex orbits rely on the back-front mirror symmetry; a robot with its COM
+    off centre has none, and the refusal names why rather than only the residual."""
+    import dataclasses
+
+    robot = dataclasses.replace(O.passive_robot(), com_offset=0.015)
+    with pytest.raises(O.MapError, match=r"mirror symmetry.*com_offset = 0.015 m"):
+        O.passive_bounding_orbit(1.3, 0.35, 0.0, robot=robot)

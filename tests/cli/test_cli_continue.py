@@ -60,3 +60,16 @@ def test_bad_input_is_a_usage_error_naming_the_field(tmp_path, capsys, argv, mes
     code = main(["continue", *argv, "--out", str(tmp_path / "x"), "--no-progress"])
     assert code == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_factory_that_raises_is_a_usage_error_naming_it(tmp_path, capsys, monkeypatch):
+    """A MODULE:FACTORY whose code raises (here: a factory with another signature than
+    FACTORY(robot, params)) is reported with how it was called, not as a traceback."""
+    (tmp_path / "wrong_factory.py").write_text("def make(robot, gain):\n    return 1.0 + gain\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    code = main(["continue", "--controller", "wrong_factory:make", "--vary",
+                 "robot.belt_stiffness=400:600", "--out", str(tmp_path / "x"),
+                 "--no-progress"])  # fmt: skip
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "wrong_factory:make" in err and "make(robot, params)" in err and "TypeError" in err
