@@ -5,8 +5,9 @@ gaits").
 
 The closed loop is sampled at 1 kHz, so its stride map is only piecewise smooth: a family
 of orbits breaks into sample-phase cells (a lift-off or a controller switch moves to the
-next sample) narrower than 0.06 deg of front touchdown angle at the Table I operating
-point, and an orbit predicted from its neighbour's tangent lands in the wrong cell.
+next sample; at the Table I operating point a step of 0.06 deg of front touchdown angle
+already crosses a border), and an orbit predicted from its neighbour's tangent lands in
+the wrong cell.
 :func:`controlled_family` therefore follows the orbit by natural-parameter steps that let
 the robot settle: at each value the closed loop runs on from the previous orbit's hybrid
 state with the new parameter (:func:`~scoutsim.analysis.controlled_orbit.likely_strides`,
