@@ -260,8 +260,10 @@ def _check_jacobian(jacobian: str) -> None:
 
 def _finish(orb: PassiveOrbit, rob, integ, jacobian, jacobian_step) -> PassiveOrbit:
     """Fill in period, order, Jacobians and multipliers of a converged orbit."""
+    # the map the orbit was solved on (the derivative's own integration, with the
+    # sensitivities under the error control, takes other steps)
+    m = passive_apex_map(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
     d = passive_apex_map_derivative(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
-    m = d.map
     J, Jg = d.state_jacobian, d.angle_jacobian
     if jacobian == "fd":
 

@@ -46,6 +46,8 @@ __all__ = [
     "ApexMapDerivative",
     "passive_apex_map_derivative",
     "TANGENT_STATE_NAMES",
+    "TANGENT_VARIABLES",
+    "PARAMETER_NAMES",
     "SIMULTANEOUS_EVENT_TOL",
 ]
 
@@ -147,28 +149,40 @@ def _passive_rhs(rob: RobotParameters, anchors):
 
 
 #: Layout of the state the passive stride's sensitivities are taken of: the torso's six
-#: coordinates and rates, the back and front toe anchors (x of the pinned toe [m]) and the
-#: back and front touchdown angles [rad] (parameters: zero rate, but the touchdown reset
-#: and guard depend on them).
+#: coordinates and rates, the back and front toe anchors (x of the pinned toe [m]), then
+#: constants (zero rate) that the flow, the touchdown reset or a guard depend on: the
+#: touchdown angles [rad], the legs' stiffness (per physical leg, N/m) and rest length [m],
+#: the torso's mass [kg] and inertia [kg m^2] and the hip spacing [m].
 TANGENT_STATE_NAMES = ("x", "y", "theta", "dx", "dy", "dtheta", "anchor_back", "anchor_front",
-                       "gamma_back", "gamma_front")  # fmt: skip
-_ANCHOR, _GAMMA = 6, 8
+                       "gamma_back", "gamma_front", "leg_stiffness_back", "leg_stiffness_front",
+                       "leg_rest_length_back", "leg_rest_length_front", "torso_mass",
+                       "torso_inertia", "hip_spacing")  # fmt: skip
+_ANCHOR, _GAMMA, _K, _L0, _M, _I, _D = 6, 8, 10, 12, 14, 15, 16
+_NW = len(TANGENT_STATE_NAMES)
+#: the robot constants of the derivative's parameter blocks (columns of
+#: ApexMapDerivative.parameter_jacobian), as named in TANGENT_STATE_NAMES
+PARAMETER_NAMES = TANGENT_STATE_NAMES[_K:]
+#: the variables the sensitivities are taken with respect to (the columns of ``phi``): the
+#: apex state z, then the constants of TANGENT_STATE_NAMES from the touchdown angles on
+TANGENT_VARIABLES = ("y", "theta", "dx", "dtheta", *TANGENT_STATE_NAMES[_GAMMA:])
 
 
 class _PassiveTangent:
     """The sensitivities of the passive stride (docs/orbits.md, "Exact derivatives"):
-    ``phi`` = d(state of :data:`TANGENT_STATE_NAMES`)/d(apex z, touchdown angles), (10, 6),
+    ``phi`` = d(state of :data:`TANGENT_STATE_NAMES`)/d(:data:`TANGENT_VARIABLES`),
     integrated with the torso by the variational equations of :func:`_passive_rhs` and
     mapped across each touchdown and lift-off by its saltation matrix
     (:mod:`scoutsim.analysis.saltation`)."""
 
     def __init__(self, rob: RobotParameters, gammas):
         self.rob, self.gammas = rob, gammas
-        self.k = [rob.legs_per_virtual_leg * v for v in rob.per_leg("leg_stiffness")]
+        self.n = rob.legs_per_virtual_leg
+        self.k = [self.n * v for v in rob.per_leg("leg_stiffness")]
         self.l0, self.hip = rob.per_leg("leg_rest_length"), _hips(rob)
-        phi = np.zeros((10, 6))
-        for row, col in ((1, 0), (2, 1), (3, 2), (5, 3), (_GAMMA, 4), (_GAMMA + 1, 5)):
+        phi = np.zeros((_NW, len(TANGENT_VARIABLES)))
+        for row, col in ((1, 0), (2, 1), (3, 2), (5, 3)):
             phi[row, col] = 1.0
+        phi[_GAMMA:, 4:] = np.eye(_NW - _GAMMA)
         self.phi = phi
         self.simultaneous = False
 
@@ -181,65 +195,80 @@ class _PassiveTangent:
         self.phi[:6] = value
 
     def _leg(self, u, leg, anchor):
-        """Hip lever r, its theta-derivative, leg vector d (hip - toe), length l."""
+        """Hip lever r, its derivatives in theta and in the hip spacing, the leg vector d
+        (hip - toe) and its length l."""
         sL, c, sn = self.hip[leg], math.cos(u[2]), math.sin(u[2])
         r, rp = np.array([sL * c, sL * sn]), np.array([-sL * sn, sL * c])
+        rD = (0.5 if leg else -0.5) * np.array([c, sn])  # hips at -D/2 - e, D/2 - e
         d = np.array([u[0] + r[0] - anchor, u[1] + r[1]])
-        return r, rp, d, math.hypot(d[0], d[1])
+        return r, rp, rD, d, math.hypot(d[0], d[1])
 
     def jacobians(self, u, anchors):
-        """(d f_u / d u (6, 6), d f_u / d anchors (6, 2)) of the torso equations."""
+        """d f_u / d(u (6), anchors (2), constants from the touchdown angles on (9)) of the
+        torso equations, (6, 17)."""
         rob = self.rob
-        A = np.zeros((6, 6))
-        A[0:3, 3:6] = np.eye(3)
-        B = np.zeros((6, 2))
+        m, inertia = rob.torso_mass, rob.torso_inertia
+        J = np.zeros((6, _NW))
+        J[0:3, 3:6] = np.eye(3)
+        total = np.zeros(3)  # sum of Fx, Fy, torque
         for leg, ax in enumerate(anchors):
             if ax is None:
                 continue
-            r, rp, d, ll = self._leg(u, leg, ax)
+            r, rp, rD, d, ll = self._leg(u, leg, ax)
             k, l0 = self.k[leg], self.l0[leg]
             F = k * (l0 / ll - 1.0) * d  # axial spring force on the hip
             K = k * (l0 / ll - 1.0) * np.eye(2) - k * l0 / ll**3 * np.outer(d, d)  # dF/dd
-            dF = np.column_stack((K[:, 0], K[:, 1], K @ rp, -K[:, 0]))  # d/d(x, y, theta, a)
-            dtau = r[0] * dF[1] - r[1] * dF[0]
-            dtau[2] += rp[0] * F[1] - rp[1] * F[0]
-            for row, col, v in ((3, dF[0], rob.torso_mass), (4, dF[1], rob.torso_mass),
-                                (5, dtau, rob.torso_inertia)):  # fmt: skip
-                A[row, 0:3] += col[0:3] / v
-                B[row, leg] += col[3] / v
-        return A, B
+            cols = {0: K[:, 0], 1: K[:, 1], 2: K @ rp, _ANCHOR + leg: -K[:, 0], _D: K @ rD,
+                    _K + leg: self.n * (l0 / ll - 1.0) * d, _L0 + leg: k * d / ll}  # fmt: skip
+            for j, dF in cols.items():
+                dtau = r[0] * dF[1] - r[1] * dF[0]
+                if j == 2:
+                    dtau += rp[0] * F[1] - rp[1] * F[0]
+                elif j == _D:
+                    dtau += rD[0] * F[1] - rD[1] * F[0]
+                J[3, j] += dF[0] / m
+                J[4, j] += dF[1] / m
+                J[5, j] += dtau / inertia
+            total += (F[0], F[1], r[0] * F[1] - r[1] * F[0])
+        J[3, _M], J[4, _M] = -total[0] / m**2, -total[1] / m**2
+        J[5, _I] = -total[2] / inertia**2
+        return J
 
     def variational(self, anchors):
         anchors = list(anchors)
 
         def rhs(u, phi_u):
-            A, B = self.jacobians(u, anchors)
-            return A @ phi_u + B @ self.phi[_ANCHOR:_GAMMA]
+            J = self.jacobians(u, anchors)
+            return J[:, :6] @ phi_u + J[:, 6:] @ self.phi[6:]
 
         return rhs
 
     def _flow(self, u, anchors) -> np.ndarray:
-        f = np.zeros(10)
+        f = np.zeros(_NW)
         f[:6] = _passive_rhs(self.rob, list(anchors))(u)
         return f
 
     def jump(self, kind, leg, u, before, after) -> None:
         """Map ``phi`` across the ``kind`` event of ``leg`` at state ``u`` (anchors before
         and after the reset)."""
-        n = np.zeros(10)
-        DR = np.eye(10)
+        n = np.zeros(_NW)
+        DR = np.eye(_NW)
+        c, sn = math.cos(u[2]), math.sin(u[2])
+        half = 0.5 if leg else -0.5  # d(hip lever)/d(hip spacing)
         if kind == "touchdown":  # toe height y + sL sin(theta) - l0 cos(gamma) = 0
             sL, gam, l0 = self.hip[leg], self.gammas[leg], self.l0[leg]
-            n[1], n[2], n[_GAMMA + leg] = 1.0, sL * math.cos(u[2]), l0 * math.sin(gam)
+            n[1], n[2], n[_GAMMA + leg] = 1.0, sL * c, l0 * math.sin(gam)
+            n[_L0 + leg], n[_D] = -math.cos(gam), half * sn
             # reset: anchor = x + sL cos(theta) + l0 sin(gamma)
-            DR[_ANCHOR + leg] = 0.0
-            DR[_ANCHOR + leg, 0] = 1.0
-            DR[_ANCHOR + leg, 2] = -sL * math.sin(u[2])
-            DR[_ANCHOR + leg, _GAMMA + leg] = l0 * math.cos(gam)
+            row = _ANCHOR + leg
+            DR[row] = 0.0
+            DR[row, 0], DR[row, 2] = 1.0, -sL * sn
+            DR[row, _GAMMA + leg], DR[row, _L0 + leg] = l0 * math.cos(gam), math.sin(gam)
+            DR[row, _D] = half * c
         else:  # lift-off: leg length |d| - l0 = 0
-            r, rp, d, ll = self._leg(u, leg, before[leg])
+            r, rp, rD, d, ll = self._leg(u, leg, before[leg])
             n[0], n[1], n[2] = d[0] / ll, d[1] / ll, float(d @ rp) / ll
-            n[_ANCHOR + leg] = -d[0] / ll
+            n[_ANCHOR + leg], n[_L0 + leg], n[_D] = -d[0] / ll, -1.0, float(d @ rD) / ll
         fm, fp = self._flow(u, before), self._flow(u, after)
         self.phi = saltation_matrix(DR, fm, fp, n) @ self.phi
 
@@ -254,6 +283,10 @@ class ApexMapDerivative:
     angle_jacobian : (4, 2) dz_next/d(gamma_back, gamma_front) [per rad].
     period_gradient : (4,) d period/dz.
     period_angle_gradient : (2,) d period/d(gamma_back, gamma_front) [s/rad].
+    parameter_jacobian : (4, 7) dz_next/d(robot constants), the constants of
+        :data:`PARAMETER_NAMES` (SI).
+    period_parameter_gradient : (7,) d period/d(robot constants).
+    stride_gradient : (13,) d stride_length/d(z, touchdown angles, robot constants).
     simultaneous : two events happened at one instant (a pronk's touchdowns or lift-offs):
         the map is only piecewise smooth there and the derivatives are those of one side
         (the events taken back leg first when they were found together).
@@ -264,6 +297,9 @@ class ApexMapDerivative:
     angle_jacobian: np.ndarray
     period_gradient: np.ndarray
     period_angle_gradient: np.ndarray
+    parameter_jacobian: np.ndarray
+    period_parameter_gradient: np.ndarray
+    stride_gradient: np.ndarray
     simultaneous: bool
 
 
@@ -463,15 +499,20 @@ def passive_apex_map_derivative(
     tangent = _PassiveTangent(rob, gam)
     u, t_lo, order = _integrate_passive_stride(z, gam, rob, rtol, max_period, tangent)
     z_next, period, D = _to_apex(u, t_lo, rob.gravity)
-    dz = D @ tangent.phi_u
+    phi = tangent.phi_u
+    dz = D @ phi
     # phi_u is the sensitivity at the nominal lift-off time, the event-time shift included
     # by the saltation matrix: the apex follows after dy / g from there
-    dT = tangent.phi_u[4] / rob.gravity
+    dT = phi[4] / rob.gravity
+    dX = phi[0] + (period - t_lo) * phi[3] + u[3] * phi[4] / rob.gravity
     return ApexMapDerivative(
         map=ApexMap(z=z_next, period=period, order=order, stride_length=_stride(u, t_lo, period)),
         state_jacobian=dz[:, :4],
-        angle_jacobian=dz[:, 4:],
+        angle_jacobian=dz[:, 4:6],
         period_gradient=dT[:4],
-        period_angle_gradient=dT[4:],
+        period_angle_gradient=dT[4:6],
+        parameter_jacobian=dz[:, 6:],
+        period_parameter_gradient=dT[6:],
+        stride_gradient=dX,
         simultaneous=tangent.simultaneous,
     )

@@ -102,11 +102,14 @@ def register(sub, common) -> None:
         "--sensitivity",
         metavar="NAME[,NAME...]|all",
         default=None,
-        help="controlled: also the sensitivities of the orbit's speed, stride frequency, "
-        "duty factors, pitch and height extremes, electrical power, cost of transport "
-        "and spectral radius to these parameters (robot.<field>, controller.<field> of "
-        "the Table I law, friction_coefficient; SI), by the implicit function theorem "
-        "on the fixed point, and their elasticities [%% per %%]",
+        help="also the sensitivities of the orbit to these parameters, by the implicit "
+        "function theorem on the fixed point, and their elasticities [%% per %%]. "
+        "Controlled: the speed, stride frequency, duty factors, pitch and height "
+        "extremes, electrical power, cost of transport and spectral radius, to "
+        "robot.<field>, controller.<field> of the Table I law, friction_coefficient "
+        "(SI). --passive: the touchdown angles, period, mean speed and spectral radius, "
+        "from exact derivatives, to robot.leg_stiffness, robot.leg_rest_length, "
+        "robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
     )
     orbit.add_argument(
         "--section",
@@ -182,14 +185,22 @@ def execute(args) -> int:
         sens, metrics = orbit_sensitivities(orb, names, progress=progress_messages(args, NAME))
         d["metrics"] = metrics
         d["sensitivities"] = {n: s.to_dict() for n, s in sens.items()}
+    elif names and isinstance(orb, PassiveOrbit):
+        from ..analysis.passive_sensitivity import passive_orbit_sensitivities
+
+        sens, metrics = passive_orbit_sensitivities(orb, names, robot=robot)
+        d["metrics"] = metrics
+        d["sensitivities"] = {n: s.to_dict() for n, s in sens.items()}
     if args.json:
         print(dumps(d))
     elif args.passive:
         _print_passive(args, orb, d)
+        if sens is not None:
+            _print_sensitivities(d, PASSIVE_COLUMNS, "touchdown_angle_back")
     else:
         _print_controlled(args, orb, d)
         if sens is not None:
-            _print_sensitivities(d)
+            _print_sensitivities(d, CONTROLLED_COLUMNS, "mean_speed_m_s")
     return 0
 
 
@@ -198,10 +209,13 @@ def _sensitivity_names(args, controller) -> list[str] | None:
     if args.sensitivity is None:
         return None
     if args.passive:
-        raise UsageError("--sensitivity is not allowed with --passive")
-    from ..analysis.orbit_sensitivity import sensitivity_parameter_names
+        from ..analysis.passive_sensitivity import PASSIVE_SENSITIVITY_PARAMETERS
 
-    known = sensitivity_parameter_names(controller)
+        known = list(PASSIVE_SENSITIVITY_PARAMETERS)
+    else:
+        from ..analysis.orbit_sensitivity import sensitivity_parameter_names
+
+        known = sensitivity_parameter_names(controller)
     if args.sensitivity.strip() == "all":
         return known
     names = [n.strip() for n in args.sensitivity.split(",") if n.strip()]
@@ -211,29 +225,39 @@ def _sensitivity_names(args, controller) -> list[str] | None:
 
             near = difflib.get_close_matches(n, known, n=1)
             hint = f"; did you mean {near[0]!r}?" if near else ""
+            allowed = (
+                ", ".join(known)
+                if args.passive
+                else "robot.<field>, controller.<field> (the Table I law's) or friction_coefficient"
+            )
             raise UsageError(
-                f"--sensitivity {n!r} is not allowed: must be 'all' or names of "
-                f"robot.<field>, controller.<field> (the Table I law's) or "
-                f"friction_coefficient{hint}"
+                f"--sensitivity {n!r} is not allowed: must be 'all' or names of {allowed}{hint}"
             )
     return names
 
 
-def _print_sensitivities(d) -> None:
-    """The elasticities [% per %] of the main metrics, the parameters that move the speed
-    most first."""
+#: the elasticities printed for a controlled and a passive orbit
+CONTROLLED_COLUMNS = ("mean_speed_m_s", "electrical_power_w", "cost_of_transport",
+                      "spectral_radius")  # fmt: skip
+PASSIVE_COLUMNS = ("touchdown_angle_back", "touchdown_angle_front", "period_s",
+                   "spectral_radius")  # fmt: skip
+
+
+def _print_sensitivities(d, cols, lead: str) -> None:
+    """The elasticities [% per %] of the main metrics ``cols``, the parameters that move
+    ``lead`` most first."""
     rows = [(n, s) for n, s in d["sensitivities"].items() if s["status"] == "ok"]
 
     def size(row) -> float:
-        e = row[1]["elasticity"]["mean_speed_m_s"]
+        e = row[1]["elasticity"][lead]
         return -1.0 if e is None or math.isnan(e) else abs(e)
 
     rows.sort(key=size, reverse=True)
-    cols = ("mean_speed_m_s", "electrical_power_w", "cost_of_transport", "spectral_radius")
+    w = max(20, max(len(c) for c in cols) + 2)
     print("  elasticities [% per %] at the orbit (implicit function theorem):")
-    print(f"    {'parameter':<40}" + "".join(f"{c:>20}" for c in cols))
+    print(f"    {'parameter':<40}" + "".join(f"{c:>{w}}" for c in cols))
     for n, s in rows:
-        print(f"    {n:<40}" + "".join(f"{s['elasticity'][c]:>20.4f}" for c in cols))
+        print(f"    {n:<40}" + "".join(f"{s['elasticity'][c]:>{w}.4f}" for c in cols))
     print(
         "    (nan: a parameter at 0, whose elasticity is not defined; its derivative is in --json)"
     )

@@ -5,6 +5,7 @@ jump at each touchdown and lift-off against differences of the flow across it, a
 conservation: the conserved energy's gradient is a left eigenvector of the map's Jacobian
 with eigenvalue 1."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -94,11 +95,26 @@ def test_pronk_is_flagged_as_simultaneous(orbits):
 # --- the jump at each event, against differences of the flow across it ------------------
 
 
-def _flow_through(z, gammas, events, t_end, with_sensitivity):
-    """From apex z, the passive flow through ``events`` ((kind, leg) in their known order)
-    to the fixed time ``t_end`` [s]: (state (6,), sensitivity to (z, gammas) or None, the
-    events' times [s])."""
+def _robot(constants):
+    """The passive robot with the constants of PARAMETER_NAMES set to ``constants``."""
+    kb, kf, lb, lf, m, inertia, spacing = constants
+    return dataclasses.replace(
+        P.passive_robot(), leg_stiffness=(kb, kf), leg_rest_length=(lb, lf), torso_mass=m,
+        torso_inertia=inertia, hip_spacing=spacing,
+    )  # fmt: skip
+
+
+def _constants():
     rob = P.passive_robot()
+    return np.array([*rob.per_leg("leg_stiffness"), *rob.per_leg("leg_rest_length"),
+                     rob.torso_mass, rob.torso_inertia, rob.hip_spacing])  # fmt: skip
+
+
+def _flow_through(z, gammas, events, t_end, with_sensitivity, constants=None):
+    """From apex z, the passive flow through ``events`` ((kind, leg) in their known order)
+    to the fixed time ``t_end`` [s]: (state (6,), sensitivity to (z, gammas, the robot
+    constants) or None, the events' times [s])."""
+    rob = P.passive_robot() if constants is None else _robot(constants)
     hip = (-0.5 * rob.hip_spacing - rob.com_offset, 0.5 * rob.hip_spacing - rob.com_offset)
     l0 = rob.per_leg("leg_rest_length")
     tangent = P._PassiveTangent(rob, tuple(gammas)) if with_sensitivity else None
@@ -153,15 +169,18 @@ def _flow_through(z, gammas, events, t_end, with_sensitivity):
 def test_sensitivity_jump_at_each_event_matches_differences_of_the_flow(orbits, events, after_s):
     """Ending a short time after the event (in stance after a touchdown, with the back leg
     in flight after its lift-off), the sensitivity to the apex state and the touchdown
-    angles equals differences of the flow across the event."""
+    angles and the robot's constants equals differences of the flow across the event."""
     orb = orbits[50.0]
-    x0 = np.concatenate((orb.z, orb.touchdown_angles))
+    x0 = np.concatenate((orb.z, orb.touchdown_angles, _constants()))
     t_end = _flow_through(orb.z, orb.touchdown_angles, events, 2.0, False)[2][-1] + after_s
 
     def f(x):
-        return _flow_through(x[:4], x[4:], events, t_end, False)[0]
+        return _flow_through(x[:4], x[4:6], events, t_end, False, x[6:])[0]
 
     _, phi, _ = _flow_through(orb.z, orb.touchdown_angles, events, t_end, True)
-    ref = _richardson(f, x0, 1e-4)
-    scale = max(1.0, float(np.abs(ref).max()))
-    np.testing.assert_allclose(phi, ref, rtol=0.0, atol=1e-7 * scale)
+    # differences of each variable scaled to its size (stiffness ~ 3e3 N/m, lengths 0.2 m)
+    scale_x = np.maximum(1.0, np.abs(x0))
+    ref = _richardson(lambda y: f(y * scale_x), x0 / scale_x, 1e-4) / scale_x
+    for j in range(len(x0)):  # each column against its own size
+        col = max(1e-12, float(np.abs(ref[:, j]).max()))
+        np.testing.assert_allclose(phi[:, j], ref[:, j], rtol=0.0, atol=1e-6 * col)

@@ -18,7 +18,12 @@ from scoutsim.cli import COMMANDS, build_parser
 _DEFAULT = re.compile(r"\(default:\s*([^();]*?)\)|default:\s*([^();,]*?)[;,]")
 
 #: positional arguments a command needs before it parses (a placeholder file name)
-_POSITIONALS = {"plot": ["x"], "animate": ["x", "--out", "a.gif"], "rig": ["free-swing"]}
+_POSITIONALS = {
+    "plot": ["x"],
+    "animate": ["x", "--out", "a.gif"],
+    "rig": ["free-swing"],
+    "continue": ["--vary", "robot.belt_stiffness=400:600", "--out", "d"],
+}
 
 
 def _subparsers():
