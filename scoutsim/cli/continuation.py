@@ -20,17 +20,15 @@ import sys
 from pathlib import Path
 
 from ._common import (
-    CONTROLLED_MODELS,
-    SCOUT_FLOOR_FRICTION,
     UsageError,
+    add_controlled_orbit_options,
     add_controller_option,
-    add_friction_option,
     add_no_progress_option,
+    add_passive_apex_options,
     controller_choice,
     dumps,
     load_parameters,
     make_controller,
-    positive_float,
     progress_messages,
 )
 
@@ -74,20 +72,7 @@ def register(sub, common) -> None:
         action="store_true",
         help="the passive conservative model (massless legs), varying pitch_rate_deg",
     )
-    p.add_argument(
-        "--speed",
-        type=positive_float,
-        default=1.3,
-        metavar="V",
-        help="--passive: forward speed at the apex [m/s] (default: 1.3)",
-    )
-    p.add_argument(
-        "--apex-height",
-        type=positive_float,
-        default=0.35,
-        metavar="H",
-        help="--passive: torso COM height at the apex [m] (default: 0.35)",
-    )
+    add_passive_apex_options(p)
     p.add_argument(
         "--points",
         type=_points,
@@ -95,17 +80,7 @@ def register(sub, common) -> None:
         metavar="N",
         help="controlled: values from LO to HI, evenly spaced (default: 13)",
     )
-    p.add_argument(
-        "--model", choices=CONTROLLED_MODELS, default="II", help="controlled model (default: II)"
-    )
-    add_friction_option(p, f"controlled: toe friction (default: {SCOUT_FLOOR_FRICTION})")
-    p.add_argument(
-        "--duration",
-        type=positive_float,
-        default=12.0,
-        metavar="S",
-        help="controlled: simulated time to the first orbit's Newton start [s] (default: 12)",
-    )
+    add_controlled_orbit_options(p, "simulated time to the first orbit's Newton start")
     p.add_argument(
         "--robot",
         metavar="FILE",

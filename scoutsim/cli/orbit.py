@@ -18,19 +18,17 @@ import math
 import sys
 
 from ._common import (
-    CONTROLLED_MODELS,
-    SCOUT_FLOOR_FRICTION,
     UsageError,
+    add_controlled_orbit_options,
     add_controller_option,
-    add_friction_option,
     add_no_progress_option,
+    add_passive_apex_options,
     controller_choice,
     controller_label,
     dumps,
     finite_float,
     load_parameters,
     make_controller,
-    positive_float,
     positive_int,
     progress_messages,
 )
@@ -57,20 +55,7 @@ def register(sub, common) -> None:
         action="store_true",
         help="the passive conservative model (massless legs, docs/orbits.md)",
     )
-    orbit.add_argument(
-        "--speed",
-        type=positive_float,
-        default=1.3,
-        metavar="V",
-        help="--passive: forward speed at the apex [m/s] (default: 1.3)",
-    )
-    orbit.add_argument(
-        "--apex-height",
-        type=positive_float,
-        default=0.35,
-        metavar="H",
-        help="--passive: torso COM height at the apex [m] (default: 0.35)",
-    )
+    add_passive_apex_options(orbit)
     orbit.add_argument(
         "--pitch-rate",
         type=finite_float,
@@ -78,17 +63,7 @@ def register(sub, common) -> None:
         metavar="W",
         help="--passive: pitch rate at the apex [deg/s] (default: 0)",
     )
-    orbit.add_argument(
-        "--model", choices=CONTROLLED_MODELS, default="II", help="controlled model (default: II)"
-    )
-    add_friction_option(orbit, f"controlled: toe friction (default: {SCOUT_FLOOR_FRICTION})")
-    orbit.add_argument(
-        "--duration",
-        type=positive_float,
-        default=12.0,
-        metavar="S",
-        help="controlled: simulated time to the Newton start [s] (default: 12)",
-    )
+    add_controlled_orbit_options(orbit, "simulated time to the Newton start")
     orbit.add_argument(
         "--strides",
         type=positive_int,
