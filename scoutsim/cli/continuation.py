@@ -111,6 +111,7 @@ def execute(args) -> int:
     import numpy as np
 
     from ..analysis.poincare import MapError
+    from ..control.dispatch import ControllerStateError
     from ..presentation.family_plots import plot_family
 
     name, lo, hi = _vary(args.vary)
@@ -157,6 +158,11 @@ def execute(args) -> int:
                 settle_duration=args.duration,
                 progress=say,
             )
+        except ControllerStateError as exc:
+            raise UsageError(
+                f"--controller {args.controller}: {exc}; scoutsim continue restarts strides "
+                "from section states, which include the controller's own state"
+            ) from exc
         except ValueError as exc:
             raise UsageError(f"--vary {name!r}: {exc}") from exc
         title = f"Model {args.model} family (each orbit after settling from its neighbour)"

@@ -73,3 +73,18 @@ def test_a_factory_that_raises_is_a_usage_error_naming_it(tmp_path, capsys, monk
     assert code == 2
     err = capsys.readouterr().err
     assert "wrong_factory:make" in err and "make(robot, params)" in err and "TypeError" in err
+
+
+def test_a_controller_without_its_state_is_refused_by_name(tmp_path, capsys, monkeypatch):
+    """A family restarts strides from section states: a Python controller that cannot give
+    and take its own state is a usage error saying what to add."""
+    (tmp_path / "stateless.py").write_text(
+        "import numpy as np\n\n\nclass Hold:\n    def command(self, t, sensors):\n"
+        "        return np.zeros(2)\n\n\ndef make(robot, params):\n    return Hold()\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    code = main(["continue", "--controller", "stateless:make", "--vary",
+                 "robot.belt_stiffness=400:600", "--out", str(tmp_path / "x"),
+                 "--no-progress"])  # fmt: skip
+    assert code == 2
+    assert "get_state()" in capsys.readouterr().err
