@@ -14,13 +14,13 @@ from scoutsim.analysis.passive_orbits import passive_bounding_orbit
 
 @pytest.fixture(scope="module")
 def family():
-    return passive_family(1.3, 0.35, (0.0, math.radians(160.0)))
+    return passive_family(1.3, 0.35, (math.radians(40.0), math.radians(160.0)))
 
 
 def test_branch_covers_the_range(family):
     assert family.stopped == "range"
     p = [r["pitch_rate_deg"] for r in family.rows if not r["bifurcation"]]
-    assert p[0] == pytest.approx(0.0, abs=1e-12) and p[-1] == pytest.approx(160.0, abs=1e-9)
+    assert p[0] == pytest.approx(40.0, abs=1e-9) and p[-1] == pytest.approx(160.0, abs=1e-9)
     assert np.all(np.diff(p) > 0)  # no fold in this range: the pitch rate only grows
 
 
