@@ -16,7 +16,8 @@ Along a branch of periodic orbits, :func:`crossing_kind` names a change in the n
 multipliers outside the unit circle between two neighbours: a real multiplier through +1
 (a fold or branch point), through -1 (a period doubling) or a complex pair (a torus,
 Neimark-Sacker, bifurcation); :func:`locate_crossing` finds where by bisection along the
-arclength.
+arclength, and :func:`crossings_between` finds each of several crossings between the same
+two neighbours in turn.
 
 Units: those of u and lam (the arclength mixes them; scale them to comparable sizes).
 """
@@ -35,6 +36,7 @@ __all__ = [
     "correct",
     "crossing_kind",
     "locate_crossing",
+    "crossings_between",
     "multipliers_outside",
 ]
 
@@ -207,7 +209,7 @@ def crossing_kind(
     after,
     trivial: int = 0,
     parameter_turns: bool = False,
-    imaginary_tol: float = 1e-7,
+    imaginary_tol: float = 1e-5,
 ) -> str:
     """What crossed the unit circle between the multipliers ``before`` and ``after`` of two
     neighbouring orbits of a branch ("" if the number outside it did not change):
@@ -220,7 +222,10 @@ def crossing_kind(
     * a complex pair: "torus" (Neimark-Sacker).
 
     ``trivial`` multipliers nearest +1 are left out (1 for the energy multiplier of a
-    conservative orbit)."""
+    conservative orbit). A multiplier counts as complex when its imaginary part exceeds
+    ``imaginary_tol`` times its modulus: next to a double multiplier (a crossing at +1 that
+    meets the energy multiplier) the computed eigenvalues split by about the square root of
+    the Jacobian's error (1e-6 for 1e-12), which must not read as a complex pair."""
     b = multipliers_outside(before, trivial)
     a = multipliers_outside(after, trivial)
     out_b, out_a = int(np.sum(np.abs(b) > 1.0)), int(np.sum(np.abs(a) > 1.0))
@@ -245,28 +250,68 @@ def locate_crossing(
     tol: float = 1e-11,
     max_iter: int = 8,
     bisections: int = 30,
-) -> BranchStep | None:
-    """The branch point between ``before`` and ``after`` where the number of multipliers
-    outside the unit circle changes, by bisection of the chord between them (each trial
-    point corrected onto the branch perpendicular to the chord). ``multipliers(w)`` gives
-    the multipliers at a point of the branch. Returns the point on the side of ``after``
-    (within 2^-bisections of the chord), or None if a trial point cannot be corrected."""
-
-    def count(w):
-        return int(np.sum(np.abs(multipliers_outside(multipliers(w), trivial)) > 1.0))
-
-    n_b = count(before.w)
+) -> tuple[BranchStep, BranchStep] | None:
+    """Where, between ``before`` and ``after``, the number of multipliers outside the unit
+    circle first changes from its value at ``before``: bisection of the chord between them,
+    each trial point corrected onto the branch perpendicular to the chord.
+    ``multipliers(w)`` gives the multipliers at a point of the branch. Returns the two
+    branch points either side of the change (within 2^-bisections of the chord), or None
+    if a trial point cannot be corrected."""
+    n_b = _count(multipliers(before.w), trivial)
     chord = after.w - before.w
     normal = chord / np.linalg.norm(chord)
-    a, b, best = 0.0, 1.0, after
+    a, b, side_a, side_b = 0.0, 1.0, before, after
     for _ in range(bisections):
         mid = 0.5 * (a + b)
         got = correct(residual, before.w + mid * chord, normal, tol, max_iter)
         if got is None:
             return None
         w, J, res, it = got
-        if count(w) == n_b:
-            a = mid
+        point = BranchStep(w, _oriented(J, before.tangent), res, it)
+        if _count(multipliers(w), trivial) == n_b:
+            a, side_a = mid, point
         else:
-            b, best = mid, BranchStep(w, _oriented(J, before.tangent), res, it)
-    return best
+            b, side_b = mid, point
+    return side_a, side_b
+
+
+def crossings_between(
+    residual: Residual,
+    before: BranchStep,
+    after: BranchStep,
+    multipliers: Callable[[np.ndarray], np.ndarray],
+    *,
+    trivial: int = 0,
+    most: int = 6,
+) -> list[tuple[str, BranchStep]]:
+    """Every change of the number of multipliers outside the unit circle between two
+    neighbouring points, in order along the branch, each located
+    (:func:`locate_crossing`) and named from the multipliers on its two sides
+    (:func:`crossing_kind`): [(kind, the point just past it), ...]. Several crossings
+    between the same neighbours (a complex pair entering the circle and one of the pair
+    leaving it on the real axis a moment later) are found one after the other, up to
+    ``most``; crossings that cancel in number between the neighbours are not seen (the
+    step bounds that)."""
+    out: list[tuple[str, BranchStep]] = []
+    n_after = _count(multipliers(after.w), trivial)
+    lo = before
+    for _ in range(most):
+        if _count(multipliers(lo.w), trivial) == n_after:
+            break
+        got = locate_crossing(residual, lo, after, multipliers, trivial=trivial)
+        if got is None:
+            break
+        side_a, side_b = got
+        kind = crossing_kind(
+            multipliers(side_a.w),
+            multipliers(side_b.w),
+            trivial=trivial,
+            parameter_turns=side_a.tangent[-1] * side_b.tangent[-1] < 0,
+        )
+        out.append((kind, side_b))
+        lo = side_b
+    return out
+
+
+def _count(multipliers, trivial: int) -> int:
+    return int(np.sum(np.abs(multipliers_outside(multipliers, trivial)) > 1.0))

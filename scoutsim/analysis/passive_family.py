@@ -24,8 +24,7 @@ from ..parameters import RobotParameters
 from .continuation import (
     BranchStep,
     ContinuationSettings,
-    crossing_kind,
-    locate_crossing,
+    crossings_between,
     multipliers_outside,
     pseudo_arclength,
 )
@@ -119,17 +118,9 @@ def passive_family(
     prev = None
     for step in steps:
         if prev is not None:
-            kind = crossing_kind(
-                multipliers(prev.w),
-                multipliers(step.w),
-                trivial=_ENERGY,
-                parameter_turns=prev.tangent[-1] * step.tangent[-1] < 0,
-            )
-            if kind:
-                at = locate_crossing(residual, prev, step, multipliers, trivial=_ENERGY)
-                if at is not None:
-                    fam.rows.append(_row(at.w, derivative(at.w), kind))
-                    say(f"{kind} at pitch rate {math.degrees(at.parameter):.4f} deg/s")
+            for kind, at in crossings_between(residual, prev, step, multipliers, trivial=_ENERGY):
+                fam.rows.append(_row(at.w, derivative(at.w), kind))
+                say(f"{kind} at pitch rate {math.degrees(at.parameter):.4f} deg/s")
         fam.rows.append(_row(step.w, derivative(step.w), ""))
         prev = step
     return fam

@@ -90,5 +90,33 @@ def test_locate_crossing_finds_the_parameter_where_a_multiplier_is_one():
     steps, _ = pseudo_arclength(r, [0.0, 0.0], parameter_range=(0.0, 1.0))
     mult = lambda w: np.array([np.exp(w[0] - 0.3)])  # noqa: E731
     k = next(i for i, s in enumerate(steps) if s.w[0] > 0.3)
-    at = locate_crossing(r, steps[k - 1], steps[k], mult)
-    assert at is not None and at.parameter == pytest.approx(0.3, abs=1e-8)
+    got = locate_crossing(r, steps[k - 1], steps[k], mult)
+    assert got is not None
+    before, after = got
+    assert before.parameter < 0.3 <= after.parameter
+    assert after.parameter == pytest.approx(0.3, abs=1e-8)
+
+
+def test_two_crossings_between_the_same_neighbours_are_both_found():
+    """A complex pair entering the unit circle at lam = 0.3 and, after meeting on the real
+    axis, one of them leaving it through +1 at lam = 0.345, between two neighbours 0.2 and
+    0.5: both are located and named."""
+    from scoutsim.analysis.continuation import BranchStep, crossings_between
+
+    def r(w):
+        return np.array([w[0] - w[1]]), np.array([[1.0, -1.0]])
+
+    def mult(w):
+        lam = w[1]
+        if lam < 0.33:  # a complex pair of modulus 1.3 - lam
+            m = 1.3 - lam
+            return np.array([m * np.exp(0.2j), m * np.exp(-0.2j)])
+        return np.array([0.97 + 2.0 * (lam - 0.33), 0.5 + 0j])
+
+    t = np.array([1.0, 1.0]) / np.sqrt(2.0)
+    before = BranchStep(np.array([0.2, 0.2]), t, 0.0, 0)
+    after = BranchStep(np.array([0.5, 0.5]), t, 0.0, 0)
+    found = crossings_between(r, before, after, mult)
+    assert [k for k, _ in found] == ["torus", "branch point"]
+    assert found[0][1].parameter == pytest.approx(0.3, abs=1e-8)
+    assert found[1][1].parameter == pytest.approx(0.345, abs=1e-8)
