@@ -17,7 +17,8 @@ multipliers outside the unit circle between two neighbours: a real multiplier th
 (a fold or branch point), through -1 (a period doubling) or a complex pair (a torus,
 Neimark-Sacker, bifurcation); :func:`locate_crossing` finds where by bisection along the
 arclength, and :func:`crossings_between` finds each of several crossings between the same
-two neighbours in turn.
+two neighbours in turn. :func:`locate_fold` finds where the parameter turns (a fold),
+whatever the multipliers do there.
 
 Units: those of u and lam (the arclength mixes them; scale them to comparable sizes).
 """
@@ -37,6 +38,7 @@ __all__ = [
     "crossing_kind",
     "locate_crossing",
     "crossings_between",
+    "locate_fold",
     "multipliers_outside",
 ]
 
@@ -169,7 +171,9 @@ def pseudo_arclength(
         if not lo <= lam <= hi:
             bound = hi if lam > hi else lo
             frac = (bound - w[-1]) / (lam - w[-1])
-            end = correct(residual, w + frac * (w_new - w), e_lam, s.tol, s.max_iter + 4)
+            pred = w + frac * (w_new - w)
+            pred[-1] = bound  # the corrector keeps the parameter where the prediction has it
+            end = correct(residual, pred, e_lam, s.tol, s.max_iter + 4)
             if end is not None:
                 points.append(BranchStep(end[0], _oriented(end[1], t), end[2], end[3]))
                 if progress:
@@ -311,6 +315,41 @@ def crossings_between(
         out.append((kind, side_b))
         lo = side_b
     return out
+
+
+def locate_fold(
+    residual: Residual,
+    before: BranchStep,
+    after: BranchStep,
+    *,
+    tol: float = 1e-11,
+    max_iter: int = 8,
+    bisections: int = 30,
+) -> BranchStep | None:
+    """The turning point of the parameter between two neighbours whose tangents' parameter
+    components have opposite signs (a fold: the branch comes back), by bisection of the
+    chord on that sign. Returns the point nearest the turn (where the tangent's parameter
+    component is smallest in size), or None if the signs agree or a trial point cannot be
+    corrected."""
+    if before.tangent[-1] * after.tangent[-1] >= 0:
+        return None
+    chord = after.w - before.w
+    normal = chord / np.linalg.norm(chord)
+    a, b, best = 0.0, 1.0, min((before, after), key=lambda p: abs(p.tangent[-1]))
+    for _ in range(bisections):
+        mid = 0.5 * (a + b)
+        got = correct(residual, before.w + mid * chord, normal, tol, max_iter)
+        if got is None:
+            return None
+        w, J, res, it = got
+        point = BranchStep(w, _oriented(J, before.tangent), res, it)
+        if abs(point.tangent[-1]) < abs(best.tangent[-1]):
+            best = point
+        if point.tangent[-1] * before.tangent[-1] > 0:
+            a = mid
+        else:
+            b = mid
+    return best
 
 
 def _count(multipliers, trivial: int) -> int:

@@ -25,13 +25,14 @@ from .continuation import (
     BranchStep,
     ContinuationSettings,
     crossings_between,
+    locate_fold,
     multipliers_outside,
     pseudo_arclength,
 )
 from .gait_family import GaitFamily
 from .passive_orbits import passive_bounding_orbit
 from .passive_reference import ORBIT_TOLERANCE, passive_apex_map_derivative, passive_robot
-from .poincare import floquet_multipliers
+from .poincare import MapError, floquet_multipliers
 
 __all__ = ["PITCH_RATE", "passive_family"]
 
@@ -73,7 +74,9 @@ def passive_family(
     rad/s, first step 0.05, at most 0.2). Each crossing of the unit circle by a multiplier
     between two neighbours is located by bisection along the branch and added as a row
     naming it ("fold", "branch point", "period doubling", "torus";
-    :func:`~scoutsim.analysis.continuation.crossing_kind`).
+    :func:`~scoutsim.analysis.continuation.crossing_kind`), and so is each turning point
+    of the pitch rate ("fold": the branch comes back; it may then leave the range at its
+    lower end).
 
     Raises MapError if no orbit is found at the lower end.
     """
@@ -82,7 +85,6 @@ def passive_family(
         raise ValueError(f"pitch_rate_range = ({lo}, {hi}): the upper end must exceed the lower")
     say = progress or (lambda message: None)
     rob = passive_robot(robot)
-    start = passive_bounding_orbit(speed, apex_height, lo, robot=rob, rtol=rtol)
     cache: dict = {}
     residual = _residual(speed, apex_height, rob, rtol, cache)
 
@@ -101,7 +103,7 @@ def passive_family(
             f"residual {step.residual:.1e} after {step.iterations} iteration(s)"
         )
 
-    w0 = np.array([*start.touchdown_angles, lo])
+    w0 = _start(speed, apex_height, lo, rob, rtol, residual, settings)
     steps, stopped = pseudo_arclength(
         residual, w0, parameter_range=(lo, hi), settings=settings, progress=told
     )
@@ -115,15 +117,46 @@ def passive_family(
         },
         method="pseudo-arclength",
     )
-    prev = None
+    prev: BranchStep | None = None
     for step in steps:
         if prev is not None:
-            for kind, at in crossings_between(residual, prev, step, multipliers, trivial=_ENERGY):
+            events = crossings_between(residual, prev, step, multipliers, trivial=_ENERGY)
+            fold = locate_fold(residual, prev, step)
+            if fold is not None and not any(kind == "fold" for kind, _ in events):
+                events.append(("fold", fold))
+            origin, chord = prev.w, step.w - prev.w
+            for kind, at in sorted(events, key=lambda e: float((e[1].w - origin) @ chord)):
                 fam.rows.append(_row(at.w, derivative(at.w), kind))
                 say(f"{kind} at pitch rate {math.degrees(at.parameter):.4f} deg/s")
         fam.rows.append(_row(step.w, derivative(step.w), ""))
         prev = step
     return fam
+
+
+def _start(speed, apex_height, lo, rob, rtol, residual, settings) -> np.ndarray:
+    """(gamma_b, gamma_f, lo): the orbit at the lower end, solved there, or, if that fails
+    far from the pronk, followed along the branch from the pronk at zero pitch rate."""
+    try:
+        orb = passive_bounding_orbit(speed, apex_height, lo, robot=rob, rtol=rtol)
+        return np.array([*orb.touchdown_angles, lo])
+    except MapError as exc:
+        if lo == 0.0:
+            raise
+        why = exc
+    pronk = passive_bounding_orbit(speed, apex_height, 0.0, robot=rob, rtol=rtol)
+    steps, _ = pseudo_arclength(
+        residual,
+        np.array([*pronk.touchdown_angles, 0.0]),
+        parameter_range=(min(lo, 0.0), max(lo, 0.0)),
+        direction=1.0 if lo > 0.0 else -1.0,
+        settings=settings,
+    )
+    if not steps or abs(steps[-1].parameter - lo) > 1e-12 * max(1.0, abs(lo)):
+        raise MapError(
+            f"no orbit at pitch rate {math.degrees(lo):.6g} deg/s: solved there, {why}; "
+            "followed from the pronk, the branch does not reach it"
+        )
+    return steps[-1].w
 
 
 def _row(w, d, bifurcation: str) -> dict:

@@ -120,3 +120,21 @@ def test_two_crossings_between_the_same_neighbours_are_both_found():
     assert [k for k, _ in found] == ["torus", "branch point"]
     assert found[0][1].parameter == pytest.approx(0.3, abs=1e-8)
     assert found[1][1].parameter == pytest.approx(0.345, abs=1e-8)
+
+
+def test_locate_fold_finds_the_turn_of_the_parameter():
+    """On lam = u^2 the parameter turns at u = 0: located between the two points either
+    side, where no multiplier is involved."""
+    from scoutsim.analysis.continuation import locate_fold
+
+    steps, _ = pseudo_arclength(
+        _parabola, [-1.0, 1.0], parameter_range=(-1.0, 2.0), direction=-1.0,
+        settings=ContinuationSettings(step=0.05, max_step=0.1),
+    )  # fmt: skip
+    k = next(i for i, s in enumerate(steps) if s.tangent[1] > 0)
+    fold = locate_fold(_parabola, steps[k - 1], steps[k])
+    assert fold is not None
+    assert fold.w[0] == pytest.approx(0.0, abs=1e-6) and fold.parameter == pytest.approx(
+        0.0, abs=1e-11
+    )
+    assert locate_fold(_parabola, steps[0], steps[1]) is None  # no turn between these
