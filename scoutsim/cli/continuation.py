@@ -21,16 +21,15 @@ from pathlib import Path
 
 from ._common import (
     UsageError,
-    add_controlled_orbit_options,
     add_controller_option,
     add_no_progress_option,
-    add_passive_apex_options,
     controller_choice,
     dumps,
     load_parameters,
     make_controller,
     progress_messages,
 )
+from ._orbit_options import add_controlled_orbit_options, add_passive_apex_options
 
 NAME = "continue"
 #: the passive family's parameter

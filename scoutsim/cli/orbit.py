@@ -19,10 +19,8 @@ import sys
 
 from ._common import (
     UsageError,
-    add_controlled_orbit_options,
     add_controller_option,
     add_no_progress_option,
-    add_passive_apex_options,
     controller_choice,
     controller_label,
     dumps,
@@ -32,6 +30,7 @@ from ._common import (
     positive_int,
     progress_messages,
 )
+from ._orbit_options import add_controlled_orbit_options, add_passive_apex_options
 
 NAME = "orbit"
 
