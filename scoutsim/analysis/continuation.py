@@ -244,6 +244,28 @@ def crossing_kind(
     return "fold" if parameter_turns else "branch point"
 
 
+def _bisect_chord(residual, before, after, same_side, tol, max_iter, bisections):
+    """Bisection of the chord from ``before`` to ``after`` on the predicate
+    ``same_side(point)`` (true on ``before``'s side), each trial point corrected onto the
+    branch perpendicular to the chord: the last points found on either side, or None if a
+    trial point cannot be corrected."""
+    chord = after.w - before.w
+    normal = chord / np.linalg.norm(chord)
+    a, b, side_a, side_b = 0.0, 1.0, before, after
+    for _ in range(bisections):
+        mid = 0.5 * (a + b)
+        got = correct(residual, before.w + mid * chord, normal, tol, max_iter)
+        if got is None:
+            return None
+        w, J, res, it = got
+        point = BranchStep(w, _oriented(J, before.tangent), res, it)
+        if same_side(point):
+            a, side_a = mid, point
+        else:
+            b, side_b = mid, point
+    return side_a, side_b
+
+
 def locate_crossing(
     residual: Residual,
     before: BranchStep,
@@ -262,21 +284,15 @@ def locate_crossing(
     branch points either side of the change (within 2^-bisections of the chord), or None
     if a trial point cannot be corrected."""
     n_b = _count(multipliers(before.w), trivial)
-    chord = after.w - before.w
-    normal = chord / np.linalg.norm(chord)
-    a, b, side_a, side_b = 0.0, 1.0, before, after
-    for _ in range(bisections):
-        mid = 0.5 * (a + b)
-        got = correct(residual, before.w + mid * chord, normal, tol, max_iter)
-        if got is None:
-            return None
-        w, J, res, it = got
-        point = BranchStep(w, _oriented(J, before.tangent), res, it)
-        if _count(multipliers(w), trivial) == n_b:
-            a, side_a = mid, point
-        else:
-            b, side_b = mid, point
-    return side_a, side_b
+    return _bisect_chord(
+        residual,
+        before,
+        after,
+        lambda point: _count(multipliers(point.w), trivial) == n_b,
+        tol,
+        max_iter,
+        bisections,
+    )
 
 
 def crossings_between(
@@ -328,28 +344,23 @@ def locate_fold(
 ) -> BranchStep | None:
     """The turning point of the parameter between two neighbours whose tangents' parameter
     components have opposite signs (a fold: the branch comes back), by bisection of the
-    chord on that sign. Returns the point nearest the turn (where the tangent's parameter
-    component is smallest in size), or None if the signs agree or a trial point cannot be
-    corrected."""
+    chord on that sign. Returns the point nearest the turn (the one of the last two whose
+    tangent's parameter component is smaller in size), or None if the signs agree or a
+    trial point cannot be corrected."""
     if before.tangent[-1] * after.tangent[-1] >= 0:
         return None
-    chord = after.w - before.w
-    normal = chord / np.linalg.norm(chord)
-    a, b, best = 0.0, 1.0, min((before, after), key=lambda p: abs(p.tangent[-1]))
-    for _ in range(bisections):
-        mid = 0.5 * (a + b)
-        got = correct(residual, before.w + mid * chord, normal, tol, max_iter)
-        if got is None:
-            return None
-        w, J, res, it = got
-        point = BranchStep(w, _oriented(J, before.tangent), res, it)
-        if abs(point.tangent[-1]) < abs(best.tangent[-1]):
-            best = point
-        if point.tangent[-1] * before.tangent[-1] > 0:
-            a = mid
-        else:
-            b = mid
-    return best
+    sides = _bisect_chord(
+        residual,
+        before,
+        after,
+        lambda point: point.tangent[-1] * before.tangent[-1] > 0,
+        tol,
+        max_iter,
+        bisections,
+    )
+    if sides is None:
+        return None
+    return min(sides, key=lambda point: abs(point.tangent[-1]))
 
 
 def _count(multipliers, trivial: int) -> int:
