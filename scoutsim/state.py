@@ -160,13 +160,7 @@ class HybridState:
                     f"allowed: two values from {sorted(ok)}"
                 )
             object.__setattr__(self, name, v)
-        a = tuple(float(x) for x in self.toe_anchors)
-        if len(a) != 2 or not all(math.isfinite(x) for x in a):
-            raise ValueError(
-                f"HybridState.toe_anchors = {self.toe_anchors!r} is not allowed: "
-                "two finite positions [m]"
-            )
-        object.__setattr__(self, "toe_anchors", a)
+        self._finite_pair("toe_anchors", "two finite positions [m]")
         c = np.asarray(self.controller_state, dtype=float).ravel()
         if not np.all(np.isfinite(c)):
             raise ValueError(
@@ -174,13 +168,15 @@ class HybridState:
                 "finite numbers only"
             )
         object.__setattr__(self, "controller_state", tuple(float(v) for v in c))
-        tq = tuple(float(x) for x in self.held_torques)
-        if len(tq) != 2 or not all(math.isfinite(x) for x in tq):
-            raise ValueError(
-                f"HybridState.held_torques = {self.held_torques!r} is not allowed: "
-                "two finite hip torques [N m]"
-            )
-        object.__setattr__(self, "held_torques", tq)
+        self._finite_pair("held_torques", "two finite hip torques [N m]")
+
+    def _finite_pair(self, name: str, what: str) -> None:
+        """Field ``name`` as a tuple of two finite floats; ValueError saying ``what`` it
+        must be otherwise."""
+        v = tuple(float(x) for x in getattr(self, name))
+        if len(v) != 2 or not all(math.isfinite(x) for x in v):
+            raise ValueError(f"HybridState.{name} = {getattr(self, name)!r} is not allowed: {what}")
+        object.__setattr__(self, name, v)
 
     def mode_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The compiled model's mode arrays of this state: (mi, mf), layout ``MI_*`` (toe

@@ -263,9 +263,10 @@ def _finish(orb: PassiveOrbit, rob, integ, jacobian, jacobian_step) -> PassiveOr
     # the map the orbit was solved on (the derivative's own integration, with the
     # sensitivities under the error control, takes other steps)
     m = passive_apex_map(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
-    d = passive_apex_map_derivative(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
-    J, Jg = d.state_jacobian, d.angle_jacobian
-    if jacobian == "fd":
+    if jacobian == "exact":
+        d = passive_apex_map_derivative(orb.z, orb.touchdown_angles, robot=rob, rtol=integ.rtol)
+        J, Jg = d.state_jacobian, d.angle_jacobian
+    else:
 
         def f(x):
             return passive_apex_map(x, orb.touchdown_angles, robot=rob, rtol=integ.rtol).z

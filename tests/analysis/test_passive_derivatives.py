@@ -184,3 +184,15 @@ def test_sensitivity_jump_at_each_event_matches_differences_of_the_flow(orbits, 
     for j in range(len(x0)):  # each column against its own size
         col = max(1e-12, float(np.abs(ref[:, j]).max()))
         np.testing.assert_allclose(phi[:, j], ref[:, j], rtol=0.0, atol=1e-6 * col)
+
+
+def test_difference_jacobian_is_kept_as_the_check(orbits):
+    """jacobian="fd" gives the central-difference Jacobians, which agree with the exact ones
+    to their own accuracy (step 1e-5: ~1e-9); an unknown method is refused by name."""
+    exact = orbits[50.0]
+    fd = passive_bounding_orbit(1.3, 0.35, math.radians(50.0), jacobian="fd")
+    assert fd.jacobian_method == "fd"
+    assert np.max(np.abs(fd.multipliers - exact.multipliers)) < 1e-7
+    assert np.max(np.abs(fd.angle_jacobian - exact.angle_jacobian)) < 1e-7
+    with pytest.raises(ValueError, match="jacobian = 'ad'"):
+        passive_bounding_orbit(1.3, 0.35, 0.0, jacobian="ad")
