@@ -26,11 +26,10 @@ from .continuation import (
     ContinuationSettings,
     crossings_between,
     locate_fold,
-    multipliers_outside,
     pseudo_arclength,
 )
 from .gait_family import GaitFamily
-from .passive_orbits import passive_bounding_orbit
+from .passive_orbits import non_energy_multipliers, passive_bounding_orbit
 from .passive_reference import ORBIT_TOLERANCE, passive_apex_map_derivative, passive_robot
 from .poincare import MapError, floquet_multipliers
 
@@ -160,7 +159,7 @@ def _start(speed, apex_height, lo, rob, rtol, residual, settings) -> np.ndarray:
 
 
 def _row(w, d, bifurcation: str) -> dict:
-    m = multipliers_outside(floquet_multipliers(d.state_jacobian), _ENERGY)
+    m = non_energy_multipliers(d.state_jacobian)
     rho = float(np.max(np.abs(m)))
     return {
         PITCH_RATE: math.degrees(w[2]),

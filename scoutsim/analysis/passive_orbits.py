@@ -24,6 +24,7 @@ import numpy as np
 
 from ..parameters import RobotParameters
 from ..simulation.integrator import IntegratorSettings
+from .continuation import multipliers_outside
 from .passive_reference import (
     ORBIT_TOLERANCE,
     passive_apex_map,
@@ -32,7 +33,19 @@ from .passive_reference import (
 )
 from .poincare import MapError, fd_jacobian, floquet_multipliers
 
-__all__ = ["PassiveOrbit", "passive_bounding_orbit", "continue_passive_family"]
+__all__ = [
+    "PassiveOrbit",
+    "passive_bounding_orbit",
+    "continue_passive_family",
+    "non_energy_multipliers",
+]
+
+
+def non_energy_multipliers(jacobian) -> np.ndarray:
+    """The multipliers of the passive apex map's Jacobian ``dP/dz`` without the energy
+    multiplier (the one nearest +1, which energy conservation fixes at 1), by decreasing
+    modulus: those that decide the orbit's stability."""
+    return multipliers_outside(floquet_multipliers(jacobian), 1)
 
 
 @dataclass
@@ -85,9 +98,7 @@ class PassiveOrbit:
     @property
     def is_stable(self) -> bool:
         """All multipliers except the energy one inside or on the unit circle (+1e-6)."""
-        m = list(self.multipliers)
-        m.pop(int(np.argmin(np.abs(np.array(m) - 1.0))))
-        return bool(np.all(np.abs(m) <= 1.0 + 1e-6))
+        return bool(np.all(np.abs(multipliers_outside(self.multipliers, 1)) <= 1.0 + 1e-6))
 
     def to_dict(self) -> dict:
         """JSON-safe summary (the keys of ``scoutsim orbit --passive --json`` and more)."""

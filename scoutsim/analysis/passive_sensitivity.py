@@ -24,11 +24,9 @@ import dataclasses
 import numpy as np
 
 from ..parameters import RobotParameters
-from .continuation import multipliers_outside
 from .orbit_sensitivity import ParameterSensitivity
-from .passive_orbits import PassiveOrbit
+from .passive_orbits import PassiveOrbit, non_energy_multipliers
 from .passive_reference import PARAMETER_NAMES, passive_apex_map_derivative, passive_robot
-from .poincare import floquet_multipliers
 
 __all__ = ["PASSIVE_SENSITIVITY_PARAMETERS", "PASSIVE_SENSITIVITY_METRICS",
            "passive_orbit_sensitivities"]  # fmt: skip
@@ -75,7 +73,7 @@ def _value(rob: RobotParameters, name: str) -> float:
 
 
 def _spectral_radius(d) -> float:
-    return float(np.max(np.abs(multipliers_outside(floquet_multipliers(d.state_jacobian), 1))))
+    return float(np.max(np.abs(non_energy_multipliers(d.state_jacobian))))
 
 
 def passive_orbit_sensitivities(
