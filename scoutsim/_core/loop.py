@@ -64,6 +64,7 @@ from .numerics.events import log_event, mode_violations, stamp_states, stamp_tra
 from .numerics.hybrid import HW_EVAL_KEPT, HW_STIFF_VALID, STEP_HEADROOM, AdvanceScratch, advance
 from .numerics.stats import S_NFEV
 from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
+from .numerics.tangent import carrying, keep_controller, snapshot, tangent_reset, tangent_sample
 from .numerics.transitions import settle_ws
 from .numerics.work import EventLog, EventWork, StepEnergy, StepWork
 
@@ -141,9 +142,10 @@ Span = namedtuple("Span", "k_start k_stop k_last dt rtol atol")
 #: steps (``steps``, ``stepc``) and the energy accounting (``energy``, ``out_energy``)
 Records = namedtuple("Records", "out_t out_s out_aux out_ls ev stats steps stepc energy out_energy")
 #: what a run carries from one call to the next: ``hwork`` (step-size guess and flags),
-#: which event functions are ``armed``, the ARK stiff factors ``sfwork`` and the evaluation
-#: workspace ``ew``
-Carry = namedtuple("Carry", "hwork armed sfwork ew")
+#: which event functions are ``armed``, the ARK stiff factors ``sfwork``, the evaluation
+#: workspace ``ew`` and the sensitivities ``tangent``
+#: (:data:`~scoutsim._core.numerics.tangent.TangentWork`; no columns: none)
+Carry = namedtuple("Carry", "hwork armed sfwork ew tangent")
 
 
 @allocating
@@ -215,6 +217,7 @@ def run(plant, control, span, records, carry, n_out, nev, method):
         stepc,
         energy,
         imp,
+        carry.tangent,
     )
     work = StepWork(K, y_new, aux_new, tmp, ew, SF0, SF1, Z, rtol, atol, step_energy)
     evw = EventWork(armed, e_old, e_new, ybuf, np.empty(NAUX), np.empty(NEV))
@@ -248,6 +251,7 @@ def run_periods(plant, control, span, records, carry, n_out, nev, method, work, 
     hwork, ew = carry.hwork, carry.ew
     K = work.K
     aux, ds, s_prev, tr, ew_s, s_tmp, M_e, log = periods
+    tan = carry.tangent
     kind = cb.ints[CB_KIND]
     sf_ok = is_set(hwork[HW_STIFF_VALID])  # SF0 holds stiff factors from an earlier step
     t = k_start * dt
@@ -262,6 +266,8 @@ def run_periods(plant, control, span, records, carry, n_out, nev, method, work, 
             read_encoders(s, is_set(cb.geom[SG_MOTOR_SIDE]), cb.y)
         else:
             sense(k, s, P, mi, mf, cmd, is_set(hwork[HW_EVAL_KEPT]), cb, ew_s, s_tmp)
+        if carrying(tan):
+            keep_controller(cmd, cb.state, ls, tan)
         if kind == CTRL_BUILTIN:
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev
@@ -280,12 +286,18 @@ def run_periods(plant, control, span, records, carry, n_out, nev, method, work, 
                 # the sample is not recorded: the run's data end at the sample before
                 cb.ints[CB_STATUS] = rc
                 return k, n_out, nev, ST_CONTROLLER_ERROR, t
+        if carrying(tan) and kind != CTRL_HELD:
+            tangent_sample(t, s, P, mi, mf, kind == CTRL_BUILTIN, C, cb, tan)
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
+        if carrying(tan):
+            snapshot(s, mi, mf, K[0], tan)
         nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew, is_set(hwork[HW_EVAL_KEPT]))
         hwork[HW_EVAL_KEPT] = FLAG_OFF
         stats[S_NFEV] += 1
+        if carrying(tan):
+            tangent_reset(-1, t, mi, K[0], P, cmd, tan)
         if nev > nev0:
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
             # audit it like an event (rare: the energy before is computed only here)

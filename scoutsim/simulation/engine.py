@@ -19,6 +19,7 @@ from .._core.numerics.dopri5 import eval_workspace
 from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .._core.numerics.stepper import METHOD_AUTO
+from .._core.numerics.tangent import new_tangent
 from .._core.numerics.work import Plant
 from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
 from ..control.dispatch import (
@@ -103,6 +104,8 @@ class HybridEngine:
         self.hwork[HW_STEP] = integrator.initial_step
         self.ew = eval_workspace()
         self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
+        # the sensitivities the run carries (none: no columns; carry_sensitivities)
+        self.tangent = new_tangent(0, len(block.state), len(block.y), self.rtol, self.atol)
         self.out_t = np.zeros(n_total + 1)
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
@@ -324,6 +327,37 @@ class HybridEngine:
         self.n_out = self.nev = 0
         self.stepc[0] = 0
 
+    def carry_sensitivities(self, seed) -> None:
+        """From now on, carry the derivatives of the extended state x = [state, toe
+        anchors [m], held commands [N m], controller state] (layout:
+        :mod:`scoutsim._core.numerics.tangent`, ``X_*``) with respect to m variables:
+        ``seed`` (NX x m) is dx/d(variables) now; :attr:`sensitivities` holds them as the
+        run goes on."""
+        seed = np.asarray(seed, dtype=float)
+        tan = new_tangent(
+            seed.shape[1], len(self.block.state), len(self.block.y), self.rtol, self.atol
+        )
+        if seed.shape != tan.Phi.shape:
+            raise ValueError(
+                f"seed has shape {seed.shape}: must be ({tan.Phi.shape[0]}, m), one row per "
+                "entry of the extended state"
+            )
+        tan.Phi[:] = seed
+        self.tangent = tan
+
+    @property
+    def sensitivities(self) -> np.ndarray:
+        """dx/d(variables) now (NX x m; see :meth:`carry_sensitivities`)."""
+        return self.tangent.Phi
+
+    @property
+    def sensitivity_info(self) -> np.ndarray:
+        """What the sensitivities met (layout ``TI_*`` of
+        :mod:`scoutsim._core.numerics.tangent`): resets that were not smooth, the smallest
+        transversality of a located event, events differentiated, samples whose
+        measurement model was not differentiated."""
+        return self.tangent.info
+
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
         args = (
@@ -349,7 +383,7 @@ class HybridEngine:
                 self.energy,
                 self.out_energy,
             ),
-            Carry(self.hwork, self.armed, self.sfwork, self.ew),
+            Carry(self.hwork, self.armed, self.sfwork, self.ew, self.tangent),
             self.n_out,
             self.nev,
         )

@@ -71,6 +71,7 @@ from .events import (
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .step_energy import accounting, power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
+from .tangent import carrying, snapshot, tangent_flow, tangent_projection, tangent_reset
 from .transitions import apply_event, record_friction, settle_ws
 
 # slots of run()'s hwork array, carried between calls
@@ -116,8 +117,10 @@ def arm_jams(mi, e_now, armed):
 #: (``s_before``, for the event records) and the work-energy accounting (``energy``: the
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; each step's
 #: share: :mod:`~scoutsim._core.numerics.step_energy`)
+#: ``tan``: the sensitivities the run carries
+#: (:data:`~scoutsim._core.numerics.tangent.TangentWork`; no columns when it carries none)
 AdvanceScratch = namedtuple(
-    "AdvanceScratch", "e_end pending mi_before s_before steps stepc energy imp"
+    "AdvanceScratch", "e_end pending mi_before s_before steps stepc energy imp tan"
 )
 
 
@@ -154,11 +157,14 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
     mi_before = sc.mi_before
     e_tmp = evw.e_tmp
     counting = accounting(work.energy)  # (the run's energies sc.energy have the same size)
+    tan = sc.tan
     if not fresh:
         # (if fresh, K0 and aux were just computed at s by settle(); the ARK stiff factors
         # SF0 are kept from the end of the previous step: any splitting matrix keeps the
         # method's order)
         project_state(s, P, mi, mf)
+        if carrying(tan):
+            tangent_projection(s, P, mi, mf, tan)
         eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
         stats[S_NFEV] += 1
     if counting:  # the power flows at the first step's start (ew holds K0's)
@@ -282,6 +288,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 stats[S_NFEV] += nf
                 if counting:
                     take_step(he, work.energy, sc.energy)
+                if carrying(tan):
+                    tangent_flow(method, s, he, P, mi, mf, cmd, SF0, tan)
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -298,6 +306,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                     aux[i] = aux_new[i]
             else:
                 project_state(s, P, mi, mf)
+                if carrying(tan):
+                    tangent_projection(s, P, mi, mf, tan)
                 evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, False, ew[3], True)
                 stats[S_NFEV] += 1
             n_events_here += 1
@@ -324,6 +334,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 pending[kcur] = False
                 for i in range(NMI):
                     mi_before[i] = mi[i]
+                if carrying(tan):
+                    snapshot(s, mi, mf, K0, tan)
                 nev, ok = apply_event(kcur, t, s, P, mi, mf, aux, ev, nev, stats, imp)
                 if kcur == EV_FALL_HEIGHT or kcur == EV_FALL_PITCH:
                     stamp_transition(ev, nev0, nev, e_before, e_before, 0, s_before, s)
@@ -333,6 +345,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                     return t, nev, ST_NUMERICAL_FAILURE
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, log, nev, ew, False)
                 stats[S_NFEV] += 1
+                if carrying(tan):
+                    tangent_reset(kcur, t, mi, K0, P, cmd, tan)
                 if not is_set(aux[A_KKT_OK]):
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
@@ -397,6 +411,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             stats[S_HMAX] = h
         if counting:
             take_step(h, work.energy, sc.energy)
+        if carrying(tan):
+            tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan)
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]

@@ -1,0 +1,416 @@
+"""First-order sensitivities of the hybrid flow, carried with a run (compiled).
+
+A run can carry the derivatives ``Phi`` (NX x m) of its extended state
+
+    x = [s (NS), toe anchors mf (NMF), held commands cmd (2), controller state (n_c)]
+
+with respect to m chosen variables (the columns: directions in the start's x, or a
+parameter's column). They are obtained by internal differentiation of the integrator
+(Bock's internal numerical differentiation): every map the run applies is differentiated
+with the run's own discrete choices held (the step sizes, the ARK splitting matrix, the
+event sequence and the control samples), so the derivatives are those of the computed
+trajectory, not of a neighbouring one integrated with other steps:
+
+- a step from ``s`` of size ``h`` (:func:`tangent_flow`): y -> proj(step(y; h)) with the
+  splitting matrix of the nominal step, by central differences of the compiled step along
+  each column (the map is smooth: no error control or event location inside it);
+- a plant event at ``t_e`` (:func:`tangent_reset` with the event slot): the saltation
+  matrix S = DR + (f+ - DR f-) n^T / (n^T f-) (docs/explanation/derivatives.md), with DR
+  the derivative of the transition and the settling after it, n the gradient of the event
+  function, f-/f+ the vector fields either side; DR and n by central differences of the
+  compiled transition and event function, f-/f+ from the run's own evaluations;
+- a reset at a fixed instant (a control sample's settling, a projection: slot -1): DR only;
+- a control sample (:func:`tangent_sample`): the new held commands and controller state
+  as functions of the state, the anchors, the old commands and the old controller state
+  (zero-order hold), by central differences of the controller on copies of its arrays.
+
+The differences are of smooth maps (each with its discrete choices held), so their error
+is that of a central difference (about 1e-9 of the scale here), not that of differencing a
+whole adaptive run. Where a perturbed copy of a reset ends in other modes than the run
+(an event that is not transversal, a mode decided by a margin smaller than the step), the
+map is not differentiable there: ``info[TI_NONSMOOTH]`` counts such resets, and
+``info[TI_GRAZING]`` keeps the smallest transversality |n^T f-| / (|n| |f-|) met.
+
+A run without sensitivities carries ``Phi`` with no columns: every function here is then
+skipped by the caller (a check of ``Phi.shape[1]``), and the run is the same, bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from ..._numba.jit import kernel
+from ...control.bounding import bounding_step
+from ...control.compiled import call_controller
+from ..model.evaluate import NSTIFF, evaluate_ws, evaluated_state
+from ..model.flags import is_set
+from ..model.kinematics import project_state
+from ..model.layout import (
+    CB_ADDRESS,
+    NAUX,
+    NEV,
+    NEVBUF,
+    NIMP,
+    NMF,
+    NMI,
+    NS,
+    P_G,
+    SG_MEASURED,
+    SG_MOTOR_SIDE,
+)
+from ..model.sensor_readings import read_encoders, true_readings
+from .ark import Z_COLS, Z_ROWS
+from .dopri5 import eval_workspace
+from .events import event_values
+from .stats import NSTAT
+from .stepper import METHOD_ARK4, do_step
+from .transitions import apply_event, settle_ws
+from .work import EventLog, StepEnergy, StepWork
+
+# rows of Phi (the extended state x)
+X_S = 0  # the plant state s (layout.NS)
+X_MF = NS  # the toe anchors (layout.MF_*)
+X_CMD = NS + NMF  # the held commands [N m]
+X_CS = NS + NMF + 2  # the controller state (its own layout)
+
+# slots of info
+TI_NONSMOOTH = 0  # resets where a perturbed copy ended in other modes than the run
+TI_GRAZING = 1  # smallest transversality |n.f-| / (|n| |f-|) of a located event (1: none)
+TI_EVENTS = 2  # located events differentiated
+TI_UNSUPPORTED = 3  # samples whose readings are not differentiated (a measurement model)
+NTI = 4
+
+#: relative size of the central-difference step along a column (of the largest entry of
+#: the column, in the state's units)
+DIFFERENCE_STEP = 1e-6
+
+#: What the sensitivities work on: ``Phi`` (NX x m, the derivatives), ``out`` (NX x
+#: (m + 1) scratch: the columns being built), ``work`` (a ``StepWork`` of its own: the
+#: perturbed steps), the snapshot of the state before a reset (``s0``, ``mf0``, ``mi0``,
+#: ``f0`` its vector field; ``cmd0``, ``cs0``, ``ls0`` before a control sample), the
+#: perturbed copies (``sp``, ``mfp``, ``mip``, ``auxp``, ``cmdp``, ``csp``, ``lsp``,
+#: ``trp``, ``yp``, ``ep``, ``ds``), a scratch event log (``ev``, ``stats``, ``imp``), the
+#: column's event-function differences ``gd`` (m + 1), ``info`` (``TI_*``) and the
+#: difference step ``delta`` (one entry).
+TangentWork = namedtuple(
+    "TangentWork",
+    "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
+    "ev stats imp gd info delta",
+)
+
+
+def new_tangent(m: int, n_state: int, n_readings: int, rtol: float, atol: float) -> TangentWork:
+    """A ``TangentWork`` for ``m`` columns (0: a run without sensitivities), a controller
+    state of ``n_state`` entries and ``n_readings`` sensor readings; ``rtol``, ``atol``: the
+    run's tolerances (the perturbed steps' error estimate is not used). ``Phi`` starts at
+    zero: the caller seeds it."""
+    nx = X_CS + n_state
+    info = np.zeros(NTI)
+    info[TI_GRAZING] = 1.0
+    sf = (NS, 2 * NSTIFF)
+    none = np.zeros(0)
+    work = StepWork(
+        np.zeros((7, NS)),
+        np.zeros(NS),
+        np.zeros(NAUX),
+        np.zeros(NS),
+        eval_workspace(),
+        np.zeros(sf),
+        np.zeros(sf),
+        np.zeros((Z_ROWS, Z_COLS)),
+        float(rtol),
+        float(atol),
+        StepEnergy(none, none, none, none),
+    )
+    return TangentWork(
+        np.zeros((nx, m)),
+        np.zeros((nx, m + 1)),
+        work,
+        np.zeros(NS),
+        np.zeros(NMF),
+        np.zeros(NMI, dtype=np.int64),
+        np.zeros(NS),
+        np.zeros(2),
+        np.zeros(n_state),
+        np.zeros(2, dtype=np.int64),
+        np.zeros(NS),
+        np.zeros(NMF),
+        np.zeros(NMI, dtype=np.int64),
+        np.zeros(NAUX),
+        np.zeros(2),
+        np.zeros(n_state),
+        np.zeros(2, dtype=np.int64),
+        np.zeros(2, dtype=np.int64),
+        np.zeros(n_readings),
+        np.zeros(NEV),
+        np.zeros(NS),
+        np.zeros((16, NEVBUF)),
+        np.zeros(NSTAT),
+        np.zeros(NIMP),
+        np.zeros(m + 1),
+        info,
+        np.array([DIFFERENCE_STEP]),
+    )
+
+
+@kernel(inline="always")
+def carrying(tan):
+    """True if the run carries sensitivities (``Phi`` has columns)."""
+    return tan.Phi.shape[1] > 0
+
+
+@kernel(inline="always")
+def _column_step(v, delta, rows):
+    """The difference step along column ``v`` (its first ``rows`` entries): ``delta`` over
+    the largest magnitude; 0 for a zero column."""
+    scale = 0.0
+    for i in range(rows):
+        a = abs(v[i])
+        if a > scale:
+            scale = a
+    return delta / scale if scale > 0.0 else 0.0
+
+
+@kernel
+def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
+    """Phi := D[proj(step(.; h))] Phi over the step of size ``h`` [s] the run has just
+    taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``, ARK splitting
+    factors ``SF0``): the rows of s; the anchors, commands and controller state are
+    constant along the flow."""
+    Phi, out, tw = tan.Phi, tan.out, tan.work
+    sp, mfp, cmdp = tan.sp, tan.mfp, tan.cmdp
+    m = Phi.shape[1]
+    if method >= METHOD_ARK4:
+        for i in range(SF0.shape[0]):
+            for j in range(SF0.shape[1]):
+                tw.SF0[i, j] = SF0[i, j]
+    for j in range(m):
+        eps = _column_step(Phi[:, j], tan.delta[0], X_CS)
+        if eps == 0.0:
+            for i in range(NS):
+                out[X_S + i, j] = 0.0
+            continue
+        for side in range(2):
+            e = eps if side == 0 else -eps
+            for i in range(NS):
+                sp[i] = s[i] + e * Phi[X_S + i, j]
+            for i in range(NMF):
+                mfp[i] = mf[i] + e * Phi[X_MF + i, j]
+            for i in range(2):
+                cmdp[i] = cmd[i] + e * Phi[X_CMD + i, j]
+            evaluate_ws(sp, P, mi, mfp, cmdp, tw.K[0], tw.aux_new, tw.ew, False, tw.ew[3], False)
+            do_step(method, sp, h, P, mi, mfp, cmdp, tw, True, False)
+            evaluated_state(tw.ew, tw.y_new)
+            if side == 0:
+                for i in range(NS):
+                    out[X_S + i, j] = tw.y_new[i]
+            else:
+                for i in range(NS):
+                    out[X_S + i, j] = (out[X_S + i, j] - tw.y_new[i]) / (2.0 * eps)
+    for j in range(m):
+        for i in range(NS):
+            Phi[X_S + i, j] = out[X_S + i, j]
+
+
+@kernel
+def snapshot(s, mi, mf, f, tan):
+    """Keep the state before a reset (``s``, modes ``mi``, anchors ``mf``, vector field
+    ``f`` there) for :func:`tangent_reset`."""
+    for i in range(NS):
+        tan.s0[i] = s[i]
+        tan.f0[i] = f[i]
+    for i in range(NMI):
+        tan.mi0[i] = mi[i]
+    for i in range(NMF):
+        tan.mf0[i] = mf[i]
+
+
+@kernel
+def _reset_copy(k, t, e, v, f_dir, P, cmd, tan):
+    """One perturbed copy of the reset: the snapshot moved by ``e`` along ``v`` (a column
+    of Phi) or, if ``f_dir``, along the vector field before it; projected and evaluated,
+    its event function ``k`` read (k >= 0), the transition of slot ``k`` applied (k >= 0)
+    and the modes settled. Returns the event function's value (0 if k < 0)."""
+    sp, mfp, mip, auxp, cmdp, ds = tan.sp, tan.mfp, tan.mip, tan.auxp, tan.cmdp, tan.ds
+    ew = tan.work.ew
+    for i in range(NS):
+        sp[i] = tan.s0[i] + e * (tan.f0[i] if f_dir else v[X_S + i])
+    for i in range(NMF):
+        mfp[i] = tan.mf0[i] + (0.0 if f_dir else e * v[X_MF + i])
+    for i in range(2):
+        cmdp[i] = cmd[i] + (0.0 if f_dir else e * v[X_CMD + i])
+    for i in range(NMI):
+        mip[i] = tan.mi0[i]
+    evaluate_ws(sp, P, mip, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
+    evaluated_state(ew, sp)
+    g = 0.0
+    if k >= 0:
+        event_values(sp, auxp, P, mip, tan.ep)
+        g = tan.ep[k]
+        apply_event(k, t, sp, P, mip, mfp, auxp, tan.ev, 0, tan.stats, tan.imp)
+    settle_ws(t, sp, P, mip, mfp, cmdp, ds, auxp, EventLog(tan.ev, tan.stats), 0, ew, False)
+    return g
+
+
+@kernel
+def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
+    """Phi := S Phi across the reset from the snapshot (:func:`snapshot`) to the run's
+    state now (modes ``mi``, vector field ``f_plus``): for a located event (slot ``k`` >=
+    0) the saltation matrix S = DR + (f+ - DR f-) n^T / (n^T f-), for a reset at a fixed
+    instant (k < 0: a sample's settling) S = DR. DR (the transition followed by the
+    settling) and n (the gradient of event function k) by central differences."""
+    Phi, out, gd, info = tan.Phi, tan.out, tan.gd, tan.info
+    m = Phi.shape[1]
+    ncol = m + 1 if k >= 0 else m
+    for j in range(ncol):
+        f_dir = j == m
+        if f_dir:
+            eps = _column_step(tan.f0, tan.delta[0], NS)
+        else:
+            eps = _column_step(Phi[:, j], tan.delta[0], X_CS)
+        if eps == 0.0:
+            for i in range(X_CMD):
+                out[i, j] = 0.0
+            gd[j] = 0.0
+            continue
+        g_hi = 0.0
+        for side in range(2):
+            e = eps if side == 0 else -eps
+            g = _reset_copy(k, t, e, Phi[:, min(j, m - 1)], f_dir, P, cmd, tan)
+            same = True
+            for i in range(NMI):
+                if tan.mip[i] != mi[i]:
+                    same = False
+            if not same:
+                info[TI_NONSMOOTH] += 1
+            if side == 0:
+                g_hi = g
+                for i in range(NS):
+                    out[X_S + i, j] = tan.sp[i]
+                for i in range(NMF):
+                    out[X_MF + i, j] = tan.mfp[i]
+            else:
+                gd[j] = (g_hi - g) / (2.0 * eps)
+                for i in range(NS):
+                    out[X_S + i, j] = (out[X_S + i, j] - tan.sp[i]) / (2.0 * eps)
+                for i in range(NMF):
+                    out[X_MF + i, j] = (out[X_MF + i, j] - tan.mfp[i]) / (2.0 * eps)
+    if k >= 0:
+        info[TI_EVENTS] += 1
+        nf = gd[m]
+        nn = 0.0
+        ff = 0.0
+        for i in range(NS):
+            ff += tan.f0[i] * tan.f0[i]
+        for j in range(m):
+            nn = max(nn, abs(gd[j]))
+        tr = abs(nf) / max(np.sqrt(ff) * max(nn, 1e-300), 1e-300)
+        if tr < info[TI_GRAZING]:
+            info[TI_GRAZING] = tr
+        for j in range(m):
+            c = gd[j] / nf if nf != 0.0 else 0.0
+            for i in range(NS):
+                Phi[X_S + i, j] = out[X_S + i, j] + (f_plus[i] - out[X_S + i, m]) * c
+            for i in range(NMF):
+                Phi[X_MF + i, j] = out[X_MF + i, j] - out[X_MF + i, m] * c
+    else:
+        for j in range(m):
+            for i in range(X_CMD):
+                Phi[i, j] = out[i, j]
+
+
+@kernel
+def tangent_projection(s, P, mi, mf, tan):
+    """Phi := D[proj] Phi for the projection of the dependent coordinates at ``s``."""
+    Phi, out, sp, mfp = tan.Phi, tan.out, tan.sp, tan.mfp
+    m = Phi.shape[1]
+    for j in range(m):
+        eps = _column_step(Phi[:, j], tan.delta[0], X_CMD)
+        if eps == 0.0:
+            continue
+        for side in range(2):
+            e = eps if side == 0 else -eps
+            for i in range(NS):
+                sp[i] = s[i] + e * Phi[X_S + i, j]
+            for i in range(NMF):
+                mfp[i] = mf[i] + e * Phi[X_MF + i, j]
+            project_state(sp, P, mi, mfp)
+            for i in range(NS):
+                if side == 0:
+                    out[i, j] = sp[i]
+                else:
+                    out[i, j] = (out[i, j] - sp[i]) / (2.0 * eps)
+        for i in range(NS):
+            Phi[X_S + i, j] = out[i, j]
+
+
+@kernel
+def keep_controller(cmd, cs, ls, tan):
+    """Keep the held commands, the controller state and the leg states before a control
+    sample for :func:`tangent_sample`."""
+    for i in range(2):
+        tan.cmd0[i] = cmd[i]
+        tan.ls0[i] = ls[i]
+    for i in range(cs.shape[0]):
+        tan.cs0[i] = cs[i]
+
+
+@kernel
+def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
+    """Phi's rows of the held commands and the controller state := their derivatives
+    through the control sample at ``t`` [s] (zero-order hold): the readings of the state
+    (``s``, modes ``mi``, anchors ``mf``; under the old commands), the controller
+    (``builtin``: the compiled Table I law with parameters ``C``; else the controller
+    function of the control block ``cb``), on copies of its arrays (the snapshot of
+    :func:`keep_controller`). A measurement model (noise, delay) is not differentiated:
+    ``info[TI_UNSUPPORTED]`` counts such samples and the readings' derivative is taken as
+    that of the true readings."""
+    Phi, out = tan.Phi, tan.out
+    sp, mfp, cmdp, csp, lsp, trp, yp = tan.sp, tan.mfp, tan.cmdp, tan.csp, tan.lsp, tan.trp, tan.yp
+    ew, ds, auxp = tan.work.ew, tan.ds, tan.auxp
+    m = Phi.shape[1]
+    nc = csp.shape[0]
+    if is_set(cb.geom[SG_MEASURED]):
+        tan.info[TI_UNSUPPORTED] += 1
+    for j in range(m):
+        eps = _column_step(Phi[:, j], tan.delta[0], Phi.shape[0])
+        if eps == 0.0:
+            for i in range(2 + nc):
+                out[X_CMD + i, j] = 0.0
+            continue
+        for side in range(2):
+            e = eps if side == 0 else -eps
+            for i in range(NS):
+                sp[i] = s[i] + e * Phi[X_S + i, j]
+            for i in range(NMF):
+                mfp[i] = mf[i] + e * Phi[X_MF + i, j]
+            for i in range(2):
+                cmdp[i] = tan.cmd0[i] + e * Phi[X_CMD + i, j]
+                lsp[i] = tan.ls0[i]
+            for i in range(nc):
+                csp[i] = tan.cs0[i] + e * Phi[X_CS + i, j]
+            if builtin and not is_set(cb.geom[SG_MEASURED]):
+                read_encoders(sp, is_set(cb.geom[SG_MOTOR_SIDE]), yp)
+            else:
+                evaluate_ws(sp, P, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
+                evaluated_state(ew, sp)
+                true_readings(sp, ds, auxp, P[P_G], cb.geom, yp)
+            if builtin:
+                bounding_step(yp, C, lsp, cmdp, trp)
+            else:
+                call_controller(cb.ints[CB_ADDRESS], t, yp, cb.params, csp, cmdp, lsp)
+            for i in range(2):
+                if side == 0:
+                    out[X_CMD + i, j] = cmdp[i]
+                else:
+                    out[X_CMD + i, j] = (out[X_CMD + i, j] - cmdp[i]) / (2.0 * eps)
+            for i in range(nc):
+                if side == 0:
+                    out[X_CS + i, j] = csp[i]
+                else:
+                    out[X_CS + i, j] = (out[X_CS + i, j] - csp[i]) / (2.0 * eps)
+    for j in range(m):
+        for i in range(2 + nc):
+            Phi[X_CMD + i, j] = out[X_CMD + i, j]

@@ -1,0 +1,131 @@
+"""Sensitivities carried with a run (scoutsim._core.numerics.tangent).
+
+Law checked: the derivative of the hybrid flow. The sensitivities a run carries through
+its steps, located events (saltation matrices), control samples (zero-order hold) and
+settlings must equal central differences of whole runs from perturbed starts, run for
+run, where the flow is smooth; carrying them must not change the run.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from scoutsim._core.model.layout import EVENT_KIND_NAMES, IL_B, IL_F, NMF, NS
+from scoutsim._core.numerics import tangent as T
+from scoutsim._core.numerics.hybrid import HW_EVAL_KEPT
+from scoutsim.simulation.engine import start_engine
+from scoutsim.simulation.integrator import IntegratorSettings
+
+# tight tolerances, so that differences of whole runs are accurate to ~1e-5 of scale
+TIGHT = IntegratorSettings(rtol=1e-9, atol=1e-11)
+# the leg lengths sit at their stops in flight: a one-sided constraint, where the flow is
+# not differentiable (a shortened leg extends back, a lengthened one is held at the stop)
+AT_STOP = (IL_B, IL_F)
+SMOOTH_COLUMNS = [j for j in range(T.X_CS) if j not in AT_STOP]
+#: the plant event kinds of Model II's first stride from the default start
+PLANT_KINDS = {"touchdown", "slide_start", "stick", "liftoff", "motor_slip", "motor_stick"}
+
+
+def _x(e) -> np.ndarray:
+    return np.concatenate([e.s, e.mf, e.cmd, e.block.state])
+
+
+def _set_x(e, x) -> None:
+    # (the engine's kept evaluation is of the state it was at: evaluate afresh)
+    e.hwork[HW_EVAL_KEPT] = 0.0
+    e.s[:] = x[:NS]
+    e.mf[:] = x[NS : NS + NMF]
+    e.cmd[:] = x[T.X_CMD : T.X_CMD + 2]
+    e.block.state[:] = x[T.X_CS :]
+
+
+def _differences(base, k_stop: int, columns, h: float = 1e-6) -> np.ndarray:
+    """Central differences of the extended state at sample ``k_stop`` with respect to the
+    extended state of the engine ``base`` (not advanced), column by column."""
+    x0 = _x(base)
+    out = np.zeros((len(x0), len(columns)))
+    for c, j in enumerate(columns):
+        step = h * max(1.0, abs(x0[j]))
+        ends = []
+        for sign in (1.0, -1.0):
+            e = copy.deepcopy(base)
+            x = x0.copy()
+            x[j] += sign * step
+            _set_x(e, x)
+            e.advance(k_stop)
+            ends.append(_x(e))
+        out[:, c] = (ends[0] - ends[1]) / (2.0 * step)
+    return out
+
+
+def _carried(base, k_stop: int, columns) -> tuple[np.ndarray, object]:
+    e = copy.deepcopy(base)
+    e.carry_sensitivities(np.eye(len(_x(e)))[:, columns])
+    e.advance(k_stop)
+    return e.sensitivities.copy(), e
+
+
+def _column_errors(phi, fd) -> np.ndarray:
+    """Each column's largest difference, relative to the column's largest entry (a column
+    the projection zeroes, a velocity of a stuck joint, relative to the whole matrix's)."""
+    scale = np.maximum(np.abs(fd).max(axis=0), 1e-6 * np.abs(fd).max())
+    return np.abs(phi - fd).max(axis=0) / scale
+
+
+@pytest.fixture(scope="module")
+def bound_start():
+    """Model II from the default start, at the tight tolerance (sample 0)."""
+    return start_engine(None, 1.0, model="II", integrator=TIGHT)
+
+
+def test_carrying_sensitivities_leaves_the_run_unchanged(bound_start):
+    plain = copy.deepcopy(bound_start)
+    plain.advance(120)
+    _, carried = _carried(bound_start, 120, SMOOTH_COLUMNS)
+    assert np.array_equal(plain.out_s[: plain.n_out], carried.out_s[: carried.n_out])
+    assert np.array_equal(plain.ev[: plain.nev], carried.ev[: carried.nev], equal_nan=True)
+
+
+def test_a_stride_of_model_ii_matches_differences_of_the_run(bound_start):
+    """250 ms: flight, the back leg's touchdown (with a slide and stick), motor-joint slip and
+    stick, lift-off, the front leg's touchdown; about 250 control samples."""
+    phi, e = _carried(bound_start, 250, SMOOTH_COLUMNS)
+    kinds = {kind for kind, _ in e.plant_events()}
+    assert PLANT_KINDS <= kinds
+    assert e.sensitivity_info[T.TI_EVENTS] >= 10
+    fd = _differences(bound_start, 250, SMOOTH_COLUMNS)
+    # measured: 2e-6 .. 9e-5 per column (the differences' own error at this tolerance)
+    assert _column_errors(phi, fd).max() < 1e-3
+
+
+def test_the_jump_across_each_event_kind_matches_differences(bound_start):
+    """Each plant event kind of a stride, at the control sample right after its first
+    occurrence (before the stiff belt modes can damp an error out): the sensitivities
+    carried from the start against differences of the run from perturbed starts. (From
+    the start: its directions are those of the state's manifold; a unit perturbation of
+    one coordinate mid-run is not, and the run's projection decides its fate.)"""
+    ref = copy.deepcopy(bound_start)
+    ref.advance(250)
+    dt = float(ref.dt)
+    first: dict[str, int] = {}
+    for r in ref.ev[: ref.nev]:
+        kind = EVENT_KIND_NAMES[int(r[1])]
+        if kind in PLANT_KINDS and kind not in first:
+            first[kind] = int(np.floor(r[0] / dt + 1e-9)) + 1
+    assert set(first) == PLANT_KINDS
+    for kind, k in sorted(first.items(), key=lambda item: item[1]):
+        phi, _ = _carried(bound_start, k, SMOOTH_COLUMNS)
+        fd = _differences(bound_start, k, SMOOTH_COLUMNS)
+        err = _column_errors(phi, fd).max()
+        assert err < 1e-3, (kind, k, err)
+
+
+def test_the_ideal_actuator_stride_matches_differences():
+    base = start_engine(None, 1.0, model="ideal", integrator=TIGHT)
+    phi, e = _carried(base, 250, SMOOTH_COLUMNS)
+    assert {"touchdown", "liftoff"} <= {kind for kind, _ in e.plant_events()}
+    fd = _differences(base, 250, SMOOTH_COLUMNS)
+    assert _column_errors(phi, fd).max() < 1e-3
