@@ -29,7 +29,7 @@ import numpy as np
 from ..control.dispatch import check_state_access, plan_controller
 from ..names import ContactMode, Leg
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-from ..simulation.engine import start_engine
+from ..simulation.engine import EXTENDED_ROWS, start_engine
 from ..simulation.integrator import IntegratorSettings
 from ..state import HybridState, state_index, state_vector
 from .poincare import MapError
@@ -114,6 +114,13 @@ class Crossing:
         stride: where the controller switched.
     plant_events : the plant's events of the stride, (kind, leg) in order: the sequence of
         contact and joint modes it went through.
+    jacobian : with ``exact``, dz'/dz: the derivative of the section coordinates of
+        ``state`` with respect to those of ``start``, carried with the run
+        (:mod:`scoutsim._core.numerics.tangent`); else None.
+    smoothness : with ``exact``, what the derivatives met: ``nonsmooth`` (resets where a
+        perturbed copy ended in other modes than the run: the map is not differentiable
+        there), ``transversality`` (the smallest |n.f| / (|n| |f|) of a located event),
+        ``events`` (events differentiated); else None.
     """
 
     start: HybridState | None
@@ -124,6 +131,8 @@ class Crossing:
     margin_s: float
     leg_states: np.ndarray
     plant_events: tuple = ()
+    jacobian: np.ndarray | None = None
+    smoothness: dict | None = None
 
 
 class StrideMap:
@@ -164,6 +173,9 @@ class StrideMap:
         check_state_access(plan)  # strides restart from states that include it
         #: the controller is the built-in Table I law (no held torques in z)
         self.builtin = plan.kind == "builtin"
+        #: the compiled loop runs the controller (the built-in law or a CompiledController):
+        #: the map's Jacobian can be carried with the run
+        self.compiled = plan.kind in ("builtin", "compiled")
         #: "plant" or "controller" (the built-in law's lift-off detection; its default)
         self.section = section or ("controller" if self.builtin else "plant")
         if self.section not in SECTION_LABELS or (
@@ -189,22 +201,38 @@ class StrideMap:
             integrator=self.integrator,
         )
 
-    def crossing(self, start, *, settle_s: float = 0.0, strides: int = 1) -> Crossing:
+    def crossing(
+        self, start, *, settle_s: float = 0.0, strides: int = 1, exact: bool = False
+    ) -> Crossing:
         """Run from ``start`` (a HybridState at a section sample, or None: the default
         start) for ``settle_s`` [s], then to the ``strides``-th section sample. MapError if
         the robot falls, the controller fails or a stride takes longer than
-        ``max_period``."""
+        ``max_period``. ``exact``: also the map's Jacobian dz'/dz, carried with the run
+        (``start`` a HybridState, no settling; a controller the compiled loop runs: the
+        built-in law or a CompiledController)."""
+        if exact and (not isinstance(start, HybridState) or settle_s != 0.0):
+            raise ValueError("exact: the Jacobian is of the map from a HybridState start")
+        if exact and not self.compiled:
+            raise ValueError(
+                "exact: the Jacobian is carried through the compiled loop's controller (the "
+                "built-in Table I law or a CompiledController); a Python controller's "
+                "stride map is differentiated by differences (jacobian='fd')"
+            )
         guess = self._expected.get(strides) if settle_s == 0.0 else None
-        c = self._cross(start, settle_s, guess, strides)
+        c = self._cross(start, settle_s, guess, strides, exact)
         if c is None:  # the lift-off came before the expected stride length: again
-            c = self._cross(start, settle_s, None, strides)
+            c = self._cross(start, settle_s, None, strides, exact)
         assert c is not None, "a run sample by sample finds the crossing or raises"
         if settle_s == 0.0:
             self._expected[strides] = c.samples
         return c
 
-    def _cross(self, start, settle_s: float, guess: int | None, strides: int) -> Crossing | None:
+    def _cross(
+        self, start, settle_s: float, guess: int | None, strides: int, exact: bool = False
+    ) -> Crossing | None:
         eng = self.engine(start, settle_s + strides * self.max_period)
+        if exact:
+            eng.carry_sensitivities(self._seed(start, eng.sensitivities.shape[0]))
         dt = float(eng.dt)
         k0 = int(round(settle_s / dt))
         if k0 > 0:
@@ -252,7 +280,47 @@ class StrideMap:
             margin_s=dt * min(phase, 1.0 - phase),
             leg_states=eng.leg_state_record()[k0:],
             plant_events=eng.plant_events(nev0),
+            jacobian=(self._end_map(eng) @ eng.sensitivities) if exact else None,
+            smoothness=eng.smoothness() if exact else None,
         )
+
+    # -- the Jacobian carried with the run ---------------------------------------------------
+    def _seed(self, hs: HybridState, nx: int) -> np.ndarray:
+        """dx/dz (nx rows) at the start :meth:`hs_of` makes: x is the run's extended state
+        (rows :data:`~scoutsim.simulation.engine.EXTENDED_ROWS`), its x coordinate 0, its
+        anchors, controller state and (but for the built-in law) held torques those of z."""
+        return self._coordinates(hs, nx).T
+
+    def _end_map(self, eng) -> np.ndarray:
+        """dz/dx at the engine's state now (:meth:`z_of` of its hybrid state): the anchors
+        of pinned legs relative to x."""
+        hs = eng.hybrid_state()
+        out = self._coordinates(hs, eng.sensitivities.shape[0])
+        nb = len(CONTROLLED_Z_NAMES)
+        for leg in Leg:
+            if hs.contact_modes[leg] in _PINNED:
+                out[nb - 2 + leg, EXTENDED_ROWS["state"] + state_index("x")] = -1.0
+            else:
+                out[nb - 2 + leg, :] = 0.0
+        return out
+
+    def _coordinates(self, hs: HybridState, nx: int) -> np.ndarray:
+        """The 0/1 matrix that picks each section coordinate of ``hs`` out of the extended
+        state (nz x nx)."""
+        nb = len(CONTROLLED_Z_NAMES)
+        nc = len(hs.controller_state)
+        rows = EXTENDED_ROWS
+        out = np.zeros((len(self.z_of(hs)), nx))
+        for i, name in enumerate(_STATE_Z_NAMES):
+            out[i, rows["state"] + state_index(name)] = 1.0
+        for leg in Leg:
+            out[nb - 2 + leg, rows["anchors"] + leg] = 1.0
+        for i in range(nc):
+            out[nb + i, rows["controller_state"] + i] = 1.0
+        if not self.builtin:
+            for leg in Leg:
+                out[nb + nc + leg, rows["commands"] + leg] = 1.0
+        return out
 
     def _lifts(self, eng, nev0: int, t0: float) -> np.ndarray:
         kind, leg = SECTION_EVENTS[self.section]

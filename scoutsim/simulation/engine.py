@@ -19,7 +19,17 @@ from .._core.numerics.dopri5 import eval_workspace
 from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .._core.numerics.stepper import METHOD_AUTO
-from .._core.numerics.tangent import new_tangent
+from .._core.numerics.tangent import (
+    TI_EVENTS,
+    TI_GRAZING,
+    TI_NONSMOOTH,
+    TI_UNSUPPORTED,
+    X_CMD,
+    X_CS,
+    X_MF,
+    X_S,
+    new_tangent,
+)
 from .._core.numerics.work import Plant
 from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
 from ..control.dispatch import (
@@ -350,13 +360,19 @@ class HybridEngine:
         """dx/d(variables) now (NX x m; see :meth:`carry_sensitivities`)."""
         return self.tangent.Phi
 
-    @property
-    def sensitivity_info(self) -> np.ndarray:
-        """What the sensitivities met (layout ``TI_*`` of
-        :mod:`scoutsim._core.numerics.tangent`): resets that were not smooth, the smallest
-        transversality of a located event, events differentiated, samples whose
-        measurement model was not differentiated."""
-        return self.tangent.info
+    def smoothness(self) -> dict:
+        """What the carried sensitivities met so far: ``nonsmooth`` (resets where a
+        perturbed copy ended in other modes than the run: not differentiable there),
+        ``transversality`` (the smallest |n.f| / (|n| |f|) of a located event: near 0, an
+        event that grazes), ``events`` (located events differentiated), ``undifferentiated``
+        (control samples whose measurement model, noise or delay, was not differentiated)."""
+        info = self.tangent.info
+        return {
+            "nonsmooth": int(info[TI_NONSMOOTH]),
+            "transversality": float(info[TI_GRAZING]),
+            "events": int(info[TI_EVENTS]),
+            "undifferentiated": int(info[TI_UNSUPPORTED]),
+        }
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
@@ -479,6 +495,12 @@ class HybridEngine:
             energy_flows=self.energy_flows(),
             energy_series=(_kept(self.out_energy, n) if self.energy.size else None),
         )
+
+
+#: where each part of the extended state starts in the rows of
+#: :attr:`HybridEngine.sensitivities`: the state (layout ``NS``), the toe anchors [m], the
+#: held hip commands [N m], the controller's state array
+EXTENDED_ROWS = {"state": X_S, "anchors": X_MF, "commands": X_CMD, "controller_state": X_CS}
 
 
 def start_controller(engine: HybridEngine, plan, robot: RobotParameters, start):

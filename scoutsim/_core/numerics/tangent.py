@@ -97,7 +97,7 @@ DIFFERENCE_STEP = 1e-6
 TangentWork = namedtuple(
     "TangentWork",
     "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
-    "ev stats imp gd info delta",
+    "ev stats imp gd w info delta",
 )
 
 
@@ -150,6 +150,7 @@ def new_tangent(m: int, n_state: int, n_readings: int, rtol: float, atol: float)
         np.zeros(NSTAT),
         np.zeros(NIMP),
         np.zeros(m + 1),
+        np.zeros(nx),
         info,
         np.array([DIFFERENCE_STEP]),
     )
@@ -228,97 +229,124 @@ def snapshot(s, mi, mf, f, tan):
 
 
 @kernel
-def _reset_copy(k, t, e, v, f_dir, P, cmd, tan):
-    """One perturbed copy of the reset: the snapshot moved by ``e`` along ``v`` (a column
-    of Phi) or, if ``f_dir``, along the vector field before it; projected and evaluated,
-    its event function ``k`` read (k >= 0), the transition of slot ``k`` applied (k >= 0)
-    and the modes settled. Returns the event function's value (0 if k < 0)."""
+def _perturbed_copy(e, v, P, cmd, tan):
+    """The snapshot (:func:`snapshot`) moved by ``e`` along the direction ``v`` (NX rows),
+    projected and evaluated (outputs in ``tan.auxp``) under the snapshot's modes."""
     sp, mfp, mip, auxp, cmdp, ds = tan.sp, tan.mfp, tan.mip, tan.auxp, tan.cmdp, tan.ds
     ew = tan.work.ew
     for i in range(NS):
-        sp[i] = tan.s0[i] + e * (tan.f0[i] if f_dir else v[X_S + i])
+        sp[i] = tan.s0[i] + e * v[X_S + i]
     for i in range(NMF):
-        mfp[i] = tan.mf0[i] + (0.0 if f_dir else e * v[X_MF + i])
+        mfp[i] = tan.mf0[i] + e * v[X_MF + i]
     for i in range(2):
-        cmdp[i] = cmd[i] + (0.0 if f_dir else e * v[X_CMD + i])
+        cmdp[i] = cmd[i] + e * v[X_CMD + i]
     for i in range(NMI):
         mip[i] = tan.mi0[i]
     evaluate_ws(sp, P, mip, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
     evaluated_state(ew, sp)
-    g = 0.0
-    if k >= 0:
-        event_values(sp, auxp, P, mip, tan.ep)
-        g = tan.ep[k]
-        apply_event(k, t, sp, P, mip, mfp, auxp, tan.ev, 0, tan.stats, tan.imp)
-    settle_ws(t, sp, P, mip, mfp, cmdp, ds, auxp, EventLog(tan.ev, tan.stats), 0, ew, False)
-    return g
+
+
+@kernel
+def _event_slope(k, v, P, cmd, tan):
+    """The derivative of event function ``k`` at the snapshot along ``v`` (central
+    differences; 0 along a zero direction)."""
+    eps = _column_step(v, tan.delta[0], X_CS)
+    if eps == 0.0:
+        return 0.0
+    _perturbed_copy(eps, v, P, cmd, tan)
+    event_values(tan.sp, tan.auxp, P, tan.mip, tan.ep)
+    g_hi = tan.ep[k]
+    _perturbed_copy(-eps, v, P, cmd, tan)
+    event_values(tan.sp, tan.auxp, P, tan.mip, tan.ep)
+    return (g_hi - tan.ep[k]) / (2.0 * eps)
+
+
+@kernel
+def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
+    """The derivative of the reset (event ``k``'s transition if k >= 0, then the
+    settling) at the snapshot along ``v``, into the rows of the state and the anchors of
+    ``tan.out[:, j]`` (central differences); a copy that ends in other modes than the run
+    (``mi``) is counted in ``info[TI_NONSMOOTH]``."""
+    out = tan.out
+    eps = _column_step(v, tan.delta[0], X_CS)
+    if eps == 0.0:
+        for i in range(X_CMD):
+            out[i, j] = 0.0
+        return
+    for side in range(2):
+        e = eps if side == 0 else -eps
+        _perturbed_copy(e, v, P, cmd, tan)
+        if k >= 0:
+            apply_event(k, t, tan.sp, P, tan.mip, tan.mfp, tan.auxp, tan.ev, 0, tan.stats, tan.imp)
+        log = EventLog(tan.ev, tan.stats)
+        settle_ws(t, tan.sp, P, tan.mip, tan.mfp, tan.cmdp, tan.ds, tan.auxp, log, 0, tan.work.ew)
+        for i in range(NMI):
+            if tan.mip[i] != mi[i]:
+                tan.info[TI_NONSMOOTH] += 1
+                break
+        for i in range(NS):
+            if side == 0:
+                out[X_S + i, j] = tan.sp[i]
+            else:
+                out[X_S + i, j] = (out[X_S + i, j] - tan.sp[i]) / (2.0 * eps)
+        for i in range(NMF):
+            if side == 0:
+                out[X_MF + i, j] = tan.mfp[i]
+            else:
+                out[X_MF + i, j] = (out[X_MF + i, j] - tan.mfp[i]) / (2.0 * eps)
 
 
 @kernel
 def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
     """Phi := S Phi across the reset from the snapshot (:func:`snapshot`) to the run's
-    state now (modes ``mi``, vector field ``f_plus``): for a located event (slot ``k`` >=
-    0) the saltation matrix S = DR + (f+ - DR f-) n^T / (n^T f-), for a reset at a fixed
-    instant (k < 0: a sample's settling) S = DR. DR (the transition followed by the
-    settling) and n (the gradient of event function k) by central differences."""
-    Phi, out, gd, info = tan.Phi, tan.out, tan.gd, tan.info
+    state now (modes ``mi``, vector field ``f_plus``).
+
+    For a located event (slot ``k`` >= 0) S is the saltation matrix
+    S = DR + (f+ - DR f-) n^T / (n^T f-), applied as S v = DR w + f+ (n.v) / (n.f-) with
+    w = v - f- (n.v) / (n.f-), the part of v in the event's surface: the reset is
+    differenced only along the surface, so no perturbed copy crosses the event (a copy
+    moved along f- would, and could take the other branch of a decision taken at the
+    event: a lift-off that might have been a slide). For a reset at a fixed instant
+    (k < 0: a sample's settling) S = DR. DR (the transition and the settling after it) and
+    n (the gradient of event function k) by central differences."""
+    Phi, out, w, gd, info = tan.Phi, tan.out, tan.w, tan.gd, tan.info
     m = Phi.shape[1]
-    ncol = m + 1 if k >= 0 else m
-    for j in range(ncol):
-        f_dir = j == m
-        if f_dir:
-            eps = _column_step(tan.f0, tan.delta[0], NS)
-        else:
-            eps = _column_step(Phi[:, j], tan.delta[0], X_CS)
-        if eps == 0.0:
-            for i in range(X_CMD):
-                out[i, j] = 0.0
-            gd[j] = 0.0
-            continue
-        g_hi = 0.0
-        for side in range(2):
-            e = eps if side == 0 else -eps
-            g = _reset_copy(k, t, e, Phi[:, min(j, m - 1)], f_dir, P, cmd, tan)
-            same = True
-            for i in range(NMI):
-                if tan.mip[i] != mi[i]:
-                    same = False
-            if not same:
-                info[TI_NONSMOOTH] += 1
-            if side == 0:
-                g_hi = g
-                for i in range(NS):
-                    out[X_S + i, j] = tan.sp[i]
-                for i in range(NMF):
-                    out[X_MF + i, j] = tan.mfp[i]
-            else:
-                gd[j] = (g_hi - g) / (2.0 * eps)
-                for i in range(NS):
-                    out[X_S + i, j] = (out[X_S + i, j] - tan.sp[i]) / (2.0 * eps)
-                for i in range(NMF):
-                    out[X_MF + i, j] = (out[X_MF + i, j] - tan.mfp[i]) / (2.0 * eps)
-    if k >= 0:
-        info[TI_EVENTS] += 1
-        nf = gd[m]
-        nn = 0.0
-        ff = 0.0
-        for i in range(NS):
-            ff += tan.f0[i] * tan.f0[i]
+    if k < 0:
         for j in range(m):
-            nn = max(nn, abs(gd[j]))
-        tr = abs(nf) / max(np.sqrt(ff) * max(nn, 1e-300), 1e-300)
-        if tr < info[TI_GRAZING]:
-            info[TI_GRAZING] = tr
-        for j in range(m):
-            c = gd[j] / nf if nf != 0.0 else 0.0
-            for i in range(NS):
-                Phi[X_S + i, j] = out[X_S + i, j] + (f_plus[i] - out[X_S + i, m]) * c
-            for i in range(NMF):
-                Phi[X_MF + i, j] = out[X_MF + i, j] - out[X_MF + i, m] * c
-    else:
+            _reset_derivative(k, t, Phi[:, j], mi, P, cmd, tan, j)
         for j in range(m):
             for i in range(X_CMD):
                 Phi[i, j] = out[i, j]
+        return
+    info[TI_EVENTS] += 1
+    for i in range(w.shape[0]):
+        w[i] = 0.0
+    for i in range(NS):
+        w[X_S + i] = tan.f0[i]
+    nf = _event_slope(k, w, P, cmd, tan)
+    ff = 0.0
+    for i in range(NS):
+        ff += tan.f0[i] * tan.f0[i]
+    nn = 0.0
+    for j in range(m):
+        gd[j] = _event_slope(k, Phi[:, j], P, cmd, tan)
+        nn = max(nn, abs(gd[j]))
+    tr = abs(nf) / max(np.sqrt(ff) * nn, 1e-300)
+    if tr < info[TI_GRAZING]:
+        info[TI_GRAZING] = tr
+    for j in range(m):
+        c = gd[j] / nf if nf != 0.0 else 0.0
+        gd[j] = c
+        for i in range(w.shape[0]):
+            w[i] = Phi[i, j]
+        for i in range(NS):
+            w[X_S + i] -= c * tan.f0[i]
+        _reset_derivative(k, t, w, mi, P, cmd, tan, j)
+    for j in range(m):
+        for i in range(NS):
+            Phi[X_S + i, j] = out[X_S + i, j] + f_plus[i] * gd[j]
+        for i in range(NMF):
+            Phi[X_MF + i, j] = out[X_MF + i, j]
 
 
 @kernel

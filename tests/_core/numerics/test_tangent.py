@@ -95,7 +95,7 @@ def test_a_stride_of_model_ii_matches_differences_of_the_run(bound_start):
     phi, e = _carried(bound_start, 250, SMOOTH_COLUMNS)
     kinds = {kind for kind, _ in e.plant_events()}
     assert PLANT_KINDS <= kinds
-    assert e.sensitivity_info[T.TI_EVENTS] >= 10
+    assert e.smoothness()["events"] >= 10
     fd = _differences(bound_start, 250, SMOOTH_COLUMNS)
     # measured: 2e-6 .. 9e-5 per column (the differences' own error at this tolerance)
     assert _column_errors(phi, fd).max() < 1e-3
