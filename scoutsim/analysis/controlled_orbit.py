@@ -2,9 +2,10 @@
 (:func:`~scoutsim.analysis.stride_map.controlled_stride_map`) by Newton's method, and its
 Floquet multipliers (docs/orbits.md).
 
-Newton's method with a forward-difference Jacobian and least-squares steps (pinned legs
-and stuck motor joints make some coordinates dependent) converges to a residual ~1e-12;
-the eigenvalues of the Jacobian at the fixed point are the multipliers. On the Scout II
+Newton's method with the stride map's Jacobian carried with the run (or by forward
+differences) and least-squares steps (pinned legs and stuck motor joints make some
+coordinates dependent) converges to a residual ~1e-12; the eigenvalues of the Jacobian at
+the fixed point are the multipliers. On the Scout II
 defaults (Model II, default floor) the orbit lasts 234 ms with spectral radius 0.925.
 
 Units: SI (section coordinates as :data:`~scoutsim.analysis.stride_map.CONTROLLED_Z_NAMES`,
@@ -40,8 +41,14 @@ __all__ = [
     "cell_change",
     "controlled_fixed_point",
     "difference_jacobian",
+    "stride_jacobian",
+    "JACOBIAN_METHODS",
     "likely_strides",
 ]
+
+
+#: how a stride map's Jacobian can be obtained (NewtonSettings.jacobian)
+JACOBIAN_METHODS = ("exact", "fd")
 
 
 @dataclass(frozen=True)
@@ -51,11 +58,23 @@ class NewtonSettings:
     tol : target residual max|P(z) - z| (SI units of each coordinate).
     max_iter : Newton iterations at most.
     jacobian_step : relative step of the difference Jacobian (times max(1, |z_j|)).
+    jacobian : how dP/dz is obtained: "exact" (carried with the run, internal
+        differentiation: :mod:`scoutsim._core.numerics.tangent`; for a controller the
+        compiled loop runs, the built-in Table I law or a CompiledController), "fd"
+        (forward differences of whole strides), or None: "exact" where it can be, else
+        "fd" (a Python controller).
     """
 
     tol: float = 1e-10
     max_iter: int = 10
     jacobian_step: float = 1e-6
+    jacobian: str | None = None
+
+    def __post_init__(self):
+        if self.jacobian not in JACOBIAN_METHODS + (None,):
+            raise ValueError(
+                f"jacobian = {self.jacobian!r}: must be one of {list(JACOBIAN_METHODS)} or None"
+            )
 
 
 @dataclass
@@ -87,6 +106,8 @@ class ControlledOrbit:
     #: how it was found: model, friction_coefficient, robot, controller, integrator and
     #: section (what orbit_sensitivity needs to perturb it)
     setting: dict = field(default_factory=dict, repr=False)
+    #: how ``jacobian`` was obtained: "exact" (carried with the run) or "fd" (differences)
+    jacobian_method: str = "fd"
 
     @property
     def stable(self) -> bool:
@@ -96,7 +117,7 @@ class ControlledOrbit:
         return {
             "section": self.section_label,
             "section_margin_s": self.section_margin,
-            "jacobian_method": "fd",
+            "jacobian_method": self.jacobian_method,
             "strides_per_period": self.strides,
             "touchdown_angle_back_deg": math.degrees(self.touchdown_angles_world[0]),
             "touchdown_angle_front_deg": math.degrees(self.touchdown_angles_world[1]),
@@ -145,9 +166,12 @@ def controlled_fixed_point(
     state or reads its held torques is settled three more strides from there, since a
     result records neither), or a HybridState at a section sample (as
     :attr:`ControlledOrbit.state`). ``newton``: :class:`NewtonSettings` (the target
-    residual ``tol``, ``max_iter``, ``jacobian_step``). Jacobian: forward differences with
-    steps ``jacobian_step`` max(1, |z_j|) (backward where the forward step moves the section or
-    a controller switch by a sample: the map's jump, not its derivative). Newton steps by
+    residual ``tol``, ``max_iter``, the Jacobian's method ``jacobian`` and
+    ``jacobian_step``). Jacobian: "exact", carried with the run through its steps, events
+    and samples (the default for the built-in law and a CompiledController;
+    :func:`stride_jacobian`), or "fd", forward differences with steps ``jacobian_step``
+    max(1, |z_j|) (backward where the forward step moves the section or a controller
+    switch by a sample: the map's jump, not its derivative). Newton steps by
     least squares (the dependent coordinates of pinned legs and stuck motor joints make
     ``dP/dz - I`` rank deficient), globalised by halving a step that does not reduce the
     residual (or makes the robot fall) up to five times. Default integrator: DOPRI5 at
@@ -168,11 +192,19 @@ def controlled_fixed_point(
     built-in law's own lift-off detection for that law, the plant's lift-off otherwise)."""
     integ = integrator or IntegratorSettings(rtol=1e-11, atol=1e-12)
     ns = newton or NewtonSettings()
-    tol, max_iter, jacobian_step = ns.tol, ns.max_iter, ns.jacobian_step
+    tol, max_iter = ns.tol, ns.max_iter
     common = dict(
         model=model, friction_coefficient=friction_coefficient, robot=robot, controller=controller
     )
     m = StrideMap(integrator=integ, section=section, **common)
+    method = ns.jacobian or ("exact" if m.compiled else "fd")
+    if method == "exact" and not m.compiled:
+        raise ValueError(
+            "jacobian = 'exact' needs a controller the compiled loop runs (the built-in "
+            "Table I law or a CompiledController); a Python controller's orbit takes "
+            "jacobian = 'fd'"
+        )
+    how = (method, ns.jacobian_step)
     say = progress or (lambda message: None)
     if start is None:
         say(f"settling: {settle_duration:g} s of model {model} to a Newton start")
@@ -187,7 +219,7 @@ def controlled_fixed_point(
             for _ in range(3):
                 start = settle.crossing(start).state
     if strides is not None:
-        return _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
+        return _newton(m, start, strides, tol, max_iter, how, say, common, integ)
     ks, lengths, start = likely_strides(m, start)
     say(
         f"settled stride lengths (control periods) {lengths[:12]}...: trying "
@@ -196,7 +228,7 @@ def controlled_fixed_point(
     failures = []
     for k in ks:
         try:
-            orbit = _newton(m, start, k, tol, max_iter, jacobian_step, say, common, integ)
+            orbit = _newton(m, start, k, tol, max_iter, how, say, common, integ)
         except MapError as exc:
             failures.append(f"{k} stride(s): {exc}")
             continue
@@ -205,7 +237,7 @@ def controlled_fixed_point(
             c = m.crossing(orbit.state, strides=d)
             if float(np.max(np.abs(m.z_of(c.state) - orbit.z))) < 100.0 * tol:
                 say(f"the fixed point of {k} strides is one of {d}: Newton for {d} from it")
-                return _newton(m, orbit.state, d, tol, max_iter, jacobian_step, say, common, integ)
+                return _newton(m, orbit.state, d, tol, max_iter, how, say, common, integ)
         return orbit
     raise MapError(
         "no periodic orbit from this start (settled stride lengths in control periods "
@@ -213,7 +245,7 @@ def controlled_fixed_point(
     )
 
 
-def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ):
+def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
     """Newton on the ``strides``-th iterate of the map ``m`` from ``start`` (see
     :func:`controlled_fixed_point`)."""
     disc = mode_signature(start)
@@ -232,7 +264,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
         if res < tol or it == max_iter:
             break
-        J = difference_jacobian(m, z, like, c, jacobian_step, strides)
+        J = stride_jacobian(m, z, like, c, how, strides)
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
         z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
     if hist[-1] >= tol:
@@ -241,7 +273,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
             f"iterations (history {[f'{v:.1e}' for v in hist]})"
         )
     if J is None or it > 0:
-        J = difference_jacobian(m, z, like, c, jacobian_step, strides)
+        J = stride_jacobian(m, z, like, c, how, strides)
     hs = m.hs_of(z, like)
     T = c.period_s
     r = simulate(
@@ -277,6 +309,7 @@ def _newton(m, start, strides, tol, max_iter, jacobian_step, say, common, integ)
         strides=strides,
         section_label=m.section_label,
         setting=dict(common, integrator=integ, section=m.section),
+        jacobian_method=how[0],
     )
 
 
@@ -349,6 +382,28 @@ def cell_change(base: Crossing, c: Crossing) -> str:
         what = "; ".join(parts) or "reordered"
         return f"the plant's event sequence changes ({what}): the orbit grazes it"
     return ""
+
+
+def stride_jacobian(m: StrideMap, z, like, base: Crossing, how, strides: int) -> np.ndarray:
+    """dP/dz at ``z`` (whose stride is ``base``) by ``how`` = (method, step): "exact",
+    carried with one more run of the stride (MapError if that run leaves the cell of
+    ``base``, or a reset on it is not differentiable), or "fd" (:func:`difference_jacobian`
+    with the relative step)."""
+    method, step = how
+    if method == "fd":
+        return difference_jacobian(m, z, like, base, step, strides)
+    c = m.crossing(m.hs_of(z, like), strides=strides, exact=True)
+    why = cell_change(base, c)
+    if why:
+        raise MapError(f"the stride carrying the Jacobian left the stride's cell: {why}")
+    assert c.jacobian is not None and c.smoothness is not None, "an exact crossing has both"
+    if c.smoothness["nonsmooth"]:
+        raise MapError(
+            "the stride map is not differentiable here: a reset on the stride takes another "
+            f"branch under a perturbation ({c.smoothness['nonsmooth']} such resets; the "
+            f"smallest event transversality {c.smoothness['transversality']:.1e})"
+        )
+    return c.jacobian
 
 
 def difference_jacobian(

@@ -37,7 +37,7 @@ from ..control.pitch_feedback import PitchFeedbackController
 from ..parameters import ControllerParameters, RobotParameters
 from ..simulation.simulator import simulate
 from ..state import HybridState
-from .controlled_orbit import ControlledOrbit, cell_change, difference_jacobian
+from .controlled_orbit import ControlledOrbit, cell_change, stride_jacobian
 from .poincare import MapError
 from .stride_map import StrideMap
 
@@ -280,7 +280,8 @@ def orbit_sensitivities(
                 if spectral_radius:
                     c = m.crossing(hs, strides=k)
                     assert c.start is not None, "a crossing from a HybridState keeps its start"
-                    J = difference_jacobian(m, m.z_of(c.start), c.start, c, 1e-6, k)
+                    how = (orbit.jacobian_method, 1e-6)
+                    J = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
                 values.append(orbit_metrics(hs, orbit.period, s_p, integ, J))
             if len(values) == 1:
                 values.append(base_values)

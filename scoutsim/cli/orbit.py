@@ -86,6 +86,17 @@ def register(sub, common) -> None:
         "robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
     )
     orbit.add_argument(
+        "--jacobian",
+        choices=("exact", "fd"),
+        default=None,
+        help="how the return map's Jacobian (the multipliers, Newton's steps) is obtained: "
+        "exact (derivatives carried with the run through its steps, events and control "
+        "samples; the default, where the controller runs in the compiled loop: the Table I "
+        "law, a CompiledController, --passive) or fd (differences of whole strides, the "
+        "check; the default for a Python controller). The JSON says which in "
+        "jacobian_method",
+    )
+    orbit.add_argument(
         "--section",
         choices=("plant", "controller"),
         default=None,
@@ -107,7 +118,7 @@ def register(sub, common) -> None:
 
 
 def execute(args) -> int:
-    from ..analysis.controlled_orbit import ControlledOrbit, controlled_fixed_point
+    from ..analysis.controlled_orbit import ControlledOrbit, NewtonSettings, controlled_fixed_point
     from ..analysis.passive_orbits import PassiveOrbit, passive_bounding_orbit
     from ..analysis.poincare import MapError
     from ..control.dispatch import ControllerStateError
@@ -126,7 +137,11 @@ def execute(args) -> int:
     try:
         if args.passive:
             orb = passive_bounding_orbit(
-                args.speed, args.apex_height, math.radians(args.pitch_rate), robot=robot
+                args.speed,
+                args.apex_height,
+                math.radians(args.pitch_rate),
+                robot=robot,
+                jacobian=args.jacobian or "exact",
             )
         else:
             orb = controlled_fixed_point(
@@ -138,8 +153,11 @@ def execute(args) -> int:
                 progress=progress_messages(args, NAME),
                 strides=args.strides,
                 section=args.section,
+                newton=NewtonSettings(jacobian=args.jacobian),
             )
     except ValueError as exc:
+        if args.jacobian == "exact" and str(exc).startswith("jacobian = 'exact'"):
+            raise UsageError(f"--jacobian exact: {exc}") from exc  # a Python controller
         if args.section is None or not str(exc).startswith("section ="):
             raise
         raise UsageError(f"--section {args.section}: {exc}") from exc  # not this controller's
