@@ -69,6 +69,17 @@ SENSITIVITY_METRICS = (
 FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
+#: the smallest change of the spectral radius its derivative is taken over (a difference
+#: of two Jacobians of the map). The Jacobian is a Lipschitz, not a smooth, function of
+#: the state: the actuator's current and voltage limits and its efficiency's switch
+#: between motoring and back-driving are kinks of the vector field the integrator's steps
+#: straddle, so the Jacobian of the computed map moves by about 1e-4 in places under
+#: perturbations of 1e-9, and its dominant multiplier by about 1e-6 (measured on the
+#: default Model II orbit; docs/explanation/derivatives.md)
+RADIUS_RESOLUTION = 1e-4
+#: the parameter steps tried for the spectral radius's derivative, in units of the
+#: metrics' step
+RADIUS_STEPS = (1.0, 10.0, 30.0)
 
 
 @dataclass
@@ -81,6 +92,8 @@ class ParameterSensitivity:
     elasticity : {metric: (d metric / d parameter) value / metric} [% per %] (NaN where
         the value or the metric is 0).
     status : "ok", or why there is none (the step leaves the sample-phase cell, ...).
+    radius_step : the parameter step of the spectral radius's derivative (SI; see
+        :func:`orbit_sensitivities`); NaN without it.
     """
 
     name: str
@@ -88,6 +101,7 @@ class ParameterSensitivity:
     derivative: dict = field(default_factory=dict)
     elasticity: dict = field(default_factory=dict)
     status: str = "ok"
+    radius_step: float = math.nan
 
     def to_dict(self) -> dict:
         return {
@@ -95,6 +109,7 @@ class ParameterSensitivity:
             "derivative": self.derivative,
             "elasticity": self.elasticity,
             "status": self.status,
+            "spectral_radius_step": self.radius_step,
         }
 
 
@@ -244,8 +259,11 @@ def orbit_sensitivities(
     setting) to each parameter of ``names`` (see :func:`sensitivity_parameter_names`;
     "all": every one), by the implicit function theorem (module docstring) with steps
     ``relative_step`` |p| (a forward step of :data:`ZERO_STEP` for a parameter at 0).
-    ``spectral_radius``: also the spectral radius's (two Jacobians of the map per
-    parameter: the costliest part). ``progress``: optional callable(str). Returns
+    ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
+    (the orbit's method) at two ends; the step is the first of :data:`RADIUS_STEPS` x
+    ``h`` over which the radius moves by at least :data:`RADIUS_RESOLUTION` (or the last
+    that stays in the orbit's sample-phase cell): the Jacobian is only Lipschitz in the
+    state, see :data:`RADIUS_RESOLUTION`. ``progress``: optional callable(str). Returns
     ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
     setting = orbit.setting
     if not setting:
@@ -276,26 +294,62 @@ def orbit_sensitivities(
             values = []
             for s_p, m, _, sign in ends:
                 hs = m.hs_of(orbit.z + sign * h * dz, like)
-                J = None
-                if spectral_radius:
-                    c = m.crossing(hs, strides=k)
-                    assert c.start is not None, "a crossing from a HybridState keeps its start"
-                    how = (orbit.jacobian_method, 1e-6)
-                    J = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
-                values.append(orbit_metrics(hs, orbit.period, s_p, integ, J))
+                values.append(orbit_metrics(hs, orbit.period, s_p, integ))
             if len(values) == 1:
-                values.append(base_values)
+                values.append(dict(base_values))
+            if spectral_radius:
+                hr, radii = _radius_ends(orbit, base, base_map, name, h, signs)
+                sens.radius_step = hr
+                for i, r in enumerate(radii):
+                    values[i]["spectral_radius"] = r
         except (MapError, ValueError) as exc:
             sens.status = f"no sensitivity: {exc}"
             say(f"{name}: {sens.status}")
             continue
         for metric in SENSITIVITY_METRICS:
-            d = (values[0][metric] - values[1][metric]) / (len(signs) * h)
+            step = sens.radius_step if metric == "spectral_radius" else h
+            d = (values[0][metric] - values[1][metric]) / (len(signs) * step)
             sens.derivative[metric] = d
             mv = base_values.get(metric, math.nan)
             sens.elasticity[metric] = d * p / mv if p != 0.0 and mv != 0.0 else math.nan
         say(f"{name} = {p:.6g}: d speed / d p = {sens.derivative['mean_speed_m_s']:.4g}")
     return out, base_values
+
+
+def _radius_ends(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
+    """(step, the spectral radius at each end) for the radius's derivative: the first step
+    of RADIUS_STEPS x ``h`` over which the radius moves by RADIUS_RESOLUTION, or the
+    largest that stays in the orbit's cell."""
+    found = None
+    for factor in RADIUS_STEPS:
+        try:
+            radii = _radii(orbit, base, base_map, name, factor * h, signs)
+        except MapError:
+            if found is None:
+                raise
+            break
+        found = (factor * h, radii)
+        if abs(radii[0] - radii[1]) >= RADIUS_RESOLUTION:
+            break
+    assert found is not None, "the first step gives radii or raises"
+    return found
+
+
+def _radii(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
+    """The spectral radius of the stride map's Jacobian (the orbit's method) at the orbit
+    moved to parameter ``name`` + sign ``h`` along dz*/dp, for each sign of ``signs``."""
+    ends, dz = _tangent(orbit, base, base_map, name, h, signs)
+    k, like = orbit.strides, orbit.state
+    out = []
+    for _, m, _, sign in ends:
+        c = m.crossing(m.hs_of(orbit.z + sign * h * dz, like), strides=k)
+        assert c.start is not None, "a crossing from a HybridState keeps its start"
+        how = (orbit.jacobian_method, 1e-6)
+        J = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
+        out.append(float(np.max(np.abs(np.linalg.eigvals(J)))))
+    if len(signs) == 1:
+        out.append(float(np.max(np.abs(orbit.multipliers))))
+    return out
 
 
 def _tangent(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):

@@ -125,7 +125,7 @@ def test_a_cycle_of_several_strides_is_a_fixed_point_of_the_iterate(capsys):
     CLI says so."""
     assert main(["orbit", "--controller", "pitch-feedback", "--json", "--duration", "8"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert d["jacobian_method"] == "fd"
+    assert d["jacobian_method"] == "exact"
     assert d["residual"] < 1e-9
     k = d["strides_per_period"]
     assert k > 1
