@@ -177,7 +177,8 @@ def controlled_fixed_point(
     residual (or makes the robot fall) up to five times. Default integrator: DOPRI5 at
     rtol 1e-11 / atol 1e-12, so the map is accurate well below ``tol``. MapError, saying
     why, if the discrete modes at the section change, Newton stalls or no fixed point is
-    found within ``max_iter`` iterations. ``progress``: optional callable(str), told the
+    found within ``max_iter`` iterations; a Python controller that raises in a stride
+    stops the search with its ControllerError. ``progress``: optional callable(str), told the
     settling run and each Newton iteration's residual.
 
     ``strides``: strides per period of the orbit, the fixed point of the map's

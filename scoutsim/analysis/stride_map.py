@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..control.dispatch import check_state_access, plan_controller
+from ..control.protocol import ControllerError, controller_name
 from ..names import ContactMode, Leg
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
 from ..simulation.engine import EXTENDED_ROWS, start_engine
@@ -206,10 +207,12 @@ class StrideMap:
     ) -> Crossing:
         """Run from ``start`` (a HybridState at a section sample, or None: the default
         start) for ``settle_s`` [s], then to the ``strides``-th section sample. MapError if
-        the robot falls, the controller fails or a stride takes longer than
-        ``max_period``. ``exact``: also the map's Jacobian dz'/dz, carried with the run
-        (``start`` a HybridState, no settling; a controller the compiled loop runs: the
-        built-in law or a CompiledController)."""
+        the robot falls, the controller stops the run (non-finite torques, a compiled
+        controller's status) or a stride takes longer than ``max_period``;
+        ControllerError if a Python controller raises (its exception the cause).
+        ``exact``: also the map's Jacobian dz'/dz, carried with the run (``start`` a
+        HybridState, no settling; a controller the compiled loop runs: the built-in law
+        or a CompiledController)."""
         if exact and (not isinstance(start, HybridState) or settle_s != 0.0):
             raise ValueError("exact: the Jacobian is of the map from a HybridState start")
         if exact and not self.compiled:
@@ -329,6 +332,29 @@ class StrideMap:
 
     @staticmethod
     def _check(eng, what: str) -> None:
+        """MapError if the run of ``eng`` has stopped (the robot fell, the integration
+        failed, the controller stopped it: no stride, a fact about the closed loop).
+        A Python controller's own exception (a bug in its code, which a restart from a
+        section state can reach where a run from the start does not) is raised as
+        :class:`~scoutsim.control.protocol.ControllerError` with that exception as its
+        cause, and a Ctrl-C that reached it as KeyboardInterrupt: neither says anything
+        about the orbit."""
+        bridge = eng.bridge
+        if bridge is not None and bridge.interrupted:
+            raise KeyboardInterrupt
+        if eng.stopped and bridge is not None and bridge.failure is not None:
+            sample, _, exc = bridge.failure
+            if exc is not None:
+                dt = float(eng.dt)
+                raise ControllerError(
+                    f"controller {controller_name(bridge.controller)}.command(t = "
+                    f"{sample * dt:.10g} s, sensors) raised {type(exc).__name__}: {exc}; "
+                    f"the stride map's run ({what}, t from its start at a section state) "
+                    "stopped at that sample",
+                    controller=bridge.controller,
+                    t=sample * dt,
+                    sample=sample,
+                ) from exc
         if eng.stopped:
             raise MapError(
                 f"the robot did not complete {what}: the run stopped ({eng.status_name}) "

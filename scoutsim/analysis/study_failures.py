@@ -13,8 +13,9 @@ Every row of a study has a ``status``:
   the parameters). It is left out of fractions, as a basin map's invalid starts are.
 - ``"error"``: the study could not run the point, so the point says nothing about the
   robot and is never counted as "did not bound": the controller could not be made (its
-  factory could not be imported, or raised), it raised inside the run (a
-  ControllerError whose cause is the controller's own exception: a bug in its code), the
+  factory could not be imported, or raised), it raised inside the run or inside the
+  periodic-orbit search of the point (a ControllerError whose cause is the controller's
+  own exception: a bug in its code), the
   task could not be loaded in the worker (an ImportError or AttributeError on
   unpickling), the worker died twice, or any other exception.
 

@@ -31,7 +31,10 @@ ORBIT_TOL = 1e-7
 
 def orbit_columns(result, robot, ctrl, task) -> dict:
     """The :data:`ORBIT_COLUMNS` of a steadily bounding run: its controlled orbit by Newton
-    from its last strides (``task``: the run's ``model`` and ``friction_coefficient``)."""
+    from its last strides (``task``: the run's ``model`` and ``friction_coefficient``).
+    Where there is none, ``orbit_status`` says why; a controller's own exception in the
+    search (a ControllerError with a cause) is raised: an error of the study, not a point
+    without an orbit."""
     from ..control.dispatch import ControllerStateError
     from ..simulation.integrator import IntegratorSettings
     from .controlled_orbit import NewtonSettings, controlled_fixed_point

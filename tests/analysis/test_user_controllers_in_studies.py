@@ -3,11 +3,12 @@
 A compiled controller and a Python controller defined in the user's own module (written
 here into a temporary directory on sys.path and PYTHONPATH), given as objects or named as
 ``MODULE:FACTORY``, give on two local worker processes and on a Dask cluster the same
-table as in one process, number for number; the law they run is Table I's, so their basin
-map equals the built-in controller's (a check independent of the parallel machinery). A
-controller that cannot be sent to a worker (a closure) is refused before any point runs;
-a point the study could not run is an error of the study (StudyError, or a row with
-status "error" counted apart), never a start that did not bound."""
+table as in one process, number for number, a sweep's periodic orbits included; the law
+they run is Table I's, so their basin map equals the built-in controller's (a check
+independent of the parallel machinery). A controller that cannot be sent to a worker (a
+closure) is refused before any point runs; a point the study could not run is an error
+of the study (StudyError, or a row with status "error" counted apart), never a start that
+did not bound nor a bounding point without an orbit."""
 
 import json
 import math
@@ -24,7 +25,7 @@ from scoutsim.control import CompiledController
 from scoutsim.control.factory import ControllerSpec
 
 USER_MODULE = "scoutsim_user_controllers"
-USER_SOURCE = '"""A user\'s controllers, in a module of their own (written by the test)."""\nimport numpy as np\n\nfrom scoutsim.control import CompiledController\nfrom scoutsim.control import sensors as S\n\nTD, SWEEP = 0, 2                      # touchdown angles, sweep limits [rad] (back, front)\nKP, KD, KPB, KDB, TDC, LOC, L0, STALL, SLOPE, TMAX = range(4, 14)\nN = 14\nFLIGHT, RETRACTION, BRAKE = 0, 1, 2\n\n\ndef bound(t, y, p, state, torque, leg_states):\n    """Table I\'s structure written by a user: flight servo, retraction, brake."""\n    for leg in range(2):\n        angle = y[S.HIP_ANGLE + leg]\n        rate = y[S.HIP_RATE + leg]\n        compression = p[L0] - y[S.LEG_LENGTH + leg]\n        st = leg_states[leg]\n        if st == FLIGHT and compression > p[TDC]:\n            st = RETRACTION\n        elif st != FLIGHT and compression < p[LOC]:\n            st = FLIGHT\n        if st == RETRACTION and angle < p[SWEEP + leg]:\n            st = BRAKE\n        leg_states[leg] = st\n        if st == FLIGHT:\n            torque[leg] = p[KP] * (p[TD + leg] - angle) - p[KD] * rate\n        elif st == RETRACTION:\n            torque[leg] = min(0.0, max(-p[STALL] + p[SLOPE] * rate, -p[TMAX]))\n        else:\n            torque[leg] = p[KPB] * (p[SWEEP + leg] - angle) - p[KDB] * rate\n    return 0\n\n\ndef params_of(robot, c):\n    p = np.zeros(N)\n    p[TD:TD + 2] = c.touchdown_angle_back, c.touchdown_angle_front\n    p[SWEEP:SWEEP + 2] = c.sweep_limit_back, c.sweep_limit_front\n    p[KP], p[KD], p[KPB], p[KDB] = c.flight_kp_back, c.flight_kd_back, c.brake_kp_back, c.brake_kd_back\n    p[TDC], p[LOC] = c.touchdown_compression, c.liftoff_compression\n    p[L0], p[STALL], p[SLOPE], p[TMAX] = (robot.leg_rest_length, robot.stall_torque,\n                                          -robot.torque_speed_slope, robot.max_leg_torque)\n    return p\n\n\nclass PyBound:\n    """The same law as a Python controller (command(t, sensors))."""\n\n    control_period = 1e-3\n\n    def __init__(self, p, controller_parameters=None):\n        self.p = np.array(p, dtype=float)\n        self.controller_parameters = controller_parameters\n        self.leg_states = np.zeros(2, dtype=np.int64)\n\n    def reset(self, robot, sensors):\n        self.leg_states[:] = 0\n\n    def command(self, t, sensors):\n        torque = np.zeros(2)\n        bound(t, sensors.vector, self.p, None, torque, self.leg_states)\n        return float(torque[0]), float(torque[1])\n\n\ndef make_compiled(robot, params):\n    c = CompiledController(bound, params=params_of(robot, params), name="user_bound")\n    c.controller_parameters = params    # (legs start at the touchdown angles)\n    return c\n\n\ndef make_python(robot, params):\n    return PyBound(params_of(robot, params), params)\n\n\ndef make_broken(robot, params):\n    """A factory with a bug."""\n    raise RuntimeError("the factory\'s own bug")\n\n\nclass Raises(PyBound):\n    """A Python controller whose command has a bug (an AttributeError)."""\n\n    def command(self, t, sensors):\n        return sensors.no_such_reading, 0.0\n\n\nclass GivesUp(PyBound):\n    """A Python controller that returns torques that are not finite after 0.2 s."""\n\n    def command(self, t, sensors):\n        tau = super().command(t, sensors)\n        return (float("nan"), tau[1]) if t >= 0.2 else tau\n\n\ndef make_raises(robot, params):\n    return Raises(params_of(robot, params), params)\n\n\ndef make_gives_up(robot, params):\n    return GivesUp(params_of(robot, params), params)\n'
+USER_SOURCE = '"""A user\'s controllers, in a module of their own (written by the test)."""\nimport numpy as np\n\nfrom scoutsim.control import CompiledController\nfrom scoutsim.control import sensors as S\n\nTD, SWEEP = 0, 2                      # touchdown angles, sweep limits [rad] (back, front)\nKP, KD, KPB, KDB, TDC, LOC, L0, STALL, SLOPE, TMAX = range(4, 14)\nN = 14\nFLIGHT, RETRACTION, BRAKE = 0, 1, 2\n\n\ndef bound(t, y, p, state, torque, leg_states):\n    """Table I\'s structure written by a user: flight servo, retraction, brake."""\n    for leg in range(2):\n        angle = y[S.HIP_ANGLE + leg]\n        rate = y[S.HIP_RATE + leg]\n        compression = p[L0] - y[S.LEG_LENGTH + leg]\n        st = leg_states[leg]\n        if st == FLIGHT and compression > p[TDC]:\n            st = RETRACTION\n        elif st != FLIGHT and compression < p[LOC]:\n            st = FLIGHT\n        if st == RETRACTION and angle < p[SWEEP + leg]:\n            st = BRAKE\n        leg_states[leg] = st\n        if st == FLIGHT:\n            torque[leg] = p[KP] * (p[TD + leg] - angle) - p[KD] * rate\n        elif st == RETRACTION:\n            torque[leg] = min(0.0, max(-p[STALL] + p[SLOPE] * rate, -p[TMAX]))\n        else:\n            torque[leg] = p[KPB] * (p[SWEEP + leg] - angle) - p[KDB] * rate\n    return 0\n\n\ndef params_of(robot, c):\n    p = np.zeros(N)\n    p[TD:TD + 2] = c.touchdown_angle_back, c.touchdown_angle_front\n    p[SWEEP:SWEEP + 2] = c.sweep_limit_back, c.sweep_limit_front\n    p[KP], p[KD], p[KPB], p[KDB] = c.flight_kp_back, c.flight_kd_back, c.brake_kp_back, c.brake_kd_back\n    p[TDC], p[LOC] = c.touchdown_compression, c.liftoff_compression\n    p[L0], p[STALL], p[SLOPE], p[TMAX] = (robot.leg_rest_length, robot.stall_torque,\n                                          -robot.torque_speed_slope, robot.max_leg_torque)\n    return p\n\n\nclass PyBound:\n    """The same law as a Python controller (command(t, sensors)), its leg states as its\n    own state (get_state / set_state: what the periodic orbits restart strides from)."""\n\n    control_period = 1e-3\n\n    def __init__(self, p, controller_parameters=None):\n        self.p = np.array(p, dtype=float)\n        self.controller_parameters = controller_parameters\n        self.leg_states = np.zeros(2, dtype=np.int64)\n\n    def reset(self, robot, sensors):\n        self.leg_states[:] = 0\n\n    def get_state(self):\n        return tuple(float(v) for v in self.leg_states)\n\n    def set_state(self, values):\n        self.leg_states[:] = np.round(values).astype(np.int64)\n\n    def command(self, t, sensors):\n        torque = np.zeros(2)\n        bound(t, sensors.vector, self.p, None, torque, self.leg_states)\n        return float(torque[0]), float(torque[1])\n\n\ndef make_compiled(robot, params):\n    c = CompiledController(bound, params=params_of(robot, params), name="user_bound")\n    c.controller_parameters = params    # (legs start at the touchdown angles)\n    return c\n\n\ndef make_python(robot, params):\n    return PyBound(params_of(robot, params), params)\n\n\ndef make_broken(robot, params):\n    """A factory with a bug."""\n    raise RuntimeError("the factory\'s own bug")\n\n\nclass Raises(PyBound):\n    """A Python controller whose command has a bug (an AttributeError)."""\n\n    def command(self, t, sensors):\n        return sensors.no_such_reading, 0.0\n\n\nclass GivesUp(PyBound):\n    """A Python controller that returns torques that are not finite after 0.2 s."""\n\n    def command(self, t, sensors):\n        tau = super().command(t, sensors)\n        return (float("nan"), tau[1]) if t >= 0.2 else tau\n\n\ndef make_raises(robot, params):\n    return Raises(params_of(robot, params), params)\n\n\ndef make_gives_up(robot, params):\n    return GivesUp(params_of(robot, params), params)\n\n\nclass Forgets(PyBound):\n    """A Python controller with a bug only a restart from a state reaches: set_state\n    forgets the sample counter its command needs (a run from the start never calls it)."""\n\n    def reset(self, robot, sensors):\n        super().reset(robot, sensors)\n        self.samples = 0\n\n    def set_state(self, values):\n        super().set_state(values)\n        self.samples = None\n\n    def command(self, t, sensors):\n        self.samples += 1\n        return super().command(t, sensors)\n\n\ndef make_forgets(robot, params):\n    return Forgets(params_of(robot, params), params)\n'
 
 #: two starts from which the Table I law bounds steadily within 6 s
 GRID = dict(
@@ -329,3 +330,50 @@ def test_basin_pitch_rates_are_si_and_the_older_degree_keyword_still_works():
         old = basin_of_attraction(pitch_rates_deg_s=(150.0,), **kw)
     assert si.rows == old.rows
     assert si.rows[0]["pitch_rate_deg_s"] == 150.0
+
+
+#: two points at which the Table I law settles within 6 s onto orbits of one stride
+#: (0.254 s and 0.248 s)
+ORBIT_POINTS = SW.grid_points(
+    {"robot.belt_stiffness": [200.0, 350.0], "controller.touchdown_angle_front_deg": [23.0]}
+)
+
+
+def test_orbit_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(user, dask_client):
+    """sweep(orbit=True) with a user's factory: the Python one on two local workers, it
+    and the compiled one on a Dask cluster find the orbits one process finds (period,
+    strides, spectral radius, residual), number for number; the law's two forms have the
+    same orbits. (The compiled one on two local workers is left out: it costs a compilation
+    in each new worker, and its runs there are checked above.)"""
+    kw = dict(model="II", duration=6.0, orbit=True)
+    python = f"{USER_MODULE}:make_python"
+    one = SW.sweep(ORBIT_POINTS, workers=1, controller=python, **kw)
+    assert [r["orbit_status"] for r in one.rows] == ["ok", "ok"]
+    assert [r["orbit_strides"] for r in one.rows] == [1, 1]
+    assert [round(r["orbit_period_s"], 6) for r in one.rows] == [0.254, 0.248]
+    assert all(r["orbit_stable"] for r in one.rows)
+    two = SW.sweep(ORBIT_POINTS, workers=2, controller=python, **kw)
+    assert _same(two.rows, one.rows)
+    for c in (f"{USER_MODULE}:make_compiled", python):  # (one point leaves this process too)
+        dask = SW.sweep(ORBIT_POINTS[:1], scheduler=dask_client, controller=c, **kw)
+        assert _same(dask.rows, one.rows[:1]), c
+
+
+def test_a_controller_bug_in_the_orbit_search_is_an_error_of_the_sweep(user, dask_client):
+    """A Python controller whose command raises only in a stride restarted from a section
+    state (its set_state's bug): its runs bound, but its orbit search fails in the user's
+    code, so with orbit=True each point is an error of the sweep naming the controller's
+    exception, in one process and on Dask alike, never a bounding point without an orbit."""
+    kw = dict(model="II", duration=6.0, controller=f"{USER_MODULE}:make_forgets")
+    runs = SW.sweep(ORBIT_POINTS, workers=1, **kw)
+    assert [(r["status"], r["steady_bounding"]) for r in runs.rows] == [("ok", True)] * 2
+    for where in ({"workers": 1}, {"scheduler": dask_client}):
+        with pytest.warns(RuntimeWarning, match="2 of its 2 points could not be run"):
+            res = SW.sweep(ORBIT_POINTS, orbit=True, on_error="record", **where, **kw)
+        assert [r["status"] for r in res.rows] == ["error", "error"], where
+        for r in res.rows:
+            assert r["error"].startswith("ControllerError: controller Forgets.command(")
+            assert "TypeError" in r["error"] and r["orbit_status"] is None
+        assert res.settings["n_errors"] == 2
+    with pytest.raises(StudyError, match="Forgets.command"):
+        SW.sweep(ORBIT_POINTS, workers=1, orbit=True, **kw)
