@@ -7,9 +7,10 @@
    (``StrideMap.crossing(exact=True)``) against forward differences of whole strides
    (``difference_jacobian``: one stride per coordinate). Target: exact <= 0.5 x differences.
 2. Sensitivities along a 10 s run of Model II (default start, floor and integrator) with
-   n columns carried (``HybridEngine.carry_sensitivities``), against the plain run.
-   Target: <= 1 + n / 4 plain runs. (The columns here are directions of the start; a
-   parameter's column costs the same.)
+   the sensitivities to n robot parameters carried (``HybridEngine.carry_sensitivities``
+   with parameter rows: leg and belt springs and dampers, motor constants, the current
+   limit, the battery, the masses), against the plain run. Target: <= 1 + n / 4 plain
+   runs.
 3. Plain runs no slower: the plain 10 s run of this checkout against an earlier commit is
    ``benchmarks/bench_inprocess.py --base COMMIT`` (a run carries no sensitivities unless
    asked: the same compiled loop skips them).
@@ -20,6 +21,7 @@ Medians of ``--repeats`` timings, after one warm-up. Prints the machine. Asserts
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import sys
 import time
@@ -32,6 +34,7 @@ from machine import machine  # noqa: E402
 
 from scoutsim.analysis.controlled_orbit import controlled_fixed_point, difference_jacobian  # noqa: E402
 from scoutsim.analysis.stride_map import StrideMap  # noqa: E402
+from scoutsim.parameters import RobotParameters  # noqa: E402
 from scoutsim.simulation.engine import start_engine  # noqa: E402
 
 
@@ -43,6 +46,45 @@ def _median(f, repeats: int) -> float:
         f()
         times.append(time.perf_counter() - t)
     return statistics.median(times)
+
+
+#: the robot parameters whose sensitivities part 2 carries, in this order
+PARAMETERS = (
+    "leg_stiffness",
+    "leg_damping",
+    "belt_stiffness",
+    "belt_damping",
+    "torque_constant",
+    "speed_constant",
+    "armature_resistance",
+    "current_limit",
+    "battery_voltage",
+    "torso_mass",
+    "torso_inertia",
+    "leg_mass",
+    "leg_inertia",
+    "gearbox_efficiency",
+    "planetary_ratio",
+    "hip_spacing",
+)
+
+
+def _parameter_derivatives(n: int):
+    """(dP, dC, dcp) of the first ``n`` PARAMETERS: central differences of the packing."""
+    robot = RobotParameters()
+    rows = []
+    for field in PARAMETERS[:n]:
+        value = getattr(robot, field)
+        h = 1e-6 * abs(value)
+        ends = [
+            start_engine(None, 1.0, model="II", robot=dataclasses.replace(robot, **{field: v}))
+            for v in (value + h, value - h)
+        ]
+        rows.append(
+            [(getattr(ends[0], k) - getattr(ends[1], k)) / (2 * h) for k in ("P", "C")]
+            + [(ends[0].block.params - ends[1].block.params) / (2 * h)]
+        )
+    return tuple(np.array([r[i] for r in rows]) for i in range(3))
 
 
 def main() -> int:
@@ -65,10 +107,15 @@ def main() -> int:
     print(f"   forward differences    {t_fd * 1e3:8.1f} ms")
     print(f"   ratio exact / fd       {t_exact / t_fd:8.2f}   (target <= 0.5)")
 
+    derivatives = _parameter_derivatives(max(args.columns))
+
     def run(columns: int):
         e = start_engine(None, 10.0, model="II")
         if columns:
-            e.carry_sensitivities(np.eye(e.sensitivities.shape[0])[:, :columns])
+            nx = e.sensitivities.shape[0]
+            seed = np.zeros((nx + columns, columns))
+            seed[nx:, :] = np.eye(columns)
+            e.carry_sensitivities(seed, tuple(d[:columns] for d in derivatives))
         e.advance(10_001)
 
     t_plain = _median(lambda: run(0), args.repeats)
@@ -77,7 +124,7 @@ def main() -> int:
     for k in args.columns:
         t = _median(lambda k=k: run(k), max(1, args.repeats // 2))
         print(
-            f"   {k:2d} columns             {t * 1e3:8.1f} ms   {t / t_plain:6.1f} plain runs"
+            f"   {k:2d} parameters          {t * 1e3:8.1f} ms   {t / t_plain:6.1f} plain runs"
             f"   (target <= {1 + k / 4:.1f})"
         )
     print("\n3. plain runs against an earlier commit: benchmarks/bench_inprocess.py --base COMMIT")

@@ -115,7 +115,7 @@ class HybridEngine:
         self.ew = eval_workspace()
         self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
         # the sensitivities the run carries (none: no columns; carry_sensitivities)
-        self.tangent = new_tangent(0, len(block.state), len(block.y), self.rtol, self.atol)
+        self.tangent = self._new_tangent(0)
         self.out_t = np.zeros(n_total + 1)
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
@@ -337,16 +337,17 @@ class HybridEngine:
         self.n_out = self.nev = 0
         self.stepc[0] = 0
 
-    def carry_sensitivities(self, seed) -> None:
+    def carry_sensitivities(self, seed, parameters=None) -> None:
         """From now on, carry the derivatives of the extended state x = [state, toe
-        anchors [m], held commands [N m], controller state] (layout:
-        :mod:`scoutsim._core.numerics.tangent`, ``X_*``) with respect to m variables:
-        ``seed`` (NX x m) is dx/d(variables) now; :attr:`sensitivities` holds them as the
-        run goes on."""
+        anchors [m], held commands [N m], controller state, parameters] (rows:
+        :data:`EXTENDED_ROWS`) with respect to m variables: ``seed`` (NX x m) is
+        dx/d(variables) now; :attr:`sensitivities` holds them as the run goes on.
+        ``parameters``: None, or (dP, dC, dcp) for n_p parameters carried as the last n_p
+        rows of x (constant along the run): each one's derivative (n_p x size) of the
+        packed robot parameters ``P``, the Table I law's ``C`` and a compiled controller's
+        parameters (:func:`parameter_derivatives` makes them for named parameters)."""
         seed = np.asarray(seed, dtype=float)
-        tan = new_tangent(
-            seed.shape[1], len(self.block.state), len(self.block.y), self.rtol, self.atol
-        )
+        tan = self._new_tangent(seed.shape[1], parameters)
         if seed.shape != tan.Phi.shape:
             raise ValueError(
                 f"seed has shape {seed.shape}: must be ({tan.Phi.shape[0]}, m), one row per "
@@ -354,6 +355,24 @@ class HybridEngine:
             )
         tan.Phi[:] = seed
         self.tangent = tan
+
+    def _new_tangent(self, m: int, parameters=None):
+        sizes = (len(self.P), len(self.C), len(self.block.params))
+        if parameters is not None:
+            dP, dC, dcp = (np.atleast_2d(np.asarray(a, dtype=float)) for a in parameters)
+            # each parameter's largest relative change of a packed value (absolute where
+            # the value is 0), so that the difference step is relative
+            scale = np.concatenate(
+                [
+                    np.abs(d) / np.where(v != 0.0, np.abs(v), 1.0)
+                    for d, v in ((dP, self.P), (dC, self.C), (dcp, self.block.params))
+                ],
+                axis=1,
+            )
+            parameters = (dP, dC, dcp, scale.max(axis=1, initial=0.0))
+        return new_tangent(
+            m, len(self.block.state), len(self.block.y), (self.rtol, self.atol), sizes, parameters
+        )
 
     @property
     def sensitivities(self) -> np.ndarray:

@@ -77,7 +77,9 @@ X_CS = NS + NMF + 2  # the controller state (its own layout)
 
 # slots of info
 TI_NONSMOOTH = 0  # resets where a perturbed copy ended in other modes than the run
-TI_GRAZING = 1  # smallest transversality |n.f-| / (|n| |f-|) of a located event (1: none)
+#: smallest transversality |n.f-| / (|n| |f-|) of a located event, |n| taken along the
+#: carried state directions (1: none)
+TI_GRAZING = 1
 TI_EVENTS = 2  # located events differentiated
 TI_UNSUPPORTED = 3  # samples whose readings are not differentiated (a measurement model)
 NTI = 4
@@ -97,16 +99,34 @@ DIFFERENCE_STEP = 1e-6
 TangentWork = namedtuple(
     "TangentWork",
     "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
-    "ev stats imp gd w info delta",
+    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp",
 )
 
 
-def new_tangent(m: int, n_state: int, n_readings: int, rtol: float, atol: float) -> TangentWork:
+def new_tangent(
+    m: int,
+    n_state: int,
+    n_readings: int,
+    tolerances: tuple[float, float],
+    sizes: tuple[int, int, int],
+    parameters=None,
+) -> TangentWork:
     """A ``TangentWork`` for ``m`` columns (0: a run without sensitivities), a controller
-    state of ``n_state`` entries and ``n_readings`` sensor readings; ``rtol``, ``atol``: the
-    run's tolerances (the perturbed steps' error estimate is not used). ``Phi`` starts at
-    zero: the caller seeds it."""
-    nx = X_CS + n_state
+    state of ``n_state`` entries and ``n_readings`` sensor readings; ``tolerances``: the
+    run's (rtol, atol) (the perturbed steps' error estimate is not used); ``sizes``: the
+    lengths of the packed robot parameters P, the Table I law's C and the compiled
+    controller's parameters. ``parameters``: None, or (dP, dC, dcp, pscale) for n_p
+    parameters carried as the last n_p rows of x (constant along the run): each one's
+    derivative of P, C and the controller's parameters (n_p x size) and the scale of its
+    packed values (1 / the largest |P_k| it moves, so that a difference step is relative).
+    ``Phi`` starts at zero: the caller seeds it."""
+    rtol, atol = tolerances
+    n_P, n_C, n_cp = sizes
+    if parameters is None:
+        parameters = (np.zeros((0, n_P)), np.zeros((0, n_C)), np.zeros((0, n_cp)), np.zeros(0))
+    dP, dC, dcp, pscale = (np.ascontiguousarray(a, dtype=float) for a in parameters)
+    n_par = pscale.shape[0]
+    nx = X_CS + n_state + n_par
     info = np.zeros(NTI)
     info[TI_GRAZING] = 1.0
     sf = (NS, 2 * NSTIFF)
@@ -153,6 +173,13 @@ def new_tangent(m: int, n_state: int, n_readings: int, rtol: float, atol: float)
         np.zeros(nx),
         info,
         np.array([DIFFERENCE_STEP]),
+        dP,
+        dC,
+        dcp,
+        pscale,
+        np.zeros(n_P),
+        np.zeros(n_C),
+        np.zeros(n_cp),
     )
 
 
@@ -163,15 +190,57 @@ def carrying(tan):
 
 
 @kernel(inline="always")
-def _column_step(v, delta, rows):
-    """The difference step along column ``v`` (its first ``rows`` entries): ``delta`` over
-    the largest magnitude; 0 for a zero column."""
+def _column_step(v, tan, rows):
+    """The difference step along column ``v``: ``tan.delta`` over its largest magnitude,
+    among its first ``rows`` entries (state units) and its parameter rows (relative to
+    each parameter's packed values, ``tan.pscale``); 0 for a zero column."""
     scale = 0.0
     for i in range(rows):
         a = abs(v[i])
         if a > scale:
             scale = a
-    return delta / scale if scale > 0.0 else 0.0
+    npar = tan.pscale.shape[0]
+    par0 = v.shape[0] - npar
+    for i in range(npar):
+        a = abs(v[par0 + i]) * tan.pscale[i]
+        if a > scale:
+            scale = a
+    return tan.delta[0] / scale if scale > 0.0 else 0.0
+
+
+@kernel
+def _moved_parameters(e, v, P, tan):
+    """The robot's packed parameters ``P`` moved by ``e`` along the parameter rows of
+    ``v`` (``tan.dP``: each parameter's derivative of P), into ``tan.Pp``."""
+    npar = tan.pscale.shape[0]
+    par0 = v.shape[0] - npar
+    Pp = tan.Pp
+    for k in range(P.shape[0]):
+        Pp[k] = P[k]
+    for i in range(npar):
+        w = e * v[par0 + i]
+        if w != 0.0:
+            for k in range(P.shape[0]):
+                Pp[k] += w * tan.dP[i, k]
+
+
+@kernel
+def _moved_controller(e, v, C, params, tan):
+    """The Table I law's parameters ``C`` and a compiled controller's ``params`` moved by
+    ``e`` along the parameter rows of ``v``, into ``tan.Cp`` and ``tan.cpp``."""
+    npar = tan.pscale.shape[0]
+    par0 = v.shape[0] - npar
+    for k in range(C.shape[0]):
+        tan.Cp[k] = C[k]
+    for k in range(params.shape[0]):
+        tan.cpp[k] = params[k]
+    for i in range(npar):
+        w = e * v[par0 + i]
+        if w != 0.0:
+            for k in range(C.shape[0]):
+                tan.Cp[k] += w * tan.dC[i, k]
+            for k in range(params.shape[0]):
+                tan.cpp[k] += w * tan.dcp[i, k]
 
 
 @kernel
@@ -188,7 +257,7 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
             for j in range(SF0.shape[1]):
                 tw.SF0[i, j] = SF0[i, j]
     for j in range(m):
-        eps = _column_step(Phi[:, j], tan.delta[0], X_CS)
+        eps = _column_step(Phi[:, j], tan, X_CS)
         if eps == 0.0:
             for i in range(NS):
                 out[X_S + i, j] = 0.0
@@ -201,8 +270,10 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
                 mfp[i] = mf[i] + e * Phi[X_MF + i, j]
             for i in range(2):
                 cmdp[i] = cmd[i] + e * Phi[X_CMD + i, j]
-            evaluate_ws(sp, P, mi, mfp, cmdp, tw.K[0], tw.aux_new, tw.ew, False, tw.ew[3], False)
-            do_step(method, sp, h, P, mi, mfp, cmdp, tw, True, False)
+            _moved_parameters(e, Phi[:, j], P, tan)
+            Pq = tan.Pp
+            evaluate_ws(sp, Pq, mi, mfp, cmdp, tw.K[0], tw.aux_new, tw.ew, False, tw.ew[3], False)
+            do_step(method, sp, h, Pq, mi, mfp, cmdp, tw, True, False)
             evaluated_state(tw.ew, tw.y_new)
             if side == 0:
                 for i in range(NS):
@@ -231,7 +302,8 @@ def snapshot(s, mi, mf, f, tan):
 @kernel
 def _perturbed_copy(e, v, P, cmd, tan):
     """The snapshot (:func:`snapshot`) moved by ``e`` along the direction ``v`` (NX rows),
-    projected and evaluated (outputs in ``tan.auxp``) under the snapshot's modes."""
+    projected and evaluated (outputs in ``tan.auxp``) under the snapshot's modes, with the
+    packed parameters moved with it (``tan.Pp``)."""
     sp, mfp, mip, auxp, cmdp, ds = tan.sp, tan.mfp, tan.mip, tan.auxp, tan.cmdp, tan.ds
     ew = tan.work.ew
     for i in range(NS):
@@ -242,7 +314,8 @@ def _perturbed_copy(e, v, P, cmd, tan):
         cmdp[i] = cmd[i] + e * v[X_CMD + i]
     for i in range(NMI):
         mip[i] = tan.mi0[i]
-    evaluate_ws(sp, P, mip, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
+    _moved_parameters(e, v, P, tan)
+    evaluate_ws(sp, tan.Pp, mip, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
     evaluated_state(ew, sp)
 
 
@@ -250,14 +323,14 @@ def _perturbed_copy(e, v, P, cmd, tan):
 def _event_slope(k, v, P, cmd, tan):
     """The derivative of event function ``k`` at the snapshot along ``v`` (central
     differences; 0 along a zero direction)."""
-    eps = _column_step(v, tan.delta[0], X_CS)
+    eps = _column_step(v, tan, X_CS)
     if eps == 0.0:
         return 0.0
     _perturbed_copy(eps, v, P, cmd, tan)
-    event_values(tan.sp, tan.auxp, P, tan.mip, tan.ep)
+    event_values(tan.sp, tan.auxp, tan.Pp, tan.mip, tan.ep)
     g_hi = tan.ep[k]
     _perturbed_copy(-eps, v, P, cmd, tan)
-    event_values(tan.sp, tan.auxp, P, tan.mip, tan.ep)
+    event_values(tan.sp, tan.auxp, tan.Pp, tan.mip, tan.ep)
     return (g_hi - tan.ep[k]) / (2.0 * eps)
 
 
@@ -268,7 +341,7 @@ def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
     ``tan.out[:, j]`` (central differences); a copy that ends in other modes than the run
     (``mi``) is counted in ``info[TI_NONSMOOTH]``."""
     out = tan.out
-    eps = _column_step(v, tan.delta[0], X_CS)
+    eps = _column_step(v, tan, X_CS)
     if eps == 0.0:
         for i in range(X_CMD):
             out[i, j] = 0.0
@@ -276,10 +349,11 @@ def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
     for side in range(2):
         e = eps if side == 0 else -eps
         _perturbed_copy(e, v, P, cmd, tan)
+        Pq = tan.Pp
         if k >= 0:
-            apply_event(k, t, tan.sp, P, tan.mip, tan.mfp, tan.auxp, tan.ev, 0, tan.stats, tan.imp)
+            apply_event(k, t, tan.sp, Pq, tan.mip, tan.mfp, tan.auxp, tan.ev, 0, tan.stats, tan.imp)
         log = EventLog(tan.ev, tan.stats)
-        settle_ws(t, tan.sp, P, tan.mip, tan.mfp, tan.cmdp, tan.ds, tan.auxp, log, 0, tan.work.ew)
+        settle_ws(t, tan.sp, Pq, tan.mip, tan.mfp, tan.cmdp, tan.ds, tan.auxp, log, 0, tan.work.ew)
         for i in range(NMI):
             if tan.mip[i] != mi[i]:
                 tan.info[TI_NONSMOOTH] += 1
@@ -327,13 +401,18 @@ def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
     ff = 0.0
     for i in range(NS):
         ff += tan.f0[i] * tan.f0[i]
-    nn = 0.0
+    nn = 0.0  # the event function's largest slope per unit state along a column
     for j in range(m):
         gd[j] = _event_slope(k, Phi[:, j], P, cmd, tan)
-        nn = max(nn, abs(gd[j]))
-    tr = abs(nf) / max(np.sqrt(ff) * nn, 1e-300)
-    if tr < info[TI_GRAZING]:
-        info[TI_GRAZING] = tr
+        vv = 0.0
+        for i in range(NS):
+            vv += Phi[X_S + i, j] * Phi[X_S + i, j]
+        if vv > 0.0:
+            nn = max(nn, abs(gd[j]) / np.sqrt(vv))
+    if nn > 0.0:
+        tr = abs(nf) / max(np.sqrt(ff) * nn, 1e-300)
+        if tr < info[TI_GRAZING]:
+            info[TI_GRAZING] = tr
     for j in range(m):
         c = gd[j] / nf if nf != 0.0 else 0.0
         gd[j] = c
@@ -355,7 +434,7 @@ def tangent_projection(s, P, mi, mf, tan):
     Phi, out, sp, mfp = tan.Phi, tan.out, tan.sp, tan.mfp
     m = Phi.shape[1]
     for j in range(m):
-        eps = _column_step(Phi[:, j], tan.delta[0], X_CMD)
+        eps = _column_step(Phi[:, j], tan, X_CMD)
         if eps == 0.0:
             continue
         for side in range(2):
@@ -364,7 +443,8 @@ def tangent_projection(s, P, mi, mf, tan):
                 sp[i] = s[i] + e * Phi[X_S + i, j]
             for i in range(NMF):
                 mfp[i] = mf[i] + e * Phi[X_MF + i, j]
-            project_state(sp, P, mi, mfp)
+            _moved_parameters(e, Phi[:, j], P, tan)
+            project_state(sp, tan.Pp, mi, mfp)
             for i in range(NS):
                 if side == 0:
                     out[i, j] = sp[i]
@@ -403,7 +483,7 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
     if is_set(cb.geom[SG_MEASURED]):
         tan.info[TI_UNSUPPORTED] += 1
     for j in range(m):
-        eps = _column_step(Phi[:, j], tan.delta[0], Phi.shape[0])
+        eps = _column_step(Phi[:, j], tan, Phi.shape[0] - tan.pscale.shape[0])
         if eps == 0.0:
             for i in range(2 + nc):
                 out[X_CMD + i, j] = 0.0
@@ -419,16 +499,19 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
                 lsp[i] = tan.ls0[i]
             for i in range(nc):
                 csp[i] = tan.cs0[i] + e * Phi[X_CS + i, j]
+            _moved_parameters(e, Phi[:, j], P, tan)
+            Pq = tan.Pp
+            _moved_controller(e, Phi[:, j], C, cb.params, tan)
             if builtin and not is_set(cb.geom[SG_MEASURED]):
                 read_encoders(sp, is_set(cb.geom[SG_MOTOR_SIDE]), yp)
             else:
-                evaluate_ws(sp, P, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
+                evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
                 evaluated_state(ew, sp)
-                true_readings(sp, ds, auxp, P[P_G], cb.geom, yp)
+                true_readings(sp, ds, auxp, Pq[P_G], cb.geom, yp)
             if builtin:
-                bounding_step(yp, C, lsp, cmdp, trp)
+                bounding_step(yp, tan.Cp, lsp, cmdp, trp)
             else:
-                call_controller(cb.ints[CB_ADDRESS], t, yp, cb.params, csp, cmdp, lsp)
+                call_controller(cb.ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
             for i in range(2):
                 if side == 0:
                     out[X_CMD + i, j] = cmdp[i]
