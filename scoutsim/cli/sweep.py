@@ -194,6 +194,8 @@ def execute(args) -> int:
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = make_controller(law, cparams, robot, on_workers=True)
+    if args.orbit:
+        _check_orbit_controller(args, law, cparams, robot)
     out = out_dir(args.out)
     progress = show_progress(args)
     wall0 = time.perf_counter()
@@ -283,3 +285,18 @@ def execute(args) -> int:
             file=sys.stderr,
         )
     return 1 if errors else 0
+
+
+def _check_orbit_controller(args, law, cparams, robot) -> None:
+    """UsageError before any point runs if ``--orbit`` cannot restart the controller's
+    strides from section states (a Python controller without get_state / set_state):
+    every point would report it instead of an orbit."""
+    from ..control.dispatch import ControllerStateError, check_state_access, plan_controller
+
+    try:
+        check_state_access(plan_controller(make_controller(law, cparams, robot), args.model, robot))
+    except ControllerStateError as exc:
+        raise UsageError(
+            f"--orbit with --controller {args.controller}: {exc}; the orbit search restarts "
+            "strides from section states, which include the controller's own state"
+        ) from exc

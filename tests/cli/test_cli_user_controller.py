@@ -256,7 +256,7 @@ def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     """orbit: the factory's parameters are the ones whose orbit is found (its front
     touchdown angle differs from the default orbit's); a controller that does not bound
     is reported (exit 1, the reason), and a Python controller that offers no state of its
-    own is refused with the reason (exit 2)."""
+    own is refused with the reason (exit 2), by sweep --orbit as well."""
     own = scoutsim(
         user_dir,
         "orbit",
@@ -282,3 +282,22 @@ def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     )
     assert refused.returncode == 2
     assert "get_state" in refused.stderr
+    # a sweep with --orbit refuses it before any point runs (every point would report
+    # it), and writes nothing
+    swept = scoutsim(
+        user_dir,
+        "sweep",
+        "--controller",
+        "usermod:limp",
+        "--orbit",
+        "--grid",
+        "robot.belt_stiffness=300:400:2",
+        "--duration",
+        "0.5",
+        "--out",
+        "s",
+        cwd=tmp_path,
+    )
+    assert swept.returncode == 2
+    assert "--orbit" in swept.stderr and "get_state" in swept.stderr
+    assert not (tmp_path / "s" / "sweep.csv").exists()
