@@ -106,7 +106,8 @@ class ControlledOrbit:
     #: how it was found: model, friction_coefficient, robot, controller, integrator and
     #: section (what orbit_sensitivity needs to perturb it)
     setting: dict = field(default_factory=dict, repr=False)
-    #: how ``jacobian`` was obtained: "exact" (carried with the run) or "fd" (differences)
+    #: how ``jacobian`` was obtained: "exact" (carried with the run) or "fd" (differences:
+    #: asked for, or where the carried one does not exist, :func:`stride_jacobian`)
     jacobian_method: str = "fd"
 
     @property
@@ -256,6 +257,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
     like = c.start
     hist: list[float] = []
     J = None
+    used = how[0]
     it = 0
     for it in range(max_iter + 1):
         _same_modes(disc, c.state)
@@ -265,7 +267,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
         say(f"Newton iteration {it}: residual max|P(z)-z| = {res:.2e}")
         if res < tol or it == max_iter:
             break
-        J = stride_jacobian(m, z, like, c, how, strides)
+        J, used = stride_jacobian(m, z, like, c, how, strides)
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
         z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
     if hist[-1] >= tol:
@@ -274,7 +276,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
             f"iterations (history {[f'{v:.1e}' for v in hist]})"
         )
     if J is None or it > 0:
-        J = stride_jacobian(m, z, like, c, how, strides)
+        J, used = stride_jacobian(m, z, like, c, how, strides)
     hs = m.hs_of(z, like)
     T = c.period_s
     r = simulate(
@@ -310,7 +312,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
         strides=strides,
         section_label=m.section_label,
         setting=dict(common, integrator=integ, section=m.section),
-        jacobian_method=how[0],
+        jacobian_method=used,
     )
 
 
@@ -385,26 +387,22 @@ def cell_change(base: Crossing, c: Crossing) -> str:
     return ""
 
 
-def stride_jacobian(m: StrideMap, z, like, base: Crossing, how, strides: int) -> np.ndarray:
-    """dP/dz at ``z`` (whose stride is ``base``) by ``how`` = (method, step): "exact",
-    carried with one more run of the stride (MapError if that run leaves the cell of
-    ``base``, or a reset on it is not differentiable), or "fd" (:func:`difference_jacobian`
-    with the relative step)."""
+def stride_jacobian(
+    m: StrideMap, z, like, base: Crossing, how, strides: int
+) -> tuple[np.ndarray, str]:
+    """dP/dz at ``z`` (whose stride is ``base``) by ``how`` = (method, step), and the method
+    that gave it: "exact", carried with one more run of the stride, or "fd"
+    (:func:`difference_jacobian` with the relative step). Where the carried Jacobian does
+    not exist (a reset on the stride decided by a margin below the difference step: a
+    perturbed copy took another branch; or the run carrying it left the stride's cell),
+    the differences of whole strides are taken instead, and the method says so."""
     method, step = how
-    if method == "fd":
-        return difference_jacobian(m, z, like, base, step, strides)
-    c = m.crossing(m.hs_of(z, like), strides=strides, exact=True)
-    why = cell_change(base, c)
-    if why:
-        raise MapError(f"the stride carrying the Jacobian left the stride's cell: {why}")
-    assert c.jacobian is not None and c.smoothness is not None, "an exact crossing has both"
-    if c.smoothness["nonsmooth"]:
-        raise MapError(
-            "the stride map is not differentiable here: a reset on the stride takes another "
-            f"branch under a perturbation ({c.smoothness['nonsmooth']} such resets; the "
-            f"smallest event transversality {c.smoothness['transversality']:.1e})"
-        )
-    return c.jacobian
+    if method == "exact":
+        c = m.crossing(m.hs_of(z, like), strides=strides, exact=True)
+        assert c.jacobian is not None and c.smoothness is not None, "an exact crossing has both"
+        if not cell_change(base, c) and not c.smoothness["nonsmooth"]:
+            return c.jacobian, "exact"
+    return difference_jacobian(m, z, like, base, step, strides), "fd"
 
 
 def difference_jacobian(

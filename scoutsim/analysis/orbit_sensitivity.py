@@ -345,7 +345,7 @@ def _radii(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: floa
         c = m.crossing(m.hs_of(orbit.z + sign * h * dz, like), strides=k)
         assert c.start is not None, "a crossing from a HybridState keeps its start"
         how = (orbit.jacobian_method, 1e-6)
-        J = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
+        J, _ = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
         out.append(float(np.max(np.abs(np.linalg.eigvals(J)))))
     if len(signs) == 1:
         out.append(float(np.max(np.abs(orbit.multipliers))))
