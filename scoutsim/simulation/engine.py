@@ -23,6 +23,7 @@ from .._core.numerics.tangent import (
     TI_EVENTS,
     TI_GRAZING,
     TI_NONSMOOTH,
+    TI_SAMPLE_MARGIN,
     TI_UNSUPPORTED,
     X_CMD,
     X_CS,
@@ -384,13 +385,18 @@ class HybridEngine:
         perturbed copy ended in other modes than the run: not differentiable there),
         ``transversality`` (the smallest |n.f| / (|n| |f|) of a located event: near 0, an
         event that grazes), ``events`` (located events differentiated), ``undifferentiated``
-        (control samples whose measurement model, noise or delay, was not differentiated)."""
+        (control samples whose measurement model, noise or delay, was not differentiated),
+        ``sample_margin_s`` (the smallest time [s] from a control sample to the zero of an
+        event function approaching it: an event that close to a sample boundary crosses
+        it under a perturbation, where the sampled map jumps; the derivatives are those
+        of the side the run took)."""
         info = self.tangent.info
         return {
             "nonsmooth": int(info[TI_NONSMOOTH]),
             "transversality": float(info[TI_GRAZING]),
             "events": int(info[TI_EVENTS]),
             "undifferentiated": int(info[TI_UNSUPPORTED]),
+            "sample_margin_s": float(info[TI_SAMPLE_MARGIN]),
         }
 
     def advance(self, k_stop: int):

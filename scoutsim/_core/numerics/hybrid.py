@@ -71,7 +71,14 @@ from .events import (
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .step_energy import accounting, power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
-from .tangent import carrying, snapshot, tangent_flow, tangent_projection, tangent_reset
+from .tangent import (
+    carrying,
+    sample_margin,
+    snapshot,
+    tangent_flow,
+    tangent_projection,
+    tangent_reset,
+)
 from .transitions import apply_event, record_friction, settle_ws
 
 # slots of run()'s hwork array, carried between calls
@@ -413,6 +420,8 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             take_step(h, work.energy, sc.energy)
         if carrying(tan):
             tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan)
+            if last:
+                sample_margin(h, armed, e_old, e_new, tan)
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]

@@ -82,7 +82,12 @@ TI_NONSMOOTH = 0  # resets where a perturbed copy ended in other modes than the 
 TI_GRAZING = 1
 TI_EVENTS = 2  # located events differentiated
 TI_UNSUPPORTED = 3  # samples whose readings are not differentiated (a measurement model)
-NTI = 4
+#: the smallest time [s] from a control sample to the zero of an armed event function
+#: that was approaching it over the period's last step (linear extrapolation; 1: none):
+#: an event that close to a sample boundary moves to the other side of it under a
+#: perturbation of that size, where the sampled map jumps
+TI_SAMPLE_MARGIN = 4
+NTI = 5
 
 #: relative size of the central-difference step along a column (of the largest entry of
 #: the column, in the state's units)
@@ -129,6 +134,7 @@ def new_tangent(
     nx = X_CS + n_state + n_par
     info = np.zeros(NTI)
     info[TI_GRAZING] = 1.0
+    info[TI_SAMPLE_MARGIN] = 1.0
     sf = (NS, 2 * NSTIFF)
     none = np.zeros(0)
     work = StepWork(
@@ -284,6 +290,19 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
     for j in range(m):
         for i in range(NS):
             Phi[X_S + i, j] = out[X_S + i, j]
+
+
+@kernel
+def sample_margin(h, armed, e_start, e_end, tan):
+    """Keep in ``info[TI_SAMPLE_MARGIN]`` the time from the control sample ending the last
+    step (of size ``h`` [s]) to the zero of each armed event function falling over it
+    (values ``e_start``, ``e_end`` at its ends), extrapolated linearly."""
+    for k in range(e_end.shape[0]):
+        fall = e_start[k] - e_end[k]
+        if armed[k] and e_end[k] > 0.0 and fall > 0.0:
+            dt = e_end[k] * h / fall
+            if dt < tan.info[TI_SAMPLE_MARGIN]:
+                tan.info[TI_SAMPLE_MARGIN] = dt
 
 
 @kernel

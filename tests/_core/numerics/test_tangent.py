@@ -167,3 +167,19 @@ def test_a_parameter_column_matches_differences_of_runs(field):
     assert base.smoothness()["events"] >= 10
     # measured: 4e-7 .. 2e-5 (the differences' own error)
     assert np.abs(carried - fd).max() < 1e-3 * np.abs(fd).max()
+
+
+def test_an_event_near_a_sample_boundary_is_reported():
+    """The ideal actuator on a no-slip floor releases the back toe at a control sample (the
+    new command makes the ground pull): the normal force is 0.8 us from its zero at that
+    sample, so a perturbation of the start moves the lift-off across the sample boundary,
+    where the sampled map jumps (differences of runs there average two branches). The
+    run carrying derivatives says how close: the time from a sample to the zero of an
+    event function approaching it."""
+    base = start_engine(
+        None, 1.0, model="ideal", integrator=TIGHT, friction_coefficient=float("inf")
+    )
+    _, before = _carried(base, 160, SMOOTH_COLUMNS)
+    _, at = _carried(base, 161, SMOOTH_COLUMNS)
+    assert before.smoothness()["sample_margin_s"] > 1e-4
+    assert at.smoothness()["sample_margin_s"] < 1e-5
