@@ -21,7 +21,6 @@ Medians of ``--repeats`` timings, after one warm-up. Prints the machine. Asserts
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import statistics
 import sys
 import time
@@ -34,8 +33,8 @@ from machine import machine  # noqa: E402
 
 from scoutsim.analysis.controlled_orbit import controlled_fixed_point, difference_jacobian  # noqa: E402
 from scoutsim.analysis.stride_map import StrideMap  # noqa: E402
-from scoutsim.parameters import RobotParameters  # noqa: E402
 from scoutsim.simulation.engine import start_engine  # noqa: E402
+from scoutsim.simulation.sensitivities import robot_parameter_derivatives  # noqa: E402
 
 
 def _median(f, repeats: int) -> float:
@@ -69,24 +68,6 @@ PARAMETERS = (
 )
 
 
-def _parameter_derivatives(n: int):
-    """(dP, dC, dcp) of the first ``n`` PARAMETERS: central differences of the packing."""
-    robot = RobotParameters()
-    rows = []
-    for field in PARAMETERS[:n]:
-        value = getattr(robot, field)
-        h = 1e-6 * abs(value)
-        ends = [
-            start_engine(None, 1.0, model="II", robot=dataclasses.replace(robot, **{field: v}))
-            for v in (value + h, value - h)
-        ]
-        rows.append(
-            [(getattr(ends[0], k) - getattr(ends[1], k)) / (2 * h) for k in ("P", "C")]
-            + [(ends[0].block.params - ends[1].block.params) / (2 * h)]
-        )
-    return tuple(np.array([r[i] for r in rows]) for i in range(3))
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
@@ -107,7 +88,7 @@ def main() -> int:
     print(f"   forward differences    {t_fd * 1e3:8.1f} ms")
     print(f"   ratio exact / fd       {t_exact / t_fd:8.2f}   (target <= 0.5)")
 
-    derivatives = _parameter_derivatives(max(args.columns))
+    derivatives = robot_parameter_derivatives(PARAMETERS[: max(args.columns)], model="II")
 
     def run(columns: int):
         e = start_engine(None, 10.0, model="II")

@@ -30,8 +30,9 @@ from ..control.dispatch import check_state_access, plan_controller
 from ..control.protocol import ControllerError, controller_name
 from ..names import ContactMode, Leg
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-from ..simulation.engine import EXTENDED_ROWS, start_engine
+from ..simulation.engine import start_engine
 from ..simulation.integrator import IntegratorSettings
+from ..simulation.sensitivities import EXTENDED_ROWS
 from ..state import HybridState, state_index, state_vector
 from .poincare import MapError
 
@@ -290,7 +291,7 @@ class StrideMap:
     # -- the Jacobian carried with the run ---------------------------------------------------
     def _seed(self, hs: HybridState, nx: int) -> np.ndarray:
         """dx/dz (nx rows) at the start :meth:`hs_of` makes: x is the run's extended state
-        (rows :data:`~scoutsim.simulation.engine.EXTENDED_ROWS`), its x coordinate 0, its
+        (rows :data:`~scoutsim.simulation.sensitivities.EXTENDED_ROWS`), its x coordinate 0, its
         anchors, controller state and (but for the built-in law) held torques those of z."""
         return self._coordinates(hs, nx).T
 

@@ -133,6 +133,8 @@ def execute(args) -> int:
     if not args.passive:
         controller = make_controller(law, cparams, robot)
     names = _sensitivity_names(args, controller)
+    if not args.passive and args.jacobian == "exact":
+        _check_exact(args, controller, robot)
     orb: PassiveOrbit | ControlledOrbit
     try:
         if args.passive:
@@ -156,8 +158,6 @@ def execute(args) -> int:
                 newton=NewtonSettings(jacobian=args.jacobian),
             )
     except ValueError as exc:
-        if args.jacobian == "exact" and str(exc).startswith("jacobian = 'exact'"):
-            raise UsageError(f"--jacobian exact: {exc}") from exc  # a Python controller
         if args.section is None or not str(exc).startswith("section ="):
             raise
         raise UsageError(f"--section {args.section}: {exc}") from exc  # not this controller's
@@ -309,3 +309,15 @@ def _print_controlled(args, orb, d) -> None:
         f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
         "Newton iterations"
     )
+
+
+def _check_exact(args, controller, robot) -> None:
+    """UsageError if ``--jacobian exact`` is asked of a controller the compiled loop does
+    not run (a Python controller: its stride map is differenced)."""
+    from ..control.dispatch import plan_controller
+
+    if plan_controller(controller, args.model, robot).kind not in ("builtin", "compiled"):
+        raise UsageError(
+            f"--jacobian exact: controller {args.controller} runs in Python, outside the "
+            "compiled loop that carries the derivatives; use --jacobian fd (its default)"
+        )

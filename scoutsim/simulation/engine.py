@@ -19,18 +19,6 @@ from .._core.numerics.dopri5 import eval_workspace
 from .._core.numerics.hybrid import HW_EVAL_KEPT, HW_STEP, NHW, STEP_HEADROOM
 from .._core.numerics.stats import NSTAT, S_HMIN, STAT_NAMES
 from .._core.numerics.stepper import METHOD_AUTO
-from .._core.numerics.tangent import (
-    TI_EVENTS,
-    TI_GRAZING,
-    TI_NONSMOOTH,
-    TI_SAMPLE_MARGIN,
-    TI_UNSUPPORTED,
-    X_CMD,
-    X_CS,
-    X_MF,
-    X_S,
-    new_tangent,
-)
 from .._core.numerics.work import Plant
 from ..control.bounding import C_KDB_B, C_KDB_F, C_KPB_B, C_KPB_F, SCHEDULABLE
 from ..control.dispatch import (
@@ -46,6 +34,7 @@ from ..state import HybridState, InitialState
 from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, RunSetup, assemble
 from .budgets import EVENT_ROWS_PER_S
 from .integrator import METHOD_CODES, IntegratorSettings
+from .sensitivities import engine_tangent, smoothness
 
 __all__ = ["HybridEngine", "start_controller", "start_engine", "RETUNABLE"]
 
@@ -116,7 +105,7 @@ class HybridEngine:
         self.ew = eval_workspace()
         self.sfwork = np.zeros((L.NS, 2 * NSTIFF))
         # the sensitivities the run carries (none: no columns; carry_sensitivities)
-        self.tangent = self._new_tangent(0)
+        self.tangent = engine_tangent(self, 0)
         self.out_t = np.zeros(n_total + 1)
         self.out_s = np.zeros((n_total + 1, L.NS))
         self.out_aux = np.zeros((n_total + 1, L.NAUX))
@@ -341,14 +330,20 @@ class HybridEngine:
     def carry_sensitivities(self, seed, parameters=None) -> None:
         """From now on, carry the derivatives of the extended state x = [state, toe
         anchors [m], held commands [N m], controller state, parameters] (rows:
-        :data:`EXTENDED_ROWS`) with respect to m variables: ``seed`` (NX x m) is
-        dx/d(variables) now; :attr:`sensitivities` holds them as the run goes on.
-        ``parameters``: None, or (dP, dC, dcp) for n_p parameters carried as the last n_p
-        rows of x (constant along the run): each one's derivative (n_p x size) of the
-        packed robot parameters ``P``, the Table I law's ``C`` and a compiled controller's
-        parameters (:func:`parameter_derivatives` makes them for named parameters)."""
+        :data:`~scoutsim.simulation.sensitivities.EXTENDED_ROWS`) with respect to m
+        variables: ``seed`` (NX x m) is dx/d(variables) now; :attr:`sensitivities` holds
+        them as the run goes on. ``parameters``: None, or (dP, dC, dcp) for n_p parameters
+        carried as the last n_p rows of x (constant along the run): their derivatives of
+        the packed arrays
+        (:func:`~scoutsim.simulation.sensitivities.robot_parameter_derivatives`). A Python
+        controller runs outside the compiled loop and is not differentiated: refused."""
+        if self.bridge is not None:
+            raise ValueError(
+                "carry_sensitivities: a Python controller runs outside the compiled loop and "
+                "is not differentiated (the built-in law and a CompiledController are)"
+            )
         seed = np.asarray(seed, dtype=float)
-        tan = self._new_tangent(seed.shape[1], parameters)
+        tan = engine_tangent(self, seed.shape[1], parameters)
         if seed.shape != tan.Phi.shape:
             raise ValueError(
                 f"seed has shape {seed.shape}: must be ({tan.Phi.shape[0]}, m), one row per "
@@ -357,47 +352,15 @@ class HybridEngine:
         tan.Phi[:] = seed
         self.tangent = tan
 
-    def _new_tangent(self, m: int, parameters=None):
-        sizes = (len(self.P), len(self.C), len(self.block.params))
-        if parameters is not None:
-            dP, dC, dcp = (np.atleast_2d(np.asarray(a, dtype=float)) for a in parameters)
-            # each parameter's largest relative change of a packed value (absolute where
-            # the value is 0), so that the difference step is relative
-            scale = np.concatenate(
-                [
-                    np.abs(d) / np.where(v != 0.0, np.abs(v), 1.0)
-                    for d, v in ((dP, self.P), (dC, self.C), (dcp, self.block.params))
-                ],
-                axis=1,
-            )
-            parameters = (dP, dC, dcp, scale.max(axis=1, initial=0.0))
-        return new_tangent(
-            m, len(self.block.state), len(self.block.y), (self.rtol, self.atol), sizes, parameters
-        )
-
     @property
     def sensitivities(self) -> np.ndarray:
         """dx/d(variables) now (NX x m; see :meth:`carry_sensitivities`)."""
         return self.tangent.Phi
 
     def smoothness(self) -> dict:
-        """What the carried sensitivities met so far: ``nonsmooth`` (resets where a
-        perturbed copy ended in other modes than the run: not differentiable there),
-        ``transversality`` (the smallest |n.f| / (|n| |f|) of a located event: near 0, an
-        event that grazes), ``events`` (located events differentiated), ``undifferentiated``
-        (control samples whose measurement model, noise or delay, was not differentiated),
-        ``sample_margin_s`` (the smallest time [s] from a control sample to the zero of an
-        event function approaching it: an event that close to a sample boundary crosses
-        it under a perturbation, where the sampled map jumps; the derivatives are those
-        of the side the run took)."""
-        info = self.tangent.info
-        return {
-            "nonsmooth": int(info[TI_NONSMOOTH]),
-            "transversality": float(info[TI_GRAZING]),
-            "events": int(info[TI_EVENTS]),
-            "undifferentiated": int(info[TI_UNSUPPORTED]),
-            "sample_margin_s": float(info[TI_SAMPLE_MARGIN]),
-        }
+        """What the carried sensitivities met so far
+        (:func:`~scoutsim.simulation.sensitivities.smoothness`)."""
+        return smoothness(self.tangent.info)
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
@@ -520,12 +483,6 @@ class HybridEngine:
             energy_flows=self.energy_flows(),
             energy_series=(_kept(self.out_energy, n) if self.energy.size else None),
         )
-
-
-#: where each part of the extended state starts in the rows of
-#: :attr:`HybridEngine.sensitivities`: the state (layout ``NS``), the toe anchors [m], the
-#: held hip commands [N m], the controller's state array
-EXTENDED_ROWS = {"state": X_S, "anchors": X_MF, "commands": X_CMD, "controller_state": X_CS}
 
 
 def start_controller(engine: HybridEngine, plan, robot: RobotParameters, start):

@@ -282,6 +282,12 @@ def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):
     )
     assert refused.returncode == 2
     assert "get_state" in refused.stderr
+    # a Python controller's stride map is differenced: --jacobian exact is refused by name
+    inexact = scoutsim(
+        user_dir, "orbit", "--controller", "usermod:limp", "--jacobian", "exact", cwd=tmp_path
+    )
+    assert inexact.returncode == 2
+    assert "--jacobian exact" in inexact.stderr and "--jacobian fd" in inexact.stderr
     # a sweep with --orbit refuses it before any point runs (every point would report
     # it), and writes nothing
     swept = scoutsim(

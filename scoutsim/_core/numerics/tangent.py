@@ -89,6 +89,9 @@ TI_UNSUPPORTED = 3  # samples whose readings are not differentiated (a measureme
 TI_SAMPLE_MARGIN = 4
 NTI = 5
 
+#: rows of the scratch event log the perturbed copies' transitions write to (a transition
+#: and its settling log a few records; log_event drops any beyond)
+EVENT_SCRATCH_ROWS = 16
 #: relative size of the central-difference step along a column (of the largest entry of
 #: the column, in the state's units)
 DIFFERENCE_STEP = 1e-6
@@ -118,7 +121,7 @@ def new_tangent(
 ) -> TangentWork:
     """A ``TangentWork`` for ``m`` columns (0: a run without sensitivities), a controller
     state of ``n_state`` entries and ``n_readings`` sensor readings; ``tolerances``: the
-    run's (rtol, atol) (the perturbed steps' error estimate is not used); ``sizes``: the
+    run's (rtol [-], atol [state units]) (the perturbed steps' error estimate is not used); ``sizes``: the
     lengths of the packed robot parameters P, the Table I law's C and the compiled
     controller's parameters. ``parameters``: None, or (dP, dC, dcp, pscale) for n_p
     parameters carried as the last n_p rows of x (constant along the run): each one's
@@ -172,7 +175,7 @@ def new_tangent(
         np.zeros(n_readings),
         np.zeros(NEV),
         np.zeros(NS),
-        np.zeros((16, NEVBUF)),
+        np.zeros((EVENT_SCRATCH_ROWS, NEVBUF)),
         np.zeros(NSTAT),
         np.zeros(NIMP),
         np.zeros(m + 1),
@@ -521,16 +524,20 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
             _moved_parameters(e, Phi[:, j], P, tan)
             Pq = tan.Pp
             _moved_controller(e, Phi[:, j], C, cb.params, tan)
+            # (projected as the run's state is, so that a direction off the constraints
+            # reads as the run would read it)
+            evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
+            evaluated_state(ew, sp)
             if builtin and not is_set(cb.geom[SG_MEASURED]):
                 read_encoders(sp, is_set(cb.geom[SG_MOTOR_SIDE]), yp)
             else:
-                evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
-                evaluated_state(ew, sp)
                 true_readings(sp, ds, auxp, Pq[P_G], cb.geom, yp)
             if builtin:
                 bounding_step(yp, tan.Cp, lsp, cmdp, trp)
             else:
-                call_controller(cb.ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
+                rc = call_controller(cb.ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
+                if rc != 0 or not (np.isfinite(cmdp[0]) and np.isfinite(cmdp[1])):
+                    tan.info[TI_NONSMOOTH] += 1  # a copy the controller refused
             for i in range(2):
                 if side == 0:
                     out[X_CMD + i, j] = cmdp[i]

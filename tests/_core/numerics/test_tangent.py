@@ -20,6 +20,7 @@ from scoutsim._core.numerics.hybrid import HW_EVAL_KEPT
 from scoutsim.parameters import RobotParameters
 from scoutsim.simulation.engine import start_engine
 from scoutsim.simulation.integrator import IntegratorSettings
+from scoutsim.simulation.sensitivities import robot_parameter_derivatives
 
 # tight tolerances, so that differences of whole runs are accurate to ~1e-5 of scale
 TIGHT = IntegratorSettings(rtol=1e-9, atol=1e-11)
@@ -83,6 +84,21 @@ def bound_start():
     return start_engine(None, 1.0, model="II", integrator=TIGHT)
 
 
+def test_a_python_controller_is_refused():
+    """A Python controller runs outside the compiled loop: its commands would be carried
+    as constants, so the engine refuses to carry derivatives through it."""
+
+    class Hold:
+        control_period = 1e-3
+
+        def command(self, t, sensors):
+            return (0.0, 0.0)
+
+    e = start_engine(None, 1.0, model="II", controller=Hold())
+    with pytest.raises(ValueError, match="Python controller"):
+        e.carry_sensitivities(np.eye(e.sensitivities.shape[0]))
+
+
 def test_carrying_sensitivities_leaves_the_run_unchanged(bound_start):
     plain = copy.deepcopy(bound_start)
     plain.advance(120)
@@ -133,13 +149,13 @@ def test_the_ideal_actuator_stride_matches_differences():
     assert _column_errors(phi, fd).max() < 1e-3
 
 
-def _packed(**robot_fields):
-    """The packed parameters (P, C, the controller's) of Model II's default start for a
-    robot with these fields (a floor friction as ``friction_coefficient``)."""
-    mu = robot_fields.pop("friction_coefficient", None)
-    robot = dataclasses.replace(RobotParameters(), **robot_fields)
-    e = start_engine(None, 1.0, model="II", integrator=TIGHT, robot=robot, friction_coefficient=mu)
-    return e, (e.P.copy(), e.C.copy(), e.block.params.copy())
+def _engine(field: str, value: float):
+    """Model II's default start at the tight tolerance with the robot field (or the
+    floor's friction) ``field`` at ``value``."""
+    if field == "friction_coefficient":
+        return start_engine(None, 1.0, model="II", integrator=TIGHT, friction_coefficient=value)
+    robot = dataclasses.replace(RobotParameters(), **{field: value})
+    return start_engine(None, 1.0, model="II", integrator=TIGHT, robot=robot)
 
 
 @pytest.mark.parametrize(
@@ -150,16 +166,18 @@ def test_a_parameter_column_matches_differences_of_runs(field):
     """A robot or floor parameter carried as a row of x (its derivative of the packed
     arrays by differences of the packing): the state's derivative after 250 ms against
     runs with the parameter moved."""
-    value = 0.8 if field == "friction_coefficient" else getattr(RobotParameters(), field)
-    h = 1e-6 * value
-    (hi, packed_hi), (lo, packed_lo) = _packed(**{field: value + h}), _packed(**{field: value - h})
-    derivative = [(a - b) / (2.0 * h) for a, b in zip(packed_hi, packed_lo)]
-    base, _ = _packed(**{field: value})
+    floor = field == "friction_coefficient"
+    value = 0.8 if floor else getattr(RobotParameters(), field)
+    run = dict(model="II", integrator=TIGHT, **({field: value} if floor else {}))
+    derivative = robot_parameter_derivatives([field], **run)
+    base = _engine(field, value)
     nx = len(_x(base))
     seed = np.zeros((nx + 1, 1))
     seed[nx, 0] = 1.0  # the parameter's own row
-    base.carry_sensitivities(seed, tuple(d[None, :] for d in derivative))
+    base.carry_sensitivities(seed, derivative)
     base.advance(250)
+    h = 1e-6 * value
+    hi, lo = _engine(field, value + h), _engine(field, value - h)
     hi.advance(250)
     lo.advance(250)
     fd = (_x(hi) - _x(lo)) / (2.0 * h)
