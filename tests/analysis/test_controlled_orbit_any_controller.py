@@ -12,7 +12,6 @@ the k-th iterate.
 
 import json
 
-import numba
 import numpy as np
 import pytest
 
@@ -22,37 +21,13 @@ from scoutsim.analysis.poincare import MapError
 from scoutsim.analysis.stride_map import StrideMap
 from scoutsim.cli import main
 from scoutsim.control.bounding import BoundingController
-from scoutsim.control.compiled import CompiledController
 from scoutsim.control.dispatch import ControllerStateError
-from scoutsim.control.pitch_feedback import (
-    PitchFeedbackController,
-    pitch_feedback_array,
-    pitch_feedback_command,
-)
-from scoutsim.control.sensors import PITCH_RATE
+from scoutsim.control.pitch_feedback import PitchFeedbackController
 from scoutsim.parameters import ControllerParameters
 from scoutsim.simulation.integrator import IntegratorSettings
 from scoutsim.state import HybridState
 
-_pf = numba.njit(pitch_feedback_command)
-
-
-def filtered_pitch_feedback(t, y, params, state, torque, leg_states):
-    """Table I with torso feedback, the pitch rate low-passed (state[0], a first-order
-    filter with a 10-sample time constant): a compiled controller with a state of its own."""
-    state[0] += 0.1 * (y[PITCH_RATE] - state[0])
-    yf = y.copy()
-    yf[PITCH_RATE] = state[0]
-    return _pf(t, yf, params, state, torque, leg_states)
-
-
-def _filtered():
-    return CompiledController(
-        filtered_pitch_feedback,
-        params=pitch_feedback_array(ControllerParameters()),
-        state=[0.0],
-        name="filtered_pitch_feedback",
-    )
+from .user_controllers import filtered
 
 
 class PythonTableI(BoundingController):
@@ -93,7 +68,7 @@ def test_a_python_controller_has_the_orbit_of_the_same_law_compiled(table_i):
 
 
 def test_a_compiled_controller_state_is_part_of_the_orbit():
-    ctrl = _filtered()
+    ctrl = filtered()
     o = controlled_fixed_point(controller=ctrl, settle_duration=8.0)
     assert o.residual < 1e-9
     i = o.z_names.index("controller_state_0")

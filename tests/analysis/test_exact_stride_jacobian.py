@@ -13,41 +13,16 @@ with a state of its own; and so must the Floquet multipliers.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 import pytest
 
 from scoutsim.analysis.controlled_orbit import cell_change, controlled_fixed_point
 from scoutsim.analysis.poincare import floquet_multipliers
 from scoutsim.analysis.stride_map import StrideMap
-from scoutsim.control.compiled import CompiledController
-from scoutsim.control.pitch_feedback import (
-    PitchFeedbackController,
-    pitch_feedback_array,
-    pitch_feedback_command,
-)
-from scoutsim.control.sensors import PITCH_RATE
+from scoutsim.control.pitch_feedback import PitchFeedbackController
 from scoutsim.parameters import ControllerParameters
 
-_pf = numba.njit(pitch_feedback_command)
-
-
-def filtered_pitch_feedback(t, y, params, state, torque, leg_states):
-    """Torso feedback on a low-passed pitch rate (state[0]): a user's compiled controller
-    with a state of its own."""
-    state[0] += 0.1 * (y[PITCH_RATE] - state[0])
-    yf = y.copy()
-    yf[PITCH_RATE] = state[0]
-    return _pf(t, yf, params, state, torque, leg_states)
-
-
-def _filtered():
-    return CompiledController(
-        filtered_pitch_feedback,
-        params=pitch_feedback_array(ControllerParameters()),
-        state=[0.0],
-        name="filtered_pitch_feedback",
-    )
+from .user_controllers import filtered
 
 
 def _central(m: StrideMap, orbit, h: float) -> np.ndarray | None:
@@ -106,7 +81,7 @@ CASES = {
 def test_exact_multipliers_are_the_limit_of_differences(case):
     setting = dict(CASES[case])
     if setting.get("controller") == "filtered":
-        setting["controller"] = _filtered()
+        setting["controller"] = filtered()
     orbit = controlled_fixed_point(settle_duration=8.0, **setting)
     assert orbit.jacobian_method == "exact"
     m = StrideMap(integrator=orbit.setting["integrator"], **setting)
