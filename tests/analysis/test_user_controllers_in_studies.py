@@ -340,13 +340,16 @@ ORBIT_POINTS = SW.grid_points(
 
 
 def test_orbit_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(user, dask_client):
-    """sweep(orbit=True) with a user's factory: the Python one on two local workers, it
-    and the compiled one on a Dask cluster find the orbits one process finds (period,
-    strides, spectral radius, residual), number for number; the law's two forms have the
-    same orbits. (The compiled one on two local workers is left out: it costs a compilation
-    in each new worker, and its runs there are checked above.)"""
+    """sweep(orbit=True) with a user's factory: the Python one on two local workers and on
+    a Dask cluster, the compiled one on a Dask cluster, find the orbits one process finds
+    (period, strides, spectral radius, residual), number for number; the law's two forms
+    have the same orbits (the compiled one's Jacobian carried with the run, the Python
+    one's by differences: the same multipliers to their accuracy). (The compiled one on
+    two local workers is left out: it costs a compilation in each new worker, and its runs
+    there are checked above.)"""
     kw = dict(model="II", duration=6.0, orbit=True)
     python = f"{USER_MODULE}:make_python"
+    compiled = f"{USER_MODULE}:make_compiled"
     one = SW.sweep(ORBIT_POINTS, workers=1, controller=python, **kw)
     assert [r["orbit_status"] for r in one.rows] == ["ok", "ok"]
     assert [r["orbit_strides"] for r in one.rows] == [1, 1]
@@ -354,9 +357,15 @@ def test_orbit_sweep_of_a_users_controller_is_the_same_on_workers_and_on_dask(us
     assert all(r["orbit_stable"] for r in one.rows)
     two = SW.sweep(ORBIT_POINTS, workers=2, controller=python, **kw)
     assert _same(two.rows, one.rows)
-    for c in (f"{USER_MODULE}:make_compiled", python):  # (one point leaves this process too)
-        dask = SW.sweep(ORBIT_POINTS[:1], scheduler=dask_client, controller=c, **kw)
-        assert _same(dask.rows, one.rows[:1]), c
+    dask = SW.sweep(ORBIT_POINTS[:1], scheduler=dask_client, controller=python, **kw)
+    assert _same(dask.rows, one.rows[:1])
+    here = SW.sweep(ORBIT_POINTS[:1], workers=1, controller=compiled, **kw)
+    dask = SW.sweep(ORBIT_POINTS[:1], scheduler=dask_client, controller=compiled, **kw)
+    assert _same(dask.rows, here.rows)
+    a, b = here.rows[0], one.rows[0]
+    assert (a["orbit_period_s"], a["orbit_strides"]) == (b["orbit_period_s"], b["orbit_strides"])
+    radius = "orbit_spectral_radius_per_stride"
+    assert abs(a[radius] - b[radius]) < 1e-3
 
 
 def test_a_controller_bug_in_the_orbit_search_is_an_error_of_the_sweep(user, dask_client):
