@@ -63,6 +63,30 @@ def dask_client_timeouts(monkeypatch):
 
 
 @pytest.fixture(scope="session")
+def dask_cluster():
+    """A local Dask cluster of two single-threaded worker processes, started once for the
+    session (each start spawns a scheduler and two workers that import scoutsim: seconds)
+    and shared by the tests that compare a study on Dask with the same study in local
+    processes; a test that kills a worker, or needs an environment set before the workers
+    start, starts its own. Skips the test without dask.distributed."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        yield cluster
+
+
+@pytest.fixture
+def dask_client(dask_cluster):
+    """A ``distributed.Client`` of the session's cluster (:func:`dask_cluster`), closed
+    after the test."""
+    import distributed
+
+    with distributed.Client(dask_cluster) as client:
+        yield client
+
+
+@pytest.fixture(scope="session")
 def symbolic_model():
     """``tools/derive_eom.py``: the equations of motion derived with SymPy from the kinetic
     and potential energies, independently of ``scoutsim._core.model`` (``mass_matrix(q,

@@ -77,17 +77,10 @@ def test_parquet_round_trip(tmp_path):
     ]
 
 
-def test_dask_cluster_gives_the_same_table_as_local(tmp_path):
-    distributed = pytest.importorskip("distributed")
+def test_dask_cluster_gives_the_same_table_as_local(tmp_path, dask_client):
     pts = grid_points(GRID)
     local = sweep(pts, model="II", duration=0.5, workers=1)
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        remote = sweep(pts, model="II", duration=0.5, scheduler=client)
+    remote = sweep(pts, model="II", duration=0.5, scheduler=dask_client)
     assert json.dumps(local.rows, sort_keys=True) == json.dumps(remote.rows, sort_keys=True)
 
 

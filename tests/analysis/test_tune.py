@@ -104,17 +104,10 @@ def test_an_interrupted_generation_resumes_to_the_uninterrupted_table(tmp_path, 
     assert _table(resumed) == _table(whole)
 
 
-def test_dask_cluster_gives_the_same_evaluations_as_local_processes():
-    distributed = pytest.importorskip("distributed")
+def test_dask_cluster_gives_the_same_evaluations_as_local_processes(dask_client):
     kw = dict(target=1.3, duration=2.0, population=4, budget=8)
     local = T.tune(ANGLES, workers=2, **kw)
-    with (
-        distributed.LocalCluster(
-            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        remote = T.tune(ANGLES, scheduler=client, **kw)
+    remote = T.tune(ANGLES, scheduler=dask_client, **kw)
     assert _table(local) == _table(remote)
 
 

@@ -73,16 +73,8 @@ def test_two_workers_give_the_same_indices(tmp_path, reference):
     assert (tmp_path / "indices.csv").read_bytes() == (reference / "indices.csv").read_bytes()
 
 
-def test_a_local_dask_cluster_gives_the_same_indices(tmp_path, reference):
-    distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        scheduler_port=0,
-        dashboard_address=":0",
-    ) as cluster:
-        assert _run(tmp_path, "--scheduler", cluster.scheduler_address, "--no-plots") == 0
+def test_a_local_dask_cluster_gives_the_same_indices(tmp_path, reference, dask_cluster):
+    assert _run(tmp_path, "--scheduler", dask_cluster.scheduler_address, "--no-plots") == 0
     assert (tmp_path / "indices.csv").read_bytes() == (reference / "indices.csv").read_bytes()
 
 

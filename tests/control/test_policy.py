@@ -315,18 +315,6 @@ def test_a_copy_sent_to_a_process_runs_the_same_run():
 GRID = dict(models=("II",), speeds=(1.0, 1.3), pitch_rates=(2.0,), heights=(0.34,), duration=3.0)
 
 
-@pytest.fixture(scope="module")
-def dask_client():
-    distributed = pytest.importorskip("distributed")
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        yield client
-
-
 def test_a_basin_map_with_a_policy_is_the_same_on_workers_and_on_dask(dask_client):
     """The policy travels to two worker processes and to a Dask cluster: the same rows as
     in one process; the set-point policy moves the set-points (its table is not Table
