@@ -34,7 +34,7 @@ from machine import machine  # noqa: E402
 from scoutsim.analysis.controlled_orbit import controlled_fixed_point, difference_jacobian  # noqa: E402
 from scoutsim.analysis.stride_map import StrideMap  # noqa: E402
 from scoutsim.simulation.engine import start_engine  # noqa: E402
-from scoutsim.simulation.sensitivities import robot_parameter_derivatives  # noqa: E402
+from scoutsim.simulation.parameter_rows import robot_parameter_derivatives  # noqa: E402
 
 
 def _median(f, repeats: int) -> float:

@@ -335,7 +335,7 @@ class HybridEngine:
         them as the run goes on. ``parameters``: None, or (dP, dC, dcp) for n_p parameters
         carried as the last n_p rows of x (constant along the run): their derivatives of
         the packed arrays
-        (:func:`~scoutsim.simulation.sensitivities.robot_parameter_derivatives`). A Python
+        (:func:`~scoutsim.simulation.parameter_rows.robot_parameter_derivatives`). A Python
         controller runs outside the compiled loop and is not differentiated: refused."""
         if self.bridge is not None:
             raise ValueError(

@@ -1,11 +1,9 @@
 """The sensitivities an engine carries along its run: the rows of its extended state, the
-work arrays, what they met, and the derivatives of the packed parameters that make a
-parameter a row of its own (the compiled side: :mod:`scoutsim._core.numerics.tangent`;
+work arrays and what they met (a parameter's row:
+:mod:`scoutsim.simulation.parameter_rows`; the compiled side: :mod:`scoutsim._core.numerics.tangent`;
 docs/explanation/derivatives.md)."""
 
 from __future__ import annotations
-
-import dataclasses
 
 import numpy as np
 
@@ -22,7 +20,7 @@ from .._core.numerics.tangent import (
     new_tangent,
 )
 
-__all__ = ["EXTENDED_ROWS", "engine_tangent", "smoothness", "robot_parameter_derivatives"]
+__all__ = ["EXTENDED_ROWS", "engine_tangent", "smoothness"]
 
 #: where each part of the extended state starts in the rows of
 #: :attr:`~scoutsim.simulation.engine.HybridEngine.sensitivities`: the state (layout
@@ -72,29 +70,3 @@ def smoothness(info) -> dict:
         "undifferentiated": int(info[TI_UNSUPPORTED]),
         "sample_margin_s": float(info[TI_SAMPLE_MARGIN]),
     }
-
-
-def robot_parameter_derivatives(fields, robot=None, relative_step: float = 1e-6, **run):
-    """(dP, dC, dcp) of the robot parameters ``fields`` (names of RobotParameters' float
-    fields; ``"friction_coefficient"`` the floor's): central differences of the packing,
-    steps ``relative_step`` |value| (absolute at 0), for the run ``run`` describes
-    (:func:`~scoutsim.simulation.engine.start_engine`'s keywords: model, controller, ...).
-    The rows to pass to ``carry_sensitivities``."""
-    from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
-    from .engine import start_engine  # (the engine imports this module)
-
-    robot = robot or RobotParameters()
-    rows = []
-    for field in fields:
-        floor = field == "friction_coefficient"
-        value = run.get(field, DEFAULT_FRICTION_COEFFICIENT) if floor else getattr(robot, field)
-        h = relative_step * abs(value) if value != 0.0 else relative_step
-        ends = []
-        for v in (value + h, value - h):
-            if floor:
-                e = start_engine(None, 1.0, robot=robot, **{**run, field: v})
-            else:
-                e = start_engine(None, 1.0, robot=dataclasses.replace(robot, **{field: v}), **run)
-            ends.append((e.P, e.C, e.block.params))
-        rows.append([(a - b) / (2.0 * h) for a, b in zip(*ends)])
-    return tuple(np.array([r[i] for r in rows]) for i in range(3))

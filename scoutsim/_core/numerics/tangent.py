@@ -524,13 +524,12 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
             _moved_parameters(e, Phi[:, j], P, tan)
             Pq = tan.Pp
             _moved_controller(e, Phi[:, j], C, cb.params, tan)
-            # (projected as the run's state is, so that a direction off the constraints
-            # reads as the run would read it)
-            evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
-            evaluated_state(ew, sp)
+            # (read as the run reads its state at a sample: the state as it is, its
+            # derivative and outputs from an evaluation, which projects a copy)
             if builtin and not is_set(cb.geom[SG_MEASURED]):
                 read_encoders(sp, is_set(cb.geom[SG_MOTOR_SIDE]), yp)
             else:
+                evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
                 true_readings(sp, ds, auxp, Pq[P_G], cb.geom, yp)
             if builtin:
                 bounding_step(yp, tan.Cp, lsp, cmdp, trp)

@@ -20,7 +20,7 @@ from scoutsim._core.numerics.hybrid import HW_EVAL_KEPT
 from scoutsim.parameters import RobotParameters
 from scoutsim.simulation.engine import start_engine
 from scoutsim.simulation.integrator import IntegratorSettings
-from scoutsim.simulation.sensitivities import robot_parameter_derivatives
+from scoutsim.simulation.parameter_rows import robot_parameter_derivatives
 
 # tight tolerances, so that differences of whole runs are accurate to ~1e-5 of scale
 TIGHT = IntegratorSettings(rtol=1e-9, atol=1e-11)

@@ -1,0 +1,36 @@
+"""A robot or floor parameter as a row of the sensitivities a run carries: its derivative
+of the packed arrays the compiled loop reads (:mod:`scoutsim.simulation.sensitivities`)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
+from .engine import start_engine
+
+__all__ = ["robot_parameter_derivatives"]
+
+
+def robot_parameter_derivatives(fields, robot=None, relative_step: float = 1e-6, **run):
+    """(dP, dC, dcp) of the robot parameters ``fields`` (names of RobotParameters' float
+    fields; ``"friction_coefficient"`` the floor's): central differences of the packing,
+    steps ``relative_step`` |value| (absolute at 0), for the run ``run`` describes
+    (:func:`~scoutsim.simulation.engine.start_engine`'s keywords: model, controller, ...).
+    The rows to pass to ``carry_sensitivities``."""
+    robot = robot or RobotParameters()
+    rows = []
+    for field in fields:
+        floor = field == "friction_coefficient"
+        value = run.get(field, DEFAULT_FRICTION_COEFFICIENT) if floor else getattr(robot, field)
+        h = relative_step * abs(value) if value != 0.0 else relative_step
+        ends = []
+        for v in (value + h, value - h):
+            if floor:
+                e = start_engine(None, 1.0, robot=robot, **{**run, field: v})
+            else:
+                e = start_engine(None, 1.0, robot=dataclasses.replace(robot, **{field: v}), **run)
+            ends.append((e.P, e.C, e.block.params))
+        rows.append([(a - b) / (2.0 * h) for a, b in zip(*ends)])
+    return tuple(np.array([r[i] for r in rows]) for i in range(3))
