@@ -144,7 +144,7 @@ Records = namedtuple("Records", "out_t out_s out_aux out_ls ev stats steps stepc
 #: what a run carries from one call to the next: ``hwork`` (step-size guess and flags),
 #: which event functions are ``armed``, the ARK stiff factors ``sfwork``, the evaluation
 #: workspace ``ew`` and the sensitivities ``tangent``
-#: (:data:`~scoutsim._core.numerics.tangent.TangentWork`; no columns: none)
+#: (:data:`~scoutsim._core.numerics.tangent.TangentPack`; no columns: none)
 Carry = namedtuple("Carry", "hwork armed sfwork ew tangent")
 
 

@@ -125,7 +125,7 @@ def arm_jams(mi, e_now, armed):
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; each step's
 #: share: :mod:`~scoutsim._core.numerics.step_energy`)
 #: ``tan``: the sensitivities the run carries
-#: (:data:`~scoutsim._core.numerics.tangent.TangentWork`; no columns when it carries none)
+#: (:data:`~scoutsim._core.numerics.tangent.TangentPack`; no columns when it carries none)
 AdvanceScratch = namedtuple(
     "AdvanceScratch", "e_end pending mi_before s_before steps stepc energy imp tan"
 )

@@ -110,6 +110,20 @@ TangentWork = namedtuple(
     "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp",
 )
 
+#: What a run carries (in ``Carry.tangent`` and ``AdvanceScratch.tan``): ``Phi`` and
+#: ``info`` as in ``TangentWork``, and every other array of the ``TangentWork`` packed
+#: into one float buffer ``f`` and one int buffer ``i``, whose header holds, for each
+#: part k (the ``TangentWork`` leaves other than ``Phi`` and ``info``, depth first), its
+#: start and stop in ``f`` or ``i`` and its rows and columns (0, 0: a vector). Four arrays, not
+#: fifty: a tuple of arrays is passed to a compiled call as its arrays' fields, one
+#: argument each, and a plain run pays for every one of them on each control period.
+#: :func:`unpacked` gives the ``TangentWork`` back (views, no copy).
+TangentPack = namedtuple("TangentPack", "Phi info f i")
+
+#: the header entries of a part in ``TangentPack.i``: start, stop, rows, columns
+PART_START, PART_STOP, PART_ROWS, PART_COLS = 0, 1, 2, 3
+PART_HEADER = 4
+
 
 def new_tangent(
     m: int,
@@ -118,15 +132,29 @@ def new_tangent(
     tolerances: tuple[float, float],
     sizes: tuple[int, int, int],
     parameters=None,
+) -> TangentPack:
+    """What a run carries for ``m`` sensitivity columns (0: none): the arrays of
+    :func:`tangent_work` (the arguments are its), packed (:func:`packed`)."""
+    return packed(tangent_work(m, n_state, n_readings, tolerances, sizes, parameters))
+
+
+def tangent_work(
+    m: int,
+    n_state: int,
+    n_readings: int,
+    tolerances: tuple[float, float],
+    sizes: tuple[int, int, int],
+    parameters=None,
 ) -> TangentWork:
-    """A ``TangentWork`` for ``m`` columns (0: a run without sensitivities), a controller
-    state of ``n_state`` entries and ``n_readings`` sensor readings; ``tolerances``: the
-    run's (rtol [-], atol [state units]) (the perturbed steps' error estimate is not used); ``sizes``: the
-    lengths of the packed robot parameters P, the Table I law's C and the compiled
-    controller's parameters. ``parameters``: None, or (dP, dC, dcp, pscale) for n_p
-    parameters carried as the last n_p rows of x (constant along the run): each one's
-    derivative of P, C and the controller's parameters (n_p x size) and the scale of its
-    packed values (1 / the largest |P_k| it moves, so that a difference step is relative).
+    """The work arrays (a ``TangentWork``) for ``m`` columns (0: a run without
+    sensitivities), a controller state of ``n_state`` entries and ``n_readings`` sensor
+    readings; ``tolerances``: the run's (rtol [-], atol [state units]) (the perturbed
+    steps' error estimate is not used); ``sizes``: the lengths of the packed robot
+    parameters P, the Table I law's C and the compiled controller's parameters.
+    ``parameters``: None, or (dP, dC, dcp, pscale) for n_p parameters carried as the last
+    n_p rows of x (constant along the run): each one's derivative of P, C and the
+    controller's parameters (n_p x size) and the scale of its packed values (1 / the
+    largest |P_k| it moves, so that a difference step is relative).
     ``Phi`` starts at zero: the caller seeds it."""
     rtol, atol = tolerances
     n_P, n_C, n_cp = sizes
@@ -192,10 +220,127 @@ def new_tangent(
     )
 
 
+def _leaves(tree):
+    """The arrays and numbers of a tree of tuples, depth first."""
+    for x in tree:
+        if isinstance(x, tuple):
+            yield from _leaves(x)
+        else:
+            yield x
+
+
+def packed(tw: TangentWork) -> TangentPack:
+    """``tw`` as a ``TangentPack`` (its parts copied; :func:`unpacked` is the inverse)."""
+    parts = [
+        np.atleast_1d(np.asarray(leaf))
+        for name, x in zip(tw._fields, tw)
+        if name not in ("Phi", "info")
+        for leaf in (_leaves(x) if isinstance(x, tuple) else (x,))
+    ]
+    header = np.zeros(PART_HEADER * len(parts), dtype=np.int64)
+    floats: list[np.ndarray] = []
+    ints: list[np.ndarray] = []
+    n_f, n_i = 0, header.shape[0]
+    for k, x in enumerate(parts):
+        integer = np.issubdtype(x.dtype, np.integer)
+        start = n_i if integer else n_f
+        header[PART_HEADER * k + PART_START] = start
+        header[PART_HEADER * k + PART_STOP] = start + x.size
+        header[PART_HEADER * k + PART_ROWS] = x.shape[0] if x.ndim == 2 else 0
+        header[PART_HEADER * k + PART_COLS] = x.shape[1] if x.ndim == 2 else 0
+        (ints if integer else floats).append(x.ravel())
+        if integer:
+            n_i += x.size
+        else:
+            n_f += x.size
+    f = np.concatenate(floats).astype(float) if floats else np.zeros(0)
+    i = np.concatenate([header] + [x.astype(np.int64) for x in ints])
+    return TangentPack(np.ascontiguousarray(tw.Phi), tw.info, f, i)
+
+
 @kernel(inline="always")
-def carrying(tan):
+def _fv(pack, k):
+    """Part ``k`` of ``pack``: a float vector (a view)."""
+    h = pack.i
+    return pack.f[h[PART_HEADER * k + PART_START] : h[PART_HEADER * k + PART_STOP]]
+
+
+@kernel(inline="always")
+def _fm(pack, k):
+    """Part ``k`` of ``pack``: a float matrix (a view)."""
+    h = pack.i
+    return _fv(pack, k).reshape((h[PART_HEADER * k + PART_ROWS], h[PART_HEADER * k + PART_COLS]))
+
+
+@kernel(inline="always")
+def _iv(pack, k):
+    """Part ``k`` of ``pack``: an int vector (a view)."""
+    h = pack.i
+    return h[h[PART_HEADER * k + PART_START] : h[PART_HEADER * k + PART_STOP]]
+
+
+@kernel(inline="always")
+def unpacked(pack):
+    """The ``TangentWork`` of a ``TangentPack``: views of its buffers, the parts in the
+    order of the fields of ``TangentWork`` (and, inside it, of ``StepWork``, the
+    evaluation workspace and ``StepEnergy``). Compiled callers only (it is inlined into
+    them: a compiled function may return views of its arguments only if inlined)."""
+    work = StepWork(
+        _fm(pack, 1),
+        _fv(pack, 2),
+        _fv(pack, 3),
+        _fv(pack, 4),
+        (_fv(pack, 5), _fm(pack, 6), _iv(pack, 7), _fm(pack, 8)),
+        _fm(pack, 9),
+        _fm(pack, 10),
+        _fm(pack, 11),
+        _fv(pack, 12)[0],
+        _fv(pack, 13)[0],
+        StepEnergy(_fv(pack, 14), _fv(pack, 15), _fv(pack, 16), _fv(pack, 17)),
+    )
+    return TangentWork(
+        pack.Phi,
+        _fm(pack, 0),
+        work,
+        _fv(pack, 18),
+        _fv(pack, 19),
+        _iv(pack, 20),
+        _fv(pack, 21),
+        _fv(pack, 22),
+        _fv(pack, 23),
+        _iv(pack, 24),
+        _fv(pack, 25),
+        _fv(pack, 26),
+        _iv(pack, 27),
+        _fv(pack, 28),
+        _fv(pack, 29),
+        _fv(pack, 30),
+        _iv(pack, 31),
+        _iv(pack, 32),
+        _fv(pack, 33),
+        _fv(pack, 34),
+        _fv(pack, 35),
+        _fm(pack, 36),
+        _fv(pack, 37),
+        _fv(pack, 38),
+        _fv(pack, 39),
+        _fv(pack, 40),
+        pack.info,
+        _fv(pack, 41),
+        _fm(pack, 42),
+        _fm(pack, 43),
+        _fm(pack, 44),
+        _fv(pack, 45),
+        _fv(pack, 46),
+        _fv(pack, 47),
+        _fv(pack, 48),
+    )
+
+
+@kernel(inline="always")
+def carrying(pack):
     """True if the run carries sensitivities (``Phi`` has columns)."""
-    return tan.Phi.shape[1] > 0
+    return pack.Phi.shape[1] > 0
 
 
 @kernel(inline="always")
@@ -253,11 +398,12 @@ def _moved_controller(e, v, C, params, tan):
 
 
 @kernel
-def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
+def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, pack):
     """Phi := D[proj(step(.; h))] Phi over the step of size ``h`` [s] the run has just
     taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``, ARK splitting
     factors ``SF0``): the rows of s; the anchors, commands and controller state are
     constant along the flow."""
+    tan = unpacked(pack)
     Phi, out, tw = tan.Phi, tan.out, tan.work
     sp, mfp, cmdp = tan.sp, tan.mfp, tan.cmdp
     m = Phi.shape[1]
@@ -296,10 +442,11 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan):
 
 
 @kernel
-def sample_margin(h, armed, e_start, e_end, tan):
+def sample_margin(h, armed, e_start, e_end, pack):
     """Keep in ``info[TI_SAMPLE_MARGIN]`` the time from the control sample ending the last
     step (of size ``h`` [s]) to the zero of each armed event function falling over it
     (values ``e_start``, ``e_end`` at its ends), extrapolated linearly."""
+    tan = unpacked(pack)
     for k in range(e_end.shape[0]):
         fall = e_start[k] - e_end[k]
         if armed[k] and e_end[k] > 0.0 and fall > 0.0:
@@ -309,9 +456,10 @@ def sample_margin(h, armed, e_start, e_end, tan):
 
 
 @kernel
-def snapshot(s, mi, mf, f, tan):
+def snapshot(s, mi, mf, f, pack):
     """Keep the state before a reset (``s``, modes ``mi``, anchors ``mf``, vector field
     ``f`` there) for :func:`tangent_reset`."""
+    tan = unpacked(pack)
     for i in range(NS):
         tan.s0[i] = s[i]
         tan.f0[i] = f[i]
@@ -393,7 +541,7 @@ def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
 
 
 @kernel
-def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
+def tangent_reset(k, t, mi, f_plus, P, cmd, pack):
     """Phi := S Phi across the reset from the snapshot (:func:`snapshot`) to the run's
     state now (modes ``mi``, vector field ``f_plus``).
 
@@ -405,6 +553,7 @@ def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
     event: a lift-off that might have been a slide). For a reset at a fixed instant
     (k < 0: a sample's settling) S = DR. DR (the transition and the settling after it) and
     n (the gradient of event function k) by central differences."""
+    tan = unpacked(pack)
     Phi, out, w, gd, info = tan.Phi, tan.out, tan.w, tan.gd, tan.info
     m = Phi.shape[1]
     if k < 0:
@@ -451,8 +600,9 @@ def tangent_reset(k, t, mi, f_plus, P, cmd, tan):
 
 
 @kernel
-def tangent_projection(s, P, mi, mf, tan):
+def tangent_projection(s, P, mi, mf, pack):
     """Phi := D[proj] Phi for the projection of the dependent coordinates at ``s``."""
+    tan = unpacked(pack)
     Phi, out, sp, mfp = tan.Phi, tan.out, tan.sp, tan.mfp
     m = Phi.shape[1]
     for j in range(m):
@@ -477,9 +627,10 @@ def tangent_projection(s, P, mi, mf, tan):
 
 
 @kernel
-def keep_controller(cmd, cs, ls, tan):
+def keep_controller(cmd, cs, ls, pack):
     """Keep the held commands, the controller state and the leg states before a control
     sample for :func:`tangent_sample`."""
+    tan = unpacked(pack)
     for i in range(2):
         tan.cmd0[i] = cmd[i]
         tan.ls0[i] = ls[i]
@@ -488,7 +639,7 @@ def keep_controller(cmd, cs, ls, tan):
 
 
 @kernel
-def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
+def tangent_sample(t, s, P, mi, mf, builtin, C, cb, pack):
     """Phi's rows of the held commands and the controller state := their derivatives
     through the control sample at ``t`` [s] (zero-order hold): the readings of the state
     (``s``, modes ``mi``, anchors ``mf``; under the old commands), the controller
@@ -497,6 +648,7 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, tan):
     :func:`keep_controller`). A measurement model (noise, delay) is not differentiated:
     ``info[TI_UNSUPPORTED]`` counts such samples and the readings' derivative is taken as
     that of the true readings."""
+    tan = unpacked(pack)
     Phi, out = tan.Phi, tan.out
     sp, mfp, cmdp, csp, lsp, trp, yp = tan.sp, tan.mfp, tan.cmdp, tan.csp, tan.lsp, tan.trp, tan.yp
     ew, ds, auxp = tan.work.ew, tan.ds, tan.auxp
