@@ -64,7 +64,8 @@ from .numerics.events import log_event, mode_violations, stamp_states, stamp_tra
 from .numerics.hybrid import HW_EVAL_KEPT, HW_STIFF_VALID, STEP_HEADROOM, AdvanceScratch, advance
 from .numerics.stats import S_NFEV
 from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
-from .numerics.tangent import carrying, keep_controller, snapshot, tangent_reset, tangent_sample
+from .numerics.tangent import keep_controller, snapshot, tangent_reset, tangent_sample
+from .numerics.tangent_work import carrying
 from .numerics.transitions import settle_ws
 from .numerics.work import EventLog, EventWork, StepEnergy, StepWork
 
@@ -144,7 +145,7 @@ Records = namedtuple("Records", "out_t out_s out_aux out_ls ev stats steps stepc
 #: what a run carries from one call to the next: ``hwork`` (step-size guess and flags),
 #: which event functions are ``armed``, the ARK stiff factors ``sfwork``, the evaluation
 #: workspace ``ew`` and the sensitivities ``tangent``
-#: (:data:`~scoutsim._core.numerics.tangent.TangentPack`; no columns: none)
+#: (:data:`~scoutsim._core.numerics.tangent_work.TangentPack`; no columns: none)
 Carry = namedtuple("Carry", "hwork armed sfwork ew tangent")
 
 

@@ -1,13 +1,14 @@
 """The sensitivities an engine carries along its run: the rows of its extended state, the
 work arrays and what they met (a parameter's row:
-:mod:`scoutsim.simulation.parameter_rows`; the compiled side: :mod:`scoutsim._core.numerics.tangent`;
+:mod:`scoutsim.simulation.parameter_rows`; the compiled side: :mod:`scoutsim._core.numerics.tangent`, its work arrays
+:mod:`scoutsim._core.numerics.tangent_work`;
 docs/explanation/derivatives.md)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._core.numerics.tangent import (
+from .._core.numerics.tangent_work import (
     TI_EVENTS,
     TI_GRAZING,
     TI_NONSMOOTH,

@@ -72,13 +72,13 @@ from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .step_energy import accounting, power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
 from .tangent import (
-    carrying,
     sample_margin,
     snapshot,
     tangent_flow,
     tangent_projection,
     tangent_reset,
 )
+from .tangent_work import carrying
 from .transitions import apply_event, record_friction, settle_ws
 
 # slots of run()'s hwork array, carried between calls
@@ -125,7 +125,7 @@ def arm_jams(mi, e_now, armed):
 #: accumulated energies, layout ``EN_*``, empty when the run does not account; each step's
 #: share: :mod:`~scoutsim._core.numerics.step_energy`)
 #: ``tan``: the sensitivities the run carries
-#: (:data:`~scoutsim._core.numerics.tangent.TangentPack`; no columns when it carries none)
+#: (:data:`~scoutsim._core.numerics.tangent_work.TangentPack`; no columns when it carries none)
 AdvanceScratch = namedtuple(
     "AdvanceScratch", "e_end pending mi_before s_before steps stepc energy imp tan"
 )

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from scoutsim._core.model.layout import EVENT_KIND_NAMES, IL_B, IL_F, NMF, NS
-from scoutsim._core.numerics import tangent as T
+from scoutsim._core.numerics import tangent_work as T
 from scoutsim._core.numerics.hybrid import HW_EVAL_KEPT
 from scoutsim.parameters import RobotParameters
 from scoutsim.simulation.engine import start_engine
@@ -201,32 +201,3 @@ def test_an_event_near_a_sample_boundary_is_reported():
     _, at = _carried(base, 161, SMOOTH_COLUMNS)
     assert before.smoothness()["sample_margin_s"] > 1e-4
     assert at.smoothness()["sample_margin_s"] < 1e-5
-
-
-def _leaves(tree):
-    for x in tree:
-        yield from _leaves(x) if isinstance(x, tuple) else (x,)
-
-
-def test_packed_work_arrays_unpack_to_the_same_arrays():
-    """A run carries its work arrays packed into two buffers (``TangentPack``); the
-    compiled code's views of them must be the arrays packed, part for part, in shape, type
-    and content (a part read at another's offset would silently differentiate garbage)."""
-    import numba
-
-    rng = np.random.default_rng(3)
-    parameters = (rng.normal(size=(2, 9)), rng.normal(size=(2, 4)), rng.normal(size=(2, 3)))
-    work = T.tangent_work(3, 2, 5, (1e-6, 1e-8), (9, 4, 3), (*parameters, np.ones(2)))
-    # every array filled with numbers of its own (a shifted part would show)
-    for k, leaf in enumerate(_leaves(work)):
-        if isinstance(leaf, np.ndarray):
-            leaf[...] = (100 * k + rng.integers(0, 99, size=leaf.shape)).astype(leaf.dtype)
-    pack = T.packed(work)
-    unpacked = numba.njit(lambda p: T.unpacked(p))(pack)
-    assert type(unpacked) is type(work)
-    expected, got = list(_leaves(work)), list(_leaves(unpacked))
-    assert len(got) == len(expected)
-    for a, b in zip(expected, got):
-        assert np.shape(a) == np.shape(b)
-        assert np.asarray(a).dtype.kind == np.asarray(b).dtype.kind
-        assert np.array_equal(a, b)
