@@ -35,6 +35,7 @@ import numpy as np
 
 from ..control.pitch_feedback import PitchFeedbackController
 from ..parameters import ControllerParameters, RobotParameters
+from ..parameters.robot_fields import leg_names_where_legs_differ, robot_value, robot_with_value
 from ..simulation.simulator import simulate
 from ..state import HybridState
 from .controlled_orbit import ControlledOrbit, cell_change, stride_jacobian
@@ -113,16 +114,19 @@ class ParameterSensitivity:
         }
 
 
-def sensitivity_parameter_names(controller=None) -> list[str]:
+def sensitivity_parameter_names(controller=None, robot: RobotParameters | None = None) -> list[str]:
     """The parameters whose sensitivities can be computed: every float field of
-    RobotParameters, of the Table I ControllerParameters (when the controller is the
-    built-in law; not its control period or torso-feedback gains) and the floor's
-    friction coefficient."""
-    names = [
-        f"robot.{f.name}"
+    RobotParameters (on a ``robot`` whose legs differ in a per-leg field, that field's
+    two legs, ``robot.<field>.back`` and ``robot.<field>.front``; see
+    :mod:`scoutsim.parameters.robot_fields`), of the Table I ControllerParameters (when the
+    controller is the built-in law; not its control period or torso-feedback gains) and
+    the floor's friction coefficient."""
+    fields = [
+        f.name
         for f in dataclasses.fields(RobotParameters)
         if isinstance(getattr(RobotParameters(), f.name), float)
     ]
+    names = [f"robot.{n}" for n in leg_names_where_legs_differ(robot or RobotParameters(), fields)]
     if controller is None or isinstance(controller, ControllerParameters):
         names += [
             f"controller.{f.name}"
@@ -156,7 +160,7 @@ def setting_with(setting: dict, name: str, value: float) -> dict:
     sec, _, fld = name.partition(".")
     changes: dict[str, Any] = {fld: value}
     if sec == "robot":
-        out["robot"] = dataclasses.replace(setting["robot"] or RobotParameters(), **changes)
+        out["robot"] = robot_with_value(setting["robot"] or RobotParameters(), fld, value, "robot.")
     elif sec == "controller" and (
         setting["controller"] is None or isinstance(setting["controller"], ControllerParameters)
     ):
@@ -179,8 +183,10 @@ def parameter_value(setting: dict, name: str) -> float:
     if name == FRICTION:
         return float(setting["friction_coefficient"])
     sec, _, fld = name.partition(".")
-    obj = setting["robot"] or RobotParameters() if sec == "robot" else setting["controller"]
-    if sec == "controller" and obj is None:
+    if sec == "robot":
+        return robot_value(setting["robot"] or RobotParameters(), fld, "robot.")
+    obj = setting["controller"]
+    if obj is None:
         obj = ControllerParameters()
     if isinstance(obj, PitchFeedbackController):
         obj = obj.controller_parameters
@@ -269,7 +275,7 @@ def orbit_sensitivities(
     if not setting:
         raise ValueError("orbit has no setting: find it with controlled_fixed_point()")
     if names == "all" or names == ["all"]:
-        names = sensitivity_parameter_names(setting["controller"])
+        names = sensitivity_parameter_names(setting["controller"], setting["robot"])
     integ, k = setting["integrator"], orbit.strides
     base_map = StrideMap(integrator=integ, section=setting["section"], **_common(setting))
     base = base_map.crossing(orbit.state, strides=k)

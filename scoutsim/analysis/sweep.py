@@ -55,6 +55,7 @@ from ..parameters import (
     plausibility_warnings_off,
     validate_parameters,
 )
+from ..parameters.robot_fields import field_of, robot_value, robot_with_values
 from ..simulation.initial_conditions import NAMED_STARTS
 from ..state import HybridState, InitialState
 from .study_controller import (
@@ -144,7 +145,7 @@ def _point_parameters(task: dict):
         (rob if sec == "robot" else ctl)[fld] = v * scale
     if "legs_per_virtual_leg" in rob:
         rob["legs_per_virtual_leg"] = int(rob["legs_per_virtual_leg"])
-    robot = dataclasses.replace(task["robot"], **rob)
+    robot = robot_with_values(task["robot"], rob, "robot.")
     c = task["controller"]
     if isinstance(c, ControllerParameters):
         return robot, dataclasses.replace(c, **ctl)
@@ -386,6 +387,15 @@ def sweep(
             )
         fields_set[base_name] = n
     robot = robot or RobotParameters()
+    for n in names:
+        sec, _, fld = si_name(n)[0].partition(".")
+        if sec == "robot":
+            robot_value(robot, fld, "robot.")  # (both legs at once only where they are equal)
+            field, leg = field_of(fld)
+            if leg is not None and f"robot.{field}" in fields_set:
+                raise ValueError(
+                    f"sweep parameters 'robot.{field}' and {n!r} set the same field: give one"
+                )
     controller = study_controller(controller, robot) or ControllerParameters()
     if isinstance(controller, str):
         raise ValueError(

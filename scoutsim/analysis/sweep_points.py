@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ..parameters import UNITS, ControllerParameters, RobotParameters, field_dimension
+from ..parameters.robot_fields import field_of
 
 #: suffix of a name that gives an angle field in degrees
 DEG = "_deg"
@@ -44,7 +45,10 @@ def axis_label(name: str) -> tuple[float, str]:
     column as it is, another field in its SI unit ("-" for a pure number); any other
     column by its name (its unit is in the name: ``mean_speed_m_s``)."""
     base, scale = si_name(name)
-    dim = field_dimension(base.partition(".")[2]) if base.partition(".")[0] in _SECTIONS else None
+    sec, _, fld = base.partition(".")
+    if sec == "robot" and "." in fld:
+        fld = fld.partition(".")[0]  # one leg of a per-leg field: the field's unit
+    dim = field_dimension(fld) if sec in _SECTIONS else None
     if dim is None:
         return 1.0, name
     if scale != 1.0:
@@ -59,6 +63,8 @@ def check_name(name: str):
     """ValueError for a name a sweep cannot vary (naming the nearest that it can)."""
     base, scale = si_name(name)
     sec, _, fld = base.partition(".")
+    if sec == "robot" and "." in fld:
+        fld = field_of(fld, "robot.")[0]  # one leg of a per-leg field (robot.leg_stiffness.front)
     cls = _SECTIONS.get(sec)
     if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
         import difflib

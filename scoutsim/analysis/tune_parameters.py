@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
+from ..parameters.robot_fields import robot_with_values
 from .sweep_points import check_name, parameter_names
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
@@ -251,7 +252,7 @@ def apply_values(values: dict, robot, cparams, params):
     ({key: SI}) set."""
     rob = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("robot.")}
     ctl = {k.partition(".")[2]: v for k, v in values.items() if k.startswith("controller.")}
-    robot = dataclasses.replace(robot, **rob) if rob else robot
+    robot = robot_with_values(robot, rob, "robot.")
     cparams = dataclasses.replace(cparams, **ctl) if ctl else cparams
     if params is not None:
         params = np.array(params, dtype=float)

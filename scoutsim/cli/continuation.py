@@ -106,6 +106,17 @@ def _vary(text: str) -> tuple[str, float, float]:
     return name.strip(), a, b
 
 
+def _axis(name: str) -> str:
+    """The family figure's parameter axis: the name with its unit."""
+    if name == PITCH_RATE:
+        return f"{name} [deg/s]"
+    if name == "friction_coefficient":
+        return f"{name} [-]"
+    from ..analysis.sweep_points import axis_label
+
+    return axis_label(name)[1]
+
+
 def execute(args) -> int:
     import numpy as np
 
@@ -169,7 +180,7 @@ def execute(args) -> int:
     found = [r for r in fam.rows if r["status"] == "ok"]
     if found:
         png = Path(args.out) / "family.png"
-        plot_family(fam.rows, fam.parameter, title=title, path=png)
+        plot_family(fam.rows, fam.parameter, title=title, path=png, label=_axis(fam.parameter))
         paths.append(png)
     summary = {
         "parameter": fam.parameter,

@@ -80,8 +80,9 @@ def register(sub, common) -> None:
         "function theorem on the fixed point, and their elasticities [%% per %%]. "
         "Controlled: the speed, stride frequency, duty factors, pitch and height "
         "extremes, electrical power, cost of transport and spectral radius, to "
-        "robot.<field>, controller.<field> of the Table I law, friction_coefficient "
-        "(SI). --passive: the touchdown angles, period, mean speed and spectral radius, "
+        "robot.<field> (robot.<field>.back / .front: one leg of a per-leg field; a "
+        "robot whose legs differ in it takes only these), controller.<field> of the "
+        "Table I law, friction_coefficient (SI). --passive: the touchdown angles, period, mean speed and spectral radius, "
         "from exact derivatives, to robot.leg_stiffness, robot.leg_rest_length, "
         "robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
     )
@@ -132,7 +133,7 @@ def execute(args) -> int:
         )
     if not args.passive:
         controller = make_controller(law, cparams, robot)
-    names = _sensitivity_names(args, controller)
+    names = _sensitivity_names(args, controller, robot)
     if not args.passive and args.jacobian == "exact":
         _check_exact(args, controller, robot)
     orb: PassiveOrbit | ControlledOrbit
@@ -196,7 +197,7 @@ def execute(args) -> int:
     return 0
 
 
-def _sensitivity_names(args, controller) -> list[str] | None:
+def _sensitivity_names(args, controller, robot) -> list[str] | None:
     """The parameters of --sensitivity (None without it); UsageError naming a bad one."""
     if args.sensitivity is None:
         return None
@@ -204,15 +205,24 @@ def _sensitivity_names(args, controller) -> list[str] | None:
         from ..analysis.passive_sensitivity import PASSIVE_SENSITIVITY_PARAMETERS
 
         known = list(PASSIVE_SENSITIVITY_PARAMETERS)
+        everything = known
     else:
         from ..analysis.orbit_sensitivity import sensitivity_parameter_names
+        from ..names import LEG_NAMES
+        from ..parameters import PER_LEG_FIELDS
+        from ..parameters.robot_fields import robot_value
 
-        known = sensitivity_parameter_names(controller)
+        known = sensitivity_parameter_names(controller, robot)
+        # (one leg's value of a per-leg field may be named on any robot; both legs at
+        # once only where they are equal, which robot_value checks)
+        everything = sensitivity_parameter_names(controller) + [
+            f"robot.{f}.{leg}" for f in PER_LEG_FIELDS for leg in LEG_NAMES
+        ]
     if args.sensitivity.strip() == "all":
         return known
     names = [n.strip() for n in args.sensitivity.split(",") if n.strip()]
     for n in names:
-        if n not in known:
+        if n not in everything:
             import difflib
 
             near = difflib.get_close_matches(n, known, n=1)
@@ -220,11 +230,17 @@ def _sensitivity_names(args, controller) -> list[str] | None:
             allowed = (
                 ", ".join(known)
                 if args.passive
-                else "robot.<field>, controller.<field> (the Table I law's) or friction_coefficient"
+                else "robot.<field> (robot.<field>.back / .front for one leg of a per-leg "
+                "field), controller.<field> (the Table I law's) or friction_coefficient"
             )
             raise UsageError(
                 f"--sensitivity {n!r} is not allowed: must be 'all' or names of {allowed}{hint}"
             )
+        if not args.passive and n.startswith("robot."):
+            try:
+                robot_value(robot, n.partition(".")[2], "robot.")
+            except ValueError as e:
+                raise UsageError(f"--sensitivity: {e}") from None
     return names
 
 

@@ -31,6 +31,8 @@ Modules (each imports only those above it):
 * ``robot``, ``controller``: :class:`RobotParameters` (with its derived quantities; the
   leg, hip-unit and motor quantities of :data:`PER_LEG_FIELDS` may differ between the back
   and front legs) and :class:`ControllerParameters`; constructing either checks it.
+* ``robot_fields``: a robot's field by name, one leg's value of a per-leg field included
+  (``leg_stiffness.front``): :func:`robot_value`, :func:`robot_with_value`.
 * ``environment``: :class:`Environment` (the floor), :data:`DEFAULT_FRICTION_COEFFICIENT`,
   :func:`floor_label`.
 * ``files``: :func:`load_robot`, :func:`load_controller`, :func:`load_parameters` (TOML files
@@ -53,6 +55,7 @@ from .files import (
 from .parameter_error import ParameterError
 from .plausibility import ImplausibleParameterWarning, plausibility_warnings_off
 from .robot import PER_LEG_FIELDS, RobotParameters
+from .robot_fields import robot_value, robot_with_value
 from .schema import field_dimension, plausible_range
 from .units import UNITS, quantity_to_si
 from .validation import (
@@ -73,6 +76,8 @@ __all__ = [
     "floor_label",
     "RobotParameters",
     "PER_LEG_FIELDS",
+    "robot_value",
+    "robot_with_value",
     "ControllerParameters",
     "ParameterError",
     "ImplausibleParameterWarning",

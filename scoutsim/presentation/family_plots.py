@@ -17,7 +17,9 @@ _MARK = {"fold": "tab:red", "branch point": "tab:purple", "period doubling": "ta
          "torus": "tab:green"}  # fmt: skip
 
 
-def plot_family(rows, parameter: str, *, title: str = "", marks=(), path=None) -> Figure:
+def plot_family(
+    rows, parameter: str, *, title: str = "", marks=(), path=None, label: str | None = None
+) -> Figure:
     """The branch ``rows`` (dicts with ``parameter``, ``touchdown_angle_back_deg``,
     ``touchdown_angle_front_deg``, ``period_s``, ``strides``, ``mean_speed_m_s``,
     ``stable``, ``bifurcation``, ``multipliers`` as (real, imag) pairs of the period map
@@ -31,7 +33,8 @@ def plot_family(rows, parameter: str, *, title: str = "", marks=(), path=None) -
     labelled; a change of the number of strides per period is the number written at the
     point; a value without an orbit a grey cross on the unit line. ``marks``:
     (parameter value, label) pairs drawn as dotted lines (e.g. orbits documented
-    elsewhere). Saved by suffix if ``path`` is given."""
+    elsewhere). ``label``: the parameter axis's label, with its unit (default: the
+    parameter's name). Saved by suffix if ``path`` is given."""
     lost = [r for r in rows if r.get("status", "ok") != "ok"]
     rows = [r for r in rows if r.get("status", "ok") == "ok"]
     p = np.array([r[parameter] for r in rows], dtype=float)
@@ -74,7 +77,7 @@ def plot_family(rows, parameter: str, *, title: str = "", marks=(), path=None) -
         ax_m.legend(fontsize=7, loc="lower right")
     ax_m.set_yscale("log")
     ax_m.set_ylabel("|multiplier| per stride\n(filled: stable orbit)")
-    ax_m.set_xlabel(parameter)
+    ax_m.set_xlabel(label or parameter)
     for i, r in enumerate(x for x in rows if x["bifurcation"] in _MARK):
         color = _MARK[r["bifurcation"]]
         for ax in (ax_td, ax_t, ax_m):

@@ -3,11 +3,10 @@ of the packed arrays the compiled loop reads (:mod:`scoutsim.simulation.sensitiv
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ..parameters import DEFAULT_FRICTION_COEFFICIENT, RobotParameters
+from ..parameters.robot_fields import robot_value, robot_with_value
 from .engine import start_engine
 
 __all__ = ["robot_parameter_derivatives"]
@@ -15,7 +14,8 @@ __all__ = ["robot_parameter_derivatives"]
 
 def robot_parameter_derivatives(fields, robot=None, relative_step: float = 1e-6, **run):
     """(dP, dC, dcp) of the robot parameters ``fields`` (names of RobotParameters' float
-    fields; ``"friction_coefficient"`` the floor's): central differences of the packing,
+    fields, ``<field>.back`` / ``<field>.front`` for one leg of a per-leg field
+    (:mod:`scoutsim.parameters.robot_fields`); ``"friction_coefficient"`` the floor's): central differences of the packing,
     steps ``relative_step`` |value| (absolute at 0), for the run ``run`` describes
     (:func:`~scoutsim.simulation.engine.start_engine`'s keywords: model, controller, ...).
     The rows to pass to ``carry_sensitivities``."""
@@ -23,14 +23,14 @@ def robot_parameter_derivatives(fields, robot=None, relative_step: float = 1e-6,
     rows = []
     for field in fields:
         floor = field == "friction_coefficient"
-        value = run.get(field, DEFAULT_FRICTION_COEFFICIENT) if floor else getattr(robot, field)
+        value = run.get(field, DEFAULT_FRICTION_COEFFICIENT) if floor else robot_value(robot, field)
         h = relative_step * abs(value) if value != 0.0 else relative_step
         ends = []
         for v in (value + h, value - h):
             if floor:
                 e = start_engine(None, 1.0, robot=robot, **{**run, field: v})
             else:
-                e = start_engine(None, 1.0, robot=dataclasses.replace(robot, **{field: v}), **run)
+                e = start_engine(None, 1.0, robot=robot_with_value(robot, field, v), **run)
             ends.append((e.P, e.C, e.block.params))
         rows.append([(a - b) / (2.0 * h) for a, b in zip(*ends)])
     return tuple(np.array([r[i] for r in rows]) for i in range(3))

@@ -165,3 +165,33 @@ def test_orbit_rig_and_the_refused_fit(robot_file, tmp_path, capsys):
     assert code != 0
     err = capsys.readouterr().err
     assert "joint_stiction" in err and "one hip unit" in err
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["orbit", "--sensitivity", "robot.current_limit"],
+        ["sweep", "--grid", "robot.current_limit=11:13:2", "--duration", "0.5", "--out", "o"],
+        ["continue", "--vary", "robot.current_limit=11:13", "--out", "o"],
+    ],
+    ids=["orbit", "sweep", "continue"],
+)
+def test_a_field_whose_legs_differ_is_named_by_leg(robot_file, tmp_path, capsys, command):
+    """The robot's current limits differ (12 / 12.5 A): one value for both would silently
+    make them equal, so a study refuses it before it runs, naming the two legs' names."""
+    command = [str(tmp_path / a) if a == "o" else a for a in command]
+    code = main([*command, "--robot", robot_file, "--quiet"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "'robot.current_limit.back'" in err and "'robot.current_limit.front'" in err
+
+
+def test_a_sweep_over_one_legs_value_keeps_the_other(robot_file, tmp_path):
+    out = tmp_path / "sweep"
+    args = ["sweep", "--grid", "robot.current_limit.front=11:13:2", "--duration", "0.5"]
+    assert main([*args, "--robot", robot_file, "--out", str(out), "--quiet"]) == 0
+    import pandas as pd
+
+    table = pd.read_csv(out / "sweep.csv")
+    assert list(table["robot.current_limit.front"]) == [11.0, 13.0]
+    assert set(table["outcome"]) <= {"completed", "fell"}
