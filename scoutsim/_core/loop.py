@@ -58,13 +58,12 @@ from .model.layout import (
 )
 from .model.rigid_body import state_energy_ws
 from .model.sensor_readings import measure, read_encoders, true_readings
-from .numerics import ark
+from .numerics import ark, tangent_call
 from .numerics.dopri5 import eval_workspace
 from .numerics.events import log_event, mode_violations, stamp_states, stamp_transition
 from .numerics.hybrid import HW_EVAL_KEPT, HW_STIFF_VALID, STEP_HEADROOM, AdvanceScratch, advance
 from .numerics.stats import S_NFEV
 from .numerics.stepper import METHOD_ARK4, METHOD_AUTO, METHOD_DOPRI5
-from .numerics.tangent import keep_controller, snapshot, tangent_reset, tangent_sample
 from .numerics.tangent_work import carrying
 from .numerics.transitions import settle_ws
 from .numerics.work import EventLog, EventWork, StepEnergy, StepWork
@@ -268,7 +267,7 @@ def run_periods(plant, control, span, records, carry, n_out, nev, method, work, 
         else:
             sense(k, s, P, mi, mf, cmd, is_set(hwork[HW_EVAL_KEPT]), cb, ew_s, s_tmp)
         if carrying(tan):
-            keep_controller(cmd, cb.state, ls, tan)
+            tangent_call.keep(cmd, cb.state, ls, tan)
         if kind == CTRL_BUILTIN:
             bounding_step(cb.y, C, ls, cmd, tr)
             nevc = nev
@@ -288,17 +287,17 @@ def run_periods(plant, control, span, records, carry, n_out, nev, method, work, 
                 cb.ints[CB_STATUS] = rc
                 return k, n_out, nev, ST_CONTROLLER_ERROR, t
         if carrying(tan) and kind != CTRL_HELD:
-            tangent_sample(t, s, P, mi, mf, kind == CTRL_BUILTIN, C, cb, tan)
+            tangent_call.sample(t, s, P, mi, mf, kind == CTRL_BUILTIN, C, cb, tan)
         nev0 = nev
         for i in range(NS):
             s_prev[i] = s[i]
         if carrying(tan):
-            snapshot(s, mi, mf, K[0], tan)
+            tangent_call.snapshot(s, mi, mf, K[0], tan)
         nev = settle_ws(t, s, P, mi, mf, cmd, K[0], aux, log, nev, ew, is_set(hwork[HW_EVAL_KEPT]))
         hwork[HW_EVAL_KEPT] = FLAG_OFF
         stats[S_NFEV] += 1
         if carrying(tan):
-            tangent_reset(-1, t, mi, K[0], P, cmd, tan)
+            tangent_call.reset(-1, t, mi, K[0], P, cmd, tan)
         if nev > nev0:
             # the new command changed a mode (a joint breaks away, a toe starts to slide):
             # audit it like an event (rare: the energy before is computed only here)

@@ -272,6 +272,18 @@ def kernel(func=None, *, inline: str = "never"):
     return _compile(func, False, inline)
 
 
+def c_function(signature, func):
+    """Compile ``func`` now as a C function of ``signature`` (cached on disk), for calls
+    by address from compiled code (its ``.address``): code a compiled caller runs without
+    linking it. With reference counting (Numba's ``carray``, which makes arrays of the
+    addresses it is given, needs it); its callees are kernels as they are declared."""
+    from numba import cfunc
+
+    with compile_steps.applied():
+        disk_cache.clean_once()
+        return cfunc(signature, **_COMMON, _nrt=True)(func)
+
+
 def allocating(func=None, *, inline: str = "never"):
     """Compile ``func`` with reference counting (it allocates arrays)."""
     return _compile(func, True, inline)

@@ -34,7 +34,7 @@ from ..state import HybridState, InitialState
 from .assembly import DEFAULT_PITCH_LIMIT_DEG, PlantOptions, RunSetup, assemble
 from .budgets import EVENT_ROWS_PER_S
 from .integrator import METHOD_CODES, IntegratorSettings
-from .sensitivities import engine_tangent, smoothness
+from .sensitivities import engine_tangent, smoothness, with_hook
 
 __all__ = ["HybridEngine", "start_controller", "start_engine", "RETUNABLE"]
 
@@ -130,6 +130,10 @@ class HybridEngine:
         self.event_records_lost = 0
         self.status = L.ST_RUNNING
         self._entry: Callable | None = None  # the compiled run loop for this engine's method
+        #: the integration method's code (stepper.METHOD_*, "auto" resolved)
+        self._method = effective_method(
+            METHOD_CODES.get(self.integ.method, METHOD_AUTO), int(self.P[L.P_HIP_UNIT])
+        )
         self.t_now = 0.0
         # the controller's plan and a Python controller's bridge (start_controller)
         self.plan: Any = None
@@ -364,6 +368,7 @@ class HybridEngine:
 
     def advance(self, k_stop: int):
         """Run control samples k .. k_stop - 1 under the control block's controller."""
+        with_hook(self.tangent, self._method)
         args = (
             Plant(self.s, self.P, self.mi, self.mf, self.cmd),
             Control(self.C, self.ls, self.block),
@@ -392,9 +397,6 @@ class HybridEngine:
             self.nev,
         )
         if self._entry is None:  # the argument types stay those of the first call
-            self._method = effective_method(
-                METHOD_CODES.get(self.integ.method, METHOD_AUTO), int(self.P[L.P_HIP_UNIT])
-            )
             self._entry = run_entry(self._method, args)
         nev_before = self.nev
         self.k, self.n_out, self.nev, self.status, self.t_now = self._entry(*args, self._method)

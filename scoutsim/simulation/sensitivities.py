@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._core.numerics.tangent_call import hook_address
 from .._core.numerics.tangent_work import (
+    A_HOOK,
+    CALL_ADDRESS,
     TI_EVENTS,
     TI_GRAZING,
     TI_NONSMOOTH,
@@ -21,7 +24,7 @@ from .._core.numerics.tangent_work import (
     new_tangent,
 )
 
-__all__ = ["EXTENDED_ROWS", "engine_tangent", "smoothness"]
+__all__ = ["EXTENDED_ROWS", "engine_tangent", "smoothness", "with_hook"]
 
 #: where each part of the extended state starts in the rows of
 #: :attr:`~scoutsim.simulation.engine.HybridEngine.sensitivities`: the state (layout
@@ -51,6 +54,15 @@ def engine_tangent(engine, m: int, parameters=None):
     return new_tangent(
         m, len(block.state), len(block.y), (engine.rtol, engine.atol), sizes, parameters
     )
+
+
+def with_hook(pack, method: int) -> None:
+    """Give a run's sensitivities (``pack``) the address, in this process, of the compiled
+    code a run of ``method`` (its integrator's code) calls them through
+    (:mod:`scoutsim._core.numerics.tangent_call`; compiled on the first run that carries
+    columns); nothing for a run that carries none."""
+    if pack.Phi.shape[1] > 0:
+        pack.calls[A_HOOK, CALL_ADDRESS] = hook_address(method)
 
 
 def smoothness(info) -> dict:

@@ -55,7 +55,7 @@ from ..model.layout import (
     V_SINGULAR,
 )
 from ..model.roots import illinois_update
-from . import ark
+from . import ark, tangent_call
 from .event_location import EVENT_TIME_TOL, dense_event_values, refine_event
 from .events import (
     contact_event,
@@ -71,13 +71,6 @@ from .events import (
 from .stats import S_HMAX, S_HMIN, S_NEVENT, S_NFEV, S_NREJECT, S_NSTEP
 from .step_energy import accounting, power_at, take_step
 from .stepper import METHOD_ARK3, METHOD_ARK4, do_step, eval_k0
-from .tangent import (
-    sample_margin,
-    snapshot,
-    tangent_flow,
-    tangent_projection,
-    tangent_reset,
-)
 from .tangent_work import carrying
 from .transitions import apply_event, record_friction, settle_ws
 
@@ -171,7 +164,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         # method's order)
         project_state(s, P, mi, mf)
         if carrying(tan):
-            tangent_projection(s, P, mi, mf, tan)
+            tangent_call.projection(s, P, mi, mf, tan)
         eval_k0(method, s, P, mi, mf, cmd, K0, aux, ew, SF0)
         stats[S_NFEV] += 1
     if counting:  # the power flows at the first step's start (ew holds K0's)
@@ -296,7 +289,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 if counting:
                     take_step(he, work.energy, sc.energy)
                 if carrying(tan):
-                    tangent_flow(method, s, he, P, mi, mf, cmd, SF0, tan)
+                    tangent_call.flow(method, s, he, P, mi, mf, cmd, SF0, tan)
                 for i in range(NS):
                     s[i] = y_new[i]
                 t = t + he
@@ -314,7 +307,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
             else:
                 project_state(s, P, mi, mf)
                 if carrying(tan):
-                    tangent_projection(s, P, mi, mf, tan)
+                    tangent_call.projection(s, P, mi, mf, tan)
                 evaluate_ws(s, P, mi, mf, cmd, K0, aux, ew, False, ew[3], True)
                 stats[S_NFEV] += 1
             n_events_here += 1
@@ -342,7 +335,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 for i in range(NMI):
                     mi_before[i] = mi[i]
                 if carrying(tan):
-                    snapshot(s, mi, mf, K0, tan)
+                    tangent_call.snapshot(s, mi, mf, K0, tan)
                 nev, ok = apply_event(kcur, t, s, P, mi, mf, aux, ev, nev, stats, imp)
                 if kcur == EV_FALL_HEIGHT or kcur == EV_FALL_PITCH:
                     stamp_transition(ev, nev0, nev, e_before, e_before, 0, s_before, s)
@@ -353,7 +346,7 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
                 nev = settle_ws(t, s, P, mi, mf, cmd, K0, aux, log, nev, ew, False)
                 stats[S_NFEV] += 1
                 if carrying(tan):
-                    tangent_reset(kcur, t, mi, K0, P, cmd, tan)
+                    tangent_call.reset(kcur, t, mi, K0, P, cmd, tan)
                 if not is_set(aux[A_KKT_OK]):
                     stamp_transition(ev, nev0, nev, e_before, np.nan, V_SINGULAR, s_before, s)
                     return t, nev, ST_NUMERICAL_FAILURE
@@ -419,9 +412,9 @@ def advance(t, t_end, plant, hwork, aux, log, nev, method, work, evw, sc, fresh=
         if counting:
             take_step(h, work.energy, sc.energy)
         if carrying(tan):
-            tangent_flow(method, s, h, P, mi, mf, cmd, SF0, tan)
+            tangent_call.flow(method, s, h, P, mi, mf, cmd, SF0, tan)
             if last:
-                sample_margin(h, armed, e_old, e_new, tan)
+                tangent_call.margin(h, armed, e_old, e_new, tan)
         for i in range(NS):
             s[i] = y_new[i]
             K0[i] = K[6, i]

@@ -361,12 +361,13 @@ def keep_controller(cmd, cs, ls, pack):
 
 
 @kernel
-def tangent_sample(t, s, P, mi, mf, builtin, C, cb, pack):
+def tangent_sample(t, s, P, mi, mf, builtin, C, geom, ints, params, pack):
     """Phi's rows of the held commands and the controller state := their derivatives
     through the control sample at ``t`` [s] (zero-order hold): the readings of the state
     (``s``, modes ``mi``, anchors ``mf``; under the old commands), the controller
     (``builtin``: the compiled Table I law with parameters ``C``; else the controller
-    function of the control block ``cb``), on copies of its arrays (the snapshot of
+    function of the control block whose sensor geometry, integers and parameters are
+    ``geom``, ``ints``, ``params``), on copies of its arrays (the snapshot of
     :func:`keep_controller`). A measurement model (noise, delay) is not differentiated:
     ``info[TI_UNSUPPORTED]`` counts such samples and the readings' derivative is taken as
     that of the true readings."""
@@ -376,7 +377,7 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, pack):
     ew, ds, auxp = tan.work.ew, tan.ds, tan.auxp
     m = Phi.shape[1]
     nc = csp.shape[0]
-    if is_set(cb.geom[SG_MEASURED]):
+    if is_set(geom[SG_MEASURED]):
         tan.info[TI_UNSUPPORTED] += 1
     for j in range(m):
         eps = _column_step(Phi[:, j], tan, Phi.shape[0] - tan.pscale.shape[0])
@@ -394,18 +395,18 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, cb, pack):
                 csp[i] = tan.cs0[i] + e * Phi[X_CS + i, j]
             _moved_parameters(e, Phi[:, j], P, tan)
             Pq = tan.Pp
-            _moved_controller(e, Phi[:, j], C, cb.params, tan)
+            _moved_controller(e, Phi[:, j], C, params, tan)
             # (read as the run reads its state at a sample: the state as it is, its
             # derivative and outputs from an evaluation, which projects a copy)
-            if builtin and not is_set(cb.geom[SG_MEASURED]):
-                read_encoders(sp, is_set(cb.geom[SG_MOTOR_SIDE]), yp)
+            if builtin and not is_set(geom[SG_MEASURED]):
+                read_encoders(sp, is_set(geom[SG_MOTOR_SIDE]), yp)
             else:
                 evaluate_ws(sp, Pq, mi, mfp, cmdp, ds, auxp, ew, False, ew[3], True)
-                true_readings(sp, ds, auxp, Pq[P_G], cb.geom, yp)
+                true_readings(sp, ds, auxp, Pq[P_G], geom, yp)
             if builtin:
                 bounding_step(yp, tan.Cp, lsp, cmdp, trp)
             else:
-                rc = call_controller(cb.ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
+                rc = call_controller(ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
                 if rc != 0 or not (np.isfinite(cmdp[0]) and np.isfinite(cmdp[1])):
                     tan.info[TI_NONSMOOTH] += 1  # a copy the controller refused
             _central(out, X_CMD, j, cmdp, side, eps)

@@ -1,6 +1,6 @@
 """The work arrays of the sensitivities a run carries (:mod:`.tangent`): the rows of the
 extended state, the slots of what they met, and the packing in which a run carries the
-arrays (``TangentPack``: four arrays however many parts; :func:`unpacked` gives them back
+arrays (``TangentPack``: five arrays however many parts; :func:`unpacked` gives them back
 as a ``TangentWork`` in compiled code)."""
 
 from __future__ import annotations
@@ -62,11 +62,41 @@ TangentWork = namedtuple(
 #: ``info`` as in ``TangentWork``, and every other array of the ``TangentWork`` packed
 #: into one float buffer ``f`` and one int buffer ``i``, whose header holds, for each
 #: part k (the ``TangentWork`` leaves other than ``Phi`` and ``info``, depth first), its
-#: start and stop in ``f`` or ``i`` and its rows and columns (0, 0: a vector). Four arrays, not
+#: start and stop in ``f`` or ``i`` and its rows and columns (0, 0: a vector). Five arrays, not
 #: fifty: a tuple of arrays is passed to a compiled call as its arrays' fields, one
 #: argument each, and a plain run pays for every one of them on each control period.
-#: :func:`unpacked` gives the ``TangentWork`` back (views, no copy).
-TangentPack = namedtuple("TangentPack", "Phi info f i")
+#: :func:`unpacked` gives the ``TangentWork`` back (views, no copy). ``calls``: the table
+#: through which the run calls the sensitivities (:mod:`.tangent_call`; int64, one row per
+#: argument: address, rows, columns).
+TangentPack = namedtuple("TangentPack", "Phi info f i calls")
+
+# rows of the table ``TangentPack.calls`` (:mod:`.tangent_call`): the C function's address (column 0), then for
+# each array argument its address, rows and columns (1 for a vector)
+A_HOOK = 0
+A_S = 1  # the state [layout.NS]
+A_P = 2  # the packed robot parameters
+A_MI = 3  # the modes (int64)
+A_MF = 4  # the toe anchors [m]
+A_CMD = 5  # the held commands [N m]
+A_F = 6  # a vector field (the state's derivative) at the state
+A_SF0 = 7  # the ARK splitting factors (matrix)
+A_ARMED = 8  # the armed events (bool, one byte each)
+A_E_START = 9  # the event functions at the step's start
+A_E_END = 10  # ... and end
+A_C = 11  # the Table I law's parameters
+A_GEOM = 12  # the control block's sensor geometry
+A_INTS = 13  # ... its integers (int64)
+A_PARAMS = 14  # ... a compiled controller's parameters
+A_STATE = 15  # ... the controller's state
+A_LS = 16  # the leg states (int64)
+A_PHI = 17  # the pack: Phi (matrix)
+A_INFO = 18  # ... info
+A_FLOATS = 19  # ... its float buffer
+A_INTEGERS = 20  # ... its int buffer (int64)
+N_CALL_ROWS = 21
+#: the columns of a row of the table
+CALL_ADDRESS, CALL_ROWS, CALL_COLS = 0, 1, 2
+
 
 #: the header entries of a part in ``TangentPack.i``: start, stop, rows, columns
 PART_START, PART_STOP, PART_ROWS, PART_COLS = 0, 1, 2, 3
@@ -203,7 +233,9 @@ def packed(tw: TangentWork) -> TangentPack:
             n_f += x.size
     f = np.concatenate(floats).astype(float) if floats else np.zeros(0)
     i = np.concatenate([header] + [x.astype(np.int64) for x in ints])
-    return TangentPack(np.ascontiguousarray(tw.Phi), tw.info, f, i)
+    return TangentPack(
+        np.ascontiguousarray(tw.Phi), tw.info, f, i, np.zeros((N_CALL_ROWS, 3), dtype=np.int64)
+    )
 
 
 @kernel(inline="always")

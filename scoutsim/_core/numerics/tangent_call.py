@@ -1,0 +1,342 @@
+"""The run's calls into the carried sensitivities (:mod:`.tangent`), by address.
+
+The integrator and the control loop call the sensitivities at every step, event, sample and
+projection of a run that carries them. Called directly, their code (perturbed steps,
+transitions, the controller: much of the simulator again) would be compiled into the run
+loop, and every run would pay for it, in compile time, whether it carries derivatives or
+not (Numba links a callee's code into each caller and optimizes it there again: the first
+compile of ``scoutsim run`` took 106 s of CPU against 58 s without them). So the run calls
+them through one C function, compiled on its own and only when a run first carries
+sensitivities (:func:`hook_address`), the way it calls a user's compiled controller
+(:func:`~scoutsim.control.compiled.call_controller`):
+
+- each function here (:func:`projection`, :func:`flow`, :func:`snapshot`, :func:`reset`,
+  :func:`margin`, :func:`keep`, :func:`sample`) writes the addresses and shapes of its
+  arrays into the pack's table ``calls`` (rows ``A_*``: address, rows, columns) and calls
+  the C function at ``calls[A_HOOK, 0]`` with the operation (``OP_*``), one integer, two
+  numbers and the table;
+- the C function (one per integration method, :func:`_run_op`) makes arrays of the
+  addresses again and calls the function of :mod:`.tangent` the operation names.
+
+The address is the process's: :meth:`~scoutsim.simulation.engine.HybridEngine.advance` sets
+it before every run that carries columns (an engine copied to another process gets that
+process's). A run that carries none never calls it.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from llvmlite import ir
+from numba import carray, types
+from numba.extending import intrinsic
+
+from ..._numba.jit import allocating, c_function, kernel
+from .stepper import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5
+from .tangent import (
+    keep_controller,
+    sample_margin,
+    tangent_flow,
+    tangent_projection,
+    tangent_reset,
+    tangent_sample,
+)
+from .tangent import (
+    snapshot as tangent_snapshot,
+)
+from .tangent_work import (
+    A_ARMED,
+    A_C,
+    A_CMD,
+    A_E_END,
+    A_E_START,
+    A_F,
+    A_FLOATS,
+    A_GEOM,
+    A_HOOK,
+    A_INFO,
+    A_INTEGERS,
+    A_INTS,
+    A_LS,
+    A_MF,
+    A_MI,
+    A_P,
+    A_PARAMS,
+    A_PHI,
+    A_S,
+    A_SF0,
+    A_STATE,
+    CALL_ADDRESS,
+    CALL_COLS,
+    CALL_ROWS,
+    N_CALL_ROWS,
+    TangentPack,
+)
+
+# the operations
+OP_PROJECTION, OP_FLOW, OP_SNAPSHOT, OP_RESET, OP_MARGIN, OP_KEEP, OP_SAMPLE = range(7)
+
+#: the C signature of the hook: (operation, an integer, two numbers, the table) -> 0
+HOOK_SIGNATURE = types.int64(
+    types.int64, types.int64, types.float64, types.float64, types.CPointer(types.int64)
+)
+
+
+# --- the run's side: put the arrays in the table and call ------------------------------
+
+
+@kernel
+def _put(calls, row, x):
+    """Row ``row`` of the table: vector ``x``'s address and length."""
+    calls[row, CALL_ADDRESS] = x.ctypes.data
+    calls[row, CALL_ROWS] = x.shape[0]
+    calls[row, CALL_COLS] = 1
+
+
+@kernel
+def _put_matrix(calls, row, x):
+    """Row ``row`` of the table: matrix ``x``'s address and shape (C order)."""
+    calls[row, CALL_ADDRESS] = x.ctypes.data
+    calls[row, CALL_ROWS] = x.shape[0]
+    calls[row, CALL_COLS] = x.shape[1]
+
+
+@intrinsic
+def _call_hook(typingctx, address, op, k, a, b, calls):
+    """Call the C function at ``address`` (:data:`HOOK_SIGNATURE`) with ``op``, ``k``,
+    ``a``, ``b`` and the table's data."""
+    sig = types.int64(types.int64, types.int64, types.int64, types.float64, types.float64, calls)
+
+    def codegen(context, builder, signature, args):
+        a_addr, a_op, a_k, a_a, a_b, a_calls = args
+        table = context.make_array(signature.args[5])(context, builder, a_calls)
+        i64 = ir.IntType(64)
+        dbl = ir.DoubleType()
+        fnty = ir.FunctionType(i64, [i64, i64, dbl, dbl, i64.as_pointer()])
+        fn = builder.inttoptr(a_addr, fnty.as_pointer())
+        return builder.call(fn, [a_op, a_k, a_a, a_b, table.data])
+
+    return sig, codegen
+
+
+@kernel
+def _call(pack, op, k, a, b):
+    """Put the pack's own arrays in its table and call the hook."""
+    calls = pack.calls
+    _put_matrix(calls, A_PHI, pack.Phi)
+    _put(calls, A_INFO, pack.info)
+    _put(calls, A_FLOATS, pack.f)
+    _put(calls, A_INTEGERS, pack.i)
+    _call_hook(calls[A_HOOK, CALL_ADDRESS], op, k, a, b, calls)
+
+
+@kernel
+def projection(s, P, mi, mf, pack):
+    """:func:`~.tangent.tangent_projection`, by address."""
+    calls = pack.calls
+    _put(calls, A_S, s)
+    _put(calls, A_P, P)
+    _put(calls, A_MI, mi)
+    _put(calls, A_MF, mf)
+    _call(pack, OP_PROJECTION, 0, 0.0, 0.0)
+
+
+@kernel
+def flow(method, s, h, P, mi, mf, cmd, SF0, pack):
+    """:func:`~.tangent.tangent_flow`, by address."""
+    calls = pack.calls
+    _put(calls, A_S, s)
+    _put(calls, A_P, P)
+    _put(calls, A_MI, mi)
+    _put(calls, A_MF, mf)
+    _put(calls, A_CMD, cmd)
+    _put_matrix(calls, A_SF0, SF0)
+    _call(pack, OP_FLOW, method, h, 0.0)
+
+
+@kernel
+def snapshot(s, mi, mf, f, pack):
+    """:func:`~.tangent.snapshot`, by address."""
+    calls = pack.calls
+    _put(calls, A_S, s)
+    _put(calls, A_MI, mi)
+    _put(calls, A_MF, mf)
+    _put(calls, A_F, f)
+    _call(pack, OP_SNAPSHOT, 0, 0.0, 0.0)
+
+
+@kernel
+def reset(k, t, mi, f_plus, P, cmd, pack):
+    """:func:`~.tangent.tangent_reset`, by address."""
+    calls = pack.calls
+    _put(calls, A_MI, mi)
+    _put(calls, A_F, f_plus)
+    _put(calls, A_P, P)
+    _put(calls, A_CMD, cmd)
+    _call(pack, OP_RESET, k, t, 0.0)
+
+
+@kernel
+def margin(h, armed, e_start, e_end, pack):
+    """:func:`~.tangent.sample_margin`, by address."""
+    calls = pack.calls
+    _put(calls, A_ARMED, armed)
+    _put(calls, A_E_START, e_start)
+    _put(calls, A_E_END, e_end)
+    _call(pack, OP_MARGIN, 0, h, 0.0)
+
+
+@kernel
+def keep(cmd, cs, ls, pack):
+    """:func:`~.tangent.keep_controller`, by address."""
+    calls = pack.calls
+    _put(calls, A_CMD, cmd)
+    _put(calls, A_STATE, cs)
+    _put(calls, A_LS, ls)
+    _call(pack, OP_KEEP, 0, 0.0, 0.0)
+
+
+@kernel
+def sample(t, s, P, mi, mf, builtin, C, cb, pack):
+    """:func:`~.tangent.tangent_sample`, by address (``cb``: the control block)."""
+    calls = pack.calls
+    _put(calls, A_S, s)
+    _put(calls, A_P, P)
+    _put(calls, A_MI, mi)
+    _put(calls, A_MF, mf)
+    _put(calls, A_C, C)
+    _put(calls, A_GEOM, cb.geom)
+    _put(calls, A_INTS, cb.ints)
+    _put(calls, A_PARAMS, cb.params)
+    _call(pack, OP_SAMPLE, 1 if builtin else 0, t, 0.0)
+
+
+# --- the hook's side: the arrays again, and the call -----------------------------------
+
+
+def _pointer_to(ty):
+    @intrinsic
+    def pointer(typingctx, address):
+        sig = types.CPointer(ty)(types.int64)
+
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+
+        return sig, codegen
+
+    return pointer
+
+
+_float_pointer = _pointer_to(types.float64)
+_int_pointer = _pointer_to(types.int64)
+_byte_pointer = _pointer_to(types.uint8)
+
+
+@kernel(inline="always")
+def _floats(calls, row):
+    return carray(_float_pointer(calls[row, CALL_ADDRESS]), calls[row, CALL_ROWS])
+
+
+@kernel(inline="always")
+def _float_matrix(calls, row):
+    return carray(
+        _float_pointer(calls[row, CALL_ADDRESS]), (calls[row, CALL_ROWS], calls[row, CALL_COLS])
+    )
+
+
+@kernel(inline="always")
+def _ints(calls, row):
+    return carray(_int_pointer(calls[row, CALL_ADDRESS]), calls[row, CALL_ROWS])
+
+
+@allocating
+def _run_op(method, op, k, a, b, table):
+    """Operation ``op`` on the arrays of the table (module docstring) for a run of
+    ``method`` (a constant: the steps are the method's); ``k``: the event's slot (a
+    reset), 1 for the built-in law (a sample); ``a``, ``b``: the step [s] (a flow, a
+    margin) or the time [s] (a reset, a sample). (Reference counting on: ``carray``
+    needs it.)"""
+    calls = carray(table, (N_CALL_ROWS, 3))
+    pack = TangentPack(
+        _float_matrix(calls, A_PHI),
+        _floats(calls, A_INFO),
+        _floats(calls, A_FLOATS),
+        _ints(calls, A_INTEGERS),
+        calls,
+    )
+    if op == OP_PROJECTION:
+        s, P, mi, mf = (
+            _floats(calls, A_S),
+            _floats(calls, A_P),
+            _ints(calls, A_MI),
+            _floats(calls, A_MF),
+        )
+        tangent_projection(s, P, mi, mf, pack)
+    elif op == OP_FLOW:
+        s, P, mi, mf = (
+            _floats(calls, A_S),
+            _floats(calls, A_P),
+            _ints(calls, A_MI),
+            _floats(calls, A_MF),
+        )
+        cmd, SF0 = _floats(calls, A_CMD), _float_matrix(calls, A_SF0)
+        tangent_flow(method, s, a, P, mi, mf, cmd, SF0, pack)
+    elif op == OP_SNAPSHOT:
+        s, mi, mf, f = (
+            _floats(calls, A_S),
+            _ints(calls, A_MI),
+            _floats(calls, A_MF),
+            _floats(calls, A_F),
+        )
+        tangent_snapshot(s, mi, mf, f, pack)
+    elif op == OP_RESET:
+        mi, f, P, cmd = (
+            _ints(calls, A_MI),
+            _floats(calls, A_F),
+            _floats(calls, A_P),
+            _floats(calls, A_CMD),
+        )
+        tangent_reset(k, a, mi, f, P, cmd, pack)
+    elif op == OP_MARGIN:
+        armed = carray(_byte_pointer(calls[A_ARMED, CALL_ADDRESS]), calls[A_ARMED, CALL_ROWS])
+        sample_margin(a, armed, _floats(calls, A_E_START), _floats(calls, A_E_END), pack)
+    elif op == OP_KEEP:
+        keep_controller(_floats(calls, A_CMD), _floats(calls, A_STATE), _ints(calls, A_LS), pack)
+    elif op == OP_SAMPLE:
+        s, P, mi, mf = (
+            _floats(calls, A_S),
+            _floats(calls, A_P),
+            _ints(calls, A_MI),
+            _floats(calls, A_MF),
+        )
+        C, geom, ints, params = (
+            _floats(calls, A_C),
+            _floats(calls, A_GEOM),
+            _ints(calls, A_INTS),
+            _floats(calls, A_PARAMS),
+        )
+        tangent_sample(a, s, P, mi, mf, k == 1, C, geom, ints, params, pack)
+    return 0
+
+
+def _entry_dopri5(op, k, a, b, table):
+    return _run_op(METHOD_DOPRI5, op, k, a, b, table)
+
+
+def _entry_ark4(op, k, a, b, table):
+    return _run_op(METHOD_ARK4, op, k, a, b, table)
+
+
+def _entry_ark3(op, k, a, b, table):
+    return _run_op(METHOD_ARK3, op, k, a, b, table)
+
+
+#: the hook of each method (its steps are the method's)
+_ENTRIES = {METHOD_DOPRI5: _entry_dopri5, METHOD_ARK4: _entry_ark4, METHOD_ARK3: _entry_ark3}
+
+
+@functools.cache
+def hook_address(method: int) -> int:
+    """The address in this process of the hook for runs of ``method`` (a METHOD_* code,
+    not METHOD_AUTO), compiled (or loaded from the disk cache) on the first call."""
+    return c_function(HOOK_SIGNATURE, _ENTRIES[method]).address
