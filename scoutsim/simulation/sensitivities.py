@@ -11,7 +11,8 @@ import numpy as np
 from .._core.numerics.tangent_call import hook_address
 from .._core.numerics.tangent_work import (
     A_HOOK,
-    CALL_ADDRESS,
+    HOOK_FLOW,
+    HOOK_OPS,
     TI_EVENTS,
     TI_GRAZING,
     TI_NONSMOOTH,
@@ -21,7 +22,8 @@ from .._core.numerics.tangent_work import (
     X_CS,
     X_MF,
     X_S,
-    new_tangent,
+    packed,
+    tangent_work,
 )
 
 __all__ = ["EXTENDED_ROWS", "engine_tangent", "smoothness", "with_hook"]
@@ -51,8 +53,10 @@ def engine_tangent(engine, m: int, parameters=None):
             axis=1,
         )
         parameters = (dP, dC, dcp, scale.max(axis=1, initial=0.0))
-    return new_tangent(
-        m, len(block.state), len(block.y), (engine.rtol, engine.atol), sizes, parameters
+    return packed(
+        tangent_work(
+            m, len(block.state), len(block.y), (engine.rtol, engine.atol), sizes, parameters
+        )
     )
 
 
@@ -62,7 +66,8 @@ def with_hook(pack, method: int) -> None:
     (:mod:`scoutsim._core.numerics.tangent_call`; compiled on the first run that carries
     columns); nothing for a run that carries none."""
     if pack.Phi.shape[1] > 0:
-        pack.calls[A_HOOK, CALL_ADDRESS] = hook_address(method)
+        pack.calls[A_HOOK, HOOK_OPS] = hook_address("op")
+        pack.calls[A_HOOK, HOOK_FLOW] = hook_address(method)
 
 
 def smoothness(info) -> dict:

@@ -48,7 +48,7 @@ from ..model.kinematics import project_state
 from ..model.layout import CB_ADDRESS, NMF, NMI, NS, P_G, SG_MEASURED, SG_MOTOR_SIDE
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
-from .stepper import METHOD_ARK4, do_step
+from .stepper import do_step
 from .tangent_work import (
     TI_EVENTS,
     TI_GRAZING,
@@ -62,7 +62,7 @@ from .tangent_work import (
     unpacked,
 )
 from .transitions import apply_event, settle_ws
-from .work import EventLog
+from .work import EventLog, StepWork
 
 
 @kernel(inline="always")
@@ -154,13 +154,18 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, pack):
     factors ``SF0``): the rows of s; the anchors, commands and controller state are
     constant along the flow."""
     tan = unpacked(pack)
-    Phi, out, tw = tan.Phi, tan.out, tan.work
+    Phi, out, own = tan.Phi, tan.out, tan.work
     sp, mfp, cmdp = tan.sp, tan.mfp, tan.cmdp
     m = Phi.shape[1]
-    if method >= METHOD_ARK4:
-        for i in range(SF0.shape[0]):
-            for j in range(SF0.shape[1]):
-                tw.SF0[i, j] = SF0[i, j]
+    # the perturbed steps read the run's splitting factors where they are (a step reads
+    # SF0 and, with want_sf off, leaves SF1 alone). (A copy into the work's own SF0 was
+    # lost when the loop below was compiled with it: the perturbed ARK steps ran with a
+    # zero splitting, an explicit method on the stiff belt, and the carried derivatives
+    # grew by 55 per control period; tests/_core/numerics/test_tangent.py checks ARK.)
+    tw = StepWork(
+        own.K, own.y_new, own.aux_new, own.tmp, own.ew, SF0, own.SF1, own.Z, own.rtol,
+        own.atol, own.energy,
+    )  # fmt: skip
     for j in range(m):
         eps = _column_step(Phi[:, j], tan, X_CS)
         if eps == 0.0:

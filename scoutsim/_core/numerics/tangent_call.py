@@ -13,10 +13,12 @@ sensitivities (:func:`hook_address`), the way it calls a user's compiled control
 - each function here (:func:`projection`, :func:`flow`, :func:`snapshot`, :func:`reset`,
   :func:`margin`, :func:`keep`, :func:`sample`) writes the addresses and shapes of its
   arrays into the pack's table ``calls`` (rows ``A_*``: address, rows, columns) and calls
-  the C function at ``calls[A_HOOK, 0]`` with the operation (``OP_*``), one integer, two
-  numbers and the table;
-- the C function (one per integration method, :func:`_run_op`) makes arrays of the
-  addresses again and calls the function of :mod:`.tangent` the operation names.
+  a C function with the operation (``OP_*``), one integer, two numbers and the table:
+  the flow of a step the method's (``calls[A_HOOK, HOOK_FLOW]``, :func:`_run_flow`, one
+  per integration method), every other operation the one of all methods
+  (``calls[A_HOOK, HOOK_OPS]``, :func:`_run_op`);
+- the C function makes arrays of the addresses again and calls the function of
+  :mod:`.tangent` the operation names.
 
 The address is the process's: :meth:`~scoutsim.simulation.engine.HybridEngine.advance` sets
 it before every run that carries columns (an engine copied to another process gets that
@@ -69,6 +71,8 @@ from .tangent_work import (
     CALL_ADDRESS,
     CALL_COLS,
     CALL_ROWS,
+    HOOK_FLOW,
+    HOOK_OPS,
     N_CALL_ROWS,
     TangentPack,
 )
@@ -121,23 +125,29 @@ def _call_hook(typingctx, address, op, k, a, b, calls):
 
 @kernel
 def _call(pack, op, k, a, b):
-    """Put the pack's own arrays in its table and call the hook."""
+    """Put the pack's own arrays in its table and call the hook (a flow: the method's)."""
     calls = pack.calls
     _put_matrix(calls, A_PHI, pack.Phi)
     _put(calls, A_INFO, pack.info)
     _put(calls, A_FLOATS, pack.f)
     _put(calls, A_INTEGERS, pack.i)
-    _call_hook(calls[A_HOOK, CALL_ADDRESS], op, k, a, b, calls)
+    hook = calls[A_HOOK, HOOK_FLOW] if op == OP_FLOW else calls[A_HOOK, HOOK_OPS]
+    _call_hook(hook, op, k, a, b, calls)
+
+
+@kernel
+def _put_plant(calls, s, P, mi, mf):
+    """The rows of the state, the robot's parameters, the modes and the anchors."""
+    _put(calls, A_S, s)
+    _put(calls, A_P, P)
+    _put(calls, A_MI, mi)
+    _put(calls, A_MF, mf)
 
 
 @kernel
 def projection(s, P, mi, mf, pack):
     """:func:`~.tangent.tangent_projection`, by address."""
-    calls = pack.calls
-    _put(calls, A_S, s)
-    _put(calls, A_P, P)
-    _put(calls, A_MI, mi)
-    _put(calls, A_MF, mf)
+    _put_plant(pack.calls, s, P, mi, mf)
     _call(pack, OP_PROJECTION, 0, 0.0, 0.0)
 
 
@@ -145,10 +155,7 @@ def projection(s, P, mi, mf, pack):
 def flow(method, s, h, P, mi, mf, cmd, SF0, pack):
     """:func:`~.tangent.tangent_flow`, by address."""
     calls = pack.calls
-    _put(calls, A_S, s)
-    _put(calls, A_P, P)
-    _put(calls, A_MI, mi)
-    _put(calls, A_MF, mf)
+    _put_plant(calls, s, P, mi, mf)
     _put(calls, A_CMD, cmd)
     _put_matrix(calls, A_SF0, SF0)
     _call(pack, OP_FLOW, method, h, 0.0)
@@ -200,10 +207,7 @@ def keep(cmd, cs, ls, pack):
 def sample(t, s, P, mi, mf, builtin, C, cb, pack):
     """:func:`~.tangent.tangent_sample`, by address (``cb``: the control block)."""
     calls = pack.calls
-    _put(calls, A_S, s)
-    _put(calls, A_P, P)
-    _put(calls, A_MI, mi)
-    _put(calls, A_MF, mf)
+    _put_plant(calls, s, P, mi, mf)
     _put(calls, A_C, C)
     _put(calls, A_GEOM, cb.geom)
     _put(calls, A_INTS, cb.ints)
@@ -250,93 +254,91 @@ def _ints(calls, row):
 
 
 @allocating
-def _run_op(method, op, k, a, b, table):
-    """Operation ``op`` on the arrays of the table (module docstring) for a run of
-    ``method`` (a constant: the steps are the method's); ``k``: the event's slot (a
-    reset), 1 for the built-in law (a sample); ``a``, ``b``: the step [s] (a flow, a
-    margin) or the time [s] (a reset, a sample). (Reference counting on: ``carray``
-    needs it.)"""
-    calls = carray(table, (N_CALL_ROWS, 3))
-    pack = TangentPack(
+def _pack_of(calls):
+    """The pack whose arrays the table ``calls`` gives."""
+    return TangentPack(
         _float_matrix(calls, A_PHI),
         _floats(calls, A_INFO),
         _floats(calls, A_FLOATS),
         _ints(calls, A_INTEGERS),
         calls,
     )
+
+
+@allocating
+def _run_op(op, k, a, table):
+    """Operation ``op`` (any but a flow) on the arrays of the table (module docstring);
+    ``k``: the event's slot (a reset), 1 for the built-in law (a sample); ``a``: the step
+    [s] (a margin) or the time [s] (a reset, a sample). (Reference counting on: ``carray``
+    needs it.)"""
+    calls = carray(table, (N_CALL_ROWS, 3))
+    pack = _pack_of(calls)
+    # (every array of the table, also those this operation does not use: a view of an
+    # address left from another call is made, never read)
+    s, P, mi, mf = (
+        _floats(calls, A_S),
+        _floats(calls, A_P),
+        _ints(calls, A_MI),
+        _floats(calls, A_MF),
+    )
+    cmd, f = _floats(calls, A_CMD), _floats(calls, A_F)
     if op == OP_PROJECTION:
-        s, P, mi, mf = (
-            _floats(calls, A_S),
-            _floats(calls, A_P),
-            _ints(calls, A_MI),
-            _floats(calls, A_MF),
-        )
         tangent_projection(s, P, mi, mf, pack)
-    elif op == OP_FLOW:
-        s, P, mi, mf = (
-            _floats(calls, A_S),
-            _floats(calls, A_P),
-            _ints(calls, A_MI),
-            _floats(calls, A_MF),
-        )
-        cmd, SF0 = _floats(calls, A_CMD), _float_matrix(calls, A_SF0)
-        tangent_flow(method, s, a, P, mi, mf, cmd, SF0, pack)
     elif op == OP_SNAPSHOT:
-        s, mi, mf, f = (
-            _floats(calls, A_S),
-            _ints(calls, A_MI),
-            _floats(calls, A_MF),
-            _floats(calls, A_F),
-        )
         tangent_snapshot(s, mi, mf, f, pack)
     elif op == OP_RESET:
-        mi, f, P, cmd = (
-            _ints(calls, A_MI),
-            _floats(calls, A_F),
-            _floats(calls, A_P),
-            _floats(calls, A_CMD),
-        )
         tangent_reset(k, a, mi, f, P, cmd, pack)
     elif op == OP_MARGIN:
         armed = carray(_byte_pointer(calls[A_ARMED, CALL_ADDRESS]), calls[A_ARMED, CALL_ROWS])
         sample_margin(a, armed, _floats(calls, A_E_START), _floats(calls, A_E_END), pack)
     elif op == OP_KEEP:
-        keep_controller(_floats(calls, A_CMD), _floats(calls, A_STATE), _ints(calls, A_LS), pack)
+        keep_controller(cmd, _floats(calls, A_STATE), _ints(calls, A_LS), pack)
     elif op == OP_SAMPLE:
-        s, P, mi, mf = (
-            _floats(calls, A_S),
-            _floats(calls, A_P),
-            _ints(calls, A_MI),
-            _floats(calls, A_MF),
-        )
-        C, geom, ints, params = (
-            _floats(calls, A_C),
-            _floats(calls, A_GEOM),
-            _ints(calls, A_INTS),
-            _floats(calls, A_PARAMS),
-        )
-        tangent_sample(a, s, P, mi, mf, k == 1, C, geom, ints, params, pack)
+        C, geom, params = _floats(calls, A_C), _floats(calls, A_GEOM), _floats(calls, A_PARAMS)
+        tangent_sample(a, s, P, mi, mf, k == 1, C, geom, _ints(calls, A_INTS), params, pack)
     return 0
 
 
-def _entry_dopri5(op, k, a, b, table):
-    return _run_op(METHOD_DOPRI5, op, k, a, b, table)
+@allocating
+def _run_flow(method, h, table):
+    """A flow over a step of ``h`` [s] of ``method`` (a constant: the steps are the
+    method's) on the arrays of the table."""
+    calls = carray(table, (N_CALL_ROWS, 3))
+    s, P, mi, mf = (
+        _floats(calls, A_S),
+        _floats(calls, A_P),
+        _ints(calls, A_MI),
+        _floats(calls, A_MF),
+    )
+    cmd, SF0 = _floats(calls, A_CMD), _float_matrix(calls, A_SF0)
+    tangent_flow(method, s, h, P, mi, mf, cmd, SF0, _pack_of(calls))
+    return 0
 
 
-def _entry_ark4(op, k, a, b, table):
-    return _run_op(METHOD_ARK4, op, k, a, b, table)
+def _entry(op, k, a, b, table):
+    return _run_op(op, k, a, table)
 
 
-def _entry_ark3(op, k, a, b, table):
-    return _run_op(METHOD_ARK3, op, k, a, b, table)
+def _flow_dopri5(op, k, a, b, table):
+    return _run_flow(METHOD_DOPRI5, a, table)
 
 
-#: the hook of each method (its steps are the method's)
-_ENTRIES = {METHOD_DOPRI5: _entry_dopri5, METHOD_ARK4: _entry_ark4, METHOD_ARK3: _entry_ark3}
+def _flow_ark4(op, k, a, b, table):
+    return _run_flow(METHOD_ARK4, a, table)
+
+
+def _flow_ark3(op, k, a, b, table):
+    return _run_flow(METHOD_ARK3, a, table)
+
+
+#: the flow of each method (its steps are the method's)
+_FLOWS = {METHOD_DOPRI5: _flow_dopri5, METHOD_ARK4: _flow_ark4, METHOD_ARK3: _flow_ark3}
 
 
 @functools.cache
-def hook_address(method: int) -> int:
-    """The address in this process of the hook for runs of ``method`` (a METHOD_* code,
-    not METHOD_AUTO), compiled (or loaded from the disk cache) on the first call."""
-    return c_function(HOOK_SIGNATURE, _ENTRIES[method]).address
+def hook_address(which) -> int:
+    """The address in this process of a hook: ``"op"`` (every operation but a flow) or a
+    method's code (stepper.METHOD_*, not METHOD_AUTO: its flow), compiled (or loaded from
+    the disk cache) on the first call."""
+    entry = _entry if which == "op" else _FLOWS[which]
+    return c_function(HOOK_SIGNATURE, entry).address

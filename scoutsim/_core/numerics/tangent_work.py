@@ -72,7 +72,7 @@ TangentPack = namedtuple("TangentPack", "Phi info f i calls")
 
 # rows of the table ``TangentPack.calls`` (:mod:`.tangent_call`): the C function's address (column 0), then for
 # each array argument its address, rows and columns (1 for a vector)
-A_HOOK = 0
+A_HOOK = 0  # the hooks' addresses: columns HOOK_OPS, HOOK_FLOW
 A_S = 1  # the state [layout.NS]
 A_P = 2  # the packed robot parameters
 A_MI = 3  # the modes (int64)
@@ -94,6 +94,8 @@ A_INFO = 18  # ... info
 A_FLOATS = 19  # ... its float buffer
 A_INTEGERS = 20  # ... its int buffer (int64)
 N_CALL_ROWS = 21
+#: the columns of row A_HOOK: every operation but a flow, the flow of the run's method
+HOOK_OPS, HOOK_FLOW = 0, 1
 #: the columns of a row of the table
 CALL_ADDRESS, CALL_ROWS, CALL_COLS = 0, 1, 2
 
@@ -101,19 +103,6 @@ CALL_ADDRESS, CALL_ROWS, CALL_COLS = 0, 1, 2
 #: the header entries of a part in ``TangentPack.i``: start, stop, rows, columns
 PART_START, PART_STOP, PART_ROWS, PART_COLS = 0, 1, 2, 3
 PART_HEADER = 4
-
-
-def new_tangent(
-    m: int,
-    n_state: int,
-    n_readings: int,
-    tolerances: tuple[float, float],
-    sizes: tuple[int, int, int],
-    parameters=None,
-) -> TangentPack:
-    """What a run carries for ``m`` sensitivity columns (0: none): the arrays of
-    :func:`tangent_work` (the arguments are its), packed (:func:`packed`)."""
-    return packed(tangent_work(m, n_state, n_readings, tolerances, sizes, parameters))
 
 
 def tangent_work(
