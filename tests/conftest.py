@@ -1,11 +1,42 @@
 """Fixtures shared by the test modules."""
 
 import importlib.util
+import os
 from pathlib import Path
 
 import pytest
+import session_work
 
 import scoutsim
+
+_AS_IS_KEY = pytest.StashKey[session_work.AsIsRun]()
+
+
+def _starts_workers(config) -> bool:
+    """Whether this process runs the tests on workers (pytest-xdist) instead of itself."""
+    return bool(getattr(config.option, "numprocesses", None)) and not hasattr(config, "workerinput")
+
+
+def pytest_sessionstart(session):
+    """Before the workers start (on several workers only): the second process of the
+    compile-step test, then the core's compile, once for all (tests/session_work.py)."""
+    config = session.config
+    if not _starts_workers(config):
+        return
+    if session_work.as_is_test_selected(config) and not os.environ.get(
+        session_work.AS_IS_DIRECTORY
+    ):
+        run = session_work.AsIsRun()
+        config.stash[_AS_IS_KEY] = run
+        os.environ[session_work.AS_IS_DIRECTORY] = str(run.dir)
+    session_work.compile_the_core()
+
+
+def pytest_unconfigure(config):
+    run = config.stash.get(_AS_IS_KEY, None)
+    if run is not None:
+        os.environ.pop(session_work.AS_IS_DIRECTORY, None)
+        run.close()
 
 
 @pytest.fixture
