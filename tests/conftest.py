@@ -2,6 +2,7 @@
 
 import importlib.util
 import os
+import time
 from pathlib import Path
 
 import pytest
@@ -29,7 +30,14 @@ def pytest_sessionstart(session):
         run = session_work.AsIsRun()
         config.stash[_AS_IS_KEY] = run
         os.environ[session_work.AS_IS_DIRECTORY] = str(run.dir)
+    t0 = time.perf_counter()
     session_work.compile_the_core()
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    if reporter is not None:
+        reporter.write_line(
+            f"compiled the core for the workers in {time.perf_counter() - t0:.0f} s "
+            "(loaded from the cache if it was there)"
+        )
 
 
 def pytest_unconfigure(config):
