@@ -53,6 +53,9 @@ class ControllerFile:
 
 
 def _value(v) -> str:
+    """``v`` in TOML: a per-leg field's (back, front) pair as an array."""
+    if isinstance(v, tuple):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
@@ -87,7 +90,8 @@ def write_controller_file(
         unit = row["si_unit"]
         entry = f'{row["name"]} = {{ value = {_value(v)}, unit = "{unit}" }}'
         if unit == "rad":
-            entry += f"   # {math.degrees(v):.4f} deg"
+            pair = v if isinstance(v, tuple) else (v,)
+            entry += "   # " + ", ".join(f"{math.degrees(x):.4f}" for x in pair) + " deg"
         sections.setdefault(row["section"], []).append(entry)
     for name, entries in sections.items():
         lines += ["", f"[{name}]"] + entries

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
-from ..parameters.robot_fields import robot_with_values
+from ..parameters.robot_fields import field_of, robot_value, robot_with_values
 from .sweep_points import check_name, parameter_names
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
@@ -170,28 +170,29 @@ def parse_parameter(
     base = name[:-4] if name.endswith("_deg") else name
     _check_tuned_name(name, base)
     if name.endswith("_deg"):
-        if field_dimension(base.partition(".")[2]) != "angle":
+        section, _, fld = base.partition(".")
+        field = field_of(fld, "robot.")[0] if section == "robot" else fld
+        if field_dimension(field) != "angle":
             raise ValueError(
                 f"parameter {name!r} is not allowed: the _deg suffix takes "
                 f"degrees for an angle; {base!r} is not an angle (give it in SI "
                 "units, without the suffix)"
             )
         scale = math.pi / 180.0
-    fld = base.partition(".")[2]
-    if fld in ("legs_per_virtual_leg", "sense_motor_angle"):
+    section, _, fld = base.partition(".")
+    # (a per-leg field's one leg, robot.<field>.back / .front, has the field's rules)
+    field = field_of(fld, "robot.")[0] if section == "robot" else fld
+    if field in ("legs_per_virtual_leg", "sense_motor_angle"):
         raise ValueError(
             f"parameter {name!r} is not allowed: tuning varies continuous "
             "parameters, and this one is a whole number or a switch"
         )
-    lo_r, hi_r, lo_closed, hi_closed = allowed_range(fld)
+    lo_r, hi_r, lo_closed, hi_closed = allowed_range(field)
+    # (read even with a range: a per-leg field without a leg is refused here, before the
+    # tuning starts, where the legs differ)
+    value = _value_of(base, robot or RobotParameters(), cparams or ControllerParameters())
     if bounds is None:
-        section = base.partition(".")[0]
-        owner = (
-            (robot or RobotParameters())
-            if section == "robot"
-            else (cparams or ControllerParameters())
-        )
-        found = default_search_range(base, float(getattr(owner, fld)))
+        found = default_search_range(f"{section}.{field}", value)
         if found is None:
             raise ValueError(
                 f"parameter {name!r} needs a range: it has no default search "
@@ -267,8 +268,18 @@ def base_value(p: TuneParameter, robot, cparams, spec) -> float:
     the compiled controller's parameter array (``spec["params"]``)."""
     if p.key.startswith("params["):
         return float(spec["params"][int(p.key[7:-1])])
-    sec, _, fld = p.key.partition(".")
-    return float(getattr(robot if sec == "robot" else cparams, fld))
+    return _value_of(p.key, robot, cparams)
+
+
+def _value_of(key: str, robot, cparams) -> float:
+    """The value [SI] of ``key`` (``robot.<field>``, a per-leg field's
+    ``robot.<field>.<leg>``, or ``controller.<field>``) in ``robot`` / ``cparams``; a
+    per-leg field named without a leg is refused where the legs differ (ValueError naming
+    the two legs' names)."""
+    section, _, fld = key.partition(".")
+    if section == "robot":
+        return robot_value(robot, fld, "robot.")
+    return float(getattr(cparams, fld))
 
 
 def warn_of_box_ends(params, robot, cparams) -> None:

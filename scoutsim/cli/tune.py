@@ -193,6 +193,26 @@ def _starts(args, robot, model):
     return out
 
 
+def _where_in_a_robot_file(parameters) -> str:
+    """Where each tuned value goes in a robot file: its field's section, and for one leg of
+    a per-leg field, that leg's entry of the (back, front) pair."""
+    from ..parameters.robot_fields import field_of
+    from ..parameters.schema import field_schema
+
+    places = []
+    for p in parameters:
+        section, _, name = p.key.partition(".")
+        if section != "robot":
+            places.append(f"{p.name}: [controller]")
+            continue
+        field, leg = field_of(name)
+        where = f"[{field_schema()[field].section}] {field}"
+        if leg is not None:
+            where += f", the {name.rpartition('.')[2]} entry of [back, front]"
+        places.append(f"{p.name}: {where}")
+    return "; ".join(places)
+
+
 def execute(args) -> int:
     from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.study_failures import StudyError
@@ -338,8 +358,8 @@ def execute(args) -> int:
         # a user's controller (MODULE:FACTORY): the tuned values are the parameters its
         # factory was called with, which a controller file of the Table I law cannot carry
         print(
-            f"  run it: put the tuned values of {out}/best.json in the [controller] section "
-            f"of a robot file and run scoutsim run --controller {args.controller} --robot "
-            "FILE" + tail
+            f"  run it: put the tuned values of {out}/best.json in a robot file "
+            f"({_where_in_a_robot_file(res.parameters)}) and run scoutsim run --controller "
+            f"{args.controller} --robot FILE" + tail
         )
     return 0

@@ -122,6 +122,17 @@ def test_controller_file_round_trips_bit_for_bit(tmp_path):
     assert scoutsim.load_parameters(path)[1] == c
 
 
+def test_a_robot_whose_legs_differ_reads_back_from_its_controller_file(tmp_path):
+    """A per-leg field's (back, front) pair is written as a pair and read back exactly."""
+    robot = scoutsim.RobotParameters(
+        leg_stiffness=(3520.0, 3950.0 + 1e-9), leg_rest_length=(0.323, 0.305)
+    )
+    c = ControllerParameters()
+    path = write_controller_file(tmp_path / "c.toml", "table-i", c, robot)
+    f = read_controller_file(path)
+    assert f.robot == robot and f.controller == c
+
+
 @pytest.mark.parametrize(
     "body, field",
     [

@@ -132,6 +132,18 @@ def test_gait_metrics_are_not_computed_when_some_samples_do_not_bound():
     assert res.summary()["share_not_bounding"] == share
 
 
+def test_runs_too_short_to_bound_steadily_are_named_as_such():
+    """Runs that end without falling but before seven steady strides do not count as
+    bounding: the reason says so and names the duration, not the ranges."""
+    params = [parse_parameter("robot.leg_stiffness=3400:3600")]
+    res = uncertainty_study(params, n=2, model="II", duration=2.0, workers=1)
+    assert res.share_not_bounding() == 1.0
+    assert all(r["outcome"] == "completed" for r in res.rows)
+    why = res.not_computed["mean_speed_m_s"]
+    assert f"{len(res.rows)} of them ran to the end without falling but with fewer than 7" in why
+    assert "longer duration" in why and "narrow the ranges" not in why
+
+
 def test_uniform_and_normal_parameters_stay_in_the_allowed_range():
     u = np.linspace(0.0, 1.0, 1001)[1:-1]
     p = parse_parameter("controller.touchdown_angle_front_deg=normal:88:5")

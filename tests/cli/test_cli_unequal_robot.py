@@ -173,8 +173,9 @@ def test_orbit_rig_and_the_refused_fit(robot_file, tmp_path, capsys):
         ["orbit", "--sensitivity", "robot.current_limit"],
         ["sweep", "--grid", "robot.current_limit=11:13:2", "--duration", "0.5", "--out", "o"],
         ["continue", "--vary", "robot.current_limit=11:13", "--out", "o"],
+        ["tune", "--param", "robot.current_limit=11:13", "--objective", "cot", "--out", "o"],
     ],
-    ids=["orbit", "sweep", "continue"],
+    ids=["orbit", "sweep", "continue", "tune"],
 )
 def test_a_field_whose_legs_differ_is_named_by_leg(robot_file, tmp_path, capsys, command):
     """The robot's current limits differ (12 / 12.5 A): one value for both would silently
@@ -195,3 +196,21 @@ def test_a_sweep_over_one_legs_value_keeps_the_other(robot_file, tmp_path):
     table = pd.read_csv(out / "sweep.csv")
     assert list(table["robot.current_limit.front"]) == [11.0, 13.0]
     assert set(table["outcome"]) <= {"completed", "fell"}
+
+
+def test_a_tuning_of_one_legs_value_writes_a_robot_file_that_runs(robot_file, tmp_path):
+    """Tuning the front current limit of this robot: the best value is the front entry of
+    the robot's pair in best.toml (the back one kept), and the file runs as the robot."""
+    import tomllib
+
+    out = tmp_path / "tune"
+    args = ["tune", "--param", "robot.current_limit.front=11:13", "--objective", "cot"]
+    args += ["--budget", "6", "--duration", "1.5", "--workers", "1", "--out", str(out)]
+    assert main([*args, "--robot", robot_file, "--quiet"]) == 0
+    best = json.loads((out / "best.json").read_text())["parameters"]
+    written = tomllib.loads((out / "best.toml").read_text())["motor"]["current_limit"]
+    assert written["value"] == [12.0, best["robot.current_limit.front"]]
+    run = tmp_path / "run"
+    toml = str(out / "best.toml")
+    assert main(["run", "--controller", toml, "--robot", toml, "--duration", "0.3",
+                 "--no-plots", "--out", str(run), "--quiet"]) == 0  # fmt: skip

@@ -250,6 +250,7 @@ def test_tune_runs_a_module_controller(user_dir, tmp_path):
     assert not (tmp_path / "t" / "best.toml").exists()
     assert "best.toml" not in p.stdout
     assert "--controller usermod:table_i --robot FILE" in p.stdout
+    assert "controller.touchdown_angle_front_deg: [controller]" in p.stdout
 
 
 def test_orbit_takes_a_factory_of_table_i_parameters(user_dir, tmp_path):

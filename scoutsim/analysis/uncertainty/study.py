@@ -51,6 +51,7 @@ from ...io.run_directory import RunDirectory, json_default
 from ...io.tables import write_rows_csv, write_rows_parquet
 from ...parameters import ControllerParameters, RobotParameters
 from ...simulation.initial_conditions import NAMED_STARTS
+from ..strides import MIN_STEADY_STRIDES
 from ..study_controller import check_controller_travels, describe_controller, study_controller
 from ..study_failures import StudyError, end_of_study, error_fields, is_error
 from ..sweep import COST_OF_TRANSPORT, SUMMARY_COLUMNS, SweepBase, sweep_task
@@ -241,12 +242,28 @@ def _indices(res: UncertaintyResult, seed: int) -> None:
     d = len(res.parameters)
     n_runs = len(res.rows)
     not_bounding = int(round(res.share_not_bounding() * n_runs))
+    # runs that ended without falling and without the strides to count as steady
+    # bounding: the ranges need not be what keeps them out, the duration may
+    short = sum(
+        1
+        for r in res.rows
+        if not r.get("steady_bounding")
+        and r.get("outcome") == "completed"
+        and (r.get("n_steady_strides") or 0) < MIN_STEADY_STRIDES
+    )
     for m in res.metrics:
         v = res.metric(m)
         if m != BOUNDS and not_bounding:
+            why = (
+                f"; {short} of them ran to the end without falling but with fewer than "
+                f"{MIN_STEADY_STRIDES} steady strides: a longer duration tells whether they "
+                "settle into a bound"
+                if short
+                else " (narrow the ranges to where the robot bounds)"
+            )
             res.not_computed[m] = (
-                f"{not_bounding} of {n_runs} samples do not bound: a gait metric has no "
-                "value for them (narrow the ranges to where the robot bounds)"
+                f"{not_bounding} of {n_runs} samples do not bound steadily: a gait metric "
+                f"has no value for them{why}"
             )
         elif not np.all(np.isfinite(v)):
             res.not_computed[m] = f"{int(np.sum(~np.isfinite(v)))} runs have no value"
