@@ -117,7 +117,7 @@ def execute(args) -> int:
     from ..analysis.parallel import NotSendableError, SchedulerUnreachableError
     from ..analysis.study_failures import StudyError
     from ..analysis.sweep import CHECKPOINT, read_checkpoint
-    from ..analysis.uncertainty import uncertainty_study
+    from ..analysis.uncertainty import check_parameters, uncertainty_study
 
     params = _parameters(args)
     n_runs = args.samples * (len(params) + 2)
@@ -129,6 +129,8 @@ def execute(args) -> int:
         what=f"the study of {n_runs} runs",
     )
     robot, cparams = load_parameters(args.robot)
+    with usage_errors():
+        check_parameters(params, robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = make_controller(law, cparams, robot, on_workers=True)
     out = out_dir(args.out)

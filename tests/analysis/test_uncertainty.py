@@ -14,6 +14,7 @@ from scoutsim.analysis.uncertainty import (
     GAIT_METRICS,
     METRICS,
     UncertainParameter,
+    check_parameters,
     parse_parameter,
     read_uncertainty,
     sobol_indices,
@@ -130,6 +131,20 @@ def test_gait_metrics_are_not_computed_when_some_samples_do_not_bound():
     for m in GAIT_METRICS:
         assert res.not_computed[m].startswith(f"{n_not} of {len(res.rows)} samples do not bound")
     assert res.summary()["share_not_bounding"] == share
+
+
+def test_one_legs_value_has_the_fields_allowed_range_and_is_one_field_with_it():
+    """A per-leg field's one leg is drawn within the field's allowed range (a normal
+    truncated at zero stiffness) and is refused beside the field itself."""
+    front = parse_parameter("robot.leg_stiffness.front=normal:100:400")
+    x = front.values(np.linspace(0.001, 0.999, 50))
+    assert np.all(x > 0.0)
+    with pytest.raises(ValueError, match="low = -5 is not allowed"):
+        parse_parameter("robot.leg_stiffness.back=-5:10")
+    both = parse_parameter("robot.leg_stiffness=3000:3800")
+    with pytest.raises(ValueError, match="set the same field"):
+        check_parameters([front, both])
+    check_parameters([front, parse_parameter("robot.leg_stiffness.back=3000:3800")])
 
 
 def test_runs_too_short_to_bound_steadily_are_named_as_such():

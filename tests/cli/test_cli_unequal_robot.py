@@ -174,8 +174,9 @@ def test_orbit_rig_and_the_refused_fit(robot_file, tmp_path, capsys):
         ["sweep", "--grid", "robot.current_limit=11:13:2", "--duration", "0.5", "--out", "o"],
         ["continue", "--vary", "robot.current_limit=11:13", "--out", "o"],
         ["tune", "--param", "robot.current_limit=11:13", "--objective", "cot", "--out", "o"],
+        ["uncertainty", "--param", "robot.current_limit=11:13", "--samples", "2", "--out", "o"],
     ],
-    ids=["orbit", "sweep", "continue", "tune"],
+    ids=["orbit", "sweep", "continue", "tune", "uncertainty"],
 )
 def test_a_field_whose_legs_differ_is_named_by_leg(robot_file, tmp_path, capsys, command):
     """The robot's current limits differ (12 / 12.5 A): one value for both would silently

@@ -24,6 +24,7 @@ from .study import (
     INDEX_COLUMNS,
     METRICS,
     UncertaintyResult,
+    check_parameters,
     uncertainty_study,
     uncertainty_task,
 )
@@ -41,6 +42,7 @@ __all__ = [
     "UncertaintyResult",
     "UncertainParameter",
     "parse_parameter",
+    "check_parameters",
     "read_uncertainty",
     "sobol_indices",
     "sobol_design",

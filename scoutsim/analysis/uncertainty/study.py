@@ -50,6 +50,7 @@ from ...control.factory import ControllerSpec
 from ...io.run_directory import RunDirectory, json_default
 from ...io.tables import write_rows_csv, write_rows_parquet
 from ...parameters import ControllerParameters, RobotParameters
+from ...parameters.robot_fields import field_of, robot_value, robot_with_value
 from ...simulation.initial_conditions import NAMED_STARTS
 from ..strides import MIN_STEADY_STRIDES
 from ..study_controller import check_controller_travels, describe_controller, study_controller
@@ -62,6 +63,7 @@ from .uncertain_parameters import FRICTION, UncertainParameter
 
 __all__ = [
     "uncertainty_study",
+    "check_parameters",
     "uncertainty_task",
     "UncertaintyResult",
     "METRICS",
@@ -335,23 +337,47 @@ def _warn_of_range_ends(parameters: list, points: list[dict], robot, controller)
         scale = 1.0 if p.name == p.field else math.pi / 180.0
         for v in {min(q[p.name] for q in points), max(q[p.name] for q in points)}:
             try:
-                dataclasses.replace(obj, **{fld: v * scale})
+                if isinstance(obj, RobotParameters):
+                    robot_with_value(obj, fld, v * scale, "robot.")
+                else:
+                    dataclasses.replace(obj, **{fld: v * scale})
             except (ValueError, TypeError):
                 pass
 
 
-def _check(parameters: list, base: SweepBase, controller) -> None:
+def check_parameters(parameters: list, robot: RobotParameters | None = None) -> None:
+    """ValueError (TypeError for what is not an :class:`UncertainParameter`) unless
+    ``parameters`` are a study's: at least one, no field set twice (a per-leg field's one
+    leg beside the field itself included), and no per-leg field named without a leg where
+    ``robot``'s legs differ in it (one value would make them equal; the message names the
+    two legs' names)."""
     if not parameters:
         raise ValueError("parameters is empty: give at least one uncertain parameter")
+    robot = robot or RobotParameters()
     fields: dict = {}
     for p in parameters:
         if not isinstance(p, UncertainParameter):
             raise TypeError(
                 f"parameters: {p!r} is not an UncertainParameter (scoutsim.analysis.uncertainty.parse_parameter)"
             )
-        if p.field in fields:
-            raise ValueError(f"parameters {fields[p.field]!r} and {p.name!r} set the same field")
+        section, _, name = p.field.partition(".")
+        same = [p.field]
+        if section == "robot":
+            robot_value(robot, name, "robot.")  # (both legs at once only where equal)
+            field, leg = field_of(name, "robot.")
+            same += (
+                [f"robot.{field}"]
+                if leg is not None
+                else [f"robot.{field}.{other}" for other in ("back", "front")]
+            )
+        for f in same:
+            if f in fields:
+                raise ValueError(f"parameters {fields[f]!r} and {p.name!r} set the same field")
         fields[p.field] = p.name
+
+
+def _check(parameters: list, base: SweepBase, controller) -> None:
+    check_parameters(parameters, base.robot)
     if isinstance(base.initial_state, str) and base.initial_state not in NAMED_STARTS:
         raise ValueError(
             f"initial_state = {base.initial_state!r} is not allowed: must be a state or "

@@ -41,6 +41,7 @@ import numpy as np
 from scipy import stats
 
 from ...parameters import ParameterError, allowed_range
+from ...parameters.robot_fields import field_of
 from ...parameters.schema import CONTROLLER_SECTIONS, field_schema
 from ...parameters.units import UNIT_INDEX, UNITS
 from ..sweep_points import check_name, si_name
@@ -65,7 +66,11 @@ def _range_of(name: str) -> tuple[float, float, bool, bool]:
         return 0.0, math.inf, False, False
     check_name(name)
     base, scale = si_name(name)
-    lo, hi, lo_closed, hi_closed = allowed_range(base.partition(".")[2])
+    section, _, fld = base.partition(".")
+    # (one leg of a per-leg field, robot.<field>.back / .front, has the field's range)
+    lo, hi, lo_closed, hi_closed = allowed_range(
+        field_of(fld, "robot.")[0] if section == "robot" else fld
+    )
     return (
         -math.inf if lo is None else lo / scale,
         math.inf if hi is None else hi / scale,
