@@ -1,14 +1,21 @@
-"""Compile time: four of Numba's compiler steps that repeat work, replaced by equivalent
-ones while scoutsim compiles its own core, and only then (docs/model.md "Compile time").
+"""Numba's compiler steps that scoutsim replaces while it compiles its own core, and only
+then (docs/model.md "Compile time"): four that repeat work, replaced by equivalent ones,
 
 - the hash of the compiler flags on every overload lookup (:func:`_flags_hash`);
 - the IR inliner's per-block deep copies (:func:`_inline_copy`, numba#8989, numba#9204)
   and its per-call-site re-translation of the callee (:func:`_inline_translation`);
 - the full compilation of an always-inlined overload's implementation that is then thrown
-  away (:func:`inline_only`, :func:`_inline_overloads`, numba#6856).
+  away (:func:`inline_only`, :func:`_inline_overloads`, numba#6856);
 
-They change no compiled code: the results are bit for bit those without them
-(``tests/_numba/test_compile_steps.py`` compiles the core both ways and compares).
+and one that is wrong: the alias analysis of the dead-code elimination Numba runs after
+inlining, which lets it remove a write into an array taken from a tuple made in the
+function (:func:`_alias_analysis`, numba#7135).
+
+The first four change no compiled code: the results are bit for bit those without them
+(``tests/_numba/test_compile_steps.py`` compiles the core both ways and compares). The
+fifth keeps writes that Numba's analysis would remove; on the core as it is, that changes
+no plain run's results either (the same test, and ``tools/check_identical.py``); it moved
+the derivatives carried with a run by about 1e-8, where such a write had been lost.
 
 **Only while the core compiles.** The replacements are class attributes of Numba's, so
 they would change every Numba user of the process if they stayed in place. They are put
@@ -23,12 +30,12 @@ re-translated callees (:func:`_inline_translation`) lives as long as the outermo
 replaces (its source text or signature, on the Numba releases of the pin in
 pyproject.toml) and otherwise leaves Numba's step as it is. What each check found is
 recorded, not swallowed: :func:`status` says, for each replacement, ``"applied"`` or why
-not (``tests/_numba/test_compile_steps.py`` fails on the pinned Numba unless all four are applied).
+not (``tests/_numba/test_compile_steps.py`` fails on the pinned Numba unless all five are applied).
 Only the errors a moved or changed Numba can give (a missing module or attribute, a source
 that cannot be read, a signature that differs) count as "not the known code"; any other
 error propagates.
 
-``SCOUTSIM_NUMBA_AS_IS=1`` in the environment (read at import) leaves all four as Numba
+``SCOUTSIM_NUMBA_AS_IS=1`` in the environment (read at import) leaves all five as Numba
 has them (to compare: :data:`AS_IS`).
 """
 
@@ -213,12 +220,96 @@ def _inline_overloads():
     return disp, "get_call_template", get_call_template
 
 
+def _alias_analysis():
+    """Numba's dead-code elimination, run after every IR inlining, removes a write into an
+    array (``x[i] = v``) unless the variable ``x``, or a variable its alias analysis
+    (``ir_utils.find_potential_aliases``) links to it, is read later or aliases an
+    argument. That analysis links ``a = b.c`` to ``b`` only when ``b`` already aliases an
+    argument, and a tuple made in the function (``build_tuple``, a named tuple's
+    constructor) to none of its items. So a write through an array taken from such a tuple,
+    ``t.x[i] = v`` (typically in an inlined callee given ``t``), is removed when that
+    variable is not read again, though the array is read later through another name:
+    the write is silently lost (numba#7135; numba PR #7167, open, links tuples made from
+    parts). Found here as carried derivatives that came out zero, or with an explicit
+    integration step where the splitting matrix had been copied.
+
+    The replacement runs Numba's analysis, then links every ``getattr`` result to its
+    object and every tuple made in the function to its items, closes the links
+    transitively, and counts every variable linked to an argument's alias as one. It can
+    only keep writes Numba's removes: a store that is truly dead is left to LLVM's own
+    dead-store elimination, which sees the memory."""
+    iru = _lookup("numba.core.ir_utils")
+    ir = _lookup("numba.core.ir")
+    original = _lookup("numba.core.ir_utils", "find_potential_aliases")
+    where = "ir_utils.find_potential_aliases"
+    _check_parameters(
+        original, where, ("blocks", "args", "typemap", "func_ir", "alias_map", "arg_aliases")
+    )
+    src = _source(original, where)
+    if "expr.value.name in arg_aliases" not in src or "build_tuple" in src:
+        raise _NotTheKnownCode(f"{where} is not the analysis whose gaps this fills")
+    add_alias = _lookup("numba.core.ir_utils", "_add_alias")
+    immutable = _lookup("numba.core.ir_utils", "is_immutable_type")
+    get_definition = _lookup("numba.core.ir_utils", "get_definition")
+
+    def tuple_class(func_ir, var) -> bool:
+        try:
+            d = get_definition(func_ir, var)
+        except Exception:  # noqa: BLE001 - no single definition: not a known class
+            return False
+        value = getattr(d, "value", None) if isinstance(d, (ir.Global, ir.FreeVar)) else None
+        return isinstance(value, type) and issubclass(value, tuple)
+
+    def find_potential_aliases(blocks, args, typemap, func_ir, alias_map=None, arg_aliases=None):
+        alias_map, arg_aliases = original(blocks, args, typemap, func_ir, alias_map, arg_aliases)
+        linked = False
+        for block in blocks.values():
+            for instr in block.body:
+                if not isinstance(instr, ir.Assign) or not isinstance(instr.value, ir.Expr):
+                    continue
+                lhs, expr = instr.target.name, instr.value
+                if typemap is not None and immutable(lhs, typemap):
+                    continue
+                if expr.op == "getattr" and expr.attr != "shape":
+                    parts = [expr.value.name]
+                elif expr.op == "build_tuple":
+                    parts = [v.name for v in expr.items]
+                elif expr.op == "call" and tuple_class(func_ir, expr.func):
+                    parts = [v.name for v in expr.args] + [v.name for _, v in expr.kws]
+                else:
+                    continue
+                for part in parts:
+                    add_alias(lhs, part, alias_map, arg_aliases)
+                    add_alias(part, lhs, alias_map, arg_aliases)
+                    linked = True
+        if not linked:
+            return alias_map, arg_aliases
+        changed = True
+        while changed:
+            changed = False
+            for v in list(alias_map):
+                group = set(alias_map[v]) | {v}
+                for w in list(group):
+                    group |= alias_map.get(w, set())
+                group.discard(v)
+                if group != alias_map[v]:
+                    alias_map[v] = group
+                    changed = True
+                if (v in arg_aliases or group & arg_aliases) and not group <= arg_aliases:
+                    arg_aliases |= group | {v}
+                    changed = True
+        return alias_map, arg_aliases
+
+    return iru, "find_potential_aliases", find_potential_aliases
+
+
 #: the replacements, by the Numba attribute each replaces
 STEPS = {
     "TargetConfig.__hash__": _flags_hash,
     "InlineWorker.inline_ir": _inline_copy,
     "InlineWorker.inline_function": _inline_translation,
     "Dispatcher.get_call_template": _inline_overloads,
+    "ir_utils.find_potential_aliases": _alias_analysis,
 }
 
 _INHERITED = object()  # (an attribute the class inherits: put back by deleting ours)

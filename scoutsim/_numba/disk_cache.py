@@ -326,8 +326,10 @@ def install_cache_locator() -> str | None:
         )
 
     class _CoreCacheLocator(base):  # type: ignore[valid-type,misc]  # (Numba's class, found above)
-        def __init__(self, py_func, path: Path, digest: str):
+        def __init__(self, py_func, path: Path, digest: str, py_file: str = ""):
             self._lineno = py_func.__code__.co_firstlineno
+            # (Numba names the source file when it warns that a function cannot be cached)
+            self._py_file = py_file
             self._path = str(path)
             self._digest = digest
 
@@ -345,7 +347,7 @@ def install_cache_locator() -> str | None:
             path = _MODULE_DIRS.get(os.path.realpath(py_file))
             if path is None:
                 return None
-            self = cls(py_func, path, path.name.rsplit("-", 1)[1])
+            self = cls(py_func, path, path.name.rsplit("-", 1)[1], py_file)
             try:
                 self.ensure_cache_path()
             except OSError:

@@ -23,7 +23,8 @@ digest of what it depends on (:mod:`.disk_cache`), and use NumPy's error model (
 by zero gives inf / nan, it does not raise).
 
 Compile time (docs/model.md "Compile time"): four of Numba's compiler steps repeat work
-and are replaced by equivalent ones (:mod:`.compile_steps`) only while scoutsim compiles
+and are replaced by equivalent ones, and one, an alias analysis that loses writes into
+arrays of tuples, by a sound one (:mod:`.compile_steps`), only while scoutsim compiles
 its own functions: each dispatcher :func:`kernel` and :func:`allocating` make compiles
 inside :func:`compile_steps.applied` (:func:`_compiled_in_context`), and the compiles of
 its callees nest in it; other Numba users of the process see Numba as it is. Calls from
@@ -31,7 +32,7 @@ compiled code to a core function compile one specialization per argument kind, n
 constant (:func:`_typed_by_kind`). Each of these checks that Numba's code is the one it
 expects, else leaves Numba's as it is; :func:`status` records what was applied and why
 not. To compare (the results are bit for bit the same either way), two switches in the
-environment: ``SCOUTSIM_NUMBA_AS_IS=1`` leaves the four replacements out (Numba's steps as
+environment: ``SCOUTSIM_NUMBA_AS_IS=1`` leaves the five replacements out (Numba's steps as
 they are), ``SCOUTSIM_NUMBA_SPECIALIZE_CONSTANTS=1`` leaves :func:`_typed_by_kind` out (one
 specialization per constant argument, as Numba does by itself: about 45 % more CPU time for
 the first compile, which is why it has its own switch and is not part of the first).
@@ -244,7 +245,7 @@ def _compiled_in_context(dispatcher):
 def status() -> dict[str, str]:
     """What each of the guarded uses of Numba's internals found on the installed Numba:
     ``"applied"``, or ``"off: ..."`` / ``"not applied: ..."`` and why (then Numba's own
-    code is used). The four compiler steps (:func:`compile_steps.status`), the compile
+    code is used). The five compiler steps (:func:`compile_steps.status`), the compile
     context of the core's dispatchers (``compile_context``), the per-kind typing of calls
     (``typed_by_kind``) and the cache locator (``cache_locator``)."""
     return {**compile_steps.status(), **_STATUS}

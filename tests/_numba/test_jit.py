@@ -419,3 +419,28 @@ def test_the_cleaner_removes_directories_of_other_digests_and_of_modules_gone(tm
         os.utime(p, (old, old))
     assert disk_cache._remove_other_digests(tmp_path / "shared", digests, 3600.0) == [other]
     assert all(p.exists() for p in keep + gone)
+
+
+def test_numba_can_name_the_source_of_a_core_function_it_cannot_cache():
+    """Numba names a function's source file (its cache locator's ``_py_file``) when it
+    warns that the function cannot be cached (dynamic globals, as with ``NUMBA_OPT=0``);
+    the core's locator has it, so that warning is a warning, not an AttributeError."""
+    from scoutsim._core.model import evaluate
+
+    impl = evaluate.evaluate_ws._cache._impl
+    assert type(impl.locator).__name__ == "_CoreCacheLocator"
+    assert impl.locator._py_file == evaluate.__file__
+    import types
+    import warnings
+
+    from numba.core.errors import NumbaWarning
+
+    class Result:  # (what check_cachable reads of a compile result)
+        library = types.SimpleNamespace(has_dynamic_globals=True)
+        lifted = ()
+        fndesc = types.SimpleNamespace(qualname="evaluate_ws")
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert impl.check_cachable(Result()) is False
+    assert any(issubclass(w.category, NumbaWarning) for w in seen)

@@ -158,10 +158,11 @@ def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, pack):
     sp, mfp, cmdp = tan.sp, tan.mfp, tan.cmdp
     m = Phi.shape[1]
     # the perturbed steps read the run's splitting factors where they are (a step reads
-    # SF0 and, with want_sf off, leaves SF1 alone), not a copy in the work's own SF0: such
-    # a copy, compiled with the loop below, has been seen to read back zeros, and the ARK
-    # steps then run with a zero splitting, an explicit method on the stiff belts
-    # (tests/_core/numerics/test_tangent.py checks ARK3 against differences of runs)
+    # SF0 and, with want_sf off, leaves SF1 alone): no copy is needed. (A copy into the
+    # work's own SF0 was once removed by Numba's dead-code elimination, which lost writes
+    # into arrays of tuples made in the function, and the ARK steps ran with a zero
+    # splitting; scoutsim._numba.compile_steps._alias_analysis corrects that analysis, and
+    # tests/_core/numerics/test_tangent.py checks ARK3 against differences of runs.)
     tw = StepWork(
         own.K, own.y_new, own.aux_new, own.tmp, own.ew, SF0, own.SF1, own.Z, own.rtol,
         own.atol, own.energy,
