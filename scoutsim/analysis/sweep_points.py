@@ -39,6 +39,17 @@ def si_name(name: str) -> tuple[str, float]:
     return name, 1.0
 
 
+def section_and_field(name: str) -> tuple[str, str]:
+    """The section (``robot``, ``controller``) and the field a name sets: its ``_deg``
+    suffix dropped and, for one leg of a per-leg field (``robot.leg_stiffness.front``),
+    its leg (ValueError for a leg on a field that is not per leg)."""
+    base, _ = si_name(name)
+    sec, _, fld = base.partition(".")
+    if sec == "robot" and "." in fld:
+        fld = field_of(fld, "robot.")[0]
+    return sec, fld
+
+
 def axis_label(name: str) -> tuple[float, str]:
     """How a plot shows a sweep column: ``(factor, label)``, the column's values times
     ``factor`` in the unit the label gives. An angle in SI is shown in degrees, a ``_deg``
@@ -62,9 +73,7 @@ def axis_label(name: str) -> tuple[float, str]:
 def check_name(name: str):
     """ValueError for a name a sweep cannot vary (naming the nearest that it can)."""
     base, scale = si_name(name)
-    sec, _, fld = base.partition(".")
-    if sec == "robot" and "." in fld:
-        fld = field_of(fld, "robot.")[0]  # one leg of a per-leg field (robot.leg_stiffness.front)
+    sec, fld = section_and_field(name)
     cls = _SECTIONS.get(sec)
     if cls is None or fld not in {f.name for f in dataclasses.fields(cls)}:
         import difflib

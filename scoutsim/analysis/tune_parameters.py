@@ -23,8 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters import ControllerParameters, RobotParameters, allowed_range, field_dimension
-from ..parameters.robot_fields import field_of, robot_value, robot_with_values
-from .sweep_points import check_name, parameter_names
+from ..parameters.robot_fields import robot_value, robot_with_values
+from .sweep_points import check_name, parameter_names, section_and_field
 
 __all__ = ["TuneParameter", "parse_parameter", "DEFAULT_SEARCH", "default_search_range"]
 
@@ -169,9 +169,9 @@ def parse_parameter(
     scale = 1.0
     base = name[:-4] if name.endswith("_deg") else name
     _check_tuned_name(name, base)
+    # (a per-leg field's one leg, robot.<field>.back / .front, has the field's rules)
+    section, field = section_and_field(name)
     if name.endswith("_deg"):
-        section, _, fld = base.partition(".")
-        field = field_of(fld, "robot.")[0] if section == "robot" else fld
         if field_dimension(field) != "angle":
             raise ValueError(
                 f"parameter {name!r} is not allowed: the _deg suffix takes "
@@ -179,9 +179,6 @@ def parse_parameter(
                 "units, without the suffix)"
             )
         scale = math.pi / 180.0
-    section, _, fld = base.partition(".")
-    # (a per-leg field's one leg, robot.<field>.back / .front, has the field's rules)
-    field = field_of(fld, "robot.")[0] if section == "robot" else fld
     if field in ("legs_per_virtual_leg", "sense_motor_angle"):
         raise ValueError(
             f"parameter {name!r} is not allowed: tuning varies continuous "

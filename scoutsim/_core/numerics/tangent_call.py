@@ -253,6 +253,19 @@ def _ints(calls, row):
     return carray(_int_pointer(calls[row, CALL_ADDRESS]), calls[row, CALL_ROWS])
 
 
+@kernel(inline="always")
+def _plant_of(calls):
+    """The state, packed parameters, integer and float modes and held commands the table
+    ``calls`` gives (views)."""
+    return (
+        _floats(calls, A_S),
+        _floats(calls, A_P),
+        _ints(calls, A_MI),
+        _floats(calls, A_MF),
+        _floats(calls, A_CMD),
+    )
+
+
 @allocating
 def _pack_of(calls):
     """The pack whose arrays the table ``calls`` gives."""
@@ -275,13 +288,8 @@ def _run_op(op, k, a, table):
     pack = _pack_of(calls)
     # (every array of the table, also those this operation does not use: a view of an
     # address left from another call is made, never read)
-    s, P, mi, mf = (
-        _floats(calls, A_S),
-        _floats(calls, A_P),
-        _ints(calls, A_MI),
-        _floats(calls, A_MF),
-    )
-    cmd, f = _floats(calls, A_CMD), _floats(calls, A_F)
+    s, P, mi, mf, cmd = _plant_of(calls)
+    f = _floats(calls, A_F)
     if op == OP_PROJECTION:
         tangent_projection(s, P, mi, mf, pack)
     elif op == OP_SNAPSHOT:
@@ -304,14 +312,8 @@ def _run_flow(method, h, table):
     """A flow over a step of ``h`` [s] of ``method`` (a constant: the steps are the
     method's) on the arrays of the table."""
     calls = carray(table, (N_CALL_ROWS, 3))
-    s, P, mi, mf = (
-        _floats(calls, A_S),
-        _floats(calls, A_P),
-        _ints(calls, A_MI),
-        _floats(calls, A_MF),
-    )
-    cmd, SF0 = _floats(calls, A_CMD), _float_matrix(calls, A_SF0)
-    tangent_flow(method, s, h, P, mi, mf, cmd, SF0, _pack_of(calls))
+    s, P, mi, mf, cmd = _plant_of(calls)
+    tangent_flow(method, s, h, P, mi, mf, cmd, _float_matrix(calls, A_SF0), _pack_of(calls))
     return 0
 
 

@@ -41,10 +41,9 @@ import numpy as np
 from scipy import stats
 
 from ...parameters import ParameterError, allowed_range
-from ...parameters.robot_fields import field_of
 from ...parameters.schema import CONTROLLER_SECTIONS, field_schema
 from ...parameters.units import UNIT_INDEX, UNITS
-from ..sweep_points import check_name, si_name
+from ..sweep_points import check_name, section_and_field, si_name
 
 __all__ = [
     "FRICTION",
@@ -65,12 +64,9 @@ def _range_of(name: str) -> tuple[float, float, bool, bool]:
     if name == FRICTION:
         return 0.0, math.inf, False, False
     check_name(name)
-    base, scale = si_name(name)
-    section, _, fld = base.partition(".")
+    _, scale = si_name(name)
     # (one leg of a per-leg field, robot.<field>.back / .front, has the field's range)
-    lo, hi, lo_closed, hi_closed = allowed_range(
-        field_of(fld, "robot.")[0] if section == "robot" else fld
-    )
+    lo, hi, lo_closed, hi_closed = allowed_range(section_and_field(name)[1])
     return (
         -math.inf if lo is None else lo / scale,
         math.inf if hi is None else hi / scale,
