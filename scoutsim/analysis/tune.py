@@ -66,6 +66,12 @@ resumed run asks exactly the candidates the uninterrupted run asked (an Optuna s
 random state lives in the process, and its SQLite study would be a second copy of the
 evaluations table).
 
+**Refinement** (optional, ``refine`` evaluations after CMA-ES): steps from the best
+candidate along the gradient of the objective of its periodic gait (the orbit
+sensitivities), each scored by the tuning's own evaluation and kept if it lowers the
+score (:mod:`~scoutsim.analysis.tune_refinement`); its rows follow CMA-ES's, with
+``phase`` "refine".
+
 **Resuming**: every finished evaluation is appended to ``out/evaluations.jsonl`` as it
 arrives (Ctrl-C keeps them all), and the optimiser's state to ``out/optimizer.pkl``
 (written atomically) after every generation. The same call again continues from them: the
@@ -84,7 +90,8 @@ The parts have their own modules: :mod:`~scoutsim.analysis.tune_settings` (the s
 :mod:`~scoutsim.analysis.tune_parameters` (the tuned parameters: names, bounds, units),
 :mod:`~scoutsim.analysis.tune_evaluation` (one evaluation: the scenarios' runs and the
 score), :mod:`~scoutsim.analysis.tune_optimizer` (CMA-ES, its saved state and the
-checkpoint's files) and :mod:`~scoutsim.analysis.tune_result` (the result and the files
+checkpoint's files), :mod:`~scoutsim.analysis.tune_refinement` (the gradient refinement)
+and :mod:`~scoutsim.analysis.tune_result` (the result and the files
 written). This module holds the run driver, :func:`tune`, and re-exports the public names.
 """
 
@@ -141,6 +148,7 @@ from .tune_parameters import (
     parse_parameter,
     warn_of_box_ends,
 )
+from .tune_refinement import check_refinable, refine
 from .tune_result import TuneResult, write_outputs
 from .tune_settings import TuneGoal, TuneRuns, TuneSearch, bundles, check_settings
 
@@ -257,6 +265,8 @@ def tune(
     if not params:
         raise ValueError("no parameter to tune: give at least one")
     check_tuned_fields(kind, params)
+    if search.refine:
+        check_refinable(params, kind)
     check_controller_travels(spec.get("controller"), workers, scheduler, 2)
     seen = set()
     for p in params:
@@ -360,7 +370,7 @@ def tune(
     n_resumed = len(done)
 
     bar = tqdm(
-        total=n_gen * pop,
+        total=n_gen * pop + search.refine,
         unit="run",
         desc="tune",
         file=sys.stderr,
@@ -369,6 +379,8 @@ def tune(
     )
     rows_by_key: dict = {}
     stopped = "budget"
+    refine_keys: list = []  # the refinement's evaluations, in order
+    refinement = None
     fh = open(ck, "a") if ck is not None else None
     best = math.inf
 
@@ -467,6 +479,48 @@ def tune(
             cma.tell([(x, rows_by_key[k]["score"]) for x, k in zip(xs, keys)])
             gen += 1
             cma = write_state(state_path, skey, gen, cma)
+        cma_keys = [
+            checkpoint_key([skey, g, i])
+            for g in range(gen if stopped == "converged" else n_gen)
+            for i in range(pop)
+        ]
+        if search.refine > 0:
+
+            def evaluate(values, j):
+                k = checkpoint_key([skey, "refine", j])
+                refine_keys.append(k)
+                if k in done and done[k].get("values") == values and not is_error(done[k]):
+                    record(k, done[k])
+                    return done[k]
+                task = task_base | {
+                    "values": values,
+                    "evaluation": len(cma_keys) + j,
+                    "generation": len(cma_keys) // pop,
+                    "phase": "refine",
+                }
+                row = tune_task(task)
+                if is_error(row) and on_error == "raise":
+                    shown = {p.name: p.shown(values[p.key]) for p in params}
+                    raise StudyError(
+                        f"refinement evaluation {j} at {shown} could not be run: {row['error']}",
+                        [row],
+                    )
+                if fh is not None:
+                    fh.write(json.dumps({"key": k, "row": row}, default=json_default) + "\n")
+                    fh.flush()
+                record(k, row)
+                return row
+
+            first = min(range(len(cma_keys)), key=lambda j: (rows_by_key[cma_keys[j]]["score"], j))
+            refinement = refine(
+                search.refine,
+                rows_by_key[cma_keys[first]],
+                params,
+                task_base,
+                sigma,
+                evaluate,
+                say=(lambda message: bar.write(message)) if progress else None,
+            )
     except BaseException as exc:
         pools.__exit__(type(exc), exc, exc.__traceback__)  # kills the workers at once
         if rd is not None and isinstance(exc, (KeyboardInterrupt, StudyError)):
@@ -484,12 +538,7 @@ def tune(
         if fh is not None:
             fh.close()
 
-    keys = [
-        checkpoint_key([skey, g, i])
-        for g in range(gen if stopped == "converged" else n_gen)
-        for i in range(pop)
-    ]
-    raw = [rows_by_key[k] for k in keys]
+    raw = [rows_by_key[k] for k in cma_keys + refine_keys]
     rows = []
     for r in raw:
         row = {p.name: p.shown(r["values"][p.key]) for p in params}
@@ -508,9 +557,11 @@ def tune(
         robot=b_robot,
         controller_parameters=b_cparams,
         params=b_params,
-        settings=json_safe(settings) | {"budget": budget, "n_resumed": n_resumed},
+        settings=json_safe(settings)
+        | {"budget": budget, "refine": search.refine, "n_resumed": n_resumed},
         stopped=stopped,
         n_errors=n_errors,
+        refinement=None if refinement is None else refinement.to_dict(),
     )
     if n_errors:
         import warnings

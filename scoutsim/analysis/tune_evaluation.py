@@ -36,6 +36,7 @@ from .tune_parameters import apply_values
 
 __all__ = [
     "tune_task",
+    "candidate_controller",
     "OBJECTIVES",
     "AGGREGATES",
     "PENALTY",
@@ -54,6 +55,7 @@ PENALTY = 1000.0
 COLUMNS = (
     "evaluation",
     "generation",
+    "phase",
     "score",
     "objective",
     "feasible",
@@ -76,7 +78,7 @@ COLUMNS = (
 NOT_RUN_SCORE = 30.0 * PENALTY
 
 
-def _controller(spec, robot, cparams, params):
+def candidate_controller(spec, robot, cparams, params):
     """The controller of one evaluation: Table I parameters, a PitchFeedbackController,
     the user's controller object, or the one the user's factory makes for the candidate's
     ``robot`` and ``cparams``; a compiled controller's parameter array set to ``params``
@@ -113,7 +115,7 @@ def _scenario_row(task, scenario, robot, cparams, params) -> dict:
     goal = task["goal"]
     duration = task["duration"]
     try:
-        ctrl = _controller(task["controller"], robot, cparams, params)
+        ctrl = candidate_controller(task["controller"], robot, cparams, params)
     except Exception as exc:  # noqa: BLE001 - an error of the tuning
         return (
             {k: None for k in COLUMNS[3:]}
@@ -267,6 +269,7 @@ def _evaluate(task: dict) -> dict:
     row = {
         "evaluation": task["evaluation"],
         "generation": task["generation"],
+        "phase": task.get("phase", "cma-es"),
         "values": dict(task["values"]),
     }
     try:
@@ -312,6 +315,7 @@ def evaluation_error_row(task: dict, exc: BaseException) -> dict:
     row = {
         "evaluation": task["evaluation"],
         "generation": task["generation"],
+        "phase": task.get("phase", "cma-es"),
         "values": dict(task["values"]),
     }
     return _not_run(row, error_fields(exc)) | {"not_run": True}

@@ -41,6 +41,9 @@ class TuneResult:
     stopped : why the tuning ended: "budget" or "converged" (CMA-ES's stopping rule).
     n_errors : evaluations the tuning could not run (status "error", recorded with
         ``on_error="record"``; scored as infeasible).
+    refinement : what the gradient refinement after CMA-ES did
+        (:class:`~scoutsim.analysis.tune_refinement.Refinement` as a dict), None without
+        one. Its evaluations are the rows whose ``phase`` is "refine".
     """
 
     rows: list
@@ -53,6 +56,7 @@ class TuneResult:
     settings: dict = field(default_factory=dict)
     stopped: str = "budget"
     n_errors: int = 0
+    refinement: dict | None = None
 
     def columns(self) -> dict:
         names = [p.name for p in self.parameters] + list(COLUMNS)
@@ -106,6 +110,7 @@ class TuneResult:
             "n_evaluations": len(self.rows),
             "n_errors": self.n_errors,
             "stopped": self.stopped,
+            "refinement": self.refinement,
             "settings": self.settings,
         }
 

@@ -88,12 +88,16 @@ class TuneSearch:
     sigma : its initial step, a fraction of each parameter's range.
     population : candidates per generation, at least 4 (default: CMA-ES's 4 + 3 ln n for
         n parameters).
+    refine : evaluations of a gradient refinement after CMA-ES (0: none; its gradient is
+        the periodic gait's, :mod:`scoutsim.analysis.tune_refinement`), on top of
+        ``budget``; its trust radius starts at ``sigma``.
     """
 
     budget: int = 200
     seed: int = 0
     sigma: float = 0.1
     population: int | None = None
+    refine: int = 0
 
 
 def bundles(goal, runs, search, fields: dict) -> list:
@@ -126,6 +130,11 @@ def check_settings(goal: TuneGoal, search: TuneSearch) -> None:
         goal.min_speed,
     )
     sigma = search.sigma
+    if isinstance(search.refine, bool) or not isinstance(search.refine, int) or search.refine < 0:
+        raise ValueError(
+            f"refine = {search.refine!r} is not allowed: must be a whole number >= 0 "
+            "(evaluations of the gradient refinement)"
+        )
     if objective not in OBJECTIVES:
         raise ValueError(
             f"objective = {objective!r} is not allowed: must be one of {', '.join(OBJECTIVES)}"

@@ -10,7 +10,8 @@ evaluation; the same command again goes on from them).
                   [--speeds LIST] [--pitch-rates LIST] [--aggregate {worst,mean}]
                   [--controller {table-i,pitch-feedback,FILE}] [--max-belt-deflection DEG]
                   [--max-current A] [--min-speed M_S] [--seed N] [--sigma F]
-                  [--population N] [--workers N] [--scheduler ADDRESS] [--no-resume]
+                  [--population N] [--refine N] [--workers N] [--scheduler ADDRESS]
+                  [--no-resume]
                   [--duration S] [--robot FILE] [--out DIR] [--friction MU]
 """
 
@@ -169,6 +170,15 @@ def register(sub, common) -> None:
         metavar="N",
         help="candidates per generation (default: 4 + 3 ln n)",
     )
+    tu.add_argument(
+        "--refine",
+        type=int,
+        default=0,
+        metavar="N",
+        help="after CMA-ES, up to N evaluations of a gradient refinement along the "
+        "periodic gait's exact derivatives (robot fields and the built-in laws' fields; "
+        "default: 0, none)",
+    )
     add_parallel_options(tu, "start afresh even if DIR holds an earlier tuning's checkpoints")
     tu.set_defaults(func=execute)
 
@@ -287,7 +297,11 @@ def execute(args) -> int:
                 controller=controller,
             )
             search = TuneSearch(
-                budget=args.budget, seed=args.seed, sigma=args.sigma, population=args.population
+                budget=args.budget,
+                seed=args.seed,
+                sigma=args.sigma,
+                population=args.population,
+                refine=args.refine,
             )
             res = tune(
                 params,
@@ -319,6 +333,12 @@ def execute(args) -> int:
         f"scoutsim tune: {len(res.rows)} evaluations ({res.settings['n_resumed']} resumed "
         f"from {out}/{EVALUATIONS}), {n_feasible} feasible; stopped: {res.stopped}"
     )
+    if res.refinement is not None:
+        r = res.refinement
+        print(
+            f"  refinement: {r['evaluations']} evaluations, {r['accepted']} accepted, "
+            f"best score {r['start_score']:.6g} -> {r['end_score']:.6g}; stopped: {r['stopped']}"
+        )
     print(
         f"  objective {args.objective}"
         + (f", target {args.target:g} m/s" if args.target is not None else "")

@@ -120,6 +120,10 @@ def test_ctrl_c_keeps_the_evaluations_and_the_same_command_goes_on(tmp_path, mon
             ["robot.leg_stiffness=-5:3000", "allowed values"],
         ),
         ([], ["--param"]),
+        (
+            ["--param", "controller.touchdown_angle_front_deg", "--refine", "-1"],
+            ["refine = -1 is not allowed"],
+        ),
     ],
 )
 def test_bad_params_exit_2_naming_them(tmp_path, capsys, argv, words):
