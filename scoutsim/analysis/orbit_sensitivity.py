@@ -71,12 +71,10 @@ FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
 #: the smallest change of the spectral radius its derivative is taken over (a difference
-#: of two Jacobians of the map). The Jacobian is a Lipschitz, not a smooth, function of
-#: the state: the actuator's current and voltage limits and its efficiency's switch
-#: between motoring and back-driving are kinks of the vector field the integrator's steps
-#: straddle, so the Jacobian of the computed map moves by about 1e-4 in places under
-#: perturbations of 1e-9, and its dominant multiplier by about 1e-6 (measured on the
-#: default Model II orbit; docs/explanation/derivatives.md)
+#: of two Jacobians of the map). The carried Jacobian has a noise floor: the rounding of
+#: its central differences over their step moves it by up to 2e-4 (of 51) and its
+#: dominant multiplier by up to 5e-6 under perturbations of the state of 1e-13 to 1e-7
+#: (measured on the default Model II orbit; docs/explanation/derivatives.md)
 RADIUS_RESOLUTION = 1e-4
 #: the parameter steps tried for the spectral radius's derivative, in units of the
 #: metrics' step
@@ -268,8 +266,8 @@ def orbit_sensitivities(
     ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
     (the orbit's method) at two ends; the step is the first of :data:`RADIUS_STEPS` x
     ``h`` over which the radius moves by at least :data:`RADIUS_RESOLUTION` (or the last
-    that stays in the orbit's sample-phase cell): the Jacobian is only Lipschitz in the
-    state, see :data:`RADIUS_RESOLUTION`. ``progress``: optional callable(str). Returns
+    that stays in the orbit's sample-phase cell): the carried Jacobian has a noise floor,
+    see :data:`RADIUS_RESOLUTION`. ``progress``: optional callable(str). Returns
     ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
     setting = orbit.setting
     if not setting:

@@ -92,6 +92,14 @@ def register(sub, common) -> None:
         metavar="C",
         help="interval confidence level (default: 0.95)",
     )
+    idf.add_argument(
+        "--jacobian",
+        choices=("fd", "exact"),
+        default="fd",
+        help="the local fits' Jacobian: fd, forward differences of the residuals; exact, "
+        "the replays' derivatives carried with them (slower here, the same optimum: "
+        "docs/identification.md) (default: fd)",
+    )
     add_plots_option(idf, True, "the fit figures")
     idf.add_argument("--json", action="store_true", help="print identified.json to stdout")
     add_no_progress_option(idf)
@@ -135,6 +143,7 @@ def execute(args) -> int:
             n_local=args.local,
             seed=args.seed,
             confidence=args.confidence,
+            jacobian=args.jacobian,
             progress=progress_messages(args, NAME),
         )
     wall = time.perf_counter() - wall0

@@ -16,6 +16,7 @@ from ..result.simulation_result import SimulationResult
 from ..simulation.assembly import Bench, PlantOptions, assemble, bench_plan
 from ..simulation.engine import HybridEngine
 from ..simulation.integrator import IntegratorSettings
+from ..simulation.sample_derivatives import SampleDerivatives
 
 __all__ = ["run_bench", "Bench"]
 
@@ -33,6 +34,7 @@ def run_bench(
     dt: float = 1e-3,
     integrator: IntegratorSettings | None = None,
     provenance: dict | None = None,
+    derivatives: SampleDerivatives | None = None,
 ) -> SimulationResult:
     """Run the hybrid model on a bench: the engine of
     :func:`~scoutsim.simulation.simulator.simulate` with the rig options a hip-unit
@@ -52,22 +54,31 @@ def run_bench(
         controller's set-points ``field`` (a key of ``control.bounding.SCHEDULABLE``:
         touchdown angles, sweep limits) [rad] take these values.
     integrator : IntegratorSettings (default: the reference, DOPRI5).
+    derivatives : a :class:`~scoutsim.simulation.sample_derivatives.SampleDerivatives` to fill: the run carries the derivatives of
+        its state with respect to those robot fields and records, sample by sample, those
+        of the driven-gear angles and the motor currents (the run itself is unchanged).
     """
     integrator = integrator or IntegratorSettings(method="dopri5")
-    setup = assemble(
-        robot,
-        model,
-        np.asarray(start_state, dtype=float),
-        bench_plan(robot, model, controller),
-        plant=PlantOptions(bench=bench or Bench()),
-        integrator=integrator,
-        control_period=dt,
-    )
-    integrator = setup.integrator
-    eng = HybridEngine.assembled(setup, duration)
-    if held_torques is not None:
-        eng.cmd[:] = held_torques
-    chunk = max(1, int(round(1.0 / dt)))
+
+    def engine(rob):
+        setup = assemble(
+            rob,
+            model,
+            np.asarray(start_state, dtype=float),
+            bench_plan(rob, model, controller),
+            plant=PlantOptions(bench=bench or Bench()),
+            integrator=integrator,
+            control_period=dt,
+        )
+        eng = HybridEngine.assembled(setup, duration)
+        if held_torques is not None:
+            eng.cmd[:] = held_torques
+        return eng, setup.integrator
+
+    eng, integrator = engine(robot)
+    if derivatives is not None:
+        derivatives.start(eng, robot, engine)
+    chunk = 1 if derivatives is not None else max(1, int(round(1.0 / dt)))
     sched = sorted(schedule or [], key=lambda e: e[0])
     for _, changes in sched:
         for field in changes:
@@ -84,6 +95,10 @@ def run_bench(
         if si < len(sched):
             k_stop = min(k_stop, int(sched[si][0]))
         eng.advance(k_stop)
+        if derivatives is not None:
+            derivatives.record(eng)
+    if derivatives is not None:
+        derivatives.finish(eng)
     return eng.result(
         dict(
             provenance or {},

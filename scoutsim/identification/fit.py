@@ -90,6 +90,10 @@ class FitSettings:
     max_interval_ratio : an identifiable parameter's interval spans at most this factor.
     max_nfev, diff_step : passed to ``scipy.optimize.least_squares`` (per local fit; the
         finite-difference step is in ln p).
+    jacobian : the local fits' Jacobian: "fd" (default), forward differences of the
+        residuals with ``diff_step``; "exact", the replays' derivatives carried with them
+        (:meth:`~scoutsim.identification.residuals.Residuals.jacobian`; differences where a
+        replay is not differentiable). docs/identification.md compares the two.
     jac_step : central-difference step in ln p of the Jacobian at the optimum.
     flat_ratio : a singular direction along which the cost rises by less than this
         fraction, or more than its inverse, of the quadratic prediction over the interval
@@ -103,6 +107,7 @@ class FitSettings:
     max_interval_ratio: float = 2.0
     max_nfev: int = 60
     diff_step: float = 1e-3
+    jacobian: str = "fd"
     jac_step: float = 1e-2
     flat_ratio: float = 0.25
 
@@ -165,6 +170,8 @@ def identify(
             "legs: give those fields one value (in Python, robot.leg('back') "
             "or robot.leg('front') is one leg's robot)"
         )
+    if s.jacobian not in ("fd", "exact"):
+        raise ValueError(f"jacobian = {s.jacobian!r} is not allowed: must be fd or exact")
     if not (0.0 < s.confidence < 1.0):
         raise ValueError(f"confidence = {s.confidence} is not allowed: must be in (0, 1)")
     data = prepare_logs(logs, rig, base, use_current)
@@ -172,7 +179,7 @@ def identify(
     sb = search_box(names, base, bounds)
     p = len(names)
     nres = residual_count(data, p)
-    residuals = Residuals(data, base, names, integrator)
+    residuals = Residuals(data, base, names, integrator, s.diff_step)
     scored = score_starts(residuals, start_points(base, sb, start, s.n_starts, s.seed), progress)
     starts_info = starts_table(scored, names)
     best = refine(residuals, scored, starts_info, sb, s, progress)

@@ -8,6 +8,7 @@ reflective, in ln p), and the best optimum is polished by one more local fit.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from scipy import optimize
@@ -74,6 +75,7 @@ def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings, 
     ``starts_info``), polished by one more local fit from it."""
     xlo, xhi = sb.xlo, sb.xhi
     diff_step, max_nfev = settings.diff_step, settings.max_nfev
+    jac: Any = residuals.jacobian if settings.jacobian == "exact" else "2-point"
     best = None
     for c0, label, x0 in scored[: max(1, settings.n_local)]:
         sol = optimize.least_squares(
@@ -83,6 +85,7 @@ def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings, 
             method="trf",
             x_scale=1.0,
             diff_step=diff_step,
+            jac=jac,
             max_nfev=max_nfev,
         )
         for si in starts_info:
@@ -103,6 +106,7 @@ def refine(residuals, scored: list, starts_info: list, sb: SearchBox, settings, 
         method="trf",
         x_scale=1.0,
         diff_step=diff_step,
+        jac=jac,
         max_nfev=max_nfev,
     )
     if progress:

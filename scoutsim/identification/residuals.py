@@ -13,6 +13,7 @@ import numpy as np
 
 from ..parameters import RobotParameters
 from ..simulation.integrator import IntegratorSettings
+from ..simulation.sample_derivatives import SampleDerivatives
 from ..validation.log_format import LogError
 from .parameter_vector import robot_with
 from .rig_data import simulate_log
@@ -38,13 +39,21 @@ class Residuals:
     evaluations (each replays every rig)."""
 
     def __init__(
-        self, data: list, base: RobotParameters, names: list, integrator: IntegratorSettings | None
+        self,
+        data: list,
+        base: RobotParameters,
+        names: list,
+        integrator: IntegratorSettings | None,
+        diff_step: float = 1e-3,
     ):
         self.data = data
         self.base = base
         self.names = names
         self.integrator = integrator
+        self.diff_step = diff_step
         self.nfev = 0
+        self.njev = 0
+        self.nfd = 0
 
     def __call__(self, x):
         self.nfev += 1
@@ -60,6 +69,55 @@ class Residuals:
         r = np.concatenate(out)
         r[~np.isfinite(r)] = 1e6
         return r
+
+    def jacobian(self, x) -> np.ndarray:
+        """dr/dx at ``x`` (x = ln p), from the derivatives of each replay carried with it
+        (:class:`~scoutsim.simulation.sample_derivatives.SampleDerivatives`): the angles' and
+        currents' derivatives with respect to the fitted fields, times p (the chain rule
+        to ln p), over each channel's noise. Where a replay is not differentiable (a reset
+        whose perturbed copies took another branch) or failed early, forward differences
+        of r with ``diff_step`` (the fit's) instead, for the whole matrix. ``njev`` counts
+        the calls, ``nfd`` those that fell back."""
+        self.njev += 1
+        rb = robot_with(self.base, self.names, x)
+        p = np.exp(np.asarray(x, dtype=float))
+        blocks = []
+        for d in self.data:
+            der = SampleDerivatives(tuple(self.names))
+            a, _, _ = simulate_log(d, rb, self.integrator, derivatives=der)
+            n = d.angle.shape[0]
+            if (
+                der.smoothness.get("nonsmooth", 0) > 0
+                or a.shape[0] < n
+                or der.angle is None
+                or der.angle.shape[0] < n
+            ):
+                self.nfd += 1
+                return self._differences(x)
+            for leg in d.legs:
+                blocks.append(der.angle[:n, leg, :] * p / d.sigma_angle)
+            if d.current is not None:
+                assert der.current is not None, "a finished run has both"
+                for leg in d.legs:
+                    blocks.append(der.current[:n, leg, :] * p / d.sigma_current)
+        J = np.vstack(blocks)
+        if not np.all(np.isfinite(J)):
+            self.nfd += 1
+            return self._differences(x)
+        return J
+
+    def _differences(self, x) -> np.ndarray:
+        """dr/dx by forward differences, steps ``diff_step`` max(1, |x_i|) (as
+        ``scipy.optimize.least_squares``'s "2-point")."""
+        x = np.asarray(x, dtype=float)
+        r0 = self(x)
+        J = np.empty((r0.size, x.size))
+        for i in range(x.size):
+            h = self.diff_step * max(1.0, abs(x[i]))
+            xp = x.copy()
+            xp[i] += h
+            J[:, i] = (self(xp) - r0) / h
+        return J
 
 
 def channel_rms(r: np.ndarray, data: list) -> dict:

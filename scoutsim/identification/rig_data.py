@@ -246,14 +246,17 @@ def prepare_logs(
     return data
 
 
-def simulate_log(data: RigData, robot: RobotParameters, integrator=None):
-    """(angle (n, 2), current (n, 2), result) of the rig replayed with ``robot``."""
+def simulate_log(data: RigData, robot: RobotParameters, integrator=None, derivatives=None):
+    """(angle (n, 2), current (n, 2), result) of the rig replayed with ``robot``;
+    ``derivatives``: an optional :class:`~scoutsim.simulation.sample_derivatives.SampleDerivatives`
+    the replay fills."""
     res = run_rig(
         data.rig,
         robot,
         integrator=integrator,
         dt=data.dt,
         touchdown_commands=data.touchdown_commands,
+        derivatives=derivatives,
     )
     n = data.angle.shape[0]
     ang = np.column_stack([res.motor_angle(0), res.motor_angle(1)])

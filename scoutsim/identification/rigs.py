@@ -356,6 +356,7 @@ def run_rig(
     integrator: IntegratorSettings | None = None,
     touchdown_commands=None,
     dt: float | None = None,
+    derivatives=None,
 ) -> SimulationResult:
     """Run a bench rig (:class:`FreeSwing`, :class:`FlightSteps` or :class:`Stall`) on the
     simulator (see the module docstring).
@@ -371,6 +372,9 @@ def run_rig(
     touchdown_commands : flight steps only: optional (n, 2) array of touchdown commands [rad]
         per control sample (overrides the rig's step schedule; used to replay a log).
     dt : sample / control period [s] (default: the controller's, 1 ms).
+    derivatives : optional :class:`~scoutsim.simulation.sample_derivatives.SampleDerivatives` the run
+        fills: the derivatives of its driven-gear angles and motor currents with respect to
+        robot fields, carried with it.
 
     Returns
     -------
@@ -395,6 +399,7 @@ def run_rig(
             dt=dt,
             integrator=integ,
             provenance=prov,
+            derivatives=derivatives,
         )
     if isinstance(rig, FlightSteps):
         n = int(round(rig.duration / dt)) + 1
@@ -426,6 +431,7 @@ def run_rig(
             dt=dt,
             integrator=integ,
             provenance=prov | {"controller": asdict(cparams)},
+            derivatives=derivatives,
         )
     if isinstance(rig, Stall):
         s0 = _clamped_state(rig.clamp_height, rig.leg_angle, rig.leg_angle, robot)
@@ -442,6 +448,7 @@ def run_rig(
             dt=dt,
             integrator=integ,
             provenance=prov,
+            derivatives=derivatives,
         )
     raise TypeError(f"rig must be FreeSwing, FlightSteps or Stall, not {type(rig).__name__}")
 

@@ -75,7 +75,7 @@ def test_implicit_function_theorem_agrees_with_orbits_solved_again(orbit, sensit
         # reference's own noise
         assert ift == pytest.approx(fd, rel=1e-3, abs=1e-9 / h)
     # the spectral radius's derivative is a difference of two Jacobians, over the step
-    # the sensitivity chose, on both routes (the Jacobian is only Lipschitz in the state:
+    # the sensitivity chose, on both routes (the carried Jacobian has a noise floor:
     # over a step that moves the radius by less than RADIUS_RESOLUTION its difference is
     # noise). Measured: within 0.3 % (touchdown angle), 2.2 % (friction), 3.5 % (belt)
     hr = sens.radius_step
