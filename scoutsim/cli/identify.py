@@ -153,7 +153,9 @@ def execute(args) -> int:
     else:
         print(res.report())
         print(
-            f"wall time {wall:.1f} s ({res.nfev} rig simulations); wrote {path}"
+            f"wall time {wall:.1f} s ({res.nfev} rig simulations"
+            + (f", {res.jacobian_evaluations} exact Jacobians" if res.jacobian == "exact" else "")
+            + f"); wrote {path}"
             + (" and fit figures" if args.plots else "")
             + f" to {out}/"
         )

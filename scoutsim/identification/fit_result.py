@@ -75,6 +75,9 @@ class IdentificationResult:
     combinations: dict = field(default_factory=dict)
     nfev: int = 0
     message: str = ""
+    jacobian: str = "fd"
+    jacobian_evaluations: int = 0
+    jacobian_fallbacks: int = 0
 
     @property
     def names(self) -> list:
@@ -106,6 +109,9 @@ class IdentificationResult:
             "channel_rms_over_sigma": self.channel_rms,
             "n_residuals": self.n_residuals,
             "function_evaluations": self.nfev,
+            "jacobian_method": self.jacobian,
+            "jacobian_evaluations": self.jacobian_evaluations,
+            "jacobian_fallbacks_to_differences": self.jacobian_fallbacks,
             "optimizer_message": self.message,
             "multistart": self.starts,
         }
