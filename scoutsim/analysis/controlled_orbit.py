@@ -222,7 +222,7 @@ def controlled_fixed_point(
                 start = settle.crossing(start).state
     if strides is not None:
         return _newton(m, start, strides, tol, max_iter, how, say, common, integ)
-    ks, lengths, start = likely_strides(m, start)
+    ks, lengths, start, recurrence = likely_strides(m, start)
     say(
         f"settled stride lengths (control periods) {lengths[:12]}...: trying "
         f"{', '.join(map(str, ks))} stride(s) per period"
@@ -241,9 +241,14 @@ def controlled_fixed_point(
                 say(f"the fixed point of {k} strides is one of {d}: Newton for {d} from it")
                 return _newton(m, orbit.state, d, tol, max_iter, how, say, common, integ)
         return orbit
+    closest = min(recurrence, key=lambda k: (recurrence[k], k))
     raise MapError(
         "no periodic orbit from this start (settled stride lengths in control periods "
-        f"{lengths}): " + "; ".join(failures)
+        f"{lengths}; the section states come closest to repeating every {closest} "
+        f"stride(s), within {recurrence[closest]:.2g} (max |z_(i+k) - z_i| over "
+        f"{_COMPARED} strides): a gait that does not repeat within "
+        f"{MAX_STRIDES_PER_PERIOD} strides, such as a quasi-periodic one, has no such "
+        "orbit): " + "; ".join(failures)
     )
 
 
@@ -336,7 +341,7 @@ def likely_strides(m: StrideMap, start: HybridState):
     sampled controller can lock into a cycle of strides of different whole numbers of
     control periods, and a gait can repeat only every other stride (a period doubling)
     with strides of equal length. Returns (the three most likely k, the last 48 stride
-    lengths, the section state after them)."""
+    lengths, the section state after them, {k: d_k})."""
     hs = start
     ks = range(1, MAX_STRIDES_PER_PERIOD + 1)
     for _ in range(_ROUNDS):
@@ -354,7 +359,7 @@ def likely_strides(m: StrideMap, start: HybridState):
     d = {k: float(np.max(np.abs(Z[k:] - Z[:-k]))) for k in (repeating or list(ks))}
     best = min(d.values())
     order = sorted(d, key=lambda k: (d[k] > 30.0 * best, k))
-    return order[:_TRIED], ns, hs
+    return order[:_TRIED], ns, hs, d
 
 
 def _same_modes(disc: dict, hs: HybridState) -> None:

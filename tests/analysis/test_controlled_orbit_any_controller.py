@@ -172,3 +172,25 @@ def test_a_period_doubled_gait_is_found_as_a_two_stride_orbit():
     one = m.crossing(o.state)
     assert 2 * one.samples * 1e-3 == pytest.approx(o.period)
     assert np.max(np.abs(m.z_of(one.state) - o.z)) > 1e-3
+
+
+def test_a_gait_without_a_cycle_is_reported_with_its_closest_recurrence(monkeypatch):
+    """Where Newton finds no orbit of the likely numbers of strides, the report says how
+    closely the settled section states repeat (measured on Table I with the front touchdown
+    angle at 21.035 deg: every stride 234 control periods, the states closest to repeating
+    every 5 strides, within 1.2e-2, and no closer over 44 strides: no cycle, a gait that
+    looks quasi-periodic). Here the search itself is replaced, so the report is checked
+    alone."""
+    import scoutsim.analysis.controlled_orbit as C
+
+    def likely(m, start):
+        return [1, 2, 3], [234] * 48, start, {1: 0.05, 2: 0.04, 3: 0.03, 5: 0.012}
+
+    def stalled(m, start, k, *args):
+        raise MapError(f"Newton stalled for {k}")
+
+    monkeypatch.setattr(C, "likely_strides", likely)
+    monkeypatch.setattr(C, "_newton", stalled)
+    start = StrideMap().crossing(None).state
+    with pytest.raises(MapError, match="closest to repeating every 5 stride.s., within 0.012"):
+        controlled_fixed_point(start)
