@@ -12,7 +12,8 @@ evaluation's run. The refinement uses them:
 1. At the best candidate so far (which must be feasible), the periodic orbit of each
    scenario that sets the score (``aggregate="worst"``: the worst one; ``"mean"``: all),
    found by :func:`~scoutsim.analysis.controlled_orbit.controlled_fixed_point` from a run
-   of the tuning's duration (at least :data:`SETTLE_S`), and the derivatives of the objective's metric on it: the mean
+   of the tuning's duration (at least :data:`SETTLE_S`), or, after an accepted step, by
+   Newton from the last gradient's orbit (kept if it is stable), and the derivatives of the objective's metric on it: the mean
    speed (objectives ``speed``, ``max-speed``), the cost of transport (``cot``) or the
    spectral radius per stride (``stability``), with the first of the relative steps
    :data:`SENSITIVITY_STEPS` that keeps every perturbed orbit in its sample-phase cell.
@@ -152,32 +153,52 @@ def _scenario_objective(
     return value, grad
 
 
-def objective_gradient(values: dict, params, task_base: dict, scenario_indices) -> tuple:
-    """(f, df/dp per parameter, {scenario: why not}) of the tuning's objective at the
-    candidate ``values`` ({key: SI}) from the periodic orbits of the scenarios
-    ``scenario_indices`` (their mean). A scenario without an orbit or sensitivities is
-    named in the third item (and the first two are None)."""
+def objective_gradient(
+    values: dict, params, task_base: dict, scenario_indices, previous: dict | None = None
+) -> tuple:
+    """(f, df/dp per parameter, {scenario: why not}, {scenario: orbit}) of the tuning's
+    objective at the candidate ``values`` ({key: SI}) from the periodic orbits of the
+    scenarios ``scenario_indices`` (their mean). A scenario without an orbit or
+    sensitivities is named in the third item (and the first two are None).
+    ``previous``: {scenario: orbit} at a nearby candidate (the last gradient's): Newton
+    starts from such an orbit with its number of strides, and the orbit found is kept if
+    it is stable; otherwise (and without one) the orbit is searched from a run of the
+    tuning's duration."""
     goal = task_base["goal"]
     spec = task_base["controller"]
     robot, cparams, arr = apply_values(
         values, task_base["robot"], task_base["cparams"], spec.get("params")
     )
     names = [p.key for p in params]
-    fs, gs, why = [], [], {}
+    fs, gs, why, orbits = [], [], {}, {}
     for i in scenario_indices:
         sc = task_base["scenarios"][i]
-        try:
-            orbit = controlled_fixed_point(
-                sc["initial_state"],
-                model=sc["model"],
-                friction_coefficient=sc["friction"],
-                robot=robot,
-                controller=candidate_controller(spec, robot, cparams, arr),
-                settle_duration=max(task_base["duration"], SETTLE_S),
-            )
-        except (MapError, ValueError) as exc:
-            why[i] = f"no periodic orbit: {exc}"
-            continue
+        setting = dict(
+            model=sc["model"],
+            friction_coefficient=sc["friction"],
+            robot=robot,
+            controller=candidate_controller(spec, robot, cparams, arr),
+        )
+        orbit = None
+        near = (previous or {}).get(i)
+        if near is not None:
+            try:
+                orbit = controlled_fixed_point(near.state, strides=near.strides, **setting)
+            except (MapError, ValueError):
+                orbit = None
+            if orbit is not None and float(np.max(np.abs(orbit.multipliers))) >= 1.0:
+                orbit = None  # an unstable orbit: not the gait the runs settle on
+        if orbit is None:
+            try:
+                orbit = controlled_fixed_point(
+                    sc["initial_state"],
+                    settle_duration=max(task_base["duration"], SETTLE_S),
+                    **setting,
+                )
+            except (MapError, ValueError) as exc:
+                why[i] = f"no periodic orbit: {exc}"
+                continue
+        orbits[i] = orbit
         for step in SENSITIVITY_STEPS:
             sens, base = orbit_sensitivities(
                 orbit,
@@ -195,8 +216,8 @@ def objective_gradient(values: dict, params, task_base: dict, scenario_indices) 
         fs.append(f)
         gs.append(g)
     if why:
-        return None, None, why
-    return float(np.mean(fs)), np.mean(gs, axis=0), why
+        return None, None, why, orbits
+    return float(np.mean(fs)), np.mean(gs, axis=0), why, orbits
 
 
 def _step(f: float, g_u: np.ndarray, u: np.ndarray, radius: float, objective: str) -> np.ndarray:
@@ -241,6 +262,7 @@ def refine(
     best_score = float(best_row["score"])
     worst = best_row.get("scenario")
     grad_at = None  # the values the gradient was taken at
+    orbits: dict = {}  # the orbits the gradient was taken on, by scenario
     f = g_u = None
     while res.evaluations < n:
         if grad_at != best_values:
@@ -248,7 +270,7 @@ def refine(
                 indices = list(range(len(task_base["scenarios"])))
             else:
                 indices = [int(worst)]
-            f, g, why = objective_gradient(best_values, params, task_base, indices)
+            f, g, why, orbits = objective_gradient(best_values, params, task_base, indices, orbits)
             if g is None:
                 res.stopped = "no gradient: " + "; ".join(
                     f"scenario {i}: {w}" for i, w in why.items()

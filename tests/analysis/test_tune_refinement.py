@@ -73,10 +73,10 @@ def _bowl_row(task, scenario, robot, cparams, params):
     return {"score": d, "objective": d, "feasible": True, "violations": "", "outcome": "completed"}
 
 
-def _bowl_gradient(values, params, task_base, indices):
+def _bowl_gradient(values, params, task_base, indices, previous=None):
     x = np.array([values[p.key] for p in params])
     dx = x - np.array(CENTRE)
-    return float(dx @ dx), 2.0 * dx, {}
+    return float(dx @ dx), 2.0 * dx, {}, {}
 
 
 def test_refinement_steps_resume_and_stay_in_the_box(monkeypatch, tmp_path):
