@@ -129,24 +129,10 @@ def test_log_without_needed_signals_is_a_clear_error(tmp_path):
 
 def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     path = rig_log(swing_run, seed=3).save(tmp_path / "swing.csv.gz")
-    code = main(
-        [
-            "identify",
-            str(path),
-            "--rig",
-            "free-swing",
-            "--params",
-            "joint_stiction,joint_damping",
-            "--starts",
-            "2",
-            "--local",
-            "1",
-            "--out",
-            str(tmp_path / "out"),
-            "--no-plots",
-        ]
-    )
-    assert code == 0
+    argv = ["identify", str(path), "--rig", "free-swing"]
+    argv += ["--params", "joint_stiction,joint_damping", "--starts", "2", "--local", "1"]
+    argv += ["--no-plots"]
+    assert main(argv + ["--out", str(tmp_path / "out")]) == 0
     d = json.loads((tmp_path / "out" / "identified.json").read_text())
     p = d["parameters"]["joint_stiction"]
     assert p["unit"] == "N m" and p["identifiable"] is True
@@ -155,16 +141,7 @@ def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     assert "joint_stiction" in out and "true" in out
     assert d["jacobian_method"] == "fd"
     # the exact Jacobian (the replays' carried derivatives) reaches the same optimum
-    argv = [
-        "identify",
-        str(path),
-        "--rig",
-        "free-swing",
-        "--params",
-        "joint_stiction,joint_damping",
-    ]
-    argv += ["--starts", "2", "--local", "1", "--no-plots", "--jacobian", "exact"]
-    assert main(argv + ["--out", str(tmp_path / "exact")]) == 0
+    assert main(argv + ["--jacobian", "exact", "--out", str(tmp_path / "exact")]) == 0
     e = json.loads((tmp_path / "exact" / "identified.json").read_text())
     assert e["jacobian_method"] == "exact" and e["jacobian_evaluations"] > 0
     assert e["jacobian_fallbacks_to_differences"] == 0
