@@ -147,7 +147,29 @@ def as_is_test_selected(config) -> bool:
 def compile_the_core() -> None:
     """Compile (or load from the disk cache) what the tests compile: the run loop of each
     integration method, the carried derivatives' code (the operations' and DOPRI5's
-    flow), and the right-hand side called from Python."""
+    flow), and the right-hand side called from Python; in two processes side by side
+    (Numba compiles on one core, and writes each cache file whole under a temporary name
+    before renaming it, so two processes may write the same one): this one compiles the
+    ARK3 and ARK4 run loops, a second one the rest (:func:`compile_part`), which this one
+    compiles itself after them if the second one failed."""
+    helper = subprocess.Popen(
+        [sys.executable, str(Path(__file__).resolve()), "rest"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        compile_part("loops")
+    finally:
+        rc = helper.wait()
+    if rc != 0:
+        compile_part("rest")
+
+
+def compile_part(part: str) -> None:
+    """Part ``part`` of :func:`compile_the_core`: "loops", the ARK3 and ARK4 run loops;
+    "rest", the DOPRI5 run loop, the carried derivatives' operations and DOPRI5's flow
+    (every orbit's; ARK3's flow is carried by one test only, which compiles it beside the
+    other worker's tests), and the right-hand side called from Python."""
     import numpy as np
 
     import scoutsim
@@ -158,10 +180,13 @@ def compile_the_core() -> None:
     from scoutsim.simulation.engine import start_engine
     from scoutsim.simulation.integrator import IntegratorSettings
 
-    for method in ("ark3", "dopri5", "ark4"):
-        scoutsim.simulate(duration=0.01, model="II", integrator=IntegratorSettings(method=method))
-    # the carried derivatives' operations and DOPRI5's flow (every orbit's); ARK3's flow
-    # is carried by one test only, which compiles it beside the other worker's tests
+    if part == "loops":
+        for method in ("ark3", "ark4"):
+            scoutsim.simulate(
+                duration=0.01, model="II", integrator=IntegratorSettings(method=method)
+            )
+        return
+    scoutsim.simulate(duration=0.01, model="II", integrator=IntegratorSettings(method="dopri5"))
     e = start_engine(None, 1.0, model="II", integrator=IntegratorSettings(method="dopri5"))
     e.carry_sensitivities(np.eye(e.sensitivities.shape[0])[:, :1])
     e.advance(2)
@@ -174,3 +199,7 @@ def compile_the_core() -> None:
     D.evaluate_ws(s, P, mi, mf, np.zeros(2), np.zeros(L.NS), np.zeros(L.NAUX),
                   (wk, wA, piv, st), True, st, True)  # fmt: skip
     D.evaluate(s, P, mi, mf, np.zeros(2), np.zeros(L.NS), np.zeros(L.NAUX))
+
+
+if __name__ == "__main__":
+    compile_part(sys.argv[1])
