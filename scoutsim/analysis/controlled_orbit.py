@@ -242,13 +242,18 @@ def controlled_fixed_point(
                 return _newton(m, orbit.state, d, tol, max_iter, how, say, common, integ)
         return orbit
     closest = min(recurrence, key=lambda k: (recurrence[k], k))
+    d = recurrence[closest]
+    verdict = (
+        "the gait does not repeat within "
+        f"{MAX_STRIDES_PER_PERIOD} strides (quasi-periodic, or still settling)"
+        if d > _REPEATS * tol
+        else "the gait repeats, but Newton did not reach its tolerance"
+    )
     raise MapError(
         "no periodic orbit from this start (settled stride lengths in control periods "
         f"{lengths}; the section states come closest to repeating every {closest} "
-        f"stride(s), within {recurrence[closest]:.2g} (max |z_(i+k) - z_i| over "
-        f"{_COMPARED} strides): a gait that does not repeat within "
-        f"{MAX_STRIDES_PER_PERIOD} strides, such as a quasi-periodic one, has no such "
-        "orbit): " + "; ".join(failures)
+        f"stride(s), within {d:.2g} (max |z_(i+k) - z_i| over {_COMPARED} strides): "
+        f"{verdict}): " + "; ".join(failures)
     )
 
 
@@ -326,6 +331,9 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
 MAX_STRIDES_PER_PERIOD = 16
 _SETTLED = 2 * MAX_STRIDES_PER_PERIOD
 _COMPARED = 3 * MAX_STRIDES_PER_PERIOD
+#: section states that repeat within this many times Newton's tolerance count as a
+#: cycle in the report of an orbit not found
+_REPEATS = 1e4
 _TRIED = 3
 _ROUNDS = 3
 

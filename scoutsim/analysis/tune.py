@@ -391,6 +391,24 @@ def tune(
         bar.set_postfix_str(f"best {best:.4g}")
         bar.update(1)
 
+    def kept(key, values) -> bool:
+        """Record the checkpoint's row of ``key`` if it is of ``values`` (and not an error
+        to run again); False if there is none."""
+        row = done.get(key)
+        if row is None or row.get("values") != values:
+            return False
+        if on_error == "raise" and is_error(row):
+            return False
+        record(key, row)
+        return True
+
+    def keep(key, row):
+        """Append a finished evaluation to the checkpoint and record it."""
+        if fh is not None:
+            fh.write(json.dumps({"key": key, "row": row}, default=json_default) + "\n")
+            fh.flush()
+        record(key, row)
+
     n_workers = workers or os.cpu_count() or 1
     own_pool = scheduler is None and n_workers > 1
     pools = contextlib.ExitStack()
@@ -416,12 +434,7 @@ def tune(
             tasks, todo = [], []
             for i, (x, k) in enumerate(zip(xs, keys)):
                 values = {p.key: float(p.low + (p.high - p.low) * u) for p, u in zip(params, x)}
-                if (
-                    k in done
-                    and done[k].get("values") == values
-                    and (on_error == "record" or not is_error(done[k]))
-                ):
-                    record(k, done[k])
+                if kept(k, values):
                     continue
                 tasks.append(
                     task_base | {"values": values, "evaluation": gen * pop + i, "generation": gen}
@@ -434,10 +447,7 @@ def tune(
                 if on_error == "raise" and is_error(row):
                     failed.append(row)  # never recorded: a resumed tuning runs it again
                     return
-                if fh is not None:
-                    fh.write(json.dumps({"key": todo[j], "row": row}, default=json_default) + "\n")
-                    fh.flush()
-                record(todo[j], row)
+                keep(todo[j], row)
 
             if tasks:
                 if own_pool and (scheduler is None or pool_is_broken(scheduler)):
@@ -489,8 +499,7 @@ def tune(
             def evaluate(values, j):
                 k = checkpoint_key([skey, "refine", j])
                 refine_keys.append(k)
-                if k in done and done[k].get("values") == values and not is_error(done[k]):
-                    record(k, done[k])
+                if kept(k, values):
                     return done[k]
                 task = task_base | {
                     "values": values,
@@ -505,10 +514,7 @@ def tune(
                         f"refinement evaluation {j} at {shown} could not be run: {row['error']}",
                         [row],
                     )
-                if fh is not None:
-                    fh.write(json.dumps({"key": k, "row": row}, default=json_default) + "\n")
-                    fh.flush()
-                record(k, row)
+                keep(k, row)
                 return row
 
             first = min(range(len(cma_keys)), key=lambda j: (rows_by_key[cma_keys[j]]["score"], j))

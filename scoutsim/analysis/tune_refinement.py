@@ -13,11 +13,11 @@ evaluation's run. The refinement uses them:
    scenario that sets the score (``aggregate="worst"``: the worst one; ``"mean"``: all),
    found by :func:`~scoutsim.analysis.controlled_orbit.controlled_fixed_point` from a run
    of the tuning's duration (at least :data:`SETTLE_S`), or, after an accepted step, by
-   Newton from the last gradient's orbit (kept if it is stable), and the derivatives of the objective's metric on it: the mean
-   speed (objectives ``speed``, ``max-speed``), the cost of transport (``cot``) or the
-   spectral radius per stride (``stability``), with the first of the relative steps
-   :data:`SENSITIVITY_STEPS` that keeps every perturbed orbit in its sample-phase cell.
-   The objective f and its gradient G in the
+   Newton from the last gradient's orbit (kept if it is stable); and the derivatives of
+   the objective's metric on it: the mean speed (objectives ``speed``, ``max-speed``),
+   the cost of transport (``cot``) or the spectral radius per stride (``stability``),
+   with the first of the relative steps :data:`SENSITIVITY_STEPS` that keeps every
+   perturbed orbit in its sample-phase cell. The objective f and its gradient G in the
    unit cube of the parameters' bounds (u = (p - low) / (high - low)); for ``speed``,
    f = |v - target| and G = sign(v - target) dv/du; ``mean``: the scenarios' means.
 2. A step within the trust radius r: along -G (the components that would leave the box at
@@ -25,7 +25,8 @@ evaluation's run. The refinement uses them:
    if shorter (Newton on v = target).
 3. The candidate there is scored by the tuning's own evaluation (every scenario, every
    constraint): accepted if its score is lower than the best's (r doubles, at most
-   :data:`MAX_RADIUS`; the gradient is taken again there), else rejected (r / 4).
+   :data:`MAX_RADIUS`; the gradient is taken again there), else rejected (r becomes a
+   quarter of the step tried).
 
 It ends after ``refine`` evaluations, when r falls below :data:`MIN_RADIUS`, when the
 gradient is 0 in the box, or when there is no gradient (no feasible candidate; no periodic
@@ -46,7 +47,7 @@ resumed tuning asks the same candidates (their rows are read back from the check
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -68,9 +69,12 @@ REFINED_METRIC = {
 #: the trust radius's bounds, in the unit cube of the parameters' bounds
 MIN_RADIUS = 1e-6
 MAX_RADIUS = 0.5
-#: the relative parameter steps of the orbit sensitivities, tried in turn: a cycle of
-#: many strides has a small sample-phase cell (measured: an 11-stride Table I cycle of
-#: Model II left it at 1e-6 of a touchdown angle, not at 1e-7)
+#: the relative parameter steps of the orbit sensitivities, tried in turn. A cycle of many
+#: strides has a small sample-phase cell (an 11-stride Table I cycle of Model II at front /
+#: back 25.27 / 20.23 deg left it at 1e-6 of a touchdown angle, not at 1e-7), and there the
+#: derivative within the cell does not describe the score's trend (measured there: d speed
+#: / d front angle -1.6 per rad within the cell, +8 per rad across the tuning's runs), so
+#: a smaller step is reported as no gradient rather than refined on
 SENSITIVITY_STEPS = (1e-4, 1e-5)
 #: the shortest run [s] the orbit's Newton search starts from (the orbit search's own
 #: default): after a tuning's shorter runs (6 s) the default Table I gait of Model II,
@@ -100,14 +104,7 @@ class Refinement:
     gradient: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {
-            "evaluations": self.evaluations,
-            "accepted": self.accepted,
-            "start_score": self.start_score,
-            "end_score": self.end_score,
-            "stopped": self.stopped,
-            "gradient": self.gradient,
-        }
+        return asdict(self)
 
 
 def check_refinable(params, kind: str) -> None:
@@ -227,13 +224,10 @@ def _step(f: float, g_u: np.ndarray, u: np.ndarray, radius: float, objective: st
     d = -g_u.copy()
     d[(u <= 0.0) & (d < 0.0)] = 0.0
     d[(u >= 1.0) & (d > 0.0)] = 0.0
-    norm = float(np.linalg.norm(d))
+    norm = float(np.linalg.norm(d))  # the gradient's within the box
     if norm == 0.0:
         return d
-    gd = float(np.linalg.norm(g_u[d != 0.0]))
-    length = radius
-    if objective == "speed" and gd > 0.0:
-        length = min(radius, f / gd)
+    length = min(radius, f / norm) if objective == "speed" else radius
     return d / norm * length
 
 
@@ -261,11 +255,11 @@ def refine(
     best_values = dict(best_row["values"])
     best_score = float(best_row["score"])
     worst = best_row.get("scenario")
-    grad_at = None  # the values the gradient was taken at
+    stale = True  # no gradient yet at best_values
     orbits: dict = {}  # the orbits the gradient was taken on, by scenario
     f = g_u = None
     while res.evaluations < n:
-        if grad_at != best_values:
+        if stale:
             if task_base["goal"]["aggregate"] == "mean" or worst is None:
                 indices = list(range(len(task_base["scenarios"])))
             else:
@@ -276,7 +270,7 @@ def refine(
                     f"scenario {i}: {w}" for i, w in why.items()
                 )
                 break
-            grad_at = dict(best_values)
+            stale = False
             res.gradient = {p.name: float(x) * p.scale for p, x in zip(params, g)}
             g_u = g * (hi - lo)
             say(
@@ -295,6 +289,7 @@ def refine(
         if row["score"] < best_score:
             best_score, best_values = float(row["score"]), values
             worst = row.get("scenario")
+            stale = True
             res.accepted += 1
             radius = min(MAX_RADIUS, 2.0 * radius)
             say(f"refine: accepted, score {best_score:.6g}")

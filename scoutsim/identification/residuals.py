@@ -10,6 +10,7 @@ and, after the fit, the rms of each channel in units of its stated noise.
 from __future__ import annotations
 
 import numpy as np
+from scipy import optimize
 
 from ..parameters import RobotParameters
 from ..simulation.integrator import IntegratorSettings
@@ -61,11 +62,9 @@ class Residuals:
         out = []
         for d in self.data:
             a, c, _ = simulate_log(d, rb, self.integrator)
-            for leg in d.legs:
-                out.append((a[:, leg] - d.angle[:, leg]) / d.sigma_angle)
-            if d.current is not None:
-                for leg in d.legs:
-                    out.append((c[:, leg] - d.current[:, leg]) / d.sigma_current)
+            simulated, logged = (a, c), (d.angle, d.current)
+            for signal, leg, noise in _channels(d):
+                out.append((simulated[signal][:, leg] - logged[signal][:, leg]) / noise)
         r = np.concatenate(out)
         r[~np.isfinite(r)] = 1e6
         return r
@@ -94,12 +93,10 @@ class Residuals:
             ):
                 self.nfd += 1
                 return self._differences(x)
-            for leg in d.legs:
-                blocks.append(der.angle[:n, leg, :] * p / d.sigma_angle)
-            if d.current is not None:
-                assert der.current is not None, "a finished run has both"
-                for leg in d.legs:
-                    blocks.append(der.current[:n, leg, :] * p / d.sigma_current)
+            assert der.current is not None, "a finished run has both"
+            derivative = (der.angle, der.current)
+            for signal, leg, noise in _channels(d):
+                blocks.append(derivative[signal][:n, leg, :] * p / noise)
         J = np.vstack(blocks)
         if not np.all(np.isfinite(J)):
             self.nfd += 1
@@ -107,17 +104,19 @@ class Residuals:
         return J
 
     def _differences(self, x) -> np.ndarray:
-        """dr/dx by forward differences, steps ``diff_step`` max(1, |x_i|) (as
+        """dr/dx by forward differences, steps ``diff_step`` max(1, |x_i|) (those of
         ``scipy.optimize.least_squares``'s "2-point")."""
         x = np.asarray(x, dtype=float)
-        r0 = self(x)
-        J = np.empty((r0.size, x.size))
-        for i in range(x.size):
-            h = self.diff_step * max(1.0, abs(x[i]))
-            xp = x.copy()
-            xp[i] += h
-            J[:, i] = (self(xp) - r0) / h
-        return J
+        return optimize.approx_fprime(x, self, self.diff_step * np.maximum(1.0, np.abs(x)))
+
+
+def _channels(d) -> list:
+    """The channels of log ``d`` in the order of its residuals: (signal, leg, noise), signal
+    0 the encoder angle [rad], 1 the motor current [A] (where the fit uses it)."""
+    out = [(0, leg, d.sigma_angle) for leg in d.legs]
+    if d.current is not None:
+        out += [(1, leg, d.sigma_current) for leg in d.legs]
+    return out
 
 
 def channel_rms(r: np.ndarray, data: list) -> dict:

@@ -13,12 +13,15 @@ import numpy as np
 
 from .._core.model import layout as L
 from .._core.model.evaluate import evaluate
+from .._core.numerics.tangent_work import X_CMD, X_MF, X_S
 from ..parameters.robot_fields import robot_value, robot_with_value
+from .parameter_rows import packing_derivatives
 
 __all__ = ["SampleDerivatives"]
 
 #: relative step of the central differences of the packing (a field's derivative of the
-#: packed arrays) and of the motor current along a carried column
+#: packed arrays, :func:`~scoutsim.simulation.parameter_rows.packing_derivatives`) and of
+#: the motor current along a carried column
 DIFFERENCE_STEP = 1e-6
 
 
@@ -52,21 +55,12 @@ class SampleDerivatives:
         """Carry the fields' columns on ``eng`` (``engine(robot)`` makes the run's engine
         for another robot: the fields' derivatives of the packed arrays are its central
         differences) and record sample 0."""
-        rows = []
-        for name in self.fields:
-            value = robot_value(robot, name)
-            h = DIFFERENCE_STEP * abs(value) if value != 0.0 else DIFFERENCE_STEP
-            ends = [engine(robot_with_value(robot, name, v))[0] for v in (value + h, value - h)]
-            rows.append(
-                [
-                    (a - b) / (2.0 * h)
-                    for a, b in zip(
-                        (ends[0].P, ends[0].C, ends[0].block.params),
-                        (ends[1].P, ends[1].C, ends[1].block.params),
-                    )
-                ]
-            )
-        dP, dC, dcp = (np.array([r[i] for r in rows]) for i in range(3))
+        dP, dC, dcp = packing_derivatives(
+            self.fields,
+            lambda name: robot_value(robot, name),
+            lambda name, value: engine(robot_with_value(robot, name, value))[0],
+            DIFFERENCE_STEP,
+        )
         n = len(self.fields)
         nx = eng.sensitivities.shape[0]
         seed = np.zeros((nx + n, n))
@@ -84,11 +78,10 @@ class SampleDerivatives:
         pending = self._pending
         if pending is not None and eng.k == pending[0] + 1:
             _, s, mi, mf, phi = pending
-            self._angle.append(phi[[L.IALB, L.IALF], :].copy())
-            x_cmd = L.NS + L.NMF
+            self._angle.append(phi[[X_S + L.IALB, X_S + L.IALF], :].copy())
             self._current.append(
                 self._current_derivative(
-                    s, mi, mf, eng.cmd, eng.P, phi, eng.sensitivities[x_cmd : x_cmd + 2]
+                    s, mi, mf, eng.cmd, eng.P, phi, eng.sensitivities[X_CMD : X_CMD + 2]
                 )
             )
         Phi = eng.sensitivities
@@ -97,7 +90,7 @@ class SampleDerivatives:
             eng.s.copy(),
             eng.mi.copy(),
             eng.mf.copy(),
-            Phi[: L.NS + L.NMF].copy(),
+            Phi[:X_CMD].copy(),
         )
 
     def finish(self, eng) -> None:
@@ -122,10 +115,10 @@ class SampleDerivatives:
             ends = []
             for sign in (1.0, -1.0):
                 evaluate(
-                    s + sign * e * phi[: L.NS, j],
+                    s + sign * e * phi[X_S:X_MF, j],
                     P + sign * e * self._dP[j],
                     mi,
-                    mf + sign * e * phi[L.NS :, j],
+                    mf + sign * e * phi[X_MF:X_CMD, j],
                     cmd + sign * e * dcmd[:, j],
                     ds,
                     aux,

@@ -194,3 +194,5 @@ def test_a_gait_without_a_cycle_is_reported_with_its_closest_recurrence(monkeypa
     start = StrideMap().crossing(None).state
     with pytest.raises(MapError, match="closest to repeating every 5 stride.s., within 0.012"):
         controlled_fixed_point(start)
+    with pytest.raises(MapError, match="does not repeat within 16 strides"):
+        controlled_fixed_point(start)
