@@ -71,11 +71,12 @@ FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
 #: the smallest change of the spectral radius its derivative is taken over (a difference
-#: of two Jacobians of the map). The carried Jacobian has a noise floor: the rounding of
-#: its central differences over their step moves it by up to 2e-4 (of 51) and its
-#: dominant multiplier by up to 5e-6 under perturbations of the state of 1e-13 to 1e-7
-#: (measured on the default Model II orbit; docs/explanation/derivatives.md)
-RADIUS_RESOLUTION = 1e-4
+#: of two Jacobians of the map). The carried Jacobian has a noise floor, the rounding of
+#: the central differences its events and samples still take: on the default Model II
+#: orbit, perturbations of the state of 1e-13 to 1e-9 move it by about 1e-7 of its scale
+#: and its dominant multiplier by 1e-9 to 3e-8 (docs/explanation/derivatives.md); a
+#: change of the radius a hundred times that is resolved
+RADIUS_RESOLUTION = 1e-6
 #: the parameter steps tried for the spectral radius's derivative, in units of the
 #: metrics' step
 RADIUS_STEPS = (1.0, 10.0, 30.0)

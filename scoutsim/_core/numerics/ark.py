@@ -195,60 +195,18 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
     nfev = 0
     # rank of the splitting: the two motor-damping columns are zero unless the motor
     # damping is stiff (model.evaluate.STIFF_MOTOR_RATE); V (columns NSTIFF ...) then has rank 2
-    R = NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0 or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
+    R = splitting_rank(SF0)
     hg = h * GAMMA
     VU = Z[NSTAGE : NSTAGE + R]  # V^T U
     Si = Z[NSTAGE + R : NSTAGE + 2 * R]  # (I - h gamma V^T U)^-1
-    for a in range(R):
-        for b in range(R):
-            acc = 0.0
-            for i in range(U0, U1):
-                acc += SF0[i, NSTIFF + a] * SF0[i, b]
-            VU[a, b] = acc
-        acc = 0.0
-        for i in range(NS):
-            acc += SF0[i, NSTIFF + a] * y[i]
-        Z[0, a] = acc
-    if not invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3 : NSTAGE + 2 * R + 7]):
+    project_on_v(SF0, y, Z[0], R)
+    if not factor_splitting(SF0, hg, Z, R):
         return np.inf, False, nfev
     w = Z[NSTAGE + 2 * R]
     m = Z[NSTAGE + 2 * R + 1]
     pp = Z[NSTAGE + 2 * R + 2]
     for st in range(1, ns):
-        # rhs = y + h sum_j [AE_ij f_j + (AI_ij - AE_ij) U z_j]
-        for a in range(R):
-            acc = 0.0
-            for j in range(st):
-                acc += AD[st, j] * Z[j, a]
-            w[a] = h * acc
-            m[a] = 0.0
-        # (loops over the components innermost, in the order of the sums: each
-        # component's sum runs over the stages in the same order as a sum per component)
-        for i in range(NS):
-            tmp[i] = 0.0
-        for j in range(st):
-            c = AE[st, j]
-            for i in range(NS):
-                tmp[i] += c * K[j, i]
-        for i in range(NS):
-            tmp[i] = y[i] + h * tmp[i]
-        for i in range(U0, U1):
-            r = tmp[i]
-            for a in range(R):
-                r += SF0[i, a] * w[a]
-            tmp[i] = r
-        for i in range(NS):
-            r = tmp[i]
-            for a in range(R):
-                m[a] += SF0[i, NSTIFF + a] * r
-        # Y = W^-1 rhs
-        apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
-        # z = V^T Y = m + (V^T U) p
-        for a in range(R):
-            acc = m[a]
-            for b in range(R):
-                acc += VU[a, b] * pp[b]
-            Z[st, a] = acc
+        stage_state(st, y, h, (K, Z), (SF0, VU, Si, R), (AE, AD, GAMMA), (tmp, w, m, pp))
         if not evaluate_ws(tmp, P, mi, mf, cmd, K[st], aux_new, ew, False, ew[3], False):
             ok = False
         nfev += 1
@@ -288,6 +246,87 @@ def step_tab(y, h, P, mi, mf, cmd, work, eval_end, want_sf, tableau, ns):
         if counting:
             power_at(K[6], P, mi, ew, en.p_end)
     return err, ok, nfev
+
+
+@kernel(inline="always")
+def splitting_rank(SF0):
+    """The rank of the splitting in the stiff factors ``SF0``: 4 where the motor damping is
+    stiff (its columns are nonzero), else 2 (the belt dampers alone)."""
+    return NSTIFF if (SF0[NQ + IALB, NSTIFF + 2] != 0.0 or SF0[NQ + IALF, NSTIFF + 3] != 0.0) else 2
+
+
+@kernel(inline="always")
+def factor_splitting(SF0, hg, Z, R):
+    """V^T U into ``Z[NSTAGE : NSTAGE + R]`` and (I - hg V^T U)^-1 into the next ``R`` rows
+    (the stiff factors ``SF0``, rank ``R``, hg = h gamma); False if singular."""
+    VU = Z[NSTAGE : NSTAGE + R]
+    Si = Z[NSTAGE + R : NSTAGE + 2 * R]
+    for a in range(R):
+        for b in range(R):
+            acc = 0.0
+            for i in range(U0, U1):
+                acc += SF0[i, NSTIFF + a] * SF0[i, b]
+            VU[a, b] = acc
+    return invert_small(VU, hg, Si, R, Z[NSTAGE + 2 * R + 3 : NSTAGE + 2 * R + 7])
+
+
+@kernel(inline="always")
+def project_on_v(SF0, y, z, R):
+    """z := V^T y (the first ``R`` columns of V = SF0[:, NSTIFF:])."""
+    for a in range(R):
+        acc = 0.0
+        for i in range(NS):
+            acc += SF0[i, NSTIFF + a] * y[i]
+        z[a] = acc
+
+
+@kernel(inline="always")
+def stage_state(st, y, h, stages, split, tab, scratch):
+    """The state Y of stage ``st`` into ``tmp`` and z = V^T Y into ``Z[st]``, from the
+    step's start ``y`` and the earlier stages' derivatives ``K`` and z's (``stages`` =
+    (K, Z)): Y = W^-1 (y + h sum_j [AE_sj f_j + AD_sj U z_j]), W = I - h gamma U V^T.
+    ``split`` = (SF0, VU, Si, R): the stiff factors, V^T U, (I - h gamma V^T U)^-1 and the
+    rank; ``tab`` = (AE, AD, GAMMA); ``scratch`` = (tmp, w, m, pp). Linear in (y, K, Z):
+    the flow's derivative applies it to their tangents (:mod:`.tangent_flow`)."""
+    K, Z = stages
+    SF0, VU, Si, R = split
+    AE, AD, GAMMA = tab
+    tmp, w, m, pp = scratch
+    hg = h * GAMMA
+    # rhs = y + h sum_j [AE_ij f_j + (AI_ij - AE_ij) U z_j]
+    for a in range(R):
+        acc = 0.0
+        for j in range(st):
+            acc += AD[st, j] * Z[j, a]
+        w[a] = h * acc
+        m[a] = 0.0
+    # (loops over the components innermost, in the order of the sums: each
+    # component's sum runs over the stages in the same order as a sum per component)
+    for i in range(NS):
+        tmp[i] = 0.0
+    for j in range(st):
+        c = AE[st, j]
+        for i in range(NS):
+            tmp[i] += c * K[j, i]
+    for i in range(NS):
+        tmp[i] = y[i] + h * tmp[i]
+    for i in range(U0, U1):
+        r = tmp[i]
+        for a in range(R):
+            r += SF0[i, a] * w[a]
+        tmp[i] = r
+    for i in range(NS):
+        r = tmp[i]
+        for a in range(R):
+            m[a] += SF0[i, NSTIFF + a] * r
+    # Y = W^-1 rhs
+    apply_w_inverse(SF0, Si, hg, m, pp, tmp, R)
+    # z = V^T Y = m + (V^T U) p
+    for a in range(R):
+        acc = m[a]
+        for b in range(R):
+            acc += VU[a, b] * pp[b]
+        Z[st, a] = acc
 
 
 @kernel(inline="always")

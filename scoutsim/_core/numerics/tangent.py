@@ -11,22 +11,26 @@ with the run's own discrete choices held (the step sizes, the ARK splitting matr
 event sequence and the control samples), so the derivatives are those of the computed
 trajectory, not of a neighbouring one integrated with other steps:
 
-- a step from ``s`` of size ``h`` (:func:`tangent_flow`): y -> proj(step(y; h)) with the
-  splitting matrix of the nominal step, by central differences of the compiled step along
-  each column (the map is smooth: no error control or event location inside it);
+- a step from ``s`` of size ``h``: y -> proj(step(y; h)) with the splitting matrix of the
+  nominal step, stage by stage with the right-hand side's derivative in closed form
+  (:mod:`.tangent_flow`); :func:`flow_by_differences` is the same map by central
+  differences of the compiled step along each column (the check of the closed form);
 - a plant event at ``t_e`` (:func:`tangent_reset` with the event slot): the saltation
   matrix S = DR + (f+ - DR f-) n^T / (n^T f-) (docs/explanation/derivatives.md), with DR
   the derivative of the transition and the settling after it, n the gradient of the event
   function, f-/f+ the vector fields either side; DR and n by central differences of the
   compiled transition and event function, f-/f+ from the run's own evaluations;
-- a reset at a fixed instant (a control sample's settling, a projection: slot -1): DR only;
+- a reset at a fixed instant (a control sample's settling: slot -1): DR only, the
+  projection's derivative in closed form where no transition fired
+  (:func:`~.tangent_flow.projection_derivative`), else by central differences; a
+  projection (:func:`tangent_projection`): in closed form;
 - a control sample (:func:`tangent_sample`): the new held commands and controller state
   as functions of the state, the anchors, the old commands and the old controller state
   (zero-order hold), by central differences of the controller on copies of its arrays.
 
 The differences are of smooth maps (each with its discrete choices held), so their error
 is that of a central difference (about 1e-9 of the scale here), not that of differencing a
-whole adaptive run. Where a perturbed copy of a reset ends in other modes than the run
+whole adaptive run; the steps, in closed form, add none. Where a perturbed copy of a reset ends in other modes than the run
 (an event that is not transversal, a mode decided by a margin smaller than the step), the
 map is not differentiable there: ``info[TI_NONSMOOTH]`` counts such resets, and
 ``info[TI_GRAZING]`` keeps the smallest transversality |n^T f-| / (|n| |f-|) met.
@@ -44,11 +48,11 @@ from ...control.bounding import bounding_step
 from ...control.compiled import call_controller
 from ..model.evaluate import evaluate_ws, evaluated_state
 from ..model.flags import is_set
-from ..model.kinematics import project_state
 from ..model.layout import CB_ADDRESS, NMF, NMI, NS, P_G, SG_MEASURED, SG_MOTOR_SIDE
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
 from .stepper import do_step
+from .tangent_flow import projection_derivative
 from .tangent_work import (
     TI_EVENTS,
     TI_GRAZING,
@@ -148,7 +152,7 @@ def _central(out, row, j, values, side, eps):
 
 
 @kernel
-def tangent_flow(method, s, h, P, mi, mf, cmd, SF0, pack):
+def flow_by_differences(method, s, h, P, mi, mf, cmd, SF0, pack):
     """Phi := D[proj(step(.; h))] Phi over the step of size ``h`` [s] the run has just
     taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``, ARK splitting
     factors ``SF0``): the rows of s; the anchors, commands and controller state are
@@ -292,6 +296,15 @@ def tangent_reset(k, t, mi, f_plus, P, cmd, pack):
     Phi, out, w, gd, info = tan.Phi, tan.out, tan.w, tan.gd, tan.info
     m = Phi.shape[1]
     if k < 0:
+        kept = True
+        for i in range(NMI):
+            if mi[i] != tan.mi0[i]:
+                kept = False
+        if kept:
+            # no transition fired: the settling only projected the snapshot (its anchors
+            # are those of its modes)
+            projection_derivative(tan.s0, P, tan.mi0, tan.mf0, tan)
+            return
         for j in range(m):
             _reset_derivative(k, t, Phi[:, j], mi, P, cmd, tan, j)
         for j in range(m):
@@ -336,22 +349,9 @@ def tangent_reset(k, t, mi, f_plus, P, cmd, pack):
 
 @kernel
 def tangent_projection(s, P, mi, mf, pack):
-    """Phi := D[proj] Phi for the projection of the dependent coordinates at ``s``."""
-    tan = unpacked(pack)
-    Phi, out, sp, mfp = tan.Phi, tan.out, tan.sp, tan.mfp
-    m = Phi.shape[1]
-    for j in range(m):
-        eps = _column_step(Phi[:, j], tan, X_CMD)
-        if eps == 0.0:
-            continue
-        for side in range(2):
-            e = eps if side == 0 else -eps
-            _moved_state(e, Phi[:, j], s, mf, tan)
-            _moved_parameters(e, Phi[:, j], P, tan)
-            project_state(sp, tan.Pp, mi, mfp)
-            _central(out, X_S, j, sp, side, eps)
-        for i in range(NS):
-            Phi[X_S + i, j] = out[X_S + i, j]
+    """Phi := D[proj] Phi for the projection of the dependent coordinates at ``s``, in
+    closed form (:func:`~.tangent_flow.projection_derivative`)."""
+    projection_derivative(s, P, mi, mf, unpacked(pack))
 
 
 @kernel

@@ -14,8 +14,8 @@ sensitivities (:func:`hook_address`), the way it calls a user's compiled control
   :func:`margin`, :func:`keep`, :func:`sample`) writes the addresses and shapes of its
   arrays into the pack's table ``calls`` (rows ``A_*``: address, rows, columns) and calls
   a C function with the operation (``OP_*``), one integer, two numbers and the table:
-  the flow of a step the method's (``calls[A_HOOK, HOOK_FLOW]``, :func:`_run_flow`, one
-  per integration method), every other operation the one of all methods
+  the flow of a step the method's (``calls[A_HOOK, HOOK_FLOW]``, :func:`_run_flow_dopri5` and its
+  like, one per integration method), every other operation the one of all methods
   (``calls[A_HOOK, HOOK_OPS]``, :func:`_run_op`);
 - the C function makes arrays of the addresses again and calls the function of
   :mod:`.tangent` the operation names.
@@ -38,7 +38,6 @@ from .stepper import METHOD_ARK3, METHOD_ARK4, METHOD_DOPRI5
 from .tangent import (
     keep_controller,
     sample_margin,
-    tangent_flow,
     tangent_projection,
     tangent_reset,
     tangent_sample,
@@ -46,6 +45,7 @@ from .tangent import (
 from .tangent import (
     snapshot as tangent_snapshot,
 )
+from .tangent_flow import flow_ark3, flow_ark4, flow_dopri5
 from .tangent_work import (
     A_ARMED,
     A_C,
@@ -153,7 +153,8 @@ def projection(s, P, mi, mf, pack):
 
 @kernel
 def flow(method, s, h, P, mi, mf, cmd, SF0, pack):
-    """:func:`~.tangent.tangent_flow`, by address."""
+    """The flow's derivative over the step just taken (:mod:`.tangent_flow`, the
+    method's), by address."""
     calls = pack.calls
     _put_plant(calls, s, P, mi, mf)
     _put(calls, A_CMD, cmd)
@@ -308,12 +309,29 @@ def _run_op(op, k, a, table):
 
 
 @allocating
-def _run_flow(method, h, table):
-    """A flow over a step of ``h`` [s] of ``method`` (a constant: the steps are the
-    method's) on the arrays of the table."""
+def _run_flow_dopri5(h, table):
+    """The flow over a Dormand-Prince step of ``h`` [s] on the arrays of the table."""
     calls = carray(table, (N_CALL_ROWS, 3))
     s, P, mi, mf, cmd = _plant_of(calls)
-    tangent_flow(method, s, h, P, mi, mf, cmd, _float_matrix(calls, A_SF0), _pack_of(calls))
+    flow_dopri5(s, h, P, mi, mf, cmd, _pack_of(calls))
+    return 0
+
+
+@allocating
+def _run_flow_ark4(h, table):
+    """The flow over an ARK4 step of ``h`` [s] on the arrays of the table."""
+    calls = carray(table, (N_CALL_ROWS, 3))
+    s, P, mi, mf, cmd = _plant_of(calls)
+    flow_ark4(s, h, (P, mi, mf, cmd), _float_matrix(calls, A_SF0), _pack_of(calls))
+    return 0
+
+
+@allocating
+def _run_flow_ark3(h, table):
+    """The flow over an ARK3 step of ``h`` [s] on the arrays of the table."""
+    calls = carray(table, (N_CALL_ROWS, 3))
+    s, P, mi, mf, cmd = _plant_of(calls)
+    flow_ark3(s, h, (P, mi, mf, cmd), _float_matrix(calls, A_SF0), _pack_of(calls))
     return 0
 
 
@@ -322,15 +340,15 @@ def _entry(op, k, a, b, table):
 
 
 def _flow_dopri5(op, k, a, b, table):
-    return _run_flow(METHOD_DOPRI5, a, table)
+    return _run_flow_dopri5(a, table)
 
 
 def _flow_ark4(op, k, a, b, table):
-    return _run_flow(METHOD_ARK4, a, table)
+    return _run_flow_ark4(a, table)
 
 
 def _flow_ark3(op, k, a, b, table):
-    return _run_flow(METHOD_ARK3, a, table)
+    return _run_flow_ark3(a, table)
 
 
 #: the flow of each method (its steps are the method's)

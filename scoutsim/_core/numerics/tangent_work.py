@@ -10,6 +10,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..._numba.jit import kernel
+from ..model.derivative.evaluate import derivative_workspace
 from ..model.evaluate import NSTIFF
 from ..model.layout import NAUX, NEV, NEVBUF, NIMP, NMF, NMI, NS
 from .ark import Z_COLS, Z_ROWS
@@ -51,11 +52,17 @@ DIFFERENCE_STEP = 1e-6
 #: perturbed copies (``sp``, ``mfp``, ``mip``, ``auxp``, ``cmdp``, ``csp``, ``lsp``,
 #: ``trp``, ``yp``, ``ep``, ``ds``), a scratch event log (``ev``, ``stats``, ``imp``), the
 #: column's event-function differences ``gd`` (m + 1), ``info`` (``TI_*``) and the
-#: difference step ``delta`` (one entry).
+#: difference step ``delta`` (one entry); the parameters' derivatives ``dP``, ``dC``,
+#: ``dcp``, ``pscale`` and the moved copies ``Pp``, ``Cp``, ``cpp`` (:func:`tangent_work`);
+#: for the flow's derivative stage by stage (:mod:`.tangent_flow`): the stages' tangents
+#: ``Kt`` (7 rows per column, NS), the ARK splitting's per column ``Zt`` (``Z_ROWS`` rows
+#: per column), a stage's tangent ``yt`` (NS), a column's tangents of the anchors ``mft``
+#: and the commands ``cmdt``, each column's tangent of the packed parameters ``Pt``
+#: (m x len(P)) and the right-hand side derivative's scratch ``dw``.
 TangentWork = namedtuple(
     "TangentWork",
     "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
-    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp",
+    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp Kt Zt yt mft cmdt Pt dw",
 )
 
 #: What a run carries (in ``Carry.tangent`` and ``AdvanceScratch.tan``): ``Phi`` and
@@ -184,6 +191,13 @@ def tangent_work(
         np.zeros(n_P),
         np.zeros(n_C),
         np.zeros(n_cp),
+        np.zeros((7 * m, NS)),
+        np.zeros((Z_ROWS * m, Z_COLS)),
+        np.zeros(NS),
+        np.zeros(NMF),
+        np.zeros(2),
+        np.zeros((m, n_P)),
+        derivative_workspace(),
     )
 
 
@@ -303,6 +317,13 @@ def unpacked(pack):
         _fv(pack, 46),
         _fv(pack, 47),
         _fv(pack, 48),
+        _fm(pack, 49),
+        _fm(pack, 50),
+        _fv(pack, 51),
+        _fv(pack, 52),
+        _fv(pack, 53),
+        _fm(pack, 54),
+        _fv(pack, 55),
     )
 
 

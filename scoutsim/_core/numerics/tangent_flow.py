@@ -1,0 +1,200 @@
+"""The derivative of a step's flow, stage by stage, with the right-hand side's derivative in
+closed form (compiled).
+
+A step of an explicit or linearly implicit Runge-Kutta method is a chain of linear
+combinations and evaluations of the right-hand side: each stage's state Y_i is linear in
+the step's start y and the earlier stages' derivatives K_j (with the ARK methods' splitting
+matrix of the step held), and K_i = f(Y_i). Its derivative along a column is the same
+chain on the tangents,
+
+    Y_i' = (the stage's combination of y' and the K_j'),   K_i' = Df(Y_i)[Y_i', p'],
+
+with Df in closed form (:func:`~scoutsim._core.model.derivative.evaluate.evaluate_t`, one KKT
+solve with the factors of the stage's evaluation), and the step's end projected
+(:func:`~scoutsim._core.model.derivative.evaluate.projection_t`). The stages are evaluated
+again here (the run's step keeps only their derivatives), with the step's own size, modes,
+anchors, commands and splitting: the derivative is that of the computed step, exact up to
+rounding, with no difference step.
+"""
+
+from __future__ import annotations
+
+from ..._numba.jit import kernel
+from ..model.derivative.evaluate import DW_TR, evaluate_t, projected_t, projection_t
+from ..model.derivative.kinematics import TR_CGB, TR_CGF, TR_CTH, TR_SGB, TR_SGF, TR_STH
+from ..model.evaluate import evaluate_ws
+from ..model.kinematics import project
+from ..model.layout import IL_B, NMF, NQ, NS
+from . import ark
+from .dopri5 import A as DOPRI5_A
+from .tangent_work import X_CMD, X_MF, X_S, unpacked
+
+
+@kernel
+def parameter_tangents(tan):
+    """Each column's tangent of the packed robot parameters, sum_i Phi[par_i, j] dP[i],
+    into ``tan.Pt`` (constant along a flow: the parameter rows do not change)."""
+    Phi, Pt, dP = tan.Phi, tan.Pt, tan.dP
+    npar = tan.pscale.shape[0]
+    par0 = Phi.shape[0] - npar
+    for j in range(Phi.shape[1]):
+        for k in range(Pt.shape[1]):
+            Pt[j, k] = 0.0
+        for i in range(npar):
+            w = Phi[par0 + i, j]
+            if w != 0.0:
+                for k in range(Pt.shape[1]):
+                    Pt[j, k] += w * dP[i, k]
+
+
+@kernel(inline="always")
+def _column(j, tan, y0):
+    """Column ``j``'s tangents of the state (into ``y0``), the anchors and the commands
+    (into ``tan.mft``, ``tan.cmdt``)."""
+    Phi = tan.Phi
+    for i in range(NS):
+        y0[i] = Phi[X_S + i, j]
+    for i in range(NMF):
+        tan.mft[i] = Phi[X_MF + i, j]
+    for i in range(2):
+        tan.cmdt[i] = Phi[X_CMD + i, j]
+
+
+@kernel
+def projection_derivative(s, P, mi, mf, tan):
+    """Phi := D[proj] Phi for the projection of the dependent coordinates of ``s`` (modes
+    ``mi``, anchors ``mf``; ``s`` is not changed), in closed form; ``tan``: the unpacked
+    work (:func:`~.tangent_work.unpacked`)."""
+    Phi, sp, y0, out, dw = tan.Phi, tan.sp, tan.w, tan.yt, tan.dw
+    for i in range(NS):
+        sp[i] = s[i]
+    q, dq, l = sp[0:NQ], sp[NQ : 2 * NQ], sp[IL_B : IL_B + 2]
+    sth, cth, sg0, cg0, sg1, cg1 = project(q, dq, l, P, mi, mf)
+    tr = dw[DW_TR:]
+    tr[TR_STH] = sth
+    tr[TR_CTH] = cth
+    tr[TR_SGB] = sg0
+    tr[TR_CGB] = cg0
+    tr[TR_SGF] = sg1
+    tr[TR_CGF] = cg1
+    parameter_tangents(tan)
+    for j in range(Phi.shape[1]):
+        _column(j, tan, y0)
+        projected_t(q, dq, l, P, mi, dw, (y0, tan.mft, tan.Pt[j]), out)
+        for i in range(NS):
+            Phi[X_S + i, j] = out[i]
+
+
+@kernel
+def flow_dopri5(s, h, P, mi, mf, cmd, pack):
+    """Phi := D[proj(step(.; h))] Phi over the Dormand-Prince step of size ``h`` [s] the
+    run has just taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``)."""
+    tan = unpacked(pack)
+    Phi, own, Kt, yt, y0 = tan.Phi, tan.work, tan.Kt, tan.yt, tan.w
+    K, y, ew = own.K, own.tmp, own.ew
+    m = Phi.shape[1]
+    parameter_tangents(tan)
+    for st in range(7):
+        for i in range(NS):
+            acc = s[i]
+            for k in range(st):
+                a = DOPRI5_A[st, k]
+                if a != 0.0:
+                    acc += h * a * K[k, i]
+            y[i] = acc
+        evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
+        for j in range(m):
+            _column(j, tan, y0)
+            for i in range(NS):
+                acc = y0[i]
+                for k in range(st):
+                    a = DOPRI5_A[st, k]
+                    if a != 0.0:
+                        acc += h * a * Kt[7 * j + k, i]
+                yt[i] = acc
+            if st < 6:
+                evaluate_t(
+                    P, mi, cmd, ew, tan.dw, (yt, tan.mft, tan.cmdt, tan.Pt[j]), Kt[7 * j + st]
+                )
+            else:  # the step's end (b_7 = 0: its derivative is not needed), projected
+                projection_t(P, mi, ew, tan.dw, (yt, tan.mft, tan.Pt[j]), Kt[7 * j + 6])
+    for j in range(m):
+        for i in range(NS):
+            Phi[X_S + i, j] = Kt[7 * j + 6, i]
+
+
+@kernel(inline="always")
+def _flow_ark(s, h, plant, SF0, pack, tableau, ns):
+    """Phi := D[proj(step(.; h))] Phi over the ARK step of size ``h`` [s] the run has just
+    taken from ``s`` with the stiff factors ``SF0`` (held: the splitting of the step);
+    ``plant`` = (P, mi, mf, cmd); ``tableau`` = (AE, AD, B, GAMMA), ``ns`` stages."""
+    P, mi, mf, cmd = plant
+    AE, AD, B, GAMMA = tableau
+    tan = unpacked(pack)
+    Phi, own, Kt, Zt, yt, y0 = tan.Phi, tan.work, tan.Kt, tan.Zt, tan.yt, tan.w
+    K, y, ew, Z = own.K, own.tmp, own.ew, own.Z
+    m = Phi.shape[1]
+    parameter_tangents(tan)
+    R = ark.splitting_rank(SF0)
+    hg = h * GAMMA
+    ark.factor_splitting(SF0, hg, Z, R)
+    VU = Z[ark.NSTAGE : ark.NSTAGE + R]
+    Si = Z[ark.NSTAGE + R : ark.NSTAGE + 2 * R]
+    w = Z[ark.NSTAGE + 2 * R]
+    mm = Z[ark.NSTAGE + 2 * R + 1]
+    pp = Z[ark.NSTAGE + 2 * R + 2]
+    split = (SF0, VU, Si, R)
+    tab = (AE, AD, GAMMA)
+    zr = ark.Z_ROWS
+    ark.project_on_v(SF0, s, Z[0], R)
+    for st in range(ns):
+        if st == 0:
+            for i in range(NS):
+                y[i] = s[i]
+        else:
+            ark.stage_state(st, s, h, (K, Z), split, tab, (y, w, mm, pp))
+        evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
+        for j in range(m):
+            _column(j, tan, y0)
+            Zj = Zt[zr * j : zr * (j + 1)]
+            if st == 0:
+                ark.project_on_v(SF0, y0, Zj[0], R)
+                for i in range(NS):
+                    yt[i] = y0[i]
+            else:
+                ark.stage_state(st, y0, h, (Kt[7 * j : 7 * j + 7], Zj), split, tab, (yt, w, mm, pp))
+            evaluate_t(P, mi, cmd, ew, tan.dw, (yt, tan.mft, tan.cmdt, tan.Pt[j]), Kt[7 * j + st])
+    # the step's end y + h sum_j b_j K_j, evaluated for its projection
+    for i in range(NS):
+        y[i] = 0.0
+    for k in range(ns):
+        for i in range(NS):
+            y[i] += B[k] * K[k, i]
+    for i in range(NS):
+        y[i] = s[i] + h * y[i]
+    evaluate_ws(y, P, mi, mf, cmd, K[6], own.aux_new, ew, False, ew[3], False)
+    for j in range(m):
+        _column(j, tan, y0)
+        for i in range(NS):
+            yt[i] = 0.0
+        for k in range(ns):
+            for i in range(NS):
+                yt[i] += B[k] * Kt[7 * j + k, i]
+        for i in range(NS):
+            yt[i] = y0[i] + h * yt[i]
+        projection_t(P, mi, ew, tan.dw, (yt, tan.mft, tan.Pt[j]), Kt[7 * j + 6])
+    for j in range(m):
+        for i in range(NS):
+            Phi[X_S + i, j] = Kt[7 * j + 6, i]
+
+
+@kernel
+def flow_ark4(s, h, plant, SF0, pack):
+    """:func:`_flow_ark` with ARK4(3)6L[2]SA."""
+    _flow_ark(s, h, plant, SF0, pack, (ark.AE, ark.AD, ark.B, ark.GAMMA), ark.NSTAGE)
+
+
+@kernel
+def flow_ark3(s, h, plant, SF0, pack):
+    """:func:`_flow_ark` with ARK3(2)4L[2]SA."""
+    _flow_ark(s, h, plant, SF0, pack, (ark.AE3, ark.AD3, ark.B3, ark.GAMMA3), 4)
