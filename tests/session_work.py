@@ -150,7 +150,8 @@ def compile_the_core() -> None:
     flow), and the right-hand side called from Python; in two processes side by side
     (Numba compiles on one core, and writes each cache file whole under a temporary name
     before renaming it, so two processes may write the same one): this one compiles the
-    ARK3 and ARK4 run loops, a second one the rest (:func:`compile_part`), which this one
+    ARK3 and ARK4 run loops and the right-hand side called from Python, a second one the
+    rest (:func:`compile_part`), which this one
     compiles itself after them if the second one failed."""
     helper = subprocess.Popen(
         [sys.executable, str(Path(__file__).resolve()), "rest"],
@@ -166,17 +167,13 @@ def compile_the_core() -> None:
 
 
 def compile_part(part: str) -> None:
-    """Part ``part`` of :func:`compile_the_core`: "loops", the ARK3 and ARK4 run loops;
-    "rest", the DOPRI5 run loop, the carried derivatives' operations and DOPRI5's flow
-    (every orbit's; ARK3's flow is carried by one test only, which compiles it beside the
-    other worker's tests), and the right-hand side called from Python."""
+    """Part ``part`` of :func:`compile_the_core`: "loops", the ARK3 and ARK4 run loops and
+    the right-hand side called from Python; "rest", the DOPRI5 run loop, the carried
+    derivatives' operations and DOPRI5's flow (every orbit's; ARK3's flow is carried by a
+    few tests only, which compile it beside the other worker's tests)."""
     import numpy as np
 
     import scoutsim
-    from scoutsim._core.model import evaluate as D
-    from scoutsim._core.model import layout as L
-    from scoutsim._core.model import workspace as W
-    from scoutsim._core.model.packing import robot_array
     from scoutsim.simulation.engine import start_engine
     from scoutsim.simulation.integrator import IntegratorSettings
 
@@ -185,11 +182,24 @@ def compile_part(part: str) -> None:
             scoutsim.simulate(
                 duration=0.01, model="II", integrator=IntegratorSettings(method=method)
             )
+        _right_hand_side_from_python()
         return
     scoutsim.simulate(duration=0.01, model="II", integrator=IntegratorSettings(method="dopri5"))
     e = start_engine(None, 1.0, model="II", integrator=IntegratorSettings(method="dopri5"))
     e.carry_sensitivities(np.eye(e.sensitivities.shape[0])[:, :1])
     e.advance(2)
+
+
+def _right_hand_side_from_python() -> None:
+    """The right-hand side called from Python (the model's tests)."""
+    import numpy as np
+
+    import scoutsim
+    from scoutsim._core.model import evaluate as D
+    from scoutsim._core.model import layout as L
+    from scoutsim._core.model import workspace as W
+    from scoutsim._core.model.packing import robot_array
+
     s = np.zeros(L.NS)
     P = robot_array(scoutsim.RobotParameters(), "II")
     mi = np.zeros(L.NMI, dtype=np.int64)

@@ -187,6 +187,50 @@ def bounding_step(y, C, ls, cmd, transitions):
             cmd[leg] = C[C_KPB_B + 2 * leg] * (sweep - ang) - C[C_KDB_B + 2 * leg] * rate
 
 
+@kernel
+def bounding_step_t(y, C, ls, tangents, cmd_t):
+    """The derivative of the commands :func:`bounding_step` sets [N m per unit of the
+    direction], along one direction with tangents ``tangents`` = (y_t, C_t) of the readings
+    ``y`` and the law's parameters ``C``, in the leg states ``ls`` the sample switched to
+    (held: the transitions are the sample's discrete choices). The leg length decides
+    transitions only; the retraction torque's clipping (eqs. 4-5) is differentiated on the
+    side the command is on."""
+    y_t, C_t = tangents
+    if not is_set(C[C_ENABLED]):
+        cmd_t[0] = 0.0
+        cmd_t[1] = 0.0
+        return
+    for leg in range(2):
+        ang = y[SN_ANGLE_B + leg]
+        rate = y[SN_RATE_B + leg]
+        ang_t = y_t[SN_ANGLE_B + leg]
+        rate_t = y_t[SN_RATE_B + leg]
+        st = ls[leg]
+        if st == LS_FLIGHT:
+            kp, kd = C_KPF_B + 2 * leg, C_KDF_B + 2 * leg
+            target = C_TD_B + leg
+        elif st == LS_BRAKE:
+            kp, kd = C_KPB_B + 2 * leg, C_KDB_B + 2 * leg
+            target = C_SW_B + leg
+        else:
+            tau = -C[C_TAU_MAX + leg] + C[C_SLOPE + leg] * rate
+            if tau >= 0.0:
+                cmd_t[leg] = 0.0
+            elif tau < -C[C_TAU_LIMIT + leg]:
+                cmd_t[leg] = -C_t[C_TAU_LIMIT + leg]
+            else:
+                cmd_t[leg] = (
+                    -C_t[C_TAU_MAX + leg] + C_t[C_SLOPE + leg] * rate + C[C_SLOPE + leg] * rate_t
+                )
+            continue
+        cmd_t[leg] = (
+            C_t[kp] * (C[target] - ang)
+            + C[kp] * (C_t[target] - ang_t)
+            - C_t[kd] * rate
+            - C[kd] * rate_t
+        )
+
+
 class BoundingController(Controller):
     """The Table I bounding controller behind the controller protocol
     (:mod:`scoutsim.control.protocol`).

@@ -215,3 +215,46 @@ def test_the_sensors_read_the_motor_or_the_leg_side(motor_side):
         assert y[L.SN_ANGLE_B + leg] == s[q0 + leg]
         assert y[L.SN_RATE_B + leg] == s[L.NQ + q0 + leg]
         assert y[L.SN_LENGTH_B + leg] == s[L.IL_B + leg]
+
+
+def _held_command(y, C, ls, moves):
+    """The commands of bounding_step at readings y and parameters C moved by ``moves``,
+    asserting that the leg states ``ls`` are held (no transition)."""
+    from scoutsim.control import bounding as B
+
+    cmd, lsp, tr = np.zeros(2), ls.copy(), np.zeros(2, dtype=np.int64)
+    B.bounding_step(y + moves[0], C + moves[1], lsp, cmd, tr)
+    assert (lsp == ls).all() and not tr.any()
+    return cmd
+
+
+@pytest.mark.parametrize("state", [L.LS_FLIGHT, L.LS_RETRACTION, L.LS_BRAKE])
+def test_the_laws_derivative_is_the_difference_of_the_law(state):
+    """bounding_step_t (the commands' derivative with the leg states held) equals the
+    central difference of bounding_step along random readings and parameter tangents, in
+    each leg state, on both sides of the retraction torque's clipping (eqs. 4-5)."""
+    from scoutsim.control import bounding as B
+
+    rng = np.random.default_rng(state)
+    C = B.controller_array(ControllerParameters(), RobotParameters())
+    comp = {L.LS_FLIGHT: 0.0, L.LS_RETRACTION: 0.02, L.LS_BRAKE: 0.02}[state]
+    # retraction: clipped at 0 (eq. 5), free, at the current limit (eq. 4)
+    for rate in (-30.0, -7.0, 5.0, 40.0):
+        y = np.zeros(L.NSN)
+        for leg in range(2):
+            y[L.SN_ANGLE_B + leg] = (0.3 if state != L.LS_BRAKE else -0.5) + 0.05 * leg
+            y[L.SN_RATE_B + leg] = rate * (1 + 0.01 * leg)
+            y[L.SN_LENGTH_B + leg] = C[B.C_L0 + leg] - comp
+        y_t = rng.standard_normal(y.size)
+        C_t = rng.standard_normal(C.size) * np.abs(C) * 0.1
+        C_t[B.C_ENABLED] = C_t[B.C_SENSE_ALPHA] = 0.0
+        ls = np.array([state, state], dtype=np.int64)
+        cmd_t = np.zeros(2)
+        B.bounding_step_t(y, C, ls, (y_t, C_t), cmd_t)
+
+        e = 1e-6
+        fd = (
+            _held_command(y, C, ls, (e * y_t, e * C_t))
+            - _held_command(y, C, ls, (-e * y_t, -e * C_t))
+        ) / (2 * e)
+        assert np.allclose(cmd_t, fd, rtol=1e-7, atol=1e-7 * np.abs(fd).max()), (rate, cmd_t, fd)

@@ -44,11 +44,24 @@ from __future__ import annotations
 import numpy as np
 
 from ..._numba.jit import kernel
-from ...control.bounding import bounding_step
+from ...control.bounding import bounding_step, bounding_step_t
 from ...control.compiled import call_controller
 from ..model.evaluate import evaluate_ws, evaluated_state
 from ..model.flags import is_set
-from ..model.layout import CB_ADDRESS, NMF, NMI, NS, P_G, SG_MEASURED, SG_MOTOR_SIDE
+from ..model.layout import (
+    CB_ADDRESS,
+    IALB,
+    IPHB,
+    NMF,
+    NMI,
+    NQ,
+    NS,
+    P_G,
+    SG_MEASURED,
+    SG_MOTOR_SIDE,
+    SN_ANGLE_B,
+    SN_RATE_B,
+)
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
 from .stepper import do_step
@@ -367,6 +380,41 @@ def keep_controller(cmd, cs, ls, pack):
 
 
 @kernel
+def _table_i_sample(s, C, geom, tan):
+    """The held commands' rows of Phi through a sample of the Table I law with ideal
+    sensors, in closed form (:func:`~scoutsim.control.bounding.bounding_step_t`): its
+    readings are the state's hip encoders and leg lengths, its leg states those the sample
+    switched to (the law run again from the snapshot's), its parameters' tangents those of
+    the columns' parameter rows (``tan.dC``)."""
+    Phi, yp, ytr, lsp, cmdp, trp, Ct = tan.Phi, tan.yp, tan.ytr, tan.lsp, tan.cmdp, tan.trp, tan.Cp
+    motor = is_set(geom[SG_MOTOR_SIDE])
+    read_encoders(s, motor, yp)
+    for i in range(2):
+        lsp[i] = tan.ls0[i]
+        cmdp[i] = tan.cmd0[i]
+    bounding_step(yp, C, lsp, cmdp, trp)
+    i0 = IALB if motor else IPHB
+    npar = tan.pscale.shape[0]
+    par0 = Phi.shape[0] - npar
+    for i in range(ytr.shape[0]):
+        ytr[i] = 0.0
+    for j in range(Phi.shape[1]):
+        for leg in range(2):
+            ytr[SN_ANGLE_B + leg] = Phi[X_S + i0 + leg, j]
+            ytr[SN_RATE_B + leg] = Phi[X_S + NQ + i0 + leg, j]
+        for k in range(Ct.shape[0]):
+            Ct[k] = 0.0
+        for i in range(npar):
+            w = Phi[par0 + i, j]
+            if w != 0.0:
+                for k in range(Ct.shape[0]):
+                    Ct[k] += w * tan.dC[i, k]
+        bounding_step_t(yp, C, lsp, (ytr, Ct), tan.cmdt)
+        for leg in range(2):
+            Phi[X_CMD + leg, j] = tan.cmdt[leg]
+
+
+@kernel
 def tangent_sample(t, s, P, mi, mf, builtin, C, geom, ints, params, pack):
     """Phi's rows of the held commands and the controller state := their derivatives
     through the control sample at ``t`` [s] (zero-order hold): the readings of the state
@@ -385,6 +433,9 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, geom, ints, params, pack):
     nc = csp.shape[0]
     if is_set(geom[SG_MEASURED]):
         tan.info[TI_UNSUPPORTED] += 1
+    elif builtin:
+        _table_i_sample(s, C, geom, tan)
+        return
     for j in range(m):
         eps = _column_step(Phi[:, j], tan, Phi.shape[0] - tan.pscale.shape[0])
         if eps == 0.0:

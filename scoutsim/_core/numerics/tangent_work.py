@@ -58,11 +58,12 @@ DIFFERENCE_STEP = 1e-6
 #: ``Kt`` (7 rows per column, NS), the ARK splitting's per column ``Zt`` (``Z_ROWS`` rows
 #: per column), a stage's tangent ``yt`` (NS), a column's tangents of the anchors ``mft``
 #: and the commands ``cmdt``, each column's tangent of the packed parameters ``Pt``
-#: (m x len(P)) and the right-hand side derivative's scratch ``dw``.
+#: (m x len(P)) and the right-hand side derivative's scratch ``dw``; a sample's readings'
+#: tangents ``ytr`` (the Table I law's sample in closed form).
 TangentWork = namedtuple(
     "TangentWork",
     "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
-    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp Kt Zt yt mft cmdt Pt dw",
+    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp Kt Zt yt mft cmdt Pt dw ytr",
 )
 
 #: What a run carries (in ``Carry.tangent`` and ``AdvanceScratch.tan``): ``Phi`` and
@@ -198,6 +199,7 @@ def tangent_work(
         np.zeros(2),
         np.zeros((m, n_P)),
         derivative_workspace(),
+        np.zeros(n_readings),
     )
 
 
@@ -324,6 +326,7 @@ def unpacked(pack):
         _fv(pack, 53),
         _fm(pack, 54),
         _fv(pack, 55),
+        _fv(pack, 56),
     )
 
 
