@@ -213,10 +213,11 @@ def bounding_step_t(y, C, ls, tangents, cmd_t):
             kp, kd = C_KPB_B + 2 * leg, C_KDB_B + 2 * leg
             target = C_SW_B + leg
         else:
-            tau = -C[C_TAU_MAX + leg] + C[C_SLOPE + leg] * rate
-            if tau >= 0.0:
+            # (the clipping's side from the clipped value: 0 or the limit exactly)
+            tau = retraction_torque(rate, leg, C)
+            if tau == 0.0:
                 cmd_t[leg] = 0.0
-            elif tau < -C[C_TAU_LIMIT + leg]:
+            elif tau == -C[C_TAU_LIMIT + leg]:
                 cmd_t[leg] = -C_t[C_TAU_LIMIT + leg]
             else:
                 cmd_t[leg] = (

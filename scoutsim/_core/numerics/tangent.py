@@ -13,8 +13,7 @@ trajectory, not of a neighbouring one integrated with other steps:
 
 - a step from ``s`` of size ``h``: y -> proj(step(y; h)) with the splitting matrix of the
   nominal step, stage by stage with the right-hand side's derivative in closed form
-  (:mod:`.tangent_flow`); :func:`flow_by_differences` is the same map by central
-  differences of the compiled step along each column (the check of the closed form);
+  (:mod:`.tangent_flow`);
 - a plant event at ``t_e`` (:func:`tangent_reset` with the event slot): the saltation
   matrix S = DR + (f+ - DR f-) n^T / (n^T f-) (docs/explanation/derivatives.md), with DR
   the derivative of the transition and the settling after it, n the gradient of the event
@@ -64,7 +63,6 @@ from ..model.layout import (
 )
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
-from .stepper import do_step
 from .tangent_flow import projection_derivative
 from .tangent_work import (
     TI_EVENTS,
@@ -79,7 +77,7 @@ from .tangent_work import (
     unpacked,
 )
 from .transitions import apply_event, settle_ws
-from .work import EventLog, StepWork
+from .work import EventLog
 
 
 @kernel(inline="always")
@@ -162,47 +160,6 @@ def _central(out, row, j, values, side, eps):
             out[row + i, j] = values[i]
         else:
             out[row + i, j] = (out[row + i, j] - values[i]) / (2.0 * eps)
-
-
-@kernel
-def flow_by_differences(method, s, h, P, mi, mf, cmd, SF0, pack):
-    """Phi := D[proj(step(.; h))] Phi over the step of size ``h`` [s] the run has just
-    taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``, ARK splitting
-    factors ``SF0``): the rows of s; the anchors, commands and controller state are
-    constant along the flow."""
-    tan = unpacked(pack)
-    Phi, out, own = tan.Phi, tan.out, tan.work
-    sp, mfp, cmdp = tan.sp, tan.mfp, tan.cmdp
-    m = Phi.shape[1]
-    # the perturbed steps read the run's splitting factors where they are (a step reads
-    # SF0 and, with want_sf off, leaves SF1 alone): no copy is needed. (A copy into the
-    # work's own SF0 was once removed by Numba's dead-code elimination, which lost writes
-    # into arrays of tuples made in the function, and the ARK steps ran with a zero
-    # splitting; scoutsim._numba.compile_steps._alias_analysis corrects that analysis, and
-    # tests/_core/numerics/test_tangent.py checks ARK3 against differences of runs.)
-    tw = StepWork(
-        own.K, own.y_new, own.aux_new, own.tmp, own.ew, SF0, own.SF1, own.Z, own.rtol,
-        own.atol, own.energy,
-    )  # fmt: skip
-    for j in range(m):
-        eps = _column_step(Phi[:, j], tan, X_CS)
-        if eps == 0.0:
-            for i in range(NS):
-                out[X_S + i, j] = 0.0
-            continue
-        for side in range(2):
-            e = eps if side == 0 else -eps
-            _moved_state(e, Phi[:, j], s, mf, tan)
-            _moved_commands(e, Phi[:, j], cmd, tan)
-            _moved_parameters(e, Phi[:, j], P, tan)
-            Pq = tan.Pp
-            evaluate_ws(sp, Pq, mi, mfp, cmdp, tw.K[0], tw.aux_new, tw.ew, False, tw.ew[3], False)
-            do_step(method, sp, h, Pq, mi, mfp, cmdp, tw, True, False)
-            evaluated_state(tw.ew, tw.y_new)
-            _central(out, X_S, j, tw.y_new[:NS], side, eps)
-    for j in range(m):
-        for i in range(NS):
-            Phi[X_S + i, j] = out[X_S + i, j]
 
 
 @kernel

@@ -1,7 +1,7 @@
 """The run's calls into the carried sensitivities (:mod:`.tangent`), by address.
 
 The integrator and the control loop call the sensitivities at every step, event, sample and
-projection of a run that carries them. Called directly, their code (perturbed steps,
+projection of a run that carries them. Called directly, their code (the steps' stages,
 transitions, the controller: much of the simulator again) would be compiled into the run
 loop, and every run would pay for it, in compile time, whether it carries derivatives or
 not (Numba links a callee's code into each caller and optimizes it there again: the first

@@ -47,7 +47,7 @@ DIFFERENCE_STEP = 1e-6
 
 #: What the sensitivities work on: ``Phi`` (NX x m, the derivatives), ``out`` (NX x
 #: (m + 1) scratch: the columns being built), ``work`` (a ``StepWork`` of its own: the
-#: perturbed steps), the snapshot of the state before a reset (``s0``, ``mf0``, ``mi0``,
+#: flow's stages, evaluated again, and the perturbed copies' evaluations), the snapshot of the state before a reset (``s0``, ``mf0``, ``mi0``,
 #: ``f0`` its vector field; ``cmd0``, ``cs0``, ``ls0`` before a control sample), the
 #: perturbed copies (``sp``, ``mfp``, ``mip``, ``auxp``, ``cmdp``, ``csp``, ``lsp``,
 #: ``trp``, ``yp``, ``ep``, ``ds``), a scratch event log (``ev``, ``stats``, ``imp``), the
