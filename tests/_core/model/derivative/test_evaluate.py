@@ -19,15 +19,8 @@ from scoutsim._core.model.packing import robot_array
 from scoutsim._core.numerics.dopri5 import eval_workspace
 
 from ...sample_modes import sample_modes
+from ..test_evaluate import EFFECTS
 
-EFFECTS = dict(
-    belt_backlash=math.radians(0.5),
-    leg_friction_force=6.0,
-    leg_friction_side_load_coefficient=0.05,
-    leg_damping_angle_coefficient=0.5 / math.radians(30.0) ** 2,
-    gearbox_idle_loss_torque=0.3,
-    gearbox_load_loss_coefficient=0.05,
-)
 ROBOTS = {
     "default": RobotParameters(),
     "effects and battery": RobotParameters(battery_resistance=0.1, **EFFECTS),
