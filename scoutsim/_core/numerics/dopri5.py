@@ -74,6 +74,20 @@ PD = np.array(
 )
 
 
+@kernel(inline="always")
+def stage_state(st, y, h, K, out):
+    """The state of stage ``st`` into ``out``: y + h sum_j A[st, j] K[j] over the earlier
+    stages. Linear in (y, K): the flow's derivative applies it to their tangents
+    (:mod:`.tangent_flow`)."""
+    for i in range(NS):
+        acc = y[i]
+        for j in range(st):
+            a = A[st, j]
+            if a != 0.0:
+                acc += h * a * K[j, i]
+        out[i] = acc
+
+
 @kernel
 def step(y, h, P, mi, mf, cmd, w):
     """One Dormand-Prince step of size h from y, with w.K[0] = f(y) already filled, on the
@@ -90,13 +104,7 @@ def step(y, h, P, mi, mf, cmd, w):
         begin_step(A[6, 0], en)
     ok = True
     for st in range(1, 7):
-        for i in range(NS):
-            acc = y[i]
-            for j in range(st):
-                a = A[st, j]
-                if a != 0.0:
-                    acc += h * a * K[j, i]
-            tmp[i] = acc
+        stage_state(st, y, h, K, tmp)
         if st == 6:
             for i in range(NS):
                 y_new[i] = tmp[i]

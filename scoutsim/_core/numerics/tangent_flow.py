@@ -25,8 +25,7 @@ from ..model.derivative.kinematics import TR_CGB, TR_CGF, TR_CTH, TR_SGB, TR_SGF
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project
 from ..model.layout import IL_B, NMF, NQ, NS
-from . import ark
-from .dopri5 import A as DOPRI5_A
+from . import ark, dopri5
 from .tangent_work import X_CMD, X_MF, X_S, unpacked
 
 
@@ -95,23 +94,11 @@ def flow_dopri5(s, h, P, mi, mf, cmd, pack):
     m = Phi.shape[1]
     parameter_tangents(tan)
     for st in range(7):
-        for i in range(NS):
-            acc = s[i]
-            for k in range(st):
-                a = DOPRI5_A[st, k]
-                if a != 0.0:
-                    acc += h * a * K[k, i]
-            y[i] = acc
+        dopri5.stage_state(st, s, h, K, y)
         evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
         for j in range(m):
             _column(j, tan, y0)
-            for i in range(NS):
-                acc = y0[i]
-                for k in range(st):
-                    a = DOPRI5_A[st, k]
-                    if a != 0.0:
-                        acc += h * a * Kt[7 * j + k, i]
-                yt[i] = acc
+            dopri5.stage_state(st, y0, h, Kt[7 * j : 7 * j + 7], yt)
             if st < 6:
                 evaluate_t(
                     P, mi, cmd, ew, tan.dw, (yt, tan.mft, tan.cmdt, tan.Pt[j]), Kt[7 * j + st]

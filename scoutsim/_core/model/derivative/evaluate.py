@@ -148,16 +148,13 @@ def evaluate_t(P, mi, cmd, ew, dw, tangents, ds_t):
     ddq = dw[DW_DDQ : DW_DDQ + NQ]
     gr = dw[DW_GR : DW_GR + MAX_ROWS]
     for i in range(NQ):
-        q_t[i] = s_t[i]
-        dq_t[i] = s_t[NQ + i]
         g[i] = 0.0
         ddq[i] = b[i] if (ok and i < nact) else 0.0
     for rr in range(nr):
         gr[rr] = 0.0  # constant rows (a stuck joint's, a massless leg's, the clamps')
-    l_t[0] = s_t[IL_B]
-    l_t[1] = s_t[IL_B + 1]
+    # the projected state's tangents into q_t, dq_t, l_t and tr_t (ds_t is filled below)
     _trig_of(meta, tr)
-    project_t(q, dq, l, P, mi, tr, (q_t, dq_t, l_t, mf_t, P_t, tr_t))
+    projected_t(q, dq, l, P, mi, dw, (s_t, mf_t, P_t), ds_t)
 
     # rigid bodies: Q_t - h_t - M_t ddq
     add_gravity_t(g, P, tr, tr_t, P_t)
