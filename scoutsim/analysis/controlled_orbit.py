@@ -44,18 +44,42 @@ __all__ = [
     "stride_jacobian",
     "JACOBIAN_METHODS",
     "likely_strides",
+    "map_noise",
+    "NewtonError",
+    "NOISE_MULTIPLE",
 ]
 
 
 #: how a stride map's Jacobian can be obtained (NewtonSettings.jacobian)
 JACOBIAN_METHODS = ("exact", "fd")
+#: a Newton that stops above its tolerance is accepted if its residual is within this many
+#: times the map's rounding noise there (:func:`map_noise`)
+NOISE_MULTIPLE = 10.0
+#: perturbations probed by :func:`map_noise`, and their size relative to max(1, |z_j|)
+NOISE_PROBES = 3
+NOISE_STEP = 1e-12
+
+
+class NewtonError(MapError):
+    """Newton found no fixed point: ``residual`` is the smallest max|P(z) - z| it reached
+    (SI units of each coordinate), ``noise`` the map's rounding noise measured there."""
+
+    def __init__(self, message: str, residual: float, noise: float = math.nan):
+        super().__init__(message)
+        self.residual = residual
+        self.noise = noise
 
 
 @dataclass(frozen=True)
 class NewtonSettings:
     """How :func:`controlled_fixed_point` runs Newton's method.
 
-    tol : target residual max|P(z) - z| (SI units of each coordinate).
+    tol : target residual max|P(z) - z| (SI units of each coordinate). Where Newton stops
+        above it (no step reduces the residual, or ``max_iter`` reached), the map's own
+        rounding noise at that point is measured (:func:`map_noise`) and the orbit accepted
+        if the residual is within ``NOISE_MULTIPLE`` times it: a cycle of many strides
+        integrated for seconds carries more rounding than ``tol`` (the residual and the
+        noise are reported).
     max_iter : Newton iterations at most.
     jacobian_step : relative step of the difference Jacobian (times max(1, |z_j|)).
     jacobian : how dP/dz is obtained: "exact" (carried with the run, internal
@@ -109,6 +133,10 @@ class ControlledOrbit:
     #: how ``jacobian`` was obtained: "exact" (carried with the run) or "fd" (differences:
     #: asked for, or where the carried one does not exist, :func:`stride_jacobian`)
     jacobian_method: str = "fd"
+    #: the map's rounding noise at the orbit (:func:`map_noise`, SI units of each
+    #: coordinate), measured where Newton stopped above its tolerance and the orbit was
+    #: accepted within NOISE_MULTIPLE times it; NaN where Newton met its tolerance
+    residual_noise: float = math.nan
 
     @property
     def stable(self) -> bool:
@@ -126,6 +154,7 @@ class ControlledOrbit:
             "period_s": self.period,
             "mean_speed_m_s": self.mean_speed,
             "residual": self.residual,
+            "residual_noise": self.residual_noise,
             "eigenvalues": [[float(m.real), float(m.imag)] for m in self.multipliers],
             "spectral_radius": float(np.max(np.abs(self.multipliers))),
             "stable": self.stable,
@@ -228,11 +257,14 @@ def controlled_fixed_point(
         f"{', '.join(map(str, ks))} stride(s) per period"
     )
     failures = []
+    reached = math.inf
     for k in ks:
         try:
             orbit = _newton(m, start, k, tol, max_iter, how, say, common, integ)
         except MapError as exc:
             failures.append(f"{k} stride(s): {exc}")
+            if isinstance(exc, NewtonError):
+                reached = min(reached, exc.residual)
             continue
         for d in (d for d in range(1, k) if k % d == 0):
             # the fixed point of the k-th iterate may be one of a shorter period
@@ -243,12 +275,16 @@ def controlled_fixed_point(
         return orbit
     closest = min(recurrence, key=lambda k: (recurrence[k], k))
     d = recurrence[closest]
-    verdict = (
-        "the gait does not repeat within "
-        f"{MAX_STRIDES_PER_PERIOD} strides (quasi-periodic, or still settling)"
-        if d > _REPEATS * tol
-        else "the gait repeats, but Newton did not reach its tolerance"
-    )
+    if min(d, reached) <= _REPEATS * tol:
+        verdict = (
+            "the gait repeats, but Newton did not reach its tolerance "
+            f"(smallest residual {min(reached, d):.2g})"
+        )
+    else:
+        verdict = (
+            f"the gait does not repeat within {MAX_STRIDES_PER_PERIOD} strides "
+            "(quasi-periodic, or still settling)"
+        )
     raise MapError(
         "no periodic orbit from this start (settled stride lengths in control periods "
         f"{lengths}; the section states come closest to repeating every {closest} "
@@ -269,6 +305,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
     J = None
     used = how[0]
     it = 0
+    stalled = ""
     for it in range(max_iter + 1):
         _same_modes(disc, c.state)
         F = z1 - z
@@ -279,14 +316,31 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
             break
         J, used = stride_jacobian(m, z, like, c, how, strides)
         dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
-        z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
-    if hist[-1] >= tol:
-        raise MapError(
-            f"Newton did not converge: residual {hist[-1]:.2e} after {it} "
-            f"iterations (history {[f'{v:.1e}' for v in hist]})"
-        )
-    if J is None or it > 0:
+        try:
+            z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
+        except NewtonError as exc:
+            stalled = str(exc)
+            break
+    if J is None or (it > 0 and not stalled):
         J, used = stride_jacobian(m, z, like, c, how, strides)
+    noise = math.nan
+    if hist[-1] >= tol:
+        noise = map_noise(m, z, like, c, J, strides)
+        why = stalled or (
+            f"Newton did not converge: residual {hist[-1]:.2e} after {it} iterations "
+            f"(history {[f'{v:.1e}' for v in hist]})"
+        )
+        if not hist[-1] <= NOISE_MULTIPLE * noise:
+            raise NewtonError(
+                f"{why}; the map's own rounding noise here is {noise:.1e}",
+                min(hist),
+                noise,
+            )
+        say(
+            f"Newton stopped at residual {hist[-1]:.2e} above its tolerance {tol:.0e}, "
+            f"within {NOISE_MULTIPLE:g} x the map's own rounding noise there "
+            f"({noise:.1e}): the orbit is found as closely as the map can tell"
+        )
     hs = m.hs_of(z, like)
     T = c.period_s
     r = simulate(
@@ -323,6 +377,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
         section_label=m.section_label,
         setting=dict(common, integrator=integ, section=m.section),
         jacobian_method=used,
+        residual_noise=noise,
     )
 
 
@@ -466,8 +521,37 @@ def _globalised_step(m: StrideMap, z, dz, like, res: float, disc: dict, hist: li
         except MapError as exc:
             why = str(exc)
         lam *= 0.5
-    raise MapError(
+    raise NewtonError(
         f"Newton stalled: no step along the Newton direction (down to 1/32 of it) reduces "
         f"the residual {res:.2e} (the last: {why}; history "
-        f"{[f'{v:.1e}' for v in hist]})"
+        f"{[f'{v:.1e}' for v in hist]})",
+        min(hist),
     )
+
+
+def map_noise(m: StrideMap, z, like, base: Crossing, J, strides: int) -> float:
+    """The rounding noise of the residual F(z) = P(z) - z at ``z`` (whose stride is
+    ``base``, Jacobian ``J``): the largest |F(z + d) - F(z) - (J - I) d| over NOISE_PROBES
+    perturbations d of NOISE_STEP max(1, |z_j|) with signs fixed in advance (so the
+    measurement is deterministic). The linear part is removed, so what is left is what the
+    integration's rounding over the ``strides`` strides does to the map; a perturbation
+    that leaves the stride's cell is not counted. NaN if none stays in it."""
+    assert base.start is not None, "a crossing from a HybridState keeps its start"
+    z0 = m.z_of(base.start)
+    F0 = m.z_of(base.state) - z0
+    signs = np.where(np.random.default_rng(20261130).random((NOISE_PROBES, z.size)) < 0.5, -1, 1)
+    A = J - np.eye(z.size)
+    worst = math.nan
+    for s in signs:
+        d = s * NOISE_STEP * np.maximum(1.0, np.abs(z))
+        try:
+            c = m.crossing(m.hs_of(z + d, like), strides=strides)
+        except MapError:
+            continue
+        if cell_change(base, c):
+            continue
+        assert c.start is not None, "a crossing from a HybridState keeps its start"
+        zp = m.z_of(c.start)
+        e = float(np.max(np.abs(m.z_of(c.state) - zp - F0 - A @ (zp - z0))))
+        worst = e if math.isnan(worst) else max(worst, e)
+    return worst

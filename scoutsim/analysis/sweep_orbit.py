@@ -13,7 +13,8 @@ import numpy as np
 #: last strides, :func:`scoutsim.analysis.controlled_orbit.controlled_fixed_point`): its
 #: period [s] and strides per period (a cycle of several strides), spectral radius of the
 #: period's map and its k-th root, the contraction per stride (comparable between cycles
-#: of different lengths), stability, residual, and "ok" or why there is none
+#: of different lengths), stability, residual (and the map's rounding noise where Newton
+#: stopped above its tolerance within it, else NaN), and "ok" or why there is none
 ORBIT_COLUMNS = (
     "orbit_period_s",
     "orbit_strides",
@@ -21,6 +22,7 @@ ORBIT_COLUMNS = (
     "orbit_spectral_radius_per_stride",
     "orbit_stable",
     "orbit_residual",
+    "orbit_residual_noise",
     "orbit_status",
 )
 #: integrator and tolerance of the per-point orbit (looser than the single-orbit default,
@@ -56,6 +58,7 @@ def orbit_columns(result, robot, ctrl, task) -> dict:
             orbit_period_s=o.period,
             orbit_strides=o.strides,
             orbit_residual=o.residual,
+            orbit_residual_noise=o.residual_noise,
             orbit_spectral_radius=rho,
             orbit_spectral_radius_per_stride=rho ** (1.0 / o.strides),
             orbit_stable=o.stable,

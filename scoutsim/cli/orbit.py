@@ -295,6 +295,8 @@ def _print_passive(args, orb, d) -> None:
 def _print_controlled(args, orb, d) -> None:
     import numpy as np
 
+    from ..analysis.controlled_orbit import NOISE_MULTIPLE
+
     law = controller_label(args.controller)
     print(
         f"scoutsim orbit: model {args.model}, {law} controller, mu = "
@@ -324,6 +326,12 @@ def _print_controlled(args, orb, d) -> None:
     print(
         f"  residual max|P(z)-z|          {d['residual']:.2e} after {d['iterations']} "
         "Newton iterations"
+        + (
+            ""
+            if math.isnan(orb.residual_noise)
+            else f" (above the tolerance, within {NOISE_MULTIPLE:g} x the map's own "
+            f"rounding noise {orb.residual_noise:.1e}: accepted)"
+        )
     )
 
 

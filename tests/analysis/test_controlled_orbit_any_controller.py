@@ -16,7 +16,13 @@ import numpy as np
 import pytest
 
 import scoutsim
-from scoutsim.analysis.controlled_orbit import NewtonSettings, controlled_fixed_point
+from scoutsim.analysis.controlled_orbit import (
+    NOISE_MULTIPLE,
+    NewtonError,
+    NewtonSettings,
+    controlled_fixed_point,
+    map_noise,
+)
 from scoutsim.analysis.poincare import MapError
 from scoutsim.analysis.stride_map import StrideMap
 from scoutsim.cli import main
@@ -129,6 +135,53 @@ def test_the_orbit_does_not_depend_on_the_section(table_i):
         StrideMap(controller=PitchFeedbackController(), section="controller")
 
 
+def test_a_newton_stopped_by_the_maps_own_noise_finds_the_orbit(table_i):
+    """A tolerance below what the map can resolve (1e-15 on a stride integrated at rtol
+    1e-11): Newton cannot meet it, and the orbit is accepted because its residual is
+    within NOISE_MULTIPLE times the map's rounding noise, measured at the point and
+    reported. The noise is what it says: the map's residual moves by about that much
+    under perturbations of the start far below it, once their linear effect is removed
+    (checked here along perturbations map_noise does not use); and the orbit is the one
+    found at the ordinary tolerance."""
+    o = controlled_fixed_point(
+        table_i.state, strides=1, section="plant", newton=NewtonSettings(tol=1e-15)
+    )
+    assert o.residual >= 1e-15 and o.residual <= NOISE_MULTIPLE * o.residual_noise
+    assert 1e-14 < o.residual_noise < 1e-10
+    assert np.max(np.abs(o.z - table_i.z)) < 1e-9
+    assert o.to_dict()["residual_noise"] == o.residual_noise
+    m = StrideMap(section="plant", integrator=IntegratorSettings(rtol=1e-11, atol=1e-12))
+    base = m.crossing(o.state)
+    F0 = m.z_of(base.state) - o.z
+    A = o.jacobian - np.eye(o.z.size)
+    rng = np.random.default_rng(7)
+    moved = []
+    for _ in range(4):
+        d = rng.uniform(-1.0, 1.0, o.z.size) * 1e-12 * np.maximum(1.0, np.abs(o.z))
+        c = m.crossing(m.hs_of(o.z + d, o.state))
+        z0 = m.z_of(c.start)
+        moved.append(np.max(np.abs(m.z_of(c.state) - z0 - F0 - A @ (z0 - o.z))))
+    assert max(moved) < 30.0 * o.residual_noise
+    assert map_noise(m, o.z, o.state, base, o.jacobian, 1) == pytest.approx(o.residual_noise)
+
+
+def test_a_newton_that_stalls_above_the_noise_is_reported_with_both(table_i, monkeypatch):
+    """A stall far above the map's noise is not accepted: the error carries the
+    smallest residual reached and the noise measured there."""
+    import scoutsim.analysis.controlled_orbit as C
+
+    def stall(m, z, dz, like, res, disc, hist, strides):
+        raise NewtonError(f"Newton stalled at {res:.1e}", min(hist))
+
+    monkeypatch.setattr(C, "_globalised_step", stall)
+    m = StrideMap(section="plant")
+    off = m.crossing(table_i.state).state  # one stride on: off the orbit by rounding only
+    start = m.hs_of(m.z_of(off) + 1e-4, off)
+    with pytest.raises(NewtonError, match="rounding noise here") as info:
+        controlled_fixed_point(start, strides=1, section="plant")
+    assert info.value.residual > 1e-6 and info.value.noise < 1e-9
+
+
 def test_a_python_controller_without_state_is_refused_by_name(capsys):
     with pytest.raises(ControllerStateError, match="get_state"):
         controlled_fixed_point(controller=Stateless(), settle_duration=2.0)
@@ -195,4 +248,14 @@ def test_a_gait_without_a_cycle_is_reported_with_its_closest_recurrence(monkeypa
     with pytest.raises(MapError, match="closest to repeating every 5 stride.s., within 0.012"):
         controlled_fixed_point(start)
     with pytest.raises(MapError, match="does not repeat within 16 strides"):
+        controlled_fixed_point(start)
+
+    # a Newton that got close says so: the gait repeats, it is not "still settling"
+    # (a per-leg robot's 14-stride cycle: the settled states repeat only to 3.7e-5, and
+    # Newton reached 1.6e-10)
+    def close(m, start, k, *args):
+        raise NewtonError(f"Newton stalled for {k}", 1.6e-10 if k == 1 else 1e-3)
+
+    monkeypatch.setattr(C, "_newton", close)
+    with pytest.raises(MapError, match=r"repeats, but Newton .*smallest residual 1.6e-10"):
         controlled_fixed_point(start)

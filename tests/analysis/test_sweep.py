@@ -127,7 +127,10 @@ def test_orbit_columns_give_the_stability_of_each_bounding_point(tmp_path):
     res = sweep(pts, duration=6.0, workers=1, out=tmp_path, orbit=True)
     bound, fell = res.rows
     assert bound["steady_bounding"] and bound["orbit_status"] == "ok"
-    assert bound["orbit_residual"] < 1e-7
+    assert (
+        bound["orbit_residual"] < 1e-7
+        or bound["orbit_residual"] <= 10 * bound["orbit_residual_noise"]
+    )
     # the orbit's period is a whole number of control periods, near the run's strides
     assert bound["orbit_period_s"] * 1000 == pytest.approx(round(bound["orbit_period_s"] * 1000))
     assert bound["orbit_period_s"] / bound["orbit_strides"] == pytest.approx(

