@@ -36,6 +36,7 @@ import numpy as np
 from ..control.pitch_feedback import PitchFeedbackController
 from ..parameters import ControllerParameters, RobotParameters
 from ..parameters.robot_fields import leg_names_where_legs_differ, robot_value, robot_with_value
+from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import HybridState
 from .controlled_orbit import ControlledOrbit, cell_change, stride_jacobian
@@ -48,6 +49,7 @@ __all__ = [
     "orbit_metrics",
     "orbit_sensitivities",
     "parameter_value",
+    "radius_integrator",
     "sensitivity_parameter_names",
     "setting_with",
 ]
@@ -71,12 +73,18 @@ FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
 #: the smallest change of the spectral radius its derivative is taken over (a difference
-#: of two Jacobians of the map). The carried Jacobian has a noise floor, the rounding of
-#: the central differences its events and samples still take: on the default Model II
-#: orbit, perturbations of the state of 1e-13 to 1e-9 move it by about 1e-7 of its scale
-#: and its dominant multiplier by 1e-9 to 3e-8 (docs/explanation/derivatives.md); a
-#: change of the radius a hundred times that is resolved
-RADIUS_RESOLUTION = 1e-6
+#: of two Jacobians of the map). The carried Jacobian's error depends on the integration's
+#: steps, which change with the parameter, so the radius of the map's Jacobian is noisy
+#: in the parameter: on the default Model II orbit about 3.5e-7 at rtol 1e-11 and 4e-8 to
+#: 1.5e-7 at rtol 1e-13 (docs/explanation/derivatives.md); the radius's ends are
+#: therefore taken at tolerances RADIUS_TOLERANCE_FACTOR times the orbit's
+#: (:func:`radius_integrator`), and over a step that moves the radius by at least a
+#: thousand times that noise
+RADIUS_RESOLUTION = 1e-4
+#: the spectral radius's ends are integrated at this times the orbit's tolerances, down
+#: to RADIUS_RTOL_FLOOR (DOPRI5 in double precision: tighter gains nothing)
+RADIUS_TOLERANCE_FACTOR = 1e-2
+RADIUS_RTOL_FLOOR = 1e-13
 #: the parameter steps tried for the spectral radius's derivative, in units of the
 #: metrics' step
 RADIUS_STEPS = (1.0, 10.0, 30.0)
@@ -265,7 +273,7 @@ def orbit_sensitivities(
     "all": every one), by the implicit function theorem (module docstring) with steps
     ``relative_step`` |p| (a forward step of :data:`ZERO_STEP` for a parameter at 0).
     ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
-    (the orbit's method) at two ends; the step is the first of :data:`RADIUS_STEPS` x
+    (the orbit's method, at tolerances :func:`radius_integrator`) at two ends; the step is the first of :data:`RADIUS_STEPS` x
     ``h`` over which the radius moves by at least :data:`RADIUS_RESOLUTION` (or the last
     that stays in the orbit's sample-phase cell): the carried Jacobian has a noise floor,
     see :data:`RADIUS_RESOLUTION`. ``progress``: optional callable(str). Returns
@@ -324,9 +332,14 @@ def orbit_sensitivities(
 def _radius_ends(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
     """(step, the spectral radius at each end) for the radius's derivative: the first step
     of RADIUS_STEPS x ``h`` over which the radius moves by RADIUS_RESOLUTION, or the
-    largest that stays in the orbit's cell."""
+    largest that stays in the orbit's cell. A step whose change, extrapolated linearly from
+    the last one tried, would fall short is skipped (unless it is the last)."""
     found = None
     for factor in RADIUS_STEPS:
+        if found is not None and factor != RADIUS_STEPS[-1]:
+            moved = abs(found[1][0] - found[1][1]) * factor * h / found[0]
+            if moved < RADIUS_RESOLUTION:
+                continue
         try:
             radii = _radii(orbit, base, base_map, name, factor * h, signs)
         except MapError:
@@ -340,21 +353,49 @@ def _radius_ends(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h
     return found
 
 
+def radius_integrator(integrator: IntegratorSettings) -> IntegratorSettings:
+    """The integrator of the spectral radius's ends: ``integrator`` with its tolerances
+    RADIUS_TOLERANCE_FACTOR times as tight (rtol not below RADIUS_RTOL_FLOOR; unset
+    tolerances stay the method's defaults)."""
+    rtol, atol = integrator.rtol, integrator.atol
+    if rtol is None or atol is None:
+        return integrator
+    tight = max(rtol * RADIUS_TOLERANCE_FACTOR, RADIUS_RTOL_FLOOR)
+    return dataclasses.replace(integrator, rtol=tight, atol=atol * tight / rtol)
+
+
 def _radii(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
-    """The spectral radius of the stride map's Jacobian (the orbit's method) at the orbit
-    moved to parameter ``name`` + sign ``h`` along dz*/dp, for each sign of ``signs``."""
+    """The spectral radius of the stride map's Jacobian (the orbit's method, integrated
+    with :func:`radius_integrator`) at the orbit moved to parameter ``name`` + sign ``h``
+    along dz*/dp, for each sign of ``signs`` (and at the orbit, for a forward step)."""
     ends, dz = _tangent(orbit, base, base_map, name, h, signs)
-    k, like = orbit.strides, orbit.state
-    out = []
-    for _, m, _, sign in ends:
-        c = m.crossing(m.hs_of(orbit.z + sign * h * dz, like), strides=k)
-        assert c.start is not None, "a crossing from a HybridState keeps its start"
-        how = (orbit.jacobian_method, 1e-6)
-        J, _ = stride_jacobian(m, m.z_of(c.start), c.start, c, how, k)
-        out.append(float(np.max(np.abs(np.linalg.eigvals(J)))))
+    tight = radius_integrator(orbit.setting["integrator"])
+    out = [_radius_at(orbit, s_p, orbit.z + sign * h * dz, tight) for s_p, _, _, sign in ends]
     if len(signs) == 1:
-        out.append(float(np.max(np.abs(orbit.multipliers))))
+        out.append(_radius_at(orbit, orbit.setting, orbit.z, tight))
     return out
+
+
+def _radius_at(orbit: ControlledOrbit, setting: dict, z, integrator) -> float:
+    """The spectral radius of the Jacobian of the stride map of ``setting`` (integrated
+    with ``integrator``) at its fixed point near the section state ``z`` of ``orbit``:
+    ``z`` (the orbit moved along dz*/dp) corrected by one Newton step, which removes the
+    predictor's second-order error (the radius is curved in the state: without it the
+    derivative over the friction's step was off by 1e-2)."""
+    k, like = orbit.strides, orbit.state
+    assert isinstance(like, HybridState), "an orbit's state is a HybridState"
+    how = (orbit.jacobian_method, 1e-6)
+    m = StrideMap(integrator=integrator, section=setting["section"], **_common(setting))
+    c = m.crossing(m.hs_of(z, like), strides=k)
+    assert c.start is not None, "a crossing from a HybridState keeps its start"
+    z0 = m.z_of(c.start)
+    J, _ = stride_jacobian(m, z0, c.start, c, how, k)
+    step = np.linalg.lstsq(J - np.eye(z0.size), z0 - m.z_of(c.state), rcond=1e-12)[0]
+    c1 = m.crossing(m.hs_of(z0 + step, like), strides=k)
+    if not cell_change(c, c1):
+        assert c1.start is not None, "a crossing from a HybridState keeps its start"
+        J, _ = stride_jacobian(m, m.z_of(c1.start), c1.start, c1, how, k)
+    return float(np.max(np.abs(np.linalg.eigvals(J))))
 
 
 def _tangent(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):

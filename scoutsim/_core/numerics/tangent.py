@@ -13,7 +13,9 @@ trajectory, not of a neighbouring one integrated with other steps:
 
 - a step from ``s`` of size ``h``: y -> proj(step(y; h)) with the splitting matrix of the
   nominal step, stage by stage with the right-hand side's derivative in closed form
-  (:mod:`.tangent_flow`);
+  (:mod:`.tangent_flow`); a Dormand-Prince step across which a motor current meets or
+  leaves the torque-speed line is differentiated over sub-steps split at that kink (the
+  flow's derivative along the computed trajectory);
 - a plant event at ``t_e`` (:func:`tangent_reset` with the event slot): the saltation
   matrix S = DR + (f+ - DR f-) n^T / (n^T f-) (docs/explanation/derivatives.md), with DR
   the derivative of the transition and the settling after it, n the gradient of the event

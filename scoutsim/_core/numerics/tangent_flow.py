@@ -14,13 +14,21 @@ solve with the factors of the stage's evaluation), and the step's end projected
 (:func:`~scoutsim._core.model.derivative.evaluate.projection_t`). The stages are evaluated
 again here (the run's step keeps only their derivatives), with the step's own size, modes,
 anchors, commands and splitting: the derivative is that of the computed step, exact up to
-rounding, with no difference step.
+rounding, with no difference step. Where a Dormand-Prince step contains a kink of the
+amplifier's law (:func:`flow_dopri5`), it is split there for the derivative, which is then
+the flow's along the computed trajectory.
 """
 
 from __future__ import annotations
 
 from ..._numba.jit import kernel
-from ..model.derivative.evaluate import DW_TR, evaluate_t, projected_t, projection_t
+from ..model.derivative.evaluate import (
+    DW_TR,
+    current_branches,
+    evaluate_t,
+    projected_t,
+    projection_t,
+)
 from ..model.derivative.kinematics import TR_CGB, TR_CGF, TR_CTH, TR_SGB, TR_SGF, TR_STH
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project
@@ -84,18 +92,34 @@ def projection_derivative(s, P, mi, mf, tan):
             Phi[X_S + i, j] = out[i]
 
 
-@kernel
-def flow_dopri5(s, h, P, mi, mf, cmd, pack):
-    """Phi := D[proj(step(.; h))] Phi over the Dormand-Prince step of size ``h`` [s] the
-    run has just taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``)."""
-    tan = unpacked(pack)
+#: the most kinks of the amplifier's law one step's derivative is split at (more are
+#: differentiated as the computed step)
+MAX_KINK_SPLITS = 4
+#: bisections locating a kink inside a step (its time to 2^-KINK_BISECTIONS of the step)
+KINK_BISECTIONS = 36
+
+
+@kernel(inline="always")
+def _dopri5_pass(s, h, plant, tan, force):
+    """The derivative of the Dormand-Prince step of size ``h`` [s] from ``s`` (``plant`` =
+    (P, mi, mf, cmd)), stage by stage: Phi := it (the stages' tangents in ``tan.Kt``), if
+    ``force`` or the motor currents' branches at the step's start and end agree. The
+    step's end state is left in ``tan.work.tmp``. Returns True if Phi was written."""
+    P, mi, mf, cmd = plant
     Phi, own, Kt, yt, y0 = tan.Phi, tan.work, tan.Kt, tan.yt, tan.w
     K, y, ew = own.K, own.tmp, own.ew
     m = Phi.shape[1]
-    parameter_tangents(tan)
+    start = 0
+    end = 0
     for st in range(7):
         dopri5.stage_state(st, s, h, K, y)
         evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
+        if st == 0:
+            start = current_branches(P, cmd, ew)
+        elif st == 6:
+            end = current_branches(P, cmd, ew)
+            if end != start and not force:
+                return False
         for j in range(m):
             _column(j, tan, y0)
             dopri5.stage_state(st, y0, h, Kt[7 * j : 7 * j + 7], yt)
@@ -108,6 +132,57 @@ def flow_dopri5(s, h, P, mi, mf, cmd, pack):
     for j in range(m):
         for i in range(NS):
             Phi[X_S + i, j] = Kt[7 * j + 6, i]
+    return True
+
+
+@kernel(inline="always")
+def _first_kink(s, h, plant, own):
+    """The time [s] after ``s`` at which the motor currents' branches first differ from
+    theirs at ``s``, within (0, ``h``]: bisection on Dormand-Prince steps from ``s`` (to
+    2^-KINK_BISECTIONS h), the upper end (just past the kink)."""
+    P, mi, mf, cmd = plant
+    K, y, ew = own.K, own.tmp, own.ew
+    evaluate_ws(s, P, mi, mf, cmd, K[0], own.aux_new, ew, False, ew[3], False)
+    start = current_branches(P, cmd, ew)
+    lo, hi = 0.0, h
+    for _ in range(KINK_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        for st in range(1, 7):
+            dopri5.stage_state(st, s, mid, K, y)
+            evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
+        if current_branches(P, cmd, ew) == start:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+@kernel
+def flow_dopri5(s, h, P, mi, mf, cmd, pack):
+    """Phi := D[proj(step(.; h))] Phi over the Dormand-Prince step of size ``h`` [s] the
+    run has just taken from ``s`` (modes ``mi``, anchors ``mf``, commands ``cmd``).
+
+    Where the motor currents' branches differ at the step's start and end, the current
+    met a kink of the amplifier's law (the torque-speed line) inside the step: the
+    right-hand side's derivative jumps there, which the step's stages straddle, so the
+    computed step's derivative is that of the flow only to O(h). The derivative is then
+    taken over sub-steps that end just past each kink (:func:`_first_kink`, at most
+    MAX_KINK_SPLITS): that of the flow along the computed trajectory, each piece smooth.
+    The run's own step is not changed."""
+    tan = unpacked(pack)
+    plant = (P, mi, mf, cmd)
+    parameter_tangents(tan)
+    start, rest = tan.sp, h
+    for i in range(NS):
+        start[i] = s[i]
+    for split in range(MAX_KINK_SPLITS + 1):
+        if _dopri5_pass(start, rest, plant, tan, split == MAX_KINK_SPLITS):
+            return
+        tau = _first_kink(start, rest, plant, tan.work)
+        _dopri5_pass(start, tau, plant, tan, True)
+        for i in range(NS):
+            start[i] = tan.work.tmp[i]
+        rest -= tau
 
 
 @kernel(inline="always")
