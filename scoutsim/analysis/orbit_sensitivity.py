@@ -72,22 +72,17 @@ SENSITIVITY_METRICS = (
 FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
-#: the smallest change of the spectral radius its derivative is taken over (a difference
-#: of two Jacobians of the map). The carried Jacobian's error depends on the integration's
-#: steps, which change with the parameter, so the radius of the map's Jacobian is noisy
-#: in the parameter: on the default Model II orbit about 3.5e-7 at rtol 1e-11 and 4e-8 to
-#: 1.5e-7 at rtol 1e-13 (docs/explanation/derivatives.md); the radius's ends are
-#: therefore taken at tolerances RADIUS_TOLERANCE_FACTOR times the orbit's
-#: (:func:`radius_integrator`), and over a step that moves the radius by at least a
-#: thousand times that noise
-RADIUS_RESOLUTION = 1e-4
+#: The spectral radius's derivative is a difference of two Jacobians of the map. The
+#: carried Jacobian's error depends on the integration's steps, which change with the
+#: parameter, so the radius of the map's Jacobian is noisy in the parameter: on the
+#: default Model II orbit it scatters by about 3.5e-7 at rtol 1e-11 and 4e-8 to 2.5e-7 at
+#: rtol 1e-13 (docs/explanation/derivatives.md). Its ends are therefore integrated at
+#: tolerances RADIUS_TOLERANCE_FACTOR times the orbit's (:func:`radius_integrator`), over
+#: the metrics' own step h: the derivative is resolved to about 2.5e-7 / h.
 #: the spectral radius's ends are integrated at this times the orbit's tolerances, down
 #: to RADIUS_RTOL_FLOOR (DOPRI5 in double precision: tighter gains nothing)
 RADIUS_TOLERANCE_FACTOR = 1e-2
 RADIUS_RTOL_FLOOR = 1e-13
-#: the parameter steps tried for the spectral radius's derivative, in units of the
-#: metrics' step
-RADIUS_STEPS = (1.0, 10.0, 30.0)
 
 
 @dataclass
@@ -100,8 +95,8 @@ class ParameterSensitivity:
     elasticity : {metric: (d metric / d parameter) value / metric} [% per %] (NaN where
         the value or the metric is 0).
     status : "ok", or why there is none (the step leaves the sample-phase cell, ...).
-    radius_step : the parameter step of the spectral radius's derivative (SI; see
-        :func:`orbit_sensitivities`); NaN without it.
+    radius_step : the parameter step of the spectral radius's derivative (SI; the
+        metrics' step); NaN without it.
     """
 
     name: str
@@ -273,10 +268,9 @@ def orbit_sensitivities(
     "all": every one), by the implicit function theorem (module docstring) with steps
     ``relative_step`` |p| (a forward step of :data:`ZERO_STEP` for a parameter at 0).
     ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
-    (the orbit's method, at tolerances :func:`radius_integrator`) at two ends; the step is the first of :data:`RADIUS_STEPS` x
-    ``h`` over which the radius moves by at least :data:`RADIUS_RESOLUTION` (or the last
-    that stays in the orbit's sample-phase cell): the carried Jacobian has a noise floor,
-    see :data:`RADIUS_RESOLUTION`. ``progress``: optional callable(str). Returns
+    (the orbit's method) at the two ends, each at the orbit solved again there and
+    integrated at :func:`radius_integrator`'s tolerances (why: docs/explanation/
+    derivatives.md, the Jacobian's noise along a parameter). ``progress``: optional callable(str). Returns
     ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
     setting = orbit.setting
     if not setting:
@@ -311,8 +305,8 @@ def orbit_sensitivities(
             if len(values) == 1:
                 values.append(dict(base_values))
             if spectral_radius:
-                hr, radii = _radius_ends(orbit, base, base_map, name, h, signs)
-                sens.radius_step = hr
+                radii = _radii(orbit, ends, dz, h)
+                sens.radius_step = h
                 for i, r in enumerate(radii):
                     values[i]["spectral_radius"] = r
         except (MapError, ValueError) as exc:
@@ -329,30 +323,6 @@ def orbit_sensitivities(
     return out, base_values
 
 
-def _radius_ends(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
-    """(step, the spectral radius at each end) for the radius's derivative: the first step
-    of RADIUS_STEPS x ``h`` over which the radius moves by RADIUS_RESOLUTION, or the
-    largest that stays in the orbit's cell. A step whose change, extrapolated linearly from
-    the last one tried, would fall short is skipped (unless it is the last)."""
-    found = None
-    for factor in RADIUS_STEPS:
-        if found is not None and factor != RADIUS_STEPS[-1]:
-            moved = abs(found[1][0] - found[1][1]) * factor * h / found[0]
-            if moved < RADIUS_RESOLUTION:
-                continue
-        try:
-            radii = _radii(orbit, base, base_map, name, factor * h, signs)
-        except MapError:
-            if found is None:
-                raise
-            break
-        found = (factor * h, radii)
-        if abs(radii[0] - radii[1]) >= RADIUS_RESOLUTION:
-            break
-    assert found is not None, "the first step gives radii or raises"
-    return found
-
-
 def radius_integrator(integrator: IntegratorSettings) -> IntegratorSettings:
     """The integrator of the spectral radius's ends: ``integrator`` with its tolerances
     RADIUS_TOLERANCE_FACTOR times as tight (rtol not below RADIUS_RTOL_FLOOR; unset
@@ -364,14 +334,14 @@ def radius_integrator(integrator: IntegratorSettings) -> IntegratorSettings:
     return dataclasses.replace(integrator, rtol=tight, atol=atol * tight / rtol)
 
 
-def _radii(orbit: ControlledOrbit, base, base_map: StrideMap, name: str, h: float, signs):
+def _radii(orbit: ControlledOrbit, ends, dz, h: float):
     """The spectral radius of the stride map's Jacobian (the orbit's method, integrated
-    with :func:`radius_integrator`) at the orbit moved to parameter ``name`` + sign ``h``
-    along dz*/dp, for each sign of ``signs`` (and at the orbit, for a forward step)."""
-    ends, dz = _tangent(orbit, base, base_map, name, h, signs)
+    with :func:`radius_integrator`) at the orbit moved to each end of ``ends`` (from
+    :func:`_tangent`: the parameter at sign ``h``) along ``dz`` = dz*/dp (and at the
+    orbit, for a forward step)."""
     tight = radius_integrator(orbit.setting["integrator"])
     out = [_radius_at(orbit, s_p, orbit.z + sign * h * dz, tight) for s_p, _, _, sign in ends]
-    if len(signs) == 1:
+    if len(ends) == 1:
         out.append(_radius_at(orbit, orbit.setting, orbit.z, tight))
     return out
 
