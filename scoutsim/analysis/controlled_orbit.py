@@ -532,14 +532,16 @@ def _globalised_step(m: StrideMap, z, dz, like, res: float, disc: dict, hist: li
 def map_noise(m: StrideMap, z, like, base: Crossing, J, strides: int) -> float:
     """The rounding noise of the residual F(z) = P(z) - z at ``z`` (whose stride is
     ``base``, Jacobian ``J``): the largest |F(z + d) - F(z) - (J - I) d| over NOISE_PROBES
-    perturbations d of NOISE_STEP max(1, |z_j|) with signs fixed in advance (so the
+    perturbations d of NOISE_STEP max(1, |z_j|) with fixed sign patterns (so the
     measurement is deterministic). The linear part is removed, so what is left is what the
     integration's rounding over the ``strides`` strides does to the map; a perturbation
     that leaves the stride's cell is not counted. NaN if none stays in it."""
     assert base.start is not None, "a crossing from a HybridState keeps its start"
     z0 = m.z_of(base.start)
     F0 = m.z_of(base.state) - z0
-    signs = np.where(np.random.default_rng(20261130).random((NOISE_PROBES, z.size)) < 0.5, -1, 1)
+    # Walsh-like sign patterns: alternating by 1, 2, 4, ... coordinates
+    j = np.arange(z.size)
+    signs = [np.where((j >> k) & 1, -1.0, 1.0) for k in range(NOISE_PROBES)]
     A = J - np.eye(z.size)
     worst = math.nan
     for s in signs:

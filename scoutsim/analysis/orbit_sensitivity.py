@@ -14,8 +14,9 @@ radius) then moves by
 
     dm/dp = [m(z* + h dz*/dp, p + h) - m(z* - h dz*/dp, p - h)] / (2 h),
 
-one period simulated from each end, without solving for the orbit again. The
-elasticity is (dm/dp) p / m [% per %]. The stride frequency of a sampled orbit is locked
+one period simulated from each end, without solving for the orbit again (the spectral
+radius's ends are: one Newton step from the prediction, at tighter tolerances; see
+RADIUS_TOLERANCE_FACTOR). The elasticity is (dm/dp) p / m [% per %]. The stride frequency of a sampled orbit is locked
 to the control period (a whole number of samples per period), so within a sample-phase
 cell its derivative is 0; a step that leaves the cell (another number of samples,
 controller switches on other samples, another sequence of plant events) is reported
@@ -72,15 +73,13 @@ SENSITIVITY_METRICS = (
 FRICTION = "friction_coefficient"
 #: absolute step of a parameter whose value is 0 (SI)
 ZERO_STEP = 1e-6
-#: The spectral radius's derivative is a difference of two Jacobians of the map. The
-#: carried Jacobian's error depends on the integration's steps, which change with the
-#: parameter, so the radius of the map's Jacobian is noisy in the parameter: on the
-#: default Model II orbit it scatters by about 3.5e-7 at rtol 1e-11 and 4e-8 to 2.5e-7 at
-#: rtol 1e-13 (docs/explanation/derivatives.md). Its ends are therefore integrated at
-#: tolerances RADIUS_TOLERANCE_FACTOR times the orbit's (:func:`radius_integrator`), over
-#: the metrics' own step h: the derivative is resolved to about 2.5e-7 / h.
 #: the spectral radius's ends are integrated at this times the orbit's tolerances, down
-#: to RADIUS_RTOL_FLOOR (DOPRI5 in double precision: tighter gains nothing)
+#: to RADIUS_RTOL_FLOOR (DOPRI5 in double precision: tighter gains nothing). The radius's
+#: derivative is a difference of two Jacobians of the map, whose integration error
+#: depends on the run's steps, which change with the parameter: on the default Model II
+#: orbit the radius scatters along a parameter by about 3.5e-7 at rtol 1e-11 and 4e-8 to
+#: 2.5e-7 at rtol 1e-13 (docs/explanation/derivatives.md), so over the metrics' own step h
+#: its derivative is resolved to about 2.5e-7 / h
 RADIUS_TOLERANCE_FACTOR = 1e-2
 RADIUS_RTOL_FLOOR = 1e-13
 
@@ -269,9 +268,9 @@ def orbit_sensitivities(
     ``relative_step`` |p| (a forward step of :data:`ZERO_STEP` for a parameter at 0).
     ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
     (the orbit's method) at the two ends, each at the orbit solved again there and
-    integrated at :func:`radius_integrator`'s tolerances (why: docs/explanation/
-    derivatives.md, the Jacobian's noise along a parameter). ``progress``: optional callable(str). Returns
-    ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
+    integrated at :func:`radius_integrator`'s tolerances (see RADIUS_TOLERANCE_FACTOR).
+    ``progress``: optional callable(str). Returns ``({name: ParameterSensitivity}, the
+    metrics at the orbit)``."""
     setting = orbit.setting
     if not setting:
         raise ValueError("orbit has no setting: find it with controlled_fixed_point()")

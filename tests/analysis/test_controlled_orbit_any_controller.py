@@ -251,8 +251,8 @@ def test_a_gait_without_a_cycle_is_reported_with_its_closest_recurrence(monkeypa
         controlled_fixed_point(start)
 
     # a Newton that got close says so: the gait repeats, it is not "still settling"
-    # (a per-leg robot's 14-stride cycle: the settled states repeat only to 3.7e-5, and
-    # Newton reached 1.6e-10)
+    # (as on a per-leg robot's 14-stride cycle, whose settled states repeat only to
+    # 3.7e-5 while Newton reaches 1e-9)
     def close(m, start, k, *args):
         raise NewtonError(f"Newton stalled for {k}", 1.6e-10 if k == 1 else 1e-3)
 
