@@ -95,15 +95,22 @@ DW_SIZE = DW_GR + MAX_ROWS
 BRANCH_LOOKAHEAD = 1e-9
 
 
-@kernel(inline="always")
-def _branch_ahead(cmd_torque, om, om_dot, vb, leg, P):
-    """The branch (``CUR_*``) of leg ``leg``'s motor current BRANCH_LOOKAHEAD ahead along
-    the motion (motor speed ``om`` [rad/s], acceleration ``om_dot`` [rad/s^2])."""
-    return current_branch(cmd_torque, om + BRANCH_LOOKAHEAD * om_dot, vb, leg, P)
-
-
 #: the branch codes of :func:`current_branches` (base: one digit per leg)
 BRANCH_BASE = 8
+
+
+@kernel(inline="always")
+def _leg_branch(P, cmd, wk, leg):
+    """The branch (``CUR_*``) of leg ``leg``'s motor current at the evaluation summarised in
+    ``wk``, BRANCH_LOOKAHEAD ahead along the motion (the motor speed moved by its
+    acceleration from the evaluation's solve; none if that failed)."""
+    b = wk[WK_B : WK_B + MAX_KKT]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    meta = wk[WK_META : WK_META + NMETA]
+    i = IALB + leg if geared(P) else IPHB + leg
+    om_dot = P[P_N + leg] * b[i] if is_set(meta[MT_KKT_OK]) else 0.0
+    om = LG[2 * LG_OM + leg] + BRANCH_LOOKAHEAD * om_dot
+    return current_branch(cmd[leg], om, meta[MT_VBATT], leg, P)
 
 
 @kernel
@@ -113,17 +120,9 @@ def current_branches(P, cmd, ew):
     :func:`evaluate_t` reads them: branch_back * BRANCH_BASE + branch_front. Where it
     differs between two states of a trajectory, the current crossed a kink of the
     amplifier's law between them (the torque-speed line met or left)."""
-    wk = ew[0]
-    b = wk[WK_B : WK_B + MAX_KKT]
-    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
-    meta = wk[WK_META : WK_META + NMETA]
-    ok = is_set(meta[MT_KKT_OK])
-    gear = geared(P)
     code = 0
     for leg in range(2):
-        om_dot = P[P_N + leg] * b[IALB + leg if gear else IPHB + leg] if ok else 0.0
-        branch = _branch_ahead(cmd[leg], LG[2 * LG_OM + leg], om_dot, meta[MT_VBATT], leg, P)
-        code = code * BRANCH_BASE + branch
+        code = code * BRANCH_BASE + _leg_branch(P, cmd, ew[0], leg)
     return code
 
 
@@ -209,8 +208,7 @@ def evaluate_t(P, mi, cmd, ew, dw, tangents, ds_t):
         # the current's branch a moment ahead along the motion: where the current sits on
         # a kink (a controller that commands the torque-speed line's torque at a sample
         # puts it exactly there), the side the trajectory enters
-        om_dot = P[P_N + leg] * ddq[IALB + leg if gear else IPHB + leg]
-        branch = _branch_ahead(cmd[leg], om, om_dot, vb, leg, P)
+        branch = _leg_branch(P, cmd, wk, leg)
         cur_t = branch_current_t(branch, cmd[leg], om, vb, leg, P, (cmd_t[leg], om_t, vb_t, P_t))
         tapp_t = delivered_torque_t(LG[2 * LG_CUR + leg], om, leg, P, cur_t, om_t, P_t)
         mode = mi[MI_MOTOR_B + leg]
