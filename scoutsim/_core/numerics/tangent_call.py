@@ -75,6 +75,8 @@ from .tangent_work import (
     HOOK_OPS,
     N_CALL_ROWS,
     TangentPack,
+    float_pointer,
+    pointer_to,
 )
 
 # the operations
@@ -219,33 +221,19 @@ def sample(t, s, P, mi, mf, builtin, C, cb, pack):
 # --- the hook's side: the arrays again, and the call -----------------------------------
 
 
-def _pointer_to(ty):
-    @intrinsic
-    def pointer(typingctx, address):
-        sig = types.CPointer(ty)(types.int64)
-
-        def codegen(context, builder, signature, args):
-            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
-
-        return sig, codegen
-
-    return pointer
-
-
-_float_pointer = _pointer_to(types.float64)
-_int_pointer = _pointer_to(types.int64)
-_byte_pointer = _pointer_to(types.uint8)
+_int_pointer = pointer_to(types.int64)
+_byte_pointer = pointer_to(types.uint8)
 
 
 @kernel(inline="always")
 def _floats(calls, row):
-    return carray(_float_pointer(calls[row, CALL_ADDRESS]), calls[row, CALL_ROWS])
+    return carray(float_pointer(calls[row, CALL_ADDRESS]), calls[row, CALL_ROWS])
 
 
 @kernel(inline="always")
 def _float_matrix(calls, row):
     return carray(
-        _float_pointer(calls[row, CALL_ADDRESS]), (calls[row, CALL_ROWS], calls[row, CALL_COLS])
+        float_pointer(calls[row, CALL_ADDRESS]), (calls[row, CALL_ROWS], calls[row, CALL_COLS])
     )
 
 

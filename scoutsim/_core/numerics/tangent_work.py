@@ -8,6 +8,11 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
+from numba import types
+from numba.core import cgutils
+from numba.core.imputils import impl_ret_borrowed
+from numba.extending import intrinsic
+from numba.np.arrayobj import populate_array
 
 from ..._numba.jit import kernel
 from ..model.derivative.evaluate import derivative_workspace
@@ -243,6 +248,53 @@ def packed(tw: TangentWork) -> TangentPack:
     )
 
 
+def pointer_to(ty):
+    """A compiled function: an address (int64) as a pointer to ``ty``."""
+
+    @intrinsic
+    def pointer(typingctx, address):
+        sig = types.CPointer(ty)(types.int64)
+
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+
+        return sig, codegen
+
+    return pointer
+
+
+float_pointer = pointer_to(types.float64)
+
+
+@intrinsic
+def _as_matrix(typingctx, vec, rows, cols):
+    """The contiguous float vector ``vec`` seen as a ``rows`` x ``cols`` C-order matrix (a
+    view: its data and owner). What ``reshape`` does, without its call into Numba's C
+    helpers, which the compiler cannot leave out where the view is not used."""
+    ret = types.Array(types.float64, 2, "C")
+    sig = ret(vec, rows, cols)
+
+    def codegen(context, builder, signature, args):
+        v, r, c = args
+        src = context.make_array(signature.args[0])(context, builder, v)
+        out = context.make_array(ret)(context, builder)
+        intp = context.get_value_type(types.intp)
+        itemsize = context.get_constant(types.intp, 8)
+        populate_array(
+            out,
+            data=src.data,
+            shape=cgutils.pack_array(builder, [r, c], ty=intp),
+            strides=cgutils.pack_array(builder, [builder.mul(c, itemsize), itemsize], ty=intp),
+            itemsize=itemsize,
+            meminfo=src.meminfo,
+            parent=src.parent,
+        )
+        # (a view: a reference to its owner, counted where reference counting is on)
+        return impl_ret_borrowed(context, builder, ret, out._getvalue())
+
+    return sig, codegen
+
+
 @kernel(inline="always")
 def _fv(pack, k):
     """Part ``k`` of ``pack``: a float vector (a view)."""
@@ -254,7 +306,7 @@ def _fv(pack, k):
 def _fm(pack, k):
     """Part ``k`` of ``pack``: a float matrix (a view)."""
     h = pack.i
-    return _fv(pack, k).reshape((h[PART_HEADER * k + PART_ROWS], h[PART_HEADER * k + PART_COLS]))
+    return _as_matrix(_fv(pack, k), h[PART_HEADER * k + PART_ROWS], h[PART_HEADER * k + PART_COLS])
 
 
 @kernel(inline="always")
