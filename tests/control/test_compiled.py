@@ -1,7 +1,7 @@
 """Controllers compiled into the loop (scoutsim.control.compiled) and Python controllers
 called from it (scoutsim.control.dispatch): the same law gives the same run either way,
 bit for bit; a compiled controller keeps its state and logs its leg states; a new
-controller compiles alone (the core's cache is not touched); failures stop the run with
+controller compiles alone (nothing of the core is compiled again); failures stop the run with
 the data kept; the control period is the controller's."""
 
 import math
