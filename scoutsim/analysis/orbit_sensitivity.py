@@ -15,10 +15,10 @@ radius) then moves by
     dm/dp = [m(z* + h dz*/dp, p + h) - m(z* - h dz*/dp, p - h)] / (2 h),
 
 one period simulated from each end, without solving for the orbit again (the spectral
-radius's ends are: one Newton step from the prediction, at tighter tolerances; see
-RADIUS_TOLERANCE_FACTOR). The elasticity is (dm/dp) p / m [% per %]. The stride frequency of a sampled orbit is locked
-to the control period (a whole number of samples per period), so within a sample-phase
-cell its derivative is 0; a step that leaves the cell (another number of samples,
+radius's ends take one Newton step from the prediction, at tighter tolerances: see
+RADIUS_TOLERANCE_FACTOR). The elasticity is (dm/dp) p / m [% per %]. The stride
+frequency of a sampled orbit is locked to the control period (a whole number of samples
+per period), so within a sample-phase cell its derivative is 0; a step that leaves the cell (another number of samples,
 controller switches on other samples, another sequence of plant events) is reported
 instead of differenced.
 
@@ -75,11 +75,12 @@ FRICTION = "friction_coefficient"
 ZERO_STEP = 1e-6
 #: the spectral radius's ends are integrated at this times the orbit's tolerances, down
 #: to RADIUS_RTOL_FLOOR (DOPRI5 in double precision: tighter gains nothing). The radius's
-#: derivative is a difference of two Jacobians of the map, whose integration error
-#: depends on the run's steps, which change with the parameter: on the default Model II
-#: orbit the radius scatters along a parameter by about 3.5e-7 at rtol 1e-11 and 4e-8 to
-#: 2.5e-7 at rtol 1e-13 (docs/explanation/derivatives.md), so over the metrics' own step h
-#: its derivative is resolved to about 2.5e-7 / h
+#: derivative is a difference of two Jacobians of the map, whose integration error (it
+#: depends on the run's steps) and the rounding of its events' central differences both
+#: change with the parameter: on the default Model II orbit the radius scatters along a
+#: parameter by about 3.5e-7 at rtol 1e-11 and 4e-8 to 2.5e-7 at rtol 1e-13
+#: (docs/explanation/derivatives.md), so over the metrics' own step h its derivative is
+#: resolved to about 2.5e-7 / h
 RADIUS_TOLERANCE_FACTOR = 1e-2
 RADIUS_RTOL_FLOOR = 1e-13
 
