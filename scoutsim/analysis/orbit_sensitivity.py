@@ -78,9 +78,9 @@ ZERO_STEP = 1e-6
 #: derivative is a difference of two Jacobians of the map, whose integration error (it
 #: depends on the run's steps) and the rounding of its events' central differences both
 #: change with the parameter: on the default Model II orbit the radius scatters along a
-#: parameter by about 3.5e-7 at rtol 1e-11 and 4e-8 to 2.5e-7 at rtol 1e-13
-#: (docs/explanation/derivatives.md), so over the metrics' own step h its derivative is
-#: resolved to about 2.5e-7 / h
+#: parameter by about 3.5e-7 at rtol 1e-11 and 3.5e-8 to 7e-8 (single values up to 2e-7)
+#: at rtol 1e-13 (docs/explanation/derivatives.md), so over the metrics' own step h its
+#: derivative is resolved to about 1e-7 / h
 RADIUS_TOLERANCE_FACTOR = 1e-2
 RADIUS_RTOL_FLOOR = 1e-13
 

@@ -31,10 +31,13 @@ trajectory, not of a neighbouring one integrated with other steps:
 
 The differences are of smooth maps (each with its discrete choices held), so their error
 is that of a central difference (about 1e-9 of the scale here), not that of differencing a
-whole adaptive run; the steps, in closed form, add none. Where a perturbed copy of a reset ends in other modes than the run
-(an event that is not transversal, a mode decided by a margin smaller than the step), the
-map is not differentiable there: ``info[TI_NONSMOOTH]`` counts such resets, and
-``info[TI_GRAZING]`` keeps the smallest transversality |n^T f-| / (|n| |f-|) met.
+whole adaptive run; the steps, in closed form, add none. The projection's one clamp, a
+massive leg in flight held at its stop, is kept out of them: no copy is moved across the
+stop of a leg that is short of it (:func:`_difference_ends`). Where a perturbed copy of
+a reset ends in other modes than the run (an event that is not transversal, a mode
+decided by a margin smaller than the step), the map is not differentiable there:
+``info[TI_NONSMOOTH]`` counts such resets, and ``info[TI_GRAZING]`` keeps the smallest
+transversality |n^T f-| / (|n| |f-|) met.
 
 A run without sensitivities carries ``Phi`` with no columns: every function here is then
 skipped by the caller (a check of ``Phi.shape[1]``), and the run is the same, bit for bit.
@@ -52,16 +55,24 @@ from ..model.flags import is_set
 from ..model.layout import (
     CB_ADDRESS,
     IALB,
+    IL_B,
     IPHB,
+    MI_CONTACT_B,
     NMF,
     NMI,
     NQ,
     NS,
+    P_C,
     P_G,
+    P_L0,
+    P_MASSLESS,
     SG_MEASURED,
     SG_MOTOR_SIDE,
+    SLIDE,
     SN_ANGLE_B,
     SN_RATE_B,
+    STICK,
+    STRUT,
 )
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
@@ -80,6 +91,11 @@ from .tangent_work import (
 )
 from .transitions import apply_event, settle_ws
 from .work import EventLog
+
+#: a difference step is shortened to keep the copies of a state off a leg's stop
+#: (:func:`_difference_ends`), down to this fraction of the step; a leg closer to its
+#: stop is differenced one-sided, away from it
+STOP_STEP_FRACTION = 0.1
 
 
 @kernel(inline="always")
@@ -154,14 +170,67 @@ def _moved_commands(e, v, cmd, tan):
 
 
 @kernel
-def _central(out, row, j, values, side, eps):
+def _central(out, row, j, values, side, span):
     """Column ``j`` of ``out`` from ``row`` on: on the first side (``side`` 0) the
-    ``values`` at +``eps``, on the second their central difference with those at -eps."""
+    ``values`` at the difference's first end, on the second their difference with those
+    at the second end over ``span`` (the first end's step less the second's)."""
     for i in range(values.shape[0]):
         if side == 0:
             out[row + i, j] = values[i]
         else:
-            out[row + i, j] = (out[row + i, j] - values[i]) / (2.0 * eps)
+            out[row + i, j] = (out[row + i, j] - values[i]) / span
+
+
+@kernel(inline="always")
+def _stop_margins(v, s, mi, P, tan):
+    """How far a copy of the state ``s`` (modes ``mi``) may move along ``v`` each way,
+    in units of the step (``e`` as in :func:`_moved_state`, with the parameters moved
+    along), before a massive leg in flight that is short of its stop in ``s`` (l < l0)
+    reaches the stop, where the projection clamps it: (up, down), the largest ``e`` > 0
+    for the copy at +e and at -e (infinite where no such leg moves towards it). A leg
+    at its stop in ``s`` is held there by the projection on both sides (its column's
+    entry is the stop's own tangent), and a leg in contact has no stop to meet here."""
+    up = np.inf
+    down = np.inf
+    if is_set(P[P_MASSLESS]):
+        return up, down
+    npar = tan.pscale.shape[0]
+    par0 = v.shape[0] - npar
+    for leg in range(2):
+        mode = mi[MI_CONTACT_B + leg]
+        if mode == STICK or mode == STRUT or mode == SLIDE or P[P_C + leg] <= 0.0:
+            continue
+        gap = P[P_L0 + leg] - s[IL_B + leg]
+        if gap <= 0.0:
+            continue
+        rate = v[X_S + IL_B + leg]  # the gap closes at this rate per unit e
+        for i in range(npar):
+            rate -= v[par0 + i] * tan.dP[i, P_L0 + leg]
+        if rate > 0.0:
+            up = min(up, gap / rate)
+        elif rate < 0.0:
+            down = min(down, -gap / rate)
+    return up, down
+
+
+@kernel(inline="always")
+def _difference_ends(eps, v, s, mi, P, tan):
+    """The two ends (e1, e2) of the difference along ``v`` from the state ``s`` (modes
+    ``mi``) with step ``eps``: (eps, -eps), unless a copy would reach the stop of a leg
+    that is short of it in ``s`` (:func:`_stop_margins`; the projection's clamp
+    there is a kink of every map that projects the copy, which a difference across it
+    would average with the run's own branch). Then the step is shortened to half the
+    distance to the stop, down to STOP_STEP_FRACTION of it; below that, the
+    difference is one-sided, (e, 0) or (0, -e), on the side away from the stop."""
+    up, down = _stop_margins(v, s, mi, P, tan)
+    near = 0.5 * min(up, down)
+    if eps <= near:
+        return eps, -eps
+    if near >= STOP_STEP_FRACTION * eps:
+        return near, -near
+    if up >= down:
+        return min(eps, 0.5 * up), 0.0
+    return 0.0, -min(eps, 0.5 * down)
 
 
 @kernel
@@ -210,33 +279,35 @@ def _perturbed_copy(e, v, P, cmd, tan):
 
 @kernel
 def _event_slope(k, v, P, cmd, tan):
-    """The derivative of event function ``k`` at the snapshot along ``v`` (central
-    differences; 0 along a zero direction)."""
+    """The derivative of event function ``k`` at the snapshot along ``v`` (differences
+    between the ends of :func:`_difference_ends`; 0 along a zero direction)."""
     eps = _column_step(v, tan, X_CS)
     if eps == 0.0:
         return 0.0
-    _perturbed_copy(eps, v, P, cmd, tan)
+    e1, e2 = _difference_ends(eps, v, tan.s0, tan.mi0, P, tan)
+    _perturbed_copy(e1, v, P, cmd, tan)
     event_values(tan.sp, tan.auxp, tan.Pp, tan.mip, tan.ep)
     g_hi = tan.ep[k]
-    _perturbed_copy(-eps, v, P, cmd, tan)
+    _perturbed_copy(e2, v, P, cmd, tan)
     event_values(tan.sp, tan.auxp, tan.Pp, tan.mip, tan.ep)
-    return (g_hi - tan.ep[k]) / (2.0 * eps)
+    return (g_hi - tan.ep[k]) / (e1 - e2)
 
 
 @kernel
 def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
     """The derivative of the reset (event ``k``'s transition if k >= 0, then the
     settling) at the snapshot along ``v``, into the rows of the state and the anchors of
-    ``tan.out[:, j]`` (central differences); a copy that ends in other modes than the run
-    (``mi``) is counted in ``info[TI_NONSMOOTH]``."""
+    ``tan.out[:, j]`` (differences between the ends of :func:`_difference_ends`); a copy
+    that ends in other modes than the run (``mi``) is counted in ``info[TI_NONSMOOTH]``."""
     out = tan.out
     eps = _column_step(v, tan, X_CS)
     if eps == 0.0:
         for i in range(X_CMD):
             out[i, j] = 0.0
         return
+    e1, e2 = _difference_ends(eps, v, tan.s0, tan.mi0, P, tan)
     for side in range(2):
-        e = eps if side == 0 else -eps
+        e = e1 if side == 0 else e2
         _perturbed_copy(e, v, P, cmd, tan)
         Pq = tan.Pp
         if k >= 0:
@@ -247,8 +318,8 @@ def _reset_derivative(k, t, v, mi, P, cmd, tan, j):
             if tan.mip[i] != mi[i]:
                 tan.info[TI_NONSMOOTH] += 1
                 break
-        _central(out, X_S, j, tan.sp, side, eps)
-        _central(out, X_MF, j, tan.mfp, side, eps)
+        _central(out, X_S, j, tan.sp, side, e1 - e2)
+        _central(out, X_MF, j, tan.mfp, side, e1 - e2)
 
 
 @kernel
@@ -401,8 +472,9 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, geom, ints, params, pack):
             for i in range(2 + nc):
                 out[X_CMD + i, j] = 0.0
             continue
+        e1, e2 = _difference_ends(eps, Phi[:, j], s, mi, P, tan)
         for side in range(2):
-            e = eps if side == 0 else -eps
+            e = e1 if side == 0 else e2
             _moved_state(e, Phi[:, j], s, mf, tan)
             _moved_commands(e, Phi[:, j], tan.cmd0, tan)
             for i in range(2):
@@ -425,8 +497,8 @@ def tangent_sample(t, s, P, mi, mf, builtin, C, geom, ints, params, pack):
                 rc = call_controller(ints[CB_ADDRESS], t, yp, tan.cpp, csp, cmdp, lsp)
                 if rc != 0 or not (np.isfinite(cmdp[0]) and np.isfinite(cmdp[1])):
                     tan.info[TI_NONSMOOTH] += 1  # a copy the controller refused
-            _central(out, X_CMD, j, cmdp, side, eps)
-            _central(out, X_CS, j, csp, side, eps)
+            _central(out, X_CMD, j, cmdp, side, e1 - e2)
+            _central(out, X_CS, j, csp, side, e1 - e2)
     for j in range(m):
         for i in range(2 + nc):
             Phi[X_CMD + i, j] = out[X_CMD + i, j]

@@ -47,8 +47,9 @@ NTI = 5
 #: and its settling log a few records; log_event drops any beyond)
 EVENT_SCRATCH_ROWS = 16
 #: relative size of the central-difference step along a column (of the largest entry of
-#: the column, in the state's units)
-DIFFERENCE_STEP = 1e-6
+#: the column, in the state's units): the copies' rounding over it is most of the exact
+#: Jacobian's noise (docs/explanation/derivatives.md; 1e-6 left twice as much of it)
+DIFFERENCE_STEP = 1e-5
 
 #: What the sensitivities work on: ``Phi`` (NX x m, the derivatives), ``out`` (NX x
 #: (m + 1) scratch: the columns being built), ``work`` (a ``StepWork`` of its own: the

@@ -215,3 +215,26 @@ def test_an_event_near_a_sample_boundary_is_reported():
     _, at = _carried(base, 161, SMOOTH_COLUMNS)
     assert before.smoothness()["sample_margin_s"] > 1e-4
     assert at.smoothness()["sample_margin_s"] < 1e-5
+
+
+def test_a_touchdown_with_the_leg_just_short_of_its_stop_matches_differences(bound_start):
+    """A massive leg in flight relaxes towards its stop l0 and touches down a little short
+    of it: here the back leg, shortened by 2 um at the start, lands about 0.2 um short,
+    less than the resets' difference step. A copy of the state moved outwards by that step
+    would be clamped at the stop by the projection (a kink of the touchdown's reset map
+    that the run, on the free side, does not meet), and a difference across it averages
+    the two sides (about half the leg length's derivative). The column along the leg's
+    length through the touchdown against central differences of runs whose step (0.5 um)
+    keeps every run's leg free of its stop."""
+    gap = 2e-6
+    base = copy.deepcopy(bound_start)
+    x0 = _x(base)
+    x0[IL_B] -= gap
+    _set_x(base, x0)
+    touchdown = 42  # the control sample right after the back leg's touchdown
+    phi, e = _carried(base, touchdown, [IL_B])
+    kinds = [EVENT_KIND_NAMES[int(r[1])] for r in e.ev[: e.nev]]
+    assert "touchdown" in kinds
+    fd = _differences(base, touchdown, [IL_B], h=0.25 * gap)
+    # measured: 3e-6 (with the copies' difference across the stop: 0.4)
+    assert _column_errors(phi, fd).max() < 1e-3
