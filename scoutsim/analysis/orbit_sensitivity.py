@@ -261,6 +261,8 @@ def orbit_sensitivities(
     relative_step: float = 1e-4,
     spectral_radius: bool = True,
     progress=None,
+    workers: int | None = 1,
+    scheduler=None,
 ) -> tuple[dict[str, ParameterSensitivity], dict]:
     """The sensitivities of the metrics of ``orbit`` (found by
     :func:`~scoutsim.analysis.controlled_orbit.controlled_fixed_point`, which keeps its
@@ -270,57 +272,111 @@ def orbit_sensitivities(
     ``spectral_radius``: also the spectral radius's, a difference of the map's Jacobians
     (the orbit's method) at the two ends, each at the orbit solved again there and
     integrated at :func:`radius_integrator`'s tolerances (see RADIUS_TOLERANCE_FACTOR).
-    ``progress``: optional callable(str). Returns ``({name: ParameterSensitivity}, the
-    metrics at the orbit)``."""
+    ``progress``: optional callable(str), told each parameter as it is done.
+    ``workers``: local processes, one parameter each at a time (None: all cores; 1: in
+    this process); ``scheduler``: a Dask scheduler address or client, or an open
+    ``concurrent.futures.Executor``, instead (:func:`~scoutsim.analysis.parallel.map_tasks`;
+    the orbit's controller must then be one that can be sent to another process). Each
+    parameter's sensitivities are the same, bit for bit, wherever they are computed; a
+    parameter whose worker failed says so in its ``status``. Returns
+    ``({name: ParameterSensitivity}, the metrics at the orbit)``."""
+    from .parallel import map_tasks
+    from .study_controller import check_controller_travels
+
     setting = orbit.setting
     if not setting:
         raise ValueError("orbit has no setting: find it with controlled_fixed_point()")
     if names == "all" or names == ["all"]:
         names = sensitivity_parameter_names(setting["controller"], setting["robot"])
+    names = list(names)
+    check_controller_travels(setting["controller"], workers, scheduler, len(names))
+    integ = setting["integrator"]
+    base_values = orbit_metrics(orbit.state, orbit.period, setting, integ, orbit.jacobian)
+    tasks = [
+        _SensitivityTask(orbit, name, relative_step, spectral_radius, base_values) for name in names
+    ]
+    say = progress or (lambda message: None)
+
+    def told(i: int, sens: ParameterSensitivity) -> None:
+        if sens.status != "ok":
+            say(f"{sens.name}: {sens.status}")
+        else:
+            d = sens.derivative["mean_speed_m_s"]
+            say(f"{sens.name} = {sens.value:.6g}: d speed / d p = {d:.4g}")
+
+    def failed(task: _SensitivityTask, exc: BaseException) -> ParameterSensitivity:
+        return ParameterSensitivity(
+            name=task.name,
+            value=parameter_value(setting, task.name),
+            status=f"no sensitivity: its computation failed ({type(exc).__name__}: {exc})",
+        )
+
+    results = map_tasks(
+        parameter_sensitivity,
+        tasks,
+        workers=workers,
+        scheduler=scheduler,
+        desc="sensitivities",
+        on_result=told,
+        error_row=failed,
+    )
+    return dict(zip(names, results)), base_values
+
+
+@dataclass(frozen=True)
+class _SensitivityTask:
+    """One parameter's part of :func:`orbit_sensitivities` (sent to a worker as is)."""
+
+    orbit: ControlledOrbit
+    name: str
+    relative_step: float
+    spectral_radius: bool
+    base_values: dict
+
+
+def parameter_sensitivity(task: _SensitivityTask) -> ParameterSensitivity:
+    """One parameter's sensitivities (:func:`orbit_sensitivities`, whose task it is): a
+    step that leaves the sample-phase cell or an orbit that cannot be solved again is its
+    ``status``, not an exception."""
+    orbit, name, base_values = task.orbit, task.name, task.base_values
+    setting = orbit.setting
     integ, k = setting["integrator"], orbit.strides
-    base_map = StrideMap(integrator=integ, section=setting["section"], **_common(setting))
-    base = base_map.crossing(orbit.state, strides=k)
     like = orbit.state
     assert isinstance(like, HybridState), "an orbit's state is a HybridState"
-    base_values = orbit_metrics(orbit.state, orbit.period, setting, integ, orbit.jacobian)
-    out = {}
-    say = progress or (lambda message: None)
-    for name in names:
-        p = parameter_value(setting, name)
-        h = relative_step * abs(p) if p != 0.0 else ZERO_STEP
-        sens = ParameterSensitivity(name=name, value=p)
-        out[name] = sens
-        if not math.isfinite(p):
-            sens.status = f"no sensitivity: {name} = {p} is not finite"
-            continue
-        # central differences; forward ones for a parameter at 0 (most such parameters
-        # are bounded below by 0: a friction, a loss, a backlash)
-        signs = (1.0, -1.0) if p != 0.0 else (1.0,)
-        try:
-            ends, dz = _tangent(orbit, base, base_map, name, h, signs)
-            values = []
-            for s_p, m, _, sign in ends:
-                hs = m.hs_of(orbit.z + sign * h * dz, like)
-                values.append(orbit_metrics(hs, orbit.period, s_p, integ))
-            if len(values) == 1:
-                values.append(dict(base_values))
-            if spectral_radius:
-                radii = _radii(orbit, ends, dz, h)
-                sens.radius_step = h
-                for i, r in enumerate(radii):
-                    values[i]["spectral_radius"] = r
-        except (MapError, ValueError) as exc:
-            sens.status = f"no sensitivity: {exc}"
-            say(f"{name}: {sens.status}")
-            continue
-        for metric in SENSITIVITY_METRICS:
-            step = sens.radius_step if metric == "spectral_radius" else h
-            d = (values[0][metric] - values[1][metric]) / (len(signs) * step)
-            sens.derivative[metric] = d
-            mv = base_values.get(metric, math.nan)
-            sens.elasticity[metric] = d * p / mv if p != 0.0 and mv != 0.0 else math.nan
-        say(f"{name} = {p:.6g}: d speed / d p = {sens.derivative['mean_speed_m_s']:.4g}")
-    return out, base_values
+    p = parameter_value(setting, name)
+    h = task.relative_step * abs(p) if p != 0.0 else ZERO_STEP
+    sens = ParameterSensitivity(name=name, value=p)
+    if not math.isfinite(p):
+        sens.status = f"no sensitivity: {name} = {p} is not finite"
+        return sens
+    # central differences; forward ones for a parameter at 0 (most such parameters are
+    # bounded below by 0: a friction, a loss, a backlash)
+    signs = (1.0, -1.0) if p != 0.0 else (1.0,)
+    try:
+        base_map = StrideMap(integrator=integ, section=setting["section"], **_common(setting))
+        base = base_map.crossing(orbit.state, strides=k)
+        ends, dz = _tangent(orbit, base, base_map, name, h, signs)
+        values = []
+        for s_p, m, _, sign in ends:
+            hs = m.hs_of(orbit.z + sign * h * dz, like)
+            values.append(orbit_metrics(hs, orbit.period, s_p, integ))
+        if len(values) == 1:
+            values.append(dict(base_values))
+        if task.spectral_radius:
+            radii = _radii(orbit, ends, dz, h)
+            sens.radius_step = h
+            for i, r in enumerate(radii):
+                values[i]["spectral_radius"] = r
+    except (MapError, ValueError) as exc:
+        sens.status = f"no sensitivity: {exc}"
+        return sens
+    for metric in SENSITIVITY_METRICS:
+        step = sens.radius_step if metric == "spectral_radius" else h
+        d = (values[0][metric] - values[1][metric]) / (len(signs) * step)
+        sens.derivative[metric] = d
+        mv = base_values.get(metric, math.nan)
+        sens.elasticity[metric] = d * p / mv if p != 0.0 and mv != 0.0 else math.nan
+    return sens
 
 
 def radius_integrator(integrator: IntegratorSettings) -> IntegratorSettings:

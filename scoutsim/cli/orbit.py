@@ -21,6 +21,7 @@ from ._common import (
     UsageError,
     add_controller_option,
     add_no_progress_option,
+    add_parallel_options,
     controller_choice,
     controller_label,
     dumps,
@@ -82,9 +83,10 @@ def register(sub, common) -> None:
         "extremes, electrical power, cost of transport and spectral radius, to "
         "robot.<field> (robot.<field>.back / .front: one leg of a per-leg field; a "
         "robot whose legs differ in it takes only these), controller.<field> of the "
-        "Table I law, friction_coefficient (SI). --passive: the touchdown angles, period, mean speed and spectral radius, "
-        "from exact derivatives, to robot.leg_stiffness, robot.leg_rest_length, "
-        "robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
+        "Table I law, friction_coefficient (SI); the parameters shared out to --workers "
+        "processes or a --scheduler's cluster. --passive: the touchdown angles, period, "
+        "mean speed and spectral radius, from exact derivatives, to robot.leg_stiffness, "
+        "robot.leg_rest_length, robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
     )
     orbit.add_argument(
         "--jacobian",
@@ -113,6 +115,7 @@ def register(sub, common) -> None:
         "configuration); unset entries keep the Scout II defaults",
     )
     add_controller_option(orbit)
+    add_parallel_options(orbit)
     orbit.add_argument("--json", action="store_true", help="print one JSON object")
     add_no_progress_option(orbit)
     orbit.set_defaults(func=execute)
@@ -175,7 +178,13 @@ def execute(args) -> int:
     if names and isinstance(orb, ControlledOrbit):
         from ..analysis.orbit_sensitivity import orbit_sensitivities
 
-        sens, metrics = orbit_sensitivities(orb, names, progress=progress_messages(args, NAME))
+        sens, metrics = orbit_sensitivities(
+            orb,
+            names,
+            progress=progress_messages(args, NAME),
+            workers=args.workers,
+            scheduler=args.scheduler,
+        )
         d["metrics"] = metrics
         d["sensitivities"] = {n: s.to_dict() for n, s in sens.items()}
     elif names and isinstance(orb, PassiveOrbit):

@@ -162,3 +162,15 @@ def test_cli_orbit_sensitivity_json(capsys):
 def test_cli_refuses_an_unknown_parameter_by_name(capsys):
     assert main(["orbit", "--sensitivity", "robot.belt_stifness"]) == 2
     assert "robot.belt_stiffness" in capsys.readouterr().err
+
+
+def test_parameters_shared_out_to_two_workers_give_the_same_numbers(orbit, sensitivities):
+    """Two parameters on two worker processes, one each: the derivatives of one process,
+    number for number (each parameter's computation is the same wherever it runs)."""
+    names = ["friction_coefficient", "robot.belt_backlash"]
+    two, base = orbit_sensitivities(orbit, names, workers=2)
+    assert base == sensitivities[1]
+    for name in names:
+        assert two[name].status == "ok"
+        assert two[name].derivative == sensitivities[0][name].derivative
+        assert two[name].radius_step == sensitivities[0][name].radius_step
