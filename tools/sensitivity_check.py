@@ -1,16 +1,17 @@
 """Orbit sensitivities against orbits solved again, for parameters of every kind.
 
-    python tools/sensitivity_check.py [--parameters NAME ...]
+    python tools/sensitivity_check.py [--parameters NAME ...] [--relative-step H]
 
-At the default Model II orbit (Table I, default floor): each parameter's sensitivities by
-the implicit function theorem (``orbit_sensitivities``) against central differences of
-orbits solved again by Newton at p (1 +- 1e-4), metric by metric, the spectral radius's at
-the tolerances its ends are integrated at (``radius_integrator``). Prints the relative
-differences, of the derivative or of its floor if larger: the orbits' 1e-9 over the step
-(the reference's own noise), and for the spectral radius the derivative of elasticity 1
-(the radius's integration noise resolves its elasticity to about 1e-3, not the derivative
-of a parameter that barely moves it); then the radius's relative difference of its
-derivative alone, and its elasticity. About 5 min on a 2-core machine.
+At the default Model II orbit (Table I, default floor): each parameter's sensitivities
+by the implicit function theorem (``orbit_sensitivities``) against central differences
+of orbits solved again by Newton at p (1 +- H; default 1e-4, the sensitivities' own
+step), metric by metric, the spectral radius's at the tolerances its ends are integrated
+at (``radius_integrator``). Prints the relative differences, of the derivative or of its
+floor if larger: the orbits' 1e-9 over the step (the reference's own noise), and for the
+spectral radius the derivative of elasticity 1 (the radius's integration noise resolves
+its elasticity to about 1e-3, not the derivative of a parameter that barely moves it);
+then the radius's relative difference of its derivative alone, and its elasticity. About
+5 min on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -61,9 +62,12 @@ def resolved(orbit, name: str, value: float, integrator=None) -> dict:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--parameters", nargs="+", default=list(PARAMETERS))
+    ap.add_argument("--relative-step", type=float, default=1e-4, metavar="H")
     args = ap.parse_args()
     orbit = controlled_fixed_point(settle_duration=8.0)
-    sens, _ = orbit_sensitivities(orbit, args.parameters)
+    sens, _ = orbit_sensitivities(
+        orbit, args.parameters, relative_step=args.relative_step, workers=None
+    )
     metrics = [m for m in SENSITIVITY_METRICS if m != "stride_frequency_hz"]
     heads = metrics + ["spectral radius, of its derivative", "radius elasticity"]
     print("| parameter | " + " | ".join(heads) + " |")
@@ -74,7 +78,7 @@ def main() -> int:
             print(f"| `{name}` | {s.status} |")
             continue
         p = s.value
-        h = 1e-4 * abs(p)
+        h = args.relative_step * abs(p)
         plus, minus = resolved(orbit, name, p + h), resolved(orbit, name, p - h)
         hr = s.radius_step
         tight = radius_integrator(orbit.setting["integrator"])
