@@ -269,7 +269,10 @@ def cli_page() -> str:
         "`--no-plots`, `--robot`, `--out`, `--rtol` / `--atol`, `--friction` (every "
         "command runs on the default floor, mu = 1.0, unless it says otherwise; "
         "`--friction inf`: no slip), `--no-progress`, `--quiet` and `--max-hours` (a job "
-        "expected to take longer is refused before it starts).",
+        "expected to take longer is refused before it starts). An option the chosen mode "
+        "would not use is refused with its name, not ignored: `orbit --passive --model I`, "
+        "`continue --passive --points 9`, `orbit --speed 1.2` without `--passive`, "
+        "`basin --floors 0.8,1 --friction 0.6`.",
         "",
         "The files `scoutsim run` writes, and the manifest that says whether they were all "
         "written, are in [Output files](output-files.md); the robot file `--robot` reads "

@@ -37,3 +37,11 @@ def add_controlled_orbit_options(parser, duration_help: str):
         metavar="S",
         help=f"controlled: {duration_help} [s] (default: 12)",
     )
+
+
+#: the options only the passive model's orbits take (argparse destinations)
+PASSIVE_ONLY = ("speed", "apex_height", "pitch_rate")
+#: the options only the controlled robot's orbits take
+CONTROLLED_ONLY = ("model", "friction", "duration", "strides", "section", "points")
+#: ... and those of a controlled orbit's sensitivities shared out to processes
+PARALLEL = ("workers", "scheduler")

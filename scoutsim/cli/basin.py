@@ -51,6 +51,7 @@ from ._common import (
     make_controller,
     out_dir,
     positive_int,
+    refuse_given,
     show_progress,
     usage_errors,
     write_json,
@@ -179,6 +180,8 @@ def _write_rows(path, rows) -> None:
 
 
 def execute(args) -> int:
+    if args.floors is not None:
+        refuse_given(args, ("friction",), "with --floors (give the floor in the list)")
     robot, cparams = load_parameters(args.robot)
     law, cparams = controller_choice(args.controller, cparams)
     controller = make_controller(law, cparams, robot, on_workers=True)
@@ -192,7 +195,7 @@ def execute(args) -> int:
         args.floors
         if args.floors is not None
         else [args.friction]
-        if getattr(args, "friction_given", False)
+        if "friction" in getattr(args, "given", ())
         else list(DEFAULT_FLOORS)
     )
     check_expected_time(

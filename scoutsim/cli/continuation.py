@@ -28,8 +28,14 @@ from ._common import (
     load_parameters,
     make_controller,
     progress_messages,
+    refuse_given,
 )
-from ._orbit_options import add_controlled_orbit_options, add_passive_apex_options
+from ._orbit_options import (
+    CONTROLLED_ONLY,
+    PASSIVE_ONLY,
+    add_controlled_orbit_options,
+    add_passive_apex_options,
+)
 
 NAME = "continue"
 #: the passive family's parameter
@@ -135,6 +141,12 @@ def execute(args) -> int:
             )
         if args.controller != "table-i":
             raise UsageError("--controller is not allowed with --passive")
+        refuse_given(
+            args,
+            CONTROLLED_ONLY,
+            "with --passive (the passive family is followed by pseudo-arclength from its "
+            "apex state, with no controller, floor or settling run)",
+        )
         from ..analysis.passive_family import passive_family
 
         try:
@@ -153,6 +165,7 @@ def execute(args) -> int:
             f"(pseudo-arclength; energy multiplier left out)"
         )
     else:
+        refuse_given(args, PASSIVE_ONLY, "without --passive (the passive model's apex state)")
         from ..analysis.controlled_family import controlled_family
 
         law, cparams = controller_choice(args.controller, cparams)

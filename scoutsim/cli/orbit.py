@@ -30,8 +30,15 @@ from ._common import (
     make_controller,
     positive_int,
     progress_messages,
+    refuse_given,
 )
-from ._orbit_options import add_controlled_orbit_options, add_passive_apex_options
+from ._orbit_options import (
+    CONTROLLED_ONLY,
+    PARALLEL,
+    PASSIVE_ONLY,
+    add_controlled_orbit_options,
+    add_passive_apex_options,
+)
 
 NAME = "orbit"
 
@@ -134,6 +141,15 @@ def execute(args) -> int:
         raise UsageError(
             "--controller is not allowed with --passive (the passive model has no controller)"
         )
+    if args.passive:
+        refuse_given(
+            args,
+            CONTROLLED_ONLY + PARALLEL,
+            "with --passive (the passive model's orbit has no controller, floor or settling "
+            "run, and its exact sensitivities are computed in one process)",
+        )
+    else:
+        refuse_given(args, PASSIVE_ONLY, "without --passive (the passive model's apex state)")
     if not args.passive:
         controller = make_controller(law, cparams, robot)
     names = _sensitivity_names(args, controller, robot)

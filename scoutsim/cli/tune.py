@@ -39,6 +39,7 @@ from ._common import (
     out_dir,
     positive_float,
     positive_int,
+    refuse_given,
     show_progress,
     usage_errors,
 )
@@ -250,6 +251,8 @@ def execute(args) -> int:
     with usage_errors():
         # a range left out is centred on the robot file's (or controller file's) value
         params = [parse_parameter(p, controller, robot, cparams) for p in args.param]
+    if args.floors is not None:
+        refuse_given(args, ("friction",), "with --floors (give the floor in the list)")
     floors = args.floors or [args.friction]
     starts = _starts(args, robot, args.model[0])
     n_scen = len(args.model) * len(floors) * len(starts or [None])
