@@ -54,6 +54,7 @@ from . import (
     uncertainty,
 )
 from ._common import MODELS, SCOUT_FLOOR_FRICTION, UsageError, join_list_values, simulation_options
+from ._given import given_options
 from .basin import format_basin
 from .run import TIMESERIES_UNITS, column_unit, format_summary, write_timeseries_csv
 
@@ -140,33 +141,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _without_defaults(parser: argparse.ArgumentParser) -> None:
-    """Every option of ``parser`` and its sub-commands' parsers left unset unless given."""
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for sub in action.choices.values():
-                _without_defaults(sub)
-        elif action.dest != "help":
-            action.default = argparse.SUPPRESS
-
-
-def given_options(argv: list[str]) -> frozenset[str]:
-    """The destinations of the options typed in ``argv`` (a valid command line), however
-    spelled (``--fric 0.8``, ``--friction=0.8``): a second parse with no defaults. A
-    command refuses what it would otherwise ignore (``orbit --passive --model I``) and
-    tells a default from a value given (``basin --friction``)."""
-    parser = build_parser()
-    _without_defaults(parser)
-    return frozenset(vars(parser.parse_args(argv)))
-
-
 def main(argv=None) -> int:
     """Entry point of the ``scoutsim`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     try:
         args = parser.parse_args(join_list_values(argv))
-        args.given = given_options(join_list_values(argv))
+        args.given = given_options(build_parser(), join_list_values(argv))
     except SystemExit as exc:  # --help, --version or a usage error (argparse printed it)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     if args.command is None:

@@ -296,17 +296,6 @@ def add_time_window_options(parser, t0_help: str, t1_help: str):
     parser.add_argument("--t1", type=finite_float, default=None, metavar="S", help=t1_help)
 
 
-def refuse_given(args, dests: tuple[str, ...], why: str) -> None:
-    """A UsageError naming the first of the options ``dests`` (argparse destinations) the
-    command line gave, with ``why`` (e.g. "with --passive"): options a mode would ignore
-    are refused, not dropped. ``args.given``: the options typed (``cli.given_options``;
-    none when a command is called with a namespace of its own)."""
-    given = getattr(args, "given", ())
-    for dest in dests:
-        if dest in given:
-            raise UsageError(f"--{dest.replace('_', '-')} is not allowed {why}")
-
-
 def add_parallel_options(parser, resume_help: str | None = None) -> None:
     """A study's --workers N (local processes) and --scheduler ADDRESS (a Dask cluster),
     as :func:`scoutsim.analysis.parallel.map_tasks` takes them; and --no-resume, with

@@ -51,11 +51,11 @@ from ._common import (
     make_controller,
     out_dir,
     positive_int,
-    refuse_given,
     show_progress,
     usage_errors,
     write_json,
 )
+from ._given import refuse_given
 
 NAME = "basin"
 

@@ -28,8 +28,8 @@ from ._common import (
     load_parameters,
     make_controller,
     progress_messages,
-    refuse_given,
 )
+from ._given import refuse_given
 from ._orbit_options import (
     CONTROLLED_ONLY,
     PASSIVE_ONLY,

@@ -30,8 +30,8 @@ from ._common import (
     make_controller,
     positive_int,
     progress_messages,
-    refuse_given,
 )
+from ._given import refuse_given
 from ._orbit_options import (
     CONTROLLED_ONLY,
     PARALLEL,

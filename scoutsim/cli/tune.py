@@ -39,10 +39,10 @@ from ._common import (
     out_dir,
     positive_float,
     positive_int,
-    refuse_given,
     show_progress,
     usage_errors,
 )
+from ._given import refuse_given
 
 NAME = "tune"
 #: default simulated time of every evaluation [s]: TuneRuns' default

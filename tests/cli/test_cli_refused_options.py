@@ -1,5 +1,5 @@
 """An option a mode would ignore is refused, naming it, before anything runs
-(scoutsim.cli: ``given_options``, ``refuse_given``).
+(scoutsim.cli._given).
 
 ``orbit --passive --model I`` used to print the passive model's orbit as if Model I had
 been asked for; every such combination is now a usage error (exit 2) that names the
@@ -7,7 +7,8 @@ option, however the user spelled it (an abbreviation, ``--name=value``)."""
 
 import pytest
 
-from scoutsim.cli import given_options, main
+from scoutsim.cli import build_parser, main
+from scoutsim.cli._given import given_options
 
 
 @pytest.mark.parametrize(
@@ -45,7 +46,9 @@ def test_an_option_the_mode_ignores_is_refused_by_name(argv, option, tmp_path, c
 
 
 def test_given_options_are_the_typed_ones_however_spelled():
-    given = given_options(["orbit", "--passive", "--fric=0.9", "--jac", "fd", "--json"])
+    given = given_options(
+        build_parser(), ["orbit", "--passive", "--fric=0.9", "--jac", "fd", "--json"]
+    )
     assert {"passive", "friction", "jacobian", "json"} <= given
     # the defaults of the options not typed are not among them
     assert not given & {"model", "duration", "speed", "apex_height", "workers", "robot"}
