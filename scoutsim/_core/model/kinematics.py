@@ -43,6 +43,7 @@ from .layout import (
     STRUT,
     STUCK,
 )
+from .leg import held_at_stop
 
 
 @kernel(inline="always")
@@ -137,7 +138,7 @@ def project(q, dq, l, P, mi, mf):
                     dq[IPHB + leg] = 0.0
                 l[leg] = l0
             else:
-                if P[P_C + leg] <= 0.0 or l[leg] > l0:
+                if held_at_stop(P[P_C + leg], l0, l[leg]):
                     l[leg] = l0
             g = q[ITH] + q[IPHB + leg]
             sg = math.sin(g)

@@ -46,10 +46,20 @@ def leg_axial_force(k, c, l0, ll, ld, fc):
 
 
 @kernel(inline="always")
+def held_at_stop(c, l0, ll):
+    """Whether a massive leg in flight of length ``ll`` [m] is held at its stop ``l0`` [m]:
+    undamped (damper ``c`` <= 0 [N s/m]: its massless toe follows the spring at once) or at
+    or beyond the stop. Otherwise it is free and relaxes towards the stop
+    (:func:`flight_leg_rate`): the projection, its derivative and the sensitivities'
+    difference steps all read this one test."""
+    return c <= 0.0 or ll >= l0
+
+
+@kernel(inline="always")
 def flight_leg_rate(k, c, l0, ll, fc):
     """dl/dt [m/s] of a massive leg's massless toe in flight, from its force balance
     leg_axial_force(...) = 0 (it relaxes towards l0; docs/specification.md section 2); 0 at the stop."""
-    if c <= 0.0 or ll >= l0:
+    if held_at_stop(c, l0, ll):
         return 0.0
     f = k * (l0 - ll)
     lin = f / (c + fc / LEG_FRICTION_SPEED)

@@ -74,6 +74,7 @@ from ..model.layout import (
     STICK,
     STRUT,
 )
+from ..model.leg import held_at_stop
 from ..model.sensor_readings import read_encoders, true_readings
 from .events import event_values
 from .tangent_flow import projection_derivative
@@ -198,11 +199,11 @@ def _stop_margins(v, s, mi, P, tan):
     par0 = v.shape[0] - npar
     for leg in range(2):
         mode = mi[MI_CONTACT_B + leg]
-        if mode == STICK or mode == STRUT or mode == SLIDE or P[P_C + leg] <= 0.0:
+        if mode == STICK or mode == STRUT or mode == SLIDE:
+            continue
+        if held_at_stop(P[P_C + leg], P[P_L0 + leg], s[IL_B + leg]):
             continue
         gap = P[P_L0 + leg] - s[IL_B + leg]
-        if gap <= 0.0:
-            continue
         rate = v[X_S + IL_B + leg]  # the gap closes at this rate per unit e
         for i in range(npar):
             rate -= v[par0 + i] * tan.dP[i, P_L0 + leg]

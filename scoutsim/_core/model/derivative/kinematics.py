@@ -40,6 +40,7 @@ from ..layout import (
     STRUT,
     STUCK,
 )
+from ..leg import held_at_stop
 
 # slots of the configuration's sines and cosines (what project returns, in its order):
 # the pitch theta, the back and the front leg's angle g from the vertical
@@ -119,9 +120,9 @@ def project_t(q, dq, l, P, mi, tr, bundle):
                     q_t[IPHB + leg] = P_t[P_TD_B + leg]
                     dq_t[IPHB + leg] = 0.0
                 l_t[leg] = P_t[P_L0 + leg]
-            elif P[P_C + leg] <= 0.0 or l[leg] == P[P_L0 + leg]:
-                # held at the stop (the primal clamps l > l0 to l0; a leg exactly at l0 is
-                # taken as held: the derivative of the branch at the stop)
+            elif held_at_stop(P[P_C + leg], P[P_L0 + leg], l[leg]):
+                # held at the stop (the projected l <= l0; a leg exactly at l0 is taken as
+                # held: the derivative of the branch at the stop)
                 l_t[leg] = P_t[P_L0 + leg]
             g_t = th_t + q_t[IPHB + leg]
             sg_t = cg * g_t
