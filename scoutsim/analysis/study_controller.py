@@ -37,15 +37,18 @@ import dataclasses
 import hashlib
 import pickle
 
-from ..control.factory import ControllerSpec, is_factory_spec, load_factory
+from ..control.factory import ControllerSpec, FactoryError, is_factory_spec, load_factory
 from ..control.protocol import controller_name
 from ..parameters import ControllerParameters
 from .parallel import check_sendable, is_importable, leaves_process
+from .sweep_points import si_name
 
 __all__ = [
     "study_controller",
     "check_controller_travels",
     "build_controller",
+    "check_factory_reads",
+    "controller_ranges",
     "describe_controller",
     "controller_label",
     "CONTROLLER_ADVICE",
@@ -99,6 +102,55 @@ def build_controller(controller, robot=None, params: ControllerParameters | None
             controller = dataclasses.replace(controller, params=params)
         return controller.build(robot)
     return controller
+
+
+def check_factory_reads(controller, robot, params: ControllerParameters, ranges: dict) -> None:
+    """FactoryError (a ValueError) if a factory (a ControllerSpec) makes the same controller at both ends of
+    a study's range of a controller parameter: it does not read that field of the
+    parameters it is given, and the study would vary nothing while its table, tuning or
+    indices looked like the robot's answer. ``ranges``: {name: (low, high)}, a
+    ``controller.<field>`` name as the study takes it (a ``_deg`` angle in degrees), each
+    set on ``params`` alone; the two controllers made for ``robot`` are compared by their
+    pickles (a compiled controller's: its function, arrays and period). Anything else
+    than a ControllerSpec, and a factory that raises or makes a controller that does not
+    pickle, is left to the points (reported there, as before)."""
+    if not isinstance(controller, ControllerSpec):
+        return
+    for name, (low, high) in ranges.items():
+        si, scale = si_name(name)
+        fld = si.partition(".")[2]
+        if low == high or not si.startswith("controller."):
+            continue
+        try:
+            made = [
+                pickle.dumps(
+                    build_controller(
+                        controller, robot, dataclasses.replace(params, **{fld: v * scale})
+                    )
+                )
+                for v in (low, high)
+            ]
+        except Exception:  # noqa: BLE001 - the factory's own failure is the points' to report
+            continue
+        if made[0] == made[1]:
+            raise FactoryError(
+                f"{name}: the factory {controller.spec!r} makes the same controller with "
+                f"{name} = {low:g} and {high:g}: it does not read {fld} in the "
+                "ControllerParameters it is given (make(robot, params)), so the study would "
+                "vary nothing; read it in the factory, or vary another parameter"
+            )
+
+
+def controller_ranges(points: list[dict]) -> dict:
+    """{name: (lowest, highest)} of the ``controller.<field>`` values of a study's points
+    ({name: value as named}), for :func:`check_factory_reads`."""
+    out: dict = {}
+    for p in points:
+        for name, v in p.items():
+            if name.startswith("controller."):
+                low, high = out.get(name, (v, v))
+                out[name] = (min(low, v), max(high, v))
+    return out
 
 
 def controller_label(controller) -> str | None:

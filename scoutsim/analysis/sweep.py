@@ -61,6 +61,8 @@ from ..state import HybridState, InitialState
 from .study_controller import (
     build_controller,
     check_controller_travels,
+    check_factory_reads,
+    controller_ranges,
     describe_controller,
     study_controller,
 )
@@ -412,6 +414,9 @@ def sweep(
             "factory make(robot, params) gets each point's parameters), or "
             "sweep robot.<field> only"
         )
+    if isinstance(controller, ControllerSpec):
+        check_factory_reads(controller, robot, controller.params or ControllerParameters(),
+                            controller_ranges(points))  # fmt: skip
     check_controller_travels(controller, workers, scheduler, len(points))
     settings = {
         "model": model,

@@ -114,6 +114,7 @@ from .parallel import map_tasks, pool_is_broken, worker_pool
 from .study_controller import (
     build_controller,
     check_controller_travels,
+    check_factory_reads,
     describe_controller,
 )
 from .study_failures import StudyError, check_on_error, is_error
@@ -265,6 +266,13 @@ def tune(
     if not params:
         raise ValueError("no parameter to tune: give at least one")
     check_tuned_fields(kind, params)
+    if kind == "factory":
+        ranges = {
+            p.name: (p.low / p.scale, p.high / p.scale)
+            for p in params
+            if p.key.startswith("controller.")
+        }
+        check_factory_reads(spec.get("controller"), robot, cparams, ranges)
     if search.refine:
         check_refinable(params, kind)
     check_controller_travels(spec.get("controller"), workers, scheduler, 2)

@@ -118,6 +118,7 @@ def execute(args) -> int:
     from ..analysis.study_failures import StudyError
     from ..analysis.sweep import CHECKPOINT, read_checkpoint
     from ..analysis.uncertainty import check_parameters, uncertainty_study
+    from ..control.factory import FactoryError
 
     params = _parameters(args)
     n_runs = args.samples * (len(params) + 2)
@@ -136,7 +137,10 @@ def execute(args) -> int:
     out = out_dir(args.out)
     wall0 = time.perf_counter()
     try:
-        with usage_errors(SchedulerUnreachableError, NotSendableError), warnings.catch_warnings():
+        with (
+            usage_errors(SchedulerUnreachableError, NotSendableError, FactoryError),
+            warnings.catch_warnings(),
+        ):
             warnings.simplefilter("ignore", RuntimeWarning)
             res = uncertainty_study(
                 params,

@@ -30,6 +30,15 @@ from scoutsim.control.factory import ControllerSpec
 USER_MODULE = "scoutsim_user_controllers"
 USER_SOURCE = '"""A user\'s controllers, in a module of their own (written by the test)."""\nimport numpy as np\n\nfrom scoutsim.control import CompiledController\nfrom scoutsim.control import sensors as S\n\nTD, SWEEP = 0, 2                      # touchdown angles, sweep limits [rad] (back, front)\nKP, KD, KPB, KDB, TDC, LOC, L0, STALL, SLOPE, TMAX = range(4, 14)\nN = 14\nFLIGHT, RETRACTION, BRAKE = 0, 1, 2\n\n\ndef bound(t, y, p, state, torque, leg_states):\n    """Table I\'s structure written by a user: flight servo, retraction, brake."""\n    for leg in range(2):\n        angle = y[S.HIP_ANGLE + leg]\n        rate = y[S.HIP_RATE + leg]\n        compression = p[L0] - y[S.LEG_LENGTH + leg]\n        st = leg_states[leg]\n        if st == FLIGHT and compression > p[TDC]:\n            st = RETRACTION\n        elif st != FLIGHT and compression < p[LOC]:\n            st = FLIGHT\n        if st == RETRACTION and angle < p[SWEEP + leg]:\n            st = BRAKE\n        leg_states[leg] = st\n        if st == FLIGHT:\n            torque[leg] = p[KP] * (p[TD + leg] - angle) - p[KD] * rate\n        elif st == RETRACTION:\n            torque[leg] = min(0.0, max(-p[STALL] + p[SLOPE] * rate, -p[TMAX]))\n        else:\n            torque[leg] = p[KPB] * (p[SWEEP + leg] - angle) - p[KDB] * rate\n    return 0\n\n\ndef params_of(robot, c):\n    p = np.zeros(N)\n    p[TD:TD + 2] = c.touchdown_angle_back, c.touchdown_angle_front\n    p[SWEEP:SWEEP + 2] = c.sweep_limit_back, c.sweep_limit_front\n    p[KP], p[KD], p[KPB], p[KDB] = c.flight_kp_back, c.flight_kd_back, c.brake_kp_back, c.brake_kd_back\n    p[TDC], p[LOC] = c.touchdown_compression, c.liftoff_compression\n    p[L0], p[STALL], p[SLOPE], p[TMAX] = (robot.leg_rest_length, robot.stall_torque,\n                                          -robot.torque_speed_slope, robot.max_leg_torque)\n    return p\n\n\nclass PyBound:\n    """The same law as a Python controller (command(t, sensors)), its leg states as its\n    own state (get_state / set_state: what the periodic orbits restart strides from)."""\n\n    control_period = 1e-3\n\n    def __init__(self, p, controller_parameters=None):\n        self.p = np.array(p, dtype=float)\n        self.controller_parameters = controller_parameters\n        self.leg_states = np.zeros(2, dtype=np.int64)\n\n    def reset(self, robot, sensors):\n        self.leg_states[:] = 0\n\n    def get_state(self):\n        return tuple(float(v) for v in self.leg_states)\n\n    def set_state(self, values):\n        self.leg_states[:] = np.round(values).astype(np.int64)\n\n    def command(self, t, sensors):\n        torque = np.zeros(2)\n        bound(t, sensors.vector, self.p, None, torque, self.leg_states)\n        return float(torque[0]), float(torque[1])\n\n\ndef make_compiled(robot, params):\n    c = CompiledController(bound, params=params_of(robot, params), name="user_bound")\n    c.controller_parameters = params    # (legs start at the touchdown angles)\n    return c\n\n\ndef make_python(robot, params):\n    return PyBound(params_of(robot, params), params)\n\n\ndef make_broken(robot, params):\n    """A factory with a bug."""\n    raise RuntimeError("the factory\'s own bug")\n\n\nclass Raises(PyBound):\n    """A Python controller whose command has a bug (an AttributeError)."""\n\n    def command(self, t, sensors):\n        return sensors.no_such_reading, 0.0\n\n\nclass GivesUp(PyBound):\n    """A Python controller that returns torques that are not finite after 0.2 s."""\n\n    def command(self, t, sensors):\n        tau = super().command(t, sensors)\n        return (float("nan"), tau[1]) if t >= 0.2 else tau\n\n\ndef make_raises(robot, params):\n    return Raises(params_of(robot, params), params)\n\n\ndef make_gives_up(robot, params):\n    return GivesUp(params_of(robot, params), params)\n\n\nclass Forgets(PyBound):\n    """A Python controller with a bug only a restart from a state reaches: set_state\n    forgets the sample counter its command needs (a run from the start never calls it)."""\n\n    def reset(self, robot, sensors):\n        super().reset(robot, sensors)\n        self.samples = 0\n\n    def set_state(self, values):\n        super().set_state(values)\n        self.samples = None\n\n    def command(self, t, sensors):\n        self.samples += 1\n        return super().command(t, sensors)\n\n\ndef make_forgets(robot, params):\n    return Forgets(params_of(robot, params), params)\n'
 
+# a factory that makes its controller from Table I's defaults whatever it is given (a
+# user's slip: the study would run one controller at every point)
+USER_SOURCE += (
+    "\n\ndef make_fixed(robot, params):\n"
+    "    from scoutsim import ControllerParameters\n\n"
+    "    return CompiledController(bound, params=params_of(robot, ControllerParameters()),"
+    " name='user_fixed')\n"
+)
+
 #: two starts from which the Table I law bounds steadily within 6 s
 GRID = dict(
     models=("II",),
@@ -319,6 +328,39 @@ def test_a_factory_that_cannot_be_imported_is_refused_before_any_point(no_point_
     with pytest.raises(FactoryError, match="no_such_module_here"):
         B.basin_of_attraction(controller="no_such_module_here:make", workers=2, **GRID)
     assert no_point_runs == []
+
+
+def test_a_study_of_a_field_the_factory_does_not_read_is_refused_before_any_point(
+    user, no_point_runs, tmp_path
+):
+    """A factory that makes the same controller at both ends of a study's range of a
+    controller field: the sweep, the tuning and the uncertainty study would vary nothing
+    and report it as the robot's answer; each refuses it, naming the field, before any
+    point runs. A factory that reads the field is not refused (the check only builds
+    and compares the controllers: the points are refused by the map that follows)."""
+    from scoutsim.analysis.tune import tune
+    from scoutsim.analysis.uncertainty import parse_parameter, uncertainty_study
+    from scoutsim.control.factory import FactoryError
+
+    name = "controller.touchdown_angle_front_deg"
+    fixed = f"{USER_MODULE}:make_fixed"
+    points = SW.grid_points({name: [19.0, 23.0]})
+    match = f"{name}: the factory '{fixed}' makes the same controller"
+    with pytest.raises(FactoryError, match=match):
+        SW.sweep(points, controller=fixed, duration=0.5, workers=1)
+    with pytest.raises(FactoryError, match=match):
+        uncertainty_study([parse_parameter(f"{name}=19:23")], n=2, controller=fixed, duration=0.5, workers=1,
+                          out=tmp_path / "u")  # fmt: skip
+    assert no_point_runs == []
+    # the same study with a factory that reads the field passes the check: its points
+    # reach the map (here refused by the fixture, which records them)
+    with pytest.raises(AssertionError, match="a point was sent to run"):
+        SW.sweep(points, controller=f"{USER_MODULE}:make_compiled", duration=0.5, workers=1)
+    assert len(no_point_runs) == 1
+    pytest.importorskip("cmaes")  # (the tuning's optional dependency)
+    with pytest.raises(FactoryError, match=match):
+        tune([name], controller=fixed, target=1.3, duration=0.5, budget=4, workers=1)
+    assert len(no_point_runs) == 1
 
 
 def test_basin_pitch_rates_are_si_and_the_older_degree_keyword_still_works():

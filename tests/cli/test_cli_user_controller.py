@@ -198,7 +198,7 @@ def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
             "--model",
             "I",
             "--grid",
-            "controller.touchdown_angle_front_deg=17:19:2",
+            "robot.leg_stiffness=3000:3500:2",
             "--duration",
             "0.5",
             "--workers",
@@ -213,6 +213,30 @@ def test_sweep_runs_a_module_controller_on_two_workers(user_dir, tmp_path):
         assert len(rows) == 2 and all(r["outcome"] != "error" for r in rows), rows
         tables[workers] = rows
     assert tables["1"] == tables["2"]
+
+
+def test_a_sweep_of_a_field_the_factory_does_not_read_is_refused(user_dir, tmp_path):
+    # 'compiled' holds the hips with gains of its own: a sweep of a touchdown angle would
+    # run the same controller at every point and report the flat table as the robot's
+    p = scoutsim(
+        user_dir,
+        "sweep",
+        "--controller",
+        "usermod:compiled",
+        "--grid",
+        "controller.touchdown_angle_front_deg=17:19:2",
+        "--duration",
+        "0.5",
+        "--workers",
+        "1",
+        "--out",
+        str(tmp_path / "s"),
+        cwd=tmp_path,
+    )
+    assert p.returncode == 2, p.stderr
+    assert "controller.touchdown_angle_front_deg: the factory 'usermod:compiled'" in p.stderr
+    assert "does not read touchdown_angle_front" in p.stderr
+    assert not (tmp_path / "s" / "sweep.csv").exists()
 
 
 def test_tune_runs_a_module_controller(user_dir, tmp_path):

@@ -53,7 +53,13 @@ from ...parameters import ControllerParameters, RobotParameters
 from ...parameters.robot_fields import field_of, robot_value, robot_with_value
 from ...simulation.initial_conditions import NAMED_STARTS
 from ..strides import MIN_STEADY_STRIDES
-from ..study_controller import check_controller_travels, describe_controller, study_controller
+from ..study_controller import (
+    check_controller_travels,
+    check_factory_reads,
+    controller_ranges,
+    describe_controller,
+    study_controller,
+)
 from ..study_failures import StudyError, end_of_study, error_fields, is_error
 from ..sweep import COST_OF_TRANSPORT, SUMMARY_COLUMNS, SweepBase, sweep_task
 from ..sweep_checkpoint import map_with_checkpoint, open_study_directory
@@ -443,6 +449,9 @@ def uncertainty_study(
     controller = study_controller(base.controller, robot) or ControllerParameters()
     _check(parameters, base, controller)
     points = _design_points(parameters, n, seed)
+    if isinstance(controller, ControllerSpec):
+        check_factory_reads(controller, robot, controller.params or ControllerParameters(),
+                            controller_ranges(points))  # fmt: skip
     check_controller_travels(controller, workers, scheduler, len(points))
     params_of = controller.params if isinstance(controller, ControllerSpec) else controller
     _warn_of_range_ends(parameters, points, robot, params_of or ControllerParameters())
