@@ -11,8 +11,8 @@ the wrong cell.
 :func:`controlled_family` therefore follows the orbit by natural-parameter steps that let
 the robot settle: at each value the closed loop runs on from the previous orbit's hybrid
 state with the new parameter (:func:`~scoutsim.analysis.controlled_orbit.likely_strides`,
-at least 80 strides) and Newton's method (difference Jacobians) finds the orbit it settled
-on. This follows the attracting orbit only: where the orbit loses stability the row says
+at least 80 strides) and Newton's method (exact Jacobians where the controller runs in
+the compiled loop, differences for a Python controller) finds the orbit it settled on. This follows the attracting orbit only: where the orbit loses stability the row says
 so, and the next value shows where the robot went (another cycle, or a fall).
 
 Units: the parameter as named (SI, or degrees for a ``_deg`` angle, as in ``sweep``).
