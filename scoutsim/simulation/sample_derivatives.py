@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._core.model import layout as L
-from .._core.model.evaluate import evaluate
+from .._core.model.derivative.currents import current_derivatives
 from .._core.numerics.tangent_work import X_CMD, X_MF, X_S
 from ..parameters.robot_fields import robot_value, robot_with_value
 from .parameter_rows import packing_derivatives
@@ -20,8 +20,7 @@ from .parameter_rows import packing_derivatives
 __all__ = ["SampleDerivatives"]
 
 #: relative step of the central differences of the packing (a field's derivative of the
-#: packed arrays, :func:`~scoutsim.simulation.parameter_rows.packing_derivatives`) and of
-#: the motor current along a carried column
+#: packed arrays, :func:`~scoutsim.simulation.parameter_rows.packing_derivatives`)
 DIFFERENCE_STEP = 1e-6
 
 
@@ -35,8 +34,8 @@ class SampleDerivatives:
     angle : (n samples, 2 legs, fields) d alpha / d field [rad per the field's SI unit];
         None before the run.
     current : (n, 2, fields) d i / d field [A per the field's SI unit]: the current's
-        derivative along each carried column, by central differences of the compiled
-        right-hand side at the sample (its state, commands and parameters moved together).
+        derivative along each carried column at the sample, in closed form (the
+        amplifier's branch, the motor speed's and the battery voltage's tangents).
     smoothness : the run's :meth:`~scoutsim.simulation.engine.HybridEngine.smoothness`;
         ``smoothness["nonsmooth"] > 0``: a reset where a perturbed copy took another branch
         (the run is not differentiable there: the derivatives are not those of the run).
@@ -102,27 +101,19 @@ class SampleDerivatives:
     def _current_derivative(self, s, mi, mf, cmd, P, phi, dcmd) -> np.ndarray:
         """(2, fields): the motor currents' derivative at state ``s`` (modes ``mi``,
         anchors ``mf``) under the commands ``cmd`` and parameters ``P``, along each
-        column (the state's and anchors' rows ``phi``, the commands' ``dcmd``): central
-        differences of the compiled right-hand side."""
+        column (the state's and anchors' rows ``phi``, the commands' ``dcmd``), in closed
+        form (:func:`~scoutsim._core.model.derivative.currents.current_derivatives`)."""
         assert self._dP is not None, "start() comes first"
-        n = len(self.fields)
-        out = np.zeros((2, n))
-        ds, aux = np.zeros(L.NS), np.zeros(L.NAUX)
-        cols = [leg * L.NAUX_LEG + L.A_CURRENT for leg in (0, 1)]
-        for j in range(n):
-            scale = max(np.abs(phi[:, j]).max(), np.abs(dcmd[:, j]).max(), 1.0)
-            e = DIFFERENCE_STEP / scale
-            ends = []
-            for sign in (1.0, -1.0):
-                evaluate(
-                    s + sign * e * phi[X_S:X_MF, j],
-                    P + sign * e * self._dP[j],
-                    mi,
-                    mf + sign * e * phi[X_MF:X_CMD, j],
-                    cmd + sign * e * dcmd[:, j],
-                    ds,
-                    aux,
-                )
-                ends.append(aux[cols].copy())
-            out[:, j] = (ends[0] - ends[1]) / (2.0 * e)
-        return out
+        return current_derivatives(
+            s,
+            P,
+            mi,
+            mf,
+            np.ascontiguousarray(cmd, dtype=float),
+            (
+                np.ascontiguousarray(phi[X_S:X_MF]),
+                np.ascontiguousarray(phi[X_MF:X_CMD]),
+                np.ascontiguousarray(dcmd),
+            ),
+            self._dP,
+        )

@@ -257,6 +257,35 @@ def evaluate_t(P, mi, cmd, ew, dw, tangents, ds_t):
 
 
 @kernel
+def motor_currents_t(P, mi, cmd, ew, dw, tangents, s_out, cur_t):
+    """cur_t[leg] := the derivative of the motor current [A] of each leg (the evaluation's
+    ``aux`` ``A_CURRENT``, :func:`~scoutsim._core.model.actuator.motor_current`) along one
+    direction, at the evaluation the workspace ``ew`` holds; ``tangents`` = (s_t, mf_t,
+    cmd_t, P_t) as for :func:`evaluate_t`, whose current tangents these are (the same
+    branch read ahead along the motion, the battery's voltage by the implicit function
+    theorem). ``dw``: scratch (:func:`derivative_workspace`); ``s_out`` (NS): scratch, left
+    with the projected state's tangent."""
+    s_t, mf_t, cmd_t, P_t = tangents
+    wk = ew[0]
+    q = wk[WK_Q : WK_Q + NQ]
+    dq = wk[WK_DQ : WK_DQ + NQ]
+    l = wk[WK_L : WK_L + 2]
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    meta = wk[WK_META : WK_META + NMETA]
+    dq_t = dw[DW_DQ_T : DW_DQ_T + NQ]
+    _trig_of(meta, dw[DW_TR : DW_TR + NTR])
+    projected_t(q, dq, l, P, mi, dw, (s_t, mf_t, P_t), s_out)
+    vb = meta[MT_VBATT]
+    vb_t = battery_voltage_t(dq, cmd, P, vb, dq_t, cmd_t, P_t)
+    for leg in range(2):
+        om_t = motor_speed_t(dq_t, leg, P, dq, P_t)
+        branch = _leg_branch(P, cmd, wk, leg)
+        cur_t[leg] = branch_current_t(
+            branch, cmd[leg], LG[2 * LG_OM + leg], vb, leg, P, (cmd_t[leg], om_t, vb_t, P_t)
+        )
+
+
+@kernel
 def projection_t(P, mi, ew, dw, tangents, s_out):
     """s_out := the derivative of the projected state along one direction, at the
     evaluation the workspace ``ew`` holds (the projection of the state given to it);

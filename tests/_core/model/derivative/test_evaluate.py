@@ -197,3 +197,62 @@ def test_massless_legs_and_the_bench_rigs():
         # (on the rigs the legs hang in flight at their stops: most points are kinks)
         assert smooth > 0 and smooth + at_kink >= 0.6 * evaluable, (model, rig)
         assert worst < 1e-6, (model, rig, worst)
+
+
+def _currents(s, P, mi, mf, cmd):
+    """The motor currents [A] (aux A_CURRENT of each leg) at a state."""
+    ds = np.zeros(L.NS)
+    aux = np.zeros(L.NAUX)
+    ew = eval_workspace()
+    evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], True)
+    return aux[[leg * L.NAUX_LEG + L.A_CURRENT for leg in (0, 1)]]
+
+
+@pytest.mark.parametrize("model", ["ideal", "I", "II"])
+@pytest.mark.parametrize("robot", list(ROBOTS))
+def test_the_motor_currents_derivative_equals_differences_of_the_currents(model, robot):
+    """The currents' derivative in closed form (current_derivatives, what the
+    identification's exact Jacobian reads for a current channel: the amplifier's branch,
+    the motor speed's and the battery's tangents), several directions at once, equals the
+    Richardson-extrapolated central difference of the currents the right-hand side
+    reports, where both sides' differences agree (no limit met within the step)."""
+    from scoutsim._core.model.derivative.currents import current_derivatives
+
+    P, cases = _samples(ROBOTS[robot], model)
+    rng = np.random.default_rng(2)
+    worst, smooth = 0.0, 0
+    for s, mi, mf, cmd in cases:
+        dirs = [_direction(rng, s, P, with_parameters=True) for _ in range(3)]
+        carried = current_derivatives(
+            s,
+            P,
+            mi,
+            mf,
+            cmd,
+            tuple(np.ascontiguousarray(np.stack([d[k] for d in dirs], axis=1)) for k in range(3)),
+            np.ascontiguousarray(np.stack([d[3] for d in dirs])),
+        )
+        for j, (s_t, mf_t, cmd_t, P_t) in enumerate(dirs):
+            case = (s, mi, mf, cmd, s_t, mf_t, cmd_t, P_t)
+
+            def moved(e, case=case):
+                s, mi, mf, cmd, s_t, mf_t, cmd_t, P_t = case
+                return _currents(s + e * s_t, P + e * P_t, mi, mf + e * mf_t, cmd + e * cmd_t)
+
+            i0 = moved(0.0)
+            sides = [(moved(e) - i0) / e for e in (STEP, -STEP)]
+            wide = [(moved(e) - i0) / e for e in (2 * STEP, -2 * STEP)]
+            scale = max(np.max(np.abs(sides[0])), 1e-3)  # [A per unit of the direction]
+            # smooth over the step: each side converges and both sides are one slope
+            # (first-order sides: agreement within STEP times the curvature, ~1e-4)
+            if not all(np.max(np.abs(a - b)) <= 1e-4 * scale for a, b in zip(sides, wide)):
+                continue
+            if np.max(np.abs(sides[0] - sides[1])) > 1e-4 * scale:
+                continue
+            c1 = (moved(STEP) - moved(-STEP)) / (2 * STEP)
+            c2 = (moved(2 * STEP) - moved(-2 * STEP)) / (4 * STEP)
+            central = (4.0 * c1 - c2) / 3.0
+            smooth += 1
+            worst = max(worst, np.max(np.abs(carried[:, j] - central)) / scale)
+    assert smooth >= 0.5 * 3 * len(cases), (smooth, len(cases))
+    assert worst < 1e-6, worst
