@@ -95,10 +95,10 @@ def register(sub, common) -> None:
     idf.add_argument(
         "--jacobian",
         choices=("fd", "exact"),
-        default="fd",
-        help="the local fits' Jacobian: fd, forward differences of the residuals; exact, "
-        "the replays' derivatives carried with them (slower here, the same optimum: "
-        "docs/identification.md) (default: fd)",
+        default="exact",
+        help="the local fits' Jacobian: exact, the replays' derivatives carried with them "
+        "(differences where a replay is not differentiable); fd, forward differences of "
+        "the residuals (slower, the same optimum: docs/identification.md) (default: exact)",
     )
     add_plots_option(idf, True, "the fit figures")
     idf.add_argument("--json", action="store_true", help="print identified.json to stdout")

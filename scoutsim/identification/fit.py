@@ -90,10 +90,10 @@ class FitSettings:
     max_interval_ratio : an identifiable parameter's interval spans at most this factor.
     max_nfev, diff_step : passed to ``scipy.optimize.least_squares`` (per local fit; the
         finite-difference step is in ln p).
-    jacobian : the local fits' Jacobian: "fd" (default), forward differences of the
-        residuals with ``diff_step``; "exact", the replays' derivatives carried with them
-        (:meth:`~scoutsim.identification.residuals.Residuals.jacobian`; differences where a
-        replay is not differentiable). docs/identification.md compares the two.
+    jacobian : the local fits' Jacobian: "exact" (default), the replays' derivatives
+        carried with them (:meth:`~scoutsim.identification.residuals.Residuals.jacobian`;
+        differences where a replay is not differentiable); "fd", forward differences of
+        the residuals with ``diff_step``. docs/identification.md compares the two.
     jac_step : central-difference step in ln p of the Jacobian at the optimum.
     flat_ratio : a singular direction along which the cost rises by less than this
         fraction, or more than its inverse, of the quadratic prediction over the interval
@@ -107,7 +107,7 @@ class FitSettings:
     max_interval_ratio: float = 2.0
     max_nfev: int = 60
     diff_step: float = 1e-3
-    jacobian: str = "fd"
+    jacobian: str = "exact"
     jac_step: float = 1e-2
     flat_ratio: float = 0.25
 

@@ -139,18 +139,19 @@ def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
     assert p["interval"][0] < p["value"] < p["interval"][1]
     out = capsys.readouterr().out
     assert "joint_stiction" in out and "true" in out
-    assert d["jacobian_method"] == "fd"
-    # the exact Jacobian (the replays' carried derivatives) reaches the same optimum
-    assert main(argv + ["--jacobian", "exact", "--out", str(tmp_path / "exact")]) == 0
-    e = json.loads((tmp_path / "exact" / "identified.json").read_text())
-    assert e["jacobian_method"] == "exact" and e["jacobian_evaluations"] > 0
-    assert e["jacobian_fallbacks_to_differences"] == 0
+    # the default: the exact Jacobian (the replays' carried derivatives)
+    assert d["jacobian_method"] == "exact" and d["jacobian_evaluations"] > 0
+    assert d["jacobian_fallbacks_to_differences"] == 0
+    # it reaches the optimum forward differences of the residuals reach
+    assert main(argv + ["--jacobian", "fd", "--out", str(tmp_path / "fd")]) == 0
+    f = json.loads((tmp_path / "fd" / "identified.json").read_text())
+    assert f["jacobian_method"] == "fd" and f["jacobian_evaluations"] == 0
     # (measured: a cost lower by 1e-6, values 2e-4 and 6e-4 from the differences' fit,
     # whose intervals are +-0.8 % and +-2 %: the cost is rough with the stiction)
-    assert e["cost"] <= d["cost"] * (1.0 + 1e-5)
+    assert d["cost"] <= f["cost"] * (1.0 + 1e-5)
     for name in ("joint_stiction", "joint_damping"):
         lo, hi = d["parameters"][name]["interval"]
-        assert lo < e["parameters"][name]["value"] < hi
+        assert lo < f["parameters"][name]["value"] < hi
     capsys.readouterr()
     # a bad log: exit code 2 and the reason
     bad = tmp_path / "bad.csv"
@@ -160,7 +161,7 @@ def test_cli_identify_writes_identified_json(tmp_path, capsys, swing_run):
 
 
 def test_gearbox_idle_loss_is_identified_by_the_same_machinery(true_robot):
-    """Issue 5 item 3: the torque-dependent efficiency's parameters are identifiable like
+    """The torque-dependent efficiency's parameters are identifiable like
     the others. A free swing back-drives the gear train, so an idle loss torque brakes it
     like a Coulomb friction at the leg: fitted from zero, it is recovered within its
     interval together with the joint damping."""

@@ -132,7 +132,7 @@ def model_ii_no_slip():
 
 
 def test_model_ii_no_slip_bounds_steadily_from_the_nose_up_start(model_ii_no_slip):
-    """Issue 12, item 1: with the stiction bookkeeping right, Model II bounds on a no-slip
+    """With the stiction bookkeeping right, Model II bounds on a no-slip
     floor from this start with lift-off detected at a few mm (the bug made it fall at
     1.3 s; with the default 8 / 6 mm it runs the 20 s without settling on a cycle)."""
     r = model_ii_no_slip
