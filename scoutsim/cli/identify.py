@@ -98,7 +98,7 @@ def register(sub, common) -> None:
         default="exact",
         help="the local fits' Jacobian: exact, the replays' derivatives carried with them "
         "(differences where a replay is not differentiable); fd, forward differences of "
-        "the residuals (slower, the same optimum: docs/identification.md) (default: exact)",
+        "the residuals, the check (the same optimum: docs/identification.md) (default: exact)",
     )
     add_plots_option(idf, True, "the fit figures")
     idf.add_argument("--json", action="store_true", help="print identified.json to stdout")
