@@ -12,8 +12,9 @@ the wrong cell.
 the robot settle: at each value the closed loop runs on from the previous orbit's hybrid
 state with the new parameter (:func:`~scoutsim.analysis.controlled_orbit.likely_strides`,
 at least 80 strides) and Newton's method (exact Jacobians where the controller runs in
-the compiled loop, differences for a Python controller) finds the orbit it settled on. This follows the attracting orbit only: where the orbit loses stability the row says
-so, and the next value shows where the robot went (another cycle, or a fall).
+the compiled loop, differences for a Python controller) finds the orbit it settled on.
+This follows the attracting orbit only: where the orbit loses stability the row says so,
+and the next value shows where the robot went (another cycle, or a fall).
 
 Units: the parameter as named (SI, or degrees for a ``_deg`` angle, as in ``sweep``).
 """

@@ -105,10 +105,10 @@ def build_controller(controller, robot=None, params: ControllerParameters | None
 
 
 def check_factory_reads(controller, robot, params: ControllerParameters, ranges: dict) -> None:
-    """FactoryError (a ValueError) if a factory (a ControllerSpec) makes the same controller at both ends of
-    a study's range of a controller parameter: it does not read that field of the
-    parameters it is given, and the study would vary nothing while its table, tuning or
-    indices looked like the robot's answer. ``ranges``: {name: (low, high)}, a
+    """FactoryError (a ValueError) if a factory (a ControllerSpec) makes the same
+    controller at both ends of a study's range of a controller parameter: it does not read
+    that field of the parameters it is given, and the study would vary nothing while its
+    table, tuning or indices looked like the robot's answer. ``ranges``: {name: (low, high)}, a
     ``controller.<field>`` name as the study takes it (a ``_deg`` angle in degrees), each
     set on ``params`` alone; the two controllers made for ``robot`` are compared by their
     pickles (a compiled controller's: its function, arrays and period). Anything else
