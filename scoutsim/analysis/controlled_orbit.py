@@ -45,6 +45,7 @@ __all__ = [
     "JACOBIAN_METHODS",
     "likely_strides",
     "map_noise",
+    "newton_step",
     "NewtonError",
     "NOISE_MULTIPLE",
 ]
@@ -293,6 +294,13 @@ def controlled_fixed_point(
     )
 
 
+def newton_step(J: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """The Newton step dz for the fixed point of a map P at z: (J - I) dz = -F, with J
+    the map's Jacobian at z and F = P(z) - z; least squares (rcond 1e-12), so a map with
+    a multiplier at 1 (a direction the section does not fix) gets the smallest step."""
+    return np.linalg.lstsq(J - np.eye(F.size), -F, rcond=1e-12)[0]
+
+
 def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
     """Newton on the ``strides``-th iterate of the map ``m`` from ``start`` (see
     :func:`controlled_fixed_point`)."""
@@ -315,7 +323,7 @@ def _newton(m, start, strides, tol, max_iter, how, say, common, integ):
         if res < tol or it == max_iter:
             break
         J, used = stride_jacobian(m, z, like, c, how, strides)
-        dz = np.linalg.lstsq(J - np.eye(z.size), -F, rcond=1e-12)[0]
+        dz = newton_step(J, F)
         try:
             z, z1, c = _globalised_step(m, z, dz, like, res, disc, hist, strides)
         except NewtonError as exc:

@@ -40,7 +40,7 @@ from ..parameters.robot_fields import leg_names_where_legs_differ, robot_value, 
 from ..simulation.integrator import IntegratorSettings
 from ..simulation.simulator import simulate
 from ..state import HybridState
-from .controlled_orbit import ControlledOrbit, cell_change, stride_jacobian
+from .controlled_orbit import ControlledOrbit, cell_change, newton_step, stride_jacobian
 from .poincare import MapError
 from .stride_map import StrideMap
 
@@ -416,7 +416,7 @@ def _radius_at(orbit: ControlledOrbit, setting: dict, z, integrator) -> float:
     assert c.start is not None, "a crossing from a HybridState keeps its start"
     z0 = m.z_of(c.start)
     J, _ = stride_jacobian(m, z0, c.start, c, how, k)
-    step = np.linalg.lstsq(J - np.eye(z0.size), z0 - m.z_of(c.state), rcond=1e-12)[0]
+    step = newton_step(J, m.z_of(c.state) - z0)
     c1 = m.crossing(m.hs_of(z0 + step, like), strides=k)
     if not cell_change(c, c1):
         assert c1.start is not None, "a crossing from a HybridState keeps its start"
