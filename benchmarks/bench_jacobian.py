@@ -14,6 +14,10 @@
 3. Plain runs no slower: the plain 10 s run of this checkout against an earlier commit is
    ``benchmarks/bench_inprocess.py --base COMMIT`` (a run carries no sensitivities unless
    asked: the same compiled loop skips them).
+4. The hip-unit identification's exact Jacobian (``Residuals.jacobian``: the six Model II
+   hip parameters, both rigs of ``scoutsim identify --example``, at Table II) against
+   one evaluation of its residuals (both rigs replayed); forward differences cost six
+   evaluations more than the residuals they difference.
 
 Medians of ``--repeats`` timings, after one warm-up. Prints the machine. Asserts nothing.
 """
@@ -109,6 +113,26 @@ def main() -> int:
             f"   (target <= {1 + k / 4:.1f})"
         )
     print("\n3. plain runs against an earlier commit: benchmarks/bench_inprocess.py --base COMMIT")
+
+    from scoutsim.identification.example import example_logs
+    from scoutsim.identification.fit import fitted_names
+    from scoutsim.identification.residuals import Residuals
+    from scoutsim.identification.rig_data import prepare_logs
+    from scoutsim.parameters import RobotParameters
+
+    robot = RobotParameters()
+    data = prepare_logs(example_logs(), None, robot, None)
+    names = fitted_names(None, data)
+    res = Residuals(data, robot, names, None)
+    x = np.log([float(getattr(robot, n)) for n in names])
+    t_r = _median(lambda: res(x), args.repeats)
+    t_j = _median(lambda: res.jacobian(x), args.repeats)
+    print(f"\n4. the identification's exact Jacobian ({len(names)} hip parameters, two rigs)")
+    print(f"   residuals              {t_r * 1e3:8.1f} ms")
+    print(
+        f"   exact Jacobian         {t_j * 1e3:8.1f} ms   {t_j / t_r:6.1f} residual evaluations"
+        f"   (forward differences: {len(names)})"
+    )
     return 0
 
 
