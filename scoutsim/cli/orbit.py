@@ -150,6 +150,13 @@ def execute(args) -> int:
         )
     else:
         refuse_given(args, PASSIVE_ONLY, "without --passive (the passive model's apex state)")
+        if not args.sensitivity:
+            refuse_given(
+                args,
+                PARALLEL,
+                "without --sensitivity (the orbit is found in one process; the "
+                "sensitivities' parameters are what is shared out)",
+            )
     if not args.passive:
         controller = make_controller(law, cparams, robot)
     names = _sensitivity_names(args, controller, robot)

@@ -23,6 +23,7 @@ from scoutsim.cli._given import given_options
         (["orbit", "--passive", "--workers", "2"], "--workers"),
         (["orbit", "--passive", "--scheduler", "tcp://h:8786"], "--scheduler"),
         (["orbit", "--speed", "1.2"], "--speed"),
+        (["orbit", "--workers", "2"], "--workers"),  # (no --sensitivity to share out)
         (["orbit", "--apex-height", "0.3"], "--apex-height"),
         (["orbit", "--pitch-rate", "20"], "--pitch-rate"),
         (["continue", "--vary", "pitch_rate_deg=0:10", "--passive", "--points", "3"], "--points"),
