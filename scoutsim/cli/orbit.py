@@ -90,7 +90,8 @@ def register(sub, common) -> None:
         "extremes, electrical power, cost of transport and spectral radius, to "
         "robot.<field> (robot.<field>.back / .front: one leg of a per-leg field; a "
         "robot whose legs differ in it takes only these), controller.<field> of the "
-        "Table I law, friction_coefficient (SI); the parameters shared out to --workers "
+        "Table I law, friction_coefficient (SI; a _deg suffix on an angle gives its value "
+        "and derivatives in degrees); the parameters shared out to --workers "
         "processes or a --scheduler's cluster. --passive: the touchdown angles, period, "
         "mean speed and spectral radius, from exact derivatives, to robot.leg_stiffness, "
         "robot.leg_rest_length, robot.torso_mass, robot.torso_inertia, robot.hip_spacing",
@@ -200,16 +201,17 @@ def execute(args) -> int:
     sens = None
     if names and isinstance(orb, ControlledOrbit):
         from ..analysis.orbit_sensitivity import orbit_sensitivities
+        from ..analysis.sweep_points import si_name
 
         sens, metrics = orbit_sensitivities(
             orb,
-            names,
+            [si_name(n)[0] for n in names],
             progress=progress_messages(args, NAME),
             workers=args.workers,
             scheduler=args.scheduler,
         )
         d["metrics"] = metrics
-        d["sensitivities"] = {n: s.to_dict() for n, s in sens.items()}
+        d["sensitivities"] = {n: _as_named(n, sens[si_name(n)[0]].to_dict()) for n in names}
     elif names and isinstance(orb, PassiveOrbit):
         from ..analysis.passive_sensitivity import passive_orbit_sensitivities
 
@@ -252,8 +254,14 @@ def _sensitivity_names(args, controller, robot) -> list[str] | None:
         ]
     if args.sensitivity.strip() == "all":
         return known
+    from ..analysis.sweep_points import si_name
+    from ..parameters import field_dimension
+
     names = [n.strip() for n in args.sensitivity.split(",") if n.strip()]
     for n in names:
+        si, scale = si_name(n)
+        if scale != 1.0 and si in everything and field_dimension(si.rpartition(".")[2]) == "angle":
+            n = si  # (an angle in degrees: computed in SI, shown in degrees)
         if n not in everything:
             import difflib
 
@@ -263,7 +271,8 @@ def _sensitivity_names(args, controller, robot) -> list[str] | None:
                 ", ".join(known)
                 if args.passive
                 else "robot.<field> (robot.<field>.back / .front for one leg of a per-leg "
-                "field), controller.<field> (the Table I law's) or friction_coefficient"
+                "field), controller.<field> (the Table I law's; a _deg suffix on an angle "
+                "takes degrees) or friction_coefficient"
             )
             raise UsageError(
                 f"--sensitivity {n!r} is not allowed: must be 'all' or names of {allowed}{hint}"
@@ -274,6 +283,22 @@ def _sensitivity_names(args, controller, robot) -> list[str] | None:
             except ValueError as e:
                 raise UsageError(f"--sensitivity: {e}") from None
     return names
+
+
+def _as_named(name: str, sens: dict) -> dict:
+    """A parameter's sensitivities (``ParameterSensitivity.to_dict``, SI) in the unit its
+    name gives: for a ``_deg`` angle the value and the radius's step in degrees and the
+    derivatives per degree (the elasticities have no unit)."""
+    from ..analysis.sweep_points import si_name
+
+    scale = si_name(name)[1]  # [rad per deg] for a _deg name, else 1
+    if scale == 1.0:
+        return sens
+    return sens | {
+        "value": sens["value"] / scale,
+        "derivative": {m: v * scale for m, v in sens["derivative"].items()},
+        "spectral_radius_step": sens["spectral_radius_step"] / scale,
+    }
 
 
 #: the elasticities printed for a controlled and a passive orbit

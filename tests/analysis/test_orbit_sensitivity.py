@@ -141,7 +141,7 @@ def test_cli_orbit_sensitivity_json(capsys):
                 "--duration",
                 "8",
                 "--sensitivity",
-                "controller.touchdown_angle_front",
+                "controller.touchdown_angle_front,controller.touchdown_angle_front_deg",
                 "--json",
                 "--no-progress",
             ]
@@ -150,6 +150,13 @@ def test_cli_orbit_sensitivity_json(capsys):
     )
     d = json.loads(capsys.readouterr().out)
     s = d["sensitivities"]["controller.touchdown_angle_front"]
+    # the same angle named in degrees (the command line's edge): its value in degrees,
+    # its derivatives per degree, the same elasticities (they have no unit)
+    g = d["sensitivities"]["controller.touchdown_angle_front_deg"]
+    assert g["value"] == pytest.approx(21.0, rel=1e-12)
+    for m in SENSITIVITY_METRICS:
+        assert g["derivative"][m] == pytest.approx(s["derivative"][m] * math.pi / 180, rel=1e-12)
+    assert g["elasticity"] == s["elasticity"]
     assert set(s) == {"value", "derivative", "elasticity", "status", "spectral_radius_step"}
     assert set(s["derivative"]) == set(SENSITIVITY_METRICS)
     assert s["value"] == pytest.approx(math.radians(21.0))
