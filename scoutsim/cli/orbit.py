@@ -260,7 +260,13 @@ def _sensitivity_names(args, controller, robot) -> list[str] | None:
     names = [n.strip() for n in args.sensitivity.split(",") if n.strip()]
     for n in names:
         si, scale = si_name(n)
-        if scale != 1.0 and si in everything and field_dimension(si.rpartition(".")[2]) == "angle":
+        parts = si.split(".")  # section, field[, leg]
+        if (
+            scale != 1.0
+            and si in everything
+            and len(parts) > 1
+            and field_dimension(parts[1]) == "angle"
+        ):
             n = si  # (an angle in degrees: computed in SI, shown in degrees)
         if n not in everything:
             import difflib

@@ -169,6 +169,10 @@ def test_cli_orbit_sensitivity_json(capsys):
 def test_cli_refuses_an_unknown_parameter_by_name(capsys):
     assert main(["orbit", "--sensitivity", "robot.belt_stifness"]) == 2
     assert "robot.belt_stiffness" in capsys.readouterr().err
+    # _deg names an angle in degrees only
+    for name in ("robot.leg_stiffness_deg", "friction_coefficient_deg"):
+        assert main(["orbit", "--sensitivity", name]) == 2
+        assert f"--sensitivity {name!r} is not allowed" in capsys.readouterr().err
 
 
 def test_parameters_shared_out_to_two_workers_give_the_same_numbers(orbit, sensitivities):
