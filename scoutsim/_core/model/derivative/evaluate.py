@@ -126,6 +126,26 @@ def current_branches(P, cmd, ew):
     return code
 
 
+@kernel(inline="always")
+def _motor_t(leg, P, cmd, wk, dq, tangents):
+    """(om_t, cur_t): the tangents of leg ``leg``'s motor speed [rad/s] and motor current
+    [A] at the evaluation summarised in ``wk`` (rates ``dq``, commands ``cmd``);
+    ``tangents`` = (dq_t, cmd_t, vb_t, P_t): those of the projected rates, the commands,
+    the battery voltage and the packed parameters. The current is on its branch a moment
+    ahead along the motion: where it sits on a kink (a controller that commands the
+    torque-speed line's torque at a sample puts it exactly there), the side the
+    trajectory enters."""
+    dq_t, cmd_t, vb_t, P_t = tangents
+    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
+    vb = wk[WK_META + MT_VBATT]
+    om_t = motor_speed_t(dq_t, leg, P, dq, P_t)
+    branch = _leg_branch(P, cmd, wk, leg)
+    cur_t = branch_current_t(
+        branch, cmd[leg], LG[2 * LG_OM + leg], vb, leg, P, (cmd_t[leg], om_t, vb_t, P_t)
+    )
+    return om_t, cur_t
+
+
 @allocating
 def derivative_workspace():
     """The scratch vector of :func:`evaluate_t` (slots ``DW_*``)."""
@@ -204,12 +224,7 @@ def evaluate_t(P, mi, cmd, ew, dw, tangents, ds_t):
     nu0 = nact
     for leg in range(2):
         om = LG[2 * LG_OM + leg]
-        om_t = motor_speed_t(dq_t, leg, P, dq, P_t)
-        # the current's branch a moment ahead along the motion: where the current sits on
-        # a kink (a controller that commands the torque-speed line's torque at a sample
-        # puts it exactly there), the side the trajectory enters
-        branch = _leg_branch(P, cmd, wk, leg)
-        cur_t = branch_current_t(branch, cmd[leg], om, vb, leg, P, (cmd_t[leg], om_t, vb_t, P_t))
+        om_t, cur_t = _motor_t(leg, P, cmd, wk, dq, (dq_t, cmd_t, vb_t, P_t))
         tapp_t = delivered_torque_t(LG[2 * LG_CUR + leg], om, leg, P, cur_t, om_t, P_t)
         mode = mi[MI_MOTOR_B + leg]
         tb_t = hip_unit_forces_t(g, q, dq, leg, mode, P, q_t, dq_t, tapp_t, om_t, P_t)[1]
@@ -267,22 +282,14 @@ def motor_currents_t(P, mi, cmd, ew, dw, tangents, s_out, cur_t):
     with the projected state's tangent."""
     s_t, mf_t, cmd_t, P_t = tangents
     wk = ew[0]
-    q = wk[WK_Q : WK_Q + NQ]
     dq = wk[WK_DQ : WK_DQ + NQ]
-    l = wk[WK_L : WK_L + 2]
-    LG = wk[WK_LEG : WK_LEG + NWK_LEG]
-    meta = wk[WK_META : WK_META + NMETA]
     dq_t = dw[DW_DQ_T : DW_DQ_T + NQ]
+    meta = wk[WK_META : WK_META + NMETA]
     _trig_of(meta, dw[DW_TR : DW_TR + NTR])
-    projected_t(q, dq, l, P, mi, dw, (s_t, mf_t, P_t), s_out)
-    vb = meta[MT_VBATT]
-    vb_t = battery_voltage_t(dq, cmd, P, vb, dq_t, cmd_t, P_t)
+    projected_t(wk[WK_Q : WK_Q + NQ], dq, wk[WK_L : WK_L + 2], P, mi, dw, (s_t, mf_t, P_t), s_out)
+    vb_t = battery_voltage_t(dq, cmd, P, meta[MT_VBATT], dq_t, cmd_t, P_t)
     for leg in range(2):
-        om_t = motor_speed_t(dq_t, leg, P, dq, P_t)
-        branch = _leg_branch(P, cmd, wk, leg)
-        cur_t[leg] = branch_current_t(
-            branch, cmd[leg], LG[2 * LG_OM + leg], vb, leg, P, (cmd_t[leg], om_t, vb_t, P_t)
-        )
+        cur_t[leg] = _motor_t(leg, P, cmd, wk, dq, (dq_t, cmd_t, vb_t, P_t))[1]
 
 
 @kernel
