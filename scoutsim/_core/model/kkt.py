@@ -379,3 +379,110 @@ def kkt_schur_solve(A, nc, y, yo):
     y[yo + 2] = z2
     y[yo + 3] = z3
     y[yo + 4] = z4
+
+
+@kernel
+def kkt_reduced_solve_columns(A, piv, M, rkind, rleg, system, B, Y, one):
+    """:func:`kkt_reduced_solve` for m right-hand sides at once: the columns of ``B``
+    (rows 0 to nact + nr - 1, (MAX_KKT, m)), each solved in place as that function solves
+    one (the same operations, column by column); ``Y`` (MAX_KKT, m) scratch. With the
+    Schur complement's factors the columns run in the innermost loops; with the LU factors
+    (the massless legs' model) one at a time, in ``one`` = (w, o, yo): w[o:] and w[yo:]
+    as :func:`kkt_reduced_solve`'s b and y."""
+    nact, nr, free0, free1, schur = system
+    m = B.shape[1]
+    if not schur:
+        w, o, yo = one
+        n = nact + nr
+        for c in range(m):
+            for i in range(n):
+                w[o + i] = B[i, c]
+            kkt_reduced_solve(A, piv, M, rkind, rleg, system, w, o, w, yo)
+            for i in range(n):
+                B[i, c] = w[o + i]
+        return
+    fold = nact == 7
+    f0 = M[2, 5] / M[5, 5] if fold and free0 else 0.0
+    f1 = M[2, 6] / M[6, 6] if fold and free1 else 0.0
+    for c in range(m):
+        for i in range(5):
+            Y[i, c] = B[i, c]
+        if fold:
+            if free0:
+                Y[2, c] -= f0 * B[5, c]
+            if free1:
+                Y[2, c] -= f1 * B[6, c]
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == ROW_GEAR:
+            continue
+        for c in range(m):
+            Y[5 + nc, c] = B[nact + rr, c]
+        nc += 1
+    for c in range(m):
+        x0 = Y[0, c]
+        x1 = Y[1, c]
+        x2 = Y[2, c]
+        x3 = Y[3, c]
+        x4 = Y[4, c]
+        z0 = A[0, 0] * x0 + A[0, 1] * x1 + A[0, 2] * x2 + A[0, 3] * x3 + A[0, 4] * x4
+        z1 = A[1, 0] * x0 + A[1, 1] * x1 + A[1, 2] * x2 + A[1, 3] * x3 + A[1, 4] * x4
+        z2 = A[2, 0] * x0 + A[2, 1] * x1 + A[2, 2] * x2 + A[2, 3] * x3 + A[2, 4] * x4
+        z3 = A[3, 0] * x0 + A[3, 1] * x1 + A[3, 2] * x2 + A[3, 3] * x3 + A[3, 4] * x4
+        z4 = A[4, 0] * x0 + A[4, 1] * x1 + A[4, 2] * x2 + A[4, 3] * x3 + A[4, 4] * x4
+        # t = R z - r, then S nu = t (forward / back substitution with the Cholesky factor)
+        for k in range(nc):
+            row = 5 + k
+            acc = (
+                A[row, 0] * z0
+                + A[row, 1] * z1
+                + A[row, 2] * z2
+                + A[row, 3] * z3
+                + A[row, 4] * z4
+                - Y[row, c]
+            )
+            for e in range(k):
+                acc -= A[row, 10 + e] * Y[5 + e, c]
+            Y[row, c] = acc / A[row, 10 + k]
+        for k in range(nc - 1, -1, -1):
+            row = 5 + k
+            acc = Y[row, c]
+            for e in range(k + 1, nc):
+                acc -= A[5 + e, 10 + k] * Y[5 + e, c]
+            Y[row, c] = acc / A[row, 10 + k]
+        # ddq = z - Y nu
+        for k in range(nc):
+            row = 5 + k
+            nu = Y[row, c]
+            z0 -= A[row, 5] * nu
+            z1 -= A[row, 6] * nu
+            z2 -= A[row, 7] * nu
+            z3 -= A[row, 8] * nu
+            z4 -= A[row, 9] * nu
+        Y[0, c] = z0
+        Y[1, c] = z1
+        Y[2, c] = z2
+        Y[3, c] = z3
+        Y[4, c] = z4
+    if fold:
+        for c in range(m):
+            ddth = Y[2, c]
+            if free0:
+                B[5, c] = (B[5, c] - M[2, 5] * ddth) / M[5, 5]
+            if free1:
+                B[6, c] = (B[6, c] - M[2, 6] * ddth) / M[6, 6]
+    nc = 0
+    for rr in range(nr):
+        if rkind[rr] == ROW_GEAR:
+            a = 5 + int(rleg[rr])
+            for c in range(m):
+                dda = B[nact + rr, c]
+                B[nact + rr, c] = B[a, c] - M[2, a] * Y[2, c] - M[a, a] * dda
+                B[a, c] = dda
+        else:
+            for c in range(m):
+                B[nact + rr, c] = Y[5 + nc, c]
+            nc += 1
+    for c in range(m):
+        for i in range(5):
+            B[i, c] = Y[i, c]

@@ -11,7 +11,8 @@ chain on the tangents,
 
 with Df in closed form (:func:`~scoutsim._core.model.derivative.evaluate.evaluate_t`, one KKT
 solve with the factors of the stage's evaluation), and the step's end projected
-(:func:`~scoutsim._core.model.derivative.evaluate.projection_t`). The stages are evaluated
+(:func:`~scoutsim._core.model.derivative.evaluate.projection_t`), both for all columns in
+one call (a stage's column states gathered into ``tan.ft``). The stages are evaluated
 again here (the run's step keeps only their derivatives), with the step's own size, modes,
 anchors, commands and splitting: the derivative is that of the computed step, exact up to
 rounding, with no difference step. Where a Dormand-Prince step contains a kink of the
@@ -29,12 +30,12 @@ from ..model.derivative.evaluate import (
     projected_t,
     projection_t,
 )
-from ..model.derivative.kinematics import TR_CGB, TR_CGF, TR_CTH, TR_SGB, TR_SGF, TR_STH
+from ..model.derivative.kinematics import NTR, TR_CGB, TR_CGF, TR_CTH, TR_SGB, TR_SGF, TR_STH
 from ..model.evaluate import evaluate_ws
 from ..model.kinematics import project
 from ..model.layout import IL_B, NMF, NQ, NS
 from . import ark, dopri5
-from .tangent_work import X_CMD, X_MF, X_S, unpacked
+from .tangent_work import FT_CMD, FT_K, FT_MF, FT_Y, X_CMD, X_MF, X_S, unpacked
 
 
 @kernel
@@ -55,16 +56,30 @@ def parameter_tangents(tan):
 
 
 @kernel(inline="always")
-def _column(j, tan, y0):
-    """Column ``j``'s tangents of the state (into ``y0``), the anchors and the commands
-    (into ``tan.mft``, ``tan.cmdt``)."""
+def _columns(tan):
+    """The columns' tangents of the anchors and the commands (constant along a step) into
+    ``tan.ft`` (rows FT_MF, FT_CMD); returns the views (a stage's states (NS, m), the
+    stages' derivatives (7 NS, m), anchors, commands) of ``tan.ft``."""
+    Phi, ft = tan.Phi, tan.ft
+    for c in range(Phi.shape[1]):
+        for i in range(NMF):
+            ft[FT_MF + i, c] = Phi[X_MF + i, c]
+        for i in range(2):
+            ft[FT_CMD + i, c] = Phi[X_CMD + i, c]
+    return (
+        ft[FT_Y : FT_Y + NS],
+        ft[FT_K : FT_K + 7 * NS],
+        ft[FT_MF : FT_MF + NMF],
+        ft[FT_CMD : FT_CMD + 2],
+    )
+
+
+@kernel(inline="always")
+def _column_state(j, tan, y0):
+    """Column ``j``'s tangents of the state into ``y0``."""
     Phi = tan.Phi
     for i in range(NS):
         y0[i] = Phi[X_S + i, j]
-    for i in range(NMF):
-        tan.mft[i] = Phi[X_MF + i, j]
-    for i in range(2):
-        tan.cmdt[i] = Phi[X_CMD + i, j]
 
 
 @kernel
@@ -72,12 +87,12 @@ def projection_derivative(s, P, mi, mf, tan):
     """Phi := D[proj] Phi for the projection of the dependent coordinates of ``s`` (modes
     ``mi``, anchors ``mf``; ``s`` is not changed), in closed form; ``tan``: the unpacked
     work (:func:`~.tangent_work.unpacked`)."""
-    Phi, sp, y0, out, dw = tan.Phi, tan.sp, tan.w, tan.yt, tan.dw
+    Phi, sp, dw = tan.Phi, tan.sp, tan.dw
     for i in range(NS):
         sp[i] = s[i]
     q, dq, l = sp[0:NQ], sp[NQ : 2 * NQ], sp[IL_B : IL_B + 2]
     sth, cth, sg0, cg0, sg1, cg1 = project(q, dq, l, P, mi, mf)
-    tr = dw[DW_TR:]
+    tr = dw[DW_TR : DW_TR + NTR, 0]
     tr[TR_STH] = sth
     tr[TR_CTH] = cth
     tr[TR_SGB] = sg0
@@ -85,11 +100,15 @@ def projection_derivative(s, P, mi, mf, tan):
     tr[TR_SGF] = sg1
     tr[TR_CGF] = cg1
     parameter_tangents(tan)
+    ys, ks, mft, _ = _columns(tan)
     for j in range(Phi.shape[1]):
-        _column(j, tan, y0)
-        projected_t(q, dq, l, P, mi, dw, (y0, tan.mft, tan.Pt[j]), out)
         for i in range(NS):
-            Phi[X_S + i, j] = out[i]
+            ys[i, j] = Phi[X_S + i, j]
+    out = ks[0:NS]
+    projected_t(q, dq, l, P, mi, dw, (ys, mft, tan.Pt), out)
+    for j in range(Phi.shape[1]):
+        for i in range(NS):
+            Phi[X_S + i, j] = out[i, j]
 
 
 #: the most kinks of the amplifier's law one step's derivative is split at (more are
@@ -102,13 +121,14 @@ KINK_BISECTIONS = 36
 @kernel(inline="always")
 def _dopri5_pass(s, h, plant, tan, force):
     """The derivative of the Dormand-Prince step of size ``h`` [s] from ``s`` (``plant`` =
-    (P, mi, mf, cmd)), stage by stage: Phi := it (the stages' tangents in ``tan.Kt``), if
+    (P, mi, mf, cmd)), stage by stage: Phi := it (the stages' tangents in ``tan.ft``), if
     ``force`` or the motor currents' branches at the step's start and end agree. The
     step's end state is left in ``tan.work.tmp``. Returns True if Phi was written."""
     P, mi, mf, cmd = plant
-    Phi, own, Kt, yt, y0 = tan.Phi, tan.work, tan.Kt, tan.yt, tan.w
+    Phi, own = tan.Phi, tan.work
     K, y, ew = own.K, own.tmp, own.ew
     m = Phi.shape[1]
+    ys, ks, mft, cmdt = _columns(tan)
     start = 0
     end = 0
     for st in range(7):
@@ -120,18 +140,26 @@ def _dopri5_pass(s, h, plant, tan, force):
             end = current_branches(P, cmd, ew)
             if end != start and not force:
                 return False
-        for j in range(m):
-            _column(j, tan, y0)
-            dopri5.stage_state(st, y0, h, Kt[7 * j : 7 * j + 7], yt)
-            if st < 6:
-                evaluate_t(
-                    P, mi, cmd, ew, tan.dw, (yt, tan.mft, tan.cmdt, tan.Pt[j]), Kt[7 * j + st]
-                )
-            else:  # the step's end (b_7 = 0: its derivative is not needed), projected
-                projection_t(P, mi, ew, tan.dw, (yt, tan.mft, tan.Pt[j]), Kt[7 * j + 6])
+        # the columns' stage states (dopri5.stage_state on the tangents, the columns in
+        # the innermost loop)
+        for i in range(NS):
+            for j in range(m):
+                ys[i, j] = Phi[X_S + i, j]
+        for k in range(st):
+            a = dopri5.A[st, k]
+            if a != 0.0:
+                ha = h * a
+                for i in range(NS):
+                    for j in range(m):
+                        ys[i, j] += ha * ks[k * NS + i, j]
+        kt = ks[st * NS : (st + 1) * NS]
+        if st < 6:
+            evaluate_t(P, mi, cmd, ew, tan.dw, (ys, mft, cmdt, tan.Pt), kt)
+        else:  # the step's end (b_7 = 0: its derivative is not needed), projected
+            projection_t(P, mi, ew, tan.dw, (ys, mft, tan.Pt), kt)
     for j in range(m):
         for i in range(NS):
-            Phi[X_S + i, j] = Kt[7 * j + 6, i]
+            Phi[X_S + i, j] = ks[6 * NS + i, j]
     return True
 
 
@@ -209,6 +237,7 @@ def _flow_ark(s, h, plant, SF0, pack, tableau, ns):
     tab = (AE, AD, GAMMA)
     zr = ark.Z_ROWS
     ark.project_on_v(SF0, s, Z[0], R)
+    ys, ks, mft, cmdt = _columns(tan)
     for st in range(ns):
         if st == 0:
             for i in range(NS):
@@ -217,7 +246,7 @@ def _flow_ark(s, h, plant, SF0, pack, tableau, ns):
             ark.stage_state(st, s, h, (K, Z), split, tab, (y, w, mm, pp))
         evaluate_ws(y, P, mi, mf, cmd, K[st], own.aux_new, ew, False, ew[3], False)
         for j in range(m):
-            _column(j, tan, y0)
+            _column_state(j, tan, y0)
             Zj = Zt[zr * j : zr * (j + 1)]
             if st == 0:
                 ark.project_on_v(SF0, y0, Zj[0], R)
@@ -225,7 +254,13 @@ def _flow_ark(s, h, plant, SF0, pack, tableau, ns):
                     yt[i] = y0[i]
             else:
                 ark.stage_state(st, y0, h, (Kt[7 * j : 7 * j + 7], Zj), split, tab, (yt, w, mm, pp))
-            evaluate_t(P, mi, cmd, ew, tan.dw, (yt, tan.mft, tan.cmdt, tan.Pt[j]), Kt[7 * j + st])
+            for i in range(NS):
+                ys[i, j] = yt[i]
+        kt = ks[0:NS]
+        evaluate_t(P, mi, cmd, ew, tan.dw, (ys, mft, cmdt, tan.Pt), kt)
+        for j in range(m):
+            for i in range(NS):
+                Kt[7 * j + st, i] = kt[i, j]
     # the step's end y + h sum_j b_j K_j, evaluated for its projection
     for i in range(NS):
         y[i] = 0.0
@@ -236,15 +271,19 @@ def _flow_ark(s, h, plant, SF0, pack, tableau, ns):
         y[i] = s[i] + h * y[i]
     evaluate_ws(y, P, mi, mf, cmd, K[6], own.aux_new, ew, False, ew[3], False)
     for j in range(m):
-        _column(j, tan, y0)
+        _column_state(j, tan, y0)
         for i in range(NS):
             yt[i] = 0.0
         for k in range(ns):
             for i in range(NS):
                 yt[i] += B[k] * Kt[7 * j + k, i]
         for i in range(NS):
-            yt[i] = y0[i] + h * yt[i]
-        projection_t(P, mi, ew, tan.dw, (yt, tan.mft, tan.Pt[j]), Kt[7 * j + 6])
+            ys[i, j] = y0[i] + h * yt[i]
+    kt = ks[0:NS]
+    projection_t(P, mi, ew, tan.dw, (ys, mft, tan.Pt), kt)
+    for j in range(m):
+        for i in range(NS):
+            Kt[7 * j + 6, i] = kt[i, j]
     for j in range(m):
         for i in range(NS):
             Phi[X_S + i, j] = Kt[7 * j + 6, i]

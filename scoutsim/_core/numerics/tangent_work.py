@@ -29,6 +29,13 @@ X_MF = NS  # the toe anchors (layout.MF_*)
 X_CMD = NS + NMF  # the held commands [N m]
 X_CS = NS + NMF + 2  # the controller state (its own layout)
 
+# rows of ``ft`` (the flow's derivative, all columns at once: :mod:`.tangent_flow`)
+FT_Y = 0  # a stage's state's tangents (NS)
+FT_K = NS  # the stages' derivatives' (7 x NS: stage k's from row FT_K + k NS)
+FT_MF = 8 * NS  # the anchors' tangents (NMF)
+FT_CMD = 8 * NS + NMF  # the commands' tangents (2)
+FT_SIZE = FT_CMD + 2
+
 # slots of info
 TI_NONSMOOTH = 0  # resets where a perturbed copy ended in other modes than the run
 #: smallest transversality |n.f-| / (|n| |f-|) of a located event, |n| taken along the
@@ -62,14 +69,15 @@ DIFFERENCE_STEP = 1e-5
 #: ``dcp``, ``pscale`` and the moved copies ``Pp``, ``Cp``, ``cpp`` (:func:`tangent_work`);
 #: for the flow's derivative stage by stage (:mod:`.tangent_flow`): the stages' tangents
 #: ``Kt`` (7 rows per column, NS), the ARK splitting's per column ``Zt`` (``Z_ROWS`` rows
-#: per column), a stage's tangent ``yt`` (NS), a column's tangents of the anchors ``mft``
-#: and the commands ``cmdt``, each column's tangent of the packed parameters ``Pt``
-#: (m x len(P)) and the right-hand side derivative's scratch ``dw``; a sample's readings'
-#: tangents ``ytr`` (the Table I law's sample in closed form).
+#: per column), a column's stage state's tangent ``yt`` (NS), the columns' stage states,
+#: stage derivatives, anchors and commands ``ft`` (rows ``FT_*``, m columns), a column's
+#: tangents of the commands ``cmdt``, each column's tangent of the packed parameters ``Pt``
+#: (m x len(P)) and the right-hand side derivative's scratch ``dw`` (m columns); a
+#: sample's readings' tangents ``ytr`` (the Table I law's sample in closed form).
 TangentWork = namedtuple(
     "TangentWork",
     "Phi out work s0 mf0 mi0 f0 cmd0 cs0 ls0 sp mfp mip auxp cmdp csp lsp trp yp ep ds "
-    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp Kt Zt yt mft cmdt Pt dw ytr",
+    "ev stats imp gd w info delta dP dC dcp pscale Pp Cp cpp Kt Zt yt ft cmdt Pt dw ytr",
 )
 
 #: What a run carries (in ``Carry.tangent`` and ``AdvanceScratch.tan``): ``Phi`` and
@@ -201,10 +209,10 @@ def tangent_work(
         np.zeros((7 * m, NS)),
         np.zeros((Z_ROWS * m, Z_COLS)),
         np.zeros(NS),
-        np.zeros(NMF),
+        np.zeros((FT_SIZE, m)),
         np.zeros(2),
         np.zeros((m, n_P)),
-        derivative_workspace(),
+        derivative_workspace(m),
         np.zeros(n_readings),
     )
 
@@ -375,10 +383,10 @@ def unpacked(pack):
         _fm(pack, 49),
         _fm(pack, 50),
         _fv(pack, 51),
-        _fv(pack, 52),
+        _fm(pack, 52),
         _fv(pack, 53),
         _fm(pack, 54),
-        _fv(pack, 55),
+        _fm(pack, 55),
         _fv(pack, 56),
     )
 

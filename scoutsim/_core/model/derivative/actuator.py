@@ -72,12 +72,13 @@ def torque_per_amp_t(leg, P, P_t):
 
 
 @kernel(inline="always")
-def motor_speed_t(dq_t, leg, P, dq, P_t):
+def motor_speed_t(dq_t, c, leg, P, dq, P_t):
     """Tangent [rad/s] of :func:`~scoutsim._core.model.transmission.motor_speed`, the motor
     speed N x (the rate of the driven gear alpha of a geared unit, of the leg phi
-    otherwise) of virtual leg ``leg``, for the tangent ``dq_t`` of the rates ``dq``."""
+    otherwise) of virtual leg ``leg``, for column ``c`` of the tangents ``dq_t`` (NQ, m)
+    of the rates ``dq``; ``P_t``: that column's parameter tangents."""
     i = IALB + leg if geared(P) else IPHB + leg
-    return P_t[P_N + leg] * dq[i] + P[P_N + leg] * dq_t[i]
+    return P_t[P_N + leg] * dq[i] + P[P_N + leg] * dq_t[i, c]
 
 
 @kernel(inline="always")
@@ -216,11 +217,12 @@ def delivered_torque_t(cur, om, leg, P, cur_t, om_t, P_t):
 
 
 @kernel(inline="always")
-def battery_voltage_t(dq, cmd, P, vb, dq_t, cmd_t, P_t):
-    """Tangent [V] of :func:`~scoutsim._core.model.actuator.battery_voltage` (the battery's
-    terminal voltage for the rates ``dq`` and the commanded torques ``cmd`` [N m]), given
-    its value ``vb`` [V], for the tangents ``dq_t``, ``cmd_t`` and ``P_t`` (V_oc, R_b and
-    the motors' N, eta, K_T, i_max, R_A, K_w).
+def battery_voltage_t(dq, cmd, P, vb, tangents, vb_t):
+    """vb_t[c] := the tangent [V] of :func:`~scoutsim._core.model.actuator.battery_voltage`
+    (the battery's terminal voltage for the rates ``dq`` and the commanded torques ``cmd``
+    [N m]) along column c, given its value ``vb`` [V]; ``tangents`` = (dq_t (NQ, m), cmd_t
+    (2, m), P_t (m, NP)): the columns' tangents of the rates, the commands and the
+    parameters (V_oc, R_b and the motors' N, eta, K_T, i_max, R_A, K_w).
 
     An ideal source (R_b <= 0, or the ideal or passive variant): V_oc's tangent. Otherwise
     V solves V = F(V) = (V_oc + sqrt(D)) / 2, D = V_oc^2 - 4 R_b P(V), P(V) the motors'
@@ -230,90 +232,116 @@ def battery_voltage_t(dq, cmd, P, vb, dq_t, cmd_t, P_t):
     on its torque-speed line draws a current that depends on V). Where the battery
     collapses (D <= 0 at the solution, V = V_oc / 2, the primal's lower bracket end) F is
     V_oc / 2 and the tangent V_oc_t / 2."""
+    dq_t, cmd_t, P_t = tangents
+    m = dq_t.shape[1]
     voc = P[P_VB]
-    voc_t = P_t[P_VB]
     rb = P[P_RB]
     model = int(P[P_MODEL])
     if rb <= 0.0 or model == MODEL_IDEAL or model == MODEL_PASSIVE:
-        return voc_t
+        for c in range(m):
+            vb_t[c] = P_t[c, P_VB]
+        return
     if vb <= 0.5 * voc:
-        return 0.5 * voc_t
+        for c in range(m):
+            vb_t[c] = 0.5 * P_t[c, P_VB]
+        return
     npl = P[P_NP]
+    # the primal power P and its voltage slope P_V, leg by leg
     pw = 0.0
-    pw_t = 0.0  # P_x x_t: at fixed V
     pw_v = 0.0  # P_V
-    for leg in range(2):
-        om = motor_speed(dq, leg, P)
-        om_t = motor_speed_t(dq_t, leg, P, dq, P_t)
-        i = motor_current(cmd[leg], om, vb, leg, P)
-        i_t = motor_current_t(cmd[leg], om, vb, leg, P, cmd_t[leg], om_t, 0.0, P_t)
-        i_v = current_voltage_slope(cmd[leg], om, vb, leg, P)
-        r = P[P_RA + leg]
-        kw = P[P_KW + leg]
-        # P = n_p i (R_A i + K_w w_m): dP/di = n_p (2 R_A i + K_w w_m)
-        dpdi = npl * (2.0 * r * i + kw * om)
-        pw += npl * i * (r * i + kw * om)
-        pw_t += dpdi * i_t + npl * i * (P_t[P_RA + leg] * i + P_t[P_KW + leg] * om + kw * om_t)
-        pw_v += dpdi * i_v
+    om0 = motor_speed(dq, 0, P)
+    om1 = motor_speed(dq, 1, P)
+    i0 = motor_current(cmd[0], om0, vb, 0, P)
+    i1 = motor_current(cmd[1], om1, vb, 1, P)
+    br0 = current_branch(cmd[0], om0, vb, 0, P)
+    br1 = current_branch(cmd[1], om1, vb, 1, P)
+    # P = n_p i (R_A i + K_w w_m): dP/di = n_p (2 R_A i + K_w w_m)
+    dpdi0 = npl * (2.0 * P[P_RA] * i0 + P[P_KW] * om0)
+    dpdi1 = npl * (2.0 * P[P_RA + 1] * i1 + P[P_KW + 1] * om1)
+    pw += npl * i0 * (P[P_RA] * i0 + P[P_KW] * om0)
+    pw_v += dpdi0 * current_voltage_slope(cmd[0], om0, vb, 0, P)
+    pw += npl * i1 * (P[P_RA + 1] * i1 + P[P_KW + 1] * om1)
+    pw_v += dpdi1 * current_voltage_slope(cmd[1], om1, vb, 1, P)
     disc = voc * voc - 4.0 * rb * pw
     if disc <= 0.0:
-        return 0.5 * voc_t
+        for c in range(m):
+            vb_t[c] = 0.5 * P_t[c, P_VB]
+        return
     sd = math.sqrt(disc)
-    f_x = 0.5 * (voc_t + (voc * voc_t - 2.0 * (P_t[P_RB] * pw + rb * pw_t)) / sd)
     f_v = -rb * pw_v / sd
-    return f_x / (1.0 - f_v)
+    for c in range(m):
+        Pc = P_t[c]
+        pw_t = 0.0  # P_x x_t: at fixed V
+        om_t = motor_speed_t(dq_t, c, 0, P, dq, Pc)
+        i_t = branch_current_t(br0, cmd[0], om0, vb, 0, P, (cmd_t[0, c], om_t, 0.0, Pc))
+        pw_t += dpdi0 * i_t + npl * i0 * (Pc[P_RA] * i0 + Pc[P_KW] * om0 + P[P_KW] * om_t)
+        om_t = motor_speed_t(dq_t, c, 1, P, dq, Pc)
+        i_t = branch_current_t(br1, cmd[1], om1, vb, 1, P, (cmd_t[1, c], om_t, 0.0, Pc))
+        pw_t += dpdi1 * i_t + npl * i1 * (
+            Pc[P_RA + 1] * i1 + Pc[P_KW + 1] * om1 + P[P_KW + 1] * om_t
+        )
+        voc_t = Pc[P_VB]
+        f_x = 0.5 * (voc_t + (voc * voc_t - 2.0 * (Pc[P_RB] * pw + rb * pw_t)) / sd)
+        vb_t[c] = f_x / (1.0 - f_v)
 
 
 @kernel(inline="always")
-def belt_deflection_t(q, leg, P, q_t, P_t):
-    """(deflection [rad], its tangent [rad]) of virtual leg ``leg``'s belt spring
-    (:func:`~scoutsim._core.model.hip_unit.belt_spring` at alpha - phi) for the tangents
-    ``q_t``, ``P_t`` (the play b): delta_t - s b_t / 2 while the spring is engaged, s the
-    sign of delta - deflection (+1 beyond the play's upper end, -1 beyond its lower end, 0
-    for a belt without play), 0 inside the play."""
+def _belt_branch(q, leg, P):
+    """(deflection [rad], engaged, s) of virtual leg ``leg``'s belt spring
+    (:func:`~scoutsim._core.model.hip_unit.belt_spring` at alpha - phi): the deflection's
+    tangent is delta_t - s b_t / 2 (b the play) while the spring is engaged, s the sign of
+    delta - deflection (+1 beyond the play's upper end, -1 beyond its lower end, 0 for a
+    belt without play), and 0 inside the play."""
     delta = q[IALB + leg] - q[IPHB + leg]
     bd, engaged = belt_spring(delta, leg, P)
-    if not engaged:
-        return bd, 0.0
     off = delta - bd
     s = 1.0 if off > 0.0 else (-1.0 if off < 0.0 else 0.0)
-    return bd, q_t[IALB + leg] - q_t[IPHB + leg] - s * 0.5 * P_t[P_BACKLASH + leg]
+    return bd, engaged, s
 
 
 @kernel(inline="always")
-def hip_unit_forces_t(Q_t, q, dq, leg, mode, P, q_t, dq_t, tapp_t, om_t, P_t):
-    """Add to ``Q_t`` (7) the tangent of what
+def hip_unit_forces_t(Q_t, q, dq, leg, mode, P, tangents, out):
+    """Add to ``Q_t`` (NQ, m) the tangent, column by column, of what
     :func:`~scoutsim._core.model.transmission.hip_unit_forces` adds to the generalized
     forces Q [N m per unit of the coordinate, N] for virtual leg ``leg`` in motor-joint
-    mode ``mode``, for the tangents ``q_t``, ``dq_t`` of the state, ``tapp_t`` of the
-    delivered torque, ``om_t`` of the motor speed (its value is motor_speed(dq, leg, P), as
-    the evaluation passes it) and ``P_t`` (N, b_J, tau_s, k_b, c_b, the play b).
+    mode ``mode``; ``tangents`` = (q_t (NQ, m), dq_t (NQ, m), tapp_t (m,), om_t (m,), P_t
+    (m, NP)): the columns' tangents of the state, of the delivered torque, of the motor
+    speed (its value is motor_speed(dq, leg, P), as the evaluation passes it) and of the
+    parameters (N, b_J, tau_s, k_b, c_b, the play b).
 
-    Returns the tangents [N m] of what it returns: (joint friction torque at the motor,
-    belt torque on the leg), both 0 outside Model II. The joint friction b_J w_m
-    (+ tau_s mode while slipping) and the belt's k_b x deflection + c_b (alpha' - phi')
-    are differentiated on the branch the primal took (the mode, the belt engaged or in its
-    play)."""
+    ``out`` = (tf_t, tb_t) (m,): the tangents [N m] of what it returns (joint friction
+    torque at the motor, belt torque on the leg), both 0 outside Model II. The joint
+    friction b_J w_m (+ tau_s mode while slipping) and the belt's k_b x deflection + c_b
+    (alpha' - phi') are differentiated on the branch the primal took (the mode, the belt
+    engaged or in its play)."""
+    q_t, dq_t, tapp_t, om_t, P_t = tangents
+    tf_t, tb_t = out
+    m = q_t.shape[1]
     npl = P[P_NP]
+    k = IPHB + leg
     if geared(P):
         a = IALB + leg
         om = motor_speed(dq, leg, P)
         tf = joint_friction_torque(om, mode, leg, P)
-        tf_t = P_t[P_B_J + leg] * om + P[P_B_J + leg] * om_t
-        if mode != STUCK:
-            tf_t += P_t[P_TAU_S + leg] * mode
-        bd, bd_t = belt_deflection_t(q, leg, P, q_t, P_t)
-        rate = dq[a] - dq[IPHB + leg]
-        rate_t = dq_t[a] - dq_t[IPHB + leg]
-        tb_t = (
-            P_t[P_KB + leg] * bd
-            + P[P_KB + leg] * bd_t
-            + P_t[P_CB + leg] * rate
-            + P[P_CB + leg] * rate_t
-        )
-        Q_t[a] += npl * (tapp_t - P_t[P_N + leg] * tf - P[P_N + leg] * tf_t - tb_t)
-        Q_t[IPHB + leg] += npl * tb_t
-        return tf_t, tb_t
+        bd, engaged, s = _belt_branch(q, leg, P)
+        rate = dq[a] - dq[k]
+        for c in range(m):
+            Pc = P_t[c]
+            tf_c = Pc[P_B_J + leg] * om + P[P_B_J + leg] * om_t[c]
+            if mode != STUCK:
+                tf_c += Pc[P_TAU_S + leg] * mode
+            bd_t = q_t[a, c] - q_t[k, c] - s * 0.5 * Pc[P_BACKLASH + leg] if engaged else 0.0
+            rate_t = dq_t[a, c] - dq_t[k, c]
+            tb_c = Pc[P_KB + leg] * bd + P[P_KB + leg] * bd_t + Pc[P_CB + leg] * rate
+            tb_c = tb_c + P[P_CB + leg] * rate_t
+            Q_t[a, c] += npl * (tapp_t[c] - Pc[P_N + leg] * tf - P[P_N + leg] * tf_c - tb_c)
+            Q_t[k, c] += npl * tb_c
+            tf_t[c] = tf_c
+            tb_t[c] = tb_c
+        return
     if int(P[P_MODEL]) != MODEL_PASSIVE:
-        Q_t[IPHB + leg] += npl * tapp_t
-    return 0.0, 0.0
+        for c in range(m):
+            Q_t[k, c] += npl * tapp_t[c]
+    for c in range(m):
+        tf_t[c] = 0.0
+        tb_t[c] = 0.0

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...._numba.jit import allocating
 from ..evaluate import evaluate_ws
-from ..layout import NAUX, NMF, NS
+from ..layout import NAUX, NS
 from ..workspace import new_eval_workspace
 from .evaluate import derivative_workspace, motor_currents_t
 
@@ -29,19 +29,7 @@ def current_derivatives(s, P, mi, mf, cmd, columns, dP):
     stiff = np.zeros((1, 1))
     ew = (wk, wA, piv, stiff)
     evaluate_ws(s, P, mi, mf, cmd, np.zeros(NS), np.zeros(NAUX), ew, False, stiff, False)
-    dw = derivative_workspace()
-    s_t, mf_t, cmd_t, s_out, cur = (
-        np.zeros(NS), np.zeros(NMF), np.zeros(2), np.zeros(NS), np.zeros(2)
-    )  # fmt: skip
+    dw = derivative_workspace(m)
     out = np.zeros((2, m))
-    for j in range(m):
-        for i in range(NS):
-            s_t[i] = phi_s[i, j]
-        for i in range(NMF):
-            mf_t[i] = phi_mf[i, j]
-        for i in range(2):
-            cmd_t[i] = phi_cmd[i, j]
-        motor_currents_t(P, mi, cmd, ew, dw, (s_t, mf_t, cmd_t, dP[j]), s_out, cur)
-        out[0, j] = cur[0]
-        out[1, j] = cur[1]
+    motor_currents_t(P, mi, cmd, ew, dw, (phi_s, phi_mf, phi_cmd, dP), np.zeros((NS, m)), out)
     return out

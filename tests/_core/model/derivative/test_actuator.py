@@ -45,6 +45,11 @@ def direction(rng, P, slots, whole=()):
     return P_t
 
 
+def column(x):
+    """A tangent vector as the one column of a batched tangent (rows, 1)."""
+    return np.ascontiguousarray(np.asarray(x, dtype=float)[:, None])
+
+
 def central(f):
     """Central difference of f(h) at h = 0 with step H."""
     return (np.asarray(f(H)) - np.asarray(f(-H))) / (2.0 * H)
@@ -74,7 +79,7 @@ def test_motor_speed_tangent_is_the_central_difference_of_motor_speed(model, leg
     dq = rng.uniform(-5.0, 5.0, L.NQ)
     dq_t = rng.uniform(-5.0, 5.0, L.NQ)
     P_t = direction(rng, P, (L.P_N,))
-    t = D.motor_speed_t(dq_t, leg, P, dq, P_t)
+    t = D.motor_speed_t(column(dq_t), 0, leg, P, dq, P_t)
     fd = central(lambda h: transmission.motor_speed(dq + h * dq_t, leg, P + h * P_t))
     check("motor_speed", t, fd)
 
@@ -252,7 +257,9 @@ def test_battery_voltage_tangent_is_the_central_difference_of_battery_voltage(ca
     P_t = direction(rng, P, BATTERY_SLOTS, whole)
     dq_t = rng.uniform(-5.0, 5.0, L.NQ)
     cmd_t = rng.uniform(-5.0, 5.0, 2)
-    t = D.battery_voltage_t(dq, cmd, P, vb, dq_t, cmd_t, P_t)
+    vb_t = np.zeros(1)
+    D.battery_voltage_t(dq, cmd, P, vb, (column(dq_t), column(cmd_t), P_t[None, :].copy()), vb_t)
+    t = vb_t[0]
     fd = central(lambda h: actuator.battery_voltage(dq + h * dq_t, cmd + h * cmd_t, P + h * P_t))
     check("battery_voltage", t, fd, scale=abs(P_t[L.P_VB]))
     if circuit == "open" or rb == 0.0 or model in ("ideal", "passive"):
@@ -301,9 +308,20 @@ def test_hip_unit_forces_tangent_is_the_central_difference_of_hip_unit_forces(ca
     dq_t = rng.uniform(-3.0, 3.0, L.NQ)
     tapp, tapp_t = 7.0, rng.uniform(-7.0, 7.0)
     P_t = direction(rng, P, HIP_SLOTS)
-    om_t = D.motor_speed_t(dq_t, leg, P, dq, P_t)
-    Q_t = np.zeros(L.NQ)
-    tf_t, tb_t = D.hip_unit_forces_t(Q_t, q, dq, leg, mode, P, q_t, dq_t, tapp_t, om_t, P_t)
+    om_t = D.motor_speed_t(column(dq_t), 0, leg, P, dq, P_t)
+    Q_t = np.zeros((L.NQ, 1))
+    tf_t, tb_t = np.zeros(1), np.zeros(1)
+    D.hip_unit_forces_t(
+        Q_t,
+        q,
+        dq,
+        leg,
+        mode,
+        P,
+        (column(q_t), column(dq_t), np.array([tapp_t]), np.array([om_t]), P_t[None, :].copy()),
+        (tf_t, tb_t),
+    )
+    Q_t, tf_t, tb_t = Q_t[:, 0], tf_t[0], tb_t[0]
 
     def forces(h):
         Q = np.zeros(L.NQ)

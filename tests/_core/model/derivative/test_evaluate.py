@@ -3,7 +3,8 @@ equals the central difference of the right-hand side itself (model.evaluate.eval
 along the same direction, in every model, contact mode and motor-joint mode, with the
 effects beyond the paper's models, a battery with internal resistance, unequal legs,
 massless legs and the bench rigs; along directions in the state, the toe anchors, the
-commands and the robot's parameters."""
+commands and the robot's parameters, several directions in one call each the derivative
+along it alone."""
 
 import math
 
@@ -93,6 +94,13 @@ def _direction(rng, s, P, with_parameters):
     return s_t, mf_t, cmd_t, P_t
 
 
+def _columns(directions):
+    """The directions as columns: (s_t (NS, m), mf_t (NMF, m), cmd_t (2, m), P_t (m, len(P)))."""
+    return tuple(
+        np.ascontiguousarray(np.stack([d[k] for d in directions], axis=1)) for k in range(3)
+    ) + (np.ascontiguousarray(np.stack([d[3] for d in directions])),)
+
+
 def _f(s, P, mi, mf, cmd):
     ds = np.zeros(L.NS)
     aux = np.zeros(L.NAUX)
@@ -135,7 +143,8 @@ def _check(P, cases, with_parameters, seed=0):
     but not at the point, or a jump (the transmission's idle loss switching direction
     at zero torque and speed), is left out."""
     rng = np.random.default_rng(seed)
-    dw = derivative_workspace()
+    dw = derivative_workspace(2)
+    dw1 = derivative_workspace(1)
     worst = 0.0
     smooth = 0
     at_kink = 0
@@ -149,8 +158,14 @@ def _check(P, cases, with_parameters, seed=0):
         if not evaluate_ws(s, P, mi, mf, cmd, f0, aux, ew, False, ew[3], True):
             continue  # singular (a massless leg's slide): no derivative to compare
         evaluable += 1
-        ds_t = np.zeros(L.NS)
-        evaluate_t(P, mi, cmd, ew, dw, direction, ds_t)
+        # the direction with another one as a second column: each column's numbers are
+        # those of the derivative along it alone
+        both = np.zeros((L.NS, 2))
+        evaluate_t(P, mi, cmd, ew, dw, _columns([direction, _direction(rng, s, P, True)]), both)
+        ds_t = np.zeros((L.NS, 1))
+        evaluate_t(P, mi, cmd, ew, dw1, _columns([direction]), ds_t)
+        assert np.array_equal(ds_t[:, 0], both[:, 0])
+        ds_t = ds_t[:, 0]
         sides = [_one_sided(case, P, direction, f0, e) for e in (STEP, -STEP)]
         wide = [_one_sided(case, P, direction, f0, e) for e in (3 * STEP, -3 * STEP)]
         scale = max(np.max(np.abs(sides[0])), np.max(np.abs(sides[1])), NOISE * np.max(np.abs(f0)))
@@ -229,8 +244,8 @@ def test_the_motor_currents_derivative_equals_differences_of_the_currents(model,
             mi,
             mf,
             cmd,
-            tuple(np.ascontiguousarray(np.stack([d[k] for d in dirs], axis=1)) for k in range(3)),
-            np.ascontiguousarray(np.stack([d[3] for d in dirs])),
+            _columns(dirs)[:3],
+            _columns(dirs)[3],
         )
         for j, (s_t, mf_t, cmd_t, P_t) in enumerate(dirs):
             case = (s, mi, mf, cmd, s_t, mf_t, cmd_t, P_t)

@@ -2,7 +2,8 @@
 the central differences of the primal terms (scoutsim._core.model.rigid_body) along the
 same direction: in the sines and cosines of the configuration (taken as independent
 numbers), the velocities and the parameters, for a geared (Model II) and rigid (ideal,
-Model I) hip unit, and a robot whose legs differ with its torso COM off the hips' midpoint.
+Model I) hip unit, and a robot whose legs differ with its torso COM off the hips' midpoint;
+each kernel takes several directions at once, a column each.
 """
 
 import math
@@ -110,31 +111,50 @@ def _rel_error(t, fd):
     return np.max(np.abs(t - fd)) / scale
 
 
+def _columns(directions):
+    """The batched layout of directions [(tr_t (6), P_t (NP)), ...]: tr_t (6, m) with a
+    column per direction, P_t (m, NP) with a row per direction."""
+    tr_t = np.stack([d[0] for d in directions], axis=1)
+    P_t = np.stack([d[1] for d in directions])
+    return tr_t, P_t
+
+
 def _pairs(P, tr, tr_t, P_t, rng, eps=EPS):
-    """(tangent, central difference) of each term at (P, tr) along (tr_t, P_t), with
-    random accelerations and velocities; the velocities' tangents are random too when the
-    direction has both a configuration and a parameter part, else zero (a direction in
-    one part alone); ``eps``: the step of the differences. The kernels that add are given outputs that already hold random
-    values, which they must keep."""
+    """(tangents, central differences), both (NQ, m), of each term at (P, tr) along the m
+    directions of the columns of tr_t (6, m) and the rows of P_t (m, NP), all in one call
+    of each kernel, with random accelerations and velocities; the velocities' tangents of
+    a direction are random too when it has both a configuration and a parameter part, else
+    zero (a direction in one part alone, or none); ``eps``: the step of the differences.
+    The kernels that add are given outputs that already hold random values, which they
+    must keep."""
+    m = tr_t.shape[1]
     a = rng.normal(size=L.NQ)
     dq = rng.normal(size=L.NQ) * 3.0
-    dq_t = rng.normal(size=L.NQ) * 3.0 if (tr_t.any() and P_t.any()) else np.zeros(L.NQ)
-    out0 = rng.normal(size=L.NQ)
+    dq_t = np.zeros((L.NQ, m))
+    for c in range(m):
+        if tr_t[:, c].any() and P_t[c].any():
+            dq_t[:, c] = rng.normal(size=L.NQ) * 3.0
+    out0 = rng.normal(size=(L.NQ, m))
     out = out0.copy()
     mass_matrix_times_t(out, a, P, tr, tr_t, P_t)
-    fd_m = _central(lambda P_, tr_: _mass_times(a, P_, tr_), (P, tr), (P_t, tr_t), eps)
-    h_t = np.full(L.NQ, np.nan)
+    h_t = np.full((L.NQ, m), np.nan)
     coriolis_t(h_t, dq, dq_t, P, tr, tr_t, P_t)
-    fd_h = _central(_coriolis, (dq, P, tr), (dq_t, P_t, tr_t), eps)
-    Q0 = rng.normal(size=L.NQ)
+    Q0 = rng.normal(size=(L.NQ, m))
     Q_t = Q0.copy()
     add_gravity_t(Q_t, P, tr, tr_t, P_t)
-    fd_q = _central(_gravity, (P, tr), (P_t, tr_t), eps)
+    fd_m, fd_h, fd_q = (np.empty((L.NQ, m)) for _ in range(3))
+    for c in range(m):
+        x_t = (P_t[c], tr_t[:, c])
+        fd_m[:, c] = _central(lambda P_, tr_: _mass_times(a, P_, tr_), (P, tr), x_t, eps)
+        fd_h[:, c] = _central(_coriolis, (dq, P, tr), (dq_t[:, c],) + x_t, eps)
+        fd_q[:, c] = _central(_gravity, (P, tr), x_t, eps)
     return {"mass": (out - out0, fd_m), "coriolis": (h_t, fd_h), "gravity": (Q_t - Q0, fd_q)}
 
 
 def _errors(P, tr, tr_t, P_t, rng):
-    """Relative errors of the three tangents (:func:`_pairs`, :func:`_rel_error`)."""
+    """Relative errors of the three tangents along one direction (tr_t (6), P_t (NP)),
+    given to the kernels as one column (:func:`_pairs`, :func:`_rel_error`)."""
+    tr_t, P_t = _columns([(tr_t, P_t)])
     return {k: _rel_error(t, fd) for k, (t, fd) in _pairs(P, tr, tr_t, P_t, rng).items()}
 
 
@@ -185,7 +205,7 @@ def test_each_parameter_read_has_its_tangent(slot):
         P = _P(case)
         P_t = np.zeros_like(P)
         P_t[slot] = abs(P[slot]) or 0.01
-        pairs = _pairs(P, tr, np.zeros(6), P_t, rng, eps=1e-2)
+        pairs = _pairs(P, tr, *_columns([(np.zeros(6), P_t)]), rng, eps=1e-2)
         for t, fd in pairs.values():
             scale = np.max(np.abs(fd))
             assert np.max(np.abs(t - fd)) <= RTOL * scale
@@ -206,8 +226,9 @@ def test_mass_matrix_tangent_is_symmetric():
     tr = _trig(rng)
     tr_t, P_t = _direction(rng, P)
     Mt = np.zeros((L.NQ, L.NQ))
+    tr_tc, P_tc = _columns([(tr_t, P_t)])
     for j in range(L.NQ):
-        mass_matrix_times_t(Mt[:, j], np.eye(L.NQ)[j], P, tr, tr_t, P_t)
+        mass_matrix_times_t(Mt[:, j : j + 1], np.eye(L.NQ)[j], P, tr, tr_tc, P_tc)
     np.testing.assert_allclose(Mt, Mt.T, rtol=0.0, atol=1e-15 * np.max(np.abs(Mt)))
 
     def mass(P_, tr_):
@@ -217,3 +238,46 @@ def test_mass_matrix_tangent_is_symmetric():
 
     fd = _central(mass, (P, tr), (P_t, tr_t))
     assert np.max(np.abs(Mt - fd)) < RTOL * np.max(np.abs(fd))
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_several_directions_at_once_column_by_column(case):
+    """Given several directions at once (a column each), each kernel gives in each column
+    the tangent along that column's direction: it equals the central difference along it
+    (a direction in the sines and cosines alone, one in the parameters alone, three in
+    both), and bit for bit what the kernel gives for that direction alone; along a zero
+    direction the tangents are zero (what the kernels that add are given is kept)."""
+    rng = np.random.default_rng(5)
+    P = _P(case)
+    tr = _trig(rng)
+    dirs = [_direction(rng, P, params=False), _direction(rng, P, trig=False)]
+    dirs += [_direction(rng, P) for _ in range(3)]
+    dirs.insert(2, _direction(rng, P, trig=False, params=False))
+    tr_t, P_t = _columns(dirs)
+    pairs = _pairs(P, tr, tr_t, P_t, np.random.default_rng(13))
+    for c in range(len(dirs)):
+        for name, (t, fd) in pairs.items():
+            if c == 2:
+                assert not t[:, c].any() and not fd[:, c].any(), name
+            else:
+                assert _rel_error(t[:, c], fd[:, c]) < RTOL, (name, c)
+    # each direction alone (a one-column call, with the same accelerations, velocities,
+    # velocity tangents and outputs' initial values) gives its batched column bit for bit
+    a = rng.normal(size=L.NQ)
+    dq = rng.normal(size=L.NQ)
+    dq_t = rng.normal(size=(L.NQ, len(dirs)))
+    out = rng.normal(size=(L.NQ, len(dirs)))
+    h_t = np.full_like(out, np.nan)
+    Q_t = out.copy()
+    outs = (out.copy(), h_t.copy(), Q_t.copy())
+    mass_matrix_times_t(outs[0], a, P, tr, tr_t, P_t)
+    coriolis_t(outs[1], dq, dq_t, P, tr, tr_t, P_t)
+    add_gravity_t(outs[2], P, tr, tr_t, P_t)
+    for c in range(len(dirs)):
+        one = (out[:, c : c + 1].copy(), h_t[:, c : c + 1].copy(), Q_t[:, c : c + 1].copy())
+        tr_1, P_1 = tr_t[:, c : c + 1], P_t[c : c + 1]
+        mass_matrix_times_t(one[0], a, P, tr, tr_1, P_1)
+        coriolis_t(one[1], dq, dq_t[:, c : c + 1], P, tr, tr_1, P_1)
+        add_gravity_t(one[2], P, tr, tr_1, P_1)
+        for batched, alone in zip(outs, one):
+            assert np.array_equal(batched[:, c], alone[:, 0])
