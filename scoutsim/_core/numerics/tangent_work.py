@@ -68,7 +68,7 @@ DIFFERENCE_STEP = 1e-5
 #: difference step ``delta`` (one entry); the parameters' derivatives ``dP``, ``dC``,
 #: ``dcp``, ``pscale`` and the moved copies ``Pp``, ``Cp``, ``cpp`` (:func:`tangent_work`);
 #: for the flow's derivative stage by stage (:mod:`.tangent_flow`): the stages' tangents
-#: ``Kt`` (7 rows per column, NS), the ARK splitting's per column ``Zt`` (``Z_ROWS`` rows
+#: ``Kt`` (the ARK flows': 7 rows per column, NS), the ARK splitting's per column ``Zt`` (``Z_ROWS`` rows
 #: per column), a column's stage state's tangent ``yt`` (NS), the columns' stage states,
 #: stage derivatives, anchors and commands ``ft`` (rows ``FT_*``, m columns), a column's
 #: tangents of the commands ``cmdt``, each column's tangent of the packed parameters ``Pt``

@@ -117,19 +117,11 @@ def current_branch(cmd_torque, omega_m, vb, leg, P):
 
 
 @kernel(inline="always")
-def motor_current_t(cmd, om, vb, leg, P, cmd_t, om_t, vb_t, P_t):
+def branch_current_t(branch, cmd, om, vb, leg, P, tangents):
     """Tangent [A] of :func:`~scoutsim._core.model.actuator.motor_current` (the motor
     current of virtual leg ``leg`` for the commanded torque ``cmd`` [N m] at motor speed
-    ``om`` [rad/s] and battery voltage ``vb`` [V]), for the tangents ``cmd_t``, ``om_t``,
-    ``vb_t`` of those and ``P_t`` of the parameters (N, eta, K_T, i_max, R_A, K_w): the
-    tangent of the branch the current is on (:func:`current_branch`)."""
-    branch = current_branch(cmd, om, vb, leg, P)
-    return branch_current_t(branch, cmd, om, vb, leg, P, (cmd_t, om_t, vb_t, P_t))
-
-
-@kernel(inline="always")
-def branch_current_t(branch, cmd, om, vb, leg, P, tangents):
-    """:func:`motor_current_t` on the given ``branch`` (``CUR_*``); ``tangents`` = (cmd_t,
+    ``om`` [rad/s] and battery voltage ``vb`` [V]) on the given ``branch`` (``CUR_*``, the
+    one :func:`current_branch` names for them); ``tangents`` = (cmd_t,
     om_t, vb_t, P_t). Where the current sits on a kink (two branches give the same value),
     the caller chooses the side."""
     cmd_t, om_t, vb_t, P_t = tangents

@@ -113,6 +113,59 @@ def _row_t(g, c, ddq, nu, row_t):
 
 
 @kernel(inline="always")
+def _pinned_motion_t(c, leg, hip, tangents):
+    """Column ``c``'s tangents of a pinned toe's leg: (sin th, cos th, sin g, cos g, the
+    hip offset s L, th', g', the leg length, the leg-length rate); ``hip`` = (sin th,
+    cos th, sin g, cos g, s L, th', the hip's velocity x and y), ``tangents`` = (dq_t,
+    l_t, tr_t, Pc: column c's parameter tangents)."""
+    sth, cth, sg, cg, sL, dth, hvx, hvy = hip
+    dq_t, l_t, tr_t, Pc = tangents
+    kk = IPHB + leg
+    sth_t, cth_t = tr_t[TR_STH, c], tr_t[TR_CTH, c]
+    sg_t, cg_t = tr_t[TR_SGB + 2 * leg, c], tr_t[TR_CGB + 2 * leg, c]
+    sL_t = hip_offset_t(Pc, leg)
+    dth_t = dq_t[ITH, c]
+    dg_t = dth_t + dq_t[kk, c]
+    hvx_t = dq_t[IX, c] - (sL_t * sth + sL * sth_t) * dth - sL * sth * dth_t
+    hvy_t = dq_t[IY, c] + (sL_t * cth + sL * cth_t) * dth + sL * cth * dth_t
+    lt = -(hvx_t * sg + hvx * sg_t - hvy_t * cg - hvy * cg_t)
+    return sth_t, cth_t, sg_t, cg_t, sL_t, dth_t, dg_t, l_t[leg, c], lt
+
+
+@kernel(inline="always")
+def _pinned_force_and_row_t(c, kk, out, pinned, t, F_t):
+    """Add column ``c``'s tangent of a pinned toe's leg force ``F_t`` (along the leg) to
+    ``g`` and write its row across the leg's r_t - R_t ddq to ``gr[0, c]``; ``out`` = (g,
+    gr, ddq); ``pinned`` = (the hip as :func:`_pinned_motion_t` takes it, (ll, g', the
+    leg-length rate, F, the toe's Jacobian columns jx, jy, px, py, sin(g - th), the hip's
+    acceleration bx, by at zero ddq), nu of that row); ``t``: :func:`_pinned_motion_t`'s
+    value. Returns the tangents of bx and by."""
+    g, gr, ddq = out
+    hip, primal, nu0 = pinned
+    sth, cth, sg, cg, sL, dth = hip[0], hip[1], hip[2], hip[3], hip[4], hip[5]
+    ll, dg, ld, F, jx, jy, px, py, sph, bx, by = primal
+    sth_t, cth_t, sg_t, cg_t, sL_t, dth_t, dg_t, ll_t, lt = t
+    fx = -F * sg
+    fy = F * cg
+    jx_t = -(sL_t * sth + sL * sth_t) + ll_t * cg + ll * cg_t
+    jy_t = sL_t * cth + sL * cth_t + ll_t * sg + ll * sg_t
+    px_t = ll_t * cg + ll * cg_t
+    py_t = ll_t * sg + ll * sg_t
+    fx_t = -F_t * sg - F * sg_t
+    fy_t = F_t * cg + F * cg_t
+    g[IX, c] += fx_t
+    g[IY, c] += fy_t
+    g[ITH, c] += jx_t * fx + jx * fx_t + jy_t * fy + jy * fy_t
+    g[kk, c] += px_t * fx + px * fx_t + py_t * fy + py * fy_t
+    sph_t = sg_t * cth + sg * cth_t - cg_t * sth - cg * sth_t
+    bx_t = -(sL_t * cth + sL * cth_t) * dth * dth - 2.0 * sL * cth * dth * dth_t
+    by_t = -(sL_t * sth + sL * sth_t) * dth * dth - 2.0 * sL * sth * dth * dth_t
+    r_t = -(bx_t * cg + bx * cg_t + by_t * sg + by * sg_t + 2.0 * (lt * dg + ld * dg_t))
+    gr[0, c] = _row_t(g, c, ddq, nu0, (cg_t, sg_t, sL_t * sph + sL * sph_t + ll_t, ll_t, kk, r_t))
+    return bx_t, by_t
+
+
+@kernel(inline="always")
 def leg_contact_t(leg, P, mi, primal, tangents, out):
     """The tangent of :func:`~scoutsim._core.model.contact.leg_contact` of virtual leg
     ``leg`` in its contact mode, along m directions (columns) at once.
@@ -217,57 +270,32 @@ def leg_contact_t(leg, P, mi, primal, tangents, out):
             g[kk, c] += px_t * gt + px * gt_t + py_t * gn + py * gn_t
             ld_t[c] = lt
         return
-    # pinned toe (stick, strut); a loop per mode (a strut's second row in a shared loop
-    # slowed the stick's columns by a sixth)
+    # pinned toe (stick, strut): a loop per mode (a strut's second row in a shared loop
+    # slowed the stick's columns by a sixth), the shared part in the two helpers above
     ld = -(hvx * sg - hvy * cg)
     # row across the leg: R = [cg, sg, sL sph + ll, ll], r = -(bx cg + by sg + 2 ld dg)
     sph = sg * cth - cg * sth
     bx = -sL * cth * dth * dth
     by = -sL * sth * dth * dth
     nu0 = nu[0]
+    hip = (sth, cth, sg, cg, sL, dth, hvx, hvy)
     if mode == STICK:
         fa = leg_axial_force(k, c_l, l0, ll, ld, fc_l)
         F = npl * fa
-        fx = -F * sg
-        fy = F * cg
+        pinned = (hip, (ll, dg, ld, F, jx, jy, px, py, sph, bx, by), nu0)
         for c in range(m):
             Pc = P_t[c]
-            sth_t, cth_t = tr_t[TR_STH, c], tr_t[TR_CTH, c]
-            sg_t, cg_t = tr_t[TR_SGB + 2 * leg, c], tr_t[TR_CGB + 2 * leg, c]
-            sL_t = hip_offset_t(Pc, leg)
-            dth_t = dq_t[ITH, c]
-            dg_t = dth_t + dq_t[kk, c]
-            hvx_t = dq_t[IX, c] - (sL_t * sth + sL * sth_t) * dth - sL * sth * dth_t
-            hvy_t = dq_t[IY, c] + (sL_t * cth + sL * cth_t) * dth + sL * cth * dth_t
-            ll_t = l_t[leg, c]
+            t = _pinned_motion_t(c, leg, hip, (dq_t, l_t, tr_t, Pc))
             c_l_t = leg_damping_t(phi, q_t[kk, c], leg, P, Pc)
-            fc_l_t = leg_friction_level_t(tau_hip, ll, leg, P, (tau_hip_t[c], ll_t, Pc))
-            jx_t = -(sL_t * sth + sL * sth_t) + ll_t * cg + ll * cg_t
-            jy_t = sL_t * cth + sL * cth_t + ll_t * sg + ll * sg_t
-            px_t = ll_t * cg + ll * cg_t
-            py_t = ll_t * sg + ll * sg_t
-            lt = -(hvx_t * sg + hvx * sg_t - hvy_t * cg - hvy * cg_t)
+            fc_l_t = leg_friction_level_t(tau_hip, ll, leg, P, (tau_hip_t[c], t[7], Pc))
             F_t = Pc[P_NP] * fa + npl * leg_axial_force_t(
-                k, c_l, l0, ll, ld, fc_l, (Pc[P_K + leg], c_l_t, Pc[P_L0 + leg], ll_t, lt, fc_l_t)
+                k, c_l, l0, ll, ld, fc_l, (Pc[P_K + leg], c_l_t, Pc[P_L0 + leg], t[7], t[8], fc_l_t)
             )
-            fx_t = -F_t * sg - F * sg_t
-            fy_t = F_t * cg + F * cg_t
-            g[IX, c] += fx_t
-            g[IY, c] += fy_t
-            g[ITH, c] += jx_t * fx + jx * fx_t + jy_t * fy + jy * fy_t
-            g[kk, c] += px_t * fx + px * fx_t + py_t * fy + py * fy_t
-            sph_t = sg_t * cth + sg * cth_t - cg_t * sth - cg * sth_t
-            bx_t = -(sL_t * cth + sL * cth_t) * dth * dth - 2.0 * sL * cth * dth * dth_t
-            by_t = -(sL_t * sth + sL * sth_t) * dth * dth - 2.0 * sL * sth * dth * dth_t
-            r_t = -(bx_t * cg + bx * cg_t + by_t * sg + by * sg_t + 2.0 * (lt * dg + ld * dg_t))
-            gr[0, c] = _row_t(
-                g, c, ddq, nu0, (cg_t, sg_t, sL_t * sph + sL * sph_t + ll_t, ll_t, kk, r_t)
-            )
-            ld_t[c] = lt
+            _pinned_force_and_row_t(c, kk, (g, gr, ddq), pinned, t, F_t)
+            ld_t[c] = t[8]
         return
     F = npl * k * (l0 - ll)
-    fx = -F * sg
-    fy = F * cg
+    pinned = (hip, (ll, dg, ld, F, jx, jy, px, py, sph, bx, by), nu0)
     # row along the leg: R = [sg, -cg, -sL cph, 0],
     # r = -(bx sg - by cg) + ll dg^2 + 2 w ld + w^2 (ll - l0)
     w = P[P_STRUT_OMEGA]
@@ -275,36 +303,11 @@ def leg_contact_t(leg, P, mi, primal, tangents, out):
     nu1 = nu[1]
     for c in range(m):
         Pc = P_t[c]
-        npl_t = Pc[P_NP]
+        t = _pinned_motion_t(c, leg, hip, (dq_t, l_t, tr_t, Pc))
+        sth_t, cth_t, sg_t, cg_t, sL_t, dth_t, dg_t, ll_t, lt = t
         l0_t = Pc[P_L0 + leg]
-        k_t = Pc[P_K + leg]
-        sth_t, cth_t = tr_t[TR_STH, c], tr_t[TR_CTH, c]
-        sg_t, cg_t = tr_t[TR_SGB + 2 * leg, c], tr_t[TR_CGB + 2 * leg, c]
-        sL_t = hip_offset_t(Pc, leg)
-        dth_t = dq_t[ITH, c]
-        dg_t = dth_t + dq_t[kk, c]
-        hvx_t = dq_t[IX, c] - (sL_t * sth + sL * sth_t) * dth - sL * sth * dth_t
-        hvy_t = dq_t[IY, c] + (sL_t * cth + sL * cth_t) * dth + sL * cth * dth_t
-        ll_t = l_t[leg, c]
-        jx_t = -(sL_t * sth + sL * sth_t) + ll_t * cg + ll * cg_t
-        jy_t = sL_t * cth + sL * cth_t + ll_t * sg + ll * sg_t
-        px_t = ll_t * cg + ll * cg_t
-        py_t = ll_t * sg + ll * sg_t
-        lt = -(hvx_t * sg + hvx * sg_t - hvy_t * cg - hvy * cg_t)
-        F_t = npl_t * k * (l0 - ll) + npl * (k_t * (l0 - ll) + k * (l0_t - ll_t))
-        fx_t = -F_t * sg - F * sg_t
-        fy_t = F_t * cg + F * cg_t
-        g[IX, c] += fx_t
-        g[IY, c] += fy_t
-        g[ITH, c] += jx_t * fx + jx * fx_t + jy_t * fy + jy * fy_t
-        g[kk, c] += px_t * fx + px * fx_t + py_t * fy + py * fy_t
-        sph_t = sg_t * cth + sg * cth_t - cg_t * sth - cg * sth_t
-        bx_t = -(sL_t * cth + sL * cth_t) * dth * dth - 2.0 * sL * cth * dth * dth_t
-        by_t = -(sL_t * sth + sL * sth_t) * dth * dth - 2.0 * sL * sth * dth * dth_t
-        r_t = -(bx_t * cg + bx * cg_t + by_t * sg + by * sg_t + 2.0 * (lt * dg + ld * dg_t))
-        gr[0, c] = _row_t(
-            g, c, ddq, nu0, (cg_t, sg_t, sL_t * sph + sL * sph_t + ll_t, ll_t, kk, r_t)
-        )
+        F_t = Pc[P_NP] * k * (l0 - ll) + npl * (Pc[P_K + leg] * (l0 - ll) + k * (l0_t - ll_t))
+        bx_t, by_t = _pinned_force_and_row_t(c, kk, (g, gr, ddq), pinned, t, F_t)
         w_t = Pc[P_STRUT_OMEGA]
         cph_t = cg_t * cth + cg * cth_t + sg_t * sth + sg * sth_t
         r_t = (

@@ -117,7 +117,8 @@ def test_motor_current_tangent_is_the_central_difference_of_motor_current(case):
     assert D.current_branch(cmd, om, vb, leg, P) == branch
     cmd_t, om_t, vb_t = rng.uniform(-1.0, 1.0, 3) * (abs(cmd), abs(om), vb)
     P_t = direction(rng, P, MOTOR_SLOTS)
-    t = D.motor_current_t(cmd, om, vb, leg, P, cmd_t, om_t, vb_t, P_t)
+    branch = D.current_branch(cmd, om, vb, leg, P)
+    t = D.branch_current_t(branch, cmd, om, vb, leg, P, (cmd_t, om_t, vb_t, P_t))
     fd = central(
         lambda h: actuator.motor_current(
             cmd + h * cmd_t, om + h * om_t, vb + h * vb_t, leg, P + h * P_t
