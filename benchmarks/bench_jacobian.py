@@ -11,15 +11,24 @@
    with parameter rows: leg and belt springs and dampers, motor constants, the current
    limit, the battery, the masses), against the plain run. Target: <= 1 + n / 4 plain
    runs.
-3. Plain runs no slower: the plain 10 s run of this checkout against an earlier commit is
+3. The floor the right-hand side's derivative sets under parts 1 and 2: one evaluation
+   (``evaluate_ws``) and the derivative for m columns (``evaluate_t``) timed per call at
+   one Model II state (2.6 s into the default run), times the derivative calls the runs
+   of parts 1 and 2 make (their accepted steps times the stages whose derivative a step
+   takes: 6 for DOPRI5 and ARK4, 4 for ARK3; the step's end's projection, the stages'
+   evaluations again, the events and samples not counted): what carrying the columns
+   costs at the least with the derivative as it is, against the targets. Every time of
+   this part (also its own plain runs, stride and forward-difference Jacobian) is the
+   shortest of its repeats, so that a busy machine does not lower the floor.
+4. Plain runs no slower: the plain 10 s run of this checkout against an earlier commit is
    ``benchmarks/bench_inprocess.py --base COMMIT`` (a run carries no sensitivities unless
    asked: the same compiled loop skips them).
-4. The hip-unit identification's exact Jacobian (``Residuals.jacobian``: the six Model II
+5. The hip-unit identification's exact Jacobian (``Residuals.jacobian``: the six Model II
    hip parameters, both rigs of ``scoutsim identify --example``, at Table II) against
    one evaluation of its residuals (both rigs replayed); forward differences cost six
    evaluations more than the residuals they difference.
 
-Medians of ``--repeats`` timings, after one warm-up. Prints the machine. Asserts nothing.
+Medians of ``--repeats`` timings (but part 3's), after one warm-up. Prints the machine. Asserts nothing.
 """
 
 from __future__ import annotations
@@ -34,7 +43,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import machine  # noqa: E402
+from numba import njit  # noqa: E402
 
+from scoutsim._core.model.derivative.evaluate import derivative_workspace, evaluate_t  # noqa: E402
+from scoutsim._core.model.evaluate import evaluate_ws  # noqa: E402
+from scoutsim._core.model.layout import NAUX, NMF, NS  # noqa: E402
+from scoutsim._core.numerics.dopri5 import eval_workspace  # noqa: E402
+from scoutsim._core.numerics.stats import S_NSTEP  # noqa: E402
+from scoutsim._core.numerics.stepper import METHOD_ARK3  # noqa: E402
 from scoutsim.analysis.controlled_orbit import controlled_fixed_point, difference_jacobian  # noqa: E402
 from scoutsim.analysis.stride_map import StrideMap  # noqa: E402
 from scoutsim.simulation.engine import start_engine  # noqa: E402
@@ -70,6 +86,95 @@ PARAMETERS = (
     "planetary_ratio",
     "hip_spacing",
 )
+
+
+@njit
+def _evaluations(n, s, P, mi, mf, cmd, ds, aux, ew):
+    for _ in range(n):
+        evaluate_ws(s, P, mi, mf, cmd, ds, aux, ew, False, ew[3], False)
+
+
+@njit
+def _derivatives(n, P, mi, cmd, ew, dw, tangents, out):
+    for _ in range(n):
+        evaluate_t(P, mi, cmd, ew, dw, tangents, out)
+
+
+def _per_call(f, n: int, repeats: int = 7) -> float:
+    """The shortest time [s] of one call of ``f(n)`` over ``repeats``, per iteration."""
+    f(1)
+    return min(_timed(lambda: f(n)) for _ in range(repeats)) / n
+
+
+def _timed(f) -> float:
+    t = time.perf_counter()
+    f()
+    return time.perf_counter() - t
+
+
+def _derivative_calls(eng) -> int:
+    """The right-hand side's derivatives the flow takes over the run of ``eng`` so far:
+    its accepted steps times the stages (6 for DOPRI5 and ARK4, 4 for ARK3)."""
+    stages = 4 if eng._method == METHOD_ARK3 else 6
+    return int(eng.stats[S_NSTEP]) * stages
+
+
+def derivative_floor(columns, stride, plain_10s, repeats) -> None:
+    """Part 5 (module docstring). ``stride`` = (StrideMap, orbit, the stride at the orbit
+    (a Crossing)); ``plain_10s``: a function running 10 s of Model II."""
+    smap, orbit, base = stride
+    n_z, samples = orbit.z.size, base.samples
+    t_plain = min(_timed(plain_10s) for _ in range(repeats))
+    t_stride_plain = min(_timed(lambda: smap.crossing(orbit.state)) for _ in range(repeats))
+    t_fd = min(
+        _timed(lambda: difference_jacobian(smap, orbit.z, orbit.state, base, 1e-6, 1))
+        for _ in range(repeats)
+    )
+    e = start_engine(None, 10.0, model="II")
+    e.advance(2_601)
+    s, P, mi, mf, cmd = e.s.copy(), e.P, e.mi.copy(), e.mf.copy(), e.cmd.copy()
+    ew, ds, aux = eval_workspace(), np.zeros(NS), np.zeros(NAUX)
+    n = 100_000
+    t_eval = _per_call(lambda k: _evaluations(k, s, P, mi, mf, cmd, ds, aux, ew), n, repeats)
+    rng = np.random.default_rng(0)
+    t_der = {}
+    for m in sorted({1, *columns, n_z}):
+        tangents = (
+            rng.standard_normal((NS, m)),
+            np.zeros((NMF, m)),
+            np.zeros((2, m)),
+            np.zeros((m, len(P))),
+        )
+        dw, out = derivative_workspace(m), np.zeros((NS, m))
+        t_der[m] = _per_call(
+            lambda k, dw=dw, tangents=tangents, out=out: _derivatives(
+                k, P, mi, cmd, ew, dw, tangents, out
+            ),
+            n,
+            repeats,
+        )
+    print("\n3. the floor the right-hand side's derivative sets (one Model II state, per call)")
+    print(f"   evaluation             {t_eval * 1e9:8.0f} ns")
+    for m, t in t_der.items():
+        print(f"   derivative, {m:2d} column{'s' if m > 1 else ' '} {t * 1e9:7.0f} ns")
+    run = start_engine(None, 10.0, model="II")
+    run.advance(10_001)
+    calls = _derivative_calls(run)
+    print(f"   10 s of Model II: {calls} derivative calls, the plain run {t_plain * 1e3:.1f} ms")
+    for k in columns:
+        floor = 1 + calls * t_der[k] / t_plain
+        print(
+            f"   {k:2d} parameters: at least {floor:5.1f} plain runs   (target <= {1 + k / 4:.1f})"
+        )
+    eng = smap.engine(orbit.state, smap.max_period)
+    eng.advance(samples)
+    calls = _derivative_calls(eng)
+    floor = (t_stride_plain + calls * t_der[n_z]) / t_fd
+    print(
+        f"   the stride: {calls} derivative calls, the plain stride {t_stride_plain * 1e3:.1f} ms, "
+        f"forward differences {t_fd * 1e3:.1f} ms"
+    )
+    print(f"   the exact Jacobian: at least {floor:.2f} x differences   (target <= 0.5)")
 
 
 def main() -> int:
@@ -112,7 +217,8 @@ def main() -> int:
             f"   {k:2d} parameters          {t * 1e3:8.1f} ms   {t / t_plain:6.1f} plain runs"
             f"   (target <= {1 + k / 4:.1f})"
         )
-    print("\n3. plain runs against an earlier commit: benchmarks/bench_inprocess.py --base COMMIT")
+    derivative_floor(args.columns, (m, orbit, base), lambda: run(0), args.repeats)
+    print("\n4. plain runs against an earlier commit: benchmarks/bench_inprocess.py --base COMMIT")
 
     from scoutsim.identification.example import example_logs
     from scoutsim.identification.fit import fitted_names
@@ -127,7 +233,7 @@ def main() -> int:
     x = np.log([float(getattr(robot, n)) for n in names])
     t_r = _median(lambda: res(x), args.repeats)
     t_j = _median(lambda: res.jacobian(x), args.repeats)
-    print(f"\n4. the identification's exact Jacobian ({len(names)} hip parameters, two rigs)")
+    print(f"\n5. the identification's exact Jacobian ({len(names)} hip parameters, two rigs)")
     print(f"   residuals              {t_r * 1e3:8.1f} ms")
     print(
         f"   exact Jacobian         {t_j * 1e3:8.1f} ms   {t_j / t_r:6.1f} residual evaluations"
