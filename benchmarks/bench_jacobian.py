@@ -120,7 +120,7 @@ def _derivative_calls(eng) -> int:
 
 
 def derivative_floor(columns, stride, plain_10s, repeats) -> None:
-    """Part 5 (module docstring). ``stride`` = (StrideMap, orbit, the stride at the orbit
+    """Part 3 (module docstring). ``stride`` = (StrideMap, orbit, the stride at the orbit
     (a Crossing)); ``plain_10s``: a function running 10 s of Model II."""
     smap, orbit, base = stride
     n_z, samples = orbit.z.size, base.samples
