@@ -386,9 +386,10 @@ def kkt_reduced_solve_columns(A, piv, M, rkind, rleg, system, B, Y, one):
     """:func:`kkt_reduced_solve` for m right-hand sides at once: the columns of ``B``
     (rows 0 to nact + nr - 1, (MAX_KKT, m)), each solved in place as that function solves
     one (the same operations, column by column); ``Y`` (MAX_KKT, m) scratch. With the
-    Schur complement's factors the columns run in the innermost loops; with the LU factors
-    (the massless legs' model) one at a time, in ``one`` = (w, o, yo): w[o:] and w[yo:]
-    as :func:`kkt_reduced_solve`'s b and y."""
+    Schur complement's factors the right-hand sides are gathered and scattered with the
+    columns in the innermost loops and each column of ``Y`` is solved by
+    :func:`kkt_schur_solve`; with the LU factors (the massless legs' model) one at a time,
+    in ``one`` = (w, o, yo): w[o:] and w[yo:] as :func:`kkt_reduced_solve`'s b and y."""
     nact, nr, free0, free1, schur = system
     m = B.shape[1]
     if not schur:
@@ -420,50 +421,7 @@ def kkt_reduced_solve_columns(A, piv, M, rkind, rleg, system, B, Y, one):
             Y[5 + nc, c] = B[nact + rr, c]
         nc += 1
     for c in range(m):
-        x0 = Y[0, c]
-        x1 = Y[1, c]
-        x2 = Y[2, c]
-        x3 = Y[3, c]
-        x4 = Y[4, c]
-        z0 = A[0, 0] * x0 + A[0, 1] * x1 + A[0, 2] * x2 + A[0, 3] * x3 + A[0, 4] * x4
-        z1 = A[1, 0] * x0 + A[1, 1] * x1 + A[1, 2] * x2 + A[1, 3] * x3 + A[1, 4] * x4
-        z2 = A[2, 0] * x0 + A[2, 1] * x1 + A[2, 2] * x2 + A[2, 3] * x3 + A[2, 4] * x4
-        z3 = A[3, 0] * x0 + A[3, 1] * x1 + A[3, 2] * x2 + A[3, 3] * x3 + A[3, 4] * x4
-        z4 = A[4, 0] * x0 + A[4, 1] * x1 + A[4, 2] * x2 + A[4, 3] * x3 + A[4, 4] * x4
-        # t = R z - r, then S nu = t (forward / back substitution with the Cholesky factor)
-        for k in range(nc):
-            row = 5 + k
-            acc = (
-                A[row, 0] * z0
-                + A[row, 1] * z1
-                + A[row, 2] * z2
-                + A[row, 3] * z3
-                + A[row, 4] * z4
-                - Y[row, c]
-            )
-            for e in range(k):
-                acc -= A[row, 10 + e] * Y[5 + e, c]
-            Y[row, c] = acc / A[row, 10 + k]
-        for k in range(nc - 1, -1, -1):
-            row = 5 + k
-            acc = Y[row, c]
-            for e in range(k + 1, nc):
-                acc -= A[5 + e, 10 + k] * Y[5 + e, c]
-            Y[row, c] = acc / A[row, 10 + k]
-        # ddq = z - Y nu
-        for k in range(nc):
-            row = 5 + k
-            nu = Y[row, c]
-            z0 -= A[row, 5] * nu
-            z1 -= A[row, 6] * nu
-            z2 -= A[row, 7] * nu
-            z3 -= A[row, 8] * nu
-            z4 -= A[row, 9] * nu
-        Y[0, c] = z0
-        Y[1, c] = z1
-        Y[2, c] = z2
-        Y[3, c] = z3
-        Y[4, c] = z4
+        kkt_schur_solve(A, nc, Y[:, c], 0)
     if fold:
         for c in range(m):
             ddth = Y[2, c]
